@@ -1,0 +1,162 @@
+// The sparse stereo stage next to OpenCV's StereoSGBM (3-way) on the same 640x360 real stereo
+// pair with 64 disparities, in one run; prints the time ratios at the end.
+
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <map>
+#include <string>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "dco/core/cv_interop.hpp"
+#include "dco/core/image.hpp"
+#include "dco/pipeline/stereo/stereo_matcher.hpp"
+
+namespace {
+
+constexpr int kWidth = 640;
+constexpr int kHeight = 360;
+constexpr int kDisparities = 64;  // searched: 0 .. 63
+
+struct Pair {
+  cv::Mat left, right;  // BGR
+  cv::Mat left_gray, right_gray;
+  bool ok = false;
+};
+
+// A 640x360 window of the KITTI 2015 pair 000046 (a real car-mounted camera), whose disparities
+// there stay below 64.
+const Pair& test_pair() {
+  static const Pair pair = [] {
+    Pair p;
+    const std::string root = std::string(DCO_DATA_DIR) + "/kitti2015/000046/";
+    const cv::Mat l = cv::imread(root + "image_2/000046_10.png", cv::IMREAD_COLOR);
+    const cv::Mat r = cv::imread(root + "image_3/000046_10.png", cv::IMREAD_COLOR);
+    if (l.empty() || r.empty() || l.cols < 300 + kWidth || l.rows < 15 + kHeight) return p;
+    const cv::Rect roi(300, 15, kWidth, kHeight);
+    p.left = l(roi).clone();
+    p.right = r(roi).clone();
+    cv::cvtColor(p.left, p.left_gray, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(p.right, p.right_gray, cv::COLOR_BGR2GRAY);
+    p.ok = true;
+    return p;
+  }();
+  return pair;
+}
+
+void run_dco(benchmark::State& state, bool color) {
+  const Pair& p = test_pair();
+  if (!p.ok) {
+    state.SkipWithError("stereo data not found under " DCO_DATA_DIR);
+    return;
+  }
+  dco::stereo::StereoParams params;
+  params.max_disparity = kDisparities - 1;
+  const auto matcher = dco::stereo::make_cpu_stereo_matcher(params);
+  const cv::Mat& l = color ? p.left : p.left_gray;
+  const cv::Mat& r = color ? p.right : p.right_gray;
+  dco::Image<float> disparity;
+  dco::stereo::StereoTimings sum;
+  for (auto _ : state) {
+    matcher->compute(dco::as_view<std::uint8_t>(l), dco::as_view<std::uint8_t>(r), disparity);
+    const auto& t = matcher->last_timings();
+    sum.prepare_ms += t.prepare_ms;
+    sum.arms_ms += t.arms_ms;
+    sum.initial_ms += t.initial_ms;
+    sum.refine_ms += t.refine_ms;
+    sum.sparse_ms += t.sparse_ms;
+    benchmark::DoNotOptimize(disparity.data());
+  }
+  const double n = static_cast<double>(state.iterations());
+  state.counters["prepare_ms"] = sum.prepare_ms / n;
+  state.counters["arms_ms"] = sum.arms_ms / n;
+  state.counters["initial_ms"] = sum.initial_ms / n;
+  state.counters["refine_ms"] = sum.refine_ms / n;
+  state.counters["sparse_ms"] = sum.sparse_ms / n;
+}
+
+void run_sgbm(benchmark::State& state, bool color, int threads) {
+  const Pair& p = test_pair();
+  if (!p.ok) {
+    state.SkipWithError("stereo data not found under " DCO_DATA_DIR);
+    return;
+  }
+  const int previous_threads = cv::getNumThreads();
+  cv::setNumThreads(threads);
+  const int cn = color ? 3 : 1;
+  const auto sgbm = cv::StereoSGBM::create(0, kDisparities, 5, 8 * cn * 25, 32 * cn * 25, 1, 63, 10,
+                                           100, 2, cv::StereoSGBM::MODE_SGBM_3WAY);
+  const cv::Mat& l = color ? p.left : p.left_gray;
+  const cv::Mat& r = color ? p.right : p.right_gray;
+  cv::Mat disparity;
+  for (auto _ : state) {
+    sgbm->compute(l, r, disparity);
+    benchmark::DoNotOptimize(disparity.data);
+  }
+  cv::setNumThreads(previous_threads);
+}
+
+void BM_DcoSparseStereo_Gray(benchmark::State& s) {
+  run_dco(s, false);
+}
+void BM_DcoSparseStereo_Color(benchmark::State& s) {
+  run_dco(s, true);
+}
+void BM_SGBM3Way_Gray_1Thread(benchmark::State& s) {
+  run_sgbm(s, false, 1);
+}
+void BM_SGBM3Way_Color_1Thread(benchmark::State& s) {
+  run_sgbm(s, true, 1);
+}
+void BM_SGBM3Way_Gray_2Threads(benchmark::State& s) {
+  run_sgbm(s, false, 2);
+}
+
+BENCHMARK(BM_DcoSparseStereo_Gray)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DcoSparseStereo_Color)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SGBM3Way_Gray_1Thread)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SGBM3Way_Color_1Thread)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SGBM3Way_Gray_2Threads)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Console output as usual, plus the real time of each benchmark for the ratios.
+class RecordingReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    ConsoleReporter::ReportRuns(runs);
+    for (const Run& run : runs)
+      if (!run.error_occurred && run.run_type == Run::RT_Iteration)
+        ms_[run.benchmark_name().substr(0, run.benchmark_name().find('/'))] =
+            run.GetAdjustedRealTime();
+  }
+  double ms(const std::string& name) const {
+    const auto it = ms_.find(name);
+    return it == ms_.end() ? 0.0 : it->second;
+  }
+
+ private:
+  std::map<std::string, double> ms_;
+};
+
+void print_ratio(const RecordingReporter& r, const char* ours, const char* peer) {
+  const double a = r.ms(ours), b = r.ms(peer);
+  if (a > 0 && b > 0) std::printf("ratio %-28s / %-28s = %.2f\n", ours, peer, a / b);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  RecordingReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  benchmark::Shutdown();
+  std::printf("\ntime ratios (< 1: dco is faster)\n");
+  print_ratio(reporter, "BM_DcoSparseStereo_Gray", "BM_SGBM3Way_Gray_1Thread");
+  print_ratio(reporter, "BM_DcoSparseStereo_Color", "BM_SGBM3Way_Color_1Thread");
+  print_ratio(reporter, "BM_DcoSparseStereo_Gray", "BM_SGBM3Way_Gray_2Threads");
+  return 0;
+}

@@ -1,0 +1,233 @@
+// Public calibration API: RectifiedGeometry, StereoCalibration::validate, load_calibration (format
+// detection and dispatch) and save_calibration. The parsers live in calibration_text_formats.cpp
+// and calibration_toml.cpp.
+#include "dco/core/calibration.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <string_view>
+
+#include <fmt/format.h>
+
+#include "calibration_internal.hpp"
+#include "dco/core/error.hpp"
+
+namespace dco {
+namespace detail {
+
+void fail_at(const std::string& file, long line, std::string_view msg) {
+  if (line > 0) throw Error(fmt::format("{}:{}: {}", file, line, msg));
+  throw Error(fmt::format("{}: {}", file, msg));
+}
+
+void cameras_from_rectified(StereoCalibration& c) {
+  const RectifiedGeometry& g = c.rectified;
+  for (CameraIntrinsics* cam : {&c.left, &c.right}) {
+    cam->model = CameraModel::kPinhole;
+    cam->width = g.width;
+    cam->height = g.height;
+    cam->fx = cam->fy = g.f;
+    cam->cx = cam == &c.left ? g.cx_left : g.cx_right;
+    cam->cy = g.cy;
+    cam->distortion.clear();
+  }
+  c.rotation = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  c.translation = {-g.baseline_m, 0, 0};
+}
+
+}  // namespace detail
+
+namespace {
+
+using detail::fail_at;
+using detail::is_identifier;
+using detail::Mat3;
+using detail::mul;
+using detail::split_lines;
+using detail::transpose;
+using detail::trim;
+
+// ---------------------------------------------------------------------------------------------
+// Validation.
+
+double det(const Mat3& a) {
+  return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) +
+         a[2] * (a[3] * a[7] - a[4] * a[6]);
+}
+
+bool finite_positive(double v) {
+  return std::isfinite(v) && v > 0;
+}
+
+std::string size_text(int w, int h) {
+  return fmt::format("{}x{}", w, h);
+}
+
+void check_rotation(const std::string& src, std::string_view what, const Mat3& r) {
+  // Files carry ~7 significant digits; 1e-3 accepts those and hand-typed values, rejects mistakes.
+  constexpr double kTolerance = 1e-3;
+  for (double v : r)
+    if (!std::isfinite(v)) fail_at(src, 0, fmt::format("{} has a non-finite entry", what));
+  const Mat3 rrt = mul(r, transpose(r));
+  for (int i = 0; i < 9; ++i) {
+    const double expected = (i % 4 == 0) ? 1.0 : 0.0;
+    if (std::abs(rrt[i] - expected) > kTolerance)
+      fail_at(src, 0,
+              fmt::format("{} is not orthonormal (R*R^T differs from I by {:.3g})", what,
+                          std::abs(rrt[i] - expected)));
+  }
+  if (det(r) < 0) fail_at(src, 0, fmt::format("{} is a reflection (determinant < 0)", what));
+}
+
+void check_camera(const std::string& src, std::string_view name, const CameraIntrinsics& c,
+                  bool size_unknown) {
+  if (!finite_positive(c.fx) || !finite_positive(c.fy))
+    fail_at(
+        src, 0,
+        fmt::format("{} camera: focal lengths must be positive (fx {}, fy {})", name, c.fx, c.fy));
+  if (!std::isfinite(c.cx) || !std::isfinite(c.cy))
+    fail_at(src, 0, fmt::format("{} camera: principal point is not finite", name));
+  const bool size_ok =
+      (c.width > 0 && c.height > 0) || (size_unknown && c.width == 0 && c.height == 0);
+  if (!size_ok)
+    fail_at(src, 0,
+            fmt::format("{} camera: image size {} is not positive", name,
+                        size_text(c.width, c.height)));
+  const std::size_t n = c.distortion.size();
+  if (c.model == CameraModel::kPinhole && n != 0 && n != 4 && n != 5 && n != 8)
+    fail_at(src, 0,
+            fmt::format("{} camera: the pinhole model takes 0, 4, 5 or 8 distortion coefficients, "
+                        "got {}",
+                        name, n));
+  if (c.model == CameraModel::kKannalaBrandt && n != 0 && n != 4)
+    fail_at(src, 0,
+            fmt::format("{} camera: the Kannala-Brandt model takes 0 or 4 distortion coefficients, "
+                        "got {}",
+                        name, n));
+  for (double v : c.distortion)
+    if (!std::isfinite(v))
+      fail_at(src, 0, fmt::format("{} camera: a distortion coefficient is not finite", name));
+}
+
+void check_geometry(const std::string& src, const RectifiedGeometry& g, bool size_unknown) {
+  if (!finite_positive(g.f))
+    fail_at(src, 0, fmt::format("rectified focal length must be positive, got {}", g.f));
+  if (!finite_positive(g.baseline_m))
+    fail_at(src, 0, fmt::format("rectified baseline must be positive, got {} m", g.baseline_m));
+  if (!std::isfinite(g.cx_left) || !std::isfinite(g.cx_right) || !std::isfinite(g.cy))
+    fail_at(src, 0, "rectified principal point is not finite");
+  if (!(g.width > 0 && g.height > 0) && !size_unknown)
+    fail_at(src, 0,
+            fmt::format("rectified image size {} is not positive", size_text(g.width, g.height)));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading and format detection.
+
+std::string read_text(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw Error(fmt::format("{}: calibration file does not exist", path.string()));
+  if (std::filesystem::is_directory(path, ec))
+    throw Error(fmt::format("{}: is a directory, not a calibration file", path.string()));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(fmt::format("{}: cannot open calibration file", path.string()));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+enum class Format { kToml, kMiddlebury, kKeyColon };
+
+// The first meaningful line decides "key: numbers"; Middlebury is any file with a cam0= line
+// (its matrices are not valid TOML); everything else is parsed as TOML.
+Format detect_format(std::string_view text) {
+  bool first = true;
+  for (const auto raw : split_lines(text)) {
+    const auto line = trim(raw);
+    if (line.empty() || line.front() == '#') continue;
+    const auto colon = line.find(':');
+    if (first && colon != std::string_view::npos && is_identifier(trim(line.substr(0, colon))))
+      return Format::kKeyColon;
+    first = false;
+    const auto eq = line.find('=');
+    if (eq != std::string_view::npos && trim(line.substr(0, eq)) == "cam0")
+      return Format::kMiddlebury;
+  }
+  return Format::kToml;
+}
+
+}  // namespace
+
+// -----------------------------------------------------------------------------------------------
+
+double RectifiedGeometry::depth_from_disparity(double d) const {
+  const double denom = d + doffs();
+  if (denom <= 0) return std::numeric_limits<double>::infinity();
+  return f * baseline_m / denom;
+}
+
+double RectifiedGeometry::disparity_from_depth(double z_m) const {
+  return f * baseline_m / z_m - doffs();
+}
+
+void StereoCalibration::validate() const {
+  const std::string src = source.empty() ? std::string("calibration") : source;
+  // Rectified files without a size (Karlsruhe without roi) leave it to the caller's images.
+  const bool size_unknown = is_rectified && rectified.width == 0 && rectified.height == 0;
+  check_camera(src, "left", left, size_unknown);
+  check_camera(src, "right", right, size_unknown);
+  if (left.width != right.width || left.height != right.height)
+    fail_at(src, 0,
+            fmt::format("left images are {} but right images are {}",
+                        size_text(left.width, left.height), size_text(right.width, right.height)));
+  check_rotation(src, "extrinsic rotation", rotation);
+  for (double t : translation)
+    if (!std::isfinite(t)) fail_at(src, 0, "translation is not finite");
+  if (std::hypot(translation[0], translation[1], translation[2]) <= 0)
+    fail_at(src, 0, "baseline is zero (translation is 0, 0, 0)");
+  if (has_rectification) {
+    check_rotation(src, "left rectifying rotation", rect_rotation_left);
+    check_rotation(src, "right rectifying rotation", rect_rotation_right);
+  }
+  if (is_rectified || has_rectification) check_geometry(src, rectified, size_unknown);
+  if (is_rectified && (rectified.width != left.width || rectified.height != left.height))
+    fail_at(src, 0,
+            fmt::format("rectified size {} differs from the camera size {}",
+                        size_text(rectified.width, rectified.height),
+                        size_text(left.width, left.height)));
+}
+
+StereoCalibration load_calibration(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  const std::string text = read_text(path);
+  if (trim(text).empty()) fail_at(file, 0, "calibration file is empty");
+  StereoCalibration c;
+  switch (detect_format(text)) {
+    case Format::kMiddlebury:
+      c = detail::parse_middlebury(text, file);
+      break;
+    case Format::kKeyColon:
+      c = detail::parse_key_colon(text, file);
+      break;
+    case Format::kToml:
+      c = detail::parse_toml(text, file);
+      break;
+  }
+  c.validate();
+  return c;
+}
+
+void save_calibration(const std::filesystem::path& path, const StereoCalibration& calib) {
+  const std::string out = detail::format_toml(calib);
+  std::ofstream f(path, std::ios::binary);
+  if (!f) throw Error(fmt::format("{}: cannot create calibration file", path.string()));
+  f << out;
+  if (!f.flush()) throw Error(fmt::format("{}: write failed", path.string()));
+}
+
+}  // namespace dco

@@ -1,0 +1,178 @@
+#include "dco/core/disparity_io.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "dco/core/cv_interop.hpp"
+#include "dco/core/error.hpp"
+
+namespace dco {
+namespace {
+
+std::string quoted(const std::filesystem::path& p) {
+  return "'" + p.string() + "'";
+}
+
+// Reads one whitespace-delimited header token; PFM headers may put tokens on one line or several.
+std::string next_token(std::istream& in) {
+  std::string token;
+  in >> token;
+  return token;
+}
+
+std::uint32_t byteswap32(std::uint32_t v) {
+  return (v >> 24) | ((v >> 8) & 0xff00u) | ((v << 8) & 0xff0000u) | (v << 24);
+}
+
+Image<std::uint16_t> read_png16(const std::filesystem::path& path, const char* what) {
+  cv::Mat m = cv::imread(path.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  if (m.empty()) throw Error("cannot read " + std::string(what) + " PNG " + quoted(path));
+  if (m.depth() != CV_16U)
+    throw Error(quoted(path) + " is not a 16-bit PNG (" + std::string(what) + " needs 16 bits)");
+  Image<std::uint16_t> out(m.cols, m.rows);
+  out.copy_from(as_view<std::uint16_t>(std::as_const(m)));
+  return out;
+}
+
+void write_png16(const std::filesystem::path& path, const Image<std::uint16_t>& img) {
+  cv::Mat m = as_mat(img.view());
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path.string(), m);
+  } catch (const cv::Exception& e) {
+    throw Error("cannot write " + quoted(path) + ": " + e.err);
+  }
+  if (!ok) throw Error("cannot write " + quoted(path));
+}
+
+}  // namespace
+
+Image<float> read_pfm(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot open PFM " + quoted(path));
+  const std::string magic = next_token(in);
+  int channels = 0;
+  if (magic == "Pf")
+    channels = 1;
+  else if (magic == "PF")
+    channels = 3;
+  else
+    throw Error(quoted(path) + " is not a PFM file (magic '" + magic.substr(0, 8) + "')");
+  long width = 0, height = 0;
+  double scale = 0;
+  try {
+    width = std::stol(next_token(in));
+    height = std::stol(next_token(in));
+    scale = std::stod(next_token(in));
+  } catch (const std::exception&) {
+    throw Error(quoted(path) + ": malformed PFM header");
+  }
+  if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16 || scale == 0 ||
+      !std::isfinite(scale))
+    throw Error(quoted(path) + ": bad PFM header (size " + std::to_string(width) + "x" +
+                std::to_string(height) + ", scale " + std::to_string(scale) + ")");
+  in.get();  // the single whitespace byte that ends the header
+  const bool little = scale < 0;
+  const bool swap = little != (std::endian::native == std::endian::little);
+
+  Image<float> out(static_cast<int>(width), static_cast<int>(height), channels);
+  const std::size_t row_floats = static_cast<std::size_t>(width) * channels;
+  for (long y = height - 1; y >= 0; --y) {
+    float* r = out.row(static_cast<int>(y));
+    in.read(reinterpret_cast<char*>(r), static_cast<std::streamsize>(row_floats * sizeof(float)));
+    if (!in) throw Error(quoted(path) + ": PFM data is truncated");
+    if (swap) {
+      for (std::size_t i = 0; i < row_floats; ++i) {
+        std::uint32_t bits;
+        std::memcpy(&bits, &r[i], 4);
+        bits = byteswap32(bits);
+        std::memcpy(&r[i], &bits, 4);
+      }
+    }
+  }
+  return out;
+}
+
+void write_pfm(const std::filesystem::path& path, ImageView<const float> image) {
+  if (image.empty() || (image.channels != 1 && image.channels != 3))
+    throw Error("cannot write " + quoted(path) +
+                ": PFM holds 1 or 3 channels of a non-empty image");
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw Error("cannot create " + quoted(path));
+  const float scale = std::endian::native == std::endian::little ? -1.0f : 1.0f;
+  out << (image.channels == 1 ? "Pf" : "PF") << '\n'
+      << image.width << ' ' << image.height << '\n'
+      << scale << '\n';
+  const std::size_t row_floats = static_cast<std::size_t>(image.width) * image.channels;
+  for (int y = image.height - 1; y >= 0; --y)
+    out.write(reinterpret_cast<const char*>(image.row(y)),
+              static_cast<std::streamsize>(row_floats * sizeof(float)));
+  if (!out) throw Error("write to " + quoted(path) + " failed");
+}
+
+void write_disparity_png16(const std::filesystem::path& path, ImageView<const float> disparity) {
+  if (disparity.empty() || disparity.channels != 1)
+    throw Error("cannot write " + quoted(path) + ": disparity must be a one-channel image");
+  Image<std::uint16_t> q(disparity.width, disparity.height);
+  for (int y = 0; y < disparity.height; ++y) {
+    const float* s = disparity.row(y);
+    std::uint16_t* d = q.row(y);
+    for (int x = 0; x < disparity.width; ++x) {
+      const float v = s[x];
+      if (!std::isfinite(v) || v <= 0)
+        d[x] = 0;
+      else
+        d[x] = static_cast<std::uint16_t>(std::clamp(std::lround(v * 256.0f), 1L, 65535L));
+    }
+  }
+  write_png16(path, q);
+}
+
+Image<float> read_disparity_png16(const std::filesystem::path& path) {
+  const Image<std::uint16_t> q = read_png16(path, "disparity");
+  Image<float> out(q.width(), q.height());
+  const float unknown = std::numeric_limits<float>::infinity();
+  for (int y = 0; y < q.height(); ++y)
+    for (int x = 0; x < q.width(); ++x) {
+      const std::uint16_t v = q.at(x, y);
+      out.at(x, y) = v == 0 ? unknown : static_cast<float>(v) / 256.0f;
+    }
+  return out;
+}
+
+void write_depth_png16(const std::filesystem::path& path, ImageView<const float> depth_m) {
+  if (depth_m.empty() || depth_m.channels != 1)
+    throw Error("cannot write " + quoted(path) + ": depth must be a one-channel image");
+  Image<std::uint16_t> q(depth_m.width, depth_m.height);
+  for (int y = 0; y < depth_m.height; ++y)
+    for (int x = 0; x < depth_m.width; ++x) {
+      const float v = depth_m.row(y)[x];
+      q.at(x, y) =
+          (!std::isfinite(v) || v <= 0)
+              ? 0
+              : static_cast<std::uint16_t>(std::clamp(std::lround(v * 1000.0f), 1L, 65535L));
+    }
+  write_png16(path, q);
+}
+
+Image<float> read_depth_png16(const std::filesystem::path& path) {
+  const Image<std::uint16_t> q = read_png16(path, "depth");
+  Image<float> out(q.width(), q.height());
+  const float unknown = std::numeric_limits<float>::infinity();
+  for (int y = 0; y < q.height(); ++y)
+    for (int x = 0; x < q.width(); ++x) {
+      const std::uint16_t v = q.at(x, y);
+      out.at(x, y) = v == 0 ? unknown : static_cast<float>(v) / 1000.0f;
+    }
+  return out;
+}
+
+}  // namespace dco

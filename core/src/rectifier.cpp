@@ -1,0 +1,160 @@
+#include "dco/core/rectifier.hpp"
+
+#include <cmath>
+#include <string>
+
+#include <fmt/format.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "dco/core/cv_interop.hpp"
+#include "dco/core/error.hpp"
+
+namespace dco {
+namespace {
+
+std::string origin(const StereoCalibration& c) {
+  return c.source.empty() ? std::string("calibration") : c.source;
+}
+
+cv::Mat camera_matrix(const CameraIntrinsics& c) {
+  return (cv::Mat_<double>(3, 3) << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1);
+}
+
+cv::Mat distortion(const CameraIntrinsics& c) {
+  // cv::fisheye insists on exactly four coefficients, even when they are all zero.
+  if (c.distortion.empty())
+    return c.model == CameraModel::kKannalaBrandt ? cv::Mat::zeros(4, 1, CV_64F) : cv::Mat();
+  return cv::Mat(c.distortion, true);
+}
+
+cv::Mat mat3(const std::array<double, 9>& a) {
+  return cv::Mat(3, 3, CV_64F, const_cast<double*>(a.data())).clone();
+}
+
+// Fixed-point maps make remap about twice as fast as float maps at the same accuracy (1/32 px).
+void build_maps(const CameraIntrinsics& cam, const cv::Mat& rect_rotation, const cv::Mat& new_k,
+                cv::Size size, cv::Mat& map_xy, cv::Mat& map_frac) {
+  cv::Mat mx, my;
+  if (cam.model == CameraModel::kKannalaBrandt)
+    cv::fisheye::initUndistortRectifyMap(camera_matrix(cam), distortion(cam), rect_rotation, new_k,
+                                         size, CV_32FC1, mx, my);
+  else
+    cv::initUndistortRectifyMap(camera_matrix(cam), distortion(cam), rect_rotation, new_k, size,
+                                CV_32FC1, mx, my);
+  cv::convertMaps(mx, my, map_xy, map_frac, CV_16SC2, false);
+}
+
+// Geometry from the projection matrices of a horizontal rectification.
+RectifiedGeometry geometry_from(const cv::Mat& p1, const cv::Mat& p2, cv::Size size,
+                                const std::string& src) {
+  RectifiedGeometry g;
+  g.width = size.width;
+  g.height = size.height;
+  g.f = p1.at<double>(0, 0);
+  g.cx_left = p1.at<double>(0, 2);
+  g.cx_right = p2.at<double>(0, 2);
+  g.cy = p1.at<double>(1, 2);
+  if (std::abs(p2.at<double>(1, 3)) > std::abs(p2.at<double>(0, 3)))
+    throw Error(src + ": the cameras are stacked vertically; dco needs a side-by-side rig");
+  g.baseline_m = (p1.at<double>(0, 3) - p2.at<double>(0, 3)) / g.f;
+  if (!(g.baseline_m > 0) || !(g.f > 0))
+    throw Error(src + ": the right camera is not to the right of the left camera (swap them?)");
+  return g;
+}
+
+void check_input(ImageView<const std::uint8_t> img, const char* side, int width, int height) {
+  if (img.empty() || (img.channels != 1 && img.channels != 3))
+    throw Error(fmt::format("rectify: {} image must be a non-empty 1- or 3-channel image", side));
+  if (width > 0 && !img.same_size(width, height))
+    throw Error(fmt::format("rectify: {} image is {}x{} but the calibration is for {}x{}", side,
+                            img.width, img.height, width, height));
+}
+
+void remap_into(ImageView<const std::uint8_t> in, Image<std::uint8_t>& out, const cv::Mat& xy,
+                const cv::Mat& frac) {
+  cv::Mat dst = as_mat(out.view());
+  const uchar* before = dst.data;
+  cv::remap(as_mat(in), dst, xy, frac, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  // remap writes in place when the Mat already has the right size and type; anything else would
+  // leave the caller's buffer untouched.
+  if (dst.data != before) throw Error("internal: cv::remap reallocated its output");
+}
+
+}  // namespace
+
+Rectifier::Rectifier(const StereoCalibration& calib) {
+  calib.validate();
+  const std::string src = origin(calib);
+  if (calib.is_rectified) {
+    geometry_ = calib.rectified;
+    in_width_ = geometry_.width;
+    in_height_ = geometry_.height;
+    return;
+  }
+  needs_remap_ = true;
+  in_width_ = calib.left.width;
+  in_height_ = calib.left.height;
+  const cv::Size in_size(in_width_, in_height_);
+  try {
+    cv::Mat r1, r2, p1, p2;
+    cv::Size out_size = in_size;
+    if (calib.has_rectification) {
+      geometry_ = calib.rectified;
+      out_size = cv::Size(geometry_.width, geometry_.height);
+      r1 = mat3(calib.rect_rotation_left);
+      r2 = mat3(calib.rect_rotation_right);
+      // The maps only need the 3x3 part; the baseline term of P does not move pixels.
+      p1 = (cv::Mat_<double>(3, 3) << geometry_.f, 0, geometry_.cx_left, 0, geometry_.f,
+            geometry_.cy, 0, 0, 1);
+      p2 = (cv::Mat_<double>(3, 3) << geometry_.f, 0, geometry_.cx_right, 0, geometry_.f,
+            geometry_.cy, 0, 0, 1);
+    } else {
+      const cv::Mat rot = mat3(calib.rotation);
+      const cv::Mat t(calib.translation, true);
+      cv::Mat q;
+      if (calib.left.model == CameraModel::kKannalaBrandt ||
+          calib.right.model == CameraModel::kKannalaBrandt) {
+        if (calib.left.model != calib.right.model)
+          throw Error(src + ": both cameras must use the same model");
+        cv::fisheye::stereoRectify(camera_matrix(calib.left), distortion(calib.left),
+                                   camera_matrix(calib.right), distortion(calib.right), in_size,
+                                   rot, t, r1, r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, in_size,
+                                   0.0, 1.0);
+      } else {
+        cv::stereoRectify(camera_matrix(calib.left), distortion(calib.left),
+                          camera_matrix(calib.right), distortion(calib.right), in_size, rot, t, r1,
+                          r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0.0, in_size);
+      }
+      geometry_ = geometry_from(p1, p2, in_size, src);
+      p1 = p1.colRange(0, 3).clone();
+      p2 = p2.colRange(0, 3).clone();
+    }
+    build_maps(calib.left, r1, p1, out_size, map_left_xy_, map_left_frac_);
+    build_maps(calib.right, r2, p2, out_size, map_right_xy_, map_right_frac_);
+  } catch (const cv::Exception& e) {
+    throw Error(src + ": cannot compute the rectification: " + e.err);
+  }
+}
+
+void Rectifier::rectify(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                        Image<std::uint8_t>& left_out, Image<std::uint8_t>& right_out) const {
+  check_input(left, "left", in_width_, in_height_);
+  check_input(right, "right", in_width_, in_height_);
+  if (!left.same_size(right))
+    throw Error(fmt::format("rectify: left image is {}x{} but right image is {}x{}", left.width,
+                            left.height, right.width, right.height));
+  if (!needs_remap_) {
+    left_out.resize(left.width, left.height, left.channels);
+    right_out.resize(right.width, right.height, right.channels);
+    left_out.copy_from(left);
+    right_out.copy_from(right);
+    return;
+  }
+  left_out.resize(geometry_.width, geometry_.height, left.channels);
+  right_out.resize(geometry_.width, geometry_.height, right.channels);
+  remap_into(left, left_out, map_left_xy_, map_left_frac_);
+  remap_into(right, right_out, map_right_xy_, map_right_frac_);
+}
+
+}  // namespace dco

@@ -1,0 +1,45 @@
+#pragma once
+
+#include <cstdint>
+
+#include "dco/core/image.hpp"
+
+namespace dco::stereo {
+
+// Arm lengths of the adaptive cross-support window of every pixel (§4.1). The support region of
+// p is built from these: the horizontal arms of every pixel on p's vertical arm (or the reverse).
+struct CrossArms {
+  Image<std::uint8_t> left, right, up, down;
+
+  void resize(int width, int height);
+  int width() const { return left.width(); }
+  int height() const { return left.height(); }
+};
+
+struct ArmRule {
+  int arm_max = 34;    // L1
+  int arm_short = 17;  // L2: beyond it the colour must stay within tau2
+  int tau1 = 20;
+  int tau2 = 6;
+};
+
+// Grows each arm from the anchor pixel while (a) the colour difference to the anchor is < tau1,
+// (b) the difference between consecutive pixels on the arm is < tau1, (c) past arm_short the
+// difference to the anchor is < tau2, and (d) the arm stays inside the image and <= arm_max.
+// Colour difference = the largest absolute difference over the channels.
+void compute_cross_arms(ImageView<const std::uint8_t> image, const ArmRule& rule, CrossArms& arms);
+
+// Smooths the window shapes (§4.1): a 3-tap median of each arm length across the arm direction
+// (left/right arms over the pixel above and below, up/down arms over the pixels beside it)
+// removes single-line spikes and notches, so neighbouring windows have similar shapes.
+// `scratch` is resized to the arm size on first use.
+void smooth_cross_arms(CrossArms& arms, Image<std::uint8_t>& scratch);
+
+// Shortest of the four arms, the L_min of Eq. 1.
+inline int shortest_arm(const CrossArms& arms, int x, int y) {
+  const int a = arms.left.at(x, y) < arms.right.at(x, y) ? arms.left.at(x, y) : arms.right.at(x, y);
+  const int b = arms.up.at(x, y) < arms.down.at(x, y) ? arms.up.at(x, y) : arms.down.at(x, y);
+  return a < b ? a : b;
+}
+
+}  // namespace dco::stereo

@@ -1,0 +1,63 @@
+#pragma once
+
+#include <cstdint>
+
+#include "dco/core/image.hpp"
+
+namespace dco::stereo {
+
+inline constexpr std::int16_t kInvalidDisparity = -1;
+
+// Winner-takes-all over aggregated cost slices fed in increasing disparity order (Eq. 3), for
+// the left image and, from the same slices, for the right image (a right pixel xr at disparity d
+// is the left pixel xr + d). Alongside the winner it keeps what the checks need: the best cost
+// at least two disparities away (uniqueness) and the costs at d-1 and d+1 (subpixel fit), so
+// the cost volume itself is never stored.
+class WinnerTakesAll {
+ public:
+  static constexpr std::uint16_t kNoCost = 0xffff;
+
+  void reset(int width, int height);
+  // Slice values must be < kNoCost; d must grow by one from 0 between calls.
+  void update(ImageView<const std::uint32_t> slice, int d);
+
+  ImageView<const std::int16_t> left_disparity() const { return disp_.view(); }
+  ImageView<const std::int16_t> right_disparity() const { return disp_right_.view(); }
+  ImageView<const std::uint16_t> best_cost() const { return best_.view(); }
+  ImageView<const std::uint16_t> second_cost() const { return second_.view(); }
+  ImageView<const std::uint16_t> cost_below() const { return below_.view(); }
+  ImageView<const std::uint16_t> cost_above() const { return above_.view(); }
+
+ private:
+  Image<std::uint16_t> best_, second_, below_, above_, prev1_, prev2_, runmin_, best_right_;
+  Image<std::int16_t> disp_, disp_right_;
+};
+
+// Marks kInvalidDisparity where the right image's winner at x - d(x) differs from d(x) by more
+// than max_diff (occlusions and mismatches), or where x - d(x) falls outside the image.
+void left_right_check(ImageView<std::int16_t> left, ImageView<const std::int16_t> right,
+                      int max_diff);
+
+// Marks kInvalidDisparity where the best cost is not at least `ratio` below the best cost of a
+// non-adjacent disparity (ambiguous matches: repetitive texture, flat regions).
+void uniqueness_check(ImageView<std::int16_t> disparity, ImageView<const std::uint16_t> best,
+                      ImageView<const std::uint16_t> second, double ratio);
+
+// Marks kInvalidDisparity where a reliable 8-neighbour's disparity differs by more than
+// max_jump: at depth discontinuities half-resolution blocks and aggregation windows straddle two
+// surfaces, so the pixels on either side are the least trustworthy; the contour-aware densify
+// stage places the edge instead. `scratch` is resized on first use.
+void discontinuity_check(ImageView<std::int16_t> disparity, int max_jump,
+                         Image<std::int16_t>& scratch);
+
+// Parabola through the costs at d-1, d, d+1: the offset of its minimum, in [-0.5, 0.5]; 0 when
+// a neighbour is missing or the costs are not convex.
+inline float subpixel_offset(std::uint16_t below, std::uint16_t best, std::uint16_t above) {
+  if (below == WinnerTakesAll::kNoCost || above == WinnerTakesAll::kNoCost) return 0.0f;
+  const int curvature = int(below) + int(above) - 2 * int(best);
+  if (curvature <= 0) return 0.0f;
+  const float offset = float(int(below) - int(above)) / (2.0f * float(curvature));
+  return offset < -0.5f ? -0.5f : (offset > 0.5f ? 0.5f : offset);
+}
+
+}  // namespace dco::stereo

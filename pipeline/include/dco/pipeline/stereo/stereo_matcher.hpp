@@ -1,0 +1,43 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "dco/core/image.hpp"
+#include "dco/pipeline/stereo/stereo_params.hpp"
+
+namespace dco::stereo {
+
+// Wall time of the last frame's sub-stages, named after the columns of the paper's Table 1.
+struct StereoTimings {
+  double prepare_ms = 0;  // downscale, grey conversion, census transform
+  double arms_ms = 0;     // adaptive filter area construction
+  double initial_ms = 0;  // cost, aggregation and winner-takes-all (initial parallax)
+  double refine_ms = 0;   // left-right and uniqueness checks, histogram vote
+  double sparse_ms = 0;   // subpixel fit and the map at input resolution
+  double total_ms = 0;
+};
+
+// The sparse stage: a rectified pair in, a disparity map out that carries values only where
+// the checks trust them.
+class StereoMatcher {
+ public:
+  virtual ~StereoMatcher() = default;
+
+  // left/right: rectified, same size, 8-bit, both 1 or both 3 channels (BGR). Writes disparity in
+  // pixels of the input image, +inf where no value survived the checks; `disparity` is resized
+  // to the input size when needed (once, for a fixed geometry). Throws dco::Error on bad input.
+  virtual void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                       Image<float>& disparity) = 0;
+
+  virtual const StereoTimings& last_timings() const = 0;
+  virtual const StereoParams& params() const = 0;
+};
+
+// Internal downscale factor (1 or 2) for an input width under the params.
+int internal_scale(const StereoParams& params, int input_width);
+
+// Throws dco::Error when the params are invalid.
+std::unique_ptr<StereoMatcher> make_cpu_stereo_matcher(const StereoParams& params);
+
+}  // namespace dco::stereo

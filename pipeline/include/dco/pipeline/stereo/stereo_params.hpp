@@ -1,0 +1,64 @@
+#pragma once
+
+#include <string>
+
+namespace dco {
+class ConfigSchema;
+}
+
+namespace dco::stereo {
+
+// Parameters of the sparse AD-census stage. Defaults follow the paper's §7.2 for the cost
+// (λ_AD, λ_census, γ_L, ε); the cross-window and voting thresholds follow Mei et al. 2011, which
+// the paper's two-stage design builds on. Lengths are in pixels of the internal resolution.
+struct StereoParams {
+  // Largest disparity searched, in pixels of the input image (the search is 0..max_disparity).
+  int max_disparity = 64;
+  // "auto": half width and height when the input is wider than 640 px, else full; "full"; "half".
+  std::string internal_resolution = "auto";
+  bool use_color = true;  // AD and arms on colour when the input has three channels
+
+  // Matching cost, Eq. 1.
+  double lambda_ad = 10.0;
+  double lambda_census = 40.0;
+  double gamma_l = 1.0;
+  double epsilon = 0.8;
+  int census_width = 9;   // odd; census_width * census_height - 1 <= 64
+  int census_height = 7;  // odd
+
+  // Adaptive cross-support windows (§4.1): arms grow while the colour stays within tau1 of the
+  // anchor (and of the previous pixel); beyond arm_short they need the stricter tau2. Lengths are
+  // in input pixels (divided by the internal downscale), so a window covers the same part of
+  // the scene at any internal resolution.
+  int arm_max = 34;
+  int arm_short = 17;
+  int tau1 = 20;
+  int tau2 = 6;
+  bool smooth_arms = true;  // 3-tap median of the arm lengths across the arm direction
+
+  // Cost aggregation over the support region, Eq. 2: alternating horizontal-first and
+  // vertical-first passes.
+  int aggregation_passes = 1;
+
+  // Checks that decide which pixels the sparse map keeps.
+  int lr_max_diff = 1;         // left-right consistency, internal pixels
+  double uniqueness = 0.15;    // best cost must beat the best non-adjacent cost by this fraction
+  int max_neighbour_jump = 1;  // drop pixels next to a jump larger than this (internal px; -1 off)
+
+  // Iterated histogram vote, Eq. 4, among reliable pixels of the support region.
+  int vote_iterations = 1;
+  int vote_min_count = 20;      // support needed for a vote to decide
+  double vote_min_ratio = 0.4;  // share of the support the winning disparity needs
+  int vote_tolerance = 1;       // a pixel this close to the winner keeps its own value
+  bool vote_fill = false;       // votes also give values to pixels that failed the checks
+
+  bool subpixel = true;
+};
+
+// Registers every field under "stereo.<name>" with its valid range.
+void register_params(ConfigSchema& schema, StereoParams& params);
+
+// Throws dco::Error naming the first invalid field.
+void validate(const StereoParams& params);
+
+}  // namespace dco::stereo

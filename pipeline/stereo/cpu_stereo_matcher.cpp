@@ -1,0 +1,219 @@
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "dco/core/error.hpp"
+#include "dco/pipeline/stereo/census.hpp"
+#include "dco/pipeline/stereo/cross_aggregation.hpp"
+#include "dco/pipeline/stereo/cross_arms.hpp"
+#include "dco/pipeline/stereo/disparity_selection.hpp"
+#include "dco/pipeline/stereo/histogram_vote.hpp"
+#include "dco/pipeline/stereo/image_ops.hpp"
+#include "dco/pipeline/stereo/matching_cost.hpp"
+#include "dco/pipeline/stereo/stereo_matcher.hpp"
+
+namespace dco::stereo {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point& t) {
+  const auto now = Clock::now();
+  const double ms = std::chrono::duration<double, std::milli>(now - t).count();
+  t = now;
+  return ms;
+}
+
+std::string size_text(ImageView<const std::uint8_t> v) {
+  return std::to_string(v.width) + "x" + std::to_string(v.height) + "x" +
+         std::to_string(v.channels);
+}
+
+class CpuStereoMatcher final : public StereoMatcher {
+ public:
+  explicit CpuStereoMatcher(const StereoParams& params) : params_(params) {
+    validate(params_);
+    model_ = {params_.lambda_ad, params_.lambda_census, params_.gamma_l, params_.epsilon};
+    vote_ = {params_.vote_iterations, params_.vote_min_count, params_.vote_min_ratio,
+             params_.vote_tolerance, params_.vote_fill};
+  }
+
+  void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+               Image<float>& disparity) override {
+    check_input(left, right);
+    auto t = Clock::now();
+    const auto start = t;
+    timings_ = {};
+
+    prepare(left, right);
+    timings_.prepare_ms = ms_since(t);
+
+    // Arm lengths are given in input pixels; the windows cover the same scene area at any
+    // internal resolution.
+    const ArmRule rule{params_.arm_max / scale_, params_.arm_short / scale_, params_.tau1,
+                       params_.tau2};
+    compute_cross_arms(ad_left_, rule, arms_);
+    if (params_.smooth_arms) smooth_cross_arms(arms_, arm_scratch_);
+    shortest_arm_.resize(w_, h_);
+    for (int y = 0; y < h_; ++y)
+      for (int x = 0; x < w_; ++x)
+        shortest_arm_.at(x, y) = static_cast<std::uint8_t>(shortest_arm(arms_, x, y));
+    regions_.build(arms_, agg_scratch_);
+    timings_.arms_ms = ms_since(t);
+
+    wta_.reset(w_, h_);
+    slice_.resize(w_, h_);
+    for (int d = 0; d <= max_d_; ++d) {
+      compute_cost_slice(ad_left_, ad_right_, census_left_.view(), census_right_.view(),
+                         shortest_arm_.view(), tables_, d, slice_.view());
+      aggregate_costs(slice_.view(), regions_, params_.aggregation_passes, agg_scratch_);
+      wta_.update(slice_.view(), d);
+    }
+    timings_.initial_ms = ms_since(t);
+
+    disp_.resize(w_, h_);
+    disp_.copy_from(wta_.left_disparity());
+    left_right_check(disp_.view(), wta_.right_disparity(), params_.lr_max_diff);
+    if (params_.uniqueness > 0)
+      uniqueness_check(disp_.view(), wta_.best_cost(), wta_.second_cost(), params_.uniqueness);
+    changed_.resize(w_, h_);
+    histogram_vote(disp_.view(), max_d_, regions_, vote_, vote_scratch_, changed_.view());
+    if (params_.max_neighbour_jump >= 0)
+      discontinuity_check(disp_.view(), params_.max_neighbour_jump, jump_scratch_);
+    timings_.refine_ms = ms_since(t);
+
+    write_output(left.width, left.height, disparity);
+    timings_.sparse_ms = ms_since(t);
+    timings_.total_ms = std::chrono::duration<double, std::milli>(t - start).count();
+  }
+
+  const StereoTimings& last_timings() const override { return timings_; }
+  const StereoParams& params() const override { return params_; }
+
+ private:
+  void check_input(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right) const {
+    if (left.empty() || right.empty()) throw Error("stereo: empty input image");
+    if (left.width != right.width || left.height != right.height || left.channels != right.channels)
+      throw Error("stereo: left image is " + size_text(left) + " but right image is " +
+                  size_text(right) + "; a rectified pair has one size");
+    if (left.channels != 1 && left.channels != 3)
+      throw Error("stereo: images need 1 or 3 channels, not " + std::to_string(left.channels));
+    const int scale = internal_scale(params_, left.width);
+    const int w = left.width / scale;
+    const int h = left.height / scale;
+    if (w < params_.census_width || h < params_.census_height)
+      throw Error("stereo: image " + size_text(left) + " is smaller than the census window");
+    const int max_d = params_.max_disparity / scale;
+    if (max_d >= w)
+      throw Error("stereo: max disparity " + std::to_string(params_.max_disparity) +
+                  " must be smaller than the image width " + std::to_string(left.width));
+  }
+
+  void prepare(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right) {
+    scale_ = internal_scale(params_, left.width);
+    w_ = left.width / scale_;
+    h_ = left.height / scale_;
+    // Rounded down, so the search never goes beyond max_disparity input pixels.
+    max_d_ = params_.max_disparity / scale_;
+    const bool color = left.channels == 3 && params_.use_color;
+
+    ImageView<const std::uint8_t> l = left, r = right;
+    if (scale_ == 2) {
+      small_left_.resize(w_, h_, left.channels);
+      small_right_.resize(w_, h_, left.channels);
+      downsample_half(left, small_left_.view());
+      downsample_half(right, small_right_.view());
+      l = small_left_.view();
+      r = small_right_.view();
+    }
+    if (left.channels == 3) {
+      gray_left_.resize(w_, h_);
+      gray_right_.resize(w_, h_);
+      bgr_to_gray(l, gray_left_.view());
+      bgr_to_gray(r, gray_right_.view());
+    }
+    const ImageView<const std::uint8_t> gl = left.channels == 3 ? gray_left_.cview() : l;
+    const ImageView<const std::uint8_t> gr = left.channels == 3 ? gray_right_.cview() : r;
+    ad_left_ = color ? l : gl;
+    ad_right_ = color ? r : gr;
+
+    census_left_.resize(w_, h_);
+    census_right_.resize(w_, h_);
+    census_transform(gl, params_.census_width, params_.census_height, census_left_.view());
+    census_transform(gr, params_.census_width, params_.census_height, census_right_.view());
+
+    if (tables_.channels() != ad_left_.channels || tables_.max_arm() != params_.arm_max / scale_)
+      tables_.build(model_, ad_left_.channels, params_.arm_max / scale_);
+  }
+
+  void write_output(int width, int height, Image<float>& disparity) {
+    disparity.resize(width, height);
+    // Value of every internal pixel first, then nearest-neighbour expansion to input size.
+    values_.resize(w_, h_);
+    constexpr float kUnknown = std::numeric_limits<float>::infinity();
+    const auto max_value = static_cast<float>(params_.max_disparity);
+    for (int y = 0; y < h_; ++y) {
+      const std::int16_t* d = disp_.row(y);
+      const std::uint8_t* ch = changed_.row(y);
+      float* v = values_.row(y);
+      for (int x = 0; x < w_; ++x) {
+        if (d[x] == kInvalidDisparity) {
+          v[x] = kUnknown;
+          continue;
+        }
+        float offset = 0.0f;
+        if (params_.subpixel && !ch[x])
+          offset = subpixel_offset(wta_.cost_below().row(y)[x], wta_.best_cost().row(y)[x],
+                                   wta_.cost_above().row(y)[x]);
+        // The fit may lean past the searched range by less than a pixel; keep values inside it.
+        v[x] =
+            std::min(static_cast<float>(scale_) * (static_cast<float>(d[x]) + offset), max_value);
+        if (!(v[x] > 0.0f)) v[x] = kUnknown;  // zero disparity has no finite depth
+      }
+    }
+    for (int y = 0; y < height; ++y) {
+      const float* src = values_.row(std::min(y / scale_, h_ - 1));
+      float* dst = disparity.row(y);
+      for (int x = 0; x < width; ++x) dst[x] = src[std::min(x / scale_, w_ - 1)];
+    }
+  }
+
+  StereoParams params_;
+  CostModel model_;
+  VoteRule vote_;
+  StereoTimings timings_;
+
+  int scale_ = 1, w_ = 0, h_ = 0, max_d_ = 0;
+  Image<std::uint8_t> small_left_, small_right_, gray_left_, gray_right_;
+  ImageView<const std::uint8_t> ad_left_, ad_right_;
+  Image<std::uint64_t> census_left_, census_right_;
+  CrossArms arms_;
+  Image<std::uint8_t> arm_scratch_, shortest_arm_;
+  CostTables tables_;
+  SupportRegions regions_;
+  AggregationScratch agg_scratch_;
+  Image<std::uint32_t> slice_;
+  WinnerTakesAll wta_;
+  Image<std::int16_t> disp_;
+  Image<std::uint8_t> changed_;
+  VoteScratch vote_scratch_;
+  Image<float> values_;
+  Image<std::int16_t> jump_scratch_;
+  std::vector<std::uint16_t> vol_, out_;
+};
+
+}  // namespace
+
+int internal_scale(const StereoParams& params, int input_width) {
+  if (params.internal_resolution == "full") return 1;
+  if (params.internal_resolution == "half") return 2;
+  return input_width > 640 ? 2 : 1;
+}
+
+std::unique_ptr<StereoMatcher> make_cpu_stereo_matcher(const StereoParams& params) {
+  return std::make_unique<CpuStereoMatcher>(params);
+}
+
+}  // namespace dco::stereo

@@ -1,0 +1,94 @@
+#include "dco/pipeline/stereo/cross_arms.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cstdlib>
+
+namespace dco::stereo {
+namespace {
+
+inline int colour_diff(const std::uint8_t* a, const std::uint8_t* b, int channels) {
+  int d = std::abs(int(a[0]) - int(b[0]));
+  for (int c = 1; c < channels; ++c) d = std::max(d, std::abs(int(a[c]) - int(b[c])));
+  return d;
+}
+
+// Length of the arm from `anchor` along `step` (in elements), limited to `limit` pixels.
+inline int arm_length(const std::uint8_t* anchor, std::ptrdiff_t step, int limit, int channels,
+                      const ArmRule& rule) {
+  const std::uint8_t* prev = anchor;
+  int len = 0;
+  for (int i = 1; i <= limit; ++i) {
+    const std::uint8_t* q = anchor + step * i;
+    const int to_anchor = colour_diff(q, anchor, channels);
+    if (to_anchor >= rule.tau1 || colour_diff(q, prev, channels) >= rule.tau1) break;
+    if (i > rule.arm_short && to_anchor >= rule.tau2) break;
+    len = i;
+    prev = q;
+  }
+  return len;
+}
+
+// 3-tap median along one axis (`along_x`: within rows, else within columns), border pixels
+// repeated. `tmp` receives a copy of the input.
+void median3(Image<std::uint8_t>& img, Image<std::uint8_t>& tmp, bool along_x) {
+  tmp.copy_from(img.cview());
+  const int w = img.width();
+  const int h = img.height();
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* mid = tmp.row(y);
+    const std::uint8_t* before = along_x ? mid : tmp.row(std::max(y - 1, 0));
+    const std::uint8_t* after = along_x ? mid : tmp.row(std::min(y + 1, h - 1));
+    std::uint8_t* out = img.row(y);
+    for (int x = 0; x < w; ++x) {
+      const int a = mid[x];
+      const int b = along_x ? mid[std::max(x - 1, 0)] : before[x];
+      const int c = along_x ? mid[std::min(x + 1, w - 1)] : after[x];
+      out[x] = static_cast<std::uint8_t>(std::max(std::min(a, b), std::min(std::max(a, b), c)));
+    }
+  }
+}
+
+}  // namespace
+
+void CrossArms::resize(int width, int height) {
+  left.resize(width, height);
+  right.resize(width, height);
+  up.resize(width, height);
+  down.resize(width, height);
+}
+
+void compute_cross_arms(ImageView<const std::uint8_t> image, const ArmRule& rule, CrossArms& arms) {
+  assert(rule.arm_max >= 0 && rule.arm_max <= 255);
+  const int w = image.width;
+  const int h = image.height;
+  const int ch = image.channels;
+  arms.resize(w, h);
+  const std::ptrdiff_t down_step = image.stride;
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* row = image.row(y);
+    for (int x = 0; x < w; ++x) {
+      const std::uint8_t* p = row + x * ch;
+      arms.left.at(x, y) =
+          static_cast<std::uint8_t>(arm_length(p, -ch, std::min(rule.arm_max, x), ch, rule));
+      arms.right.at(x, y) =
+          static_cast<std::uint8_t>(arm_length(p, ch, std::min(rule.arm_max, w - 1 - x), ch, rule));
+      arms.up.at(x, y) =
+          static_cast<std::uint8_t>(arm_length(p, -down_step, std::min(rule.arm_max, y), ch, rule));
+      arms.down.at(x, y) = static_cast<std::uint8_t>(
+          arm_length(p, down_step, std::min(rule.arm_max, h - 1 - y), ch, rule));
+    }
+  }
+}
+
+void smooth_cross_arms(CrossArms& arms, Image<std::uint8_t>& scratch) {
+  scratch.resize(arms.width(), arms.height());
+  // Horizontal arms are smoothed down the columns, vertical arms along the rows. A neighbour's
+  // arm never leaves the image at this pixel's position, so the result stays in bounds.
+  median3(arms.left, scratch, /*along_x=*/false);
+  median3(arms.right, scratch, false);
+  median3(arms.up, scratch, /*along_x=*/true);
+  median3(arms.down, scratch, true);
+}
+
+}  // namespace dco::stereo

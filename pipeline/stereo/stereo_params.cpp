@@ -1,0 +1,79 @@
+#include "dco/pipeline/stereo/stereo_params.hpp"
+
+#include <string>
+
+#include "dco/core/config.hpp"
+#include "dco/core/error.hpp"
+
+namespace dco::stereo {
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw Error("stereo parameters: " + what);
+}
+
+}  // namespace
+
+void register_params(ConfigSchema& s, StereoParams& p) {
+  s.add("stereo.max_disparity", &p.max_disparity, 1, 1024,
+        "largest disparity searched, pixels of the input image");
+  s.add("stereo.internal_resolution", &p.internal_resolution, {"auto", "full", "half"},
+        "auto = half size when the input is wider than 640 px");
+  s.add("stereo.use_color", &p.use_color, "AD cost and arms on colour when the input has it");
+  s.add("stereo.lambda_ad", &p.lambda_ad, 0.01, 1000.0, "λ_AD of Eq. 1");
+  s.add("stereo.lambda_census", &p.lambda_census, 0.01, 1000.0, "λ_census of Eq. 1");
+  s.add("stereo.gamma_l", &p.gamma_l, 0.0, 100.0, "γ_L of Eq. 1 (edge control)");
+  s.add("stereo.epsilon", &p.epsilon, 0.001, 100.0, "ε of Eq. 1 (correction)");
+  s.add("stereo.census_width", &p.census_width, 1, 63, "census window width, odd");
+  s.add("stereo.census_height", &p.census_height, 1, 63, "census window height, odd");
+  s.add("stereo.arm_max", &p.arm_max, 2, 255, "longest cross arm L1, input pixels");
+  s.add("stereo.arm_short", &p.arm_short, 0, 255, "arm length L2 beyond which tau2 applies");
+  s.add("stereo.tau1", &p.tau1, 1, 255, "colour threshold of the arms");
+  s.add("stereo.tau2", &p.tau2, 1, 255, "stricter colour threshold beyond arm_short");
+  s.add("stereo.smooth_arms", &p.smooth_arms,
+        "median-smooth the arm lengths across the arm direction");
+  s.add("stereo.aggregation_passes", &p.aggregation_passes, 1, 8,
+        "alternating cross-aggregation passes (Eq. 2)");
+  s.add("stereo.lr_max_diff", &p.lr_max_diff, 0, 16, "left-right check tolerance, internal px");
+  s.add("stereo.uniqueness", &p.uniqueness, 0.0, 0.9,
+        "best cost must be this fraction below the next non-adjacent one (0 = off)");
+  s.add("stereo.vote_iterations", &p.vote_iterations, 0, 16, "histogram-vote iterations (Eq. 4)");
+  s.add("stereo.vote_min_count", &p.vote_min_count, 1, 100000,
+        "reliable pixels a region needs for its vote to count");
+  s.add("stereo.vote_min_ratio", &p.vote_min_ratio, 0.0, 1.0,
+        "share of the votes the winning disparity needs");
+  s.add("stereo.vote_tolerance", &p.vote_tolerance, 0, 16,
+        "a pixel within this of the winning disparity keeps its own value");
+  s.add("stereo.vote_fill", &p.vote_fill, "votes also fill pixels that failed the checks");
+  s.add("stereo.max_neighbour_jump", &p.max_neighbour_jump, -1, 64,
+        "drop pixels beside a larger disparity jump (internal px, -1 = off)");
+  s.add("stereo.subpixel", &p.subpixel, "parabola fit of the winning cost");
+}
+
+void validate(const StereoParams& p) {
+  require(p.max_disparity >= 1,
+          "max_disparity must be at least 1, not " + std::to_string(p.max_disparity));
+  require(p.internal_resolution == "auto" || p.internal_resolution == "full" ||
+              p.internal_resolution == "half",
+          "internal_resolution must be auto, full or half, not '" + p.internal_resolution + "'");
+  require(p.lambda_ad > 0 && p.lambda_census > 0, "lambda_ad and lambda_census must be positive");
+  require(p.gamma_l >= 0 && p.epsilon > 0, "gamma_l must be >= 0 and epsilon > 0");
+  require(p.census_width % 2 == 1 && p.census_height % 2 == 1 && p.census_width > 0 &&
+              p.census_height > 0,
+          "census window sides must be odd");
+  require(p.census_width * p.census_height - 1 <= 64 && p.census_width * p.census_height > 1,
+          "census window must hold 2..65 pixels (a 64-bit descriptor)");
+  require(p.arm_max >= 2 && p.arm_max <= 255, "arm_max must be in 2..255");
+  require(p.arm_short >= 0 && p.arm_short <= p.arm_max, "arm_short must be in 0..arm_max");
+  require(p.tau1 >= 1 && p.tau2 >= 1 && p.tau2 <= p.tau1, "need 1 <= tau2 <= tau1");
+  require(p.aggregation_passes >= 1 && p.aggregation_passes <= 8,
+          "aggregation_passes must be in 1..8");
+  require(p.lr_max_diff >= 0, "lr_max_diff must be >= 0");
+  require(p.uniqueness >= 0 && p.uniqueness < 1, "uniqueness must be in [0, 1)");
+  require(p.vote_iterations >= 0 && p.vote_min_count >= 1 && p.vote_tolerance >= 0,
+          "vote_iterations and vote_tolerance must be >= 0 and vote_min_count >= 1");
+  require(p.max_neighbour_jump >= -1, "max_neighbour_jump must be >= -1");
+  require(p.vote_min_ratio >= 0 && p.vote_min_ratio <= 1, "vote_min_ratio must be in [0, 1]");
+}
+
+}  // namespace dco::stereo

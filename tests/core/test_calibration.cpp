@@ -1,0 +1,389 @@
+#include "dco/core/calibration.hpp"
+
+#include <cmath>
+#include <limits>
+#include <regex>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "dco/core/error.hpp"
+#include "test_support.hpp"
+
+namespace dco {
+namespace {
+
+const auto kMiddlebury = test::data_dir() / "middlebury2014" / "Motorcycle" / "calib.txt";
+const auto kKarlsruhe =
+    test::data_dir() / "karlsruhe_sequences" / "2010_03_09_drive_0023" / "calib.txt";
+const auto kKitti = test::source_dir() / "tests" / "core" / "data" / "kitti_calib_cam_to_cam.txt";
+
+// The message of the dco::Error that loading `text` (saved as `name`) throws, or "" if none.
+std::string load_error(const test::TempDir& dir, const std::string& name, const std::string& text) {
+  test::write_file(dir / name, text);
+  try {
+    load_calibration(dir / name);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const std::string kRigToml = R"([left]
+model = "pinhole"
+width = 640
+height = 480
+fx = 500.0
+fy = 500.0
+cx = 320.0
+cy = 240.0
+distortion = [-0.1, 0.01, 0.0, 0.0]
+
+[right]
+model = "pinhole"
+width = 640
+height = 480
+fx = 500.0
+fy = 500.0
+cx = 320.0
+cy = 240.0
+
+[extrinsics]
+rotation = [1, 0, 0, 0, 1, 0, 0, 0, 1]
+translation = [-0.1, 0, 0]
+)";
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return text.replace(pos, from.size(), to);
+}
+
+void expect_same(const StereoCalibration& a, const StereoCalibration& b) {
+  const CameraIntrinsics* ca[2] = {&a.left, &a.right};
+  const CameraIntrinsics* cb[2] = {&b.left, &b.right};
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_EQ(ca[i]->model, cb[i]->model);
+    EXPECT_EQ(ca[i]->width, cb[i]->width);
+    EXPECT_EQ(ca[i]->height, cb[i]->height);
+    EXPECT_EQ(ca[i]->fx, cb[i]->fx);
+    EXPECT_EQ(ca[i]->fy, cb[i]->fy);
+    EXPECT_EQ(ca[i]->cx, cb[i]->cx);
+    EXPECT_EQ(ca[i]->cy, cb[i]->cy);
+    EXPECT_EQ(ca[i]->distortion, cb[i]->distortion);
+  }
+  EXPECT_EQ(a.rotation, b.rotation);
+  EXPECT_EQ(a.translation, b.translation);
+  EXPECT_EQ(a.has_rectification, b.has_rectification);
+  EXPECT_EQ(a.rect_rotation_left, b.rect_rotation_left);
+  EXPECT_EQ(a.rect_rotation_right, b.rect_rotation_right);
+  EXPECT_EQ(a.is_rectified, b.is_rectified);
+  EXPECT_EQ(a.rectified.width, b.rectified.width);
+  EXPECT_EQ(a.rectified.height, b.rectified.height);
+  EXPECT_EQ(a.rectified.f, b.rectified.f);
+  EXPECT_EQ(a.rectified.cx_left, b.rectified.cx_left);
+  EXPECT_EQ(a.rectified.cx_right, b.rectified.cx_right);
+  EXPECT_EQ(a.rectified.cy, b.rectified.cy);
+  EXPECT_EQ(a.rectified.baseline_m, b.rectified.baseline_m);
+}
+
+TEST(Geometry, DepthAndDisparityAreInverse) {
+  RectifiedGeometry g;
+  g.f = 500;
+  g.baseline_m = 0.1;
+  EXPECT_DOUBLE_EQ(g.depth_from_disparity(25), 2.0);
+  EXPECT_DOUBLE_EQ(g.disparity_from_depth(2.0), 25);
+  EXPECT_EQ(g.depth_from_disparity(0), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(g.depth_from_disparity(-3), std::numeric_limits<double>::infinity());
+  g.cx_left = 100;
+  g.cx_right = 110;  // doffs 10
+  EXPECT_DOUBLE_EQ(g.doffs(), 10);
+  EXPECT_DOUBLE_EQ(g.depth_from_disparity(15), 2.0);
+  EXPECT_DOUBLE_EQ(g.disparity_from_depth(2.0), 15);
+  EXPECT_EQ(g.depth_from_disparity(-10), std::numeric_limits<double>::infinity());
+  EXPECT_DOUBLE_EQ(g.depth_from_disparity(-9), 50.0);
+}
+
+TEST(Calibration, LoadsMiddlebury) {
+  const StereoCalibration c = load_calibration(kMiddlebury);
+  EXPECT_TRUE(c.is_rectified);
+  EXPECT_FALSE(c.has_rectification);
+  EXPECT_EQ(c.rectified.width, 741);
+  EXPECT_EQ(c.rectified.height, 497);
+  EXPECT_DOUBLE_EQ(c.rectified.f, 999.421);
+  EXPECT_DOUBLE_EQ(c.rectified.cx_left, 294.182);
+  EXPECT_DOUBLE_EQ(c.rectified.cx_right, 326.96);
+  EXPECT_DOUBLE_EQ(c.rectified.cy, 252.932);
+  EXPECT_DOUBLE_EQ(c.rectified.baseline_m, 0.193001);
+  EXPECT_NEAR(c.rectified.doffs(), 32.778, 1e-9);
+  EXPECT_EQ(c.left.width, 741);
+  EXPECT_DOUBLE_EQ(c.right.cx, 326.96);
+  EXPECT_TRUE(c.left.distortion.empty());
+  EXPECT_DOUBLE_EQ(c.translation[0], -0.193001);
+  EXPECT_EQ(c.source, kMiddlebury.string());
+  // Middlebury's own formula: Z[mm] = baseline[mm] * f / (d + doffs).
+  for (double d : {9.5, 30.0, 62.9})
+    EXPECT_NEAR(c.rectified.depth_from_disparity(d), 193.001 * 999.421 / (d + 32.778) / 1000.0,
+                1e-12);
+}
+
+TEST(Calibration, DetectsMiddleburyByContentNotLineOrder) {
+  test::TempDir dir;
+  const std::string text = test::read_file(kMiddlebury);
+  const auto cam1 = text.find("cam1=");
+  // "# note", then everything from cam1 on, then the cam0 line last.
+  test::write_file(dir / "reordered.conf",
+                   "# copied from MiddEval3\n" + text.substr(cam1) + text.substr(0, cam1));
+  const StereoCalibration c = load_calibration(dir / "reordered.conf");
+  EXPECT_DOUBLE_EQ(c.rectified.cx_left, 294.182);
+  EXPECT_DOUBLE_EQ(c.rectified.cx_right, 326.96);
+}
+
+TEST(Calibration, LoadsKarlsruhe) {
+  const StereoCalibration c = load_calibration(kKarlsruhe);
+  EXPECT_TRUE(c.is_rectified);
+  EXPECT_EQ(c.rectified.width, 1344);  // the size of the images next to the file
+  EXPECT_EQ(c.rectified.height, 372);
+  EXPECT_DOUBLE_EQ(c.rectified.f, 645.2401);
+  EXPECT_DOUBLE_EQ(c.rectified.cx_left, 635.9587);
+  EXPECT_DOUBLE_EQ(c.rectified.cx_right, 635.9587);
+  EXPECT_DOUBLE_EQ(c.rectified.cy, 194.1291);
+  EXPECT_DOUBLE_EQ(c.rectified.baseline_m, 368.2632 / 645.2401);
+  EXPECT_NEAR(c.rectified.depth_from_disparity(10), 36.82632, 1e-9);
+  EXPECT_EQ(c.left.height, 372);
+}
+
+TEST(Calibration, KarlsruheWithoutRoiHasUnknownSize) {
+  test::TempDir dir;
+  std::string text = test::read_file(kKarlsruhe);
+  text = std::regex_replace(text, std::regex("\nroi: [^\n]*"), "");
+  test::write_file(dir / "calib.txt", text);
+  const StereoCalibration c = load_calibration(dir / "calib.txt");
+  EXPECT_TRUE(c.is_rectified);
+  EXPECT_EQ(c.rectified.width, 0);
+  EXPECT_EQ(c.rectified.height, 0);
+  EXPECT_DOUBLE_EQ(c.rectified.f, 645.2401);
+}
+
+TEST(Calibration, LoadsKittiCamToCam) {
+  const StereoCalibration c = load_calibration(kKitti);
+  EXPECT_FALSE(c.is_rectified);
+  EXPECT_TRUE(c.has_rectification);
+  EXPECT_EQ(c.left.width, 1392);
+  EXPECT_EQ(c.left.height, 512);
+  EXPECT_DOUBLE_EQ(c.left.fx, 959.8);
+  EXPECT_DOUBLE_EQ(c.left.fy, 958.0);
+  EXPECT_DOUBLE_EQ(c.right.fx, 903.7);
+  ASSERT_EQ(c.left.distortion.size(), 5u);
+  EXPECT_DOUBLE_EQ(c.left.distortion[0], -0.37);
+  EXPECT_DOUBLE_EQ(c.right.distortion[4], -0.06);
+  EXPECT_EQ(c.rectified.width, 1242);
+  EXPECT_EQ(c.rectified.height, 375);
+  EXPECT_DOUBLE_EQ(c.rectified.f, 690.6366);
+  EXPECT_DOUBLE_EQ(c.rectified.cx_left, 596.5517);
+  EXPECT_DOUBLE_EQ(c.rectified.cy, 162.1902);
+  EXPECT_DOUBLE_EQ(c.rectified.baseline_m, (41.4382 + 326.6791) / 690.6366);
+  EXPECT_DOUBLE_EQ(c.rect_rotation_left[0], 0.99954);
+  EXPECT_DOUBLE_EQ(c.rect_rotation_right[8], 0.9999255);
+  // The rig the fixture was made from: T = T_03 - R T_02 with R = R_03 R_02^T.
+  EXPECT_NEAR(c.translation[0], -0.5329278, 2e-6);
+  EXPECT_NEAR(c.translation[1], 0.007103519, 2e-6);
+  EXPECT_NEAR(c.translation[2], -0.006234079, 2e-6);
+  EXPECT_NEAR(c.rotation[1], 0.006935632, 2e-6);
+  EXPECT_NEAR(c.rotation[5], 0.006919492, 2e-6);
+}
+
+TEST(Calibration, KittiExtrinsicsFollowFromRectificationAlone) {
+  test::TempDir dir;
+  std::string text = test::read_file(kKitti);
+  text = std::regex_replace(text, std::regex("\n[RT]_0[23]: [^\n]*"), "");
+  ASSERT_EQ(text.find("T_02"), std::string::npos);
+  test::write_file(dir / "cam_to_cam.txt", text);
+  const StereoCalibration derived = load_calibration(dir / "cam_to_cam.txt");
+  const StereoCalibration full = load_calibration(kKitti);
+  for (int i = 0; i < 9; ++i) EXPECT_NEAR(derived.rotation[i], full.rotation[i], 1e-5) << i;
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(derived.translation[i], full.translation[i], 1e-5) << i;
+}
+
+TEST(Calibration, TomlRoundTrip) {
+  test::TempDir dir;
+  StereoCalibration c;
+  c.left = {CameraModel::kPinhole,
+            640,
+            480,
+            501.25,
+            499.75,
+            319.5,
+            241.125,
+            {-0.123456789, 0.0123, 1e-4, -2e-4, 0.001}};
+  c.right = {CameraModel::kPinhole,
+             640,
+             480,
+             503.1,
+             502.9,
+             322.2,
+             238.8,
+             {-0.11, 0.02, 0, 0, 0, 0.001, 0.0002, -0.0003}};
+  const double a = 0.0123, ca = std::cos(a), sa = std::sin(a);
+  c.rotation = {ca, 0, sa, 0, 1, 0, -sa, 0, ca};
+  c.translation = {-0.0641234567, 0.0002, -0.0011};
+  c.source = "in memory";
+  save_calibration(dir / "rig.toml", c);
+  const StereoCalibration back = load_calibration(dir / "rig.toml");
+  expect_same(c, back);
+  EXPECT_EQ(back.source, (dir / "rig.toml").string());
+}
+
+TEST(Calibration, TomlRoundTripOfLoadedFormats) {
+  test::TempDir dir;
+  for (const auto& path : {kMiddlebury, kKarlsruhe, kKitti}) {
+    const StereoCalibration c = load_calibration(path);
+    save_calibration(dir / "copy.toml", c);
+    SCOPED_TRACE(path.string());
+    expect_same(c, load_calibration(dir / "copy.toml"));
+  }
+}
+
+TEST(Calibration, TomlKannalaBrandtAndRodrigues) {
+  test::TempDir dir;
+  std::string text =
+      replaced(kRigToml, "rotation = [1, 0, 0, 0, 1, 0, 0, 0, 1]", "rotation = [0, 0, 0.1]");
+  text = replaced(text, "model = \"pinhole\"", "model = \"kannala_brandt\"");
+  text =
+      replaced(text, "distortion = [-0.1, 0.01, 0.0, 0.0]", "distortion = [0.05, -0.01, 0.002, 0]");
+  test::write_file(dir / "kb.toml", text);
+  const StereoCalibration c = load_calibration(dir / "kb.toml");
+  EXPECT_EQ(c.left.model, CameraModel::kKannalaBrandt);
+  EXPECT_EQ(c.right.model, CameraModel::kPinhole);
+  EXPECT_NEAR(c.rotation[0], std::cos(0.1), 1e-12);
+  EXPECT_NEAR(c.rotation[1], -std::sin(0.1), 1e-12);
+  EXPECT_NEAR(c.rotation[3], std::sin(0.1), 1e-12);
+  EXPECT_DOUBLE_EQ(c.left.fx, 500.0);  // integers and floats both read as numbers
+}
+
+TEST(Calibration, TomlRectifiedOnlyDerivesCameras) {
+  test::TempDir dir;
+  test::write_file(dir / "r.toml",
+                   "[rectified]\nwidth = 100\nheight = 50\nf = 80\ncx_left = 49.5\n"
+                   "cx_right = 52\ncy = 24.5\nbaseline_m = 0.05\n");
+  const StereoCalibration c = load_calibration(dir / "r.toml");
+  EXPECT_TRUE(c.is_rectified);
+  EXPECT_EQ(c.left.width, 100);
+  EXPECT_DOUBLE_EQ(c.right.cx, 52);
+  EXPECT_DOUBLE_EQ(c.translation[0], -0.05);
+  EXPECT_DOUBLE_EQ(c.rectified.doffs(), 2.5);
+}
+
+TEST(Calibration, DocumentationExamplesLoad) {
+  test::TempDir dir;
+  const std::string doc = test::read_file(test::source_dir() / "docs" / "calibration.md");
+  const std::regex block("```toml\n([^`]*)```");
+  int n = 0;
+  for (auto it = std::sregex_iterator(doc.begin(), doc.end(), block); it != std::sregex_iterator();
+       ++it, ++n) {
+    const std::string name = "example" + std::to_string(n) + ".toml";
+    test::write_file(dir / name, (*it)[1].str());
+    EXPECT_NO_THROW(load_calibration(dir / name)) << (*it)[1].str();
+  }
+  EXPECT_GE(n, 2);
+}
+
+TEST(CalibrationErrors, NameTheFileAndLine) {
+  test::TempDir dir;
+  struct Case {
+    std::string name, text, expected;
+  };
+  const Case cases[] = {
+      {"missing.toml", replaced(kRigToml, "fx = 500.0\n", ""),
+       "missing.toml:1: [left] is missing 'fx'"},
+      {"bad_number.toml", replaced(kRigToml, "fy = 500.0", "fy = \"abc\""),
+       "bad_number.toml:6: [left] fy must be a number"},
+      {"unknown_key.toml",
+       replaced(kRigToml, "cy = 240.0\ndistortion", "cy = 240.0\nfxx = 1\ndistortion"),
+       "unknown_key.toml:9: unknown key 'fxx' in [left]"},
+      {"unknown_section.toml", kRigToml + "\n[lens]\nx = 1\n",
+       "unknown_section.toml:24: unknown section or key 'lens'"},
+      {"syntax.toml", replaced(kRigToml, "width = 640\nheight", "width = = 640\nheight"),
+       "syntax.toml:3:"},
+      {"rotation.toml",
+       replaced(kRigToml, "rotation = [1, 0, 0, 0, 1, 0, 0, 0, 1]",
+                "rotation = [1, 0.2, 0, 0, 1, 0, 0, 0, 1]"),
+       "rotation.toml: extrinsic rotation is not orthonormal"},
+      {"reflection.toml",
+       replaced(kRigToml, "rotation = [1, 0, 0, 0, 1, 0, 0, 0, 1]",
+                "rotation = [-1, 0, 0, 0, 1, 0, 0, 0, 1]"),
+       "reflection.toml: extrinsic rotation is a reflection"},
+      {"baseline.toml", replaced(kRigToml, "translation = [-0.1, 0, 0]", "translation = [0, 0, 0]"),
+       "baseline.toml: baseline is zero"},
+      {"focal.toml", replaced(kRigToml, "fx = 500.0", "fx = -500.0"),
+       "focal.toml: left camera: focal"},
+      {"distortion.toml", replaced(kRigToml, "[-0.1, 0.01, 0.0, 0.0]", "[-0.1, 0.01, 0.0]"),
+       "distortion.toml: left camera: the pinhole model takes 0, 4, 5 or 8"},
+      {"size.toml", replaced(kRigToml, "width = 640", "width = 0"),
+       "size.toml: left camera: image size 0x480"},
+      {"mismatch.toml",
+       replaced(kRigToml, "[right]\nmodel = \"pinhole\"\nwidth = 640",
+                "[right]\nmodel = \"pinhole\"\nwidth = 320"),
+       "mismatch.toml: left images are 640x480 but right images are 320x480"},
+      {"model.toml", replaced(kRigToml, "\"pinhole\"", "\"fisheye\""),
+       "model.toml:2: [left] model must be"},
+      {"width_float.toml", replaced(kRigToml, "width = 640", "width = 640.5"),
+       "width_float.toml:3: [left] width must be an integer"},
+      {"no_right.toml", kRigToml.substr(0, kRigToml.find("[right]")),
+       "no_right.toml: missing section [right]"},
+      {"empty.toml", "\n\n", "empty.toml: calibration file is empty"},
+      {"mb_doffs.txt", replaced(test::read_file(kMiddlebury), "doffs=32.778", "doffs=30"),
+       "mb_doffs.txt:3: doffs 30 disagrees"},
+      {"mb_number.txt", replaced(test::read_file(kMiddlebury), "baseline=193.001", "baseline=19x"),
+       "mb_number.txt:4: '19x' in baseline is not a number"},
+      {"mb_missing.txt", replaced(test::read_file(kMiddlebury), "cam1=", "cam9="),
+       "mb_missing.txt: missing 'cam1'"},
+      {"ka_count.txt", replaced(test::read_file(kKarlsruhe), " 0.000000e+00\nP2:", "\nP2:"),
+       "ka_count.txt:13: P1_roi has 11 numbers, expected 12"},
+      {"ki_missing.txt",
+       std::regex_replace(test::read_file(kKitti), std::regex("P_rect_03: [^\n]*\n"), ""),
+       "ki_missing.txt: missing 'P_rect_03'"},
+      {"ki_garbage.txt", test::read_file(kKitti) + "this line is not a key\n",
+       "ki_garbage.txt:20: expected 'key: values'"},
+      {"unknown_keys.txt", "foo: 1 2 3\n",
+       "unknown_keys.txt: unrecognised 'key: numbers' calibration"},
+  };
+  for (const Case& c : cases) {
+    const std::string msg = load_error(dir, c.name, c.text);
+    EXPECT_NE(msg.find(c.expected), std::string::npos)
+        << "file " << c.name << "\nexpected: " << c.expected << "\ngot: " << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;  // one line
+  }
+  try {
+    load_calibration(dir / "does_not_exist.toml");
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("does_not_exist.toml"), std::string::npos);
+  }
+}
+
+TEST(CalibrationErrors, ValidateNamesTheSource) {
+  StereoCalibration c;
+  c.source = "rig.toml";
+  try {
+    c.validate();
+    ADD_FAILURE() << "a default calibration has no focal length";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("rig.toml: ", 0), 0u) << e.what();
+  }
+  c.left =
+      c.right = {CameraModel::kKannalaBrandt, 64, 48, 50, 50, 32, 24, {0.1, 0.0, 0.0, 0.0, 0.0}};
+  c.translation = {-0.1, 0, 0};
+  EXPECT_THROW(c.validate(), Error);  // five coefficients for a fisheye
+  c.left.distortion.resize(4);
+  c.right.distortion.resize(4);
+  EXPECT_NO_THROW(c.validate());
+  c.translation = {std::nan(""), 0, 0};
+  EXPECT_THROW(c.validate(), Error);
+  c.translation = {-0.1, 0, 0};
+  c.is_rectified = true;  // rectified geometry not filled in
+  EXPECT_THROW(c.validate(), Error);
+}
+
+}  // namespace
+}  // namespace dco

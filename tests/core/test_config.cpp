@@ -1,0 +1,196 @@
+#include "dco/core/config.hpp"
+
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "dco/core/error.hpp"
+#include "test_support.hpp"
+
+namespace dco {
+namespace {
+
+struct Params {
+  double lambda_ad = 10;
+  int max_disparity = 64;
+  bool use_color = false;
+  std::string mode = "fast";
+  std::string name = "unnamed";
+  int threads = 4;
+};
+
+class Config : public ::testing::Test {
+ protected:
+  Config() {
+    schema.add("stereo.lambda_ad", &p.lambda_ad, 0.001, 1000, "weight of the absolute difference");
+    schema.add("stereo.max_disparity", &p.max_disparity, 1, 256, "largest disparity searched");
+    schema.add("stereo.use_color", &p.use_color, "match on colour instead of grey");
+    schema.add("stereo.mode", &p.mode, {"fast", "accurate"}, "speed/quality trade-off");
+    schema.add("output.name", &p.name, {}, "free text");
+    schema.add("threads", &p.threads, 1, 64, "worker threads");
+  }
+
+  std::string load_error(const std::string& text) {
+    try {
+      schema.load_string(text, "dcod.toml");
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  }
+
+  std::string set_error(const std::string& assignment) {
+    try {
+      schema.set(assignment);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  }
+
+  Params p;
+  ConfigSchema schema;
+};
+
+TEST_F(Config, LoadsNestedTablesAndDottedKeys) {
+  schema.load_string(R"(threads = 8
+[stereo]
+lambda_ad = 12       # an integer is fine for a double
+use_color = true
+mode = "accurate"
+[output]
+name = "left cam"
+)",
+                     "dcod.toml");
+  EXPECT_EQ(p.threads, 8);
+  EXPECT_EQ(p.lambda_ad, 12.0);
+  EXPECT_TRUE(p.use_color);
+  EXPECT_EQ(p.mode, "accurate");
+  EXPECT_EQ(p.name, "left cam");
+  EXPECT_EQ(p.max_disparity, 64);  // untouched
+
+  schema.load_string("stereo.max_disparity = 128\nstereo.lambda_ad = 0.5\n", "inline");
+  EXPECT_EQ(p.max_disparity, 128);
+  EXPECT_EQ(p.lambda_ad, 0.5);
+}
+
+TEST_F(Config, UnknownKeyNamesFileAndLine) {
+  EXPECT_EQ(load_error("threads = 2\n\n[stereo]\nlamda_ad = 3\n"),
+            "dcod.toml:4: unknown key 'stereo.lamda_ad'");
+  EXPECT_EQ(load_error("[stereo]\n[sterio]\nmode = \"fast\"\n"),
+            "dcod.toml:2: unknown section 'sterio'");
+  EXPECT_EQ(load_error("[extra]\n"), "dcod.toml:1: unknown section 'extra'");
+  EXPECT_EQ(p.threads, 4);  // nothing applied from a rejected file
+}
+
+TEST_F(Config, TypeErrors) {
+  EXPECT_NE(load_error("[stereo]\nmax_disparity = 3.5\n")
+                .find("dcod.toml:2: stereo.max_disparity: expects an integer"),
+            std::string::npos);
+  EXPECT_NE(load_error("[stereo]\nuse_color = \"yes\"\n")
+                .find("dcod.toml:2: stereo.use_color: expects true or false"),
+            std::string::npos);
+  EXPECT_NE(load_error("[stereo]\nlambda_ad = \"10\"\n").find("expects a number"),
+            std::string::npos);
+  EXPECT_NE(load_error("[stereo]\nmode = 3\n").find("expects a string"), std::string::npos);
+  EXPECT_NE(load_error("[stereo]\nlambda_ad = [1, 2]\n")
+                .find("dcod.toml:2: stereo.lambda_ad: unsupported"),
+            std::string::npos);
+  EXPECT_NE(load_error("[stereo.lambda_ad]\nx = 1\n").find("stereo.lambda_ad"), std::string::npos);
+  EXPECT_NE(load_error("[stereo]\nlambda_ad = \n").find("dcod.toml:2:"),
+            std::string::npos);  // syntax
+  EXPECT_EQ(p.lambda_ad, 10.0);
+}
+
+TEST_F(Config, RangesAreInclusive) {
+  EXPECT_EQ(load_error("[stereo]\nlambda_ad = 0.001\nmax_disparity = 256\n"), "");
+  EXPECT_EQ(p.lambda_ad, 0.001);
+  EXPECT_EQ(p.max_disparity, 256);
+  EXPECT_EQ(load_error("[stereo]\nlambda_ad = 1000\nmax_disparity = 1\n"), "");
+  EXPECT_EQ(load_error("[stereo]\nlambda_ad = -1\n"),
+            "dcod.toml:2: stereo.lambda_ad: value -1 is outside [0.001, 1000]");
+  EXPECT_EQ(load_error("[stereo]\nmax_disparity = 257\n"),
+            "dcod.toml:2: stereo.max_disparity: value 257 is outside [1, 256]");
+  EXPECT_NE(load_error("[stereo]\nlambda_ad = nan\n").find("outside"), std::string::npos);
+  EXPECT_NE(load_error("[stereo]\nmode = \"slow\"\n").find("\"slow\" is not one of fast, accurate"),
+            std::string::npos);
+}
+
+TEST_F(Config, BadFileIsAppliedAllOrNothing) {
+  EXPECT_NE(load_error("threads = 16\n[stereo]\nlambda_ad = 5000\n"), "");
+  EXPECT_EQ(p.threads, 4);
+}
+
+TEST_F(Config, SetOverrides) {
+  schema.set("stereo.lambda_ad=12.5");
+  schema.set("stereo.use_color=true");
+  schema.set("stereo.mode=accurate");
+  schema.set("stereo.max_disparity = 128");
+  schema.set("output.name=\"a b\"");
+  EXPECT_EQ(p.lambda_ad, 12.5);
+  EXPECT_TRUE(p.use_color);
+  EXPECT_EQ(p.mode, "accurate");
+  EXPECT_EQ(p.max_disparity, 128);
+  EXPECT_EQ(p.name, "a b");
+  schema.set("stereo.use_color=false");
+  EXPECT_FALSE(p.use_color);
+
+  EXPECT_EQ(set_error("stereo.lambda_ad=-1"),
+            "--set stereo.lambda_ad=-1: value -1 is outside [0.001, 1000]");
+  EXPECT_EQ(set_error("stereo.lamda_ad=1"),
+            "--set stereo.lamda_ad=1: unknown key 'stereo.lamda_ad'");
+  EXPECT_NE(set_error("stereo.lambda_ad").find("expected key=value"), std::string::npos);
+  EXPECT_NE(set_error("stereo.lambda_ad=abc").find("not a number"), std::string::npos);
+  EXPECT_NE(set_error("stereo.lambda_ad=inf").find("not a number"), std::string::npos);
+  EXPECT_NE(set_error("stereo.max_disparity=12x").find("not an integer"), std::string::npos);
+  EXPECT_NE(set_error("stereo.max_disparity=1.5").find("not an integer"), std::string::npos);
+  EXPECT_NE(set_error("stereo.use_color=yes").find("not true or false"), std::string::npos);
+  EXPECT_NE(set_error("stereo.mode=slow").find("not one of"), std::string::npos);
+  EXPECT_EQ(p.lambda_ad, 12.5);
+}
+
+TEST_F(Config, LoadFile) {
+  test::TempDir dir;
+  test::write_file(dir / "dcod.toml", "[stereo]\nmax_disparity = 96\n\nbogus = 1\n");
+  try {
+    schema.load_file(dir / "dcod.toml");
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (dir / "dcod.toml").string() + ":4: unknown key 'stereo.bogus'");
+  }
+  test::write_file(dir / "dcod.toml", "[stereo]\nmax_disparity = 96\n");
+  schema.load_file(dir / "dcod.toml");
+  EXPECT_EQ(p.max_disparity, 96);
+  EXPECT_THROW(schema.load_file(dir / "missing.toml"), Error);
+}
+
+TEST_F(Config, HasAndDescribe) {
+  EXPECT_TRUE(schema.has("stereo.mode"));
+  EXPECT_FALSE(schema.has("stereo"));
+  EXPECT_FALSE(schema.has("mode"));
+
+  p.lambda_ad = 2.5;
+  const std::string text = schema.describe();
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 6u);
+  EXPECT_EQ(lines[0].rfind("stereo.lambda_ad", 0), 0u);
+  EXPECT_NE(lines[0].find("2.5"), std::string::npos);  // current value, not the default
+  EXPECT_NE(lines[0].find("[0.001, 1000]"), std::string::npos);
+  EXPECT_NE(lines[1].find("[1, 256]"), std::string::npos);
+  EXPECT_NE(lines[2].find("true|false"), std::string::npos);
+  EXPECT_NE(lines[3].find("fast|accurate"), std::string::npos);
+  EXPECT_NE(lines[3].find("\"fast\""), std::string::npos);
+  EXPECT_NE(lines[4].find("any string"), std::string::npos);
+  // Aligned: every doc string starts in the same column.
+  const std::string docs[] = {"weight of", "largest", "match on", "speed/", "free text", "worker"};
+  const auto column = lines[0].find(docs[0]);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(lines[i].find(docs[i]), column) << lines[i];
+}
+
+}  // namespace
+}  // namespace dco

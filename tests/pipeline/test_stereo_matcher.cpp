@@ -1,0 +1,603 @@
+#include "dco/pipeline/stereo/stereo_matcher.hpp"
+
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <new>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "dco/core/error.hpp"
+#include "dco/core/image.hpp"
+#include "dco/pipeline/stereo/image_ops.hpp"
+
+// Heap allocation counting for the whole test binary: global operator new (std::vector,
+// std::string, ...) and, outside sanitizer builds, aligned_alloc (dco::Image storage).
+// Counting is switched on only around the call under test.
+namespace {
+
+std::atomic<bool> g_counting{false};
+std::atomic<long> g_new_calls{0};
+std::atomic<long> g_aligned_alloc_calls{0};
+std::atomic<const void*> g_sink{nullptr};  // keeps test allocations from being optimised away
+
+void* counted_malloc(std::size_t n) {
+  if (g_counting.load(std::memory_order_relaxed)) g_new_calls.fetch_add(1);
+  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
+  throw std::bad_alloc();
+}
+
+void* counted_aligned(std::size_t n, std::align_val_t al) {
+  if (g_counting.load(std::memory_order_relaxed)) g_new_calls.fetch_add(1);
+  const auto a = static_cast<std::size_t>(al);
+  void* p = nullptr;
+  if (posix_memalign(&p, a < sizeof(void*) ? sizeof(void*) : a, n == 0 ? 1 : n) != 0)
+    throw std::bad_alloc();
+  return p;
+}
+
+}  // namespace
+
+void* operator new(std::size_t n) {
+  return counted_malloc(n);
+}
+void* operator new[](std::size_t n) {
+  return counted_malloc(n);
+}
+void* operator new(std::size_t n, std::align_val_t al) {
+  return counted_aligned(n, al);
+}
+void* operator new[](std::size_t n, std::align_val_t al) {
+  return counted_aligned(n, al);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
+  std::free(p);
+}
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define DCO_TEST_UNDER_SANITIZER 1  // the sanitizer runtime owns aligned_alloc
+#else
+#define DCO_TEST_UNDER_SANITIZER 0
+// dco::Image allocates with std::aligned_alloc, which operator new does not see.
+extern "C" void* aligned_alloc(std::size_t alignment, std::size_t size) noexcept {
+  using Fn = void* (*)(std::size_t, std::size_t);
+  static const Fn next = reinterpret_cast<Fn>(dlsym(RTLD_NEXT, "aligned_alloc"));
+  if (g_counting.load(std::memory_order_relaxed)) g_aligned_alloc_calls.fetch_add(1);
+  return next(alignment, size);
+}
+#endif
+
+namespace dco::stereo {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr int kBackground = 8;   // disparity of the background plane, input pixels
+constexpr int kForeground = 20;  // disparity of the foreground rectangle
+
+std::uint8_t texture(int u, int y, int layer, int c) {
+  std::uint32_t h = static_cast<std::uint32_t>(u) * 0x9e3779b1u ^
+                    static_cast<std::uint32_t>(y) * 0x85ebca77u ^
+                    static_cast<std::uint32_t>(layer * 3 + c + 1) * 0xc2b2ae3du;
+  h ^= h >> 15;
+  h *= 0x2c1b3c6du;
+  h ^= h >> 12;
+  h *= 0x297a2d39u;
+  h ^= h >> 15;
+  return static_cast<std::uint8_t>(h & 0xff);
+}
+
+// A rectified pair of a textured fronto-parallel background at kBackground and a textured
+// rectangle [x0, x1) x [y0, y1) (left-image coordinates) at kForeground, built by shifting:
+// left(x) shows the surface whose right-image position is x - d.
+struct Scene {
+  Image<std::uint8_t> left, right;
+  Image<float> truth;           // left-view disparity
+  Image<std::uint8_t> visible;  // the left pixel is seen in the right image
+};
+
+Scene make_scene(int w, int h, int channels, int x0, int x1, int y0, int y1) {
+  Scene s;
+  s.left = Image<std::uint8_t>(w, h, channels);
+  s.right = Image<std::uint8_t>(w, h, channels);
+  s.truth = Image<float>(w, h);
+  s.visible = Image<std::uint8_t>(w, h);
+  const auto in_rect = [&](int x, int y) { return x >= x0 && x < x1 && y >= y0 && y < y1; };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool fg = in_rect(x, y);
+      const int d = fg ? kForeground : kBackground;
+      for (int c = 0; c < channels; ++c) {
+        s.left.at(x, y, c) = texture(x - d, y, fg ? 1 : 0, c);
+        // Right pixel x shows the rectangle where the left rectangle lands after the shift.
+        const bool fg_right = in_rect(x + kForeground, y);
+        s.right.at(x, y, c) = texture(x, y, fg_right ? 1 : 0, c);
+      }
+      s.truth.at(x, y) = static_cast<float>(d);
+      const int xr = x - d;
+      s.visible.at(x, y) = xr >= 0 && (fg || !in_rect(xr + kForeground, y));
+    }
+  return s;
+}
+
+struct Score {
+  double density = 0;   // finite pixels / all pixels
+  double accurate = 0;  // finite pixels within 1 px of the truth / finite pixels
+  double max_value = 0;
+  long bad_values = 0;  // NaN, -inf, or finite <= 0
+};
+
+Score score(const Image<float>& disp, const Scene& s) {
+  Score r;
+  long finite = 0, good = 0;
+  for (int y = 0; y < disp.height(); ++y)
+    for (int x = 0; x < disp.width(); ++x) {
+      const float v = disp.at(x, y);
+      if (std::isnan(v) || (std::isinf(v) && v < 0) || (std::isfinite(v) && v <= 0.0f)) {
+        ++r.bad_values;
+        continue;
+      }
+      if (!std::isfinite(v)) continue;
+      ++finite;
+      good += std::abs(v - s.truth.at(x, y)) <= 1.0f;
+      r.max_value = std::max<double>(r.max_value, v);
+    }
+  const double n = double(disp.width()) * disp.height();
+  r.density = finite / n;
+  r.accurate = finite ? double(good) / finite : 0.0;
+  return r;
+}
+
+bool bit_identical(const Image<float>& a, const Image<float>& b) {
+  if (a.width() != b.width() || a.height() != b.height()) return false;
+  for (int y = 0; y < a.height(); ++y)
+    if (std::memcmp(a.row(y), b.row(y), sizeof(float) * a.width()) != 0) return false;
+  return true;
+}
+
+Scene small_scene(int channels) {
+  return make_scene(320, 120, channels, 120, 220, 30, 90);
+}
+Scene hd_scene(int channels) {
+  return make_scene(1280, 720, channels, 480, 880, 200, 520);
+}
+
+void expect_accurate(const Scene& s, int expected_scale) {
+  StereoParams params;
+  ASSERT_EQ(internal_scale(params, s.left.width()), expected_scale);
+  const auto matcher = make_cpu_stereo_matcher(params);
+  Image<float> disp;
+  matcher->compute(s.left.cview(), s.right.cview(), disp);
+  ASSERT_EQ(disp.width(), s.left.width());
+  ASSERT_EQ(disp.height(), s.left.height());
+  const Score r = score(disp, s);
+  EXPECT_EQ(r.bad_values, 0);
+  EXPECT_GT(r.accurate, 0.95);
+  EXPECT_GT(r.density, 0.8);
+  EXPECT_LE(r.max_value, params.max_disparity);
+  // Both surfaces are found.
+  long fg = 0, bg = 0;
+  for (int y = 0; y < disp.height(); ++y)
+    for (int x = 0; x < disp.width(); ++x) {
+      const float v = disp.at(x, y);
+      fg += std::abs(v - kForeground) <= 1.0f;
+      bg += std::abs(v - kBackground) <= 1.0f;
+    }
+  EXPECT_GT(fg, 0.1 * disp.width() * disp.height());
+  EXPECT_GT(bg, 0.3 * disp.width() * disp.height());
+  // Pixels that the right camera cannot see have no trustworthy match; most must be unknown.
+  long hidden = 0, hidden_known = 0;
+  for (int y = 0; y < disp.height(); ++y)
+    for (int x = 0; x < disp.width(); ++x)
+      if (!s.visible.at(x, y)) {
+        ++hidden;
+        hidden_known += std::isfinite(disp.at(x, y));
+      }
+  EXPECT_LT(hidden_known, 0.2 * hidden);
+}
+
+TEST(CpuStereoMatcher, GrayPairAtFullInternalResolution) {
+  expect_accurate(small_scene(1), 1);
+}
+
+TEST(CpuStereoMatcher, BgrPairAtFullInternalResolution) {
+  expect_accurate(small_scene(3), 1);
+}
+
+TEST(CpuStereoMatcher, GrayPairAtHalfInternalResolutionReportsInputPixels) {
+  expect_accurate(hd_scene(1), 2);
+}
+
+TEST(CpuStereoMatcher, BgrPairAtHalfInternalResolutionReportsInputPixels) {
+  expect_accurate(hd_scene(3), 2);
+}
+
+TEST(CpuStereoMatcher, HalfResolutionOutputIsExpandedFromTwoByTwoBlocks) {
+  const Scene s = make_scene(646, 362, 1, 200, 420, 100, 260);  // odd internal width 323
+  const auto matcher = make_cpu_stereo_matcher(StereoParams{});
+  Image<float> disp;
+  matcher->compute(s.left.cview(), s.right.cview(), disp);
+  ASSERT_EQ(disp.width(), 646);
+  ASSERT_EQ(disp.height(), 362);
+  for (int y = 0; y < 362; y += 2)
+    for (int x = 0; x < 646; x += 2) {
+      const float v = disp.at(x, y);
+      ASSERT_TRUE(std::memcmp(&v, &disp.at(x + 1, y), sizeof v) == 0 &&
+                  std::memcmp(&v, &disp.at(x, y + 1), sizeof v) == 0 &&
+                  std::memcmp(&v, &disp.at(x + 1, y + 1), sizeof v) == 0)
+          << x << "," << y;
+    }
+  EXPECT_GT(score(disp, s).accurate, 0.95);
+}
+
+TEST(CpuStereoMatcher, OddInputSizeAtHalfResolutionFillsTheLastColumnAndRow) {
+  const Scene s = make_scene(645, 363, 1, 200, 420, 100, 260);
+  const auto matcher = make_cpu_stereo_matcher(StereoParams{});
+  Image<float> disp;
+  matcher->compute(s.left.cview(), s.right.cview(), disp);
+  ASSERT_EQ(disp.width(), 645);
+  ASSERT_EQ(disp.height(), 363);
+  const Score r = score(disp, s);
+  EXPECT_EQ(r.bad_values, 0);
+  EXPECT_GT(r.accurate, 0.95);
+  // The last column and row repeat their neighbours.
+  for (int y = 0; y < 363; ++y)
+    ASSERT_EQ(std::memcmp(&disp.at(644, y), &disp.at(643, y), sizeof(float)), 0) << y;
+  for (int x = 0; x < 645; ++x)
+    ASSERT_EQ(std::memcmp(&disp.at(x, 362), &disp.at(x, 361), sizeof(float)), 0) << x;
+}
+
+TEST(CpuStereoMatcher, UnknownPixelsAreInfinityAndNoValueIsNonPositive) {
+  // Left border and occlusions are always unknown.
+  const Scene s = small_scene(1);
+  const auto matcher = make_cpu_stereo_matcher(StereoParams{});
+  Image<float> disp;
+  matcher->compute(s.left.cview(), s.right.cview(), disp);
+  long unknown = 0;
+  for (int y = 0; y < disp.height(); ++y)
+    for (int x = 0; x < disp.width(); ++x) {
+      const float v = disp.at(x, y);
+      ASSERT_FALSE(std::isnan(v)) << x << "," << y;
+      if (std::isfinite(v)) {
+        ASSERT_GT(v, 0.0f) << x << "," << y;
+      } else {
+        ASSERT_EQ(v, std::numeric_limits<float>::infinity()) << x << "," << y;
+        ++unknown;
+      }
+    }
+  EXPECT_GT(unknown, 0);
+
+  // A featureless pair has nothing to match at all.
+  Image<std::uint8_t> flat(96, 40);
+  flat.fill(128);
+  matcher->compute(flat.cview(), flat.cview(), disp);
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 96; ++x) {
+      const float v = disp.at(x, y);
+      ASSERT_TRUE(std::isinf(v) || v > 0.0f) << x << "," << y;
+    }
+}
+
+TEST(CpuStereoMatcher, MaxDisparityIsRespected) {
+  for (bool hd : {false, true}) {
+    const Scene s = hd ? hd_scene(1) : small_scene(1);
+    for (int max_d : {12, 16}) {
+      StereoParams params;
+      params.max_disparity = max_d;
+      const auto matcher = make_cpu_stereo_matcher(params);
+      Image<float> disp;
+      matcher->compute(s.left.cview(), s.right.cview(), disp);
+      const Score r = score(disp, s);
+      EXPECT_EQ(r.bad_values, 0);
+      EXPECT_LE(r.max_value, max_d) << (hd ? "1280x720" : "320x120");
+      // The background is still found.
+      long bg = 0;
+      for (int y = 0; y < disp.height(); ++y)
+        for (int x = 0; x < disp.width(); ++x) bg += std::abs(disp.at(x, y) - kBackground) <= 1;
+      EXPECT_GT(bg, 0.3 * disp.width() * disp.height());
+    }
+  }
+}
+
+TEST(CpuStereoMatcher, OddMaxDisparityAtHalfResolutionStaysWithinIt) {
+  // A background at disparity 16, which an odd limit of 15 excludes.
+  Scene s = hd_scene(1);
+  for (int y = 0; y < 720; ++y)
+    for (int x = 0; x < 1280; ++x) {
+      s.left.at(x, y) = texture(x - 16, y, 0, 0);
+      s.right.at(x, y) = texture(x, y, 0, 0);
+    }
+  StereoParams params;
+  params.max_disparity = 15;
+  const auto matcher = make_cpu_stereo_matcher(params);
+  Image<float> disp;
+  matcher->compute(s.left.cview(), s.right.cview(), disp);
+  float max_value = 0;
+  for (int y = 0; y < 720; ++y)
+    for (int x = 0; x < 1280; ++x)
+      if (std::isfinite(disp.at(x, y))) max_value = std::max(max_value, disp.at(x, y));
+  EXPECT_LE(max_value, 15.0f);
+}
+
+std::string compute_error(StereoMatcher& m, ImageView<const std::uint8_t> l,
+                          ImageView<const std::uint8_t> r) {
+  Image<float> disp;
+  try {
+    m.compute(l, r, disp);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(CpuStereoMatcher, BadInputThrowsErrorsThatNameTheProblem) {
+  const auto matcher = make_cpu_stereo_matcher(StereoParams{});
+  const Scene s = small_scene(1);
+  const Scene c = small_scene(3);
+  Image<std::uint8_t> empty;
+  EXPECT_THAT(compute_error(*matcher, empty.cview(), s.right.cview()), HasSubstr("empty"));
+  EXPECT_THAT(compute_error(*matcher, s.left.cview(), empty.cview()), HasSubstr("empty"));
+
+  Image<std::uint8_t> taller(320, 121);
+  taller.fill(0);
+  const std::string size_error = compute_error(*matcher, s.left.cview(), taller.cview());
+  EXPECT_THAT(size_error, HasSubstr("320x120x1"));
+  EXPECT_THAT(size_error, HasSubstr("320x121x1"));
+
+  const std::string channel_error = compute_error(*matcher, s.left.cview(), c.right.cview());
+  EXPECT_THAT(channel_error, HasSubstr("320x120x1"));
+  EXPECT_THAT(channel_error, HasSubstr("320x120x3"));
+
+  Image<std::uint8_t> two(320, 120, 2);
+  two.fill(0);
+  EXPECT_THAT(compute_error(*matcher, two.cview(), two.cview()), HasSubstr("1 or 3 channels"));
+
+  Image<std::uint8_t> tiny(8, 6);
+  tiny.fill(0);
+  EXPECT_THAT(compute_error(*matcher, tiny.cview(), tiny.cview()), HasSubstr("census window"));
+
+  for (int max_d : {320, 400}) {
+    StereoParams params;
+    params.max_disparity = max_d;
+    const auto wide = make_cpu_stereo_matcher(params);
+    const std::string e = compute_error(*wide, s.left.cview(), s.right.cview());
+    EXPECT_THAT(e, HasSubstr("max disparity " + std::to_string(max_d)));
+    EXPECT_THAT(e, HasSubstr("width 320"));
+  }
+  StereoParams just_fits;
+  just_fits.max_disparity = 319;
+  EXPECT_EQ(compute_error(*make_cpu_stereo_matcher(just_fits), s.left.cview(), s.right.cview()),
+            "no error");
+
+  // A failed call leaves the matcher usable.
+  Image<float> disp;
+  EXPECT_NO_THROW(matcher->compute(s.left.cview(), s.right.cview(), disp));
+  EXPECT_GT(score(disp, s).accurate, 0.95);
+}
+
+TEST(CpuStereoMatcher, AcceptsStridedViews) {
+  const Scene s = small_scene(3);
+  Image<std::uint8_t> big_l(340, 130, 3), big_r(340, 130, 3);
+  big_l.fill(0);
+  big_r.fill(255);
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < 320; ++x)
+      for (int c = 0; c < 3; ++c) {
+        big_l.at(x + 7, y + 4, c) = s.left.at(x, y, c);
+        big_r.at(x + 11, y + 2, c) = s.right.at(x, y, c);
+      }
+  const auto matcher = make_cpu_stereo_matcher(StereoParams{});
+  Image<float> from_views, direct;
+  matcher->compute(big_l.cview().sub(7, 4, 320, 120), big_r.cview().sub(11, 2, 320, 120),
+                   from_views);
+  matcher->compute(s.left.cview(), s.right.cview(), direct);
+  EXPECT_TRUE(bit_identical(from_views, direct));
+}
+
+TEST(CpuStereoMatcher, BgrWithoutColourEqualsItsGreyImage) {
+  // use_color = false: the BGR pair is matched on its grey conversion only.
+  const Scene s = small_scene(3);
+  Image<std::uint8_t> gl(s.left.width(), s.left.height()), gr(gl.width(), gl.height());
+  bgr_to_gray(s.left.cview(), gl.view());
+  bgr_to_gray(s.right.cview(), gr.view());
+  StereoParams params;
+  params.use_color = false;
+  const auto matcher = make_cpu_stereo_matcher(params);
+  Image<float> from_bgr, from_gray;
+  matcher->compute(s.left.cview(), s.right.cview(), from_bgr);
+  matcher->compute(gl.cview(), gr.cview(), from_gray);
+  EXPECT_TRUE(bit_identical(from_bgr, from_gray));
+  // With colour the result differs (the AD term and the arms see three channels).
+  params.use_color = true;
+  Image<float> colour;
+  make_cpu_stereo_matcher(params)->compute(s.left.cview(), s.right.cview(), colour);
+  EXPECT_FALSE(bit_identical(from_bgr, colour));
+}
+
+TEST(CpuStereoMatcher, HalfResolutionIsFullResolutionOnTheHalvedPair) {
+  // The half-size path must equal matching the 2x2-averaged pair at full internal resolution
+  // with lengths halved, reported doubled and expanded to the input size.
+  for (int channels : {1, 3}) {
+    const Scene s = hd_scene(channels);
+    Image<std::uint8_t> sl(640, 360, channels), sr(640, 360, channels);
+    downsample_half(s.left.cview(), sl.view());
+    downsample_half(s.right.cview(), sr.view());
+    StereoParams half;  // auto: 1280 px wide -> half
+    StereoParams full;
+    full.internal_resolution = "full";
+    full.max_disparity = half.max_disparity / 2;
+    full.arm_max = half.arm_max / 2;
+    full.arm_short = half.arm_short / 2;
+    Image<float> big, small;
+    make_cpu_stereo_matcher(half)->compute(s.left.cview(), s.right.cview(), big);
+    make_cpu_stereo_matcher(full)->compute(sl.cview(), sr.cview(), small);
+    ASSERT_EQ(small.width(), 640);
+    long mismatches = 0;
+    for (int y = 0; y < 720; ++y)
+      for (int x = 0; x < 1280; ++x) {
+        const float expected = 2.0f * small.at(x / 2, y / 2);
+        mismatches += std::memcmp(&expected, &big.at(x, y), sizeof(float)) != 0;
+      }
+    EXPECT_EQ(mismatches, 0) << channels << " channels";
+  }
+}
+
+TEST(CpuStereoMatcher, WithoutSubpixelValuesAreWholeInternalPixels) {
+  for (bool hd : {false, true}) {
+    const Scene s = hd ? hd_scene(1) : small_scene(1);
+    StereoParams params;
+    params.subpixel = false;
+    const auto matcher = make_cpu_stereo_matcher(params);
+    Image<float> disp;
+    matcher->compute(s.left.cview(), s.right.cview(), disp);
+    const float step = hd ? 2.0f : 1.0f;
+    long finite = 0, exact = 0;
+    for (int y = 0; y < disp.height(); ++y)
+      for (int x = 0; x < disp.width(); ++x) {
+        const float v = disp.at(x, y);
+        if (!std::isfinite(v)) continue;
+        ++finite;
+        ASSERT_EQ(v / step, std::floor(v / step)) << x << "," << y << " value " << v;
+        exact += v == s.truth.at(x, y);
+      }
+    // Integer shifts: the whole-pixel answer is the exact truth almost everywhere.
+    EXPECT_GT(exact, 0.95 * finite);
+  }
+}
+
+TEST(CpuStereoMatcher, DiscontinuityCheckOnlyRemovesPixels) {
+  const Scene s = small_scene(1);
+  StereoParams on, off;
+  off.max_neighbour_jump = -1;
+  Image<float> with, without;
+  make_cpu_stereo_matcher(on)->compute(s.left.cview(), s.right.cview(), with);
+  make_cpu_stereo_matcher(off)->compute(s.left.cview(), s.right.cview(), without);
+  long removed = 0;
+  for (int y = 0; y < with.height(); ++y)
+    for (int x = 0; x < with.width(); ++x) {
+      if (std::isfinite(with.at(x, y))) {
+        ASSERT_EQ(std::memcmp(&with.at(x, y), &without.at(x, y), sizeof(float)), 0)
+            << x << "," << y;
+      } else if (std::isfinite(without.at(x, y))) {
+        ++removed;
+      }
+    }
+  // The rectangle's left and right edges are depth jumps of 12 px: pixels there go.
+  EXPECT_GT(removed, 2 * 60);
+}
+
+TEST(CpuStereoMatcher, RepeatedComputeIsBitIdentical) {
+  for (bool hd : {false, true}) {
+    const Scene s = hd ? hd_scene(3) : small_scene(3);
+    const Scene other = small_scene(1);
+    const auto matcher = make_cpu_stereo_matcher(StereoParams{});
+    Image<float> first, second, third, fresh, scratch;
+    matcher->compute(s.left.cview(), s.right.cview(), first);
+    matcher->compute(s.left.cview(), s.right.cview(), second);
+    EXPECT_TRUE(bit_identical(first, second));
+    // Another geometry in between leaves no trace.
+    matcher->compute(other.left.cview(), other.right.cview(), scratch);
+    matcher->compute(s.left.cview(), s.right.cview(), third);
+    EXPECT_TRUE(bit_identical(first, third));
+    // A new matcher agrees.
+    make_cpu_stereo_matcher(StereoParams{})->compute(s.left.cview(), s.right.cview(), fresh);
+    EXPECT_TRUE(bit_identical(first, fresh));
+  }
+}
+
+TEST(CpuStereoMatcher, SecondComputeOnTheSameGeometryDoesNotAllocate) {
+  for (int channels : {1, 3})
+    for (bool hd : {false, true}) {
+      const Scene s = hd ? hd_scene(channels) : small_scene(channels);
+      const auto matcher = make_cpu_stereo_matcher(StereoParams{});
+      Image<float> disp;
+      // The first call sizes every buffer, which the counters must see.
+      g_new_calls = 0;
+      g_aligned_alloc_calls = 0;
+      g_counting = true;
+      matcher->compute(s.left.cview(), s.right.cview(), disp);
+      g_counting = false;
+      EXPECT_GT(g_new_calls.load(), 0);
+      if (!DCO_TEST_UNDER_SANITIZER) {
+        EXPECT_GT(g_aligned_alloc_calls.load(), 0);
+      }
+      const float* const data = disp.data();
+
+      g_new_calls = 0;
+      g_aligned_alloc_calls = 0;
+      g_counting = true;
+      matcher->compute(s.left.cview(), s.right.cview(), disp);
+      g_counting = false;
+      EXPECT_EQ(g_new_calls.load(), 0) << channels << " channels, " << (hd ? "half" : "full");
+      EXPECT_EQ(g_aligned_alloc_calls.load(), 0)
+          << channels << " channels, " << (hd ? "half" : "full");
+      EXPECT_EQ(disp.data(), data);
+    }
+}
+
+TEST(AllocationCounter, SeesAllocationsWhenTheyHappen) {
+  // The counter itself must work, or the test above proves nothing.
+  g_new_calls = 0;
+  g_aligned_alloc_calls = 0;
+  g_counting = true;
+  auto* v = new std::vector<int>(100);
+  g_sink = v->data();
+  Image<float> img(64, 64);
+  g_sink = img.data();
+  g_counting = false;
+  delete v;
+  EXPECT_GE(g_new_calls.load(), 2);
+  if (DCO_TEST_UNDER_SANITIZER) GTEST_SKIP() << "aligned_alloc is not counted under a sanitizer";
+  EXPECT_EQ(g_aligned_alloc_calls.load(), 1);
+}
+
+TEST(CpuStereoMatcher, ReportsParamsAndTimings) {
+  StereoParams params;
+  params.max_disparity = 40;
+  params.uniqueness = 0.2;
+  const auto matcher = make_cpu_stereo_matcher(params);
+  EXPECT_EQ(matcher->params().max_disparity, 40);
+  EXPECT_EQ(matcher->params().uniqueness, 0.2);
+  const Scene s = small_scene(1);
+  Image<float> disp;
+  matcher->compute(s.left.cview(), s.right.cview(), disp);
+  const StereoTimings& t = matcher->last_timings();
+  for (double ms : {t.prepare_ms, t.arms_ms, t.initial_ms, t.refine_ms, t.sparse_ms})
+    EXPECT_GE(ms, 0.0);
+  EXPECT_GT(t.total_ms, 0.0);
+  EXPECT_NEAR(t.total_ms, t.prepare_ms + t.arms_ms + t.initial_ms + t.refine_ms + t.sparse_ms,
+              1e-6 + 1e-9 * t.total_ms);
+}
+
+}  // namespace
+}  // namespace dco::stereo

@@ -1,0 +1,212 @@
+// Runs the dco-depth binary the way a user does: good runs write the files they promise, bad
+// input gives one clear error line and a non-zero exit.
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "cli_runner.hpp"
+#include "dco/core/calibration.hpp"
+#include "dco/core/disparity_io.hpp"
+#include "dco/core/image.hpp"
+#include "dco/core/image_io.hpp"
+#include "dco/tools/scene_manifest.hpp"
+#include "temp_dir.hpp"
+
+namespace dco::tools {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CliRun;
+using ::testing::HasSubstr;
+using testing::TempDir;
+
+const fs::path kDataDir = DCO_DATA_DIR;
+const fs::path kTsukuba = kDataDir / "middlebury2001" / "Tsukuba";
+const fs::path kMotorcycle = kDataDir / "middlebury2014" / "Motorcycle";
+
+CliRun run_depth(const TempDir& dir, const std::vector<std::string>& args) {
+  return testing::run_cli(DCO_DEPTH_EXE, dir, args);
+}
+
+void expect_error(const CliRun& r, int exit_code, const std::string& fragment) {
+  testing::expect_one_error_line(r, "dco-depth", exit_code, fragment);
+}
+
+// Counts finite (predicted) and +inf (unknown) pixels; anything else is a failure.
+struct Coverage {
+  long finite = 0, unknown = 0, bad = 0;
+};
+Coverage coverage(const Image<float>& d) {
+  Coverage c;
+  for (int y = 0; y < d.height(); ++y)
+    for (int x = 0; x < d.width(); ++x) {
+      const float v = d.at(x, y);
+      if (std::isinf(v) && v > 0)
+        ++c.unknown;
+      else if (std::isfinite(v) && v > 0)
+        ++c.finite;
+      else
+        ++c.bad;
+    }
+  return c;
+}
+
+TEST(DcoDepthCli, WritesASparseDisparityMapOfTheInputSize) {
+  TempDir dir;
+  const fs::path out = dir.path() / "d.pfm";
+  const CliRun r = run_depth(
+      dir, {"--left", (kTsukuba / "im3.png").string(), "--right", (kTsukuba / "im4.png").string(),
+            "--max-disp", "16", "--out", out.string(), "--sparse"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Image<float> d = read_pfm(out);
+  ASSERT_EQ(d.width(), 384);
+  ASSERT_EQ(d.height(), 288);
+  const Coverage c = coverage(d);
+  EXPECT_EQ(c.bad, 0);
+  EXPECT_GT(c.finite, 384 * 288 / 2);  // most of the scene is matched
+  EXPECT_GT(c.unknown, 0);             // and the map is sparse on purpose
+  for (int y = 0; y < d.height(); ++y) {
+    for (int x = 0; x < d.width(); ++x) {
+      if (std::isfinite(d.at(x, y))) {
+        ASSERT_LE(d.at(x, y), 16.5f) << x << "," << y;
+      }
+    }
+  }
+}
+
+TEST(DcoDepthCli, DepthOutputFollowsTheCalibration) {
+  TempDir dir;
+  const fs::path disp = dir.path() / "d.pfm", depth = dir.path() / "z.pfm";
+  const CliRun r = run_depth(
+      dir, {"--left", (kMotorcycle / "im0.png").string(), "--right",
+            (kMotorcycle / "im1.png").string(), "--calib", (kMotorcycle / "calib.txt").string(),
+            "--max-disp", "70", "--out", disp.string(), "--depth-out", depth.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Image<float> d = read_pfm(disp);
+  const Image<float> z = read_pfm(depth);
+  const StereoCalibration calib = load_calibration(kMotorcycle / "calib.txt");
+  const RectifiedGeometry& g = calib.rectified;
+  long checked = 0;
+  for (int y = 0; y < d.height(); y += 7)
+    for (int x = 0; x < d.width(); x += 7) {
+      if (!std::isfinite(d.at(x, y))) {
+        EXPECT_TRUE(std::isinf(z.at(x, y)));
+        continue;
+      }
+      const double expected = g.f * g.baseline_m / (d.at(x, y) + g.doffs());
+      ASSERT_NEAR(z.at(x, y), expected, 1e-4 * expected);
+      ++checked;
+    }
+  EXPECT_GT(checked, 1000);
+}
+
+TEST(DcoDepthCli, BatchModeWritesEveryScene) {
+  TempDir dir;
+  const fs::path out_dir = dir.path() / "pred";
+  const CliRun r =
+      run_depth(dir, {"--scenes", (kDataDir / "stereo_scenes.tsv").string(), "--data-root",
+                      kDataDir.string(), "--out-dir", out_dir.string(), "--sparse"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const Scene& scene : load_scene_manifest(kDataDir / "stereo_scenes.tsv", kDataDir)) {
+    const fs::path pfm = out_dir / (scene.file_stem() + ".pfm");
+    ASSERT_TRUE(fs::exists(pfm)) << pfm;
+    EXPECT_TRUE(fs::exists(out_dir / (scene.file_stem() + ".time_ms")));
+    const Image<std::uint8_t> left = load_image(scene.left);
+    const Image<float> d = read_pfm(pfm);
+    EXPECT_EQ(d.width(), left.width());
+    EXPECT_EQ(d.height(), left.height());
+    EXPECT_EQ(coverage(d).bad, 0) << scene.name;
+    EXPECT_THAT(r.out, HasSubstr(scene.name));
+  }
+}
+
+TEST(DcoDepthCli, MissingInputFileIsNamed) {
+  TempDir dir;
+  expect_error(
+      run_depth(dir, {"--left", "/nonexistent/l.png", "--right", (kTsukuba / "im4.png").string(),
+                      "--out", (dir.path() / "d.pfm").string()}),
+      1, "/nonexistent/l.png");
+}
+
+TEST(DcoDepthCli, SizeMismatchIsRefused) {
+  TempDir dir;
+  Image<std::uint8_t> small(100, 80, 3);
+  small.fill(128);
+  const fs::path right = dir.path() / "small.png";
+  save_image(right, small.view());
+  expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right", right.string(),
+                               "--out", (dir.path() / "d.pfm").string()}),
+               1, "100x80x3");
+}
+
+TEST(DcoDepthCli, UnreadableCalibrationIsNamed) {
+  TempDir dir;
+  const fs::path calib = dir.write("broken_calib.txt", "cam0=[not a matrix]\nbaseline=\n");
+  expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
+                               (kTsukuba / "im4.png").string(), "--calib", calib.string(), "--out",
+                               (dir.path() / "d.pfm").string()}),
+               1, "broken_calib.txt");
+}
+
+TEST(DcoDepthCli, NonPositiveMaxDisparityIsAUsageError) {
+  TempDir dir;
+  for (const std::string bad : {"0", "-4"})
+    expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
+                                 (kTsukuba / "im4.png").string(), "--max-disp", bad, "--out",
+                                 (dir.path() / "d.pfm").string()}),
+                 2, "--max-disp must be positive");
+  expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png", "--max-disp", "many", "--out",
+                               "d.pfm"}),
+               2, "needs an integer");
+}
+
+TEST(DcoDepthCli, MaxDisparityWiderThanTheImageIsRefused) {
+  TempDir dir;
+  expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
+                               (kTsukuba / "im4.png").string(), "--max-disp", "400", "--out",
+                               (dir.path() / "d.pfm").string()}),
+               1, "smaller than the image width");
+}
+
+TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
+  TempDir dir;
+  expect_error(run_depth(dir, {}), 2, "--left");
+  expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png"}), 2, "--out is required");
+  expect_error(run_depth(dir, {"--frobnicate"}), 2, "unknown option --frobnicate");
+  expect_error(run_depth(dir, {"--scenes", "s.tsv"}), 2, "--out-dir");
+  expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png", "--out", "d.pfm",
+                               "--depth-out", "z.pfm"}),
+               2, "--depth-out needs --calib");
+}
+
+TEST(DcoDepthCli, UnknownParameterIsRefused) {
+  TempDir dir;
+  expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
+                               (kTsukuba / "im4.png").string(), "--out",
+                               (dir.path() / "d.pfm").string(), "--set", "stereo.lamda_ad=3"}),
+               1, "stereo.lamda_ad");
+  const fs::path config = dir.write("bad.toml", "[stereo]\nuniqueness = 0.2\ncensus_widht = 7\n");
+  expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
+                               (kTsukuba / "im4.png").string(), "--out",
+                               (dir.path() / "d.pfm").string(), "--config", config.string()}),
+               1, "bad.toml:3");
+}
+
+TEST(DcoDepthCli, HelpAndParameterListExitWithZero) {
+  TempDir dir;
+  const CliRun help = run_depth(dir, {"--help"});
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_THAT(help.out, HasSubstr("usage: dco-depth"));
+  const CliRun params = run_depth(dir, {"--list-params"});
+  EXPECT_EQ(params.exit_code, 0);
+  EXPECT_THAT(params.out, HasSubstr("stereo.lambda_ad"));
+  EXPECT_THAT(params.out, HasSubstr("stereo.lambda_census"));
+}
+
+}  // namespace
+}  // namespace dco::tools

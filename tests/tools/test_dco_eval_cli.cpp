@@ -1,0 +1,152 @@
+// Runs the dco-eval binary the way a user does and checks exit codes, stderr and output.
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "cli_runner.hpp"
+#include "dco/core/disparity_io.hpp"
+#include "dco/tools/scene_manifest.hpp"
+#include "temp_dir.hpp"
+
+namespace dco::tools {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+using testing::TempDir;
+
+const std::filesystem::path kDataDir = DCO_DATA_DIR;
+const std::filesystem::path kManifest = kDataDir / "stereo_scenes.tsv";
+
+using EvalRun = testing::CliRun;
+
+EvalRun run_eval(const TempDir& dir, const std::vector<std::string>& args) {
+  return testing::run_cli(DCO_EVAL_EXE, dir, args);
+}
+
+// Writes every scene's GT as its prediction, so every error is 0.
+std::filesystem::path write_gt_predictions(const TempDir& dir) {
+  const auto pred_dir = dir.path() / "pred";
+  std::filesystem::create_directories(pred_dir);
+  for (const Scene& scene : load_scene_manifest(kManifest, kDataDir))
+    write_pfm(pred_dir / (scene.file_stem() + ".pfm"), load_ground_truth(scene).disparity.view());
+  return pred_dir;
+}
+
+std::vector<std::string> eval_args(const std::filesystem::path& pred_dir) {
+  return {"--scenes",        kManifest.string(), "--data-root",
+          kDataDir.string(), "--pred-dir",       pred_dir.string()};
+}
+
+void expect_one_error_line(const EvalRun& r, int exit_code, const std::string& fragment) {
+  testing::expect_one_error_line(r, "dco-eval", exit_code, fragment);
+}
+
+TEST(DcoEvalCli, GroundTruthAsPredictionScoresZeroOnEveryScene) {
+  TempDir dir;
+  const auto pred_dir = write_gt_predictions(dir);
+  const EvalRun text = run_eval(dir, eval_args(pred_dir));
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_EQ(text.err, "");
+  for (const Scene& scene : load_scene_manifest(kManifest, kDataDir))
+    EXPECT_THAT(text.out, HasSubstr(scene.name));
+  EXPECT_THAT(text.out, HasSubstr("\nmean "));
+
+  std::vector<std::string> args = eval_args(pred_dir);
+  args.push_back("--json");
+  const EvalRun json = run_eval(dir, args);
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_THAT(json.out, HasSubstr(R"("prediction": {"pred_dir": )"));
+  EXPECT_THAT(json.out, HasSubstr(R"("mean": {"scene": "mean")"));
+  // The mean row: full density, no error anywhere.
+  const std::string mean = json.out.substr(json.out.find(R"("mean": {)"));
+  EXPECT_THAT(mean, HasSubstr(R"("density": 100)"));
+  EXPECT_THAT(mean, HasSubstr(R"("bad1": 0, "bad2": 0, "bad4": 0, "avgerr": 0})"));
+  EXPECT_THAT(mean, HasSubstr(R"("occ_err": 0, "occ_err_pred": 0, "band_err": 0)"));
+}
+
+TEST(DcoEvalCli, MissingOrMisSizedPredictionIsARuntimeError) {
+  TempDir dir;
+  const auto pred_dir = write_gt_predictions(dir);
+  std::filesystem::remove(pred_dir / "middlebury2003_Teddy.pfm");
+  expect_one_error_line(run_eval(dir, eval_args(pred_dir)), 1, "middlebury2003_Teddy.pfm");
+
+  Image<float> small(10, 10);
+  small.fill(1.0f);
+  write_pfm(pred_dir / "middlebury2003_Teddy.pfm", small.view());
+  expect_one_error_line(run_eval(dir, eval_args(pred_dir)), 1, "10x10x1");
+
+  expect_one_error_line(run_eval(dir, eval_args(dir.path() / "nowhere")), 1, "nowhere");
+}
+
+TEST(DcoEvalCli, OnlyFilterBaselineAndTimeSidecar) {
+  TempDir dir;
+  const auto pred_dir = write_gt_predictions(dir);
+  std::ofstream(pred_dir / "middlebury2001_Tsukuba.time_ms") << "12.5\n";
+  std::vector<std::string> args = eval_args(pred_dir);
+  for (const char* a : {"--only", "Tsukuba", "--baseline", "sgbm-wls"}) args.push_back(a);
+
+  const EvalRun text = run_eval(dir, args);
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_THAT(text.out, HasSubstr("middlebury2001/Tsukuba"));
+  EXPECT_THAT(text.out, ::testing::Not(HasSubstr("Teddy")));
+  EXPECT_THAT(text.out, HasSubstr("baseline: sgbm-wls (1 scenes)"));
+  EXPECT_THAT(text.out, HasSubstr("comparison of the means"));
+  EXPECT_THAT(text.out, HasSubstr("bad-2 pred %"));
+
+  args.push_back("--json");
+  const EvalRun json = run_eval(dir, args);
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_THAT(json.out, HasSubstr(R"("baseline": {"name": "sgbm-wls")"));
+  EXPECT_THAT(json.out, HasSubstr(R"("comparison": {)"));
+  EXPECT_THAT(json.out, HasSubstr(R"("time_ms": {"prediction": 12.5, "sgbm-wls": )"));
+}
+
+TEST(DcoEvalCli, UsageErrorsExitWithTwo) {
+  TempDir dir;
+  const std::string scenes = kManifest.string();
+  expect_one_error_line(run_eval(dir, {}), 2, "--scenes is required");
+  expect_one_error_line(run_eval(dir, {"--scenes", scenes}), 2, "--pred-dir");
+  expect_one_error_line(run_eval(dir, {"--scenes", scenes, "--frobnicate"}), 2,
+                        "unknown option --frobnicate");
+  expect_one_error_line(run_eval(dir, {"--scenes"}), 2, "--scenes needs a value");
+  expect_one_error_line(run_eval(dir, {"--scenes", scenes, "--baseline", "bm"}), 2,
+                        "unknown baseline 'bm'");
+  expect_one_error_line(run_eval(dir, {"--scenes", scenes, "--json=yes", "--baseline=sgbm-wls"}), 2,
+                        "--json takes no value");
+  expect_one_error_line(run_eval(dir, {"--scenes", scenes, "stray"}), 2, "unexpected argument");
+  expect_one_error_line(
+      run_eval(dir, {"--scenes", scenes, "--pred-dir", "/tmp", "--only", "no-such-scene"}), 2,
+      "no scene name contains 'no-such-scene'");
+}
+
+TEST(DcoEvalCli, BadManifestIsARuntimeError) {
+  TempDir dir;
+  expect_one_error_line(
+      run_eval(dir, {"--scenes", (dir.path() / "none.tsv").string(), "--pred-dir", "/tmp"}), 1,
+      "none.tsv");
+  const auto tsv = dir.write("bad.tsv",
+                             "scene\tleft\tright\tgt\tgt_format\tgt_divisor\tnocc_mask\tmax_disp\n"
+                             "a\tl.png\tr.png\tg.exr\texr\t1\t-\t64\n");
+  expect_one_error_line(run_eval(dir, {"--scenes", tsv.string(), "--pred-dir", "/tmp"}), 1,
+                        "bad.tsv:2: unknown gt_format 'exr'");
+}
+
+TEST(DcoEvalCli, HelpGoesToStdout) {
+  TempDir dir;
+  const EvalRun r = run_eval(dir, {"--help"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_THAT(r.out, StartsWith("usage: dco-eval"));
+  EXPECT_EQ(r.err, "");
+}
+
+}  // namespace
+}  // namespace dco::tools

@@ -1,0 +1,47 @@
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace dco::tools {
+
+// A command-line mistake (exit status 2), as opposed to a data problem (dco::Error, status 1).
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Walks argv one option at a time; accepts "--name value" and "--name=value".
+class ArgCursor {
+ public:
+  ArgCursor(int argc, char** argv) : argc_(argc), argv_(argv) {}
+
+  // Advances to the next argument; false at the end.
+  bool next();
+  std::string_view name() const { return name_; }
+  // The option's value; throws UsageError when it has none.
+  std::string value();
+  // Confirms the option is a flag; throws UsageError for "--flag=value".
+  bool flag() const;
+  // Parses value() as an int; throws UsageError when it is not one.
+  int int_value();
+
+ private:
+  int argc_;
+  char** argv_;
+  int index_ = 0;
+  std::string_view name_;
+  std::optional<std::string> inline_value_;
+};
+
+// Errors are reported on exactly one line, whatever the message carried.
+std::string one_line(std::string text);
+
+// Runs a tool's body and turns exceptions into "TOOL: error: ..." on stderr and an exit status:
+// 2 for UsageError, 1 for anything else (dco::Error, OpenCV, the standard library).
+int run_tool(std::string_view tool, const std::function<int()>& body);
+
+}  // namespace dco::tools

@@ -1,0 +1,64 @@
+#include "dco/tools/command_line.hpp"
+
+#include <algorithm>
+#include <charconv>
+
+#include <fmt/format.h>
+#include <opencv2/core.hpp>
+
+namespace dco::tools {
+
+bool ArgCursor::next() {
+  if (++index_ >= argc_) return false;
+  name_ = argv_[index_];
+  inline_value_.reset();
+  if (const auto eq = name_.find('='); name_.starts_with("--") && eq != std::string_view::npos) {
+    inline_value_ = std::string(name_.substr(eq + 1));
+    name_ = name_.substr(0, eq);
+  }
+  return true;
+}
+
+std::string ArgCursor::value() {
+  if (inline_value_) return *std::exchange(inline_value_, std::nullopt);
+  if (index_ + 1 >= argc_) throw UsageError(fmt::format("option {} needs a value", name_));
+  return argv_[++index_];
+}
+
+bool ArgCursor::flag() const {
+  if (inline_value_) throw UsageError(fmt::format("option {} takes no value", name_));
+  return true;
+}
+
+int ArgCursor::int_value() {
+  const std::string_view option = name_;
+  const std::string text = value();
+  int v = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size())
+    throw UsageError(fmt::format("option {} needs an integer, not '{}'", option, text));
+  return v;
+}
+
+std::string one_line(std::string text) {
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  while (!text.empty() && text.back() == ' ') text.pop_back();
+  return text;
+}
+
+int run_tool(std::string_view tool, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    fmt::print(stderr, "{}: error: {} (see --help)\n", tool, one_line(e.what()));
+    return 2;
+  } catch (const cv::Exception& e) {
+    fmt::print(stderr, "{}: error: OpenCV: {}\n", tool, one_line(e.err));
+    return 1;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "{}: error: {}\n", tool, one_line(e.what()));
+    return 1;
+  }
+}
+
+}  // namespace dco::tools
