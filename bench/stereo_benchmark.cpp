@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <map>
+#include <set>
 #include <string>
 
 #include <opencv2/calib3d.hpp>
@@ -127,10 +128,15 @@ class RecordingReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
     ConsoleReporter::ReportRuns(runs);
-    for (const Run& run : runs)
-      if (!run.error_occurred && run.run_type == Run::RT_Iteration)
-        ms_[run.benchmark_name().substr(0, run.benchmark_name().find('/'))] =
-            run.GetAdjustedRealTime();
+    // With --benchmark_repetitions the median stands for the benchmark.
+    for (const Run& run : runs) {
+      if (run.error_occurred) continue;
+      const bool median = run.run_type == Run::RT_Aggregate && run.aggregate_name == "median";
+      const std::string name = run.benchmark_name().substr(0, run.benchmark_name().find('/'));
+      if (median || (run.run_type == Run::RT_Iteration && !has_median_.count(name)))
+        ms_[name] = run.GetAdjustedRealTime();
+      if (median) has_median_.insert(name);
+    }
   }
   double ms(const std::string& name) const {
     const auto it = ms_.find(name);
@@ -139,6 +145,7 @@ class RecordingReporter : public benchmark::ConsoleReporter {
 
  private:
   std::map<std::string, double> ms_;
+  std::set<std::string> has_median_;
 };
 
 void print_ratio(const RecordingReporter& r, const char* ours, const char* peer) {
