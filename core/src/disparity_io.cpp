@@ -53,6 +53,39 @@ void write_png16(const std::filesystem::path& path, const Image<std::uint16_t>& 
   if (!ok) throw Error("cannot write " + quoted(path));
 }
 
+// Both 16-bit PNG conventions store round(value * scale) with 0 meaning unknown; values that are
+// not finite or not positive are written as 0 and large ones clamp to 65535.
+void write_scaled_png16(const std::filesystem::path& path, ImageView<const float> image,
+                        float scale, const char* what) {
+  if (image.empty() || image.channels != 1)
+    throw Error("cannot write " + quoted(path) + ": " + what + " must be a one-channel image");
+  Image<std::uint16_t> q(image.width, image.height);
+  for (int y = 0; y < image.height; ++y) {
+    const float* s = image.row(y);
+    std::uint16_t* d = q.row(y);
+    for (int x = 0; x < image.width; ++x) {
+      const float v = s[x];
+      d[x] = (!std::isfinite(v) || v <= 0)
+                 ? 0
+                 : static_cast<std::uint16_t>(std::clamp(std::lround(v * scale), 1L, 65535L));
+    }
+  }
+  write_png16(path, q);
+}
+
+// Returns value / scale, with +inf where the file has 0.
+Image<float> read_scaled_png16(const std::filesystem::path& path, float scale, const char* what) {
+  const Image<std::uint16_t> q = read_png16(path, what);
+  Image<float> out(q.width(), q.height());
+  const float unknown = std::numeric_limits<float>::infinity();
+  for (int y = 0; y < q.height(); ++y)
+    for (int x = 0; x < q.width(); ++x) {
+      const std::uint16_t v = q.at(x, y);
+      out.at(x, y) = v == 0 ? unknown : static_cast<float>(v) / scale;
+    }
+  return out;
+}
+
 }  // namespace
 
 Image<float> read_pfm(const std::filesystem::path& path) {
@@ -119,60 +152,19 @@ void write_pfm(const std::filesystem::path& path, ImageView<const float> image) 
 }
 
 void write_disparity_png16(const std::filesystem::path& path, ImageView<const float> disparity) {
-  if (disparity.empty() || disparity.channels != 1)
-    throw Error("cannot write " + quoted(path) + ": disparity must be a one-channel image");
-  Image<std::uint16_t> q(disparity.width, disparity.height);
-  for (int y = 0; y < disparity.height; ++y) {
-    const float* s = disparity.row(y);
-    std::uint16_t* d = q.row(y);
-    for (int x = 0; x < disparity.width; ++x) {
-      const float v = s[x];
-      if (!std::isfinite(v) || v <= 0)
-        d[x] = 0;
-      else
-        d[x] = static_cast<std::uint16_t>(std::clamp(std::lround(v * 256.0f), 1L, 65535L));
-    }
-  }
-  write_png16(path, q);
+  write_scaled_png16(path, disparity, 256.0f, "disparity");
 }
 
 Image<float> read_disparity_png16(const std::filesystem::path& path) {
-  const Image<std::uint16_t> q = read_png16(path, "disparity");
-  Image<float> out(q.width(), q.height());
-  const float unknown = std::numeric_limits<float>::infinity();
-  for (int y = 0; y < q.height(); ++y)
-    for (int x = 0; x < q.width(); ++x) {
-      const std::uint16_t v = q.at(x, y);
-      out.at(x, y) = v == 0 ? unknown : static_cast<float>(v) / 256.0f;
-    }
-  return out;
+  return read_scaled_png16(path, 256.0f, "disparity");
 }
 
 void write_depth_png16(const std::filesystem::path& path, ImageView<const float> depth_m) {
-  if (depth_m.empty() || depth_m.channels != 1)
-    throw Error("cannot write " + quoted(path) + ": depth must be a one-channel image");
-  Image<std::uint16_t> q(depth_m.width, depth_m.height);
-  for (int y = 0; y < depth_m.height; ++y)
-    for (int x = 0; x < depth_m.width; ++x) {
-      const float v = depth_m.row(y)[x];
-      q.at(x, y) =
-          (!std::isfinite(v) || v <= 0)
-              ? 0
-              : static_cast<std::uint16_t>(std::clamp(std::lround(v * 1000.0f), 1L, 65535L));
-    }
-  write_png16(path, q);
+  write_scaled_png16(path, depth_m, 1000.0f, "depth");
 }
 
 Image<float> read_depth_png16(const std::filesystem::path& path) {
-  const Image<std::uint16_t> q = read_png16(path, "depth");
-  Image<float> out(q.width(), q.height());
-  const float unknown = std::numeric_limits<float>::infinity();
-  for (int y = 0; y < q.height(); ++y)
-    for (int x = 0; x < q.width(); ++x) {
-      const std::uint16_t v = q.at(x, y);
-      out.at(x, y) = v == 0 ? unknown : static_cast<float>(v) / 1000.0f;
-    }
-  return out;
+  return read_scaled_png16(path, 1000.0f, "depth");
 }
 
 }  // namespace dco
