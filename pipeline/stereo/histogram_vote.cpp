@@ -26,13 +26,16 @@ void histogram_vote(ImageView<std::int16_t> disparity, int max_disparity,
       for (int x = 0; x < w; ++x) changed.row(y)[x] = 0;
 
   for (int it = 0; it < rule.iterations; ++it) {
-    // Which disparities occur at all: empty bins need no pass.
+    // How often each disparity occurs: empty bins need no pass.
+    scratch.bins.assign(static_cast<std::size_t>(max_disparity) + 1, 0);
     std::uint32_t any = 0;
     for (int y = 0; y < h; ++y) {
       const std::int16_t* d = disparity.row(y);
       std::uint32_t* t = scratch.total.row(y);
       for (int x = 0; x < w; ++x) {
-        t[x] = d[x] != kInvalidDisparity;
+        // Only disparities of the searched range vote (values outside it cannot come from WTA).
+        t[x] = d[x] >= 0 && d[x] <= max_disparity;
+        if (t[x]) ++scratch.bins[static_cast<std::size_t>(d[x])];
         any += t[x];
       }
     }
@@ -42,16 +45,12 @@ void histogram_vote(ImageView<std::int16_t> disparity, int max_disparity,
     scratch.best_disp.fill(kInvalidDisparity);
 
     for (int cand = 0; cand <= max_disparity; ++cand) {
-      std::uint32_t present = 0;
+      if (scratch.bins[static_cast<std::size_t>(cand)] == 0) continue;
       for (int y = 0; y < h; ++y) {
         const std::int16_t* d = disparity.row(y);
         std::uint32_t* s = scratch.slice.row(y);
-        for (int x = 0; x < w; ++x) {
-          s[x] = d[x] == cand;
-          present += s[x];
-        }
+        for (int x = 0; x < w; ++x) s[x] = d[x] == cand;
       }
-      if (present == 0) continue;
       regions.sum(scratch.slice.view(), PassOrder::kHorizontalFirst, scratch.aggregation);
       for (int y = 0; y < h; ++y) {
         const std::uint32_t* s = scratch.slice.row(y);

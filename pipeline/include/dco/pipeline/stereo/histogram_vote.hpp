@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "dco/core/image.hpp"
 #include "dco/pipeline/stereo/cross_aggregation.hpp"
@@ -18,6 +19,7 @@ struct VoteRule {
 struct VoteScratch {
   Image<std::uint32_t> slice, total, best_votes;
   Image<std::int16_t> best_disp;
+  std::vector<std::uint32_t> bins;  // pixels per disparity
   AggregationScratch aggregation;
   void resize(int width, int height);
 };
