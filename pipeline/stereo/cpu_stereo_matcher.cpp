@@ -90,6 +90,10 @@ class CpuStereoMatcher final : public StereoMatcher {
   }
 
   const StereoTimings& last_timings() const override { return timings_; }
+  int last_scale() const override { return scale_; }
+  ImageView<const std::uint8_t> internal_left_gray() const override { return census_gray_left_; }
+  ImageView<const float> internal_raw_disparity() const override { return raw_.view(); }
+  ImageView<const float> internal_sparse_disparity() const override { return values_.view(); }
   const StereoParams& params() const override { return params_; }
 
  private:
@@ -135,6 +139,7 @@ class CpuStereoMatcher final : public StereoMatcher {
       bgr_to_gray(r, gray_right_.view());
     }
     const ImageView<const std::uint8_t> gl = left.channels == 3 ? gray_left_.cview() : l;
+    census_gray_left_ = gl;
     const ImageView<const std::uint8_t> gr = left.channels == 3 ? gray_right_.cview() : r;
     ad_left_ = color ? l : gl;
     ad_right_ = color ? r : gr;
@@ -150,10 +155,23 @@ class CpuStereoMatcher final : public StereoMatcher {
 
   void write_output(int width, int height, Image<float>& disparity) {
     disparity.resize(width, height);
-    // Value of every internal pixel first, then nearest-neighbour expansion to input size.
+    // Value of every internal pixel first (internal pixels), then nearest-neighbour expansion to
+    // input size (input pixels).
     values_.resize(w_, h_);
+    raw_.resize(w_, h_);
     constexpr float kUnknown = std::numeric_limits<float>::infinity();
-    const auto max_value = static_cast<float>(params_.max_disparity);
+    const float max_value = static_cast<float>(params_.max_disparity) / static_cast<float>(scale_);
+    for (int y = 0; y < h_; ++y) {
+      const std::int16_t* d = wta_.left_disparity().row(y);
+      float* r = raw_.row(y);
+      for (int x = 0; x < w_; ++x) {
+        const float offset = params_.subpixel ? subpixel_offset(wta_.cost_below().row(y)[x],
+                                                                wta_.best_cost().row(y)[x],
+                                                                wta_.cost_above().row(y)[x])
+                                              : 0.0f;
+        r[x] = std::clamp(static_cast<float>(d[x]) + offset, 0.0f, max_value);
+      }
+    }
     for (int y = 0; y < h_; ++y) {
       const std::int16_t* d = disp_.row(y);
       const std::uint8_t* ch = changed_.row(y);
@@ -168,15 +186,15 @@ class CpuStereoMatcher final : public StereoMatcher {
           offset = subpixel_offset(wta_.cost_below().row(y)[x], wta_.best_cost().row(y)[x],
                                    wta_.cost_above().row(y)[x]);
         // The fit may lean past the searched range by less than a pixel; keep values inside it.
-        v[x] =
-            std::min(static_cast<float>(scale_) * (static_cast<float>(d[x]) + offset), max_value);
+        v[x] = std::min(static_cast<float>(d[x]) + offset, max_value);
         if (!(v[x] > 0.0f)) v[x] = kUnknown;  // zero disparity has no finite depth
       }
     }
+    const auto scale = static_cast<float>(scale_);
     for (int y = 0; y < height; ++y) {
       const float* src = values_.row(std::min(y / scale_, h_ - 1));
       float* dst = disparity.row(y);
-      for (int x = 0; x < width; ++x) dst[x] = src[std::min(x / scale_, w_ - 1)];
+      for (int x = 0; x < width; ++x) dst[x] = scale * src[std::min(x / scale_, w_ - 1)];
     }
   }
 
@@ -187,7 +205,7 @@ class CpuStereoMatcher final : public StereoMatcher {
 
   int scale_ = 1, w_ = 0, h_ = 0, max_d_ = 0;
   Image<std::uint8_t> small_left_, small_right_, gray_left_, gray_right_;
-  ImageView<const std::uint8_t> ad_left_, ad_right_;
+  ImageView<const std::uint8_t> ad_left_, ad_right_, census_gray_left_;
   Image<std::uint64_t> census_left_, census_right_;
   CrossArms arms_;
   Image<std::uint8_t> arm_scratch_, shortest_arm_;
@@ -199,7 +217,7 @@ class CpuStereoMatcher final : public StereoMatcher {
   Image<std::int16_t> disp_;
   Image<std::uint8_t> changed_;
   VoteScratch vote_scratch_;
-  Image<float> values_;
+  Image<float> values_, raw_;
   Image<std::int16_t> jump_scratch_;
   std::vector<std::uint16_t> vol_, out_;
 };

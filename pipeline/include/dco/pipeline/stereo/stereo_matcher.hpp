@@ -31,6 +31,15 @@ class StereoMatcher {
                        Image<float>& disparity) = 0;
 
   virtual const StereoTimings& last_timings() const = 0;
+
+  // What the last frame left at the internal resolution, for the stages that follow (valid until
+  // the next compute; disparities in internal pixels): the internal downscale factor, the grey
+  // left image, the winner-takes-all disparity of every pixel before any check (with its
+  // subpixel fit), and the sparse map (+inf where no value survived).
+  virtual int last_scale() const = 0;
+  virtual ImageView<const std::uint8_t> internal_left_gray() const = 0;
+  virtual ImageView<const float> internal_raw_disparity() const = 0;
+  virtual ImageView<const float> internal_sparse_disparity() const = 0;
   virtual const StereoParams& params() const = 0;
 };
 
