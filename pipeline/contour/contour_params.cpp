@@ -1,0 +1,57 @@
+#include <string>
+
+#include "dco/core/config.hpp"
+#include "dco/core/error.hpp"
+#include "dco/pipeline/contour/contour_extractor.hpp"
+
+namespace dco::contour {
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw Error("contour parameters: " + what);
+}
+
+}  // namespace
+
+void register_params(ConfigSchema& s, ContourParams& p) {
+  s.add("contour.use_flow", &p.use_flow, "optical-flow cue from the neighbouring frames (§5.1)");
+  s.add("contour.dis_preset", &p.dis_preset, {"ultrafast", "fast", "medium"},
+        "cv::DISOpticalFlow preset");
+  s.add("contour.projection_distance", &p.projection_distance, 1, 64,
+        "|p p0| = |p p1| of the projection test (Eq. 9), internal px");
+  s.add("contour.box_size", &p.box_size, 1, 255,
+        "box filter widening the depth-contour filter (§5.2), odd, internal px");
+  s.add("contour.flow_floor", &p.flow_floor, 0.0, 1000.0,
+        "the flow cue is divided by max(its maximum, this); internal px of flow change per px");
+  s.add("contour.use_stereo", &p.use_stereo, "disparity-jump cue from the stereo map");
+  s.add("contour.stereo_jump", &p.stereo_jump, 0.001, 1000.0,
+        "disparity jump (internal px) that counts as a full-strength depth edge");
+  s.add("contour.lookahead", &p.lookahead, 0, 1,
+        "1 = window (t-1, t, t+1), output one frame late; 0 = causal (t-2, t-1, t)");
+  s.add("contour.t_high", &p.t_high, 0.0, 1.0, "T_high of the dual threshold (§5.3.1)");
+  s.add("contour.t_low", &p.t_low, 0.0, 1.0, "T_low of the dual threshold (§5.3.1)");
+  s.add("contour.t_depth", &p.t_depth, 0.0, 1.0,
+        "T_depth: pixels whose depth-contour filter is below it are no contour (§5.3.2)");
+}
+
+void validate(const ContourParams& p) {
+  require(p.dis_preset == "ultrafast" || p.dis_preset == "fast" || p.dis_preset == "medium",
+          "dis_preset must be ultrafast, fast or medium, not '" + p.dis_preset + "'");
+  require(p.projection_distance >= 1 && p.projection_distance <= 64,
+          "projection_distance must be in 1..64, not " + std::to_string(p.projection_distance));
+  require(p.box_size >= 1 && p.box_size <= 255 && p.box_size % 2 == 1,
+          "box_size must be odd and in 1..255, not " + std::to_string(p.box_size));
+  require(p.flow_floor >= 0, "flow_floor must be >= 0, not " + std::to_string(p.flow_floor));
+  require(p.stereo_jump > 0, "stereo_jump must be positive, not " + std::to_string(p.stereo_jump));
+  require(p.lookahead == 0 || p.lookahead == 1,
+          "lookahead must be 0 or 1, not " + std::to_string(p.lookahead));
+  require(p.t_low >= 0 && p.t_low <= 1, "t_low must be in [0, 1], not " + std::to_string(p.t_low));
+  require(p.t_high >= 0 && p.t_high <= 1,
+          "t_high must be in [0, 1], not " + std::to_string(p.t_high));
+  require(p.t_low <= p.t_high, "t_low (" + std::to_string(p.t_low) + ") must not exceed t_high (" +
+                                   std::to_string(p.t_high) + ")");
+  require(p.t_depth >= 0 && p.t_depth <= 1,
+          "t_depth must be in [0, 1], not " + std::to_string(p.t_depth));
+}
+
+}  // namespace dco::contour

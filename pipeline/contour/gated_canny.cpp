@@ -1,0 +1,150 @@
+#include "dco/pipeline/contour/gated_canny.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+
+namespace dco::contour {
+namespace {
+
+constexpr float kTan22 = 0.41421356f;  // tan(22.5°): sector borders of the 4 directions
+constexpr float kTan67 = 2.41421356f;  // tan(67.5°)
+constexpr std::uint8_t kWeak = 1;      // passed T_low, not yet linked to a strong pixel
+constexpr std::uint8_t kEdge = 255;
+
+// Branch-free: on textured images the direction is close to random, and mispredicted branches
+// would cost more than the whole gradient.
+inline std::uint8_t quantise(float gx, float gy) {
+  const float ax = std::fabs(gx);
+  const float ay = std::fabs(gy);
+  const int horizontal = ay <= ax * kTan22;
+  const int vertical = ay >= ax * kTan67;
+  const int diagonal = kDiagonalDown + 2 * ((gx > 0) != (gy > 0));  // kDiagonalDown or kDiagonalUp
+  return static_cast<std::uint8_t>((1 - horizontal) *
+                                   (vertical * kVertical + (1 - vertical) * diagonal));
+}
+
+}  // namespace
+
+void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<float> magnitude,
+                     ImageView<std::uint8_t> direction) {
+  assert(smoothed.channels == 1 && magnitude.same_size(smoothed) && direction.same_size(smoothed));
+  const int w = smoothed.width;
+  const int h = smoothed.height;
+  const float inv = 1.0f / norm;
+  for (int y = 0; y < h; ++y) {
+    const float* up = smoothed.row(std::max(y - 1, 0));
+    const float* mid = smoothed.row(y);
+    const float* down = smoothed.row(std::min(y + 1, h - 1));
+    float* m = magnitude.row(y);
+    std::uint8_t* d = direction.row(y);
+    auto at = [&](int x) {
+      const int l = std::max(x - 1, 0);
+      const int r = std::min(x + 1, w - 1);
+      const float gx = (up[r] + 2 * mid[r] + down[r]) - (up[l] + 2 * mid[l] + down[l]);
+      const float gy = (down[l] + 2 * down[x] + down[r]) - (up[l] + 2 * up[x] + up[r]);
+      m[x] = std::sqrt(gx * gx + gy * gy) * inv;
+      d[x] = quantise(gx, gy);
+    };
+    at(0);
+    for (int x = 1; x < w - 1; ++x) {
+      const float gx =
+          (up[x + 1] + 2 * mid[x + 1] + down[x + 1]) - (up[x - 1] + 2 * mid[x - 1] + down[x - 1]);
+      const float gy =
+          (down[x - 1] + 2 * down[x] + down[x + 1]) - (up[x - 1] + 2 * up[x] + up[x + 1]);
+      m[x] = std::sqrt(gx * gx + gy * gy) * inv;
+      d[x] = quantise(gx, gy);
+    }
+    if (w > 1) at(w - 1);
+  }
+}
+
+void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t> direction,
+                 ImageView<const float> gate, const CannyThresholds& t,
+                 ImageView<std::uint8_t> edges, CannyScratch& scratch) {
+  assert(magnitude.channels == 1 && direction.same_size(magnitude) && edges.same_size(magnitude));
+  const int w = magnitude.width;
+  const int h = magnitude.height;
+  for (int y = 0; y < h; ++y) std::memset(edges.row(y), 0, static_cast<std::size_t>(w));
+  if (w < 3 || h < 3) return;
+
+  const bool gated = !gate.empty();
+  if (gated) {
+    if (scratch.gate_x.size() < static_cast<std::size_t>(w)) scratch.gate_x.resize(w);
+    for (int x = 0; x < w; ++x)
+      scratch.gate_x[x] = static_cast<std::int32_t>(static_cast<long long>(x) * gate.width / w);
+  }
+  const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  if (scratch.stack.size() < pixels) scratch.stack.resize(pixels);
+  std::int32_t* stack = scratch.stack.data();
+  std::size_t top = 0;
+  std::uint8_t* base = edges.data;
+  const std::ptrdiff_t stride = edges.stride;
+
+  // Non-maximum suppression, depth gate and dual threshold in one pass. Of two equal maxima side by
+  // side only the first (left/upper) survives, so a plateau still thins to one pixel.
+  for (int y = 1; y < h - 1; ++y) {
+    const float* mu = magnitude.row(y - 1);
+    const float* m = magnitude.row(y);
+    const float* md = magnitude.row(y + 1);
+    const std::uint8_t* dir = direction.row(y);
+    const float* g =
+        gated ? gate.row(static_cast<int>(static_cast<long long>(y) * gate.height / h)) : nullptr;
+    std::uint8_t* e = edges.row(y);
+    for (int x = 1; x < w - 1; ++x) {
+      const float v = m[x];
+      if (v < t.low) continue;
+      float before = 0;
+      float after = 0;
+      switch (dir[x]) {
+        case kHorizontal:
+          before = m[x - 1];
+          after = m[x + 1];
+          break;
+        case kDiagonalDown:
+          before = mu[x - 1];
+          after = md[x + 1];
+          break;
+        case kVertical:
+          before = mu[x];
+          after = md[x];
+          break;
+        default:  // kDiagonalUp
+          before = md[x - 1];
+          after = mu[x + 1];
+          break;
+      }
+      if (!(v > before && v >= after)) continue;
+      if (gated && g[scratch.gate_x[x]] < t.depth) continue;
+      if (v > t.high) {
+        e[x] = kEdge;
+        stack[top++] = static_cast<std::int32_t>(y * stride + x);
+      } else {
+        e[x] = kWeak;
+      }
+    }
+  }
+
+  // Hysteresis: grow every strong pixel through 8-connected weak ones. Each pixel is marked before
+  // it is pushed, so the stack never holds more than one entry per pixel; the border rows and
+  // columns stay 0, so neighbours of a pushed pixel are always inside the image.
+  const std::ptrdiff_t offsets[8] = {-stride - 1, -stride,    -stride + 1, -1,
+                                     1,           stride - 1, stride,      stride + 1};
+  while (top > 0) {
+    const std::ptrdiff_t i = stack[--top];
+    for (const std::ptrdiff_t o : offsets) {
+      std::uint8_t& n = base[i + o];
+      if (n == kWeak) {
+        n = kEdge;
+        stack[top++] = static_cast<std::int32_t>(i + o);
+      }
+    }
+  }
+  for (int y = 1; y < h - 1; ++y) {
+    std::uint8_t* e = edges.row(y);
+    for (int x = 0; x < w; ++x) e[x] = e[x] == kEdge ? kEdge : 0;
+  }
+}
+
+}  // namespace dco::contour

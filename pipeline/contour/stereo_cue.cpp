@@ -1,0 +1,44 @@
+#include "dco/pipeline/contour/stereo_cue.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cfloat>
+#include <cmath>
+
+namespace dco::contour {
+namespace {
+
+// |q - d|, or 0 when either is missing: inf - finite, inf - inf and anything with NaN all fail the
+// comparison. Branch-free, so the row loop vectorises.
+inline float jump(float q, float d) {
+  const float diff = std::fabs(q - d);
+  return diff <= FLT_MAX ? diff : 0.0f;
+}
+
+}  // namespace
+
+void disparity_jump_strength(ImageView<const float> disparity, float full_jump,
+                             ImageView<float> strength) {
+  assert(disparity.channels == 1 && strength.same_size(disparity) && full_jump > 0);
+  const int w = disparity.width;
+  const int h = disparity.height;
+  const float inv = 1.0f / full_jump;
+  for (int y = 0; y < h; ++y) {
+    // Outside the image the neighbour is the pixel itself: a jump of 0.
+    const float* up = disparity.row(std::max(y - 1, 0));
+    const float* mid = disparity.row(y);
+    const float* down = disparity.row(std::min(y + 1, h - 1));
+    float* s = strength.row(y);
+    auto at = [&](int x, int left, int right) {
+      const float d = mid[x];
+      const float j = std::max(std::max(jump(mid[left], d), jump(mid[right], d)),
+                               std::max(jump(up[x], d), jump(down[x], d)));
+      return std::min(j * inv, 1.0f);
+    };
+    s[0] = at(0, 0, std::min(1, w - 1));
+    for (int x = 1; x < w - 1; ++x) s[x] = at(x, x - 1, x + 1);
+    if (w > 1) s[w - 1] = at(w - 1, w - 2, w - 1);
+  }
+}
+
+}  // namespace dco::contour

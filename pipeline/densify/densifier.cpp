@@ -1,0 +1,183 @@
+#include "dco/pipeline/densify/densifier.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "dco/core/config.hpp"
+#include "dco/core/error.hpp"
+
+namespace dco::densify {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+bool known(float d) {
+  return std::isfinite(d) && d > 0.0f;
+}
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw Error("densify parameters: " + what);
+}
+
+}  // namespace
+
+void register_params(ConfigSchema& s, DensifyParams& p) {
+  s.add("densify.lambda_d", &p.lambda_d, 0.0, 1000.0, "λ_d of Eq. 20 (data term)");
+  s.add("densify.lambda_s", &p.lambda_s, 0.0, 1000.0, "λ_s of Eq. 20 (smoothness)");
+  s.add("densify.lambda_s2", &p.lambda_s2, 0.0, 1000.0, "λ_s2 of Eq. 20 (stability)");
+  s.add("densify.min_edge_weight", &p.min_edge_weight, 1e-6, 1.0,
+        "floor of every smoothness weight (keeps the system connected)");
+  s.add("densify.max_iterations", &p.max_iterations, 1, 10000, "conjugate-gradient iterations");
+  s.add("densify.tolerance", &p.tolerance, 1e-9, 0.1, "relative residual to stop at");
+  s.add("densify.multigrid", &p.multigrid, "multigrid V-cycle preconditioner");
+}
+
+void validate(const DensifyParams& p) {
+  require(p.lambda_d > 0, "lambda_d must be positive (the data term anchors the solution)");
+  require(p.lambda_s >= 0 && p.lambda_s2 >= 0, "lambda_s and lambda_s2 must be >= 0");
+  require(p.min_edge_weight > 0 && p.min_edge_weight <= 1, "min_edge_weight must be in (0, 1]");
+  require(p.max_iterations >= 1, "max_iterations must be >= 1");
+  require(p.tolerance > 0 && p.tolerance < 1, "tolerance must be in (0, 1)");
+}
+
+void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::uint8_t> closed) {
+  const int w = contours.width;
+  const int h = contours.height;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) closed.row(y)[x] = contours.row(y)[x] ? 1 : 0;
+  for (int y = 0; y + 1 < h; ++y) {
+    std::uint8_t* top = closed.row(y);
+    std::uint8_t* bottom = closed.row(y + 1);
+    for (int x = 0; x + 1 < w; ++x) {
+      const bool a = top[x], b = top[x + 1], c = bottom[x], d = bottom[x + 1];
+      if (a && d && !b && !c)
+        top[x + 1] = 1;  // "\" corner contact
+      else if (b && c && !a && !d)
+        top[x] = 1;  // "/" corner contact
+    }
+  }
+}
+
+Densifier::Densifier(const DensifyParams& params) : params_(params) {
+  validate(params_);
+}
+
+void Densifier::build_system(const DensifyInputs& in) {
+  const int w = in.sparse.width;
+  const int h = in.sparse.height;
+  system_.resize(w, h);
+  rhs_.resize(w, h);
+  smooth_strength_.resize(w, h);
+  barrier_.resize(w, h);
+
+  const bool has_contours = !in.contours.empty();
+  if (has_contours)
+    close_diagonal_gaps(in.contours, barrier_.view());
+  else
+    barrier_.fill(0);
+
+  // s_p = M_fuse(p) * M_I(p), Eq. 17; M_fuse may come at the internal resolution.
+  const bool has_fuse = !in.m_fuse.empty();
+  const bool has_intensity = !in.m_intensity.empty();
+  for (int y = 0; y < h; ++y) {
+    float* s = smooth_strength_.row(y);
+    const int fy = has_fuse ? std::min(y * in.m_fuse.height / h, in.m_fuse.height - 1) : 0;
+    for (int x = 0; x < w; ++x) {
+      const float fuse =
+          has_fuse ? in.m_fuse.row(fy)[std::min(x * in.m_fuse.width / w, in.m_fuse.width - 1)]
+                   : 0.0f;
+      const float intensity = has_intensity ? in.m_intensity.row(y)[x] : 0.0f;
+      s[x] = fuse * intensity;
+    }
+  }
+
+  // Each undirected edge appears twice in Σ_p Σ_{q∈N4(p)} of Eq. 20, hence 2 λ_s.
+  const auto edge_scale = static_cast<float>(2.0 * params_.lambda_s);
+  const auto floor = static_cast<float>(params_.min_edge_weight);
+  const auto edge = [&](int x0, int y0, int x1, int y1) {
+    if (barrier_.at(x0, y0) != barrier_.at(x1, y1))
+      return edge_scale * floor;  // Eq. 16, first case
+    const float s = std::min(smooth_strength_.at(x0, y0), smooth_strength_.at(x1, y1));
+    return edge_scale * std::max(1.0f - s, floor);
+  };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      system_.wx.at(x, y) = x + 1 < w ? edge(x, y, x + 1, y) : 0.0f;
+      system_.wy.at(x, y) = y + 1 < h ? edge(x, y, x, y + 1) : 0.0f;
+    }
+
+  // Data (Eq. 13–14) and stability (Eq. 18–19) terms; a tiny pull towards 0 keeps the system
+  // definite even for a frame without a single sparse value.
+  const auto ld = static_cast<float>(params_.lambda_d);
+  const auto ls2 = static_cast<float>(params_.lambda_s2);
+  const bool has_previous = !in.previous.empty() && in.previous.same_size(w, h);
+  constexpr float kRegulariser = 1e-6f;
+  for (int y = 0; y < h; ++y) {
+    const float* sp = in.sparse.row(y);
+    const float* prev = has_previous ? in.previous.row(y) : nullptr;
+    float* data = system_.data.row(y);
+    float* b = rhs_.row(y);
+    for (int x = 0; x < w; ++x) {
+      float a = kRegulariser, rhs = 0.0f;
+      if (known(sp[x])) {
+        a += ld;
+        rhs += ld * sp[x];
+      }
+      if (prev && known(prev[x])) {
+        a += ls2;
+        rhs += ls2 * prev[x];
+      }
+      data[x] = a;
+      b[x] = rhs;
+    }
+  }
+  system_.update_diagonal();
+}
+
+void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
+  const int w = in.sparse.width;
+  const int h = in.sparse.height;
+  if (in.sparse.empty() || in.sparse.channels != 1)
+    throw Error("densify: the sparse disparity must be a non-empty one-channel image");
+  const auto check = [&](auto view, const char* name) {
+    if (!view.empty() && !view.same_size(w, h))
+      throw Error(std::string("densify: ") + name + " is " + std::to_string(view.width) + "x" +
+                  std::to_string(view.height) + ", the sparse map " + std::to_string(w) + "x" +
+                  std::to_string(h));
+  };
+  check(in.m_intensity, "m_intensity");
+  check(in.contours, "the contour mask");
+  check(in.previous, "the previous frame");
+
+  const auto t0 = Clock::now();
+  build_system(in);
+  const auto t1 = Clock::now();
+
+  if (!has_solution_ || !solution_.view().same_size(w, h)) {
+    // Cold start: the sparse values where they exist, 0 elsewhere; multigrid fills the rest fast.
+    solution_.resize(w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        solution_.at(x, y) = known(in.sparse.row(y)[x]) ? in.sparse.row(y)[x] : 0.0f;
+  }
+  if (params_.multigrid) multigrid_.build(system_);
+  report_ =
+      solve_pcg(system_, rhs_.cview(), solution_.view(), params_.multigrid ? &multigrid_ : nullptr,
+                params_.max_iterations, params_.tolerance, scratch_);
+  has_solution_ = true;
+  const auto t2 = Clock::now();
+
+  dense.resize(w, h);
+  dense.copy_from(solution_.cview());
+  timings_.build_ms = ms_between(t0, t1);
+  timings_.solve_ms = ms_between(t1, t2);
+  timings_.total_ms = ms_between(t0, Clock::now());
+}
+
+}  // namespace dco::densify

@@ -1,0 +1,139 @@
+#include "dco/pipeline/densify/multigrid.hpp"
+
+#include <algorithm>
+#include <cassert>
+
+namespace dco::densify {
+namespace {
+
+void fill(ImageView<float> v, float value) {
+  for (int y = 0; y < v.height; ++y) std::fill(v.row(y), v.row(y) + v.width, value);
+}
+
+// b_c(I) = Σ of the residual of the (up to) four children.
+void restrict_sum(ImageView<const float> fine, ImageView<float> coarse) {
+  fill(coarse, 0.0f);
+  for (int y = 0; y < fine.height; ++y) {
+    const float* f = fine.row(y);
+    float* c = coarse.row(y / 2);
+    for (int x = 0; x < fine.width; ++x) c[x / 2] += f[x];
+  }
+}
+
+// x(p) += x_c(parent of p).
+void prolong_add(ImageView<const float> coarse, ImageView<float> fine) {
+  for (int y = 0; y < fine.height; ++y) {
+    const float* c = coarse.row(y / 2);
+    float* f = fine.row(y);
+    for (int x = 0; x < fine.width; ++x) f[x] += c[x / 2];
+  }
+}
+
+}  // namespace
+
+void coarsen(const GridSystem& fine, GridSystem& coarse) {
+  const int w = fine.width();
+  const int h = fine.height();
+  const int cw = (w + 1) / 2;
+  const int ch = (h + 1) / 2;
+  coarse.resize(cw, ch);
+  fill(coarse.data.view(), 0.0f);
+  fill(coarse.wx.view(), 0.0f);
+  fill(coarse.wy.view(), 0.0f);
+  for (int y = 0; y < h; ++y) {
+    const float* d = fine.data.row(y);
+    const float* ex = fine.wx.row(y);
+    const float* ey = fine.wy.row(y);
+    float* cd = coarse.data.row(y / 2);
+    float* cex = coarse.wx.row(y / 2);
+    float* cey = coarse.wy.row(y / 2);
+    for (int x = 0; x < w; ++x) {
+      cd[x / 2] += d[x];
+      // Only edges that leave the aggregate survive: odd column -> next aggregate, odd row -> next.
+      if (x % 2 == 1 && x + 1 < w) cex[x / 2] += ex[x];
+      if (y % 2 == 1 && y + 1 < h) cey[x / 2] += ey[x];
+    }
+  }
+  coarse.update_diagonal();
+}
+
+void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
+                  bool red_first) {
+  const int w = a.width();
+  const int h = a.height();
+  for (int s = 0; s < sweeps; ++s) {
+    for (int half = 0; half < 2; ++half) {
+      const int colour = (half == 0) == red_first ? 0 : 1;
+      for (int r = 0; r < h; ++r) {
+        const float* g = a.diag.row(r);
+        const float* ex = a.wx.row(r);
+        const float* ey = a.wy.row(r);
+        const float* eu = r > 0 ? a.wy.row(r - 1) : nullptr;
+        const float* xu = r > 0 ? x.row(r - 1) : nullptr;
+        const float* xd = r + 1 < h ? x.row(r + 1) : nullptr;
+        const float* br = b.row(r);
+        float* xr = x.row(r);
+        for (int c = (r + colour) % 2; c < w; c += 2) {
+          float v = br[c];
+          if (c + 1 < w) v += ex[c] * xr[c + 1];
+          if (c > 0) v += ex[c - 1] * xr[c - 1];
+          if (xd) v += ey[c] * xd[c];
+          if (xu) v += eu[c] * xu[c];
+          xr[c] = g[c] > 0 ? v / g[c] : 0.0f;
+        }
+      }
+    }
+  }
+}
+
+void Multigrid::build(const GridSystem& fine, int coarsest_size) {
+  fine_ = &fine;
+  fine_residual_.resize(fine.width(), fine.height());
+  std::size_t n = 0;
+  int w = fine.width(), h = fine.height();
+  levels_.reserve(32);  // `previous` points into levels_: it must not reallocate
+  const GridSystem* previous = &fine;
+  while (std::max(w, h) > coarsest_size && std::min(w, h) > 2) {
+    if (levels_.size() <= n) levels_.emplace_back();
+    Level& level = levels_[n];
+    coarsen(*previous, level.system);
+    w = level.system.width();
+    h = level.system.height();
+    level.b.resize(w, h);
+    level.x.resize(w, h);
+    level.r.resize(w, h);
+    previous = &level.system;
+    ++n;
+  }
+  levels_.resize(n);
+}
+
+void Multigrid::cycle(ImageView<const float> r, ImageView<float> z) {
+  cycle_at(0, r, z);
+}
+
+void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x) {
+  const GridSystem& a = system_at(level);
+  fill(x, 0.0f);
+  if (level + 1 == levels()) {
+    gauss_seidel(a, b, x, coarsest_sweeps, true);
+    gauss_seidel(a, b, x, coarsest_sweeps, false);
+    return;
+  }
+  gauss_seidel(a, b, x, smoothing_sweeps, /*red_first=*/true);
+  ImageView<float> r =
+      level == 0 ? fine_residual_.view() : levels_[static_cast<std::size_t>(level - 1)].r.view();
+  apply(a, x, r);
+  for (int y = 0; y < r.height; ++y) {
+    const float* br = b.row(y);
+    float* rr = r.row(y);
+    for (int c = 0; c < r.width; ++c) rr[c] = br[c] - rr[c];
+  }
+  Level& next = levels_[static_cast<std::size_t>(level)];
+  restrict_sum(r, next.b.view());
+  cycle_at(level + 1, next.b.view(), next.x.view());
+  prolong_add(next.x.view(), x);
+  gauss_seidel(a, b, x, smoothing_sweeps, /*red_first=*/false);
+}
+
+}  // namespace dco::densify

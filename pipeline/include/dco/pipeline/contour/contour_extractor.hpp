@@ -1,0 +1,83 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "dco/core/image.hpp"
+
+namespace dco {
+class ConfigSchema;
+}
+
+namespace dco::contour {
+
+// Parameters of the depth-contour stage (§5). Thresholds are on values normalised to [0, 1].
+struct ContourParams {
+  // Flow cue (§5.1–5.2): DIS optical flow from the centre frame to its two neighbours.
+  bool use_flow = true;
+  std::string dis_preset = "fast";  // ultrafast | fast | medium (cv::DISOpticalFlow presets)
+  int projection_distance = 2;      // |p p0| = |p p1| of Eq. 9, internal pixels
+  int box_size = 9;                 // box filter that widens M_fuse (§5.2), internal pixels
+  // The flow cue is divided by max(its maximum, flow_floor) (the normalisation of §5.3.2). With
+  // the paper's plain maximum a still scene's flow noise (|flow| of a few hundredths of a pixel)
+  // is stretched to full strength and opens the gate everywhere; motion of about 1 internal px
+  // per frame already reaches the floor. Units: flow change (px) per px, after the box filter.
+  double flow_floor = 0.1;
+  // Stereo cue: jumps of the stereo disparity (a stereo pair is a horizontal motion), so a static
+  // scene still has depth contours.
+  bool use_stereo = true;
+  double stereo_jump = 2.0;  // disparity jump (internal px) that counts as a full-strength edge
+  // Window: 1 = (t-1, t, t+1), output one frame late; 0 = causal (t-2, t-1, t).
+  int lookahead = 1;
+  // Gated Canny (§5.3).
+  double t_high = 0.06;
+  double t_low = 0.03;
+  double t_depth = 0.03;
+};
+
+void register_params(ConfigSchema& schema, ContourParams& params);
+void validate(const ContourParams& params);  // throws dco::Error
+
+// Inputs for frame t. Neighbour images may be empty (a single frame, a window not yet full):
+// without both of them the flow cue is zero and only the stereo cue remains. compute() throws
+// dco::Error on inconsistent sizes and on internal frames too small for the DIS preset.
+struct ContourInputs {
+  ImageView<const std::uint8_t> image;        // grey frame t at input resolution (Canny)
+  ImageView<const std::uint8_t> centre;       // grey frame t at internal resolution
+  ImageView<const std::uint8_t> neighbour_a;  // t-1 (lookahead 1) or t-1 (lookahead 0)
+  ImageView<const std::uint8_t> neighbour_b;  // t+1 (lookahead 1) or t-2 (lookahead 0)
+  ImageView<const float> disparity;           // internal px, dense (e.g. the WTA map); optional
+};
+
+// Milliseconds per step of the last compute(), named after Table 2: flow = both DIS fields,
+// amplitude = Eq. 6-8 on both, fusion = projection test and Eq. 12, box and normalise = the
+// flow cue's, stereo_cue = disparity jumps with their box filter and the max with the flow cue,
+// gaussian = the 5x5 blur, canny = gradient, suppression, gate and hysteresis.
+struct ContourTimings {
+  double flow_ms = 0, amplitude_ms = 0, fusion_ms = 0, box_ms = 0, normalise_ms = 0,
+         stereo_cue_ms = 0, gaussian_ms = 0, canny_ms = 0, total_ms = 0;
+};
+
+// Outputs, resized on first use:
+//  m_fuse      internal resolution, [0, 1]: how likely a depth edge is near each pixel, the larger
+//              of the flow and stereo cues (all 0 when neither is available);
+//  m_intensity input resolution, [0, 1]: Sobel magnitude of the blurred image divided by the
+//              largest one 8-bit input allows (M_I of Eq. 17), a fixed scale on every frame;
+//  contours    input resolution, 255 on a depth contour (B_dp of Eq. 16), else 0.
+struct ContourOutputs {
+  Image<float> m_fuse;
+  Image<float> m_intensity;
+  Image<std::uint8_t> contours;
+};
+
+class ContourExtractor {
+ public:
+  virtual ~ContourExtractor() = default;
+  virtual void compute(const ContourInputs& in, ContourOutputs& out) = 0;
+  virtual const ContourTimings& last_timings() const = 0;
+};
+
+std::unique_ptr<ContourExtractor> make_cpu_contour_extractor(const ContourParams& params);
+
+}  // namespace dco::contour

@@ -1,0 +1,35 @@
+#pragma once
+
+#include "dco/core/image.hpp"
+
+// The flow cue of the depth-contour filter (§5.1–5.2). Flow fields are 2-channel (u, v) float
+// images in pixels, from the centre frame to one neighbour; all images share one size.
+namespace dco::contour {
+
+// Flows shorter than this (pixels) have no usable direction for the projection test.
+inline constexpr float kMinFlowForDirection = 1e-2f;
+
+// Eq. 6–8: speed r = |flow| per pixel (written to `speed`), then
+// amplitude M(x, y) = max(|r(x+1, y) - r(x, y)|, |r(x, y+1) - r(x, y)|). A difference that would
+// reach past the last column or row counts as 0, so the image border is not an edge.
+void flow_amplitude(ImageView<const float> flow, ImageView<float> speed,
+                    ImageView<float> amplitude);
+
+// Eq. 9–11: with e the unit flow direction at p, p0 = p - distance·e and p1 = p + distance·e
+// (bilinear samples, clamped to the image), contrast = flow(p1)·e - flow(p0)·e. It is positive
+// where p's motion carries it away from what follows it (p stays visible in the neighbour) and
+// negative where p runs into the region ahead (p is covered there). 0 where |flow| is below
+// kMinFlowForDirection.
+void projection_contrast(ImageView<const float> flow, float distance, ImageView<float> contrast);
+
+// Eq. 12: per pixel, the amplitude of the field whose contrast is larger (the more reliable of the
+// two directions); on a tie, field b.
+void fuse_amplitudes(ImageView<const float> amplitude_a, ImageView<const float> contrast_a,
+                     ImageView<const float> amplitude_b, ImageView<const float> contrast_b,
+                     ImageView<float> fused);
+
+// Divides every value by max(largest value, floor) so the result lies in [0, 1]; returns that
+// divisor. An all-zero image (with floor 0) is left as it is and 0 is returned.
+float normalise_by_max(ImageView<float> values, float floor);
+
+}  // namespace dco::contour

@@ -1,0 +1,51 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "dco/core/image.hpp"
+
+// Canny with a depth gate (§5.3): non-maximum suppression, then the paper's extra test that drops a
+// pixel whose depth-contour filter M_fuse is below T_depth, then the dual threshold with
+// 8-connected hysteresis. Written here because OpenCV's Canny offers no hook for the gate.
+namespace dco::contour {
+
+// Quantised gradient direction, the axis along which non-maximum suppression compares.
+enum GradientDirection : std::uint8_t {
+  kHorizontal = 0,    // gradient along x: compare left and right
+  kDiagonalDown = 1,  // along (1, 1) in image coordinates (y down)
+  kVertical = 2,      // gradient along y: compare above and below
+  kDiagonalUp = 3,    // along (1, -1)
+};
+
+// Largest 3x3 Sobel magnitude sqrt(gx² + gy²) an 8-bit image can produce: 255·√20 (gx = 1020,
+// gy = 510, e.g. the left column and the top-centre pixel at 0, the rest at 255). A blur first
+// keeps values in [0, 255], so it cannot exceed this either.
+inline constexpr float kMaxSobelMagnitude8Bit = 1140.3946f;
+
+// 3x3 Sobel on `smoothed` (replicated border). `magnitude` = sqrt(gx² + gy²) / `norm`, so with
+// norm = kMaxSobelMagnitude8Bit an 8-bit source maps into [0, 1] with the same scale on every
+// frame. `direction` receives a GradientDirection per pixel. All views have one size.
+void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<float> magnitude,
+                     ImageView<std::uint8_t> direction);
+
+struct CannyThresholds {
+  float high = 0.06f;   // T_high: a suppressed maximum above it starts an edge
+  float low = 0.03f;    // T_low: at or above it, a maximum may continue an edge
+  float depth = 0.03f;  // T_depth: pixels whose gate value is below it are never edges
+};
+
+// Reused between calls; it grows to the image size once and then stays.
+struct CannyScratch {
+  std::vector<std::int32_t> stack;   // hysteresis work list, one slot per pixel at most
+  std::vector<std::int32_t> gate_x;  // column of the gate image for each image column
+};
+
+// Writes 255 on edge pixels of `edges` and 0 elsewhere. `gate` (may be empty: no gating) can be
+// smaller than the image: pixel (x, y) reads gate(x * gate.width / width, y * gate.height /
+// height), i.e. (x / scale, y / scale) rounded down. The one-pixel image border is never an edge.
+void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t> direction,
+                 ImageView<const float> gate, const CannyThresholds& thresholds,
+                 ImageView<std::uint8_t> edges, CannyScratch& scratch);
+
+}  // namespace dco::contour

@@ -1,0 +1,21 @@
+#pragma once
+
+#include <cstdint>
+
+#include "dco/core/image.hpp"
+
+// Small separable filters of the contour stage, written out so that the per-frame path never
+// allocates (OpenCV's filter engines build and free their buffers on every call). Borders replicate
+// the edge pixel, as cv::BORDER_REPLICATE.
+namespace dco::contour {
+
+// 5x5 Gaussian with sigma 1.4 (the classic Canny pre-filter) from 8-bit grey to float.
+// `tmp` and `out` have the size of `in`; all single-channel.
+void gaussian_blur_5x5(ImageView<const std::uint8_t> in, ImageView<float> tmp,
+                       ImageView<float> out);
+
+// Normalised (mean) box filter of odd `size`. `tmp` and `out` have the size of `in`; `out` may not
+// alias `in`.
+void box_filter(ImageView<const float> in, int size, ImageView<float> tmp, ImageView<float> out);
+
+}  // namespace dco::contour

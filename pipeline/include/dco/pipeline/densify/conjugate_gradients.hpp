@@ -1,0 +1,27 @@
+#pragma once
+
+#include "dco/core/image.hpp"
+#include "dco/pipeline/densify/grid_system.hpp"
+#include "dco/pipeline/densify/multigrid.hpp"
+
+namespace dco::densify {
+
+struct SolverReport {
+  int iterations = 0;
+  double initial_residual = 0;  // ||b - A x0|| / ||b||
+  double final_residual = 0;    // ||b - A x|| / ||b||
+  bool converged = false;
+};
+
+struct CgScratch {
+  Image<float> r, z, p, ap;
+  void resize(int width, int height);
+};
+
+// Preconditioned conjugate gradients on A x = b from the initial guess in x (warm start), with
+// one multigrid V-cycle as the preconditioner (or none when `mg` is null). Stops when the
+// relative residual falls to `tolerance` or after `max_iterations`.
+SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
+                       Multigrid* mg, int max_iterations, double tolerance, CgScratch& scratch);
+
+}  // namespace dco::densify

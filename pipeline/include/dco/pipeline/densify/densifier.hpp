@@ -1,0 +1,78 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "dco/core/image.hpp"
+#include "dco/pipeline/densify/conjugate_gradients.hpp"
+
+namespace dco {
+class ConfigSchema;
+}
+
+namespace dco::densify {
+
+// Parameters of the quadratic densification (§6, Eq. 20; defaults from §7.2).
+struct DensifyParams {
+  double lambda_d = 0.8;    // data term, Eq. 13–14
+  double lambda_s = 1.2;    // contour-aware smoothness, Eq. 15–17
+  double lambda_s2 = 0.02;  // stability against the previous frame, Eq. 18–19
+  // Floor of every smoothness weight: keeps each pixel connected to the rest, so regions a
+  // contour encloses without any sparse value still get one, and the system stays definite.
+  double min_edge_weight = 0.001;
+  int max_iterations = 60;
+  double tolerance = 1e-4;  // relative residual ||b - Ax|| / ||b||
+  bool multigrid = true;    // V-cycle preconditioner (else plain conjugate gradients)
+};
+
+void register_params(ConfigSchema& schema, DensifyParams& params);
+void validate(const DensifyParams& params);  // throws dco::Error
+
+// Everything at the input resolution except m_fuse (any resolution: it is sampled at
+// x * m_fuse.width / width). Optional inputs may be empty.
+struct DensifyInputs {
+  ImageView<const float> sparse;           // disparity px, +inf (or <= 0) where unknown
+  ImageView<const float> m_fuse;           // [0, 1], optional
+  ImageView<const float> m_intensity;      // [0, 1], optional
+  ImageView<const std::uint8_t> contours;  // B_dp, non-zero on a depth contour, optional
+  ImageView<const float> previous;         // last frame's dense disparity, optional
+};
+
+struct DensifyTimings {
+  double build_ms = 0, solve_ms = 0, total_ms = 0;
+};
+
+// Solves Eq. 20 in disparity (a plane in the scene is affine in disparity, so smoothness in
+// disparity keeps slanted surfaces straight) and writes a dense disparity map: every pixel set.
+// The solution of the previous call is the starting point of the next (warm start).
+class Densifier {
+ public:
+  explicit Densifier(const DensifyParams& params);
+
+  void compute(const DensifyInputs& in, Image<float>& dense);
+
+  const SolverReport& last_report() const { return report_; }
+  const DensifyTimings& last_timings() const { return timings_; }
+  const DensifyParams& params() const { return params_; }
+  // Forgets the previous solution (a scene cut, a new sequence).
+  void reset() { has_solution_ = false; }
+
+ private:
+  void build_system(const DensifyInputs& in);
+
+  DensifyParams params_;
+  GridSystem system_;
+  Multigrid multigrid_;
+  CgScratch scratch_;
+  Image<float> rhs_, solution_, smooth_strength_;
+  Image<std::uint8_t> barrier_;
+  bool has_solution_ = false;
+  SolverReport report_;
+  DensifyTimings timings_;
+};
+
+// Closes diagonal gaps of a contour mask so that it separates regions under 4-connectivity
+// (two contour pixels touching only at a corner would let the smoothness term leak across).
+void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::uint8_t> closed);
+
+}  // namespace dco::densify

@@ -1,0 +1,28 @@
+#pragma once
+
+#include "dco/core/image.hpp"
+
+namespace dco::densify {
+
+// A symmetric positive definite system on the pixel grid with a 5-point stencil:
+//   (A x)(p) = diag(p) x(p) - Σ_{q ∈ N4(p)} w(p,q) x(q),  diag(p) = data(p) + Σ_q w(p,q).
+// It is the normal equation of Σ_p data(p) (x_p - t_p)^2 + Σ_edges w (x_p - x_q)^2, the form of
+// Eq. 20. `wx(x, y)` couples (x, y) with (x+1, y) (last column unused), `wy(x, y)` couples
+// (x, y) with (x, y+1) (last row unused).
+struct GridSystem {
+  Image<float> data, wx, wy, diag;
+
+  void resize(int width, int height);
+  int width() const { return data.width(); }
+  int height() const { return data.height(); }
+  // Recomputes diag from data and the edge weights.
+  void update_diagonal();
+};
+
+// y = A x.
+void apply(const GridSystem& a, ImageView<const float> x, ImageView<float> y);
+
+// Dot product and squared norm in double precision (sums over up to millions of floats).
+double dot(ImageView<const float> a, ImageView<const float> b);
+
+}  // namespace dco::densify

@@ -1,0 +1,53 @@
+#pragma once
+
+#include <vector>
+
+#include "dco/core/image.hpp"
+#include "dco/pipeline/densify/grid_system.hpp"
+
+namespace dco::densify {
+
+// Symmetric multigrid V-cycle for a GridSystem, used as the preconditioner of conjugate
+// gradients. Coarse levels are Galerkin operators of piecewise-constant 2x2 aggregation
+// (P^T A P), which keep the 5-point form: data terms add up, and the edges between two
+// aggregates add up, so a contour that cuts the fine grid (w = 0) still cuts the coarse grids.
+// Smoothing is red-black Gauss-Seidel, red then black before the coarse correction and black
+// then red after it, so the cycle is a symmetric operator.
+class Multigrid {
+ public:
+  // Builds the hierarchy for `fine` (kept by reference: it must outlive the next cycle).
+  // Levels are added until the coarsest is at most `coarsest_size` pixels on its longer side.
+  void build(const GridSystem& fine, int coarsest_size = 24);
+
+  // z ≈ A^{-1} r with one V-cycle from z = 0.
+  void cycle(ImageView<const float> r, ImageView<float> z);
+
+  int levels() const { return static_cast<int>(levels_.size()) + 1; }
+
+  int smoothing_sweeps = 2;
+  int coarsest_sweeps = 40;
+
+ private:
+  struct Level {
+    GridSystem system;
+    Image<float> b, x, r;
+  };
+  void cycle_at(int level, ImageView<const float> b, ImageView<float> x);
+  const GridSystem& system_at(int level) const {
+    return level == 0 ? *fine_ : levels_[static_cast<std::size_t>(level - 1)].system;
+  }
+
+  const GridSystem* fine_ = nullptr;
+  std::vector<Level> levels_;  // coarse levels 1..n
+  Image<float> fine_residual_;
+};
+
+// Red-black Gauss-Seidel sweeps on A x = b; `red_first` picks the colour order.
+void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
+                  bool red_first);
+
+// The Galerkin coarse system of 2x2 piecewise-constant aggregation; coarse size is
+// ceil(w/2) x ceil(h/2).
+void coarsen(const GridSystem& fine, GridSystem& coarse);
+
+}  // namespace dco::densify

@@ -1,0 +1,462 @@
+#include "dco/pipeline/contour/contour_extractor.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "dco/core/cv_interop.hpp"
+#include "dco/core/error.hpp"
+#include "dco/core/image.hpp"
+
+namespace dco::contour {
+namespace {
+
+using ::testing::HasSubstr;
+
+// A textured square sliding right over a textured still background. Frames are cut from the same
+// two textures, so every frame pair is an exact shift; the internal frames are the input frames
+// at half size, as the pipeline feeds them.
+constexpr int kInW = 512, kInH = 384;  // input resolution
+constexpr int kW = kInW / 2, kH = kInH / 2;
+constexpr int kSquareX = 80, kSquareY = 48, kSide = 96;  // centre frame, internal px
+constexpr int kStep = 3;                                 // internal px per frame
+
+cv::Mat texture(int w, int h, int seed) {
+  cv::Mat t(h, w, CV_8U);
+  cv::RNG rng(seed);
+  rng.fill(t, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(t, t, {0, 0}, 2.0);  // camera-like texture that optical flow can follow
+  cv::normalize(t, t, 0, 255, cv::NORM_MINMAX);
+  return t;
+}
+
+struct Frame {
+  Image<std::uint8_t> input;     // input resolution
+  Image<std::uint8_t> internal;  // half size
+};
+
+Frame frame_at(int t) {
+  static const cv::Mat background = texture(kInW, kInH, 1);
+  static const cv::Mat square = texture(2 * kSide, 2 * kSide, 2);
+  cv::Mat img = background.clone();
+  square.copyTo(img(cv::Rect(2 * (kSquareX + kStep * t), 2 * kSquareY, 2 * kSide, 2 * kSide)));
+  cv::Mat half;
+  cv::resize(img, half, {kW, kH}, 0, 0, cv::INTER_AREA);
+  Frame f{Image<std::uint8_t>(kInW, kInH), Image<std::uint8_t>(kW, kH)};
+  f.input.copy_from(as_view<std::uint8_t>(static_cast<const cv::Mat&>(img)));
+  f.internal.copy_from(as_view<std::uint8_t>(static_cast<const cv::Mat&>(half)));
+  return f;
+}
+
+struct MovingSquare {
+  Frame past = frame_at(-1), centre = frame_at(0), future = frame_at(1);
+  ContourInputs inputs() const {
+    ContourInputs in;
+    in.image = centre.input.view();
+    in.centre = centre.internal.view();
+    in.neighbour_a = past.internal.view();
+    in.neighbour_b = future.internal.view();
+    return in;
+  }
+};
+
+// Chebyshev distance (internal px) from (x, y) to the square's outline in the centre frame: the
+// nearest of its four sides.
+int distance_to_outline(int x, int y) {
+  const int x0 = kSquareX, x1 = kSquareX + kSide, y0 = kSquareY, y1 = kSquareY + kSide;
+  auto outside = [](int v, int lo, int hi) { return v < lo ? lo - v : v > hi ? v - hi : 0; };
+  const int horizontal_sides =
+      std::max(outside(x, x0, x1), std::min(std::abs(y - y0), std::abs(y - y1)));
+  const int vertical_sides =
+      std::max(outside(y, y0, y1), std::min(std::abs(x - x0), std::abs(x - x1)));
+  return std::min(horizontal_sides, vertical_sides);
+}
+
+// Mean of m_fuse on the outline (within 2 px), and inside and outside the square at least `far`
+// px from it.
+struct Means {
+  double outline = 0, inside = 0, outside = 0;
+};
+
+Means region_means(const Image<float>& m, int far) {
+  double s[3] = {0, 0, 0};
+  int n[3] = {0, 0, 0};
+  for (int y = 0; y < m.height(); ++y)
+    for (int x = 0; x < m.width(); ++x) {
+      const int d = distance_to_outline(x, y);
+      const bool inside =
+          x > kSquareX && x < kSquareX + kSide && y > kSquareY && y < kSquareY + kSide;
+      const int k = d <= 2 ? 0 : d < far ? -1 : inside ? 1 : 2;
+      if (k < 0) continue;
+      s[k] += m.at(x, y);
+      ++n[k];
+    }
+  return {s[0] / n[0], s[1] / n[1], s[2] / n[2]};
+}
+
+// The flow cue is as sharp as the DIS preset's flow: "fast" estimates at 1/4 of the internal
+// resolution and smears the motion boundary over ~20 px, "medium" at 1/2 over ~10 px.
+TEST(ContourExtractor, FlowCueMarksTheMovingSquaresOutlineAndNotItsTexture) {
+  const MovingSquare scene;
+  for (const auto& [preset, far] : {std::pair{"fast", 28}, std::pair{"medium", 16}}) {
+    ContourParams params;
+    params.dis_preset = preset;
+    ContourOutputs out;
+    make_cpu_contour_extractor(params)->compute(scene.inputs(), out);
+    ASSERT_EQ(out.m_fuse.width(), kW);
+    ASSERT_EQ(out.m_fuse.height(), kH);
+    const Means m = region_means(out.m_fuse, far);
+    std::printf("%s: m_fuse mean on the outline %.3f, >= %d px inside %.3f, outside %.3f\n", preset,
+                m.outline, far, m.inside, m.outside);
+    EXPECT_GT(m.outline, 0.5) << preset;
+    EXPECT_LT(m.inside, 0.03) << preset;
+    EXPECT_LT(m.outside, 0.01) << preset;
+    float largest = 0;
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        ASSERT_GE(out.m_fuse.at(x, y), 0.0f);
+        largest = std::max(largest, out.m_fuse.at(x, y));
+      }
+    EXPECT_FLOAT_EQ(largest, 1.0f) << preset;  // 3 px per frame is well above flow_floor
+  }
+}
+
+// A still scene seen with sensor noise: DIS returns a few hundredths of a pixel of noise. Divided
+// by its own maximum (the paper's normalisation, flow_floor 0) that noise becomes a full-strength
+// filter and every texture edge passes; the default floor keeps it below T_depth.
+TEST(ContourExtractor, FlowFloorKeepsAStillScenesNoiseOutOfTheGate) {
+  const Frame still = frame_at(0);
+  Image<std::uint8_t> noisy[2] = {Image<std::uint8_t>(kW, kH), Image<std::uint8_t>(kW, kH)};
+  cv::RNG rng(4);
+  for (Image<std::uint8_t>& n : noisy) {
+    cv::Mat noise(kH, kW, CV_16S), sum;
+    rng.fill(noise, cv::RNG::NORMAL, 0, 2);
+    as_mat(still.internal.view()).convertTo(sum, CV_16S);
+    sum += noise;
+    sum.convertTo(as_mat(n.view()), CV_8U);
+  }
+  ContourInputs in;
+  in.image = still.input.view();
+  in.centre = still.internal.view();
+  in.neighbour_a = noisy[0].view();
+  in.neighbour_b = noisy[1].view();
+  auto largest = [](const Image<float>& m) {
+    float v = 0;
+    for (int y = 0; y < m.height(); ++y)
+      for (int x = 0; x < m.width(); ++x) v = std::max(v, m.at(x, y));
+    return v;
+  };
+  auto edges = [](const Image<std::uint8_t>& c) {
+    int n = 0;
+    for (int y = 0; y < c.height(); ++y)
+      for (int x = 0; x < c.width(); ++x) n += c.at(x, y) == 255;
+    return n;
+  };
+  ContourOutputs with_floor, without;
+  make_cpu_contour_extractor({})->compute(in, with_floor);
+  ContourParams paper;
+  paper.flow_floor = 0;
+  make_cpu_contour_extractor(paper)->compute(in, without);
+  EXPECT_LT(largest(with_floor.m_fuse), 0.03f);
+  EXPECT_EQ(edges(with_floor.contours), 0);
+  EXPECT_FLOAT_EQ(largest(without.m_fuse), 1.0f);
+  EXPECT_GT(edges(without.contours), 10000);
+}
+
+// Share of contour pixels (input resolution) farther than `far` internal px from the outline, and
+// the share of the outline (sampled every internal px) that has a contour pixel within 2 input px.
+struct ContourStats {
+  int total = 0;
+  double off_outline = 0, outline_covered = 0;
+};
+
+ContourStats contour_stats(const Image<std::uint8_t>& c, int far) {
+  ContourStats s;
+  int off = 0;
+  for (int y = 0; y < c.height(); ++y)
+    for (int x = 0; x < c.width(); ++x)
+      if (c.at(x, y) == 255) {
+        ++s.total;
+        off += distance_to_outline(x / 2, y / 2) > far;
+      }
+  s.off_outline = s.total ? static_cast<double>(off) / s.total : 0;
+  int samples = 0, hit = 0;
+  auto covered = [&](int ix, int iy) {
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx)
+        if (c.at(std::clamp(ix + dx, 0, kInW - 1), std::clamp(iy + dy, 0, kInH - 1)) == 255)
+          return true;
+    return false;
+  };
+  for (int i = 1; i < kSide; ++i)
+    for (const auto& [ix, iy] : {std::pair{2 * (kSquareX + i), 2 * kSquareY},
+                                 std::pair{2 * (kSquareX + i), 2 * (kSquareY + kSide)},
+                                 std::pair{2 * kSquareX, 2 * (kSquareY + i)},
+                                 std::pair{2 * (kSquareX + kSide), 2 * (kSquareY + i)}}) {
+      ++samples;
+      hit += covered(ix, iy);
+    }
+  s.outline_covered = static_cast<double>(hit) / samples;
+  return s;
+}
+
+TEST(ContourExtractor, GateKeepsTheOutlineAndDropsTextureEdges) {
+  const MovingSquare scene;
+  ContourParams open;
+  open.t_depth = 0;  // plain Canny
+  ContourOutputs plain;
+  make_cpu_contour_extractor(open)->compute(scene.inputs(), plain);
+  const ContourStats p = contour_stats(plain.contours, 12);
+  std::printf("plain Canny: %d px, %.1f%% farther than 12 px from the outline\n", p.total,
+              100 * p.off_outline);
+  EXPECT_GT(p.off_outline, 0.7);  // the texture is full of intensity edges
+  EXPECT_GT(p.outline_covered, 0.95);
+  for (const auto& [preset, far, max_off] :
+       {std::tuple{"fast", 24, 0.03}, std::tuple{"medium", 12, 0.05}}) {
+    ContourParams params;
+    params.dis_preset = preset;
+    ContourOutputs gated;
+    make_cpu_contour_extractor(params)->compute(scene.inputs(), gated);
+    const ContourStats g = contour_stats(gated.contours, far);
+    std::printf("%s: %d px, %.1f%% farther than %d px from the outline, outline covered %.1f%%\n",
+                preset, g.total, 100 * g.off_outline, far, 100 * g.outline_covered);
+    EXPECT_LT(g.off_outline, max_off) << preset;
+    EXPECT_GT(g.outline_covered, 0.95) << preset;
+  }
+}
+
+TEST(ContourExtractor, StereoCueAloneMarksADisparityStep) {
+  const Frame f = frame_at(0);
+  Image<float> disparity(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) disparity.at(x, y) = x < kW / 2 ? 8.0f : 20.0f;
+  disparity.at(10, 10) = std::numeric_limits<float>::infinity();  // a hole is no edge
+  ContourInputs in;
+  in.image = f.input.view();
+  in.centre = f.internal.view();
+  in.disparity = disparity.view();
+  ContourOutputs out;
+  make_cpu_contour_extractor({})->compute(in, out);
+  // Box 9 around the 2-px line of jumps: 2 / 9 of full strength on the line, 0 beyond 4 px.
+  EXPECT_NEAR(out.m_fuse.at(kW / 2, kH / 2), 2.0f / 9.0f, 1e-5f);
+  EXPECT_NEAR(out.m_fuse.at(kW / 2 - 5, kH / 2), 1.0f / 9.0f, 1e-5f);
+  EXPECT_EQ(out.m_fuse.at(kW / 2 - 6, kH / 2), 0.0f);
+  EXPECT_EQ(out.m_fuse.at(kW / 2 + 5, kH / 2), 0.0f);
+  EXPECT_EQ(out.m_fuse.at(10, 10), 0.0f);
+  int near = 0, far = 0;
+  for (int y = 0; y < kInH; ++y)
+    for (int x = 0; x < kInW; ++x)
+      if (out.contours.at(x, y) == 255) (std::abs(x / 2 - kW / 2) <= 5 ? near : far)++;
+  EXPECT_GT(near, 0);
+  EXPECT_EQ(far, 0);
+}
+
+TEST(ContourExtractor, FusedFilterIsTheLargerOfBothCues) {
+  const MovingSquare scene;
+  Image<float> disparity(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) disparity.at(x, y) = y < 20 ? 5.0f : 30.0f;
+  ContourInputs in = scene.inputs();
+  ContourOutputs flow_only, both;
+  make_cpu_contour_extractor({})->compute(in, flow_only);
+  in.disparity = disparity.view();
+  make_cpu_contour_extractor({})->compute(in, both);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      // Rows 19 and 20 carry full-strength jumps; the 9x9 box averages the ones it covers.
+      const int rows = (std::abs(y - 19) <= 4) + (std::abs(y - 20) <= 4);
+      const float stereo = static_cast<float>(rows) / 9.0f;
+      const float expected = std::max(flow_only.m_fuse.at(x, y), stereo);
+      ASSERT_NEAR(both.m_fuse.at(x, y), expected, 1e-5f) << x << "," << y;
+    }
+}
+
+TEST(ContourExtractor, WithoutAnyCueNothingPassesTheGate) {
+  const MovingSquare scene;
+  ContourInputs in = scene.inputs();
+  in.neighbour_b = {};  // one neighbour only: no flow cue
+  ContourOutputs out;
+  make_cpu_contour_extractor({})->compute(in, out);
+  int edges = 0;
+  for (int y = 0; y < kInH; ++y)
+    for (int x = 0; x < kInW; ++x) edges += out.contours.at(x, y) == 255;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) ASSERT_EQ(out.m_fuse.at(x, y), 0.0f);
+  EXPECT_EQ(edges, 0);
+  // The intensity gradient is still there for the stages that follow.
+  float largest = 0;
+  for (int y = 0; y < kInH; ++y)
+    for (int x = 0; x < kInW; ++x) largest = std::max(largest, out.m_intensity.at(x, y));
+  EXPECT_GT(largest, 0.1f);
+  EXPECT_LE(largest, 1.0f);
+
+  ContourParams no_flow;
+  no_flow.use_flow = false;
+  make_cpu_contour_extractor(no_flow)->compute(scene.inputs(), out);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) ASSERT_EQ(out.m_fuse.at(x, y), 0.0f);
+}
+
+TEST(ContourExtractor, OutputsFollowTheInputSizes) {
+  // 3:1 with an odd internal size, and 1:1.
+  for (const auto& [iw, ih, cw, ch] :
+       {std::array{603, 297, 201, 99}, std::array{128, 96, 128, 96}}) {
+    cv::Mat big(ih, iw, CV_8U), small(ch, cw, CV_8U);
+    cv::RNG(3).fill(big, cv::RNG::UNIFORM, 0, 256);
+    cv::resize(big, small, small.size(), 0, 0, cv::INTER_AREA);
+    ContourInputs in;
+    in.image = as_view<std::uint8_t>(static_cast<const cv::Mat&>(big));
+    in.centre = as_view<std::uint8_t>(static_cast<const cv::Mat&>(small));
+    in.neighbour_a = in.centre;
+    in.neighbour_b = in.centre;
+    ContourOutputs out;
+    make_cpu_contour_extractor({})->compute(in, out);
+    EXPECT_EQ(out.m_fuse.width(), cw);
+    EXPECT_EQ(out.m_fuse.height(), ch);
+    EXPECT_EQ(out.m_intensity.width(), iw);
+    EXPECT_EQ(out.m_intensity.height(), ih);
+    EXPECT_EQ(out.contours.width(), iw);
+    EXPECT_EQ(out.contours.height(), ih);
+    for (int y = 0; y < ih; ++y)
+      for (int x = 0; x < iw; ++x) {
+        const std::uint8_t c = out.contours.at(x, y);
+        ASSERT_TRUE(c == 0 || c == 255);
+      }
+  }
+}
+
+// dco::Image pads rows to 64 bytes; DIS wants continuous rows, so such views go through a copy.
+TEST(ContourExtractor, AcceptsPaddedViews) {
+  const MovingSquare scene;
+  constexpr int kCrop = kW - 3;  // 253 columns: rows padded to 256
+  Image<std::uint8_t> padded[3] = {Image<std::uint8_t>(kCrop, kH), Image<std::uint8_t>(kCrop, kH),
+                                   Image<std::uint8_t>(kCrop, kH)};
+  cv::Mat dense[3];
+  const Frame* frames[3] = {&scene.past, &scene.centre, &scene.future};
+  for (int i = 0; i < 3; ++i) {
+    padded[i].copy_from(frames[i]->internal.view().sub(0, 0, kCrop, kH));
+    dense[i] = as_mat(padded[i].view()).clone();
+    ASSERT_FALSE(as_mat(padded[i].view()).isContinuous());
+  }
+  ContourInputs in = scene.inputs();
+  in.image = scene.centre.input.view().sub(0, 0, 2 * kCrop, kInH);
+  in.neighbour_a = padded[0].view();
+  in.centre = padded[1].view();
+  in.neighbour_b = padded[2].view();
+  ContourOutputs a, b;
+  make_cpu_contour_extractor({})->compute(in, a);
+  in.neighbour_a = as_view<std::uint8_t>(static_cast<const cv::Mat&>(dense[0]));
+  in.centre = as_view<std::uint8_t>(static_cast<const cv::Mat&>(dense[1]));
+  in.neighbour_b = as_view<std::uint8_t>(static_cast<const cv::Mat&>(dense[2]));
+  make_cpu_contour_extractor({})->compute(in, b);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kCrop; ++x) ASSERT_EQ(a.m_fuse.at(x, y), b.m_fuse.at(x, y));
+}
+
+TEST(ContourExtractor, IsDeterministicAndReusable) {
+  const MovingSquare scene;
+  const auto a = make_cpu_contour_extractor({});
+  const auto b = make_cpu_contour_extractor({});
+  ContourOutputs first, second, other;
+  a->compute(scene.inputs(), first);
+  a->compute(scene.inputs(), second);
+  b->compute(scene.inputs(), other);
+  for (const ContourOutputs* o : {&second, &other}) {
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) ASSERT_EQ(o->m_fuse.at(x, y), first.m_fuse.at(x, y));
+    for (int y = 0; y < kInH; ++y)
+      for (int x = 0; x < kInW; ++x) {
+        ASSERT_EQ(o->m_intensity.at(x, y), first.m_intensity.at(x, y));
+        ASSERT_EQ(o->contours.at(x, y), first.contours.at(x, y));
+      }
+  }
+}
+
+TEST(ContourExtractor, ReportsEveryStepsTime) {
+  const MovingSquare scene;
+  const auto extractor = make_cpu_contour_extractor({});
+  ContourOutputs out;
+  extractor->compute(scene.inputs(), out);
+  const ContourTimings& t = extractor->last_timings();
+  EXPECT_GT(t.flow_ms, 0);
+  EXPECT_GT(t.amplitude_ms, 0);
+  EXPECT_GT(t.fusion_ms, 0);
+  EXPECT_GT(t.box_ms, 0);
+  EXPECT_GT(t.normalise_ms, 0);
+  EXPECT_EQ(t.stereo_cue_ms, 0);  // no disparity given
+  EXPECT_GT(t.gaussian_ms, 0);
+  EXPECT_GT(t.canny_ms, 0);
+  const double parts = t.flow_ms + t.amplitude_ms + t.fusion_ms + t.box_ms + t.normalise_ms +
+                       t.stereo_cue_ms + t.gaussian_ms + t.canny_ms;
+  EXPECT_GE(t.total_ms, parts * 0.999);
+  EXPECT_LT(t.total_ms, parts + 5.0);
+}
+
+std::string compute_error(const ContourInputs& in) {
+  ContourOutputs out;
+  try {
+    make_cpu_contour_extractor({})->compute(in, out);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ContourExtractor, RejectsInconsistentInputs) {
+  const MovingSquare scene;
+  Image<std::uint8_t> colour(kInW, kInH, 3), odd(kW + 1, kH);
+  Image<float> disparity(kW, kH - 1);
+  colour.fill(0);
+  odd.fill(0);
+  disparity.fill(0);
+  ContourInputs in = scene.inputs();
+  in.image = {};
+  EXPECT_THAT(compute_error(in), HasSubstr("input image"));
+  in = scene.inputs();
+  in.image = colour.view();
+  EXPECT_THAT(compute_error(in), HasSubstr("grey"));
+  in = scene.inputs();
+  in.centre = {};
+  EXPECT_THAT(compute_error(in), HasSubstr("centre"));
+  in = scene.inputs();
+  in.neighbour_b = odd.view();
+  EXPECT_THAT(compute_error(in), HasSubstr("neighbour_b is 257x192x1, expected 256x192x1"));
+  in = scene.inputs();
+  in.disparity = disparity.view();
+  EXPECT_THAT(compute_error(in), HasSubstr("disparity"));
+  in = scene.inputs();
+  in.image = scene.centre.internal.view();
+  in.centre = scene.centre.input.view();
+  EXPECT_THAT(compute_error(in), HasSubstr("larger than the input image"));
+}
+
+// DIS cannot build its pyramid on small frames; the extractor says so instead of returning garbage.
+TEST(ContourExtractor, RejectsFramesTooSmallForTheFlowPreset) {
+  const MovingSquare scene;
+  ContourInputs in = scene.inputs();
+  for (const auto& [w, h] : {std::pair{64, 48}, std::pair{200, 24}}) {
+    in.centre = scene.centre.internal.view().sub(0, 0, w, h);
+    in.neighbour_a = scene.past.internal.view().sub(0, 0, w, h);
+    in.neighbour_b = scene.future.internal.view().sub(0, 0, w, h);
+    EXPECT_THAT(compute_error(in), HasSubstr("too small for DIS optical flow with the 'fast'"));
+    ContourParams no_flow;
+    no_flow.use_flow = false;
+    ContourOutputs out;
+    EXPECT_NO_THROW(make_cpu_contour_extractor(no_flow)->compute(in, out));
+  }
+}
+
+}  // namespace
+}  // namespace dco::contour

@@ -1,0 +1,147 @@
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "dco/core/image.hpp"
+#include "dco/pipeline/contour/flow_fusion.hpp"
+#include "dco/pipeline/contour/stereo_cue.hpp"
+
+namespace dco::contour {
+namespace {
+
+constexpr int kW = 32, kH = 12;
+constexpr int kObjBegin = 10, kObjEnd = 20;  // object columns [10, 20) move, the rest is still
+
+// A flow field where the object columns move by (u, 0) and the background does not.
+Image<float> object_flow(float u) {
+  Image<float> f(kW, kH, 2);
+  f.fill(0.0f);
+  for (int y = 0; y < kH; ++y)
+    for (int x = kObjBegin; x < kObjEnd; ++x) f.at(x, y, 0) = u;
+  return f;
+}
+
+TEST(ContourFlowFusion, AmplitudeIsTheLargerSpeedChangeToTheRightOrBelow) {
+  Image<float> f(kW, kH, 2), speed(kW, kH), m(kW, kH);
+  f.fill(0.0f);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 10; x < kW; ++x) {
+      f.at(x, y, 0) = 3.0f;  // speed 5 from column 10 on
+      f.at(x, y, 1) = 4.0f;
+    }
+  for (int x = 0; x < kW; ++x) f.at(x, 6, 0) = f.at(x, 6, 0) + 1.0f;  // row 6 a bit faster
+  flow_amplitude(f.view(), speed.view(), m.view());
+  EXPECT_FLOAT_EQ(speed.at(12, 2), 5.0f);
+  EXPECT_FLOAT_EQ(m.at(9, 2), 5.0f);  // |r(10) - r(9)|
+  EXPECT_FLOAT_EQ(m.at(10, 2), 0.0f);
+  EXPECT_FLOAT_EQ(m.at(3, 5), 1.0f);  // |r(3, 6) - r(3, 5)| = 1 - 0
+  EXPECT_FLOAT_EQ(m.at(3, 6), 1.0f);  // |r(3, 7) - r(3, 6)|
+  EXPECT_NEAR(m.at(20, 5), std::hypot(4.0f, 4.0f) - 5.0f, 1e-5f);
+}
+
+TEST(ContourFlowFusion, AmplitudeTreatsTheBorderAsNoChange) {
+  Image<float> f(kW, kH, 2), speed(kW, kH), m(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      f.at(x, y, 0) = 2.0f;
+      f.at(x, y, 1) = -1.0f;
+    }
+  flow_amplitude(f.view(), speed.view(), m.view());
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) EXPECT_EQ(m.at(x, y), 0.0f) << x << "," << y;
+}
+
+// Fig. 5: the object moves right in the future field (+3) and came from the left in the past one
+// (flow -3). Near the object's left edge the future field is the reliable one (that background
+// stays visible), near its right edge the past field is.
+TEST(ContourFlowFusion, ProjectionContrastSignsFollowFigure5) {
+  const Image<float> future = object_flow(3.0f);
+  const Image<float> past = object_flow(-3.0f);
+  Image<float> cf(kW, kH), cp(kW, kH);
+  projection_contrast(future.view(), 2.0f, cf.view());
+  projection_contrast(past.view(), 2.0f, cp.view());
+  for (const int y : {0, 5, kH - 1}) {
+    EXPECT_FLOAT_EQ(cf.at(kObjBegin, y), 3.0f);  // ahead of p still object, behind it background
+    EXPECT_FLOAT_EQ(cp.at(kObjBegin, y), -3.0f);
+    EXPECT_FLOAT_EQ(cf.at(kObjEnd - 1, y), -3.0f);
+    EXPECT_FLOAT_EQ(cp.at(kObjEnd - 1, y), 3.0f);
+    EXPECT_FLOAT_EQ(cf.at(15, y), 0.0f);  // deep inside: same flow ahead and behind
+    EXPECT_FLOAT_EQ(cf.at(3, y), 0.0f);   // background: no direction
+  }
+}
+
+TEST(ContourFlowFusion, ProjectionSamplesBilinearlyAndClampsAtTheBorder) {
+  Image<float> f(8, 4, 2), c(8, 4);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 8; ++x) {
+      f.at(x, y, 0) = 1.0f + 0.5f * static_cast<float>(x);  // u grows linearly along x
+      f.at(x, y, 1) = 0.0f;
+    }
+  projection_contrast(f.view(), 1.5f, c.view());
+  EXPECT_NEAR(c.at(3, 1), 0.5f * 3.0f, 1e-5f);           // u(4.5) - u(1.5), interpolated
+  EXPECT_NEAR(c.at(0, 1), 0.5f * 1.5f, 1e-5f);           // p0 clamped to x = 0
+  EXPECT_NEAR(c.at(7, 1), 0.5f * (7.0f - 5.5f), 1e-5f);  // p1 clamped to x = 7
+}
+
+TEST(ContourFlowFusion, FusionTakesTheAmplitudeOfTheLargerContrast) {
+  Image<float> ma(3, 1), ca(3, 1), mb(3, 1), cb(3, 1), out(3, 1);
+  const float a_m[3] = {1, 2, 3}, a_c[3] = {5, -1, 0}, b_m[3] = {10, 20, 30}, b_c[3] = {4, 0, 0};
+  for (int x = 0; x < 3; ++x) {
+    ma.at(x, 0) = a_m[x];
+    ca.at(x, 0) = a_c[x];
+    mb.at(x, 0) = b_m[x];
+    cb.at(x, 0) = b_c[x];
+  }
+  fuse_amplitudes(ma.view(), ca.view(), mb.view(), cb.view(), out.view());
+  EXPECT_EQ(out.at(0, 0), 1.0f);   // r_a > r_b
+  EXPECT_EQ(out.at(1, 0), 20.0f);  // r_b > r_a
+  EXPECT_EQ(out.at(2, 0), 30.0f);  // tie: b
+}
+
+TEST(ContourFlowFusion, NormaliseDividesByTheMaximumOrTheFloor) {
+  Image<float> v(3, 1);
+  v.at(0, 0) = 0;
+  v.at(1, 0) = 2;
+  v.at(2, 0) = 4;
+  EXPECT_FLOAT_EQ(normalise_by_max(v.view(), 1.0f), 4.0f);
+  EXPECT_FLOAT_EQ(v.at(1, 0), 0.5f);
+  EXPECT_FLOAT_EQ(v.at(2, 0), 1.0f);
+  v.at(1, 0) = 2;
+  v.at(2, 0) = 4;
+  EXPECT_FLOAT_EQ(normalise_by_max(v.view(), 8.0f), 8.0f);  // small motion stays small
+  EXPECT_FLOAT_EQ(v.at(2, 0), 0.5f);
+  Image<float> zero(4, 4);
+  zero.fill(0.0f);
+  EXPECT_EQ(normalise_by_max(zero.view(), 0.0f), 0.0f);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) EXPECT_EQ(zero.at(x, y), 0.0f);
+}
+
+TEST(ContourStereoCue, MarksBothSidesOfADisparityStep) {
+  Image<float> d(20, 6), s(20, 6);
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 20; ++x) d.at(x, y) = x < 12 ? 10.0f : 11.0f + 0.25f * (x - 12);
+  disparity_jump_strength(d.view(), 2.0f, s.view());
+  EXPECT_FLOAT_EQ(s.at(11, 3), 0.5f);  // jump of 1 px against a full-strength 2 px
+  EXPECT_FLOAT_EQ(s.at(12, 3), 0.5f);
+  EXPECT_FLOAT_EQ(s.at(5, 3), 0.0f);     // flat
+  EXPECT_FLOAT_EQ(s.at(15, 3), 0.125f);  // slanted: 0.25 px per px
+  d.at(5, 3) = 30.0f;
+  disparity_jump_strength(d.view(), 2.0f, s.view());
+  EXPECT_FLOAT_EQ(s.at(5, 3), 1.0f);  // capped
+  EXPECT_FLOAT_EQ(s.at(5, 2), 1.0f);
+}
+
+TEST(ContourStereoCue, IgnoresMissingDisparities) {
+  Image<float> d(5, 5), s(5, 5);
+  d.fill(4.0f);
+  d.at(2, 2) = std::numeric_limits<float>::infinity();
+  d.at(0, 0) = std::numeric_limits<float>::quiet_NaN();
+  disparity_jump_strength(d.view(), 1.0f, s.view());
+  for (int y = 0; y < 5; ++y)
+    for (int x = 0; x < 5; ++x) EXPECT_EQ(s.at(x, y), 0.0f) << x << "," << y;
+}
+
+}  // namespace
+}  // namespace dco::contour

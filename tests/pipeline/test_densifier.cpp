@@ -1,0 +1,288 @@
+// The densify stage against a direct sparse solve of Eq. 20 assembled independently with Eigen,
+// and its behaviour on images whose answer is known by construction.
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "dco/core/error.hpp"
+#include "dco/pipeline/densify/conjugate_gradients.hpp"
+#include "dco/pipeline/densify/densifier.hpp"
+#include "dco/pipeline/densify/multigrid.hpp"
+
+namespace dco::densify {
+namespace {
+
+constexpr float kUnknown = std::numeric_limits<float>::infinity();
+
+struct Problem {
+  Image<float> sparse, m_fuse, m_intensity, previous;
+  Image<std::uint8_t> contours;
+};
+
+Problem random_problem(int w, int h, unsigned seed, double density) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  Problem p;
+  p.sparse.resize(w, h);
+  p.m_fuse.resize(w, h);
+  p.m_intensity.resize(w, h);
+  p.previous.resize(w, h);
+  p.contours.resize(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      p.sparse.at(x, y) = unit(rng) < density ? 5.0f + 30.0f * unit(rng) : kUnknown;
+      p.m_fuse.at(x, y) = unit(rng);
+      p.m_intensity.at(x, y) = unit(rng);
+      p.previous.at(x, y) = unit(rng) < 0.8f ? 5.0f + 30.0f * unit(rng) : 0.0f;
+      p.contours.at(x, y) = unit(rng) < 0.1f ? 255 : 0;
+    }
+  return p;
+}
+
+// Eq. 20 assembled from its definition: E = λd Σ w_sparse (D - Ds)^2
+//   + λs Σ_p Σ_{q∈N4(p)} w_pq (D_p - D_q)^2 + λs2 Σ w_stable (D - Dpre)^2.
+Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) {
+  const int w = pr.sparse.width(), h = pr.sparse.height();
+  Image<std::uint8_t> barrier(w, h);
+  close_diagonal_gaps(pr.contours.cview(), barrier.view());
+  const auto idx = [w](int x, int y) { return y * w + x; };
+  const auto strength = [&](int x, int y) { return pr.m_fuse.at(x, y) * pr.m_intensity.at(x, y); };
+  std::vector<Eigen::Triplet<double>> t;
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(w * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      double diag = 1e-6;  // the densifier's regulariser
+      const float s = pr.sparse.at(x, y);
+      if (std::isfinite(s) && s > 0) {
+        diag += params.lambda_d;
+        b[idx(x, y)] += params.lambda_d * s;
+      }
+      const float prev = pr.previous.at(x, y);
+      if (prev > 0) {
+        diag += params.lambda_s2;
+        b[idx(x, y)] += params.lambda_s2 * prev;
+      }
+      t.emplace_back(idx(x, y), idx(x, y), diag);
+      const int nx[4] = {x + 1, x - 1, x, x};
+      const int ny[4] = {y, y, y + 1, y - 1};
+      for (int k = 0; k < 4; ++k) {
+        if (nx[k] < 0 || ny[k] < 0 || nx[k] >= w || ny[k] >= h) continue;
+        double wpq;
+        if ((barrier.at(x, y) != 0) != (barrier.at(nx[k], ny[k]) != 0))
+          wpq = params.min_edge_weight;
+        else
+          wpq = std::max(1.0 - std::min(strength(x, y), strength(nx[k], ny[k])),
+                         params.min_edge_weight);
+        // d/dD_p of λs w (D_p - D_q)^2 appears once from p's sum and once from q's sum.
+        t.emplace_back(idx(x, y), idx(x, y), 2 * params.lambda_s * wpq);
+        t.emplace_back(idx(x, y), idx(nx[k], ny[k]), -2 * params.lambda_s * wpq);
+      }
+    }
+  Eigen::SparseMatrix<double> a(w * h, w * h);
+  a.setFromTriplets(t.begin(), t.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
+  EXPECT_EQ(solver.info(), Eigen::Success);
+  return solver.solve(b);
+}
+
+DensifyInputs inputs_of(const Problem& p) {
+  DensifyInputs in;
+  in.sparse = p.sparse.cview();
+  in.m_fuse = p.m_fuse.cview();
+  in.m_intensity = p.m_intensity.cview();
+  in.contours = p.contours.cview();
+  in.previous = p.previous.cview();
+  return in;
+}
+
+class DensifierVsDirectSolve : public ::testing::TestWithParam<bool> {};
+
+TEST_P(DensifierVsDirectSolve, MatchesEigenOnRandomProblems) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const Problem p = random_problem(37, 29, seed, 0.3);
+    DensifyParams params;
+    params.multigrid = GetParam();
+    // A floor well above the default keeps the random contours from isolating pixels, so the
+    // condition number lets a single-precision residual of 1e-6 pin the solution to 1e-3.
+    params.min_edge_weight = 0.05;
+    params.tolerance = 1e-6;
+    params.max_iterations = 2000;
+    Densifier d(params);
+    Image<float> dense;
+    d.compute(inputs_of(p), dense);
+    EXPECT_TRUE(d.last_report().converged) << d.last_report().final_residual;
+    const Eigen::VectorXd ref = direct_solution(p, params);
+    double worst = 0;
+    for (int y = 0; y < 29; ++y)
+      for (int x = 0; x < 37; ++x)
+        worst = std::max(worst, std::abs(dense.at(x, y) - ref[y * 37 + x]));
+    EXPECT_LT(worst, 1e-3) << "seed " << seed;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(WithAndWithoutMultigrid, DensifierVsDirectSolve, ::testing::Bool());
+
+TEST(Densifier, MultigridNeedsFarFewerIterationsThanPlainCg) {
+  const Problem p = random_problem(200, 150, 4, 0.05);
+  DensifyParams params;
+  params.max_iterations = 5000;
+  params.tolerance = 1e-5;
+  Densifier with(params);
+  params.multigrid = false;
+  Densifier without(params);
+  Image<float> a, b;
+  with.compute(inputs_of(p), a);
+  without.compute(inputs_of(p), b);
+  ASSERT_TRUE(with.last_report().converged);
+  ASSERT_TRUE(without.last_report().converged);
+  EXPECT_LT(with.last_report().iterations * 4, without.last_report().iterations);
+}
+
+TEST(Densifier, FillsEveryPixelAndKeepsAPlaneWhereDataIsExact) {
+  // Sparse samples of an affine disparity d = 10 + 0.05 x + 0.02 y: inside the image the
+  // smoothness term is zero-gradient for an affine map, so the fill reproduces the plane; only
+  // the image border (fewer neighbours) pulls a little.
+  const int w = 64, h = 48;
+  Image<float> sparse(w, h);
+  std::mt19937 rng(5);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      sparse.at(x, y) = (rng() % 4 == 0 || x == 0 || y == 0 || x == w - 1 || y == h - 1)
+                            ? 10.0f + 0.05f * x + 0.02f * y
+                            : kUnknown;
+  DensifyParams params;
+  params.tolerance = 1e-6;
+  params.max_iterations = 500;
+  Densifier d(params);
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  Image<float> dense;
+  d.compute(in, dense);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool interior = x >= 10 && y >= 10 && x < w - 10 && y < h - 10;
+      ASSERT_NEAR(dense.at(x, y), 10.0f + 0.05f * x + 0.02f * y, interior ? 0.01 : 0.15)
+          << x << "," << y;
+    }
+}
+
+TEST(Densifier, ContourKeepsTwoSurfacesApart) {
+  // Left half near (disparity 40), right half far (10); sparse values only far from the edge,
+  // and a contour on the true boundary column: the fill must not blend across it.
+  const int w = 60, h = 20, edge = 30;
+  Image<float> sparse(w, h);
+  Image<std::uint8_t> contours(w, h);
+  contours.fill(0);
+  for (int y = 0; y < h; ++y) {
+    contours.at(edge, y) = 255;
+    for (int x = 0; x < w; ++x) sparse.at(x, y) = x < 10 ? 40.0f : (x >= 50 ? 10.0f : kUnknown);
+  }
+  DensifyParams params;
+  Densifier d(params);
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  in.contours = contours.cview();
+  Image<float> dense;
+  d.compute(in, dense);
+  for (int y = 0; y < h; ++y) {
+    EXPECT_GT(dense.at(edge - 1, y), 38.0f);
+    EXPECT_LT(dense.at(edge + 1, y), 12.0f);
+  }
+  // Without the contour the same data blends into a ramp.
+  Densifier plain(params);
+  in.contours = {};
+  plain.compute(in, dense);
+  EXPECT_LT(dense.at(edge - 1, h / 2), 30.0f);
+  EXPECT_GT(dense.at(edge + 1, h / 2), 20.0f);
+}
+
+TEST(Densifier, DiagonalContourStillSeparates) {
+  Image<std::uint8_t> diagonal(4, 4), closed(4, 4);
+  diagonal.fill(0);
+  for (int i = 0; i < 4; ++i) diagonal.at(i, i) = 255;
+  close_diagonal_gaps(diagonal.cview(), closed.view());
+  // Every 2x2 block that touched only at a corner now shares an edge.
+  for (int i = 0; i + 1 < 4; ++i) EXPECT_TRUE(closed.at(i + 1, i) || closed.at(i, i + 1));
+  for (int i = 0; i < 4; ++i) EXPECT_TRUE(closed.at(i, i));
+}
+
+TEST(Densifier, WarmStartConvergesFaster) {
+  const Problem p = random_problem(160, 120, 6, 0.1);
+  DensifyParams params;
+  params.tolerance = 1e-5;
+  params.max_iterations = 1000;
+  Densifier d(params);
+  Image<float> dense;
+  d.compute(inputs_of(p), dense);
+  const int cold = d.last_report().iterations;
+  d.compute(inputs_of(p), dense);  // same frame again: starts at its own solution
+  EXPECT_LT(d.last_report().iterations, cold);
+  EXPECT_LE(d.last_report().initial_residual, 1e-5);
+}
+
+TEST(Densifier, EmptySparseMapStillGivesAFiniteMap) {
+  Image<float> sparse(32, 24);
+  sparse.fill(kUnknown);
+  Densifier d(DensifyParams{});
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  Image<float> dense;
+  d.compute(in, dense);
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 32; ++x) ASSERT_TRUE(std::isfinite(dense.at(x, y)));
+}
+
+TEST(Densifier, RejectsMismatchedInputsAndBadParams) {
+  Image<float> sparse(32, 24), other(31, 24);
+  sparse.fill(1.0f);
+  Densifier d(DensifyParams{});
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  in.m_intensity = other.cview();
+  Image<float> dense;
+  EXPECT_THROW(d.compute(in, dense), Error);
+  DensifyParams bad;
+  bad.lambda_d = 0;
+  EXPECT_THROW(Densifier{bad}, Error);
+  bad = DensifyParams{};
+  bad.tolerance = 0;
+  EXPECT_THROW(Densifier{bad}, Error);
+}
+
+TEST(Multigrid, CoarseningPreservesTheEnergyOfPiecewiseConstantVectors) {
+  // x^T A x = y^T A_c y when x is y repeated over 2x2 blocks (Galerkin with P = injection).
+  const int w = 9, h = 7;
+  GridSystem a;
+  a.resize(w, h);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.1f, 2.0f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      a.data.at(x, y) = u(rng);
+      a.wx.at(x, y) = x + 1 < w ? u(rng) : 0.0f;
+      a.wy.at(x, y) = y + 1 < h ? u(rng) : 0.0f;
+    }
+  a.update_diagonal();
+  GridSystem c;
+  coarsen(a, c);
+  ASSERT_EQ(c.width(), 5);
+  ASSERT_EQ(c.height(), 4);
+  Image<float> yc(5, 4), x(w, h), ax(w, h), ayc(5, 4);
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 5; ++i) yc.at(i, j) = u(rng);
+  for (int yy = 0; yy < h; ++yy)
+    for (int xx = 0; xx < w; ++xx) x.at(xx, yy) = yc.at(xx / 2, yy / 2);
+  apply(a, x.cview(), ax.view());
+  apply(c, yc.cview(), ayc.view());
+  EXPECT_NEAR(dot(x.cview(), ax.cview()), dot(yc.cview(), ayc.cview()), 1e-3);
+}
+
+}  // namespace
+}  // namespace dco::densify

@@ -1,0 +1,203 @@
+#include "dco/pipeline/contour/gated_canny.hpp"
+
+#include <cstdint>
+#include <queue>
+#include <utility>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "dco/core/cv_interop.hpp"
+#include "dco/core/image.hpp"
+#include "dco/pipeline/contour/separable_filters.hpp"
+
+namespace dco::contour {
+namespace {
+
+// Blur, gradient and gated Canny as the extractor runs them.
+Image<std::uint8_t> canny(const Image<std::uint8_t>& img, ImageView<const float> gate,
+                          const CannyThresholds& t = {}) {
+  const int w = img.width(), h = img.height();
+  Image<float> tmp(w, h), blurred(w, h), mag(w, h);
+  Image<std::uint8_t> dir(w, h), edges(w, h);
+  gaussian_blur_5x5(img.view(), tmp.view(), blurred.view());
+  sobel_magnitude(blurred.view(), kMaxSobelMagnitude8Bit, mag.view(), dir.view());
+  CannyScratch scratch;
+  gated_canny(mag.view(), dir.view(), gate, t, edges.view(), scratch);
+  return edges;
+}
+
+constexpr int kW = 80, kH = 64;
+constexpr int kX0 = 20, kY0 = 16, kSide = 40;  // the bright square covers [20, 60) x [16, 56)
+
+Image<std::uint8_t> square_image() {
+  Image<std::uint8_t> img(kW, kH);
+  img.fill(30);
+  for (int y = kY0; y < kY0 + kSide; ++y)
+    for (int x = kX0; x < kX0 + kSide; ++x) img.at(x, y) = 200;
+  return img;
+}
+
+int count_edges(const Image<std::uint8_t>& e, int x_begin = 0, int x_end = kW) {
+  int n = 0;
+  for (int y = 0; y < e.height(); ++y)
+    for (int x = x_begin; x < x_end; ++x) n += e.at(x, y) == 255;
+  return n;
+}
+
+// Pixels reachable from (x, y) through 4-connected non-edge pixels.
+Image<std::uint8_t> flood_outside_edges(const Image<std::uint8_t>& e, int x, int y) {
+  Image<std::uint8_t> seen(e.width(), e.height());
+  seen.fill(0);
+  std::queue<std::pair<int, int>> todo;
+  todo.push({x, y});
+  seen.at(x, y) = 1;
+  while (!todo.empty()) {
+    const auto [px, py] = todo.front();
+    todo.pop();
+    const int nx[4] = {px - 1, px + 1, px, px};
+    const int ny[4] = {py, py, py - 1, py + 1};
+    for (int i = 0; i < 4; ++i) {
+      if (nx[i] < 0 || ny[i] < 0 || nx[i] >= e.width() || ny[i] >= e.height()) continue;
+      if (seen.at(nx[i], ny[i]) || e.at(nx[i], ny[i]) == 255) continue;
+      seen.at(nx[i], ny[i]) = 1;
+      todo.push({nx[i], ny[i]});
+    }
+  }
+  return seen;
+}
+
+TEST(GatedCanny, SquareGivesAClosedOnePixelContourOnItsBoundary) {
+  const Image<std::uint8_t> e = canny(square_image(), {});
+  // Every edge pixel lies on the boundary, give or take the half pixel between the two sides.
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      if (e.at(x, y) != 255) continue;
+      const bool near_vertical =
+          (x >= kX0 - 1 && x <= kX0) || (x >= kX0 + kSide - 1 && x <= kX0 + kSide);
+      const bool near_horizontal =
+          (y >= kY0 - 1 && y <= kY0) || (y >= kY0 + kSide - 1 && y <= kY0 + kSide);
+      const bool inside_band = x >= kX0 - 1 && x <= kX0 + kSide && y >= kY0 - 1 && y <= kY0 + kSide;
+      EXPECT_TRUE(inside_band && (near_vertical || near_horizontal)) << x << "," << y;
+    }
+  // One pixel thick: each row (column) through the square's middle crosses exactly two edges.
+  for (int y = kY0 + 3; y < kY0 + kSide - 3; ++y) {
+    int n = 0;
+    for (int x = 0; x < kW; ++x) n += e.at(x, y) == 255;
+    EXPECT_EQ(n, 2) << "row " << y;
+  }
+  for (int x = kX0 + 3; x < kX0 + kSide - 3; ++x) {
+    int n = 0;
+    for (int y = 0; y < kH; ++y) n += e.at(x, y) == 255;
+    EXPECT_EQ(n, 2) << "column " << x;
+  }
+  // Closed: the inside cannot be reached from the outside without crossing an edge.
+  const Image<std::uint8_t> outside = flood_outside_edges(e, 0, 0);
+  EXPECT_EQ(outside.at(kX0 + kSide / 2, kY0 + kSide / 2), 0);
+  // No trace of the texture-free background or interior.
+  EXPECT_GT(count_edges(e), 4 * (kSide - 4));
+  EXPECT_LT(count_edges(e), 4 * (kSide + 2));
+}
+
+TEST(GatedCanny, GateClosedOnTheLeftHalfKeepsOnlyRightHalfEdges) {
+  // The gate has half the image resolution, as M_fuse does: column g covers image columns 2g, 2g+1.
+  Image<float> gate(kW / 2, kH / 2);
+  for (int y = 0; y < gate.height(); ++y)
+    for (int x = 0; x < gate.width(); ++x) gate.at(x, y) = x < gate.width() / 2 ? 0.0f : 1.0f;
+  const Image<std::uint8_t> open = canny(square_image(), {});
+  const Image<std::uint8_t> e = canny(square_image(), gate.view());
+  EXPECT_EQ(count_edges(e, 0, kW / 2), 0);
+  EXPECT_GT(count_edges(e, kW / 2, kW), kSide);
+  // Right of the gate border (plus one pixel of hysteresis reach) nothing changes.
+  for (int y = 0; y < kH; ++y)
+    for (int x = kW / 2 + 1; x < kW; ++x) EXPECT_EQ(e.at(x, y), open.at(x, y)) << x << "," << y;
+}
+
+TEST(GatedCanny, GateBelowTDepthOnlyRejects) {
+  Image<float> gate(kW, kH);
+  gate.fill(0.0299f);
+  EXPECT_EQ(count_edges(canny(square_image(), gate.view())), 0);
+  gate.fill(0.03f);  // at T_depth: still a candidate
+  EXPECT_EQ(count_edges(canny(square_image(), gate.view())),
+            count_edges(canny(square_image(), {})));
+}
+
+// Magnitudes set by hand: thin horizontal ridges whose gradient points along y, so non-maximum
+// suppression keeps every ridge pixel and only the thresholds decide.
+struct Ridges {
+  Image<float> mag{64, 40};
+  Image<std::uint8_t> dir{64, 40};
+  Ridges() {
+    mag.fill(0.0f);
+    dir.fill(kVertical);
+  }
+  Image<std::uint8_t> run(ImageView<const float> gate = {}) const {
+    Image<std::uint8_t> edges(64, 40);
+    CannyScratch scratch;
+    gated_canny(mag.view(), dir.view(), gate, {0.06f, 0.03f, 0.03f}, edges.view(), scratch);
+    return edges;
+  }
+};
+
+TEST(GatedCanny, HysteresisFollowsWeakPixelsFromAStrongOneOnly) {
+  Ridges r;
+  for (int x = 5; x <= 10; ++x) r.mag.at(x, 10) = 0.1f;    // strong
+  for (int x = 11; x <= 40; ++x) r.mag.at(x, 10) = 0.04f;  // weak, touching the strong run
+  for (int x = 41; x <= 50; ++x) r.mag.at(x, 11) = 0.04f;  // weak, one row down: 8-connected
+  for (int x = 5; x <= 40; ++x) r.mag.at(x, 25) = 0.04f;   // weak, alone
+  r.mag.at(20, 33) = 0.02f;                                // below T_low, next to a strong pixel
+  r.mag.at(21, 33) = 0.5f;
+  const Image<std::uint8_t> e = r.run();
+  for (int x = 5; x <= 40; ++x) EXPECT_EQ(e.at(x, 10), 255) << x;
+  for (int x = 41; x <= 50; ++x) EXPECT_EQ(e.at(x, 11), 255) << x;
+  for (int x = 5; x <= 40; ++x) EXPECT_EQ(e.at(x, 25), 0) << x;
+  EXPECT_EQ(e.at(20, 33), 0);
+  EXPECT_EQ(e.at(21, 33), 255);
+  EXPECT_EQ(count_edges(e, 0, 64), 36 + 10 + 1);
+}
+
+TEST(GatedCanny, GatedPixelsDoNotBridgeHysteresis) {
+  Ridges r;
+  for (int x = 5; x <= 10; ++x) r.mag.at(x, 10) = 0.1f;
+  for (int x = 11; x <= 40; ++x) r.mag.at(x, 10) = 0.04f;
+  Image<float> gate(64, 40);
+  gate.fill(1.0f);
+  gate.at(20, 10) = 0.0f;  // one gated pixel cuts the weak run
+  const Image<std::uint8_t> e = r.run(gate.view());
+  for (int x = 5; x <= 19; ++x) EXPECT_EQ(e.at(x, 10), 255) << x;
+  for (int x = 20; x <= 40; ++x) EXPECT_EQ(e.at(x, 10), 0) << x;
+}
+
+TEST(GatedCanny, ThinsABlurredRampToOnePixel) {
+  // A soft vertical step: intensity rises over ~10 px, so the raw gradient is wide.
+  cv::Mat ramp(48, 96, CV_8U);
+  for (int x = 0; x < 96; ++x) ramp.col(x).setTo(x < 48 ? 40 : 220);
+  cv::GaussianBlur(ramp, ramp, {0, 0}, 3.0, 3.0, cv::BORDER_REPLICATE);
+  Image<std::uint8_t> img(96, 48);
+  img.copy_from(as_view<std::uint8_t>(static_cast<const cv::Mat&>(ramp)));
+  const Image<std::uint8_t> e = canny(img, {});
+  for (int y = 1; y < 47; ++y) {
+    int n = 0, where = -1;
+    for (int x = 0; x < 96; ++x)
+      if (e.at(x, y) == 255) ++n, where = x;
+    EXPECT_EQ(n, 1) << "row " << y;
+    EXPECT_TRUE(where == 47 || where == 48) << "row " << y << " edge at " << where;
+  }
+}
+
+TEST(GatedCanny, TinyImagesHaveNoEdges) {
+  for (const auto& [w, h] : {std::pair{1, 1}, std::pair{2, 5}, std::pair{5, 2}}) {
+    Image<float> mag(w, h);
+    Image<std::uint8_t> dir(w, h), edges(w, h);
+    mag.fill(1.0f);
+    dir.fill(kHorizontal);
+    CannyScratch scratch;
+    gated_canny(mag.view(), dir.view(), {}, {}, edges.view(), scratch);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) EXPECT_EQ(edges.at(x, y), 0);
+  }
+}
+
+}  // namespace
+}  // namespace dco::contour

@@ -1,0 +1,34 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "dco/core/image.hpp"
+#include "dco/tools/metrics.hpp"
+
+namespace dco::tools {
+
+// Temporal stability of an occlusion decision: for virtual fronto-parallel planes fixed by the
+// first frame (its 20..80 % disparity quantiles, as in the accuracy metrics), the share of pixels
+// whose side of each plane changes between consecutive frames. A renderer shows such a flip as
+// a flicker of the virtual object's edge. Pixels without a value (+inf, NaN, <= 0) in either
+// frame of a pair count as flips: a hole that comes and goes flickers too.
+class FlickerMeter {
+ public:
+  // Adds the next frame's disparity map; all frames must have one size (throws dco::Error).
+  void add(ImageView<const float> disparity);
+
+  int frames() const { return frames_; }
+  // Mean % of flipping pixels over consecutive pairs and planes; NaN before two frames.
+  double flip_rate() const;
+  const std::array<double, kOcclusionPlaneQuantiles.size()>& planes() const { return planes_; }
+
+ private:
+  Image<std::uint8_t> previous_side_;  // bit k set: in front of plane k; 0xff: no value
+  std::array<double, kOcclusionPlaneQuantiles.size()> planes_{};
+  int frames_ = 0;
+  double flips_ = 0;
+  double compared_ = 0;
+};
+
+}  // namespace dco::tools
