@@ -104,6 +104,7 @@ void DepthPipeline::finish_frame(int centre, int neighbour_a, int neighbour_b, D
   d.m_fuse = out.m_fuse.cview();
   d.m_intensity = out.m_intensity.cview();
   d.contours = out.contours.cview();
+  d.image = c.image.cview();
   if (has_previous_ && previous_dense_.view().same_size(c.sparse.view()))
     d.previous = previous_dense_.cview();
   densifier_.compute(d, out.dense);
@@ -112,6 +113,8 @@ void DepthPipeline::finish_frame(int centre, int neighbour_a, int neighbour_b, D
   has_previous_ = true;
 
   out.index = centre;
+  out.image.resize(c.image.width(), c.image.height());
+  out.image.copy_from(c.image.cview());
   out.sparse.resize(c.sparse.width(), c.sparse.height());
   out.sparse.copy_from(c.sparse.cview());
   out.stereo_timings = c.stereo_timings;

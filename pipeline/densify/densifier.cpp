@@ -33,6 +33,10 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.lambda_s2", &p.lambda_s2, 0.0, 1000.0, "λ_s2 of Eq. 20 (stability)");
   s.add("densify.min_edge_weight", &p.min_edge_weight, 1e-6, 1.0,
         "floor of every smoothness weight (keeps the system connected)");
+  s.add("densify.color_sigma", &p.color_sigma, 0.0, 255.0,
+        "grey-level scale of the image guidance on smoothness weights (0 = off)");
+  s.add("densify.background_fill", &p.background_fill, 0.0, 1.0,
+        "weight (times lambda_d) pulling holes towards the farther of their row neighbours");
   s.add("densify.max_iterations", &p.max_iterations, 1, 10000, "conjugate-gradient iterations");
   s.add("densify.tolerance", &p.tolerance, 1e-9, 0.1, "relative residual to stop at");
   s.add("densify.multigrid", &p.multigrid, "multigrid V-cycle preconditioner");
@@ -73,6 +77,7 @@ void Densifier::build_system(const DensifyInputs& in) {
   const int h = in.sparse.height;
   system_.resize(w, h);
   rhs_.resize(w, h);
+  hint_.resize(w, h);
   smooth_strength_.resize(w, h);
   barrier_.resize(w, h);
 
@@ -100,11 +105,18 @@ void Densifier::build_system(const DensifyInputs& in) {
   // Each undirected edge appears twice in Σ_p Σ_{q∈N4(p)} of Eq. 20, hence 2 λ_s.
   const auto edge_scale = static_cast<float>(2.0 * params_.lambda_s);
   const auto floor = static_cast<float>(params_.min_edge_weight);
+  const bool has_image = !in.image.empty() && params_.color_sigma > 0;
+  const float inv_sigma = has_image ? static_cast<float>(1.0 / params_.color_sigma) : 0.0f;
   const auto edge = [&](int x0, int y0, int x1, int y1) {
     if (barrier_.at(x0, y0) != barrier_.at(x1, y1))
       return edge_scale * floor;  // Eq. 16, first case
     const float s = std::min(smooth_strength_.at(x0, y0), smooth_strength_.at(x1, y1));
-    return edge_scale * std::max(1.0f - s, floor);
+    float weight = 1.0f - s;
+    if (has_image) {
+      const int diff = std::abs(int(in.image.row(y0)[x0]) - int(in.image.row(y1)[x1]));
+      weight *= std::exp(-static_cast<float>(diff) * inv_sigma);
+    }
+    return edge_scale * std::max(weight, floor);
   };
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
@@ -118,8 +130,30 @@ void Densifier::build_system(const DensifyInputs& in) {
   const auto ls2 = static_cast<float>(params_.lambda_s2);
   const bool has_previous = !in.previous.empty() && in.previous.same_size(w, h);
   constexpr float kRegulariser = 1e-6f;
+  const auto lh = static_cast<float>(params_.lambda_d * params_.background_fill);
   for (int y = 0; y < h; ++y) {
     const float* sp = in.sparse.row(y);
+    // Nearest known value to the left of each pixel; the right one comes from a backward scan.
+    float* hint = hint_.row(y);
+    float last = 0.0f;
+    for (int x = 0; x < w; ++x) {
+      if (known(sp[x])) last = sp[x];
+      hint[x] = last;
+    }
+    last = 0.0f;
+    for (int x = w - 1; x >= 0; --x) {
+      if (known(sp[x])) last = sp[x];
+      const float right = last;
+      // Holes next to a jump are mostly occlusions, which belong to the farther surface.
+      if (hint[x] <= 0.0f)
+        hint[x] = right;
+      else if (right > 0.0f)
+        hint[x] = std::min(hint[x], right);
+    }
+  }
+  for (int y = 0; y < h; ++y) {
+    const float* sp = in.sparse.row(y);
+    const float* hint = hint_.row(y);
     const float* prev = has_previous ? in.previous.row(y) : nullptr;
     float* data = system_.data.row(y);
     float* b = rhs_.row(y);
@@ -128,6 +162,9 @@ void Densifier::build_system(const DensifyInputs& in) {
       if (known(sp[x])) {
         a += ld;
         rhs += ld * sp[x];
+      } else if (lh > 0.0f && hint[x] > 0.0f) {
+        a += lh;
+        rhs += lh * hint[x];
       }
       if (prev && known(prev[x])) {
         a += ls2;

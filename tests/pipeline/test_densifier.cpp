@@ -23,7 +23,7 @@ constexpr float kUnknown = std::numeric_limits<float>::infinity();
 
 struct Problem {
   Image<float> sparse, m_fuse, m_intensity, previous;
-  Image<std::uint8_t> contours;
+  Image<std::uint8_t> contours, image;
 };
 
 Problem random_problem(int w, int h, unsigned seed, double density) {
@@ -35,6 +35,7 @@ Problem random_problem(int w, int h, unsigned seed, double density) {
   p.m_intensity.resize(w, h);
   p.previous.resize(w, h);
   p.contours.resize(w, h);
+  p.image.resize(w, h);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       p.sparse.at(x, y) = unit(rng) < density ? 5.0f + 30.0f * unit(rng) : kUnknown;
@@ -42,12 +43,32 @@ Problem random_problem(int w, int h, unsigned seed, double density) {
       p.m_intensity.at(x, y) = unit(rng);
       p.previous.at(x, y) = unit(rng) < 0.8f ? 5.0f + 30.0f * unit(rng) : 0.0f;
       p.contours.at(x, y) = unit(rng) < 0.1f ? 255 : 0;
+      p.image.at(x, y) = static_cast<std::uint8_t>(unit(rng) * 40.0f);
     }
   return p;
 }
 
 // Eq. 20 assembled from its definition: E = λd Σ w_sparse (D - Ds)^2
-//   + λs Σ_p Σ_{q∈N4(p)} w_pq (D_p - D_q)^2 + λs2 Σ w_stable (D - Dpre)^2.
+//   + λs Σ_p Σ_{q∈N4(p)} w_pq (D_p - D_q)^2 + λs2 Σ w_stable (D - Dpre)^2,
+// with dco's two additions: w_pq scaled by exp(-|I_p - I_q| / color_sigma), and holes pulled
+// with weight background_fill * λd towards the smaller of the nearest known values on their row.
+float row_hint(const Image<float>& sparse, int x, int y) {
+  float left = 0, right = 0;
+  for (int i = x; i >= 0; --i)
+    if (std::isfinite(sparse.at(i, y)) && sparse.at(i, y) > 0) {
+      left = sparse.at(i, y);
+      break;
+    }
+  for (int i = x; i < sparse.width(); ++i)
+    if (std::isfinite(sparse.at(i, y)) && sparse.at(i, y) > 0) {
+      right = sparse.at(i, y);
+      break;
+    }
+  if (left <= 0) return right;
+  if (right <= 0) return left;
+  return std::min(left, right);
+}
+
 Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) {
   const int w = pr.sparse.width(), h = pr.sparse.height();
   Image<std::uint8_t> barrier(w, h);
@@ -63,6 +84,9 @@ Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) 
       if (std::isfinite(s) && s > 0) {
         diag += params.lambda_d;
         b[idx(x, y)] += params.lambda_d * s;
+      } else if (const float hint = row_hint(pr.sparse, x, y); hint > 0) {
+        diag += params.lambda_d * params.background_fill;
+        b[idx(x, y)] += params.lambda_d * params.background_fill * hint;
       }
       const float prev = pr.previous.at(x, y);
       if (prev > 0) {
@@ -78,7 +102,9 @@ Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) 
         if ((barrier.at(x, y) != 0) != (barrier.at(nx[k], ny[k]) != 0))
           wpq = params.min_edge_weight;
         else
-          wpq = std::max(1.0 - std::min(strength(x, y), strength(nx[k], ny[k])),
+          wpq = std::max((1.0 - std::min(strength(x, y), strength(nx[k], ny[k]))) *
+                             std::exp(-std::abs(pr.image.at(x, y) - pr.image.at(nx[k], ny[k])) /
+                                      params.color_sigma),
                          params.min_edge_weight);
         // d/dD_p of λs w (D_p - D_q)^2 appears once from p's sum and once from q's sum.
         t.emplace_back(idx(x, y), idx(x, y), 2 * params.lambda_s * wpq);
@@ -99,6 +125,7 @@ DensifyInputs inputs_of(const Problem& p) {
   in.m_intensity = p.m_intensity.cview();
   in.contours = p.contours.cview();
   in.previous = p.previous.cview();
+  in.image = p.image.cview();
   return in;
 }
 
@@ -158,6 +185,7 @@ TEST(Densifier, FillsEveryPixelAndKeepsAPlaneWhereDataIsExact) {
                             ? 10.0f + 0.05f * x + 0.02f * y
                             : kUnknown;
   DensifyParams params;
+  params.background_fill = 0;  // the paper's model: holes follow the smoothness term alone
   params.tolerance = 1e-6;
   params.max_iterations = 500;
   Densifier d(params);
@@ -185,6 +213,7 @@ TEST(Densifier, ContourKeepsTwoSurfacesApart) {
     for (int x = 0; x < w; ++x) sparse.at(x, y) = x < 10 ? 40.0f : (x >= 50 ? 10.0f : kUnknown);
   }
   DensifyParams params;
+  params.background_fill = 0;
   Densifier d(params);
   DensifyInputs in;
   in.sparse = sparse.cview();
@@ -201,6 +230,46 @@ TEST(Densifier, ContourKeepsTwoSurfacesApart) {
   plain.compute(in, dense);
   EXPECT_LT(dense.at(edge - 1, h / 2), 30.0f);
   EXPECT_GT(dense.at(edge + 1, h / 2), 20.0f);
+}
+
+TEST(Densifier, HolesBesideAJumpLeanTowardsTheFartherSurface) {
+  // A hole between a near surface (40) and a far one (10), as left by an occlusion: with the
+  // background pull the hole takes mostly the far value; without it, the midpoint.
+  const int w = 60, h = 10;
+  Image<float> sparse(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) sparse.at(x, y) = x < 20 ? 40.0f : (x >= 30 ? 10.0f : kUnknown);
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  Image<float> with_pull, without;
+  DensifyParams params;
+  params.background_fill = 0.2;
+  Densifier(params).compute(in, with_pull);
+  params.background_fill = 0;
+  Densifier(params).compute(in, without);
+  EXPECT_LT(with_pull.at(25, 5), without.at(25, 5) - 5.0f);
+  EXPECT_NEAR(without.at(25, 5), 25.0f, 2.0f);
+}
+
+TEST(Densifier, ImageEdgesWeakenSmoothing) {
+  // The same hole, but the image has an edge at x = 25: the fill follows the image edge.
+  const int w = 60, h = 10;
+  Image<float> sparse(w, h);
+  Image<std::uint8_t> image(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      sparse.at(x, y) = x < 20 ? 40.0f : (x >= 30 ? 10.0f : kUnknown);
+      image.at(x, y) = x < 25 ? 50 : 200;
+    }
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  in.image = image.cview();
+  DensifyParams params;
+  params.background_fill = 0;
+  Image<float> dense;
+  Densifier(params).compute(in, dense);
+  EXPECT_GT(dense.at(24, 5), 38.0f);
+  EXPECT_LT(dense.at(25, 5), 12.0f);
 }
 
 TEST(Densifier, DiagonalContourStillSeparates) {

@@ -1,6 +1,9 @@
-// dco-depth: runs the depth pipeline offline on image files — one rectified (or calibrated raw)
-// stereo pair, or every scene of a manifest — and writes disparity as PFM.
+// dco-depth: runs the depth pipeline offline on files — one stereo pair, every scene of a
+// manifest, or a sequence (numbered image files or a synthetic scene) — and writes disparity
+// as PFM, plus pictures a person can judge it by.
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -18,9 +21,11 @@
 #include "dco/core/error.hpp"
 #include "dco/core/image_io.hpp"
 #include "dco/core/rectifier.hpp"
-#include "dco/pipeline/stereo/stereo_matcher.hpp"
+#include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/tools/command_line.hpp"
 #include "dco/tools/scene_manifest.hpp"
+#include "frame_sequence.hpp"
+#include "overlays.hpp"
 
 namespace {
 
@@ -29,30 +34,42 @@ using dco::tools::UsageError;
 
 constexpr std::string_view kUsage =
     R"(usage: dco-depth --left L --right R [--calib FILE] [--max-disp N] --out D.pfm
-                 [--depth-out Z.pfm|Z.png] [--sparse] [--config FILE] [--set KEY=VALUE]...
-       dco-depth --scenes TSV [--data-root DIR] --out-dir DIR [--max-disp N] [--sparse]
-                 [--config FILE] [--set KEY=VALUE]...
+                 [--depth-out Z.pfm|Z.png] [--overlay-dir DIR] [--sparse] [options]
+       dco-depth --scenes TSV [--data-root DIR] --out-dir DIR [--max-disp N] [--sparse] [options]
+       dco-depth --left-pattern P --right-pattern P [--first N] [--count N] [--calib FILE]
+                 [--max-disp N] --out-dir DIR [--overlays] [--sparse] [options]
+       dco-depth --synthetic NAME [--size WxH] [--frames N] [--color] [--max-disp N]
+                 --out-dir DIR [--overlays] [--sparse] [options]
        dco-depth --list-params
 
-Computes disparity for a stereo pair and writes it in pixels of the input image as PFM,
-+inf where the map has no value.
+Computes disparity with the depth pipeline (stereo -> contours -> densify) and writes it in
+pixels of the input image as PFM: dense, every pixel set; with --sparse the stereo stage's
+sparse map, +inf where it has no value.
 
-  --left, --right L R  the pair (8-bit PNG/PGM/JPEG, gray or colour, same size)
-  --calib FILE         calibration (dco TOML, Middlebury calib.txt, KITTI/Karlsruhe); raw
-                       images are rectified first, and --depth-out needs it
-  --max-disp N         largest disparity searched, input pixels (default: the scene's
-                       max_disp in batch mode, else stereo.max_disparity = 64)
+One pair:
+  --left, --right L R  rectified (or, with --calib, raw) 8-bit images of one size
+  --calib FILE         calibration (dco TOML, Middlebury calib.txt, KITTI/Karlsruhe)
   --out D.pfm          disparity output
-  --depth-out Z        metric depth: .pfm in metres (+inf unknown) or .png in millimetres (0 unknown)
-  --sparse             write the sparse stage's map: only pixels that pass the checks carry a
-                       value (the stage this version runs)
-  --scenes TSV         batch mode: every scene of the manifest, written to
-                       DIR/<scene with '/' replaced by '_'>.pfm, with the stage time in
-                       DIR/<same>.time_ms for dco-eval
+  --depth-out Z        metric depth: .pfm in metres (+inf unknown) or .png in millimetres
+  --overlay-dir DIR    also write disparity colours, contours and an occlusion composite
+Every scene of a manifest:
+  --scenes TSV         writes DIR/<scene with '/' replaced by '_'>.pfm and .time_ms
   --data-root DIR      what the manifest's paths are relative to (default: the TSV's folder)
-  --out-dir DIR        batch output folder (created if missing)
-  --config FILE        TOML file with a [stereo] table (see --list-params)
-  --set KEY=VALUE      override one parameter, e.g. --set stereo.uniqueness=0.2
+A sequence (frame_000000.pfm, ... in --out-dir; synthetic scenes add gt_000000.pfm, ...):
+  --left-pattern P     numbered left images, e.g. 'images/I1_%06d.png'
+  --right-pattern P    numbered right images
+  --first N --count N  frame range (default: from 0 until the first missing file)
+  --synthetic NAME     hand | boxes | static, rendered with exact ground truth
+  --size WxH           synthetic resolution (default 1280x720)
+  --frames N           synthetic frames (default 30)
+  --color              synthetic colour images (default grey, like the headset camera)
+  --overlays           also write overlay/depth_*.png, contours_*.png, occlusion_*.png
+Common:
+  --max-disp N         largest disparity searched, input pixels
+  --out-dir DIR        output folder (created if missing)
+  --sparse             write the sparse stereo map instead of the dense one
+  --config FILE        TOML with [stereo], [contour] and [densify] tables (see --list-params)
+  --set KEY=VALUE      override one parameter, e.g. --set densify.lambda_s=2
   --list-params        print every parameter with its value and range
   -h, --help           print this help
 
@@ -61,8 +78,11 @@ Exit status: 0 success, 1 bad data (missing or unreadable files, size mismatch, 
 )";
 
 struct Options {
-  std::optional<fs::path> left, right, calib, out, depth_out;
+  std::optional<fs::path> left, right, calib, out, depth_out, overlay_dir;
   std::optional<fs::path> scenes, data_root, out_dir;
+  std::optional<std::string> left_pattern, right_pattern, synthetic;
+  int first = 0, count = -1, frames = 30, width = 1280, height = 720;
+  bool color = false, overlays = false;
   std::optional<int> max_disp;
   std::optional<fs::path> config;
   std::vector<std::string> overrides;
@@ -70,6 +90,20 @@ struct Options {
   bool list_params = false;
   bool help = false;
 };
+
+void parse_size(const std::string& text, Options& opt) {
+  const auto x = text.find('x');
+  try {
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    std::size_t used = 0;
+    opt.width = std::stoi(text.substr(0, x), &used);
+    if (used != x) throw std::invalid_argument("width");
+    opt.height = std::stoi(text.substr(x + 1), &used);
+    if (used != text.size() - x - 1) throw std::invalid_argument("height");
+  } catch (const std::exception&) {
+    throw UsageError(fmt::format("--size needs WIDTHxHEIGHT, not '{}'", text));
+  }
+}
 
 Options parse_args(int argc, char** argv) {
   Options opt;
@@ -88,12 +122,32 @@ Options parse_args(int argc, char** argv) {
       opt.out = args.value();
     else if (arg == "--depth-out")
       opt.depth_out = args.value();
+    else if (arg == "--overlay-dir")
+      opt.overlay_dir = args.value();
     else if (arg == "--scenes")
       opt.scenes = args.value();
     else if (arg == "--data-root")
       opt.data_root = args.value();
     else if (arg == "--out-dir")
       opt.out_dir = args.value();
+    else if (arg == "--left-pattern")
+      opt.left_pattern = args.value();
+    else if (arg == "--right-pattern")
+      opt.right_pattern = args.value();
+    else if (arg == "--first")
+      opt.first = args.int_value();
+    else if (arg == "--count")
+      opt.count = args.int_value();
+    else if (arg == "--synthetic")
+      opt.synthetic = args.value();
+    else if (arg == "--size")
+      parse_size(args.value(), opt);
+    else if (arg == "--frames")
+      opt.frames = args.int_value();
+    else if (arg == "--color")
+      opt.color = args.flag();
+    else if (arg == "--overlays")
+      opt.overlays = args.flag();
     else if (arg == "--max-disp")
       opt.max_disp = args.int_value();
     else if (arg == "--config")
@@ -112,47 +166,92 @@ Options parse_args(int argc, char** argv) {
   if (opt.help || opt.list_params) return opt;
   if (opt.max_disp && *opt.max_disp <= 0)
     throw UsageError(fmt::format("--max-disp must be positive, not {}", *opt.max_disp));
-  if (opt.scenes) {
-    if (opt.left || opt.right || opt.out || opt.calib || opt.depth_out)
-      throw UsageError("--scenes (batch mode) does not combine with --left/--right/--out/--calib");
-    if (!opt.out_dir) throw UsageError("--scenes needs --out-dir");
-  } else {
-    if (!opt.left || !opt.right) throw UsageError("give --left and --right (or --scenes)");
+  const int modes = (opt.left || opt.right ? 1 : 0) + (opt.scenes ? 1 : 0) +
+                    (opt.left_pattern || opt.right_pattern ? 1 : 0) + (opt.synthetic ? 1 : 0);
+  if (modes == 0)
+    throw UsageError("give --left and --right, --scenes, --left-pattern or --synthetic");
+  if (modes > 1)
+    throw UsageError("--left/--right, --scenes, --*-pattern and --synthetic exclude each other");
+  if (opt.left || opt.right) {
+    if (!opt.left || !opt.right) throw UsageError("give both --left and --right");
     if (!opt.out) throw UsageError("--out is required");
     if (opt.depth_out && !opt.calib) throw UsageError("--depth-out needs --calib");
     if (opt.out_dir || opt.data_root) throw UsageError("--out-dir and --data-root need --scenes");
+    return opt;
   }
+  if (!opt.out_dir) throw UsageError("this mode needs --out-dir");
+  if (opt.out || opt.depth_out || opt.overlay_dir)
+    throw UsageError("--out, --depth-out and --overlay-dir are for one pair; use --out-dir");
+  if (opt.scenes && opt.calib) throw UsageError("--scenes does not take --calib");
+  if (opt.left_pattern && !opt.right_pattern)
+    throw UsageError("--left-pattern needs --right-pattern");
+  if (opt.right_pattern && !opt.left_pattern)
+    throw UsageError("--right-pattern needs --left-pattern");
+  if (opt.synthetic && (opt.frames < 1 || opt.width < 16 || opt.height < 16))
+    throw UsageError("--frames must be >= 1 and --size at least 16x16");
+  if (opt.left_pattern && opt.first < 0) throw UsageError("--first must be >= 0");
   return opt;
 }
 
-dco::stereo::StereoParams load_params(const Options& opt) {
-  dco::stereo::StereoParams params;
+dco::pipeline::PipelineParams load_params(const Options& opt) {
+  dco::pipeline::PipelineParams params;
   dco::ConfigSchema schema;
-  dco::stereo::register_params(schema, params);
+  dco::pipeline::register_params(schema, params);
   if (opt.config) schema.load_file(*opt.config);
   for (const std::string& assignment : opt.overrides) schema.set(assignment);
-  if (opt.max_disp) params.max_disparity = *opt.max_disp;
-  dco::stereo::validate(params);
+  if (opt.max_disp) params.stereo.max_disparity = *opt.max_disp;
+  dco::pipeline::validate(params);
   return params;
 }
 
-void write_depth(const fs::path& path, const dco::Image<float>& disparity,
-                 const dco::RectifiedGeometry& geometry) {
-  dco::Image<float> depth(disparity.width(), disparity.height());
-  dco::disparity_to_depth(disparity.view(), geometry, depth.view());
-  if (path.extension() == ".png")
-    dco::write_depth_png16(path, depth.view());
-  else
-    dco::write_pfm(path, depth.view());
+// A single frame through the whole pipeline (its contour window holds only that frame).
+void run_single(dco::pipeline::DepthPipeline& pipeline, const dco::Image<std::uint8_t>& left,
+                const dco::Image<std::uint8_t>& right, dco::pipeline::DepthResult& result) {
+  pipeline.reset();
+  if (!pipeline.push(left.cview(), right.cview(), result)) pipeline.finish(result);
 }
 
-int run_pair(const Options& opt, const dco::stereo::StereoParams& params) {
+double total_ms(const dco::pipeline::DepthResult& r, bool sparse) {
+  return r.stereo_timings.total_ms +
+         (sparse ? 0.0 : r.contour_timings.total_ms + r.densify_timings.total_ms);
+}
+
+std::string timing_text(const dco::pipeline::DepthResult& r, bool sparse) {
+  if (sparse) return fmt::format("stereo {:.1f} ms", r.stereo_timings.total_ms);
+  return fmt::format("stereo {:.1f} + contour {:.1f} + densify {:.1f} ms ({} it, res {:.1e})",
+                     r.stereo_timings.total_ms, r.contour_timings.total_ms,
+                     r.densify_timings.total_ms, r.solver.iterations, r.solver.final_residual);
+}
+
+float median_disparity(const dco::Image<float>& d) {
+  std::vector<float> v;
+  v.reserve(static_cast<std::size_t>(d.width()) * d.height());
+  for (int y = 0; y < d.height(); ++y)
+    for (int x = 0; x < d.width(); ++x)
+      if (std::isfinite(d.at(x, y)) && d.at(x, y) > 0) v.push_back(d.at(x, y));
+  if (v.empty()) return 0.0f;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+void write_overlays(const fs::path& dir, const std::string& suffix,
+                    const dco::pipeline::DepthResult& r, bool sparse, float max_disparity,
+                    float plane) {
+  fs::create_directories(dir);
+  const dco::Image<float>& map = sparse ? r.sparse : r.dense;
+  dco::tools::write_disparity_colour(dir / ("depth" + suffix + ".png"), map.cview(), max_disparity);
+  dco::tools::write_contour_overlay(dir / ("contours" + suffix + ".png"), r.image.cview(),
+                                    r.contours.cview());
+  dco::tools::write_occlusion_composite(dir / ("occlusion" + suffix + ".png"), r.image.cview(),
+                                        map.cview(), plane);
+}
+
+int run_pair(const Options& opt, const dco::pipeline::PipelineParams& params) {
   dco::Image<std::uint8_t> left = dco::load_image(*opt.left);
   dco::Image<std::uint8_t> right = dco::load_image(*opt.right);
   if (left.channels() != right.channels())
     throw dco::Error(fmt::format("'{}' has {} channel(s) but '{}' has {}", opt.left->string(),
                                  left.channels(), opt.right->string(), right.channels()));
-
   std::optional<dco::Rectifier> rectifier;
   if (opt.calib) {
     rectifier.emplace(dco::load_calibration(*opt.calib));
@@ -163,36 +262,87 @@ int run_pair(const Options& opt, const dco::stereo::StereoParams& params) {
       right = std::move(right_rect);
     }
   }
-
-  const auto matcher = dco::stereo::make_cpu_stereo_matcher(params);
-  dco::Image<float> disparity;
-  matcher->compute(left.cview(), right.cview(), disparity);
-  dco::write_pfm(*opt.out, disparity.view());
-  if (opt.depth_out) write_depth(*opt.depth_out, disparity, rectifier->geometry());
-  fmt::print("{}: {}x{} in {:.1f} ms\n", opt.out->string(), disparity.width(), disparity.height(),
-             matcher->last_timings().total_ms);
+  dco::pipeline::DepthPipeline pipeline(params);
+  dco::pipeline::DepthResult result;
+  run_single(pipeline, left, right, result);
+  const dco::Image<float>& map = opt.sparse ? result.sparse : result.dense;
+  dco::write_pfm(*opt.out, map.view());
+  if (opt.depth_out) {
+    dco::Image<float> depth(map.width(), map.height());
+    dco::disparity_to_depth(map.view(), rectifier->geometry(), depth.view());
+    if (opt.depth_out->extension() == ".png")
+      dco::write_depth_png16(*opt.depth_out, depth.view());
+    else
+      dco::write_pfm(*opt.depth_out, depth.view());
+  }
+  if (opt.overlay_dir)
+    write_overlays(*opt.overlay_dir, "", result, opt.sparse,
+                   static_cast<float>(params.stereo.max_disparity), median_disparity(map));
+  fmt::print("{}: {}x{}, {}\n", opt.out->string(), map.width(), map.height(),
+             timing_text(result, opt.sparse));
   return 0;
 }
 
-int run_batch(const Options& opt, dco::stereo::StereoParams params) {
+int run_batch(const Options& opt, dco::pipeline::PipelineParams params) {
   const fs::path data_root = opt.data_root.value_or(opt.scenes->parent_path());
-  const std::vector<dco::tools::Scene> scenes =
-      dco::tools::load_scene_manifest(*opt.scenes, data_root);
+  const auto scenes = dco::tools::load_scene_manifest(*opt.scenes, data_root);
   fs::create_directories(*opt.out_dir);
-  dco::Image<float> disparity;
+  dco::pipeline::DepthResult result;
   for (const dco::tools::Scene& scene : scenes) {
-    if (!opt.max_disp) params.max_disparity = scene.max_disp;
-    const auto matcher = dco::stereo::make_cpu_stereo_matcher(params);
+    if (!opt.max_disp) params.stereo.max_disparity = scene.max_disp;
+    dco::pipeline::DepthPipeline pipeline(params);
     const dco::Image<std::uint8_t> left = dco::load_image(scene.left);
     const dco::Image<std::uint8_t> right = dco::load_image(scene.right);
-    matcher->compute(left.cview(), right.cview(), disparity);
-    const fs::path out = *opt.out_dir / (scene.file_stem() + ".pfm");
-    dco::write_pfm(out, disparity.view());
-    const dco::stereo::StereoTimings& t = matcher->last_timings();
-    std::ofstream(*opt.out_dir / (scene.file_stem() + ".time_ms")) << t.total_ms << '\n';
-    fmt::print("{:<40} {}x{} max-disp {:3}  {:7.1f} ms\n", scene.name, left.width(), left.height(),
-               params.max_disparity, t.total_ms);
+    run_single(pipeline, left, right, result);
+    const std::string stem = scene.file_stem();
+    dco::write_pfm(*opt.out_dir / (stem + ".pfm"),
+                   (opt.sparse ? result.sparse : result.dense).view());
+    std::ofstream(*opt.out_dir / (stem + ".time_ms")) << total_ms(result, opt.sparse) << '\n';
+    fmt::print("{:<40} {}x{} max-disp {:3}  {}\n", scene.name, left.width(), left.height(),
+               params.stereo.max_disparity, timing_text(result, opt.sparse));
   }
+  return 0;
+}
+
+int run_sequence(const Options& opt, dco::pipeline::PipelineParams params) {
+  std::unique_ptr<dco::tools::FrameSequence> frames =
+      opt.synthetic ? dco::tools::make_synthetic_sequence(*opt.synthetic, opt.width, opt.height,
+                                                          opt.frames, opt.color)
+                    : dco::tools::make_pattern_sequence(*opt.left_pattern, *opt.right_pattern,
+                                                        opt.first, opt.count, opt.calib);
+  if (!opt.max_disp && frames->max_disparity())
+    params.stereo.max_disparity = *frames->max_disparity();
+  dco::pipeline::validate(params);
+  fs::create_directories(*opt.out_dir);
+  dco::pipeline::DepthPipeline pipeline(params);
+  dco::tools::StereoInput input;
+  dco::pipeline::DepthResult result;
+  float plane = 0.0f;
+  int written = 0;
+  double sum_ms = 0;
+  const auto emit = [&] {
+    const dco::Image<float>& map = opt.sparse ? result.sparse : result.dense;
+    const std::string suffix = fmt::format("_{:06d}", result.index);
+    dco::write_pfm(*opt.out_dir / ("frame" + suffix + ".pfm"), map.view());
+    if (written == 0) plane = median_disparity(map);  // one virtual plane for the whole sequence
+    if (opt.overlays)
+      write_overlays(*opt.out_dir / "overlay", suffix, result, opt.sparse,
+                     static_cast<float>(params.stereo.max_disparity), plane);
+    sum_ms += total_ms(result, opt.sparse);
+    fmt::print("frame {:6d}  {}{}\n", result.index, timing_text(result, opt.sparse),
+               result.flow_cue ? "" : "  (no flow cue)");
+    ++written;
+  };
+  while (frames->next(input)) {
+    if (!input.gt_disparity.empty())
+      dco::write_pfm(*opt.out_dir / fmt::format("gt_{:06d}.pfm", input.index),
+                     input.gt_disparity.view());
+    if (pipeline.push(input.left.cview(), input.right.cview(), result)) emit();
+  }
+  while (pipeline.finish(result)) emit();
+  if (written == 0) throw dco::Error("the sequence holds no frame");
+  fmt::print("{} frames, max-disp {}, mean {:.1f} ms per frame\n", written,
+             params.stereo.max_disparity, sum_ms / written);
   return 0;
 }
 
@@ -206,13 +356,15 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (opt.list_params) {
-      dco::stereo::StereoParams params;
+      dco::pipeline::PipelineParams params;
       dco::ConfigSchema schema;
-      dco::stereo::register_params(schema, params);
+      dco::pipeline::register_params(schema, params);
       fmt::print("{}", schema.describe());
       return 0;
     }
-    const dco::stereo::StereoParams params = load_params(opt);
-    return opt.scenes ? run_batch(opt, params) : run_pair(opt, params);
+    const dco::pipeline::PipelineParams params = load_params(opt);
+    if (opt.scenes) return run_batch(opt, params);
+    if (opt.left) return run_pair(opt, params);
+    return run_sequence(opt, params);
   });
 }

@@ -28,6 +28,7 @@ void validate(const PipelineParams& params);  // throws dco::Error
 // Everything the pipeline knows about one frame once it is done.
 struct DepthResult {
   int index = -1;
+  Image<std::uint8_t> image;     // grey left image, input resolution
   Image<float> sparse;           // input px, +inf where the stereo checks left no value
   Image<float> dense;            // input px, every pixel set
   Image<float> m_fuse;           // internal resolution, [0, 1]

@@ -20,6 +20,8 @@ struct DensifyParams {
   // Floor of every smoothness weight: keeps each pixel connected to the rest, so regions a
   // contour encloses without any sparse value still get one, and the system stays definite.
   double min_edge_weight = 0.001;
+  double background_fill = 0.05;  // weak data term for holes: the farther of the row neighbours
+  double color_sigma = 4;  // grey-level scale of exp(-|I_p - I_q| / sigma) on the weights; 0 = off
   int max_iterations = 60;
   double tolerance = 1e-4;  // relative residual ||b - Ax|| / ||b||
   bool multigrid = true;    // V-cycle preconditioner (else plain conjugate gradients)
@@ -36,6 +38,7 @@ struct DensifyInputs {
   ImageView<const float> m_intensity;      // [0, 1], optional
   ImageView<const std::uint8_t> contours;  // B_dp, non-zero on a depth contour, optional
   ImageView<const float> previous;         // last frame's dense disparity, optional
+  ImageView<const std::uint8_t> image;     // grey input image, optional (colour guidance)
 };
 
 struct DensifyTimings {
@@ -64,7 +67,7 @@ class Densifier {
   GridSystem system_;
   Multigrid multigrid_;
   CgScratch scratch_;
-  Image<float> rhs_, solution_, smooth_strength_;
+  Image<float> rhs_, hint_, solution_, smooth_strength_;
   Image<std::uint8_t> barrier_;
   bool has_solution_ = false;
   SolverReport report_;

@@ -1,0 +1,118 @@
+#include "frame_sequence.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <regex>
+
+#include "dco/core/error.hpp"
+#include "dco/core/image_io.hpp"
+
+namespace dco::tools {
+namespace {
+
+class PatternSequence final : public FrameSequence {
+ public:
+  PatternSequence(std::string left, std::string right, int first, int count,
+                  const std::optional<std::filesystem::path>& calib)
+      : left_(std::move(left)),
+        right_(std::move(right)),
+        next_(first),
+        end_(count < 0 ? -1 : first + count) {
+    expand_pattern(left_, first);  // validates both patterns up front
+    expand_pattern(right_, first);
+    if (calib) rectifier_.emplace(load_calibration(*calib));
+  }
+
+  bool next(StereoInput& frame) override {
+    if (end_ >= 0 && next_ >= end_) return false;
+    const std::filesystem::path left = expand_pattern(left_, next_);
+    if (end_ < 0 && !std::filesystem::exists(left)) return false;
+    Image<std::uint8_t> l = load_image(left);
+    Image<std::uint8_t> r = load_image(expand_pattern(right_, next_));
+    if (rectifier_ && rectifier_->needs_remap()) {
+      rectifier_->rectify(l.cview(), r.cview(), frame.left, frame.right);
+    } else {
+      frame.left = std::move(l);
+      frame.right = std::move(r);
+    }
+    frame.index = next_++;
+    return true;
+  }
+
+  std::optional<RectifiedGeometry> geometry() const override {
+    if (!rectifier_) return std::nullopt;
+    return rectifier_->geometry();
+  }
+
+ private:
+  std::string left_, right_;
+  int next_, end_;
+  std::optional<Rectifier> rectifier_;
+};
+
+class SyntheticSequence final : public FrameSequence {
+ public:
+  SyntheticSequence(synthetic::SceneConfig config, int frames)
+      : renderer_(std::move(config)), frames_(frames) {}
+
+  bool next(StereoInput& frame) override {
+    if (next_ >= frames_) return false;
+    renderer_.render(next_, sample_);
+    frame.index = next_++;
+    frame.left = sample_.left;
+    frame.right = sample_.right;
+    frame.gt_disparity = sample_.disparity;
+    return true;
+  }
+
+  std::optional<RectifiedGeometry> geometry() const override {
+    return renderer_.calibration().rectified;
+  }
+
+  // From the nearest depth any object reaches, with a 10 % margin.
+  std::optional<int> max_disparity() const override {
+    const synthetic::SceneConfig& c = renderer_.config();
+    double z_min = c.background_z_m;
+    for (const synthetic::Object& o : c.objects)
+      z_min = std::min(z_min, o.z_m - std::abs(o.amp_z_m));
+    return static_cast<int>(std::ceil(1.1 * c.focal_px * c.baseline_m / z_min));
+  }
+
+ private:
+  synthetic::SceneRenderer renderer_;
+  synthetic::StereoSample sample_;
+  int frames_;
+  int next_ = 0;
+};
+
+}  // namespace
+
+std::string expand_pattern(const std::string& pattern, int index) {
+  static const std::regex kField("%0?[0-9]*d");
+  const auto fields = std::distance(std::sregex_iterator(pattern.begin(), pattern.end(), kField),
+                                    std::sregex_iterator());
+  const auto percents = std::count(pattern.begin(), pattern.end(), '%');
+  if (fields != 1 || percents != 1)
+    throw Error("file pattern '" + pattern + "' needs exactly one integer field such as %06d");
+  char buffer[4096];
+  const int n = std::snprintf(buffer, sizeof buffer, pattern.c_str(), index);
+  if (n < 0 || n >= static_cast<int>(sizeof buffer))
+    throw Error("file pattern '" + pattern + "' expands to an overlong path");
+  return buffer;
+}
+
+std::unique_ptr<FrameSequence> make_pattern_sequence(
+    const std::string& left_pattern, const std::string& right_pattern, int first, int count,
+    const std::optional<std::filesystem::path>& calib) {
+  return std::make_unique<PatternSequence>(left_pattern, right_pattern, first, count, calib);
+}
+
+std::unique_ptr<FrameSequence> make_synthetic_sequence(const std::string& name, int width,
+                                                       int height, int frames, bool color) {
+  synthetic::SceneConfig config = synthetic::preset(name, width, height);
+  config.color = color;
+  return std::make_unique<SyntheticSequence>(std::move(config), frames);
+}
+
+}  // namespace dco::tools
