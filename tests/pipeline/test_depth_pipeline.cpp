@@ -1,0 +1,103 @@
+// The offline pipeline: frame bookkeeping of the contour window and a dense result on a
+// synthetic sequence whose truth is known.
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "dco/core/error.hpp"
+#include "dco/core/synthetic_scene.hpp"
+#include "dco/pipeline/depth_pipeline.hpp"
+
+namespace dco::pipeline {
+namespace {
+
+synthetic::SceneRenderer small_scene(const char* name) {
+  return synthetic::SceneRenderer(synthetic::preset(name, 320, 180));
+}
+
+PipelineParams params_for(const synthetic::SceneRenderer& scene) {
+  PipelineParams p;
+  // Nearest object of the presets is ~0.4 m away: f * B / 0.4 plus a margin.
+  p.stereo.max_disparity =
+      static_cast<int>(1.2 * scene.config().focal_px * scene.config().baseline_m / 0.38);
+  return p;
+}
+
+TEST(DepthPipeline, CentredWindowReleasesEachFrameOneLate) {
+  const auto scene = small_scene("hand");
+  DepthPipeline pipeline(params_for(scene));
+  synthetic::StereoSample s;
+  DepthResult r;
+  scene.render(0, s);
+  EXPECT_FALSE(pipeline.push(s.left.cview(), s.right.cview(), r));
+  for (int i = 1; i < 4; ++i) {
+    scene.render(i, s);
+    ASSERT_TRUE(pipeline.push(s.left.cview(), s.right.cview(), r));
+    EXPECT_EQ(r.index, i - 1);
+    EXPECT_EQ(r.flow_cue, i - 1 >= 1);  // frame 0 has no predecessor
+  }
+  ASSERT_TRUE(pipeline.finish(r));
+  EXPECT_EQ(r.index, 3);
+  EXPECT_FALSE(r.flow_cue);
+  EXPECT_FALSE(pipeline.finish(r));
+}
+
+TEST(DepthPipeline, CausalWindowReleasesEveryFrameAtOnce) {
+  const auto scene = small_scene("hand");
+  PipelineParams p = params_for(scene);
+  p.contour.lookahead = 0;
+  DepthPipeline pipeline(p);
+  synthetic::StereoSample s;
+  DepthResult r;
+  for (int i = 0; i < 4; ++i) {
+    scene.render(i, s);
+    ASSERT_TRUE(pipeline.push(s.left.cview(), s.right.cview(), r));
+    EXPECT_EQ(r.index, i);
+    EXPECT_EQ(r.flow_cue, i >= 2);
+  }
+  EXPECT_FALSE(pipeline.finish(r));
+}
+
+TEST(DepthPipeline, DenseMapIsCompleteAndMostlyRightOnASyntheticSequence) {
+  const auto scene = small_scene("boxes");
+  DepthPipeline pipeline(params_for(scene));
+  synthetic::StereoSample s, truth;
+  DepthResult r;
+  long pixels = 0, bad = 0;
+  for (int i = 0; i < 4; ++i) {
+    scene.render(i, s);
+    if (!pipeline.push(s.left.cview(), s.right.cview(), r)) continue;
+    scene.render(r.index, truth);
+    ASSERT_EQ(r.dense.width(), 320);
+    ASSERT_EQ(r.dense.height(), 180);
+    EXPECT_TRUE(r.solver.converged);
+    for (int y = 0; y < 180; ++y)
+      for (int x = 0; x < 320; ++x) {
+        ASSERT_TRUE(std::isfinite(r.dense.at(x, y)));
+        ++pixels;
+        bad += std::abs(r.dense.at(x, y) - truth.disparity.at(x, y)) > 2.0f;
+      }
+  }
+  ASSERT_GT(pixels, 0);
+  EXPECT_LT(100.0 * bad / pixels, 10.0);
+}
+
+TEST(DepthPipeline, RefusesASizeChangeWithinASequence) {
+  const auto scene = small_scene("static");
+  const auto other = synthetic::SceneRenderer(synthetic::preset("static", 352, 180));
+  DepthPipeline pipeline(params_for(scene));
+  synthetic::StereoSample a, b;
+  scene.render(0, a);
+  other.render(0, b);
+  DepthResult r;
+  pipeline.push(a.left.cview(), a.right.cview(), r);
+  EXPECT_THROW(pipeline.push(b.left.cview(), b.right.cview(), r), Error);
+  pipeline.reset();
+  EXPECT_FALSE(pipeline.push(b.left.cview(), b.right.cview(), r));  // a new sequence
+  ASSERT_TRUE(pipeline.finish(r));
+  EXPECT_EQ(r.index, 0);
+}
+
+}  // namespace
+}  // namespace dco::pipeline
