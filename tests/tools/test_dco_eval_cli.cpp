@@ -113,7 +113,7 @@ TEST(DcoEvalCli, OnlyFilterBaselineAndTimeSidecar) {
 TEST(DcoEvalCli, UsageErrorsExitWithTwo) {
   TempDir dir;
   const std::string scenes = kManifest.string();
-  expect_one_error_line(run_eval(dir, {}), 2, "--scenes is required");
+  expect_one_error_line(run_eval(dir, {}), 2, "give one of --scenes");
   expect_one_error_line(run_eval(dir, {"--scenes", scenes}), 2, "--pred-dir");
   expect_one_error_line(run_eval(dir, {"--scenes", scenes, "--frobnicate"}), 2,
                         "unknown option --frobnicate");

@@ -1,7 +1,10 @@
 // dco-eval: scores disparity maps written by dco-depth (or anything else that writes PFM) against
-// the ground truth of the scene manifest, optionally next to the OpenCV SGBM+WLS baseline.
+// the ground truth of the scene manifest, optionally next to the OpenCV SGBM+WLS baseline; scores
+// the temporal stability of a disparity sequence; and checks the optical-flow stage on MPI Sintel.
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -20,24 +24,35 @@
 #include "dco/core/error.hpp"
 #include "dco/core/image_io.hpp"
 #include "dco/tools/command_line.hpp"
+#include "dco/tools/flow_eval.hpp"
 #include "dco/tools/json.hpp"
 #include "dco/tools/metrics.hpp"
 #include "dco/tools/scene_manifest.hpp"
+#include "dco/tools/sequence_eval.hpp"
 #include "dco/tools/sgbm_wls.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
+using dco::tools::BoundaryAccuracy;
+using dco::tools::json_number;
+using dco::tools::json_string;
 using dco::tools::Scene;
 using dco::tools::SceneMetrics;
+using dco::tools::SequenceReport;
 using dco::tools::UsageError;
 
 constexpr std::string_view kUsage =
     R"(usage: dco-eval --scenes TSV [--data-root DIR] [--pred-dir DIR]
                 [--baseline sgbm-wls] [--only SUBSTRING] [--json]
+       dco-eval --sequence DIR [--gt-dir DIR] [--json]
+       dco-eval --flow-sintel DIR [--dis-preset NAME] [--json]
 
-Scores predicted disparity maps against the ground truth of every scene in the manifest.
+Scores disparity maps per scene against the manifest's ground truth (--scenes), over time on a
+sequence of frames (--sequence), or checks the optical-flow stage on MPI Sintel (--flow-sintel).
+The three modes are separate: give exactly one of them.
 
+Scenes:
   --scenes TSV        scene manifest (stereo_scenes.tsv)
   --data-root DIR     directory the manifest's paths are relative to (default: the TSV's directory)
   --pred-dir DIR      predictions: DIR/<scene with '/' -> '_'>.pfm, float px at the GT resolution,
@@ -45,50 +60,118 @@ Scores predicted disparity maps against the ground truth of every scene in the m
                       number (milliseconds) supplies the method's run time.
   --baseline sgbm-wls also run OpenCV StereoSGBM + WLS filter on every scene and compare
   --only SUBSTRING    only scenes whose name contains SUBSTRING
+  At least one of --pred-dir and --baseline is needed.
+
+Sequence:
+  --sequence DIR      predicted frames DIR/frame_000000.pfm, frame_000001.pfm, ... (from 0 up to
+                      the first missing number, at least 2; values as for --pred-dir). Prints the
+                      flicker: % of pixels whose side of the virtual planes (20..80 % disparity
+                      quantiles of frame 0) changes between consecutive frames, holes included.
+  --gt-dir DIR        ground truth DIR/gt_000000.pfm, ..., one per predicted frame. Frame 0 of the
+                      GT then fixes the planes for both, and dco-eval adds the GT's own flicker,
+                      the accuracy metrics of every frame with their mean, and boundary recall /
+                      precision: % of GT (predicted) occlusion-boundary pixels with a predicted (GT)
+                      one within 2 px, mean over planes and frames.
+
+Sintel flow:
+  --flow-sintel DIR   runs DIS optical flow frame_0002 -> frame_0003 in every DIR/<pass>/<sequence>/
+                      that holds frame_0002.png, frame_0003.png and gt/frame_0002.flo with its
+                      gt/invalid and gt/occlusions masks, and prints the end-point error over all
+                      valid pixels and over non-occluded ones
+  --dis-preset NAME   ultrafast, fast (default) or medium
+
   --json              print one JSON document instead of tables
   -h, --help          print this help
 
-At least one of --pred-dir and --baseline is needed.
 Exit status: 0 success, 1 bad data (missing or malformed files), 2 bad command line.
 )";
 
 constexpr std::string_view kBaselineName = "sgbm-wls";
+constexpr std::array<std::string_view, 3> kDisPresets = {"ultrafast", "fast", "medium"};
+
+enum class Mode { kNone, kScenes, kSequence, kFlowSintel };
+
+// The option that selects each mode.
+std::string_view mode_option(Mode mode) {
+  switch (mode) {
+    case Mode::kScenes:
+      return "--scenes";
+    case Mode::kSequence:
+      return "--sequence";
+    case Mode::kFlowSintel:
+      return "--flow-sintel";
+    case Mode::kNone:
+      break;
+  }
+  return "";
+}
 
 struct Options {
+  Mode mode = Mode::kNone;
+  // --scenes
   fs::path scenes;
   std::optional<fs::path> data_root;
   std::optional<fs::path> pred_dir;
   bool baseline = false;
   std::string only;
+  // --sequence
+  fs::path sequence;
+  std::optional<fs::path> gt_dir;
+  // --flow-sintel
+  fs::path sintel;
+  std::string dis_preset = "fast";
+
   bool json = false;
   bool help = false;
 };
 
 Options parse_args(int argc, char** argv) {
   Options opt;
+  // Options that belong to one mode, checked against the chosen mode once it is known.
+  std::vector<std::pair<std::string, Mode>> mode_options;
   dco::tools::ArgCursor args(argc, argv);
   while (args.next()) {
     const std::string_view arg = args.name();
     const auto value = [&] { return args.value(); };
     const auto flag = [&] { return args.flag(); };
+    const auto select = [&](Mode mode) {
+      if (opt.mode != Mode::kNone && opt.mode != mode)
+        throw UsageError(fmt::format("{} and {} are separate modes; give one of them",
+                                     mode_option(opt.mode), arg));
+      opt.mode = mode;
+    };
+    const auto belongs_to = [&](Mode mode) { mode_options.emplace_back(arg, mode); };
 
     if (arg == "-h" || arg == "--help")
       opt.help = flag();
     else if (arg == "--json")
       opt.json = flag();
     else if (arg == "--scenes")
-      opt.scenes = value();
+      select(Mode::kScenes), opt.scenes = value();
     else if (arg == "--data-root")
-      opt.data_root = value();
+      belongs_to(Mode::kScenes), opt.data_root = value();
     else if (arg == "--pred-dir")
-      opt.pred_dir = value();
+      belongs_to(Mode::kScenes), opt.pred_dir = value();
     else if (arg == "--only")
-      opt.only = value();
+      belongs_to(Mode::kScenes), opt.only = value();
     else if (arg == "--baseline") {
+      belongs_to(Mode::kScenes);
       const std::string name = value();
       if (name != kBaselineName)
         throw UsageError(fmt::format("unknown baseline '{}' (known: {})", name, kBaselineName));
       opt.baseline = true;
+    } else if (arg == "--sequence")
+      select(Mode::kSequence), opt.sequence = value();
+    else if (arg == "--gt-dir")
+      belongs_to(Mode::kSequence), opt.gt_dir = value();
+    else if (arg == "--flow-sintel")
+      select(Mode::kFlowSintel), opt.sintel = value();
+    else if (arg == "--dis-preset") {
+      belongs_to(Mode::kFlowSintel);
+      opt.dis_preset = value();
+      if (std::find(kDisPresets.begin(), kDisPresets.end(), opt.dis_preset) == kDisPresets.end())
+        throw UsageError(fmt::format("unknown DIS preset '{}' (known: {})", opt.dis_preset,
+                                     fmt::join(kDisPresets, ", ")));
     } else if (arg.starts_with("-")) {
       throw UsageError(fmt::format("unknown option {}", arg));
     } else {
@@ -96,10 +179,19 @@ Options parse_args(int argc, char** argv) {
     }
   }
   if (opt.help) return opt;
-  if (opt.scenes.empty()) throw UsageError("--scenes is required");
-  if (!opt.pred_dir && !opt.baseline) throw UsageError("give --pred-dir, --baseline or both");
+  if (opt.mode == Mode::kNone)
+    throw UsageError("give one of --scenes, --sequence or --flow-sintel");
+  for (const auto& [name, mode] : mode_options)
+    if (mode != opt.mode)
+      throw UsageError(fmt::format("{} goes with {}, not with {}", name, mode_option(mode),
+                                   mode_option(opt.mode)));
+  if (opt.mode == Mode::kScenes && !opt.pred_dir && !opt.baseline)
+    throw UsageError("give --pred-dir, --baseline or both");
   return opt;
 }
+
+// ---------------------------------------------------------------------------------------------
+// --scenes
 
 std::vector<Scene> select_scenes(const Options& opt) {
   const fs::path data_root = opt.data_root.value_or(opt.scenes.parent_path());
@@ -160,8 +252,8 @@ std::vector<SceneMetrics> evaluate_baseline(const std::vector<Scene>& scenes) {
   return results;
 }
 
-void print_text(const Options& opt, const std::vector<SceneMetrics>& predicted,
-                const std::vector<SceneMetrics>& baseline) {
+void print_scenes_text(const Options& opt, const std::vector<SceneMetrics>& predicted,
+                       const std::vector<SceneMetrics>& baseline) {
   if (opt.pred_dir) {
     fmt::print("prediction: {} ({} scenes)\n{}", opt.pred_dir->string(), predicted.size(),
                dco::tools::format_metrics_table(predicted));
@@ -178,8 +270,8 @@ void print_text(const Options& opt, const std::vector<SceneMetrics>& predicted,
   }
 }
 
-void print_json(const Options& opt, const std::vector<SceneMetrics>& predicted,
-                const std::vector<SceneMetrics>& baseline) {
+void print_scenes_json(const Options& opt, const std::vector<SceneMetrics>& predicted,
+                       const std::vector<SceneMetrics>& baseline) {
   std::vector<std::string> members;
   if (opt.pred_dir) {
     members.push_back(fmt::format(R"("prediction": {{"pred_dir": {}, "metrics": {}}})",
@@ -200,6 +292,159 @@ void print_json(const Options& opt, const std::vector<SceneMetrics>& predicted,
   fmt::print("{{\n{}\n}}\n", fmt::join(members, ",\n"));
 }
 
+int run_scenes(const Options& opt) {
+  const std::vector<Scene> scenes = select_scenes(opt);
+  std::vector<SceneMetrics> predicted, baseline;
+  if (opt.pred_dir) predicted = evaluate_predictions(scenes, *opt.pred_dir);
+  if (opt.baseline) baseline = evaluate_baseline(scenes);
+  if (opt.json)
+    print_scenes_json(opt, predicted, baseline);
+  else
+    print_scenes_text(opt, predicted, baseline);
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// --sequence
+
+std::string_view planes_source(const SequenceReport& r) {
+  return r.has_gt ? "ground-truth frame 0" : "prediction frame 0";
+}
+
+std::string percent_text(double value) {
+  return std::isnan(value) ? "-" : fmt::format("{:.2f} %", value);
+}
+
+void print_sequence_text(const Options& opt, const SequenceReport& r) {
+  fmt::print("sequence: {} ({} frames)\n", opt.sequence.string(), r.frames);
+  fmt::print("planes from {}: {:.2f} px\n", planes_source(r), fmt::join(r.planes, " "));
+  if (!r.has_gt) {
+    fmt::print("flicker: {} of pixels change side between frames\n", percent_text(r.flicker));
+    return;
+  }
+  fmt::print("flicker: prediction {}, ground truth {} of pixels change side between frames\n",
+             percent_text(r.flicker), percent_text(r.gt_flicker));
+  fmt::print("boundary within {} px (mean over frames): recall {}, precision {}\n",
+             r.boundary_tolerance, percent_text(r.boundary.recall),
+             percent_text(r.boundary.precision));
+  fmt::print("\naccuracy per frame against {}\n{}", opt.gt_dir->string(),
+             dco::tools::format_metrics_table(r.frame_metrics));
+}
+
+std::string boundary_json(const BoundaryAccuracy& b) {
+  return fmt::format(R"({{"recall": {}, "precision": {}}})", json_number(b.recall),
+                     json_number(b.precision));
+}
+
+void print_sequence_json(const Options& opt, const SequenceReport& r) {
+  std::vector<std::string> planes, members, frames;
+  for (const double p : r.planes) planes.push_back(json_number(p));
+  members.push_back(fmt::format(
+      R"("sequence": {{"dir": {}, "frames": {}, "planes": [{}], "planes_from": {}, "flicker": {}}})",
+      json_string(opt.sequence.string()), r.frames, fmt::join(planes, ", "),
+      json_string(planes_source(r)), json_number(r.flicker)));
+  if (r.has_gt) {
+    members.push_back(fmt::format(R"("ground_truth": {{"dir": {}, "flicker": {}}})",
+                                  json_string(opt.gt_dir->string()), json_number(r.gt_flicker)));
+    for (const BoundaryAccuracy& b : r.frame_boundary) frames.push_back(boundary_json(b));
+    members.push_back(
+        fmt::format(R"("boundary": {{"tolerance_px": {}, "mean": {}, "frames": [{}]}})",
+                    r.boundary_tolerance, boundary_json(r.boundary), fmt::join(frames, ", ")));
+    members.push_back(
+        fmt::format(R"("metrics": {})", dco::tools::format_metrics_json(r.frame_metrics)));
+  }
+  fmt::print("{{\n{}\n}}\n", fmt::join(members, ",\n"));
+}
+
+int run_sequence(const Options& opt) {
+  const SequenceReport report = dco::tools::evaluate_sequence(opt.sequence, opt.gt_dir);
+  if (opt.json)
+    print_sequence_json(opt, report);
+  else
+    print_sequence_text(opt, report);
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// --flow-sintel
+
+struct SintelRow {
+  std::string sequence;  // "<pass>/<sequence>", e.g. "clean/easy"
+  dco::tools::SintelFlowResult epe;
+};
+
+// DIR/<pass>/<sequence>/ folders with everything evaluate_sintel_flow reads, sorted by name.
+std::vector<std::pair<std::string, fs::path>> find_sintel_sequences(const fs::path& dir) {
+  if (!fs::is_directory(dir))
+    throw dco::Error(fmt::format("Sintel directory '{}' does not exist", dir.string()));
+  std::vector<std::pair<std::string, fs::path>> found;
+  for (const fs::directory_entry& pass : fs::directory_iterator(dir)) {
+    if (!pass.is_directory()) continue;
+    for (const fs::directory_entry& seq : fs::directory_iterator(pass.path())) {
+      const fs::path& p = seq.path();
+      const bool complete = seq.is_directory() && fs::exists(p / "frame_0002.png") &&
+                            fs::exists(p / "frame_0003.png") &&
+                            fs::exists(p / "gt" / "frame_0002.flo") &&
+                            fs::exists(p / "gt" / "invalid" / "frame_0002.png") &&
+                            fs::exists(p / "gt" / "occlusions" / "frame_0002.png");
+      if (complete) found.emplace_back((pass.path().filename() / p.filename()).generic_string(), p);
+    }
+  }
+  if (found.empty())
+    throw dco::Error(fmt::format(
+        "'{}' holds no <pass>/<sequence>/ folder with frame_0002.png, frame_0003.png and "
+        "gt/frame_0002.flo (+ gt/invalid, gt/occlusions)",
+        dir.string()));
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+SintelRow mean_row(const std::vector<SintelRow>& rows) {
+  SintelRow mean{"mean", {}};
+  for (const SintelRow& r : rows) {
+    mean.epe.epe_all += r.epe.epe_all / static_cast<double>(rows.size());
+    mean.epe.epe_noc += r.epe.epe_noc / static_cast<double>(rows.size());
+  }
+  return mean;
+}
+
+void print_sintel_text(const Options& opt, const std::vector<SintelRow>& rows) {
+  fmt::print("Sintel flow: {} (DIS preset {}, {} sequences)\n", opt.sintel.string(), opt.dis_preset,
+             rows.size());
+  fmt::print("{:<16}{:>12}{:>12}\n", "sequence", "EPE all", "EPE noc");
+  for (const SintelRow& r : rows)
+    fmt::print("{:<16}{:>12.3f}{:>12.3f}\n", r.sequence, r.epe.epe_all, r.epe.epe_noc);
+  const SintelRow mean = mean_row(rows);
+  fmt::print("{:<16}{:>12.3f}{:>12.3f}\n", mean.sequence, mean.epe.epe_all, mean.epe.epe_noc);
+  fmt::print("(mean end-point error in px over valid pixels; noc = visible in both frames)\n");
+}
+
+std::string sintel_row_json(const SintelRow& r) {
+  return fmt::format(R"({{"sequence": {}, "epe_all": {}, "epe_noc": {}}})", json_string(r.sequence),
+                     json_number(r.epe.epe_all), json_number(r.epe.epe_noc));
+}
+
+void print_sintel_json(const Options& opt, const std::vector<SintelRow>& rows) {
+  std::vector<std::string> items;
+  for (const SintelRow& r : rows) items.push_back("\n  " + sintel_row_json(r));
+  fmt::print(
+      "{{\n\"flow_sintel\": {{\"dir\": {}, \"dis_preset\": {}, \"sequences\": [{}\n], \"mean\": "
+      "{}}}\n}}\n",
+      json_string(opt.sintel.string()), json_string(opt.dis_preset), fmt::join(items, ","),
+      sintel_row_json(mean_row(rows)));
+}
+
+int run_flow_sintel(const Options& opt) {
+  std::vector<SintelRow> rows;
+  for (const auto& [name, dir] : find_sintel_sequences(opt.sintel))
+    rows.push_back({name, dco::tools::evaluate_sintel_flow(dir, opt.dis_preset)});
+  if (opt.json)
+    print_sintel_json(opt, rows);
+  else
+    print_sintel_text(opt, rows);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -209,14 +454,16 @@ int main(int argc, char** argv) {
       fmt::print("{}", kUsage);
       return 0;
     }
-    const std::vector<Scene> scenes = select_scenes(opt);
-    std::vector<SceneMetrics> predicted, baseline;
-    if (opt.pred_dir) predicted = evaluate_predictions(scenes, *opt.pred_dir);
-    if (opt.baseline) baseline = evaluate_baseline(scenes);
-    if (opt.json)
-      print_json(opt, predicted, baseline);
-    else
-      print_text(opt, predicted, baseline);
-    return 0;
+    switch (opt.mode) {
+      case Mode::kScenes:
+        return run_scenes(opt);
+      case Mode::kSequence:
+        return run_sequence(opt);
+      case Mode::kFlowSintel:
+        return run_flow_sintel(opt);
+      case Mode::kNone:
+        break;
+    }
+    throw std::logic_error("dco-eval: no mode chosen");
   });
 }

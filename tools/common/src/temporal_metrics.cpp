@@ -10,7 +10,7 @@ namespace {
 
 constexpr std::uint8_t kNoValue = 0xff;
 
-std::uint8_t sides(float d, const std::array<double, kOcclusionPlaneQuantiles.size()>& planes) {
+std::uint8_t sides(float d, const FlickerMeter::Planes& planes) {
   if (!is_valid_disparity(d)) return kNoValue;
   std::uint8_t bits = 0;
   for (std::size_t k = 0; k < planes.size(); ++k)
@@ -24,7 +24,7 @@ void FlickerMeter::add(ImageView<const float> disparity) {
   if (disparity.empty() || disparity.channels != 1)
     throw Error("flicker: a disparity map must be a non-empty one-channel image");
   if (frames_ == 0) {
-    planes_ = occlusion_planes(disparity);
+    if (!fixed_planes_) planes_ = occlusion_planes(disparity);
     previous_side_.resize(disparity.width, disparity.height);
   } else if (!previous_side_.view().same_size(disparity)) {
     throw Error("flicker: frame " + std::to_string(frames_) + " is " +

@@ -15,17 +15,26 @@ namespace dco::tools {
 // frame of a pair count as flips: a hole that comes and goes flickers too.
 class FlickerMeter {
  public:
+  using Planes = std::array<double, kOcclusionPlaneQuantiles.size()>;
+
+  // Planes from the first frame added.
+  FlickerMeter() = default;
+  // Fixed planes (e.g. from a ground-truth frame), so that two meters, say one on a prediction and
+  // one on its ground truth, judge flips against the same planes.
+  explicit FlickerMeter(const Planes& planes) : planes_(planes), fixed_planes_(true) {}
+
   // Adds the next frame's disparity map; all frames must have one size (throws dco::Error).
   void add(ImageView<const float> disparity);
 
   int frames() const { return frames_; }
   // Mean % of flipping pixels over consecutive pairs and planes; NaN before two frames.
   double flip_rate() const;
-  const std::array<double, kOcclusionPlaneQuantiles.size()>& planes() const { return planes_; }
+  const Planes& planes() const { return planes_; }
 
  private:
   Image<std::uint8_t> previous_side_;  // bit k set: in front of plane k; 0xff: no value
-  std::array<double, kOcclusionPlaneQuantiles.size()> planes_{};
+  Planes planes_{};
+  bool fixed_planes_ = false;
   int frames_ = 0;
   double flips_ = 0;
   double compared_ = 0;

@@ -1,0 +1,208 @@
+// dco-eval's sequence and Sintel-flow modes, and how the modes exclude each other, run the way a
+// user runs them.
+
+#include <cmath>
+#include <filesystem>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "cli_runner.hpp"
+#include "dco/core/disparity_io.hpp"
+#include "temp_dir.hpp"
+
+namespace dco::tools {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CliRun;
+using ::testing::HasSubstr;
+using ::testing::Not;
+using testing::TempDir;
+
+const fs::path kSintel = fs::path(DCO_DATA_DIR) / "sintel_flow";
+
+CliRun run_eval(const TempDir& dir, const std::vector<std::string>& args) {
+  return testing::run_cli(DCO_EVAL_EXE, dir, args);
+}
+
+void expect_one_error_line(const CliRun& r, int exit_code, const std::string& fragment) {
+  testing::expect_one_error_line(r, "dco-eval", exit_code, fragment);
+}
+
+// A 64x48 step whose foreground (30) starts at column 20 + index and moves right one column per
+// frame over a background of 10. With frame 0's planes at 20, 30, 30, 30, 30, each pair of frames
+// flips one 48-pixel column across the plane at 20: 48 of 64 * 48 * 5 comparisons, 0.3125 %.
+Image<float> moving_step(int index) {
+  Image<float> d(64, 48);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) d.at(x, y) = x < 20 + index ? 10.0f : 30.0f;
+  return d;
+}
+
+fs::path write_frames(const TempDir& dir, const std::string& prefix, int count) {
+  for (int i = 0; i < count; ++i)
+    write_pfm(dir.path() / fmt::format("{}{:06d}.pfm", prefix, i), moving_step(i).view());
+  return dir.path();
+}
+
+int count_of(const std::string& text, const std::string& fragment) {
+  int n = 0;
+  for (auto at = text.find(fragment); at != std::string::npos; at = text.find(fragment, at + 1))
+    ++n;
+  return n;
+}
+
+TEST(DcoEvalSequenceCli, FlickerOfAPredictionAlone) {
+  TempDir dir;
+  const std::string seq = write_frames(dir, "frame_", 3).string();
+  const CliRun text = run_eval(dir, {"--sequence", seq});
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_EQ(text.err, "");
+  EXPECT_THAT(text.out, HasSubstr("(3 frames)"));
+  EXPECT_THAT(text.out,
+              HasSubstr("planes from prediction frame 0: 20.00 30.00 30.00 30.00 30.00 px"));
+  EXPECT_THAT(text.out, HasSubstr("flicker: 0.31 %"));
+  EXPECT_THAT(text.out, Not(HasSubstr("boundary")));
+
+  const CliRun json = run_eval(dir, {"--sequence", seq, "--json"});
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_THAT(json.out, HasSubstr(R"("frames": 3, "planes": [20, 30, 30, 30, 30])"));
+  EXPECT_THAT(json.out, HasSubstr(R"("planes_from": "prediction frame 0", "flicker": 0.3125})"));
+  EXPECT_THAT(json.out, Not(HasSubstr("ground_truth")));
+}
+
+TEST(DcoEvalSequenceCli, GroundTruthAsPredictionIsPerfectAndFlickersAlike) {
+  // dco-depth writes frame_* and gt_* into one folder; both options may name it.
+  TempDir dir;
+  write_frames(dir, "frame_", 4);
+  const std::string seq = write_frames(dir, "gt_", 4).string();
+  const CliRun text = run_eval(dir, {"--sequence", seq, "--gt-dir", seq});
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_THAT(text.out, HasSubstr("planes from ground-truth frame 0"));
+  EXPECT_THAT(text.out, HasSubstr("recall 100.00 %, precision 100.00 %"));
+  EXPECT_THAT(text.out, HasSubstr("frame_000003"));
+  EXPECT_THAT(text.out, HasSubstr("\nmean "));
+
+  const CliRun json = run_eval(dir, {"--sequence", seq, "--gt-dir", seq, "--json"});
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_EQ(count_of(json.out, R"("flicker": 0.3125})"), 2) << json.out;  // prediction and GT
+  EXPECT_THAT(json.out, HasSubstr(R"("mean": {"recall": 100, "precision": 100})"));
+  EXPECT_EQ(count_of(json.out, R"({"recall": 100, "precision": 100})"), 5);
+  const std::string mean = json.out.substr(json.out.find(R"("mean": {"scene": "mean")"));
+  EXPECT_THAT(mean, HasSubstr(R"("bad1": 0, "bad2": 0, "bad4": 0, "avgerr": 0})"));
+  EXPECT_THAT(mean, HasSubstr(R"("occ_err": 0)"));
+}
+
+TEST(DcoEvalSequenceCli, PredictionIsMeasuredAgainstTheGroundTruthPlanes) {
+  // A frozen prediction does not flicker, the moving GT does; its edge drifts out of tolerance.
+  TempDir dir;
+  const fs::path gt = write_frames(dir, "gt_", 5);
+  for (int i = 0; i < 5; ++i)
+    write_pfm(gt / fmt::format("frame_{:06d}.pfm", i), moving_step(0).view());
+  const CliRun json = run_eval(dir, {"--sequence", gt.string(), "--gt-dir", gt.string(), "--json"});
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_THAT(json.out, HasSubstr(R"("planes_from": "ground-truth frame 0", "flicker": 0})"));
+  EXPECT_THAT(json.out, HasSubstr(R"("ground_truth": {"dir": )"));
+  EXPECT_THAT(json.out, HasSubstr(R"("flicker": 0.3125})"));
+  // Edges 0..4 px apart, tolerance 2: recall 100, 100, 100, 50, 0 per frame.
+  EXPECT_THAT(json.out, HasSubstr(R"("mean": {"recall": 70, "precision": 70})"));
+}
+
+TEST(DcoEvalSequenceCli, MissingOrShortSequencesAreRuntimeErrors) {
+  TempDir dir;
+  expect_one_error_line(run_eval(dir, {"--sequence", (dir.path() / "nowhere").string()}), 1,
+                        "nowhere");
+  const std::string seq = write_frames(dir, "frame_", 1).string();
+  expect_one_error_line(run_eval(dir, {"--sequence", seq}), 1,
+                        "holds 1 frame(s) numbered from frame_000000.pfm");
+  // Numbering stops at the first gap.
+  write_pfm(dir.path() / "frame_000002.pfm", moving_step(2).view());
+  expect_one_error_line(run_eval(dir, {"--sequence", seq}), 1, "holds 1 frame(s)");
+
+  write_pfm(dir.path() / "frame_000001.pfm", moving_step(1).view());
+  write_frames(dir, "gt_", 2);
+  expect_one_error_line(run_eval(dir, {"--sequence", seq, "--gt-dir", seq}), 1,
+                        "holds 2 frame(s) numbered from gt_000000.pfm, the prediction 3");
+  expect_one_error_line(
+      run_eval(dir, {"--sequence", seq, "--gt-dir", (dir.path() / "no-gt").string()}), 1,
+      "ground-truth directory");
+
+  Image<float> small(8, 8);
+  small.fill(5.0f);
+  write_pfm(dir.path() / "frame_000001.pfm", small.view());
+  expect_one_error_line(run_eval(dir, {"--sequence", seq}), 1,
+                        "frame_000001.pfm' is 8x8x1, the sequence is 64x48x1");
+}
+
+TEST(DcoEvalSequenceCli, ModesExcludeEachOther) {
+  TempDir dir;
+  expect_one_error_line(run_eval(dir, {}), 2, "give one of --scenes, --sequence or --flow-sintel");
+  expect_one_error_line(run_eval(dir, {"--sequence"}), 2, "--sequence needs a value");
+  expect_one_error_line(run_eval(dir, {"--gt-dir", "g"}), 2, "give one of --scenes");
+  expect_one_error_line(run_eval(dir, {"--sequence", "s", "--flow-sintel", "f"}), 2,
+                        "--sequence and --flow-sintel are separate modes");
+  expect_one_error_line(run_eval(dir, {"--scenes", "t.tsv", "--sequence", "s"}), 2,
+                        "--scenes and --sequence are separate modes");
+  expect_one_error_line(run_eval(dir, {"--scenes", "t.tsv", "--pred-dir", "p", "--gt-dir", "g"}), 2,
+                        "--gt-dir goes with --sequence, not with --scenes");
+  expect_one_error_line(run_eval(dir, {"--sequence", "s", "--pred-dir", "p"}), 2,
+                        "--pred-dir goes with --scenes, not with --sequence");
+  expect_one_error_line(run_eval(dir, {"--dis-preset", "fast", "--sequence", "s"}), 2,
+                        "--dis-preset goes with --flow-sintel, not with --sequence");
+  expect_one_error_line(run_eval(dir, {"--flow-sintel", "f", "--only", "x"}), 2,
+                        "--only goes with --scenes");
+  expect_one_error_line(run_eval(dir, {"--flow-sintel", "f", "--dis-preset", "slow"}), 2,
+                        "unknown DIS preset 'slow' (known: ultrafast, fast, medium)");
+  expect_one_error_line(run_eval(dir, {"--sequence", "s", "extra"}), 2, "unexpected argument");
+}
+
+TEST(DcoEvalSintelCli, FourSequencesWithFiniteEndPointErrors) {
+  TempDir dir;
+  const CliRun text = run_eval(dir, {"--flow-sintel", kSintel.string()});
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_THAT(text.out, HasSubstr("(DIS preset fast, 4 sequences)"));
+  for (const char* seq : {"clean/easy", "clean/medium", "final/easy", "final/medium", "mean"})
+    EXPECT_THAT(text.out, HasSubstr(std::string("\n") + seq + " ")) << seq;
+
+  const CliRun json =
+      run_eval(dir, {"--flow-sintel", kSintel.string(), "--dis-preset", "ultrafast", "--json"});
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_THAT(json.out, HasSubstr(R"("dis_preset": "ultrafast")"));
+  const std::regex row(
+      R"re(\{"sequence": "([a-z/]+)", "epe_all": ([^,]+), "epe_noc": ([^}]+)\})re");
+  int rows = 0;
+  for (auto it = std::sregex_iterator(json.out.begin(), json.out.end(), row);
+       it != std::sregex_iterator(); ++it, ++rows) {
+    const double all = std::stod((*it)[2]), noc = std::stod((*it)[3]);
+    EXPECT_TRUE(std::isfinite(all) && all > 0 && all < 10) << (*it)[0];
+    EXPECT_TRUE(std::isfinite(noc) && noc > 0 && noc <= all) << (*it)[0];
+  }
+  EXPECT_EQ(rows, 5) << json.out;  // four sequences and the mean
+}
+
+TEST(DcoEvalSintelCli, MissingOrEmptyFolderIsARuntimeError) {
+  TempDir dir;
+  expect_one_error_line(run_eval(dir, {"--flow-sintel", (dir.path() / "none").string()}), 1,
+                        "Sintel directory");
+  fs::create_directories(dir.path() / "clean" / "easy");
+  expect_one_error_line(run_eval(dir, {"--flow-sintel", dir.path().string()}), 1,
+                        "holds no <pass>/<sequence>/ folder");
+}
+
+TEST(DcoEvalCli, HelpDocumentsEveryMode) {
+  TempDir dir;
+  const CliRun r = run_eval(dir, {"-h"});
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* usage : {"dco-eval --scenes TSV", "dco-eval --sequence DIR [--gt-dir DIR]",
+                            "dco-eval --flow-sintel DIR [--dis-preset NAME]", "frame_000000.pfm",
+                            "gt_000000.pfm", "ultrafast, fast (default) or medium"})
+    EXPECT_THAT(r.out, HasSubstr(usage));
+}
+
+}  // namespace
+}  // namespace dco::tools

@@ -1,0 +1,93 @@
+#include "dco/tools/sequence_eval.hpp"
+
+#include <fmt/format.h>
+
+#include "dco/core/disparity_io.hpp"
+#include "dco/core/error.hpp"
+
+namespace dco::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+void require_directory(const fs::path& dir, std::string_view what) {
+  if (!fs::is_directory(dir))
+    throw Error(fmt::format("{} directory '{}' does not exist", what, dir.string()));
+}
+
+// Reads one frame and checks it against the first prediction frame (`like`, empty for that one).
+Image<float> read_frame(const fs::path& path, ImageView<const float> like) {
+  Image<float> frame = read_pfm(path);
+  if (frame.channels() != 1 || (!like.empty() && !frame.view().same_size(like)))
+    throw Error(fmt::format("'{}' is {}x{}x{}, the sequence is {}x{}x1", path.string(),
+                            frame.width(), frame.height(), frame.channels(),
+                            like.empty() ? frame.width() : like.width,
+                            like.empty() ? frame.height() : like.height));
+  return frame;
+}
+
+}  // namespace
+
+fs::path sequence_frame_path(const fs::path& dir, std::string_view prefix, int index) {
+  return dir / fmt::format("{}{:06d}.pfm", prefix, index);
+}
+
+int count_sequence_frames(const fs::path& dir, std::string_view prefix) {
+  int n = 0;
+  while (fs::exists(sequence_frame_path(dir, prefix, n))) ++n;
+  return n;
+}
+
+SequenceReport evaluate_sequence(const fs::path& pred_dir, const std::optional<fs::path>& gt_dir,
+                                 int boundary_tolerance) {
+  constexpr auto frame = sequence_frame_path;
+  require_directory(pred_dir, "sequence");
+  SequenceReport report;
+  report.frames = count_sequence_frames(pred_dir, kPredictionFramePrefix);
+  if (report.frames < 2)
+    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}; a sequence needs at least 2",
+                            pred_dir.string(), report.frames,
+                            frame({}, kPredictionFramePrefix, 0).string()));
+  report.has_gt = gt_dir.has_value();
+  report.boundary_tolerance = boundary_tolerance;
+  if (gt_dir) {
+    require_directory(*gt_dir, "ground-truth");
+    const int gt_frames = count_sequence_frames(*gt_dir, kGroundTruthFramePrefix);
+    if (gt_frames != report.frames)
+      throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}, the prediction {}",
+                              gt_dir->string(), gt_frames,
+                              frame({}, kGroundTruthFramePrefix, 0).string(), report.frames));
+  }
+
+  // With GT, its first frame fixes the planes for both meters, so the two flicker rates compare.
+  const Image<float> first = read_frame(frame(pred_dir, kPredictionFramePrefix, 0), {});
+  GroundTruth truth;
+  if (gt_dir)
+    truth.disparity = read_frame(frame(*gt_dir, kGroundTruthFramePrefix, 0), first.view());
+  FlickerMeter flicker =
+      gt_dir ? FlickerMeter(occlusion_planes(truth.disparity.view())) : FlickerMeter();
+  FlickerMeter gt_flicker(flicker.planes());  // used with GT only
+
+  for (int i = 0; i < report.frames; ++i) {
+    const Image<float> pred =
+        i == 0 ? first : read_frame(frame(pred_dir, kPredictionFramePrefix, i), first.view());
+    flicker.add(pred.view());
+    if (!gt_dir) continue;
+    if (i > 0)
+      truth.disparity = read_frame(frame(*gt_dir, kGroundTruthFramePrefix, i), first.view());
+    gt_flicker.add(truth.disparity.view());
+    report.frame_metrics.push_back(
+        evaluate_disparity(fmt::format("{}{:06d}", kPredictionFramePrefix, i), pred.view(), truth));
+    report.frame_boundary.push_back(
+        boundary_accuracy(pred.view(), truth.disparity.view(), boundary_tolerance));
+  }
+  report.planes = flicker.planes();
+  report.flicker = flicker.flip_rate();
+  if (gt_dir) {
+    report.gt_flicker = gt_flicker.flip_rate();
+    report.boundary = mean_boundary_accuracy(report.frame_boundary);
+  }
+  return report;
+}
+
+}  // namespace dco::tools
