@@ -82,6 +82,41 @@ TEST(BoundaryAccuracy, MeanSkipsUndefinedEntries) {
   EXPECT_TRUE(std::isnan(mean_boundary_accuracy({}).recall));
 }
 
+TEST(GapPlanes, SitInTheWidestEmptyDisparityIntervals) {
+  // Surfaces at 10..12 (a slanted wall), 30 and 50: the gaps are (12, 30) and (30, 50).
+  Image<float> gt(30, 10);
+  for (int y = 0; y < 10; ++y)
+    for (int x = 0; x < 30; ++x) gt.at(x, y) = x < 10 ? 10.0f + 0.2f * x : (x < 20 ? 30.0f : 50.0f);
+  const std::vector<double> planes = gap_planes(gt.view(), 3);
+  ASSERT_EQ(planes.size(), 2u);
+  EXPECT_NEAR(planes[0], 21.0, 0.5);
+  EXPECT_NEAR(planes[1], 40.0, 0.5);
+  EXPECT_EQ(gap_planes(gt.view(), 1).size(), 1u);
+  // A wall alone has no gap, so no silhouette plane.
+  Image<float> wall(30, 10);
+  for (int y = 0; y < 10; ++y)
+    for (int x = 0; x < 30; ++x) wall.at(x, y) = 10.0f + 0.2f * x;
+  EXPECT_TRUE(gap_planes(wall.view()).empty());
+}
+
+TEST(BoundaryAccuracy, GapPlanesIgnoreASlantedSurfaceAndSeeTheSilhouette) {
+  // A slanted wall with a near block: with the default quantile planes the wall's iso-lines are
+  // boundaries, with gap planes only the block's outline is. A prediction with the wall off by
+  // half a pixel keeps the silhouette perfect.
+  Image<float> gt(60, 40), pred(60, 40);
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 60; ++x) {
+      const bool block = x >= 20 && x < 40 && y >= 10 && y < 30;
+      gt.at(x, y) = block ? 60.0f : 10.0f + 0.1f * x;
+      pred.at(x, y) = block ? 60.0f : 10.5f + 0.1f * x;
+    }
+  const std::vector<double> planes = gap_planes(gt.view());
+  const BoundaryAccuracy silhouette = boundary_accuracy(pred.view(), gt.view(), planes, 0);
+  EXPECT_DOUBLE_EQ(silhouette.recall, 100.0);
+  EXPECT_DOUBLE_EQ(silhouette.precision, 100.0);
+  EXPECT_LT(boundary_accuracy(pred.view(), gt.view(), 0).recall, 100.0);
+}
+
 TEST(BoundaryAccuracy, RejectsBadInput) {
   const Image<float> gt = step();
   EXPECT_THROW(boundary_accuracy(Image<float>(10, 10).view(), gt.view()), Error);

@@ -327,6 +327,11 @@ void print_sequence_text(const Options& opt, const SequenceReport& r) {
   fmt::print("boundary within {} px (mean over frames): recall {}, precision {}\n",
              r.boundary_tolerance, percent_text(r.boundary.recall),
              percent_text(r.boundary.precision));
+  fmt::print(
+      "silhouettes within {} px (planes in the depth gaps, mean over frames): recall {}, "
+      "precision {}\n",
+      r.boundary_tolerance, percent_text(r.silhouette.recall),
+      percent_text(r.silhouette.precision));
   fmt::print("\naccuracy per frame against {}\n{}", opt.gt_dir->string(),
              dco::tools::format_metrics_table(r.frame_metrics));
 }
@@ -350,6 +355,8 @@ void print_sequence_json(const Options& opt, const SequenceReport& r) {
     members.push_back(
         fmt::format(R"("boundary": {{"tolerance_px": {}, "mean": {}, "frames": [{}]}})",
                     r.boundary_tolerance, boundary_json(r.boundary), fmt::join(frames, ", ")));
+    members.push_back(fmt::format(R"("silhouette": {{"tolerance_px": {}, "mean": {}}})",
+                                  r.boundary_tolerance, boundary_json(r.silhouette)));
     members.push_back(
         fmt::format(R"("metrics": {})", dco::tools::format_metrics_json(r.frame_metrics)));
   }

@@ -1,7 +1,9 @@
 #include "dco/tools/boundary_metrics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include <fmt/format.h>
@@ -83,8 +85,21 @@ BoundaryAccuracy boundary_accuracy(ImageView<const float> prediction, ImageView<
   if (tolerance < 0)
     throw Error(fmt::format("boundary accuracy: tolerance {} px is negative", tolerance));
 
+  const auto planes = occlusion_planes(gt);
+  return boundary_accuracy(prediction, gt, planes, tolerance);
+}
+
+BoundaryAccuracy boundary_accuracy(ImageView<const float> prediction, ImageView<const float> gt,
+                                   std::span<const double> planes, int tolerance) {
+  if (prediction.channels != 1 || gt.channels != 1)
+    throw Error("boundary accuracy: the prediction and the ground truth must be one-channel maps");
+  if (!prediction.same_size(gt))
+    throw Error(fmt::format("boundary accuracy: the prediction is {}x{} but the ground truth {}x{}",
+                            prediction.width, prediction.height, gt.width, gt.height));
+  if (tolerance < 0)
+    throw Error(fmt::format("boundary accuracy: tolerance {} px is negative", tolerance));
   std::vector<BoundaryAccuracy> per_plane;
-  for (const double plane : occlusion_planes(gt)) {
+  for (const double plane : planes) {
     if (std::isnan(plane)) continue;
     const Boundaries b = find_boundaries(sides_of(gt, plane), sides_of(prediction, plane));
     // As for bandErr: a plane with no GT edge (e.g. one at the largest GT disparity, with nothing
@@ -94,6 +109,45 @@ BoundaryAccuracy boundary_accuracy(ImageView<const float> prediction, ImageView<
                          matched_percent(b.predicted, b.gt, tolerance)});
   }
   return mean_boundary_accuracy(per_plane);
+}
+
+std::vector<double> gap_planes(ImageView<const float> gt, int count, double min_gap) {
+  // Occupancy of 0.25 px bins between the smallest and largest GT disparity.
+  constexpr double kBin = 0.25;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int y = 0; y < gt.height; ++y)
+    for (int x = 0; x < gt.width; ++x)
+      if (is_valid_disparity(gt.row(y)[x])) {
+        lo = std::min(lo, double{gt.row(y)[x]});
+        hi = std::max(hi, double{gt.row(y)[x]});
+      }
+  if (!(hi > lo)) return {};
+  std::vector<char> used(static_cast<std::size_t>((hi - lo) / kBin) + 1, 0);
+  for (int y = 0; y < gt.height; ++y)
+    for (int x = 0; x < gt.width; ++x)
+      if (is_valid_disparity(gt.row(y)[x]))
+        used[static_cast<std::size_t>((gt.row(y)[x] - lo) / kBin)] = 1;
+  struct Gap {
+    double width, centre;
+  };
+  std::vector<Gap> gaps;
+  for (std::size_t i = 0; i < used.size();) {
+    if (used[i]) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    while (j < used.size() && !used[j]) ++j;
+    const double width = static_cast<double>(j - i) * kBin;
+    if (width >= min_gap) gaps.push_back({width, lo + (static_cast<double>(i + j) / 2.0) * kBin});
+    i = j;
+  }
+  std::sort(gaps.begin(), gaps.end(), [](const Gap& a, const Gap& b) { return a.width > b.width; });
+  std::vector<double> planes;
+  for (std::size_t k = 0; k < gaps.size() && static_cast<int>(k) < count; ++k)
+    planes.push_back(gaps[k].centre);
+  std::sort(planes.begin(), planes.end());
+  return planes;
 }
 
 BoundaryAccuracy mean_boundary_accuracy(std::span<const BoundaryAccuracy> maps) {

@@ -80,12 +80,16 @@ SequenceReport evaluate_sequence(const fs::path& pred_dir, const std::optional<f
         evaluate_disparity(fmt::format("{}{:06d}", kPredictionFramePrefix, i), pred.view(), truth));
     report.frame_boundary.push_back(
         boundary_accuracy(pred.view(), truth.disparity.view(), boundary_tolerance));
+    const std::vector<double> gaps = gap_planes(truth.disparity.view());
+    report.frame_silhouette.push_back(
+        boundary_accuracy(pred.view(), truth.disparity.view(), gaps, boundary_tolerance));
   }
   report.planes = flicker.planes();
   report.flicker = flicker.flip_rate();
   if (gt_dir) {
     report.gt_flicker = gt_flicker.flip_rate();
     report.boundary = mean_boundary_accuracy(report.frame_boundary);
+    report.silhouette = mean_boundary_accuracy(report.frame_silhouette);
   }
   return report;
 }

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <span>
+#include <vector>
 
 #include "dco/core/image.hpp"
 #include "dco/tools/metrics.hpp"
@@ -31,6 +32,17 @@ struct BoundaryAccuracy {
 // Throws dco::Error when the maps differ in size, are not single-channel or tolerance < 0.
 BoundaryAccuracy boundary_accuracy(ImageView<const float> prediction, ImageView<const float> gt,
                                    int tolerance = kBoundaryTolerance);
+
+// The same for caller-chosen plane disparities.
+BoundaryAccuracy boundary_accuracy(ImageView<const float> prediction, ImageView<const float> gt,
+                                   std::span<const double> planes,
+                                   int tolerance = kBoundaryTolerance);
+
+// Planes in the empty space between the scene's surfaces: the centres of the `count` widest
+// disparity intervals (at least `min_gap` px wide, inside the GT's range) that no GT pixel falls
+// in. A virtual object placed there is cut only by object silhouettes, never by a surface it
+// intersects, so boundary accuracy against these planes measures the silhouettes alone.
+std::vector<double> gap_planes(ImageView<const float> gt, int count = 3, double min_gap = 2.0);
 
 // Mean of each number over maps (e.g. the frames of a sequence), skipping undefined entries.
 BoundaryAccuracy mean_boundary_accuracy(std::span<const BoundaryAccuracy> maps);

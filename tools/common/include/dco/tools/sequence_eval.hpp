@@ -33,6 +33,9 @@ struct SequenceReport {
   std::vector<SceneMetrics> frame_metrics;
   std::vector<BoundaryAccuracy> frame_boundary;
   BoundaryAccuracy boundary;
+  // Against planes in the depth gaps of each GT frame (gap_planes): object silhouettes only.
+  std::vector<BoundaryAccuracy> frame_silhouette;
+  BoundaryAccuracy silhouette;
   int boundary_tolerance = kBoundaryTolerance;
 };
 
