@@ -92,7 +92,11 @@ TEST(DcoEvalSequenceCli, GroundTruthAsPredictionIsPerfectAndFlickersAlike) {
   ASSERT_EQ(json.exit_code, 0) << json.err;
   EXPECT_EQ(count_of(json.out, R"("flicker": 0.3125})"), 2) << json.out;  // prediction and GT
   EXPECT_THAT(json.out, HasSubstr(R"("mean": {"recall": 100, "precision": 100})"));
-  EXPECT_EQ(count_of(json.out, R"({"recall": 100, "precision": 100})"), 5);
+  // Boundary: the mean and 4 frames; silhouettes: the mean.
+  EXPECT_EQ(count_of(json.out, R"({"recall": 100, "precision": 100})"), 6);
+  EXPECT_THAT(
+      json.out,
+      HasSubstr(R"("silhouette": {"tolerance_px": 2, "mean": {"recall": 100, "precision": 100}})"));
   const std::string mean = json.out.substr(json.out.find(R"("mean": {"scene": "mean")"));
   EXPECT_THAT(mean, HasSubstr(R"("bad1": 0, "bad2": 0, "bad4": 0, "avgerr": 0})"));
   EXPECT_THAT(mean, HasSubstr(R"("occ_err": 0)"));
