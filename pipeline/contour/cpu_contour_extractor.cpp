@@ -1,5 +1,4 @@
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -8,6 +7,7 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/stopwatch.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 #include "dco/pipeline/contour/flow_fusion.hpp"
 #include "dco/pipeline/contour/gated_canny.hpp"
@@ -16,15 +16,6 @@
 
 namespace dco::contour {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point& t) {
-  const auto now = Clock::now();
-  const double ms = std::chrono::duration<double, std::milli>(now - t).count();
-  t = now;
-  return ms;
-}
 
 int dis_preset(const std::string& name) {
   if (name == "ultrafast") return cv::DISOpticalFlow::PRESET_ULTRAFAST;
@@ -95,8 +86,7 @@ class CpuContourExtractor final : public ContourExtractor {
       throw Error("contour: the internal frame " + size_text(in.centre) +
                   " is too small for DIS optical flow with the '" + params_.dis_preset +
                   "' preset (use a larger internal resolution, another preset or use_flow=false)");
-    auto t = Clock::now();
-    const auto start = t;
+    Stopwatch t;
     timings_ = {};
     prepare(in, out);
 
@@ -114,17 +104,17 @@ class CpuContourExtractor final : public ContourExtractor {
       } else {
         box_filter(jumps_.cview(), params_.box_size, tmp_.view(), out.m_fuse.view());
       }
-      timings_.stereo_cue_ms = ms_since(t);
+      timings_.stereo_cue_ms = t.lap_ms();
     }
 
     gaussian_blur_5x5(in.image, blur_tmp_.view(), blurred_.view());
-    timings_.gaussian_ms = ms_since(t);
+    timings_.gaussian_ms = t.lap_ms();
     sobel_magnitude(blurred_.cview(), kMaxSobelMagnitude8Bit, out.m_intensity.view(),
                     direction_.view());
     gated_canny(out.m_intensity.cview(), direction_.cview(), out.m_fuse.cview(), thresholds_,
                 out.contours.view(), canny_);
-    timings_.canny_ms = ms_since(t);
-    timings_.total_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    timings_.canny_ms = t.lap_ms();
+    timings_.total_ms = t.total_ms();
   }
 
   const ContourTimings& last_timings() const override { return timings_; }
@@ -164,7 +154,7 @@ class CpuContourExtractor final : public ContourExtractor {
 
   // §5.1–5.2: DIS flow from the centre to each neighbour, amplitude per field, fusion by the
   // projection test, box filter, normalisation.
-  void flow_cue(const ContourInputs& in, ImageView<float> dst, Clock::time_point& t) {
+  void flow_cue(const ContourInputs& in, ImageView<float> dst, Stopwatch& t) {
     const cv::Mat centre = continuous(in.centre, centre_copy_);
     // A flow Mat of the right size is taken by DIS as a candidate initial flow; zero it so that
     // frame t's result depends on its window only, not on the previous call.
@@ -172,25 +162,25 @@ class CpuContourExtractor final : public ContourExtractor {
     zero(flow_b_);
     dis_->calc(centre, continuous(in.neighbour_a, neighbour_copy_), flow_a_);
     dis_->calc(centre, continuous(in.neighbour_b, neighbour_copy_), flow_b_);
-    timings_.flow_ms = ms_since(t);
+    timings_.flow_ms = t.lap_ms();
 
     const ImageView<const float> fa = as_view<float>(static_cast<const cv::Mat&>(flow_a_));
     const ImageView<const float> fb = as_view<float>(static_cast<const cv::Mat&>(flow_b_));
     flow_amplitude(fa, speed_.view(), amplitude_a_.view());
     flow_amplitude(fb, speed_.view(), amplitude_b_.view());
-    timings_.amplitude_ms = ms_since(t);
+    timings_.amplitude_ms = t.lap_ms();
 
     const auto distance = static_cast<float>(params_.projection_distance);
     projection_contrast(fa, distance, contrast_a_.view());
     projection_contrast(fb, distance, contrast_b_.view());
     fuse_amplitudes(amplitude_a_.cview(), contrast_a_.cview(), amplitude_b_.cview(),
                     contrast_b_.cview(), fused_.view());
-    timings_.fusion_ms = ms_since(t);
+    timings_.fusion_ms = t.lap_ms();
 
     box_filter(fused_.cview(), params_.box_size, tmp_.view(), dst);
-    timings_.box_ms = ms_since(t);
+    timings_.box_ms = t.lap_ms();
     normalise_by_max(dst, static_cast<float>(params_.flow_floor));
-    timings_.normalise_ms = ms_since(t);
+    timings_.normalise_ms = t.lap_ms();
   }
 
   ContourParams params_;

@@ -1,21 +1,15 @@
 #include "dco/pipeline/densify/densifier.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <string>
 
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/stopwatch.hpp"
 
 namespace dco::densify {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double ms_between(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
 
 bool known(float d) {
   return std::isfinite(d) && d > 0.0f;
@@ -192,9 +186,9 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   check(in.contours, "the contour mask");
   check(in.previous, "the previous frame");
 
-  const auto t0 = Clock::now();
+  Stopwatch t;
   build_system(in);
-  const auto t1 = Clock::now();
+  timings_.build_ms = t.lap_ms();
 
   if (!has_solution_ || !solution_.view().same_size(w, h)) {
     // Cold start: the sparse values where they exist, 0 elsewhere; multigrid fills the rest fast.
@@ -208,13 +202,11 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
       solve_pcg(system_, rhs_.cview(), solution_.view(), params_.multigrid ? &multigrid_ : nullptr,
                 params_.max_iterations, params_.tolerance, scratch_);
   has_solution_ = true;
-  const auto t2 = Clock::now();
+  timings_.solve_ms = t.lap_ms();
+  timings_.total_ms = t.total_ms();
 
   dense.resize(w, h);
   dense.copy_from(solution_.cview());
-  timings_.build_ms = ms_between(t0, t1);
-  timings_.solve_ms = ms_between(t1, t2);
-  timings_.total_ms = ms_between(t0, Clock::now());
 }
 
 }  // namespace dco::densify

@@ -1,10 +1,10 @@
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include "dco/core/error.hpp"
+#include "dco/core/stopwatch.hpp"
 #include "dco/pipeline/stereo/census.hpp"
 #include "dco/pipeline/stereo/cross_aggregation.hpp"
 #include "dco/pipeline/stereo/cross_arms.hpp"
@@ -16,15 +16,6 @@
 
 namespace dco::stereo {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point& t) {
-  const auto now = Clock::now();
-  const double ms = std::chrono::duration<double, std::milli>(now - t).count();
-  t = now;
-  return ms;
-}
 
 std::string size_text(ImageView<const std::uint8_t> v) {
   return std::to_string(v.width) + "x" + std::to_string(v.height) + "x" +
@@ -43,12 +34,11 @@ class CpuStereoMatcher final : public StereoMatcher {
   void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                Image<float>& disparity) override {
     check_input(left, right);
-    auto t = Clock::now();
-    const auto start = t;
+    Stopwatch t;
     timings_ = {};
 
     prepare(left, right);
-    timings_.prepare_ms = ms_since(t);
+    timings_.prepare_ms = t.lap_ms();
 
     // Arm lengths are given in input pixels; the windows cover the same scene area at any
     // internal resolution.
@@ -61,7 +51,7 @@ class CpuStereoMatcher final : public StereoMatcher {
       for (int x = 0; x < w_; ++x)
         shortest_arm_.at(x, y) = static_cast<std::uint8_t>(shortest_arm(arms_, x, y));
     regions_.build(arms_, agg_scratch_);
-    timings_.arms_ms = ms_since(t);
+    timings_.arms_ms = t.lap_ms();
 
     wta_.reset(w_, h_);
     slice_.resize(w_, h_);
@@ -71,7 +61,7 @@ class CpuStereoMatcher final : public StereoMatcher {
       aggregate_costs(slice_.view(), regions_, params_.aggregation_passes, agg_scratch_);
       wta_.update(slice_.view(), d);
     }
-    timings_.initial_ms = ms_since(t);
+    timings_.initial_ms = t.lap_ms();
 
     disp_.resize(w_, h_);
     disp_.copy_from(wta_.left_disparity());
@@ -82,11 +72,11 @@ class CpuStereoMatcher final : public StereoMatcher {
     histogram_vote(disp_.view(), max_d_, regions_, vote_, vote_scratch_, changed_.view());
     if (params_.max_neighbour_jump >= 0)
       discontinuity_check(disp_.view(), params_.max_neighbour_jump, jump_scratch_);
-    timings_.refine_ms = ms_since(t);
+    timings_.refine_ms = t.lap_ms();
 
     write_output(left.width, left.height, disparity);
-    timings_.sparse_ms = ms_since(t);
-    timings_.total_ms = std::chrono::duration<double, std::milli>(t - start).count();
+    timings_.sparse_ms = t.lap_ms();
+    timings_.total_ms = t.total_ms();
   }
 
   const StereoTimings& last_timings() const override { return timings_; }

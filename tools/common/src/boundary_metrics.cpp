@@ -1,5 +1,7 @@
 #include "dco/tools/boundary_metrics.hpp"
 
+#include "plane_sides.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -15,19 +17,7 @@
 namespace dco::tools {
 namespace {
 
-// Per-pixel side of one plane; kNone = no value (no GT, or no prediction).
-enum Side : std::uint8_t { kBehind = 0, kFront = 1, kNone = 2 };
-
-cv::Mat sides_of(ImageView<const float> disparity, double plane) {
-  cv::Mat sides(disparity.height, disparity.width, CV_8U);
-  for (int y = 0; y < disparity.height; ++y) {
-    const float* d = disparity.row(y);
-    auto* s = sides.ptr<std::uint8_t>(y);
-    for (int x = 0; x < disparity.width; ++x)
-      s[x] = !is_valid_disparity(d[x]) ? kNone : (d[x] > plane ? kFront : kBehind);
-  }
-  return sides;
-}
+constexpr auto kNone = detail::kNoValue;  // no GT, or no prediction
 
 struct Boundaries {
   cv::Mat gt, predicted;  // 1 = boundary pixel
@@ -77,14 +67,6 @@ double mean_of_defined(const std::vector<double>& values) {
 
 BoundaryAccuracy boundary_accuracy(ImageView<const float> prediction, ImageView<const float> gt,
                                    int tolerance) {
-  if (prediction.channels != 1 || gt.channels != 1)
-    throw Error("boundary accuracy: the prediction and the ground truth must be one-channel maps");
-  if (!prediction.same_size(gt))
-    throw Error(fmt::format("boundary accuracy: the prediction is {}x{} but the ground truth {}x{}",
-                            prediction.width, prediction.height, gt.width, gt.height));
-  if (tolerance < 0)
-    throw Error(fmt::format("boundary accuracy: tolerance {} px is negative", tolerance));
-
   const auto planes = occlusion_planes(gt);
   return boundary_accuracy(prediction, gt, planes, tolerance);
 }
@@ -101,7 +83,8 @@ BoundaryAccuracy boundary_accuracy(ImageView<const float> prediction, ImageView<
   std::vector<BoundaryAccuracy> per_plane;
   for (const double plane : planes) {
     if (std::isnan(plane)) continue;
-    const Boundaries b = find_boundaries(sides_of(gt, plane), sides_of(prediction, plane));
+    const Boundaries b =
+        find_boundaries(detail::plane_sides(gt, plane), detail::plane_sides(prediction, plane));
     // As for bandErr: a plane with no GT edge (e.g. one at the largest GT disparity, with nothing
     // in front of it) has nothing to find, and any tiny excess there would read as an edge.
     if (cv::countNonZero(b.gt) == 0) continue;

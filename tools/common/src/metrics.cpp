@@ -1,5 +1,7 @@
 #include "dco/tools/metrics.hpp"
 
+#include "plane_sides.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -55,19 +57,9 @@ double mean_of_defined(std::span<const double> values) {
   return n > 0 ? sum / n : kUndefined;
 }
 
-enum Side : std::uint8_t { kBehind = 0, kFront = 1, kNoGt = 2 };
-
-// GT side of every pixel for one plane.
-cv::Mat gt_sides(ImageView<const float> gt, double plane) {
-  cv::Mat sides(gt.height, gt.width, CV_8U);
-  for (int y = 0; y < gt.height; ++y) {
-    const float* g = gt.row(y);
-    auto* s = sides.ptr<std::uint8_t>(y);
-    for (int x = 0; x < gt.width; ++x)
-      s[x] = !is_valid_disparity(g[x]) ? kNoGt : (g[x] > plane ? kFront : kBehind);
-  }
-  return sides;
-}
+using detail::kBehind;
+using detail::kFront;
+constexpr auto kNoGt = detail::kNoValue;
 
 // GT pixels within Chebyshev distance kOcclusionBandRadius of a pixel whose GT side differs from
 // a 4-neighbour's (pixels without GT neither make nor break a boundary).
@@ -96,7 +88,7 @@ struct PlaneErrors {
 
 PlaneErrors plane_errors(ImageView<const float> prediction, ImageView<const float> gt,
                          double plane) {
-  const cv::Mat sides = gt_sides(gt, plane);
+  const cv::Mat sides = detail::plane_sides(gt, plane);
   const cv::Mat band = occlusion_band(sides);
   std::int64_t n = 0, wrong = 0, n_pred = 0, wrong_pred = 0;
   std::int64_t n_band = 0, wrong_band = 0, n_band_pred = 0, wrong_band_pred = 0;
