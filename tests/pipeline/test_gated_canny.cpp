@@ -50,19 +50,19 @@ int count_edges(const Image<std::uint8_t>& e, int x_begin = 0, int x_end = kW) {
 Image<std::uint8_t> flood_outside_edges(const Image<std::uint8_t>& e, int x, int y) {
   Image<std::uint8_t> seen(e.width(), e.height());
   seen.fill(0);
-  std::queue<std::pair<int, int>> todo;
-  todo.push({x, y});
+  std::queue<std::pair<int, int>> frontier;
+  frontier.push({x, y});
   seen.at(x, y) = 1;
-  while (!todo.empty()) {
-    const auto [px, py] = todo.front();
-    todo.pop();
+  while (!frontier.empty()) {
+    const auto [px, py] = frontier.front();
+    frontier.pop();
     const int nx[4] = {px - 1, px + 1, px, px};
     const int ny[4] = {py, py, py - 1, py + 1};
     for (int i = 0; i < 4; ++i) {
       if (nx[i] < 0 || ny[i] < 0 || nx[i] >= e.width() || ny[i] >= e.height()) continue;
       if (seen.at(nx[i], ny[i]) || e.at(nx[i], ny[i]) == 255) continue;
       seen.at(nx[i], ny[i]) = 1;
-      todo.push({nx[i], ny[i]});
+      frontier.push({nx[i], ny[i]});
     }
   }
   return seen;
