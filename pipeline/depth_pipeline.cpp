@@ -29,7 +29,6 @@ DepthPipeline::DepthPipeline(const PipelineParams& params)
 void DepthPipeline::reset() {
   next_index_ = 0;
   next_output_ = 0;
-  has_previous_ = false;
   densifier_.reset();
   for (Slot& s : slots_) s.index = -1;
 }
@@ -105,12 +104,10 @@ void DepthPipeline::finish_frame(int centre, int neighbour_a, int neighbour_b, D
   d.m_intensity = out.m_intensity.cview();
   d.contours = out.contours.cview();
   d.image = c.image.cview();
-  if (has_previous_ && previous_dense_.view().same_size(c.sparse.view()))
-    d.previous = previous_dense_.cview();
+  // The densifier's own last solution is the previous frame's dense map (Eq. 18).
+  const ImageView<const float> previous = densifier_.last_solution();
+  if (previous.same_size(c.sparse.view())) d.previous = previous;
   densifier_.compute(d, out.dense);
-  previous_dense_.resize(out.dense.width(), out.dense.height());
-  previous_dense_.copy_from(out.dense.cview());
-  has_previous_ = true;
 
   out.index = centre;
   out.image.resize(c.image.width(), c.image.height());

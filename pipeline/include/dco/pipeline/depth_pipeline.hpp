@@ -80,8 +80,6 @@ class DepthPipeline {
   std::array<Slot, 3> slots_;
   int next_index_ = 0;   // index of the next pushed frame
   int next_output_ = 0;  // index of the next frame to finish
-  Image<float> previous_dense_;
-  bool has_previous_ = false;
 };
 
 }  // namespace dco::pipeline

@@ -57,6 +57,11 @@ class Densifier {
   const SolverReport& last_report() const { return report_; }
   const DensifyTimings& last_timings() const { return timings_; }
   const DensifyParams& params() const { return params_; }
+  // The solution of the last call (empty before the first or after reset). It stays valid
+  // while the next call builds its system, so it can be that call's `previous` input.
+  ImageView<const float> last_solution() const {
+    return has_solution_ ? solution_.view() : ImageView<const float>{};
+  }
   // Forgets the previous solution (a scene cut, a new sequence).
   void reset() { has_solution_ = false; }
 
