@@ -4,8 +4,6 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
-#include <map>
-#include <set>
 #include <string>
 
 #include <opencv2/calib3d.hpp>
@@ -15,7 +13,9 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/image.hpp"
+#include "dco/kernels/stereo_kernels.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
+#include "ratio_reporter.hpp"
 
 namespace {
 
@@ -73,6 +73,7 @@ void run_dco(benchmark::State& state, bool color) {
     benchmark::DoNotOptimize(disparity.data());
   }
   const double n = static_cast<double>(state.iterations());
+  state.SetLabel(std::string("simd ") + dco::kernels::simd_target());
   state.counters["prepare_ms"] = sum.prepare_ms / n;
   state.counters["arms_ms"] = sum.arms_ms / n;
   state.counters["initial_ms"] = sum.initial_ms / n;
@@ -123,47 +124,11 @@ BENCHMARK(BM_SGBM3Way_Gray_1Thread)->Unit(benchmark::kMillisecond)->UseRealTime(
 BENCHMARK(BM_SGBM3Way_Color_1Thread)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SGBM3Way_Gray_2Threads)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// Console output as usual, plus the real time of each benchmark for the ratios.
-class RecordingReporter : public benchmark::ConsoleReporter {
- public:
-  void ReportRuns(const std::vector<Run>& runs) override {
-    ConsoleReporter::ReportRuns(runs);
-    // With --benchmark_repetitions the median stands for the benchmark.
-    for (const Run& run : runs) {
-      if (run.error_occurred) continue;
-      const bool median = run.run_type == Run::RT_Aggregate && run.aggregate_name == "median";
-      const std::string name = run.benchmark_name().substr(0, run.benchmark_name().find('/'));
-      if (median || (run.run_type == Run::RT_Iteration && !has_median_.count(name)))
-        ms_[name] = run.GetAdjustedRealTime();
-      if (median) has_median_.insert(name);
-    }
-  }
-  double ms(const std::string& name) const {
-    const auto it = ms_.find(name);
-    return it == ms_.end() ? 0.0 : it->second;
-  }
-
- private:
-  std::map<std::string, double> ms_;
-  std::set<std::string> has_median_;
-};
-
-void print_ratio(const RecordingReporter& r, const char* ours, const char* peer) {
-  const double a = r.ms(ours), b = r.ms(peer);
-  if (a > 0 && b > 0) std::printf("ratio %-28s / %-28s = %.2f\n", ours, peer, a / b);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  RecordingReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  benchmark::Shutdown();
-  std::printf("\ntime ratios (< 1: dco is faster)\n");
-  print_ratio(reporter, "BM_DcoSparseStereo_Gray", "BM_SGBM3Way_Gray_1Thread");
-  print_ratio(reporter, "BM_DcoSparseStereo_Color", "BM_SGBM3Way_Color_1Thread");
-  print_ratio(reporter, "BM_DcoSparseStereo_Gray", "BM_SGBM3Way_Gray_2Threads");
-  return 0;
+  return dco::bench::run_with_ratios(argc, argv,
+                                     {{"BM_DcoSparseStereo_Gray", "BM_SGBM3Way_Gray_1Thread"},
+                                      {"BM_DcoSparseStereo_Color", "BM_SGBM3Way_Color_1Thread"},
+                                      {"BM_DcoSparseStereo_Gray", "BM_SGBM3Way_Gray_2Threads"}});
 }

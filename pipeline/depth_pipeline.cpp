@@ -18,6 +18,94 @@ void validate(const PipelineParams& params) {
   densify::validate(params.densify);
 }
 
+void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint8_t> left,
+                   int index, StereoSlot& slot) {
+  slot.index = index;
+  slot.image.resize(left.width, left.height);
+  if (left.channels == 3)
+    stereo::bgr_to_gray(left, slot.image.view());
+  else
+    slot.image.copy_from(left);
+  // The stereo stage's own order: downscale the input as it is, then take the grey of colour.
+  const int scale = stereo::internal_scale(params, left.width);
+  if (scale == 1) {
+    slot.small.resize(left.width, left.height);
+    slot.small.copy_from(slot.image.cview());
+    return;
+  }
+  slot.small.resize(left.width / 2, left.height / 2);
+  if (left.channels == 3) {
+    slot.small_colour.resize(left.width / 2, left.height / 2, 3);
+    stereo::downsample_half(left, slot.small_colour.view());
+    stereo::bgr_to_gray(slot.small_colour.cview(), slot.small.view());
+  } else {
+    stereo::downsample_half(left, slot.small.view());
+  }
+}
+
+void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> left,
+                  ImageView<const std::uint8_t> right, StereoSlot& slot) {
+  matcher.compute(left, right, slot.sparse);
+  slot.stereo_timings = matcher.last_timings();
+  const ImageView<const float> raw = matcher.internal_raw_disparity();
+  slot.raw_disparity.resize(raw.width, raw.height);
+  slot.raw_disparity.copy_from(raw);
+}
+
+void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centre,
+                   const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out) {
+  const bool flow = neighbour_a != nullptr && neighbour_b != nullptr;
+  contour::ContourInputs in;
+  in.image = centre.image.cview();
+  in.centre = centre.small.cview();
+  in.disparity = centre.raw_disparity.cview();
+  if (flow) {
+    in.neighbour_a = neighbour_a->small.cview();
+    in.neighbour_b = neighbour_b->small.cview();
+  }
+  contour::ContourOutputs contours{std::move(out.m_fuse), std::move(out.m_intensity),
+                                   std::move(out.contours)};
+  extractor.compute(in, contours);
+  out.m_fuse = std::move(contours.m_fuse);
+  out.m_intensity = std::move(contours.m_intensity);
+  out.contours = std::move(contours.contours);
+  out.contour_timings = extractor.last_timings();
+
+  out.index = centre.index;
+  out.image.resize(centre.image.width(), centre.image.height());
+  out.image.copy_from(centre.image.cview());
+  out.sparse.resize(centre.sparse.width(), centre.sparse.height());
+  out.sparse.copy_from(centre.sparse.cview());
+  out.stereo_timings = centre.stereo_timings;
+  out.flow_cue = flow;
+}
+
+void densify_frame(densify::Densifier& densifier, DepthResult& out) {
+  densify::DensifyInputs d;
+  d.sparse = out.sparse.cview();
+  d.m_fuse = out.m_fuse.cview();
+  d.m_intensity = out.m_intensity.cview();
+  d.contours = out.contours.cview();
+  d.image = out.image.cview();
+  // The densifier's own last solution is the previous frame's dense map (Eq. 18).
+  const ImageView<const float> previous = densifier.last_solution();
+  if (previous.same_size(out.sparse.view())) d.previous = previous;
+  densifier.compute(d, out.dense);
+  out.densify_timings = densifier.last_timings();
+  out.solver = densifier.last_report();
+}
+
+ContourWindow window_on_arrival(int lookahead, int newest) {
+  const auto frame = [](int i) { return i >= 0 ? i : -1; };
+  if (lookahead == 0) return {newest, frame(newest - 1), frame(newest - 2)};
+  if (newest == 0) return {};
+  return {newest - 1, frame(newest - 2), newest};
+}
+
+ContourWindow window_at_end(int last) {
+  return {last, last >= 1 ? last - 1 : -1, -1};
+}
+
 DepthPipeline::DepthPipeline(const PipelineParams& params)
     : params_(params),
       stereo_(stereo::make_cpu_stereo_matcher(params.stereo)),
@@ -30,13 +118,13 @@ void DepthPipeline::reset() {
   next_index_ = 0;
   next_output_ = 0;
   densifier_.reset();
-  for (Slot& s : slots_) s.index = -1;
+  for (StereoSlot& s : slots_) s.index = -1;
 }
 
 bool DepthPipeline::push(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                          DepthResult& out) {
   if (next_index_ > 0) {
-    const Slot& last = slot_of(next_index_ - 1);
+    const StereoSlot& last = slot_of(next_index_ - 1);
     if (!last.image.view().same_size(left))
       throw Error("pipeline: frame " + std::to_string(next_index_) + " is " +
                   std::to_string(left.width) + "x" + std::to_string(left.height) +
@@ -44,81 +132,30 @@ bool DepthPipeline::push(ImageView<const std::uint8_t> left, ImageView<const std
                   std::to_string(last.image.height()) + "; call reset() for a new sequence");
   }
   // With lookahead 1 the slot being overwritten (t-3) has been finished already.
-  Slot& slot = slot_of(next_index_);
-  stereo_->compute(left, right, slot.sparse);
-  slot.index = next_index_;
-  slot.stereo_timings = stereo_->last_timings();
-  slot.image.resize(left.width, left.height);
-  if (left.channels == 3)
-    stereo::bgr_to_gray(left, slot.image.view());
-  else
-    slot.image.copy_from(left);
-  const ImageView<const std::uint8_t> small = stereo_->internal_left_gray();
-  slot.small.resize(small.width, small.height);
-  slot.small.copy_from(small);
-  const ImageView<const float> raw = stereo_->internal_raw_disparity();
-  slot.raw_disparity.resize(raw.width, raw.height);
-  slot.raw_disparity.copy_from(raw);
-  const int t = next_index_++;
-
-  if (params_.contour.lookahead == 0) {
-    finish_frame(t, t - 1, t - 2, out);
-    next_output_ = t + 1;
-    return true;
-  }
-  if (t == 0) return false;  // frame 0 waits for frame 1
-  finish_frame(t - 1, t - 2, t, out);
-  next_output_ = t;
+  const int t = next_index_;
+  StereoSlot& slot = slot_of(t);
+  stereo_frame(*stereo_, left, right, slot);  // first: it rejects bad input
+  prepare_frame(params_.stereo, left, t, slot);
+  ++next_index_;
+  const ContourWindow window = window_on_arrival(params_.contour.lookahead, t);
+  if (window.centre < 0) return false;  // frame 0 waits for frame 1
+  finish_frame(window, out);
+  next_output_ = window.centre + 1;
   return true;
 }
 
 bool DepthPipeline::finish(DepthResult& out) {
   if (next_output_ >= next_index_) return false;
-  const int t = next_output_;
-  finish_frame(t, t - 1, -1, out);  // no successor: the flow cue needs both neighbours
-  next_output_ = t + 1;
+  finish_frame(window_at_end(next_output_), out);  // the flow cue needs both neighbours
+  next_output_ += 1;
   return true;
 }
 
-void DepthPipeline::finish_frame(int centre, int neighbour_a, int neighbour_b, DepthResult& out) {
-  const Slot& c = slot_of(centre);
-  const bool flow = neighbour_a >= 0 && neighbour_b >= 0;
-  contour::ContourInputs in;
-  in.image = c.image.cview();
-  in.centre = c.small.cview();
-  in.disparity = c.raw_disparity.cview();
-  if (flow) {
-    in.neighbour_a = slot_of(neighbour_a).small.cview();
-    in.neighbour_b = slot_of(neighbour_b).small.cview();
-  }
-  contour::ContourOutputs contours{std::move(out.m_fuse), std::move(out.m_intensity),
-                                   std::move(out.contours)};
-  contour_->compute(in, contours);
-  out.m_fuse = std::move(contours.m_fuse);
-  out.m_intensity = std::move(contours.m_intensity);
-  out.contours = std::move(contours.contours);
-
-  densify::DensifyInputs d;
-  d.sparse = c.sparse.cview();
-  d.m_fuse = out.m_fuse.cview();
-  d.m_intensity = out.m_intensity.cview();
-  d.contours = out.contours.cview();
-  d.image = c.image.cview();
-  // The densifier's own last solution is the previous frame's dense map (Eq. 18).
-  const ImageView<const float> previous = densifier_.last_solution();
-  if (previous.same_size(c.sparse.view())) d.previous = previous;
-  densifier_.compute(d, out.dense);
-
-  out.index = centre;
-  out.image.resize(c.image.width(), c.image.height());
-  out.image.copy_from(c.image.cview());
-  out.sparse.resize(c.sparse.width(), c.sparse.height());
-  out.sparse.copy_from(c.sparse.cview());
-  out.stereo_timings = c.stereo_timings;
-  out.contour_timings = contour_->last_timings();
-  out.densify_timings = densifier_.last_timings();
-  out.solver = densifier_.last_report();
-  out.flow_cue = flow;
+void DepthPipeline::finish_frame(const ContourWindow& window, DepthResult& out) {
+  const auto neighbour = [this](int i) { return i >= 0 ? &slot_of(i) : nullptr; };
+  contour_frame(*contour_, slot_of(window.centre), neighbour(window.neighbour_a),
+                neighbour(window.neighbour_b), out);
+  densify_frame(densifier_, out);
 }
 
 }  // namespace dco::pipeline

@@ -1,6 +1,8 @@
 // Named synthetic scenes. Positions and sizes are metric; the focal length follows the width
 // (700 px at 1280) so a preset frames the same scene at any resolution, and texture grain is set
 // in pixels (kGrainPx at the object's depth) so stereo matchers see the same detail everywhere.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <numbers>
 #include <string>
@@ -109,6 +111,12 @@ SceneConfig boxes(int width, int height) {
 }
 
 }  // namespace
+
+int covering_max_disparity(const SceneConfig& c) {
+  double z_min = c.background_z_m;
+  for (const Object& o : c.objects) z_min = std::min(z_min, o.z_m - std::abs(o.amp_z_m));
+  return static_cast<int>(std::ceil(1.1 * c.focal_px * c.baseline_m / z_min));
+}
 
 SceneConfig preset(const std::string& name, int width, int height) {
   if (name == "hand") return hand(width, height);

@@ -5,13 +5,16 @@
 #include <cmath>
 #include <cstring>
 
+#include "dco/kernels/canny_kernels.hpp"
+
 namespace dco::contour {
 namespace {
 
 constexpr float kTan22 = 0.41421356f;  // tan(22.5°): sector borders of the 4 directions
 constexpr float kTan67 = 2.41421356f;  // tan(67.5°)
-constexpr std::uint8_t kWeak = 1;      // passed T_low, not yet linked to a strong pixel
-constexpr std::uint8_t kEdge = 255;
+constexpr std::uint8_t kWeak =
+    kernels::kCannyWeak;  // passed T_low, not yet linked to a strong pixel
+constexpr std::uint8_t kEdge = kernels::kCannyStrong;
 
 // Branch-free: on textured images the direction is close to random, and mispredicted branches
 // would cost more than the whole gradient.
@@ -82,48 +85,26 @@ void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t>
   std::uint8_t* base = edges.data;
   const std::ptrdiff_t stride = edges.stride;
 
-  // Non-maximum suppression, depth gate and dual threshold in one pass. Of two equal maxima side by
-  // side only the first (left/upper) survives, so a plateau still thins to one pixel.
+  // Non-maximum suppression, depth gate and dual threshold, a row at a time. Of two equal maxima
+  // side by side only the first (left/upper) survives, so a plateau still thins to one pixel.
+  if (gated && scratch.gate_row.size() < static_cast<std::size_t>(w)) scratch.gate_row.resize(w);
+  const kernels::CannyLevels levels{t.low, t.high, t.depth};
   for (int y = 1; y < h - 1; ++y) {
-    const float* mu = magnitude.row(y - 1);
-    const float* m = magnitude.row(y);
-    const float* md = magnitude.row(y + 1);
-    const std::uint8_t* dir = direction.row(y);
-    const float* g =
-        gated ? gate.row(static_cast<int>(static_cast<long long>(y) * gate.height / h)) : nullptr;
-    std::uint8_t* e = edges.row(y);
-    for (int x = 1; x < w - 1; ++x) {
-      const float v = m[x];
-      if (v < t.low) continue;
-      float before = 0;
-      float after = 0;
-      switch (dir[x]) {
-        case kHorizontal:
-          before = m[x - 1];
-          after = m[x + 1];
-          break;
-        case kDiagonalDown:
-          before = mu[x - 1];
-          after = md[x + 1];
-          break;
-        case kVertical:
-          before = mu[x];
-          after = md[x];
-          break;
-        default:  // kDiagonalUp
-          before = md[x - 1];
-          after = mu[x + 1];
-          break;
-      }
-      if (!(v > before && v >= after)) continue;
-      if (gated && g[scratch.gate_x[x]] < t.depth) continue;
-      if (v > t.high) {
-        e[x] = kEdge;
-        stack[top++] = static_cast<std::int32_t>(y * stride + x);
-      } else {
-        e[x] = kWeak;
-      }
+    kernels::CannyRow row;
+    row.above = magnitude.row(y - 1);
+    row.row = magnitude.row(y);
+    row.below = magnitude.row(y + 1);
+    row.direction = direction.row(y);
+    row.width = w;
+    if (gated) {
+      const float* g = gate.row(static_cast<int>(static_cast<long long>(y) * gate.height / h));
+      for (int x = 0; x < w; ++x) scratch.gate_row[x] = g[scratch.gate_x[x]];
+      row.gate = scratch.gate_row.data();
     }
+    std::uint8_t* e = edges.row(y);
+    kernels::canny_classify_row(row, levels, e);
+    for (int x = 1; x < w - 1; ++x)
+      if (e[x] == kEdge) stack[top++] = static_cast<std::int32_t>(y * stride + x);
   }
 
   // Hysteresis: grow every strong pixel through 8-connected weak ones. Each pixel is marked before

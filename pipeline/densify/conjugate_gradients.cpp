@@ -41,6 +41,16 @@ void CgScratch::resize(int width, int height) {
   ap.resize(width, height);
 }
 
+double relative_residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
+                         CgScratch& s) {
+  s.resize(a.width(), a.height());
+  apply(a, x, s.ap.view());
+  for (int y = 0; y < x.height; ++y)
+    for (int c = 0; c < x.width; ++c) s.r.row(y)[c] = b.row(y)[c] - s.ap.row(y)[c];
+  const double b_norm = std::sqrt(dot(b, b));
+  return b_norm > 0 ? std::sqrt(dot(s.r.cview(), s.r.cview())) / b_norm : 0.0;
+}
+
 SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
                        Multigrid* mg, int max_iterations, double tolerance, CgScratch& s) {
   SolverReport report;

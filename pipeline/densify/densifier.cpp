@@ -31,6 +31,10 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
         "grey-level scale of the image guidance on smoothness weights (0 = off)");
   s.add("densify.background_fill", &p.background_fill, 0.0, 1.0,
         "weight (times lambda_d) pulling holes towards the farther of their row neighbours");
+  s.add("densify.solve_resolution", &p.solve_resolution, {"auto", "full", "half"},
+        "auto = solve at half size, then refine at full size, when wider than 640 px");
+  s.add("densify.fine_sweeps", &p.fine_sweeps, 0, 100,
+        "Gauss-Seidel sweeps at full size after a half-size solve");
   s.add("densify.max_iterations", &p.max_iterations, 1, 10000, "conjugate-gradient iterations");
   s.add("densify.tolerance", &p.tolerance, 1e-9, 0.1, "relative residual to stop at");
   s.add("densify.multigrid", &p.multigrid, "multigrid V-cycle preconditioner");
@@ -41,6 +45,10 @@ void validate(const DensifyParams& p) {
   require(p.lambda_s >= 0 && p.lambda_s2 >= 0, "lambda_s and lambda_s2 must be >= 0");
   require(p.min_edge_weight > 0 && p.min_edge_weight <= 1, "min_edge_weight must be in (0, 1]");
   require(p.max_iterations >= 1, "max_iterations must be >= 1");
+  require(
+      p.solve_resolution == "auto" || p.solve_resolution == "full" || p.solve_resolution == "half",
+      "solve_resolution must be auto, full or half, not '" + p.solve_resolution + "'");
+  require(p.fine_sweeps >= 0, "fine_sweeps must be >= 0");
   require(p.tolerance > 0 && p.tolerance < 1, "tolerance must be in (0, 1)");
 }
 
@@ -64,6 +72,12 @@ void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::
 
 Densifier::Densifier(const DensifyParams& params) : params_(params) {
   validate(params_);
+  // Grey-level differences are integers: one table instead of two exp() per pixel.
+  for (std::size_t diff = 0; diff < color_weight_.size(); ++diff)
+    color_weight_[diff] =
+        params_.color_sigma > 0
+            ? static_cast<float>(std::exp(-static_cast<double>(diff) / params_.color_sigma))
+            : 1.0f;
 }
 
 void Densifier::build_system(const DensifyInputs& in) {
@@ -84,15 +98,19 @@ void Densifier::build_system(const DensifyInputs& in) {
   // s_p = M_fuse(p) * M_I(p), Eq. 17; M_fuse may come at the internal resolution.
   const bool has_fuse = !in.m_fuse.empty();
   const bool has_intensity = !in.m_intensity.empty();
-  for (int y = 0; y < h; ++y) {
-    float* s = smooth_strength_.row(y);
-    const int fy = has_fuse ? std::min(y * in.m_fuse.height / h, in.m_fuse.height - 1) : 0;
-    for (int x = 0; x < w; ++x) {
-      const float fuse =
-          has_fuse ? in.m_fuse.row(fy)[std::min(x * in.m_fuse.width / w, in.m_fuse.width - 1)]
-                   : 0.0f;
-      const float intensity = has_intensity ? in.m_intensity.row(y)[x] : 0.0f;
-      s[x] = fuse * intensity;
+  if (!has_fuse || !has_intensity) {
+    smooth_strength_.fill(0.0f);
+  } else {
+    fuse_column_.resize(static_cast<std::size_t>(w));
+    for (int x = 0; x < w; ++x)
+      fuse_column_[static_cast<std::size_t>(x)] =
+          std::min(x * in.m_fuse.width / w, in.m_fuse.width - 1);
+    for (int y = 0; y < h; ++y) {
+      float* s = smooth_strength_.row(y);
+      const float* fuse = in.m_fuse.row(std::min(y * in.m_fuse.height / h, in.m_fuse.height - 1));
+      const float* intensity = in.m_intensity.row(y);
+      for (int x = 0; x < w; ++x)
+        s[x] = fuse[fuse_column_[static_cast<std::size_t>(x)]] * intensity[x];
     }
   }
 
@@ -100,23 +118,33 @@ void Densifier::build_system(const DensifyInputs& in) {
   const auto edge_scale = static_cast<float>(2.0 * params_.lambda_s);
   const auto floor = static_cast<float>(params_.min_edge_weight);
   const bool has_image = !in.image.empty() && params_.color_sigma > 0;
-  const float inv_sigma = has_image ? static_cast<float>(1.0 / params_.color_sigma) : 0.0f;
-  const auto edge = [&](int x0, int y0, int x1, int y1) {
-    if (barrier_.at(x0, y0) != barrier_.at(x1, y1))
-      return edge_scale * floor;  // Eq. 16, first case
-    const float s = std::min(smooth_strength_.at(x0, y0), smooth_strength_.at(x1, y1));
-    float weight = 1.0f - s;
-    if (has_image) {
-      const int diff = std::abs(int(in.image.row(y0)[x0]) - int(in.image.row(y1)[x1]));
-      weight *= std::exp(-static_cast<float>(diff) * inv_sigma);
-    }
+  // Weight of the edge between pixels a and b of two rows (the same row for horizontal edges).
+  const auto edge = [&](std::uint8_t barrier_a, std::uint8_t barrier_b, float strength_a,
+                        float strength_b, int grey_a, int grey_b) {
+    if (barrier_a != barrier_b) return edge_scale * floor;  // Eq. 16, first case
+    float weight = 1.0f - std::min(strength_a, strength_b);
+    if (has_image) weight *= color_weight_[static_cast<std::size_t>(std::abs(grey_a - grey_b))];
     return edge_scale * std::max(weight, floor);
   };
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      system_.wx.at(x, y) = x + 1 < w ? edge(x, y, x + 1, y) : 0.0f;
-      system_.wy.at(x, y) = y + 1 < h ? edge(x, y, x, y + 1) : 0.0f;
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* bar = barrier_.row(y);
+    const float* str = smooth_strength_.row(y);
+    const std::uint8_t* grey = has_image ? in.image.row(y) : bar;
+    float* ex = system_.wx.row(y);
+    for (int x = 0; x + 1 < w; ++x)
+      ex[x] = edge(bar[x], bar[x + 1], str[x], str[x + 1], grey[x], grey[x + 1]);
+    ex[w - 1] = 0.0f;
+    float* ey = system_.wy.row(y);
+    if (y + 1 == h) {
+      std::fill(ey, ey + w, 0.0f);
+      continue;
     }
+    const std::uint8_t* bar_below = barrier_.row(y + 1);
+    const float* str_below = smooth_strength_.row(y + 1);
+    const std::uint8_t* grey_below = has_image ? in.image.row(y + 1) : bar_below;
+    for (int x = 0; x < w; ++x)
+      ey[x] = edge(bar[x], bar_below[x], str[x], str_below[x], grey[x], grey_below[x]);
+  }
 
   // Data (Eq. 13–14) and stability (Eq. 18–19) terms; a tiny pull towards 0 keeps the system
   // definite even for a frame without a single sparse value.
@@ -171,6 +199,32 @@ void Densifier::build_system(const DensifyInputs& in) {
   system_.update_diagonal();
 }
 
+bool Densifier::solves_at_half(int width) const {
+  return params_.solve_resolution == "half" || (params_.solve_resolution == "auto" && width > 640);
+}
+
+void Densifier::solve_at_half() {
+  // The full system's memory traffic bounds every pass over it; the aggregated system has a
+  // quarter of the pixels and stays in cache, and the Galerkin operator keeps the contour cuts.
+  coarsen(system_, coarse_);
+  const int cw = coarse_.width();
+  const int ch = coarse_.height();
+  coarse_rhs_.resize(cw, ch);
+  coarse_solution_.resize(cw, ch);
+  restrict_sum(rhs_.cview(), coarse_rhs_.view());
+  restrict_mean(solution_.cview(), coarse_solution_.view());  // warm start
+  if (params_.multigrid) multigrid_.build(coarse_);
+  report_ = solve_pcg(coarse_, coarse_rhs_.cview(), coarse_solution_.view(),
+                      params_.multigrid ? &multigrid_ : nullptr, params_.max_iterations,
+                      params_.tolerance, scratch_);
+  prolong(coarse_solution_.cview(), solution_.view());
+  // The sweeps put the detail inside each 2x2 block back: a contour through a block, an edge of
+  // the image guidance, a single sparse pixel.
+  for (int sweep = 0; sweep < params_.fine_sweeps; ++sweep)
+    gauss_seidel(system_, rhs_.cview(), solution_.view(), 1, sweep % 2 == 0);
+  report_.output_residual = relative_residual(system_, rhs_.cview(), solution_.cview(), scratch_);
+}
+
 void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   const int w = in.sparse.width;
   const int h = in.sparse.height;
@@ -197,10 +251,15 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
       for (int x = 0; x < w; ++x)
         solution_.at(x, y) = known(in.sparse.row(y)[x]) ? in.sparse.row(y)[x] : 0.0f;
   }
-  if (params_.multigrid) multigrid_.build(system_);
-  report_ =
-      solve_pcg(system_, rhs_.cview(), solution_.view(), params_.multigrid ? &multigrid_ : nullptr,
-                params_.max_iterations, params_.tolerance, scratch_);
+  if (solves_at_half(w)) {
+    solve_at_half();
+  } else {
+    if (params_.multigrid) multigrid_.build(system_);
+    report_ = solve_pcg(system_, rhs_.cview(), solution_.view(),
+                        params_.multigrid ? &multigrid_ : nullptr, params_.max_iterations,
+                        params_.tolerance, scratch_);
+    report_.output_residual = report_.final_residual;
+  }
   has_solution_ = true;
   timings_.solve_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();

@@ -2,6 +2,8 @@
 
 #include <cassert>
 
+#include "dco/kernels/densify_kernels.hpp"
+
 namespace dco::densify {
 
 void GridSystem::resize(int width, int height) {
@@ -9,6 +11,7 @@ void GridSystem::resize(int width, int height) {
   wx.resize(width, height);
   wy.resize(width, height);
   diag.resize(width, height);
+  inv_diag.resize(width, height);
 }
 
 void GridSystem::update_diagonal() {
@@ -20,6 +23,7 @@ void GridSystem::update_diagonal() {
     const float* ey = wy.row(y);
     const float* ey_above = y > 0 ? wy.row(y - 1) : nullptr;
     float* g = diag.row(y);
+    float* inv = inv_diag.row(y);
     for (int x = 0; x < w; ++x) {
       float s = d[x];
       if (x + 1 < w) s += ex[x];
@@ -27,43 +31,36 @@ void GridSystem::update_diagonal() {
       if (y + 1 < h) s += ey[x];
       if (ey_above) s += ey_above[x];
       g[x] = s;
+      inv[x] = s > 0 ? 1.0f / s : 0.0f;
     }
   }
 }
 
+kernels::GridRow grid_row(const GridSystem& a, int r) {
+  kernels::GridRow row;
+  row.width = a.width();
+  row.diag = a.diag.row(r);
+  row.inv_diag = a.inv_diag.row(r);
+  row.wx = a.wx.row(r);
+  if (r + 1 < a.height()) row.wy = a.wy.row(r);
+  if (r > 0) row.wy_above = a.wy.row(r - 1);
+  return row;
+}
+
 void apply(const GridSystem& a, ImageView<const float> x, ImageView<float> y) {
-  const int w = a.width();
   const int h = a.height();
-  assert(x.same_size(w, h) && y.same_size(w, h));
+  assert(x.same_size(a.width(), h) && y.same_size(a.width(), h));
   for (int r = 0; r < h; ++r) {
-    const float* xr = x.row(r);
-    const float* xu = r > 0 ? x.row(r - 1) : nullptr;
-    const float* xd = r + 1 < h ? x.row(r + 1) : nullptr;
-    const float* g = a.diag.row(r);
-    const float* ex = a.wx.row(r);
-    const float* ey = a.wy.row(r);
-    const float* eu = r > 0 ? a.wy.row(r - 1) : nullptr;
-    float* out = y.row(r);
-    for (int c = 0; c < w; ++c) {
-      float v = g[c] * xr[c];
-      if (c + 1 < w) v -= ex[c] * xr[c + 1];
-      if (c > 0) v -= ex[c - 1] * xr[c - 1];
-      if (xd) v -= ey[c] * xd[c];
-      if (xu) v -= eu[c] * xu[c];
-      out[c] = v;
-    }
+    kernels::GridRow row = grid_row(a, r);
+    if (r + 1 < h) row.x_below = x.row(r + 1);
+    if (r > 0) row.x_above = x.row(r - 1);
+    kernels::grid_apply_row(row, x.row(r), y.row(r));
   }
 }
 
 double dot(ImageView<const float> a, ImageView<const float> b) {
   double s = 0;
-  for (int y = 0; y < a.height; ++y) {
-    const float* ra = a.row(y);
-    const float* rb = b.row(y);
-    double row = 0;
-    for (int x = 0; x < a.width; ++x) row += static_cast<double>(ra[x]) * rb[x];
-    s += row;
-  }
+  for (int y = 0; y < a.height; ++y) s += kernels::dot_row(a.row(y), b.row(y), a.width);
   return s;
 }
 

@@ -10,16 +10,6 @@ void fill(ImageView<float> v, float value) {
   for (int y = 0; y < v.height; ++y) std::fill(v.row(y), v.row(y) + v.width, value);
 }
 
-// b_c(I) = Σ of the residual of the (up to) four children.
-void restrict_sum(ImageView<const float> fine, ImageView<float> coarse) {
-  fill(coarse, 0.0f);
-  for (int y = 0; y < fine.height; ++y) {
-    const float* f = fine.row(y);
-    float* c = coarse.row(y / 2);
-    for (int x = 0; x < fine.width; ++x) c[x / 2] += f[x];
-  }
-}
-
 // x(p) += x_c(parent of p).
 void prolong_add(ImageView<const float> coarse, ImageView<float> fine) {
   for (int y = 0; y < fine.height; ++y) {
@@ -30,6 +20,34 @@ void prolong_add(ImageView<const float> coarse, ImageView<float> fine) {
 }
 
 }  // namespace
+
+void restrict_sum(ImageView<const float> fine, ImageView<float> coarse) {
+  fill(coarse, 0.0f);
+  for (int y = 0; y < fine.height; ++y) {
+    const float* f = fine.row(y);
+    float* c = coarse.row(y / 2);
+    for (int x = 0; x < fine.width; ++x) c[x / 2] += f[x];
+  }
+}
+
+void restrict_mean(ImageView<const float> fine, ImageView<float> coarse) {
+  restrict_sum(fine, coarse);
+  // Aggregates on an odd last row or column have fewer than four children.
+  for (int y = 0; y < coarse.height; ++y) {
+    const int rows = std::min(2, fine.height - 2 * y);
+    float* c = coarse.row(y);
+    for (int x = 0; x < coarse.width; ++x)
+      c[x] /= static_cast<float>(rows * std::min(2, fine.width - 2 * x));
+  }
+}
+
+void prolong(ImageView<const float> coarse, ImageView<float> fine) {
+  for (int y = 0; y < fine.height; ++y) {
+    const float* c = coarse.row(y / 2);
+    float* f = fine.row(y);
+    for (int x = 0; x < fine.width; ++x) f[x] = c[x / 2];
+  }
+}
 
 void coarsen(const GridSystem& fine, GridSystem& coarse) {
   const int w = fine.width();
@@ -59,31 +77,25 @@ void coarsen(const GridSystem& fine, GridSystem& coarse) {
 
 void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
                   bool red_first) {
-  const int w = a.width();
   const int h = a.height();
-  for (int s = 0; s < sweeps; ++s) {
-    for (int half = 0; half < 2; ++half) {
-      const int colour = (half == 0) == red_first ? 0 : 1;
-      for (int r = 0; r < h; ++r) {
-        const float* g = a.diag.row(r);
-        const float* ex = a.wx.row(r);
-        const float* ey = a.wy.row(r);
-        const float* eu = r > 0 ? a.wy.row(r - 1) : nullptr;
-        const float* xu = r > 0 ? x.row(r - 1) : nullptr;
-        const float* xd = r + 1 < h ? x.row(r + 1) : nullptr;
-        const float* br = b.row(r);
-        float* xr = x.row(r);
-        for (int c = (r + colour) % 2; c < w; c += 2) {
-          float v = br[c];
-          if (c + 1 < w) v += ex[c] * xr[c + 1];
-          if (c > 0) v += ex[c - 1] * xr[c - 1];
-          if (xd) v += ey[c] * xd[c];
-          if (xu) v += eu[c] * xu[c];
-          xr[c] = g[c] > 0 ? v / g[c] : 0.0f;
-        }
-      }
+  const auto smooth = [&](int r, int colour) {
+    kernels::GridRow row = grid_row(a, r);
+    if (r + 1 < h) row.x_below = x.row(r + 1);
+    if (r > 0) row.x_above = x.row(r - 1);
+    kernels::grid_smooth_row(row, (r + colour) % 2, b.row(r), x.row(r));
+  };
+  const int first = red_first ? 0 : 1;
+  // One pass over the rows does every colour of every sweep (the sweep is bound by memory
+  // traffic, and this keeps the few rows involved in cache). Sweep s updates the first colour of
+  // row r - 2s and then the second colour of the row above it: by then the values each update
+  // reads (its row and the rows next to it) are exactly those the plain order, colour by colour
+  // and sweep by sweep, would give it, so the result is identical.
+  for (int r = 0; r < h + 2 * sweeps; ++r)
+    for (int s = 0; s < sweeps; ++s) {
+      const int row = r - 2 * s;
+      if (row >= 0 && row < h) smooth(row, first);
+      if (row >= 1 && row <= h) smooth(row - 1, 1 - first);
     }
-  }
 }
 
 void Multigrid::build(const GridSystem& fine, int coarsest_size) {

@@ -5,9 +5,11 @@
 
 #include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
+#include "dco/kernels/stereo_kernels.hpp"
 #include "dco/pipeline/stereo/census.hpp"
 #include "dco/pipeline/stereo/cross_aggregation.hpp"
 #include "dco/pipeline/stereo/cross_arms.hpp"
+#include "dco/pipeline/stereo/disparity_search.hpp"
 #include "dco/pipeline/stereo/disparity_selection.hpp"
 #include "dco/pipeline/stereo/histogram_vote.hpp"
 #include "dco/pipeline/stereo/image_ops.hpp"
@@ -44,7 +46,7 @@ class CpuStereoMatcher final : public StereoMatcher {
     // internal resolution.
     const ArmRule rule{params_.arm_max / scale_, params_.arm_short / scale_, params_.tau1,
                        params_.tau2};
-    compute_cross_arms(ad_left_, rule, arms_);
+    compute_cross_arms(packed_left_.cview(), rule, arms_);
     if (params_.smooth_arms) smooth_cross_arms(arms_, arm_scratch_);
     shortest_arm_.resize(w_, h_);
     for (int y = 0; y < h_; ++y)
@@ -54,13 +56,9 @@ class CpuStereoMatcher final : public StereoMatcher {
     timings_.arms_ms = t.lap_ms();
 
     wta_.reset(w_, h_);
-    slice_.resize(w_, h_);
-    for (int d = 0; d <= max_d_; ++d) {
-      compute_cost_slice(ad_left_, ad_right_, census_left_.view(), census_right_.view(),
-                         shortest_arm_.view(), tables_, d, slice_.view());
-      aggregate_costs(slice_.view(), regions_, params_.aggregation_passes, agg_scratch_);
-      wta_.update(slice_.view(), d);
-    }
+    const MatchingImages images{packed_left_.cview(), packed_right_.cview(), census_left_.cview(),
+                                census_right_.cview(), shortest_arm_.cview()};
+    search_.run(images, tables_, regions_, params_.aggregation_passes, max_d_, wta_);
     timings_.initial_ms = t.lap_ms();
 
     disp_.resize(w_, h_);
@@ -134,6 +132,13 @@ class CpuStereoMatcher final : public StereoMatcher {
     ad_left_ = color ? l : gl;
     ad_right_ = color ? r : gr;
 
+    packed_left_.resize(w_, h_);
+    packed_right_.resize(w_, h_);
+    for (int y = 0; y < h_; ++y) {
+      kernels::pack_pixels(ad_left_.row(y), ad_left_.channels, w_, packed_left_.row(y));
+      kernels::pack_pixels(ad_right_.row(y), ad_right_.channels, w_, packed_right_.row(y));
+    }
+
     census_left_.resize(w_, h_);
     census_right_.resize(w_, h_);
     census_transform(gl, params_.census_width, params_.census_height, census_left_.view());
@@ -196,20 +201,20 @@ class CpuStereoMatcher final : public StereoMatcher {
   int scale_ = 1, w_ = 0, h_ = 0, max_d_ = 0;
   Image<std::uint8_t> small_left_, small_right_, gray_left_, gray_right_;
   ImageView<const std::uint8_t> ad_left_, ad_right_, census_gray_left_;
+  Image<std::uint32_t> packed_left_, packed_right_;  // AD pixels, one word each
   Image<std::uint64_t> census_left_, census_right_;
   CrossArms arms_;
   Image<std::uint8_t> arm_scratch_, shortest_arm_;
   CostTables tables_;
   SupportRegions regions_;
   AggregationScratch agg_scratch_;
-  Image<std::uint32_t> slice_;
+  DisparitySearch search_;
   WinnerTakesAll wta_;
   Image<std::int16_t> disp_;
   Image<std::uint8_t> changed_;
   VoteScratch vote_scratch_;
   Image<float> values_, raw_;
   Image<std::int16_t> jump_scratch_;
-  std::vector<std::uint16_t> vol_, out_;
 };
 
 }  // namespace

@@ -1,44 +1,29 @@
 #include "dco/pipeline/stereo/cross_aggregation.hpp"
 
+#include <algorithm>
 #include <cassert>
+#include <cstdint>
+
+#include "dco/kernels/stereo_kernels.hpp"
 
 namespace dco::stereo {
 
 void horizontal_sums(ImageView<const std::uint32_t> in, ImageView<const std::uint8_t> left,
                      ImageView<const std::uint8_t> right, ImageView<std::uint32_t> out,
                      std::vector<std::uint32_t>& prefix) {
-  const int w = in.width;
-  prefix.resize(static_cast<std::size_t>(w) + 1);
-  std::uint32_t* p = prefix.data();
-  for (int y = 0; y < in.height; ++y) {
-    const std::uint32_t* src = in.row(y);
-    p[0] = 0;
-    for (int x = 0; x < w; ++x) p[x + 1] = p[x] + src[x];
-    const std::uint8_t* l = left.row(y);
-    const std::uint8_t* r = right.row(y);
-    std::uint32_t* dst = out.row(y);
-    for (int x = 0; x < w; ++x) dst[x] = p[x + r[x] + 1] - p[x - l[x]];
-  }
+  prefix.resize(static_cast<std::size_t>(in.width) + 1);
+  for (int y = 0; y < in.height; ++y)
+    kernels::horizontal_sums_row(in.row(y), left.row(y), right.row(y), in.width, prefix.data(),
+                                 out.row(y));
 }
 
 void vertical_sums(ImageView<std::uint32_t> in, ImageView<const std::uint8_t> up,
                    ImageView<const std::uint8_t> down, ImageView<std::uint32_t> out) {
-  const int w = in.width;
-  for (int y = 1; y < in.height; ++y) {
-    const std::uint32_t* above = in.row(y - 1);
-    std::uint32_t* row = in.row(y);
-    for (int x = 0; x < w; ++x) row[x] += above[x];
-  }
-  for (int y = 0; y < in.height; ++y) {
-    const std::uint8_t* u = up.row(y);
-    const std::uint8_t* d = down.row(y);
-    std::uint32_t* dst = out.row(y);
-    for (int x = 0; x < w; ++x) {
-      const int top = y - u[x] - 1;
-      const std::uint32_t below_sum = in.row(y + d[x])[x];
-      dst[x] = top >= 0 ? below_sum - in.row(top)[x] : below_sum;
-    }
-  }
+  // The kernel indexes the running sums with 32-bit offsets.
+  assert(static_cast<std::int64_t>(in.height) * in.stride <= INT32_MAX);
+  for (int y = 1; y < in.height; ++y) kernels::accumulate_row(in.row(y - 1), in.row(y), in.width);
+  for (int y = 0; y < in.height; ++y)
+    kernels::vertical_sums_row(in.data, in.stride, y, up.row(y), down.row(y), in.width, out.row(y));
 }
 
 void AggregationScratch::resize(int width, int height) {
@@ -61,9 +46,10 @@ void SupportRegions::build(const CrossArms& arms, AggregationScratch& scratch) {
     sum(size.view(), order, scratch);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
-        const std::uint64_t n = size.at(x, y);
-        recip.at(x, y) =
-            static_cast<std::uint32_t>(((std::uint64_t{1} << kReciprocalShift) + n / 2) / n);
+        // 2^31 + n / 2 fits 32 bits (n <= 511 * 511), and a 32-bit division is several times
+        // faster than a 64-bit one.
+        const std::uint32_t n = size.at(x, y);
+        recip.at(x, y) = ((std::uint32_t{1} << kReciprocalShift) + n / 2) / n;
       }
   }
 }
@@ -85,14 +71,29 @@ void SupportRegions::mean(ImageView<std::uint32_t> slice, PassOrder order,
                           AggregationScratch& scratch) const {
   sum(slice, order, scratch);
   const Image<std::uint32_t>& recip = order == PassOrder::kHorizontalFirst ? recip_hv_ : recip_vh_;
-  constexpr std::uint64_t kHalf = std::uint64_t{1} << (kReciprocalShift - 1);
-  for (int y = 0; y < slice.height; ++y) {
-    std::uint32_t* row = slice.row(y);
-    const std::uint32_t* r = recip.row(y);
-    for (int x = 0; x < slice.width; ++x)
-      row[x] =
-          static_cast<std::uint32_t>((std::uint64_t{row[x]} * r[x] + kHalf) >> kReciprocalShift);
+  static_assert(kReciprocalShift == 31, "the mean kernel rounds with a shift of 31");
+  for (int y = 0; y < slice.height; ++y)
+    kernels::region_mean_row(slice.row(y), recip.row(y), slice.width);
+}
+
+void BlockAggregator::prepare(const CrossArms& arms, int max_block) {
+  arms_ = &arms;
+  const int w = arms.width();
+  const int h = arms.height();
+  int reach_up = 0;
+  reach_down_ = 0;
+  for (int y = 0; y < h; ++y) {
+    reach_up = std::max(reach_up, int(*std::max_element(arms.up.row(y), arms.up.row(y) + w)));
+    reach_down_ =
+        std::max(reach_down_, int(*std::max_element(arms.down.row(y), arms.down.row(y) + w)));
   }
+  // Rows y - up - 1 .. y + down must be alive when row y is taken.
+  ring_.resize(w * max_block, std::min(h, reach_up + reach_down_ + 2));
+  rows_.resize(static_cast<std::size_t>(h));
+  const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(max_block);
+  input_.resize(n);
+  sums_.resize(n);
+  prefix_.resize(n + static_cast<std::size_t>(max_block));
 }
 
 void aggregate_costs(ImageView<std::uint32_t> slice, const SupportRegions& regions, int passes,

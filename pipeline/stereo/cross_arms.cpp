@@ -4,6 +4,8 @@
 #include <cassert>
 #include <cstdlib>
 
+#include "dco/kernels/stereo_kernels.hpp"
+
 namespace dco::stereo {
 namespace {
 
@@ -79,6 +81,16 @@ void compute_cross_arms(ImageView<const std::uint8_t> image, const ArmRule& rule
           arm_length(p, down_step, std::min(rule.arm_max, h - 1 - y), ch, rule));
     }
   }
+}
+
+void compute_cross_arms(ImageView<const std::uint32_t> packed, const ArmRule& rule,
+                        CrossArms& arms) {
+  assert(rule.arm_max >= 0 && rule.arm_max <= 255);
+  arms.resize(packed.width, packed.height);
+  const kernels::ArmParams params{rule.arm_max, rule.arm_short, rule.tau1, rule.tau2};
+  for (int y = 0; y < packed.height; ++y)
+    kernels::cross_arms_row(packed.data, packed.stride, packed.width, packed.height, y, params,
+                            arms.left.row(y), arms.right.row(y), arms.up.row(y), arms.down.row(y));
 }
 
 void smooth_cross_arms(CrossArms& arms, Image<std::uint8_t>& scratch) {

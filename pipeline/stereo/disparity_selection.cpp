@@ -4,6 +4,8 @@
 #include <cassert>
 #include <cstdlib>
 
+#include "dco/kernels/stereo_kernels.hpp"
+
 namespace dco::stereo {
 
 void WinnerTakesAll::reset(int width, int height) {
@@ -21,43 +23,20 @@ void WinnerTakesAll::reset(int width, int height) {
 }
 
 void WinnerTakesAll::update(ImageView<const std::uint32_t> slice, int d) {
-  const int w = slice.width;
-  const auto dd = static_cast<std::int16_t>(d);
-  for (int y = 0; y < slice.height; ++y) {
-    const std::uint32_t* c_row = slice.row(y);
-    std::uint16_t* best = best_.row(y);
-    std::uint16_t* second = second_.row(y);
-    std::uint16_t* below = below_.row(y);
-    std::uint16_t* above = above_.row(y);
-    std::uint16_t* prev1 = prev1_.row(y);
-    std::uint16_t* prev2 = prev2_.row(y);
-    std::uint16_t* runmin = runmin_.row(y);
-    std::int16_t* disp = disp_.row(y);
-    std::uint16_t* best_r = best_right_.row(y);
-    std::int16_t* disp_r = disp_right_.row(y);
-    for (int x = 0; x < w; ++x) {
-      assert(c_row[x] < kNoCost);
-      const auto c = static_cast<std::uint16_t>(c_row[x]);
-      runmin[x] = std::min(runmin[x], prev2[x]);  // best over disparities <= d - 2
-      if (c < best[x]) {
-        best[x] = c;
-        disp[x] = dd;
-        second[x] = runmin[x];
-        below[x] = prev1[x];
-        above[x] = kNoCost;
-      } else if (d == disp[x] + 1) {
-        above[x] = c;
-      } else {
-        second[x] = std::min(second[x], c);
-      }
-      prev2[x] = prev1[x];
-      prev1[x] = c;
-      if (x >= d && c < best_r[x - d]) {
-        best_r[x - d] = c;
-        disp_r[x - d] = dd;
-      }
-    }
-  }
+  for (int y = 0; y < slice.height; ++y) update_row(slice.row(y), 0, 1, y, d);
+}
+
+void WinnerTakesAll::update_row(const std::uint32_t* costs, std::ptrdiff_t stride, int count, int y,
+                                int d) {
+  static_assert(kNoCost == kernels::kNoCost);
+  const int w = best_.width();
+  for (int k = 0; k < count; ++k)
+    assert(std::all_of(costs + k * stride, costs + k * stride + w,
+                       [](std::uint32_t c) { return c < kNoCost; }));
+  const kernels::WtaRow row{best_.row(y),       second_.row(y),    below_.row(y),  above_.row(y),
+                            prev1_.row(y),      prev2_.row(y),     runmin_.row(y), disp_.row(y),
+                            best_right_.row(y), disp_right_.row(y)};
+  kernels::wta_update_row(costs, stride, count, w, d, row);
 }
 
 void left_right_check(ImageView<std::int16_t> left, ImageView<const std::int16_t> right,

@@ -30,6 +30,12 @@ void CostTables::build(const CostModel& model, int channels, int max_arm) {
       cen[hd] = static_cast<std::uint16_t>(
           std::lround(kCostScale * (1.0 - alpha) * (1.0 - std::exp(-hd / model.lambda_census))));
   }
+  wide_ad_.assign(ad_.begin(), ad_.end());
+  wide_census_.assign(census_.begin(), census_.end());
+}
+
+kernels::CostTableView CostTables::wide() const {
+  return {wide_ad_.data(), ad_size_, wide_census_.data(), kCensusSize, kCostScale};
 }
 
 void compute_cost_slice(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
@@ -57,6 +63,20 @@ void compute_cost_slice(ImageView<const std::uint8_t> left, ImageView<const std:
       const int hd = std::popcount(cl[x] ^ cr[x - d]);
       dst[x] = std::uint32_t(tables.ad_row(arm[x])[ad]) + tables.census_row(arm[x])[hd];
     }
+  }
+}
+
+void compute_cost_slice_packed(ImageView<const std::uint32_t> left,
+                               ImageView<const std::uint32_t> right,
+                               ImageView<const std::uint64_t> census_left,
+                               ImageView<const std::uint64_t> census_right,
+                               ImageView<const std::uint8_t> shortest_arm, const CostTables& tables,
+                               int d, ImageView<std::uint32_t> out) {
+  const kernels::CostTableView wide = tables.wide();
+  for (int y = 0; y < left.height; ++y) {
+    const kernels::CostRow row{left.row(y),         right.row(y),        census_left.row(y),
+                               census_right.row(y), shortest_arm.row(y), left.width};
+    kernels::matching_cost_row(row, wide, d, out.row(y));
   }
 }
 

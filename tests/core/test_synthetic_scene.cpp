@@ -11,9 +11,12 @@
 #include <gtest/gtest.h>
 
 #include "dco/core/error.hpp"
+#include "support/same_bytes.hpp"
 
 namespace dco::synthetic {
 namespace {
+
+using dco::testing::same_bytes;
 
 SceneConfig quiet(SceneConfig c) {
   c.noise_sigma = 0;
@@ -24,15 +27,6 @@ StereoSample render(const SceneConfig& c, int index) {
   StereoSample s;
   SceneRenderer(c).render(index, s);
   return s;
-}
-
-template <typename T>
-bool same_bytes(const Image<T>& a, const Image<T>& b) {
-  if (a.width() != b.width() || a.height() != b.height() || a.channels() != b.channels())
-    return false;
-  for (int y = 0; y < a.height(); ++y)
-    if (std::memcmp(a.row(y), b.row(y), sizeof(T) * a.width() * a.channels()) != 0) return false;
-  return true;
 }
 
 bool same_sample(const StereoSample& a, const StereoSample& b) {
@@ -178,6 +172,22 @@ TEST(SyntheticScene, GroundTruthIsFinitePositiveAndDepthIsFocalBaselineOverDispa
         ASSERT_TRUE(std::isfinite(z) && z > 0.1f) << name << " " << x << "," << y;
         ASSERT_EQ(z, static_cast<float>(fb / static_cast<double>(d))) << name;
       }
+  }
+}
+
+TEST(SyntheticScene, CoveringMaxDisparityCoversEveryFrameWithLittleToSpare) {
+  for (const char* name : {"hand", "boxes", "static"}) {
+    const SceneConfig config = preset(name, 320, 180);
+    const int range = covering_max_disparity(config);
+    float largest = 0;
+    for (int i = 0; i < 60; i += 3) {
+      const StereoSample s = render(config, i);
+      for (int y = 0; y < s.disparity.height(); ++y)
+        for (int x = 0; x < s.disparity.width(); ++x)
+          largest = std::max(largest, s.disparity.at(x, y));
+    }
+    EXPECT_LE(largest, static_cast<float>(range)) << name;
+    EXPECT_GT(largest, 0.75f * static_cast<float>(range)) << name;  // not a wild overestimate
   }
 }
 

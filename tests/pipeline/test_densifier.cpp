@@ -272,6 +272,131 @@ TEST(Densifier, ImageEdgesWeakenSmoothing) {
   EXPECT_LT(dense.at(25, 5), 12.0f);
 }
 
+TEST(Densifier, HalfResolutionSolveKeepsAContourOnAnOddColumn) {
+  // The contour sits on column 31, inside the 2x2 aggregate of columns 30..31: the aggregated
+  // solve blurs that aggregate, and the full-resolution sweeps must put the step back.
+  const int w = 64, h = 24, edge = 31;
+  Image<float> sparse(w, h);
+  Image<std::uint8_t> contours(w, h);
+  contours.fill(0);
+  for (int y = 0; y < h; ++y) {
+    contours.at(edge, y) = 255;
+    for (int x = 0; x < w; ++x)
+      sparse.at(x, y) = (x + y) % 3 != 0 ? kUnknown : (x < edge ? 40.0f : 10.0f);
+  }
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  in.contours = contours.cview();
+  DensifyParams params;
+  params.background_fill = 0;
+  params.solve_resolution = "full";
+  Image<float> full, half;
+  Densifier(params).compute(in, full);
+  params.solve_resolution = "half";
+  params.fine_sweeps = 4;
+  Densifier d(params);
+  d.compute(in, half);
+  EXPECT_TRUE(d.last_report().converged);
+  EXPECT_GT(d.last_report().output_residual, 0.0);
+  EXPECT_LT(d.last_report().output_residual, 0.1);
+  const auto mean_difference = [&](const Image<float>& a) {
+    double sum = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) sum += std::abs(a.at(x, y) - full.at(x, y));
+    return sum / (w * h);
+  };
+  for (int y = 0; y < h; ++y)  // the step survives, a little smaller than the full solve's 30
+    EXPECT_GT(half.at(edge - 1, y) - half.at(edge + 1, y), 24.0f) << y;
+  const double with_sweeps = mean_difference(half);
+  EXPECT_LT(with_sweeps, 1.0);
+  // Without the sweeps the aggregate that straddles the contour keeps a blend.
+  params.fine_sweeps = 0;
+  Densifier no_sweeps(params);
+  no_sweeps.compute(in, half);
+  EXPECT_GT(no_sweeps.last_report().output_residual, d.last_report().output_residual);
+  EXPECT_GT(mean_difference(half), with_sweeps);
+}
+
+TEST(Densifier, AutoResolutionHalvesOnlyWideFrames) {
+  DensifyParams params;
+  params.solve_resolution = "auto";
+  const Densifier d(params);
+  EXPECT_FALSE(d.solves_at_half(640));
+  EXPECT_TRUE(d.solves_at_half(641));
+  params.solve_resolution = "full";
+  EXPECT_FALSE(Densifier(params).solves_at_half(1280));
+  params.solve_resolution = "quarter";
+  EXPECT_THROW(Densifier{params}, Error);
+}
+
+// Red-black Gauss-Seidel written out colour by colour and sweep by sweep.
+void reference_gauss_seidel(const GridSystem& a, const Image<float>& b, Image<float>& x, int sweeps,
+                            bool red_first) {
+  const int w = a.width(), h = a.height();
+  for (int s = 0; s < sweeps; ++s)
+    for (int half = 0; half < 2; ++half) {
+      const int colour = (half == 0) == red_first ? 0 : 1;
+      for (int y = 0; y < h; ++y)
+        for (int c = (y + colour) % 2; c < w; c += 2) {
+          double v = b.at(c, y);
+          if (c + 1 < w) v += a.wx.at(c, y) * x.at(c + 1, y);
+          if (c > 0) v += a.wx.at(c - 1, y) * x.at(c - 1, y);
+          if (y + 1 < h) v += a.wy.at(c, y) * x.at(c, y + 1);
+          if (y > 0) v += a.wy.at(c, y - 1) * x.at(c, y - 1);
+          x.at(c, y) = static_cast<float>(v / a.diag.at(c, y));
+        }
+    }
+}
+
+TEST(Multigrid, GaussSeidelMatchesThePlainColourOrder) {
+  for (const auto& [w, h] :
+       {std::pair{37, 23}, std::pair{2, 5}, std::pair{1, 1}, std::pair{8, 2}}) {
+    const Problem p = random_problem(w, h, 11, 0.3);
+    Densifier d(DensifyParams{});
+    Image<float> dense;
+    d.compute(inputs_of(p), dense);
+    const GridSystem& a = d.last_system();
+    Image<float> b(w, h), x(w, h), expected(w, h), one_at_a_time(w, h);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    for (int y = 0; y < h; ++y)
+      for (int c = 0; c < w; ++c) b.at(c, y) = 10.0f * unit(rng), x.at(c, y) = unit(rng);
+    for (const bool red_first : {true, false}) {
+      expected = x;
+      one_at_a_time = x;
+      Image<float> fused = x;
+      reference_gauss_seidel(a, b, expected, 3, red_first);
+      gauss_seidel(a, b.cview(), fused.view(), 3, red_first);
+      for (int s = 0; s < 3; ++s) gauss_seidel(a, b.cview(), one_at_a_time.view(), 1, red_first);
+      for (int y = 0; y < h; ++y)
+        for (int c = 0; c < w; ++c) {
+          EXPECT_NEAR(fused.at(c, y), expected.at(c, y), 1e-4f * (1 + std::abs(expected.at(c, y))))
+              << w << "x" << h << " " << c << "," << y;
+          // Three sweeps in one pass over the rows give bit for bit the three separate sweeps.
+          EXPECT_EQ(fused.at(c, y), one_at_a_time.at(c, y))
+              << w << "x" << h << " " << c << "," << y;
+        }
+    }
+  }
+}
+
+TEST(Multigrid, TransfersOnOddSizes) {
+  Image<float> fine(5, 3), coarse(3, 2), back(5, 3);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 5; ++x) fine.at(x, y) = static_cast<float>(10 * y + x);
+  restrict_sum(fine.cview(), coarse.view());
+  EXPECT_FLOAT_EQ(coarse.at(0, 0), 0 + 1 + 10 + 11);
+  EXPECT_FLOAT_EQ(coarse.at(2, 0), 4 + 14);
+  EXPECT_FLOAT_EQ(coarse.at(2, 1), 24);
+  restrict_mean(fine.cview(), coarse.view());
+  EXPECT_FLOAT_EQ(coarse.at(0, 0), 5.5f);
+  EXPECT_FLOAT_EQ(coarse.at(2, 0), 9.0f);
+  EXPECT_FLOAT_EQ(coarse.at(1, 1), 22.5f);
+  prolong(coarse.cview(), back.view());
+  EXPECT_FLOAT_EQ(back.at(1, 1), 5.5f);
+  EXPECT_FLOAT_EQ(back.at(4, 2), 24.0f);
+}
+
 TEST(Densifier, DiagonalContourStillSeparates) {
   Image<std::uint8_t> diagonal(4, 4), closed(4, 4);
   diagonal.fill(0);

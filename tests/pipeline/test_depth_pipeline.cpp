@@ -18,9 +18,7 @@ synthetic::SceneRenderer small_scene(const char* name) {
 
 PipelineParams params_for(const synthetic::SceneRenderer& scene) {
   PipelineParams p;
-  // Nearest object of the presets is ~0.4 m away: f * B / 0.4 plus a margin.
-  p.stereo.max_disparity =
-      static_cast<int>(1.2 * scene.config().focal_px * scene.config().baseline_m / 0.38);
+  p.stereo.max_disparity = synthetic::covering_max_disparity(scene.config());
   return p;
 }
 

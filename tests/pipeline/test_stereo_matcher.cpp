@@ -1,7 +1,5 @@
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 
-#include <dlfcn.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -19,108 +17,13 @@
 #include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
 #include "dco/pipeline/stereo/image_ops.hpp"
-
-// Heap allocation counting for the whole test binary: global operator new (std::vector,
-// std::string, ...) and, outside sanitizer builds, aligned_alloc (dco::Image storage).
-// Counting is switched on only around the call under test.
-namespace {
-
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_new_calls{0};
-std::atomic<long> g_aligned_alloc_calls{0};
-std::atomic<const void*> g_sink{nullptr};  // keeps test allocations from being optimised away
-
-void* counted_malloc(std::size_t n) {
-  if (g_counting.load(std::memory_order_relaxed)) g_new_calls.fetch_add(1);
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-
-void* counted_aligned(std::size_t n, std::align_val_t al) {
-  if (g_counting.load(std::memory_order_relaxed)) g_new_calls.fetch_add(1);
-  const auto a = static_cast<std::size_t>(al);
-  void* p = nullptr;
-  if (posix_memalign(&p, a < sizeof(void*) ? sizeof(void*) : a, n == 0 ? 1 : n) != 0)
-    throw std::bad_alloc();
-  return p;
-}
-
-}  // namespace
-
-void* operator new(std::size_t n) {
-  return counted_malloc(n);
-}
-void* operator new[](std::size_t n) {
-  return counted_malloc(n);
-}
-void* operator new(std::size_t n, std::align_val_t al) {
-  return counted_aligned(n, al);
-}
-void* operator new[](std::size_t n, std::align_val_t al) {
-  return counted_aligned(n, al);
-}
-// The nothrow forms too: std::stable_sort's temporary buffer uses them and frees with the plain
-// operator delete, so every form must come from the same allocator.
-void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
-  try {
-    return counted_malloc(n);
-  } catch (const std::bad_alloc&) {
-    return nullptr;
-  }
-}
-void* operator new[](std::size_t n, const std::nothrow_t&) noexcept {
-  try {
-    return counted_malloc(n);
-  } catch (const std::bad_alloc&) {
-    return nullptr;
-  }
-}
-void operator delete(void* p, const std::nothrow_t&) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, const std::nothrow_t&) noexcept {
-  std::free(p);
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::align_val_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, std::align_val_t) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
-  std::free(p);
-}
-
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define DCO_TEST_UNDER_SANITIZER 1  // the sanitizer runtime owns aligned_alloc
-#else
-#define DCO_TEST_UNDER_SANITIZER 0
-// dco::Image allocates with std::aligned_alloc, which operator new does not see.
-extern "C" void* aligned_alloc(std::size_t alignment, std::size_t size) noexcept {
-  using Fn = void* (*)(std::size_t, std::size_t);
-  static const Fn next = reinterpret_cast<Fn>(dlsym(RTLD_NEXT, "aligned_alloc"));
-  if (g_counting.load(std::memory_order_relaxed)) g_aligned_alloc_calls.fetch_add(1);
-  return next(alignment, size);
-}
-#endif
+#include "support/allocation_counter.hpp"
+#include "support/same_bytes.hpp"
 
 namespace dco::stereo {
 namespace {
+
+using dco::testing::same_bytes;
 
 using ::testing::HasSubstr;
 
@@ -198,13 +101,6 @@ Score score(const Image<float>& disp, const Scene& s) {
   r.density = finite / n;
   r.accurate = finite ? double(good) / finite : 0.0;
   return r;
-}
-
-bool bit_identical(const Image<float>& a, const Image<float>& b) {
-  if (a.width() != b.width() || a.height() != b.height()) return false;
-  for (int y = 0; y < a.height(); ++y)
-    if (std::memcmp(a.row(y), b.row(y), sizeof(float) * a.width()) != 0) return false;
-  return true;
 }
 
 Scene small_scene(int channels) {
@@ -443,7 +339,7 @@ TEST(CpuStereoMatcher, AcceptsStridedViews) {
   matcher->compute(big_l.cview().sub(7, 4, 320, 120), big_r.cview().sub(11, 2, 320, 120),
                    from_views);
   matcher->compute(s.left.cview(), s.right.cview(), direct);
-  EXPECT_TRUE(bit_identical(from_views, direct));
+  EXPECT_TRUE(same_bytes(from_views, direct));
 }
 
 TEST(CpuStereoMatcher, BgrWithoutColourEqualsItsGreyImage) {
@@ -458,12 +354,12 @@ TEST(CpuStereoMatcher, BgrWithoutColourEqualsItsGreyImage) {
   Image<float> from_bgr, from_gray;
   matcher->compute(s.left.cview(), s.right.cview(), from_bgr);
   matcher->compute(gl.cview(), gr.cview(), from_gray);
-  EXPECT_TRUE(bit_identical(from_bgr, from_gray));
+  EXPECT_TRUE(same_bytes(from_bgr, from_gray));
   // With colour the result differs (the AD term and the arms see three channels).
   params.use_color = true;
   Image<float> colour;
   make_cpu_stereo_matcher(params)->compute(s.left.cview(), s.right.cview(), colour);
-  EXPECT_FALSE(bit_identical(from_bgr, colour));
+  EXPECT_FALSE(same_bytes(from_bgr, colour));
 }
 
 TEST(CpuStereoMatcher, HalfResolutionIsFullResolutionOnTheHalvedPair) {
@@ -546,14 +442,14 @@ TEST(CpuStereoMatcher, RepeatedComputeIsBitIdentical) {
     Image<float> first, second, third, fresh, scratch;
     matcher->compute(s.left.cview(), s.right.cview(), first);
     matcher->compute(s.left.cview(), s.right.cview(), second);
-    EXPECT_TRUE(bit_identical(first, second));
+    EXPECT_TRUE(same_bytes(first, second));
     // Another geometry in between leaves no trace.
     matcher->compute(other.left.cview(), other.right.cview(), scratch);
     matcher->compute(s.left.cview(), s.right.cview(), third);
-    EXPECT_TRUE(bit_identical(first, third));
+    EXPECT_TRUE(same_bytes(first, third));
     // A new matcher agrees.
     make_cpu_stereo_matcher(StereoParams{})->compute(s.left.cview(), s.right.cview(), fresh);
-    EXPECT_TRUE(bit_identical(first, fresh));
+    EXPECT_TRUE(same_bytes(first, fresh));
   }
 }
 
@@ -564,24 +460,20 @@ TEST(CpuStereoMatcher, SecondComputeOnTheSameGeometryDoesNotAllocate) {
       const auto matcher = make_cpu_stereo_matcher(StereoParams{});
       Image<float> disp;
       // The first call sizes every buffer, which the counters must see.
-      g_new_calls = 0;
-      g_aligned_alloc_calls = 0;
-      g_counting = true;
+      testing::start_counting_allocations();
       matcher->compute(s.left.cview(), s.right.cview(), disp);
-      g_counting = false;
-      EXPECT_GT(g_new_calls.load(), 0);
-      if (!DCO_TEST_UNDER_SANITIZER) {
-        EXPECT_GT(g_aligned_alloc_calls.load(), 0);
+      const testing::AllocationCounts first = testing::stop_counting_allocations();
+      EXPECT_GT(first.new_calls, 0);
+      if (testing::kCountsAlignedAlloc) {
+        EXPECT_GT(first.aligned_alloc_calls, 0);
       }
       const float* const data = disp.data();
 
-      g_new_calls = 0;
-      g_aligned_alloc_calls = 0;
-      g_counting = true;
+      testing::start_counting_allocations();
       matcher->compute(s.left.cview(), s.right.cview(), disp);
-      g_counting = false;
-      EXPECT_EQ(g_new_calls.load(), 0) << channels << " channels, " << (hd ? "half" : "full");
-      EXPECT_EQ(g_aligned_alloc_calls.load(), 0)
+      const testing::AllocationCounts second = testing::stop_counting_allocations();
+      EXPECT_EQ(second.new_calls, 0) << channels << " channels, " << (hd ? "half" : "full");
+      EXPECT_EQ(second.aligned_alloc_calls, 0)
           << channels << " channels, " << (hd ? "half" : "full");
       EXPECT_EQ(disp.data(), data);
     }
@@ -589,18 +481,17 @@ TEST(CpuStereoMatcher, SecondComputeOnTheSameGeometryDoesNotAllocate) {
 
 TEST(AllocationCounter, SeesAllocationsWhenTheyHappen) {
   // The counter itself must work, or the test above proves nothing.
-  g_new_calls = 0;
-  g_aligned_alloc_calls = 0;
-  g_counting = true;
+  testing::start_counting_allocations();
   auto* v = new std::vector<int>(100);
-  g_sink = v->data();
+  testing::allocation_sink = v->data();
   Image<float> img(64, 64);
-  g_sink = img.data();
-  g_counting = false;
+  testing::allocation_sink = img.data();
+  const testing::AllocationCounts counts = testing::stop_counting_allocations();
   delete v;
-  EXPECT_GE(g_new_calls.load(), 2);
-  if (DCO_TEST_UNDER_SANITIZER) GTEST_SKIP() << "aligned_alloc is not counted under a sanitizer";
-  EXPECT_EQ(g_aligned_alloc_calls.load(), 1);
+  EXPECT_GE(counts.new_calls, 2);
+  if (!testing::kCountsAlignedAlloc)
+    GTEST_SKIP() << "aligned_alloc is not counted under a sanitizer";
+  EXPECT_EQ(counts.aligned_alloc_calls, 1);
 }
 
 TEST(CpuStereoMatcher, ReportsParamsAndTimings) {

@@ -15,9 +15,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace dco::tools::testing {
+
+using dco::testing::TempDir;
 
 struct CliRun {
   int exit_code = -1;

@@ -15,15 +15,15 @@
 #include "dco/core/image.hpp"
 #include "dco/core/image_io.hpp"
 #include "dco/tools/scene_manifest.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace dco::tools {
 namespace {
 
 namespace fs = std::filesystem;
+using dco::testing::TempDir;
 using testing::CliRun;
 using ::testing::HasSubstr;
-using testing::TempDir;
 
 const fs::path kDataDir = DCO_DATA_DIR;
 const fs::path kTsukuba = kDataDir / "middlebury2001" / "Tsukuba";

@@ -14,14 +14,14 @@
 #include "cli_runner.hpp"
 #include "dco/core/disparity_io.hpp"
 #include "dco/tools/scene_manifest.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace dco::tools {
 namespace {
 
+using dco::testing::TempDir;
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
-using testing::TempDir;
 
 const std::filesystem::path kDataDir = DCO_DATA_DIR;
 const std::filesystem::path kManifest = kDataDir / "stereo_scenes.tsv";

@@ -13,16 +13,16 @@
 
 #include "cli_runner.hpp"
 #include "dco/core/disparity_io.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace dco::tools {
 namespace {
 
 namespace fs = std::filesystem;
+using dco::testing::TempDir;
 using testing::CliRun;
 using ::testing::HasSubstr;
 using ::testing::Not;
-using testing::TempDir;
 
 const fs::path kSintel = fs::path(DCO_DATA_DIR) / "sintel_flow";
 

@@ -14,13 +14,13 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace dco::tools {
 namespace {
 
+using dco::testing::TempDir;
 using ::testing::HasSubstr;
-using testing::TempDir;
 
 const std::filesystem::path kSintel = std::filesystem::path(DCO_DATA_DIR) / "sintel_flow";
 

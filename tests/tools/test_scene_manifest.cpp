@@ -11,13 +11,13 @@
 #include <gtest/gtest.h>
 
 #include "dco/core/error.hpp"
-#include "temp_dir.hpp"
+#include "support/temp_dir.hpp"
 
 namespace dco::tools {
 namespace {
 
+using dco::testing::TempDir;
 using ::testing::HasSubstr;
-using testing::TempDir;
 
 const std::filesystem::path kDataDir = DCO_DATA_DIR;
 const std::filesystem::path kManifest = kDataDir / "stereo_scenes.tsv";

@@ -23,8 +23,8 @@
 #include "dco/core/rectifier.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/tools/command_line.hpp"
+#include "dco/tools/frame_sequence.hpp"
 #include "dco/tools/scene_manifest.hpp"
-#include "frame_sequence.hpp"
 #include "overlays.hpp"
 
 namespace {
@@ -91,20 +91,6 @@ struct Options {
   bool help = false;
 };
 
-void parse_size(const std::string& text, Options& opt) {
-  const auto x = text.find('x');
-  try {
-    if (x == std::string::npos) throw std::invalid_argument("no x");
-    std::size_t used = 0;
-    opt.width = std::stoi(text.substr(0, x), &used);
-    if (used != x) throw std::invalid_argument("width");
-    opt.height = std::stoi(text.substr(x + 1), &used);
-    if (used != text.size() - x - 1) throw std::invalid_argument("height");
-  } catch (const std::exception&) {
-    throw UsageError(fmt::format("--size needs WIDTHxHEIGHT, not '{}'", text));
-  }
-}
-
 Options parse_args(int argc, char** argv) {
   Options opt;
   dco::tools::ArgCursor args(argc, argv);
@@ -140,9 +126,11 @@ Options parse_args(int argc, char** argv) {
       opt.count = args.int_value();
     else if (arg == "--synthetic")
       opt.synthetic = args.value();
-    else if (arg == "--size")
-      parse_size(args.value(), opt);
-    else if (arg == "--frames")
+    else if (arg == "--size") {
+      const dco::tools::ImageSize size = dco::tools::parse_image_size("--size", args.value());
+      opt.width = size.width;
+      opt.height = size.height;
+    } else if (arg == "--frames")
       opt.frames = args.int_value();
     else if (arg == "--color")
       opt.color = args.flag();

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <charconv>
+#include <stdexcept>
+#include <string>
 
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
@@ -38,6 +40,25 @@ int ArgCursor::int_value() {
   if (ec != std::errc() || end != text.data() + text.size())
     throw UsageError(fmt::format("option {} needs an integer, not '{}'", option, text));
   return v;
+}
+
+ImageSize parse_image_size(std::string_view option, const std::string& text, int minimum) {
+  ImageSize size;
+  const auto x = text.find('x');
+  try {
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    std::size_t used = 0;
+    size.width = std::stoi(text.substr(0, x), &used);
+    if (used != x) throw std::invalid_argument("width");
+    size.height = std::stoi(text.substr(x + 1), &used);
+    if (used != text.size() - x - 1) throw std::invalid_argument("height");
+  } catch (const std::exception&) {
+    throw UsageError(fmt::format("{} needs WIDTHxHEIGHT, not '{}'", option, text));
+  }
+  if (size.width < minimum || size.height < minimum)
+    throw UsageError(
+        fmt::format("{} must be at least {}x{}, not {}", option, minimum, minimum, text));
+  return size;
 }
 
 std::string one_line(std::string text) {

@@ -54,6 +54,10 @@ struct SceneConfig {
 // but nothing moves). Throws dco::Error for an unknown name.
 SceneConfig preset(const std::string& name, int width = 1280, int height = 720);
 
+// A disparity search range that covers the scene: the disparity of the nearest depth any object
+// (or the background) reaches, plus 10 %.
+int covering_max_disparity(const SceneConfig& config);
+
 struct StereoSample {
   int index = 0;
   double time_s = 0;

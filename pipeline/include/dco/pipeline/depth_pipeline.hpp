@@ -41,6 +41,46 @@ struct DepthResult {
   bool flow_cue = false;  // the frame had both flow neighbours
 };
 
+// What the stereo step leaves of one frame for the contour and densify steps.
+struct StereoSlot {
+  int index = -1;
+  Image<std::uint8_t> image;         // grey left image, input resolution
+  Image<std::uint8_t> small;         // grey left image at the stereo stage's internal resolution
+  Image<std::uint8_t> small_colour;  // scratch: the colour image downscaled before its grey
+  Image<float> raw_disparity;        // internal px, every pixel
+  Image<float> sparse;               // input px
+  stereo::StereoTimings stereo_timings;
+};
+
+// The steps of one frame, shared by DepthPipeline and the real-time runtime (pipeline/runtime),
+// so both give the same bytes.
+// 1. The grey images of the left view; `small` equals the stereo stage's internal grey image.
+//    Cheap, and with lookahead 1 all the previous frame's contour step needs of this frame.
+void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint8_t> left,
+                   int index, StereoSlot& slot);
+// 2. The sparse stage: sparse and raw disparity, timings (independent of step 1). Throws
+//    dco::Error on bad input.
+void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> left,
+                  ImageView<const std::uint8_t> right, StereoSlot& slot);
+// 3. Contours of `centre` given its flow neighbours (the flow cue needs both; nullptr when
+//    missing). Fills the contour fields of `out` and copies the centre's index, image, sparse map
+//    and stereo timings into it.
+void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centre,
+                   const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out);
+// 4. Densification of a result the contour step filled. The densifier's last solution is the
+//    previous frame's dense map (Eq. 18), so results go through it in order.
+void densify_frame(densify::Densifier& densifier, DepthResult& out);
+
+// Frame numbers of one contour window; -1 where a frame does not exist.
+struct ContourWindow {
+  int centre = -1, neighbour_a = -1, neighbour_b = -1;
+};
+// The window frame `newest` completes: with lookahead 1 the previous frame's (none for frame 0),
+// with lookahead 0 its own.
+ContourWindow window_on_arrival(int lookahead, int newest);
+// With lookahead 1, the window of the sequence's last frame, which has no successor.
+ContourWindow window_at_end(int last);
+
 // Stereo -> contour -> densify, one frame after the other, on the calling thread (the offline
 // tools and the tests; the real-time runtime runs the same stages on their own threads).
 // The contour window follows contour.lookahead: with 1 it is centred on frame t, so t's result
@@ -62,22 +102,14 @@ class DepthPipeline {
   const PipelineParams& params() const { return params_; }
 
  private:
-  struct Slot {
-    int index = -1;
-    Image<std::uint8_t> image;   // grey, input resolution
-    Image<std::uint8_t> small;   // grey, internal resolution
-    Image<float> raw_disparity;  // internal px, every pixel
-    Image<float> sparse;         // input px
-    stereo::StereoTimings stereo_timings;
-  };
-  Slot& slot_of(int index) { return slots_[static_cast<std::size_t>(index) % slots_.size()]; }
-  void finish_frame(int centre, int neighbour_a, int neighbour_b, DepthResult& out);
+  StereoSlot& slot_of(int index) { return slots_[static_cast<std::size_t>(index) % slots_.size()]; }
+  void finish_frame(const ContourWindow& window, DepthResult& out);
 
   PipelineParams params_;
   std::unique_ptr<stereo::StereoMatcher> stereo_;
   std::unique_ptr<contour::ContourExtractor> contour_;
   densify::Densifier densifier_;
-  std::array<Slot, 3> slots_;
+  std::array<StereoSlot, 3> slots_;
   int next_index_ = 0;   // index of the next pushed frame
   int next_output_ = 0;  // index of the next frame to finish
 };

@@ -11,6 +11,9 @@ struct SolverReport {
   double initial_residual = 0;  // ||b - A x0|| / ||b||
   double final_residual = 0;    // ||b - A x|| / ||b||
   bool converged = false;
+  // ||b - A x|| / ||b|| of the full-resolution system for the map that is output; equals
+  // final_residual unless the system was solved at a coarser resolution.
+  double output_residual = 0;
 };
 
 struct CgScratch {
@@ -23,5 +26,9 @@ struct CgScratch {
 // relative residual falls to `tolerance` or after `max_iterations`.
 SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
                        Multigrid* mg, int max_iterations, double tolerance, CgScratch& scratch);
+
+// ||b - A x|| / ||b|| (0 when b is 0); uses scratch.r and scratch.ap.
+double relative_residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
+                         CgScratch& scratch);
 
 }  // namespace dco::densify

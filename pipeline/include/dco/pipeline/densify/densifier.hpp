@@ -1,10 +1,15 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "dco/core/image.hpp"
 #include "dco/pipeline/densify/conjugate_gradients.hpp"
+#include "dco/pipeline/densify/grid_system.hpp"
+#include "dco/pipeline/densify/multigrid.hpp"
 
 namespace dco {
 class ConfigSchema;
@@ -22,6 +27,11 @@ struct DensifyParams {
   double min_edge_weight = 0.001;
   double background_fill = 0.05;  // weak data term for holes: the farther of the row neighbours
   double color_sigma = 4;  // grey-level scale of exp(-|I_p - I_q| / sigma) on the weights; 0 = off
+  // "full" solves Eq. 20 at the input resolution; "half" solves its 2x2-aggregated (Galerkin)
+  // system and then runs `fine_sweeps` Gauss-Seidel sweeps of the full system on the result, so
+  // contours still act at the input resolution; "auto" = half when the input is wider than 640 px.
+  std::string solve_resolution = "full";
+  int fine_sweeps = 2;
   int max_iterations = 60;
   double tolerance = 1e-4;  // relative residual ||b - Ax|| / ||b||
   bool multigrid = true;    // V-cycle preconditioner (else plain conjugate gradients)
@@ -62,18 +72,29 @@ class Densifier {
   ImageView<const float> last_solution() const {
     return has_solution_ ? solution_.view() : ImageView<const float>{};
   }
+  // The full-resolution system A x = b of the last call (Eq. 20's normal equations), for
+  // checks against other solvers.
+  const GridSystem& last_system() const { return system_; }
+  ImageView<const float> last_rhs() const { return rhs_.cview(); }
+  // Whether a frame `width` pixels wide is solved at half resolution.
+  bool solves_at_half(int width) const;
   // Forgets the previous solution (a scene cut, a new sequence).
   void reset() { has_solution_ = false; }
 
  private:
   void build_system(const DensifyInputs& in);
+  void solve_at_half();
 
   DensifyParams params_;
   GridSystem system_;
   Multigrid multigrid_;
   CgScratch scratch_;
   Image<float> rhs_, hint_, solution_, smooth_strength_;
+  GridSystem coarse_;  // the half-resolution system when solve_resolution is half
+  Image<float> coarse_rhs_, coarse_solution_;
   Image<std::uint8_t> barrier_;
+  std::vector<int> fuse_column_;           // column of M_fuse for each input column
+  std::array<float, 256> color_weight_{};  // exp(-diff / color_sigma) per grey-level difference
   bool has_solution_ = false;
   SolverReport report_;
   DensifyTimings timings_;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include "dco/core/image.hpp"
+#include "dco/kernels/densify_kernels.hpp"
 
 namespace dco::densify {
 
@@ -11,13 +12,17 @@ namespace dco::densify {
 // (x, y) with (x, y+1) (last row unused).
 struct GridSystem {
   Image<float> data, wx, wy, diag;
+  Image<float> inv_diag;  // 1 / diag, 0 where diag is 0: smoothing multiplies instead of dividing
 
   void resize(int width, int height);
   int width() const { return data.width(); }
   int height() const { return data.height(); }
-  // Recomputes diag from data and the edge weights.
+  // Recomputes diag and inv_diag from data and the edge weights.
   void update_diagonal();
 };
+
+// Row r of `a` as the row kernels take it (the x rows left null).
+kernels::GridRow grid_row(const GridSystem& a, int r);
 
 // y = A x.
 void apply(const GridSystem& a, ImageView<const float> x, ImageView<float> y);

@@ -50,4 +50,10 @@ void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float
 // ceil(w/2) x ceil(h/2).
 void coarsen(const GridSystem& fine, GridSystem& coarse);
 
+// The transfers that go with `coarsen` (P: piecewise constant over each 2x2 aggregate):
+// coarse = P^T fine (sum of the children), coarse = mean of the children, fine = P coarse.
+void restrict_sum(ImageView<const float> fine, ImageView<float> coarse);
+void restrict_mean(ImageView<const float> fine, ImageView<float> coarse);
+void prolong(ImageView<const float> coarse, ImageView<float> fine);
+
 }  // namespace dco::densify

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "dco/core/image.hpp"
+#include "dco/kernels/stereo_kernels.hpp"
 #include "dco/pipeline/stereo/cross_arms.hpp"
 
 namespace dco::stereo {
@@ -44,6 +45,10 @@ class SupportRegions {
   void sum(ImageView<std::uint32_t> slice, PassOrder order, AggregationScratch& scratch) const;
   // Region mean, in place, rounded to the nearest integer (Eq. 2).
   void mean(ImageView<std::uint32_t> slice, PassOrder order, AggregationScratch& scratch) const;
+  // round(2^31 / region size) per pixel: the region mean is (sum * r + 2^30) >> 31.
+  ImageView<const std::uint32_t> reciprocals(PassOrder order) const {
+    return order == PassOrder::kHorizontalFirst ? recip_hv_.view() : recip_vh_.view();
+  }
   // Region sizes (pixels) for a pass order.
   ImageView<const std::uint32_t> sizes(PassOrder order) const {
     return order == PassOrder::kHorizontalFirst ? size_hv_.view() : size_vh_.view();
@@ -62,5 +67,45 @@ class SupportRegions {
 // producing the region mean that the next pass aggregates again.
 void aggregate_costs(ImageView<std::uint32_t> slice, const SupportRegions& regions, int passes,
                      AggregationScratch& scratch);
+
+// Horizontal-first region sums of `block` values per pixel (the kernels' block layout: value k
+// of pixel x at [x * block + k]), streamed row by row: fill(y, values) writes row y of the
+// input, take(y, sums) receives row y of the region sums, in increasing y. Every value of a
+// pixel shares its arms, so the sums are whole-vector loads. The running column sums live in a
+// ring of rows just tall enough for the vertical arms, so they stay in the caches.
+class BlockAggregator {
+ public:
+  // Once per frame: sizes the buffers for blocks of up to max_block values.
+  void prepare(const CrossArms& arms, int max_block);
+
+  template <class Fill, class Take>
+  void run(int block, Fill&& fill, Take&& take) {
+    const CrossArms& a = *arms_;
+    const int w = a.width();
+    const int h = a.height();
+    for (int i = 0; i < h; ++i) rows_[i] = ring_.row(i % ring_.height());
+    for (int ya = 0; ya < h + reach_down_; ++ya) {
+      if (ya < h) {
+        fill(ya, input_.data());
+        kernels::block_horizontal_sums_row(input_.data(), a.left.row(ya), a.right.row(ya), w, block,
+                                           prefix_.data(), rows_[ya]);
+        if (ya > 0) kernels::accumulate_row(rows_[ya - 1], rows_[ya], w * block);
+      }
+      // Row yb has all of its vertical arms' rows once row yb + reach_down is in.
+      const int yb = ya - reach_down_;
+      if (yb < 0) continue;
+      kernels::block_vertical_sums_row(rows_.data(), yb, a.up.row(yb), a.down.row(yb), w, block,
+                                       sums_.data());
+      take(yb, sums_.data());
+    }
+  }
+
+ private:
+  const CrossArms* arms_ = nullptr;
+  int reach_down_ = 0;
+  Image<std::uint32_t> ring_;
+  std::vector<std::uint32_t*> rows_;  // image row -> its ring row
+  std::vector<std::uint32_t> input_, prefix_, sums_;
+};
 
 }  // namespace dco::stereo

@@ -28,6 +28,9 @@ struct ArmRule {
 // difference to the anchor is < tau2, and (d) the arm stays inside the image and <= arm_max.
 // Colour difference = the largest absolute difference over the channels.
 void compute_cross_arms(ImageView<const std::uint8_t> image, const ArmRule& rule, CrossArms& arms);
+// The same on pixels packed by kernels::pack_pixels, with the SIMD kernel: equal arms.
+void compute_cross_arms(ImageView<const std::uint32_t> packed, const ArmRule& rule,
+                        CrossArms& arms);
 
 // Smooths the window shapes (§4.1): a 3-tap median of each arm length across the arm direction
 // (left/right arms over the pixel above and below, up/down arms over the pixels beside it)

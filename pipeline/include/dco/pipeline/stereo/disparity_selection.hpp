@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include "dco/core/image.hpp"
@@ -20,6 +21,9 @@ class WinnerTakesAll {
   void reset(int width, int height);
   // Slice values must be < kNoCost; d must grow by one from 0 between calls.
   void update(ImageView<const std::uint32_t> slice, int d);
+  // Row y of the slices of disparities d .. d + count - 1 at once, that of d + k at
+  // costs + k * stride: the same result as `count` calls of update.
+  void update_row(const std::uint32_t* costs, std::ptrdiff_t stride, int count, int y, int d);
 
   ImageView<const std::int16_t> left_disparity() const { return disp_.view(); }
   ImageView<const std::int16_t> right_disparity() const { return disp_right_.view(); }

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "dco/core/image.hpp"
+#include "dco/kernels/stereo_kernels.hpp"
 
 namespace dco::stereo {
 
@@ -37,6 +38,8 @@ class CostTables {
   }
   int channels() const { return channels_; }
   int max_arm() const { return max_arm_; }
+  // Both tables widened to 32 bits (the SIMD kernel gathers 32-bit lanes).
+  kernels::CostTableView wide() const;
 
   static constexpr int kCensusSize = 65;
 
@@ -46,9 +49,11 @@ class CostTables {
   int ad_size_ = 0;
   std::vector<std::uint16_t> ad_;
   std::vector<std::uint16_t> census_;
+  std::vector<std::uint32_t> wide_ad_, wide_census_;
 };
 
-// Cost of matching every left pixel x with right pixel x - d. Pixels with x < d have no partner
+// Cost of matching every left pixel x with right pixel x - d (plain scalar code: the reference
+// that the SIMD paths are tested against). Pixels with x < d have no partner
 // and get kCostScale, the largest cost. Images at the internal resolution; `shortest_arm` holds
 // L_min per pixel, already clamped to the tables' max_arm.
 void compute_cost_slice(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
@@ -56,5 +61,14 @@ void compute_cost_slice(ImageView<const std::uint8_t> left, ImageView<const std:
                         ImageView<const std::uint64_t> census_right,
                         ImageView<const std::uint8_t> shortest_arm, const CostTables& tables, int d,
                         ImageView<std::uint32_t> out);
+
+// compute_cost_slice on pixels packed by kernels::pack_pixels, with the SIMD kernel: the same
+// output, bit for bit.
+void compute_cost_slice_packed(ImageView<const std::uint32_t> left,
+                               ImageView<const std::uint32_t> right,
+                               ImageView<const std::uint64_t> census_left,
+                               ImageView<const std::uint64_t> census_right,
+                               ImageView<const std::uint8_t> shortest_arm, const CostTables& tables,
+                               int d, ImageView<std::uint32_t> out);
 
 }  // namespace dco::stereo

@@ -37,6 +37,13 @@ class ArgCursor {
   std::optional<std::string> inline_value_;
 };
 
+struct ImageSize {
+  int width = 0, height = 0;
+};
+// "WIDTHxHEIGHT" as given to `option` (e.g. --size); throws UsageError when malformed or when a
+// side is below `minimum`.
+ImageSize parse_image_size(std::string_view option, const std::string& text, int minimum = 1);
+
 // Errors are reported on exactly one line, whatever the message carried.
 std::string one_line(std::string text);
 

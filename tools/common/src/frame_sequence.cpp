@@ -1,4 +1,4 @@
-#include "frame_sequence.hpp"
+#include "dco/tools/frame_sequence.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -70,13 +70,8 @@ class SyntheticSequence final : public FrameSequence {
     return renderer_.calibration().rectified;
   }
 
-  // From the nearest depth any object reaches, with a 10 % margin.
   std::optional<int> max_disparity() const override {
-    const synthetic::SceneConfig& c = renderer_.config();
-    double z_min = c.background_z_m;
-    for (const synthetic::Object& o : c.objects)
-      z_min = std::min(z_min, o.z_m - std::abs(o.amp_z_m));
-    return static_cast<int>(std::ceil(1.1 * c.focal_px * c.baseline_m / z_min));
+    return synthetic::covering_max_disparity(renderer_.config());
   }
 
  private:

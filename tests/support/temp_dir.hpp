@@ -1,5 +1,9 @@
 #pragma once
 
+// A fresh scratch directory per test, removed again when the test ends. The name carries the
+// test's name, the process id and a random number, so tests running in parallel (ctest -j, or
+// several processes of one test) never share one.
+
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -7,17 +11,19 @@
 #include <string_view>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
-namespace dco::tools::testing {
+namespace dco::testing {
 
-// A fresh directory per test, removed again when the test ends (ctest runs tests in parallel).
 class TempDir {
  public:
   TempDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const std::string name = std::string(info->test_suite_name()) + "." + info->name();
-    path_ = std::filesystem::temp_directory_path() /
-            ("dco_tools_" + name + "_" + std::to_string(std::random_device{}()));
+    std::string name = std::string("dco_") + info->test_suite_name() + "." + info->name() + "_" +
+                       std::to_string(::getpid()) + "_" + std::to_string(std::random_device{}());
+    for (char& c : name)
+      if (c == '/') c = '_';  // parameterised test names
+    path_ = std::filesystem::temp_directory_path() / name;
     std::filesystem::create_directories(path_);
   }
   TempDir(const TempDir&) = delete;
@@ -28,7 +34,9 @@ class TempDir {
   }
 
   const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& file) const { return path_ / file; }
 
+  // Writes `content` to a file of the directory and returns its path.
   std::filesystem::path write(const std::string& name, std::string_view content) const {
     const std::filesystem::path file = path_ / name;
     std::ofstream(file, std::ios::binary) << content;
@@ -39,4 +47,4 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-}  // namespace dco::tools::testing
+}  // namespace dco::testing

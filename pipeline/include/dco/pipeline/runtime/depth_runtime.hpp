@@ -1,0 +1,179 @@
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <exception>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <stop_token>
+#include <thread>
+#include <vector>
+
+#include "dco/core/image.hpp"
+#include "dco/pipeline/depth_pipeline.hpp"
+#include "dco/pipeline/runtime/bounded_queue.hpp"
+#include "dco/pipeline/runtime/histogram.hpp"
+#include "dco/pipeline/runtime/runtime_params.hpp"
+
+namespace dco::pipeline::runtime {
+
+using Clock = std::chrono::steady_clock;
+
+enum class Stage { kStereo, kContour, kDensify };
+
+// When one frame passed each point of the runtime.
+struct FrameTimes {
+  Clock::time_point capture;  // given by the producer (the camera's timestamp)
+  Clock::time_point entry;    // push accepted it
+  Clock::time_point stereo_start, stereo_end;
+  Clock::time_point contour_start, contour_end;
+  Clock::time_point densify_start, densify_end;  // densify_end: handed to the result callback
+};
+
+struct DurationSummary {
+  long count = 0;
+  double p50_ms = 0, p99_ms = 0, mean_ms = 0, max_ms = 0;
+};
+
+struct RuntimeStats {
+  DurationSummary latency;  // capture to publication
+  DurationSummary stereo, contour, densify;
+  long pushed = 0;     // frames given to push
+  long dropped = 0;    // replaced at the entry by a newer frame before the stereo stage took them
+  long published = 0;  // results handed to the callback
+  // The most frames each queue ever held: the entry (a single waiting frame), stereo -> contour
+  // and contour -> densify. None can exceed its capacity, so latency cannot grow.
+  std::size_t entry_high_water = 0, stereo_queue_high_water = 0, densify_queue_high_water = 0;
+};
+
+// The depth pipeline in real time: the stereo, contour and densify steps of DepthPipeline on their
+// own threads, joined by bounded queues, with every buffer allocated up front. With
+// contour.lookahead = 1 frame t's contours need only the internal grey image of t+1, which the
+// stereo thread hands on before it starts t+1's stereo, so t's contours and densification run
+// while t+1's stereo does.
+//
+// When the input outruns the pipeline, a frame still waiting at the entry is replaced by the
+// newer one and counted as dropped (newest wins); nothing else ever waits in a queue longer than
+// its capacity, so the latency stays fixed. With runtime.deterministic, push waits instead and
+// the results are bit for bit those of DepthPipeline on the same frames.
+class DepthRuntime {
+ public:
+  // Called on the last stage's thread for every result, in order; it should return quickly, the
+  // next frame waits for it. The references are valid during the call only.
+  using ResultCallback = std::function<void(const DepthResult&, const FrameTimes&)>;
+  // Called on a stage's thread right before that stage runs on a frame (tests slow stages down).
+  using StageHook = std::function<void(Stage, int index)>;
+
+  // Throws dco::Error on invalid params.
+  DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
+               ResultCallback on_result, StageHook hook = {});
+  DepthRuntime(const DepthRuntime&) = delete;
+  DepthRuntime& operator=(const DepthRuntime&) = delete;
+  ~DepthRuntime();  // stops
+
+  // Starts the stage threads and a new sequence with fresh statistics. Throws dco::Error when a
+  // thread cannot be pinned to runtime.affinity (it then leaves nothing running).
+  void start();
+  // Joins the stage threads; frames in flight are discarded. A stopped runtime can start again.
+  // start, stop, push and drain belong to one controlling thread (never the result callback).
+  void stop();
+  bool running() const { return !threads_.empty(); }
+
+  // Hands in a rectified pair; it is copied, so the caller's buffers are free again on return.
+  // Frames of one sequence have one size. Throws dco::Error on bad input or when a stage failed
+  // (with that stage's message).
+  void push(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+            Clock::time_point capture = Clock::now());
+  // Ends the sequence: waits until every accepted frame is published (with lookahead 1 the last
+  // one without a successor), then forgets it, so the next push starts a new sequence.
+  void drain();
+
+  RuntimeStats stats() const;  // from any thread
+  const PipelineParams& pipeline_params() const { return pipeline_; }
+  const RuntimeParams& runtime_params() const { return params_; }
+
+ private:
+  struct Input {
+    Image<std::uint8_t> left, right;
+    Clock::time_point capture, entry;
+    int index = -1;
+  };
+  struct SlotEntry {
+    StereoSlot slot;
+    FrameTimes times;
+    bool stereo_done = false;
+  };
+  struct ResultEntry {
+    DepthResult result;
+    FrameTimes times;
+  };
+  static constexpr int kEnd = -1;            // queue item: the sequence ends here
+  static constexpr std::size_t kInputs = 3;  // being filled, waiting, in the stereo stage
+
+  void stereo_loop(std::stop_token stop);
+  void contour_loop(std::stop_token stop);
+  void densify_loop(std::stop_token stop);
+  // The steps after the stereo stage's hand-over, on whichever thread runs them.
+  void contour_receive(std::stop_token stop, int slot);
+  void contour_end(std::stop_token stop);
+  int window_slot(int frame) const;  // -1 for a frame before the first
+  void run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b);
+  void densify_receive(int result);
+  void densify_end();
+
+  int acquire_slot(std::stop_token stop);
+  void release_slot(int slot);
+  void fail(std::exception_ptr error);
+  void rethrow_failure();
+  void reset_state();
+
+  const PipelineParams pipeline_;
+  const RuntimeParams params_;
+  const std::vector<int> cpus_;
+  ResultCallback on_result_;
+  StageHook hook_;
+
+  std::unique_ptr<stereo::StereoMatcher> stereo_;
+  std::unique_ptr<contour::ContourExtractor> contour_;
+  densify::Densifier densifier_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable_any changed_;  // any state below changed
+
+  // Entry (producer side).
+  std::array<Input, kInputs> inputs_;
+  std::array<bool, kInputs> input_free_{};
+  std::size_t input_cursor_ = 0;
+  int waiting_input_ = -1;  // the frame at the entry, -1 when none
+  bool end_requested_ = false;
+  int next_index_ = 0;  // index of the next pushed frame of the sequence
+  int width_ = 0, height_ = 0, channels_ = 0;
+  std::size_t entry_high_water_ = 0;
+
+  // Stereo -> contour.
+  std::vector<SlotEntry> slots_;
+  std::vector<bool> slot_free_;
+  std::size_t slot_cursor_ = 0;
+  BoundedQueue<int> stereo_queue_;
+  std::array<int, 3> window_{};  // slot of frame t at t mod 3, for the last three frames
+  int received_ = 0;             // frames of the sequence the contour step received
+
+  // Contour -> densify.
+  std::vector<ResultEntry> results_;
+  std::vector<bool> result_free_;
+  std::size_t result_cursor_ = 0;
+  BoundedQueue<int> densify_queue_;
+
+  long drained_ = 0;  // sequences fully published
+  std::exception_ptr failure_;
+
+  Histogram latency_, stereo_ms_, contour_ms_, densify_ms_;
+  long pushed_ = 0, dropped_ = 0, published_ = 0;
+
+  std::vector<std::jthread> threads_;
+};
+
+}  // namespace dco::pipeline::runtime

@@ -1,0 +1,33 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace dco {
+class ConfigSchema;
+}
+
+namespace dco::pipeline::runtime {
+
+// How the real-time runtime runs the stages ("runtime.*").
+struct RuntimeParams {
+  // Stage threads: 1 = one worker runs every stage; 2 = stereo | contour + densify;
+  // 3 = stereo | contour | densify.
+  int threads = 2;
+  // CPUs the stage threads are pinned to, e.g. "0,1": thread i runs on the (i mod n)-th entry;
+  // empty = wherever the scheduler puts them.
+  std::string affinity;
+  // Frames each queue between two stage threads holds. Every queued frame is a frame of latency.
+  int queue_depth = 1;
+  // Never drop: push waits for room, so every frame is processed in order and the output equals
+  // the offline DepthPipeline's (for replays and tests).
+  bool deterministic = false;
+};
+
+void register_params(ConfigSchema& schema, RuntimeParams& params);
+void validate(const RuntimeParams& params);  // throws dco::Error
+
+// Parses runtime.affinity ("0,2,3"); throws dco::Error naming the bad entry.
+std::vector<int> parse_affinity(const std::string& text);
+
+}  // namespace dco::pipeline::runtime

@@ -1,0 +1,42 @@
+#pragma once
+
+#include <cstdint>
+
+#include "dco/core/image.hpp"
+#include "dco/pipeline/stereo/cross_aggregation.hpp"
+#include "dco/pipeline/stereo/disparity_selection.hpp"
+#include "dco/pipeline/stereo/matching_cost.hpp"
+
+namespace dco::stereo {
+
+// What the matching cost reads, at the internal resolution.
+struct MatchingImages {
+  ImageView<const std::uint32_t> left, right;  // AD images, kernels::pack_pixels
+  ImageView<const std::uint64_t> census_left, census_right;
+  ImageView<const std::uint8_t> shortest_arm;  // L_min, clamped to the tables' max_arm
+};
+
+// Cost (Eq. 1), aggregation (Eq. 2) and winner-takes-all (Eq. 3) over disparities 0 .. max_d.
+// The result equals, bit for bit, compute_cost_slice + aggregate_costs + WinnerTakesAll::update
+// per disparity. With one aggregation pass the stages are fused row by row over kBatch
+// disparities at a time, aggregated with the disparities innermost: every disparity of a pixel
+// shares its arms, so the sums are contiguous vector loads instead of per-pixel gathers.
+class DisparitySearch {
+ public:
+  // `wta` must be reset to the images' size.
+  void run(const MatchingImages& images, const CostTables& tables, const SupportRegions& regions,
+           int passes, int max_d, WinnerTakesAll& wta);
+
+  static constexpr int kBatch = 16;
+
+ private:
+  void run_fused(const MatchingImages& images, const CostTables& tables,
+                 const SupportRegions& regions, int max_d, WinnerTakesAll& wta);
+
+  BlockAggregator aggregator_;
+  Image<std::uint32_t> lines_;  // one row per disparity of the batch
+  Image<std::uint32_t> slice_;
+  AggregationScratch scratch_;
+};
+
+}  // namespace dco::stereo

@@ -1,0 +1,161 @@
+// SIMD versions of the densify row kernels, compiled once per Highway target and dispatched at
+// run time. The interior columns go by whole vectors; the borders and the last partial vector go
+// to the scalar range functions, so any width is handled and the results equal
+// dco::kernels::scalar bit for bit (the file is built without floating-point contraction).
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+
+#include "dco/kernels/densify_kernels.hpp"
+#include "densify_ranges.hpp"
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "densify_kernels.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace dco::kernels {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+template <class D>
+HWY_INLINE hn::Vec<D> Vertical(D d, const GridRow& r, int c) {
+  auto v = hn::Zero(d);
+  if (r.x_below != nullptr) v = hn::Mul(hn::LoadU(d, r.wy + c), hn::LoadU(d, r.x_below + c));
+  if (r.x_above != nullptr)
+    v = hn::Add(v, hn::Mul(hn::LoadU(d, r.wy_above + c), hn::LoadU(d, r.x_above + c)));
+  return v;
+}
+
+void GridSmoothRow(const GridRow& r, int start, const float* b, float* x) {
+  // Columns of the colour, c = c0, c0 + 2, ...: de-interleaving loads split every pair of
+  // columns into the colour's lane and the other colour's lane, so each vector holds N pixels of
+  // the colour and their right neighbours; a second load one column to the left gives the left
+  // neighbours. Results go to a small buffer and into x a chunk at a time, so no load overlaps a
+  // store still in flight (that would stall every vector on store forwarding).
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const int w = r.width;
+  const int c0 = 1 + ((1 - start) & 1);  // first interior column of the colour
+  if (w < 2 || c0 + 2 * n > w - 1) {
+    detail::smooth_range(r, start, b, x, 0, w);
+    return;
+  }
+  detail::smooth_range(r, start, b, x, 0, c0);
+  constexpr int kChunk = 512;
+  HWY_ALIGN float chunk[kChunk];
+  hn::Vec<decltype(d)> own, other, left, unused, w_right, w_left, bv, inv, wy, xb, wa, xa;
+  int c = c0;
+  // The last pair read is (c + 2n - 2, c + 2n - 1); c + 2n - 1 must stay below w - 1 so that
+  // every pixel of the colour in the vector has a right neighbour.
+  while (c + 2 * n <= w - 1) {
+    const int chunk_begin = c;
+    for (; c + 2 * n <= w - 1 && c + 2 * n - chunk_begin <= kChunk; c += 2 * n) {
+      hn::LoadInterleaved2(d, x + c, own, other);
+      hn::LoadInterleaved2(d, x + c - 1, left, unused);
+      hn::LoadInterleaved2(d, r.wx + c, w_right, unused);
+      hn::LoadInterleaved2(d, r.wx + c - 1, w_left, unused);
+      hn::LoadInterleaved2(d, b + c, bv, unused);
+      hn::LoadInterleaved2(d, r.inv_diag + c, inv, unused);
+      auto v = hn::Add(bv, hn::Mul(w_right, other));
+      v = hn::Add(v, hn::Mul(w_left, left));
+      auto vertical = hn::Zero(d);
+      if (r.x_below != nullptr) {
+        hn::LoadInterleaved2(d, r.wy + c, wy, unused);
+        hn::LoadInterleaved2(d, r.x_below + c, xb, unused);
+        vertical = hn::Mul(wy, xb);
+      }
+      if (r.x_above != nullptr) {
+        hn::LoadInterleaved2(d, r.wy_above + c, wa, unused);
+        hn::LoadInterleaved2(d, r.x_above + c, xa, unused);
+        vertical = hn::Add(vertical, hn::Mul(wa, xa));
+      }
+      own = hn::Mul(hn::Add(v, vertical), inv);
+      hn::StoreInterleaved2(own, other, d, chunk + (c - chunk_begin));
+    }
+    std::memcpy(x + chunk_begin, chunk, sizeof(float) * static_cast<std::size_t>(c - chunk_begin));
+  }
+  detail::smooth_range(r, start, b, x, c, w);
+}
+
+void GridApplyRow(const GridRow& r, const float* x, float* out) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const int w = r.width;
+  if (w < 2) {
+    detail::apply_range(r, x, out, 0, w);
+    return;
+  }
+  detail::apply_range(r, x, out, 0, 1);
+  int c = 1;
+  for (; c + n <= w - 1; c += n) {
+    auto v = hn::Sub(hn::Mul(hn::LoadU(d, r.diag + c), hn::LoadU(d, x + c)),
+                     hn::Mul(hn::LoadU(d, r.wx + c), hn::LoadU(d, x + c + 1)));
+    v = hn::Sub(v, hn::Mul(hn::LoadU(d, r.wx + c - 1), hn::LoadU(d, x + c - 1)));
+    hn::StoreU(hn::Sub(v, Vertical(d, r, c)), d, out + c);
+  }
+  detail::apply_range(r, x, out, c, w);
+}
+
+double DotRow(const float* a, const float* b, int n) {
+  // At most 16 lanes, so a vector is a whole number of the reference's partial sums: vector k of
+  // a block holds partial sums k * lanes .. (k + 1) * lanes - 1.
+  constexpr int kLanes = detail::kDotLanes;
+  const hn::CappedTag<float, kLanes> d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const int vectors = kLanes / lanes;
+  float partial[kLanes] = {};
+  auto acc0 = hn::Zero(d), acc1 = hn::Zero(d), acc2 = hn::Zero(d), acc3 = hn::Zero(d);
+  int i = 0;
+  if (vectors <= 4) {
+    for (; i + kLanes <= n; i += kLanes) {
+      acc0 = hn::Add(acc0, hn::Mul(hn::LoadU(d, a + i), hn::LoadU(d, b + i)));
+      if (vectors > 1)
+        acc1 = hn::Add(acc1, hn::Mul(hn::LoadU(d, a + i + lanes), hn::LoadU(d, b + i + lanes)));
+      if (vectors > 2) {
+        acc2 = hn::Add(acc2,
+                       hn::Mul(hn::LoadU(d, a + i + 2 * lanes), hn::LoadU(d, b + i + 2 * lanes)));
+        acc3 = hn::Add(acc3,
+                       hn::Mul(hn::LoadU(d, a + i + 3 * lanes), hn::LoadU(d, b + i + 3 * lanes)));
+      }
+    }
+    hn::StoreU(acc0, d, partial);
+    if (vectors > 1) hn::StoreU(acc1, d, partial + lanes);
+    if (vectors > 2) {
+      hn::StoreU(acc2, d, partial + 2 * lanes);
+      hn::StoreU(acc3, d, partial + 3 * lanes);
+    }
+  } else {  // fewer than 4 lanes: not a target Highway builds for floats, but stay exact
+    for (; i + kLanes <= n; i += kLanes)
+      for (int lane = 0; lane < kLanes; ++lane) partial[lane] += a[i + lane] * b[i + lane];
+  }
+  return detail::finish_dot(a, b, i, n, partial);
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace dco::kernels
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace dco::kernels {
+
+HWY_EXPORT(GridSmoothRow);
+HWY_EXPORT(GridApplyRow);
+HWY_EXPORT(DotRow);
+
+void grid_smooth_row(const GridRow& row, int start, const float* b, float* x) {
+  HWY_DYNAMIC_DISPATCH(GridSmoothRow)(row, start, b, x);
+}
+
+void grid_apply_row(const GridRow& row, const float* x, float* out) {
+  HWY_DYNAMIC_DISPATCH(GridApplyRow)(row, x, out);
+}
+
+double dot_row(const float* a, const float* b, int n) {
+  return HWY_DYNAMIC_DISPATCH(DotRow)(a, b, n);
+}
+
+}  // namespace dco::kernels
+#endif  // HWY_ONCE

@@ -1,0 +1,179 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+// Row kernels of the sparse stereo stage. Every function in dco::kernels dispatches at run time
+// to the best SIMD target the CPU offers (Highway: SSE4/AVX2/AVX-512 on x86, NEON/SVE on Arm);
+// the functions of the same name in dco::kernels::scalar are the plain references, and the vector
+// versions give bit-identical results (all arithmetic is integer). They take plain pointers and
+// need nothing but Highway (inside) and the C++ library, so they build and test on any target.
+namespace dco::kernels {
+
+// Name of the SIMD target the dispatch picks on this CPU ("AVX2", "AVX3", "NEON", "SVE2", ...).
+const char* simd_target();
+
+// One pixel of up to four 8-bit channels in one word (channel c in bits 8c..8c+7, unused channels
+// zero), so the absolute-difference sum over the channels is a handful of lane operations.
+void pack_pixels(const std::uint8_t* src, int channels, int width, std::uint32_t* out);
+
+// Census transform of one row (dco::stereo::census_transform): rows[j] is image row y + j - ry,
+// clamped to the image, for j = 0 .. window_h - 1 (odd sizes, window_w * window_h - 1 <= 64).
+// Bits in row-major neighbour order from the most significant used bit down, set where the
+// neighbour (columns clamped to the row) is darker than the centre.
+void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,
+                std::uint64_t* out);
+
+// Adaptive cross arms (dco::stereo::compute_cross_arms) of the pixels of row y of a packed image
+// (`height` rows, `stride` elements apart). An arm grows while the colour difference (the
+// largest channel difference) to the anchor and to the previous pixel stays below tau1, and
+// beyond arm_short the difference to the anchor below tau2, up to arm_max and the image border.
+struct ArmParams {
+  int arm_max = 0;
+  int arm_short = 0;
+  int tau1 = 0;
+  int tau2 = 0;
+};
+void cross_arms_row(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height, int y,
+                    const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
+                    std::uint8_t* up, std::uint8_t* down);
+
+// Flat fixed-point cost tables of Eq. 1 (see dco::stereo::CostTables): the AD term of pixel x is
+// ad[arm[x] * ad_size + sum of |channel differences|], the census term
+// census[arm[x] * census_size + Hamming distance].
+struct CostTableView {
+  const std::uint32_t* ad = nullptr;
+  int ad_size = 0;
+  const std::uint32_t* census = nullptr;
+  int census_size = 0;
+  std::uint32_t unmatched = 0;  // cost of a left pixel whose partner x - d is outside the image
+};
+
+// One image row: packed pixels, census descriptors and the shortest arm of each left pixel.
+struct CostRow {
+  const std::uint32_t* left = nullptr;
+  const std::uint32_t* right = nullptr;
+  const std::uint64_t* census_left = nullptr;
+  const std::uint64_t* census_right = nullptr;
+  const std::uint8_t* shortest_arm = nullptr;
+  int width = 0;
+};
+
+// out[x] = cost of matching left pixel x with right pixel x - d (0 <= d).
+void matching_cost_row(const CostRow& row, const CostTableView& tables, int d, std::uint32_t* out);
+// The costs of disparities d0 .. d0 + count - 1 in block layout (see below): out[x * count + k] =
+// cost of left pixel x at disparity d0 + k.
+void block_matching_cost_row(const CostRow& row, const CostTableView& tables, int d0, int count,
+                             std::uint32_t* out);
+
+// out[x] = sum of in[x - left[x] .. x + right[x]] with uint32 wrap-around; arms stay inside the
+// row. `prefix` holds width + 1 elements of scratch.
+void horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
+                         const std::uint8_t* right, int width, std::uint32_t* prefix,
+                         std::uint32_t* out);
+
+// row[x] += above[x]: one step of running column sums.
+void accumulate_row(const std::uint32_t* above, std::uint32_t* row, int width);
+
+// out[x] = column_sums(x, y + down[x]) - column_sums(x, y - up[x] - 1) (0 above row 0), where
+// column_sums (`stride` elements between rows, rows 0 .. y + max down) holds running column sums:
+// the sum over the vertical arm [y - up, y + down] of the summed column.
+void vertical_sums_row(const std::uint32_t* column_sums, std::ptrdiff_t stride, int y,
+                       const std::uint8_t* up, const std::uint8_t* down, int width,
+                       std::uint32_t* out);
+
+// row[x] = (row[x] * reciprocal[x] + 2^30) >> 31 in 64-bit arithmetic: the region mean when
+// reciprocal = round(2^31 / region size).
+void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width);
+
+// The same sums over rows of blocks: element k of block x sits at [x * block + k] (one block per
+// pixel, e.g. one element per disparity), and every element of a block shares the pixel's arms
+// and reciprocal, so the work is whole-vector loads instead of gathers. Elements past a block's
+// last whole vector take scalar code: blocks of 16 are whole vectors on every target up to 512
+// bits.
+// prefix: (width + 1) * block elements; out[x * block + k] = sum of in[i * block + k] over
+// i in [x - left[x], x + right[x]].
+void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
+                               const std::uint8_t* right, int width, int block,
+                               std::uint32_t* prefix, std::uint32_t* out);
+// column_rows[i]: row i of the running column sums, width * block elements (a table of row
+// pointers, so the rows may live in a ring buffer); rows y - up - 1 .. y + down are read.
+void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
+                             const std::uint8_t* down, int width, int block, std::uint32_t* out);
+void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
+                           int block);
+// Back to one row per block element: rows[k * row_stride + x] = blocks[x * block + k] for
+// k < count (<= block).
+void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
+                    std::uint32_t* rows, std::ptrdiff_t row_stride);
+
+// out[x * count + k] = 1 where value[x] == candidates[k], else 0: one histogram bin per block
+// element (count >= 1).
+void block_indicator_row(const std::int16_t* value, int width, const std::int32_t* candidates,
+                         int count, std::uint32_t* out);
+// Tallies the region sums of those bins (votes < 2^31): total[x] += the sum of pixel x's block;
+// where a bin beats best_votes[x], in bin order and strictly, it becomes best_votes[x] and its
+// candidate best_value[x] (so the first of equal maxima wins).
+void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* candidates,
+                    int count, std::uint32_t* total, std::uint32_t* best_votes,
+                    std::int16_t* best_value);
+
+// Winner-takes-all state of one row (see dco::stereo::WinnerTakesAll).
+struct WtaRow {
+  std::uint16_t* best = nullptr;
+  std::uint16_t* second = nullptr;  // best cost at least two disparities from the winner
+  std::uint16_t* below = nullptr;   // cost at winner - 1
+  std::uint16_t* above = nullptr;   // cost at winner + 1
+  std::uint16_t* prev1 = nullptr;   // cost at d - 1
+  std::uint16_t* prev2 = nullptr;   // cost at d - 2
+  std::uint16_t* runmin = nullptr;  // best cost over disparities <= d - 3 (before this update)
+  std::int16_t* disp = nullptr;
+  std::uint16_t* best_right = nullptr;  // right image, indexed by xr = x - d
+  std::int16_t* disp_right = nullptr;
+};
+
+inline constexpr std::uint16_t kNoCost = 0xffff;
+
+// Feeds the costs of disparities d .. d + count - 1, those of d + k at cost + k * cost_stride
+// (every cost < kNoCost; disparities grow by one from 0 over the calls). Several disparities per
+// call keep the state in registers in between.
+void wta_update_row(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int count, int width,
+                    int d, const WtaRow& row);
+
+namespace scalar {
+
+void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,
+                std::uint64_t* out);
+void cross_arms_row(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height, int y,
+                    const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
+                    std::uint8_t* up, std::uint8_t* down);
+void block_matching_cost_row(const CostRow& row, const CostTableView& tables, int d0, int count,
+                             std::uint32_t* out);
+void matching_cost_row(const CostRow& row, const CostTableView& tables, int d, std::uint32_t* out);
+void horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
+                         const std::uint8_t* right, int width, std::uint32_t* prefix,
+                         std::uint32_t* out);
+void accumulate_row(const std::uint32_t* above, std::uint32_t* row, int width);
+void vertical_sums_row(const std::uint32_t* column_sums, std::ptrdiff_t stride, int y,
+                       const std::uint8_t* up, const std::uint8_t* down, int width,
+                       std::uint32_t* out);
+void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width);
+void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
+                               const std::uint8_t* right, int width, int block,
+                               std::uint32_t* prefix, std::uint32_t* out);
+void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
+                             const std::uint8_t* down, int width, int block, std::uint32_t* out);
+void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
+                           int block);
+void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
+                    std::uint32_t* rows, std::ptrdiff_t row_stride);
+void block_indicator_row(const std::int16_t* value, int width, const std::int32_t* candidates,
+                         int count, std::uint32_t* out);
+void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* candidates,
+                    int count, std::uint32_t* total, std::uint32_t* best_votes,
+                    std::int16_t* best_value);
+void wta_update_row(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int count, int width,
+                    int d, const WtaRow& row);
+
+}  // namespace scalar
+}  // namespace dco::kernels

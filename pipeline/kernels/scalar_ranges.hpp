@@ -1,0 +1,235 @@
+#pragma once
+
+// The scalar kernels over a range of columns: the whole row for dco::kernels::scalar, the last
+// partial vector for the SIMD versions.
+
+#include <algorithm>
+#include <bit>
+#include <cstddef>
+#include <cstdint>
+
+#include "dco/kernels/stereo_kernels.hpp"
+
+namespace dco::kernels::detail {
+
+inline std::uint32_t absdiff_sum(std::uint32_t a, std::uint32_t b) {
+  std::uint32_t sum = 0;
+  for (int shift = 0; shift < 32; shift += 8) {
+    const int ca = static_cast<int>((a >> shift) & 0xff);
+    const int cb = static_cast<int>((b >> shift) & 0xff);
+    sum += static_cast<std::uint32_t>(ca > cb ? ca - cb : cb - ca);
+  }
+  return sum;
+}
+
+inline void census_range(const std::uint8_t* const* rows, int width, int window_w, int window_h,
+                         int begin, int end, std::uint64_t* out) {
+  const int rx = window_w / 2;
+  const int ry = window_h / 2;
+  const std::uint8_t* centre = rows[ry];
+  for (int x = begin; x < end; ++x) {
+    std::uint64_t bits = 0;
+    for (int j = 0; j < window_h; ++j)
+      for (int dx = -rx; dx <= rx; ++dx) {
+        if (j == ry && dx == 0) continue;
+        bits = (bits << 1) | (rows[j][std::clamp(x + dx, 0, width - 1)] < centre[x]);
+      }
+    out[x] = bits;
+  }
+}
+
+inline int colour_diff(std::uint32_t a, std::uint32_t b) {
+  int d = 0;
+  for (int shift = 0; shift < 32; shift += 8) {
+    const int ca = static_cast<int>((a >> shift) & 0xff);
+    const int cb = static_cast<int>((b >> shift) & 0xff);
+    d = std::max(d, ca > cb ? ca - cb : cb - ca);
+  }
+  return d;
+}
+
+// Length of the arm from `anchor` along `step` (elements), at most `limit` pixels.
+inline int arm_length(const std::uint32_t* anchor, std::ptrdiff_t step, int limit,
+                      const ArmParams& p) {
+  std::uint32_t prev = *anchor;
+  int len = 0;
+  for (int i = 1; i <= limit; ++i) {
+    const std::uint32_t q = anchor[step * i];
+    const int to_anchor = colour_diff(q, *anchor);
+    if (to_anchor >= p.tau1 || colour_diff(q, prev) >= p.tau1) break;
+    if (i > p.arm_short && to_anchor >= p.tau2) break;
+    len = i;
+    prev = q;
+  }
+  return len;
+}
+
+// Arms of columns [begin, end) of row y.
+inline void arms_range(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height,
+                       int y, const ArmParams& p, int begin, int end, std::uint8_t* left,
+                       std::uint8_t* right, std::uint8_t* up, std::uint8_t* down) {
+  const std::uint32_t* row = image + y * stride;
+  for (int x = begin; x < end; ++x) {
+    const std::uint32_t* a = row + x;
+    left[x] = static_cast<std::uint8_t>(arm_length(a, -1, std::min(p.arm_max, x), p));
+    right[x] = static_cast<std::uint8_t>(arm_length(a, 1, std::min(p.arm_max, width - 1 - x), p));
+    up[x] = static_cast<std::uint8_t>(arm_length(a, -stride, std::min(p.arm_max, y), p));
+    down[x] =
+        static_cast<std::uint8_t>(arm_length(a, stride, std::min(p.arm_max, height - 1 - y), p));
+  }
+}
+
+// Cost of left pixel x at disparity d <= x.
+inline std::uint32_t matched_cost(const CostRow& row, const CostTableView& t, int x, int d) {
+  const std::uint32_t ad = absdiff_sum(row.left[x], row.right[x - d]);
+  const int hd = std::popcount(row.census_left[x] ^ row.census_right[x - d]);
+  const int arm = row.shortest_arm[x];
+  return t.ad[arm * t.ad_size + static_cast<int>(ad)] + t.census[arm * t.census_size + hd];
+}
+
+// Columns [begin, end), all >= d.
+inline void matched_cost_range(const CostRow& row, const CostTableView& t, int d, int begin,
+                               int end, std::uint32_t* out) {
+  for (int x = begin; x < end; ++x) out[x] = matched_cost(row, t, x, d);
+}
+
+// Block layout: disparities d0 + [begin, end) of pixel x.
+inline void block_cost_range(const CostRow& row, const CostTableView& t, int x, int d0, int count,
+                             int begin, int end, std::uint32_t* out) {
+  for (int k = begin; k < end; ++k)
+    out[x * count + k] = x >= d0 + k ? matched_cost(row, t, x, d0 + k) : t.unmatched;
+}
+
+inline void prefix_sums(const std::uint32_t* in, int width, std::uint32_t* prefix) {
+  prefix[0] = 0;
+  for (int x = 0; x < width; ++x) prefix[x + 1] = prefix[x] + in[x];
+}
+
+inline void horizontal_range(const std::uint32_t* prefix, const std::uint8_t* left,
+                             const std::uint8_t* right, int begin, int end, std::uint32_t* out) {
+  for (int x = begin; x < end; ++x) out[x] = prefix[x + right[x] + 1] - prefix[x - left[x]];
+}
+
+inline void vertical_range(const std::uint32_t* column_sums, std::ptrdiff_t stride, int y,
+                           const std::uint8_t* up, const std::uint8_t* down, int begin, int end,
+                           std::uint32_t* out) {
+  for (int x = begin; x < end; ++x) {
+    const int top = y - up[x] - 1;
+    const std::uint32_t below_sum = column_sums[(y + down[x]) * stride + x];
+    out[x] = top >= 0 ? below_sum - column_sums[top * stride + x] : below_sum;
+  }
+}
+
+inline void mean_range(std::uint32_t* row, const std::uint32_t* reciprocal, int begin, int end) {
+  constexpr std::uint64_t kHalf = std::uint64_t{1} << 30;
+  for (int x = begin; x < end; ++x)
+    row[x] = static_cast<std::uint32_t>((std::uint64_t{row[x]} * reciprocal[x] + kHalf) >> 31);
+}
+
+// Block layout: elements [begin, end) of every block.
+inline void block_prefix_range(const std::uint32_t* in, int width, int block, int begin, int end,
+                               std::uint32_t* prefix) {
+  for (int k = begin; k < end; ++k) prefix[k] = 0;
+  for (int x = 0; x < width; ++x)
+    for (int k = begin; k < end; ++k)
+      prefix[(x + 1) * block + k] = prefix[x * block + k] + in[x * block + k];
+}
+
+inline void block_horizontal_range(const std::uint32_t* prefix, const std::uint8_t* left,
+                                   const std::uint8_t* right, int width, int block, int begin,
+                                   int end, std::uint32_t* out) {
+  for (int x = 0; x < width; ++x) {
+    const std::uint32_t* hi = prefix + (x + right[x] + 1) * block;
+    const std::uint32_t* lo = prefix + (x - left[x]) * block;
+    for (int k = begin; k < end; ++k) out[x * block + k] = hi[k] - lo[k];
+  }
+}
+
+inline void block_vertical_range(const std::uint32_t* const* column_rows, int y,
+                                 const std::uint8_t* up, const std::uint8_t* down, int width,
+                                 int block, int begin, int end, std::uint32_t* out) {
+  for (int x = 0; x < width; ++x) {
+    const int top = y - up[x] - 1;
+    const std::uint32_t* below = column_rows[y + down[x]] + x * block;
+    const std::uint32_t* above = top >= 0 ? column_rows[top] + x * block : nullptr;
+    for (int k = begin; k < end; ++k) out[x * block + k] = above ? below[k] - above[k] : below[k];
+  }
+}
+
+inline void block_mean_range(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
+                             int block, int begin, int end) {
+  constexpr std::uint64_t kHalf = std::uint64_t{1} << 30;
+  for (int x = 0; x < width; ++x)
+    for (int k = begin; k < end; ++k) {
+      std::uint32_t& v = row[x * block + k];
+      v = static_cast<std::uint32_t>((std::uint64_t{v} * reciprocal[x] + kHalf) >> 31);
+    }
+}
+
+// Pixels [x_begin, width) of elements [k_begin, count), and elements [k_end, count) of pixels
+// [0, x_begin): what the 4x4 tiles leave.
+inline void blocks_to_rows_rest(const std::uint32_t* blocks, int width, int block, int count,
+                                int x_begin, int k_end, std::uint32_t* rows,
+                                std::ptrdiff_t row_stride) {
+  for (int k = 0; k < count; ++k) {
+    std::uint32_t* dst = rows + k * row_stride;
+    for (int x = k < k_end ? x_begin : 0; x < width; ++x) dst[x] = blocks[x * block + k];
+  }
+}
+
+inline void block_indicator_range(const std::int16_t* value, int width,
+                                  const std::int32_t* candidates, int count, int begin, int end,
+                                  std::uint32_t* out) {
+  for (int x = 0; x < width; ++x)
+    for (int k = begin; k < end; ++k) out[x * count + k] = value[x] == candidates[k];
+}
+
+// Bins [begin, end) of pixel x.
+inline void block_vote_range(const std::uint32_t* votes, int x, const std::int32_t* candidates,
+                             int count, int begin, int end, std::uint32_t* total,
+                             std::uint32_t* best_votes, std::int16_t* best_value) {
+  for (int k = begin; k < end; ++k) {
+    const std::uint32_t v = votes[x * count + k];
+    total[x] += v;
+    if (v > best_votes[x]) {
+      best_votes[x] = v;
+      best_value[x] = static_cast<std::int16_t>(candidates[k]);
+    }
+  }
+}
+
+// The left image's state: columns [begin, end).
+inline void wta_left_range(const std::uint32_t* cost, int begin, int end, int d, const WtaRow& r) {
+  const auto dd = static_cast<std::int16_t>(d);
+  for (int x = begin; x < end; ++x) {
+    const auto c = static_cast<std::uint16_t>(cost[x]);
+    r.runmin[x] = std::min(r.runmin[x], r.prev2[x]);  // best over disparities <= d - 2
+    if (c < r.best[x]) {
+      r.best[x] = c;
+      r.disp[x] = dd;
+      r.second[x] = r.runmin[x];
+      r.below[x] = r.prev1[x];
+      r.above[x] = kNoCost;
+    } else if (d == r.disp[x] + 1) {
+      r.above[x] = c;
+    } else {
+      r.second[x] = std::min(r.second[x], c);
+    }
+    r.prev2[x] = r.prev1[x];
+    r.prev1[x] = c;
+  }
+}
+
+// The right image's state: left columns [begin, end), all >= d (right column x - d).
+inline void wta_right_range(const std::uint32_t* cost, int begin, int end, int d, const WtaRow& r) {
+  const auto dd = static_cast<std::int16_t>(d);
+  for (int x = begin; x < end; ++x) {
+    const auto c = static_cast<std::uint16_t>(cost[x]);
+    if (c < r.best_right[x - d]) {
+      r.best_right[x - d] = c;
+      r.disp_right[x - d] = dd;
+    }
+  }
+}
+
+}  // namespace dco::kernels::detail

@@ -1,0 +1,616 @@
+// SIMD versions of the stereo row kernels, compiled once per Highway target and dispatched at run
+// time. Each loop covers whole vectors and leaves the last partial vector to the scalar range
+// functions, so any width is handled and the results equal dco::kernels::scalar bit for bit.
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+
+#include "dco/kernels/stereo_kernels.hpp"
+#include "scalar_ranges.hpp"
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "stereo_kernels.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace dco::kernels {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+void CensusRow(const std::uint8_t* const* rows, int width, int window_w, int window_h,
+               std::uint64_t* out) {
+  // The descriptor is built as two 32-bit words per pixel (32-bit lanes hold 8-bit pixels with
+  // one widening step): the first neighbours shift into the high word, the last 32 into the low.
+  const hn::ScalableTag<std::int32_t> di;
+  const hn::Rebind<std::uint8_t, decltype(di)> du8n;
+  const hn::Repartition<std::uint64_t, decltype(di)> du64;
+  const hn::Half<decltype(di)> dh;
+  const int n = static_cast<int>(hn::Lanes(di));
+  const int rx = window_w / 2;
+  const int ry = window_h / 2;
+  const int neighbours = window_w * window_h - 1;
+  const int high_count = neighbours > 32 ? neighbours - 32 : 0;
+  const auto one = hn::Set(di, 1);
+  const int begin = std::min(rx, width);
+  int x = begin;
+  for (; x + n + rx <= width; x += n) {
+    const auto centre = hn::PromoteTo(di, hn::LoadU(du8n, rows[ry] + x));
+    auto high = hn::Zero(di);
+    auto low = hn::Zero(di);
+    int i = 0;
+    for (int j = 0; j < window_h; ++j)
+      for (int dx = -rx; dx <= rx; ++dx) {
+        if (j == ry && dx == 0) continue;
+        const auto bit = hn::IfThenElseZero(
+            hn::Lt(hn::PromoteTo(di, hn::LoadU(du8n, rows[j] + x + dx)), centre), one);
+        if (i++ < high_count)
+          high = hn::Or(hn::ShiftLeft<1>(high), bit);
+        else
+          low = hn::Or(hn::ShiftLeft<1>(low), bit);
+      }
+    const auto hu = hn::BitCast(hn::RebindToUnsigned<decltype(di)>(), high);
+    const auto lu = hn::BitCast(hn::RebindToUnsigned<decltype(di)>(), low);
+    const hn::RebindToUnsigned<decltype(dh)> duh;
+    const auto first = hn::Or(hn::ShiftLeft<32>(hn::PromoteTo(du64, hn::LowerHalf(duh, hu))),
+                              hn::PromoteTo(du64, hn::LowerHalf(duh, lu)));
+    const auto second = hn::Or(hn::ShiftLeft<32>(hn::PromoteTo(du64, hn::UpperHalf(duh, hu))),
+                               hn::PromoteTo(du64, hn::UpperHalf(duh, lu)));
+    hn::StoreU(first, du64, out + x);
+    hn::StoreU(second, du64, out + x + n / 2);
+  }
+  // Columns near the ends read clamped neighbours.
+  detail::census_range(rows, width, window_w, window_h, 0, begin, out);
+  detail::census_range(rows, width, window_w, window_h, x, width, out);
+}
+
+const char* TargetName() {
+  return hwy::TargetName(HWY_TARGET);
+}
+
+// Largest per-channel |a - b| of packed pixels.
+template <class D, class V>
+V ColourDiff(D di, V a, V b) {
+  const hn::Repartition<std::uint8_t, D> du8;
+  const auto a8 = hn::BitCast(du8, a);
+  const auto b8 = hn::BitCast(du8, b);
+  const V diff = hn::BitCast(di, hn::Sub(hn::Max(a8, b8), hn::Min(a8, b8)));
+  const V byte_mask = hn::Set(di, 0xff);
+  return hn::Max(hn::Max(hn::And(diff, byte_mask), hn::And(hn::ShiftRight<8>(diff), byte_mask)),
+                 hn::Max(hn::And(hn::ShiftRight<16>(diff), byte_mask),
+                         hn::And(hn::ShiftRight<24>(diff), byte_mask)));
+}
+
+// Arm lengths of the anchors anchor[0 .. lanes), each stepping `step` elements per pixel, with
+// `limit` steps allowed in every lane. Lanes stop one by one; the loop ends when all have.
+template <class D>
+hn::Vec<D> ArmLengths(D di, const std::uint32_t* anchor, std::ptrdiff_t step, int limit,
+                      const ArmParams& p) {
+  const auto* base = reinterpret_cast<const std::int32_t*>(anchor);
+  const auto a = hn::LoadU(di, base);
+  const auto tau1 = hn::Set(di, p.tau1);
+  const auto tau2 = hn::Set(di, p.tau2);
+  auto prev = a;
+  auto len = hn::Zero(di);
+  auto active = hn::Eq(a, a);
+  for (int i = 1; i <= limit; ++i) {
+    const auto q = hn::LoadU(di, base + step * i);
+    const auto to_anchor = ColourDiff(di, q, a);
+    auto ok = hn::And(hn::Lt(to_anchor, tau1), hn::Lt(ColourDiff(di, q, prev), tau1));
+    if (i > p.arm_short) ok = hn::And(ok, hn::Lt(to_anchor, tau2));
+    active = hn::And(active, ok);
+    if (hn::AllFalse(di, active)) break;
+    len = hn::IfThenElse(active, hn::Set(di, i), len);
+    prev = hn::IfThenElse(active, q, prev);
+  }
+  return len;
+}
+
+void CrossArmsRow(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height, int y,
+                  const ArmParams& p, std::uint8_t* left, std::uint8_t* right, std::uint8_t* up,
+                  std::uint8_t* down) {
+  const hn::ScalableTag<std::int32_t> di;
+  const hn::Rebind<std::uint8_t, decltype(di)> du8n;
+  const int n = static_cast<int>(hn::Lanes(di));
+  const std::uint32_t* row = image + y * stride;
+  const int up_limit = std::min(p.arm_max, y);
+  const int down_limit = std::min(p.arm_max, height - 1 - y);
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    hn::StoreU(hn::DemoteTo(du8n, ArmLengths(di, row + x, -stride, up_limit, p)), du8n, up + x);
+    hn::StoreU(hn::DemoteTo(du8n, ArmLengths(di, row + x, stride, down_limit, p)), du8n, down + x);
+  }
+  for (; x < width; ++x) {
+    up[x] = static_cast<std::uint8_t>(detail::arm_length(row + x, -stride, up_limit, p));
+    down[x] = static_cast<std::uint8_t>(detail::arm_length(row + x, stride, down_limit, p));
+  }
+  // Horizontal arms: whole vectors where every lane may reach arm_max pixels inside the row.
+  for (x = 0; x < width; ++x) {
+    if (x >= p.arm_max && x + n <= width) {
+      hn::StoreU(hn::DemoteTo(du8n, ArmLengths(di, row + x, -1, p.arm_max, p)), du8n, left + x);
+      x += n - 1;
+    } else {
+      left[x] =
+          static_cast<std::uint8_t>(detail::arm_length(row + x, -1, std::min(p.arm_max, x), p));
+    }
+  }
+  for (x = 0; x < width; ++x) {
+    if (x + n - 1 + p.arm_max <= width - 1) {
+      hn::StoreU(hn::DemoteTo(du8n, ArmLengths(di, row + x, 1, p.arm_max, p)), du8n, right + x);
+      x += n - 1;
+    } else {
+      right[x] = static_cast<std::uint8_t>(
+          detail::arm_length(row + x, 1, std::min(p.arm_max, width - 1 - x), p));
+    }
+  }
+}
+
+void MatchingCostRow(const CostRow& row, const CostTableView& t, int d, std::uint32_t* out) {
+  const hn::ScalableTag<std::uint32_t> du;
+  const hn::RebindToSigned<decltype(du)> di;
+  const hn::Repartition<std::uint8_t, decltype(du)> du8;
+  const hn::Repartition<std::uint64_t, decltype(du)> du64;
+  const hn::Rebind<std::uint8_t, decltype(du)> du8n;  // one byte per 32-bit lane
+  const int n = static_cast<int>(hn::Lanes(du));
+  const int half = static_cast<int>(hn::Lanes(du64));
+  const int w = row.width;
+  const int first = std::min(d, w);
+  std::fill(out, out + first, t.unmatched);
+  const auto ad_size = hn::Set(di, t.ad_size);
+  const auto census_size = hn::Set(di, t.census_size);
+  const auto byte_mask = hn::Set(du, 0xffu);
+  const auto* ad_table = reinterpret_cast<const std::int32_t*>(t.ad);
+  const auto* census_table = reinterpret_cast<const std::int32_t*>(t.census);
+  int x = first;
+  for (; x + n <= w; x += n) {
+    // Sum of absolute channel differences: per-byte |a - b|, then the bytes of each word added.
+    const auto a = hn::BitCast(du8, hn::LoadU(du, row.left + x));
+    const auto b = hn::BitCast(du8, hn::LoadU(du, row.right + x - d));
+    const auto diff = hn::BitCast(du, hn::Sub(hn::Max(a, b), hn::Min(a, b)));
+    const auto ad =
+        hn::Add(hn::Add(hn::And(diff, byte_mask), hn::And(hn::ShiftRight<8>(diff), byte_mask)),
+                hn::Add(hn::And(hn::ShiftRight<16>(diff), byte_mask), hn::ShiftRight<24>(diff)));
+    // Hamming distances of the 64-bit descriptors, narrowed to one 32-bit lane per pixel.
+    const auto lo = hn::PopulationCount(
+        hn::Xor(hn::LoadU(du64, row.census_left + x), hn::LoadU(du64, row.census_right + x - d)));
+    const auto hi = hn::PopulationCount(hn::Xor(hn::LoadU(du64, row.census_left + x + half),
+                                                hn::LoadU(du64, row.census_right + x - d + half)));
+    const auto hd = hn::ConcatEven(du, hn::BitCast(du, hi), hn::BitCast(du, lo));
+    const auto arm = hn::BitCast(di, hn::PromoteTo(du, hn::LoadU(du8n, row.shortest_arm + x)));
+    const auto ad_cost =
+        hn::GatherIndex(di, ad_table, hn::Add(hn::Mul(arm, ad_size), hn::BitCast(di, ad)));
+    const auto census_cost =
+        hn::GatherIndex(di, census_table, hn::Add(hn::Mul(arm, census_size), hn::BitCast(di, hd)));
+    hn::StoreU(hn::BitCast(du, hn::Add(ad_cost, census_cost)), du, out + x);
+  }
+  detail::matched_cost_range(row, t, d, x, w, out);
+}
+
+void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, int count,
+                          std::uint32_t* out) {
+  const hn::ScalableTag<std::uint32_t> du;
+  const hn::RebindToSigned<decltype(du)> di;
+  const hn::Repartition<std::uint8_t, decltype(du)> du8;
+  const hn::Repartition<std::uint64_t, decltype(du)> du64;
+  const int n = static_cast<int>(hn::Lanes(du));
+  const int half = static_cast<int>(hn::Lanes(du64));
+  const int vector_end = count - count % n;
+  const auto byte_mask = hn::Set(du, 0xffu);
+  const auto* ad_table = reinterpret_cast<const std::int32_t*>(t.ad);
+  const auto* census_table = reinterpret_cast<const std::int32_t*>(t.census);
+  for (int x = 0; x < row.width; ++x) {
+    // Lanes run over the disparities, so the right image is read backwards from x - d0.
+    const bool all_matched = x - d0 - (count - 1) >= 0;
+    const int vector_part = all_matched ? vector_end : 0;
+    const auto a = hn::BitCast(du8, hn::Set(du, row.left[x]));
+    const auto cl = hn::Set(du64, row.census_left[x]);
+    const auto ad_base = hn::Set(di, row.shortest_arm[x] * t.ad_size);
+    const auto census_base = hn::Set(di, row.shortest_arm[x] * t.census_size);
+    std::uint32_t* dst = out + x * count;
+    for (int k = 0; k < vector_part; k += n) {
+      const int xr = x - d0 - k;  // right pixel of lane 0
+      const auto b = hn::BitCast(du8, hn::Reverse(du, hn::LoadU(du, row.right + xr - (n - 1))));
+      const auto diff = hn::BitCast(du, hn::Sub(hn::Max(a, b), hn::Min(a, b)));
+      const auto ad =
+          hn::Add(hn::Add(hn::And(diff, byte_mask), hn::And(hn::ShiftRight<8>(diff), byte_mask)),
+                  hn::Add(hn::And(hn::ShiftRight<16>(diff), byte_mask), hn::ShiftRight<24>(diff)));
+      const auto lo = hn::PopulationCount(
+          hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, row.census_right + xr - (half - 1)))));
+      const auto hi = hn::PopulationCount(hn::Xor(
+          cl, hn::Reverse(du64, hn::LoadU(du64, row.census_right + xr - half - (half - 1)))));
+      const auto hd = hn::ConcatEven(du, hn::BitCast(du, hi), hn::BitCast(du, lo));
+      const auto ad_cost = hn::GatherIndex(di, ad_table, hn::Add(ad_base, hn::BitCast(di, ad)));
+      const auto census_cost =
+          hn::GatherIndex(di, census_table, hn::Add(census_base, hn::BitCast(di, hd)));
+      hn::StoreU(hn::BitCast(du, hn::Add(ad_cost, census_cost)), du, dst + k);
+    }
+    detail::block_cost_range(row, t, x, d0, count, vector_part, count, out);
+  }
+}
+
+void HorizontalSumsRow(const std::uint32_t* in, const std::uint8_t* left, const std::uint8_t* right,
+                       int width, std::uint32_t* prefix, std::uint32_t* out) {
+  // The running sum carries from lane to lane, so it stays scalar; the window ends are gathers.
+  detail::prefix_sums(in, width, prefix);
+  const hn::ScalableTag<std::int32_t> di;
+  const hn::Rebind<std::uint8_t, decltype(di)> du8n;
+  const int n = static_cast<int>(hn::Lanes(di));
+  const auto* p = reinterpret_cast<const std::int32_t*>(prefix);
+  const auto one = hn::Set(di, 1);
+  const auto lanes = hn::Iota(di, 0);  // hoisted: Iota is not a single instruction everywhere
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    const auto xs = hn::Add(lanes, hn::Set(di, x));
+    const auto l = hn::PromoteTo(di, hn::LoadU(du8n, left + x));
+    const auto r = hn::PromoteTo(di, hn::LoadU(du8n, right + x));
+    const auto end = hn::GatherIndex(di, p, hn::Add(hn::Add(xs, r), one));
+    const auto begin = hn::GatherIndex(di, p, hn::Sub(xs, l));
+    hn::StoreU(hn::Sub(end, begin), di, reinterpret_cast<std::int32_t*>(out) + x);
+  }
+  detail::horizontal_range(prefix, left, right, x, width, out);
+}
+
+void AccumulateRow(const std::uint32_t* above, std::uint32_t* row, int width) {
+  const hn::ScalableTag<std::uint32_t> du;
+  const int n = static_cast<int>(hn::Lanes(du));
+  int x = 0;
+  for (; x + n <= width; x += n)
+    hn::StoreU(hn::Add(hn::LoadU(du, row + x), hn::LoadU(du, above + x)), du, row + x);
+  for (; x < width; ++x) row[x] += above[x];
+}
+
+void VerticalSumsRow(const std::uint32_t* column_sums, std::ptrdiff_t stride, int y,
+                     const std::uint8_t* up, const std::uint8_t* down, int width,
+                     std::uint32_t* out) {
+  const hn::ScalableTag<std::int32_t> di;
+  const hn::Rebind<std::uint8_t, decltype(di)> du8n;
+  const int n = static_cast<int>(hn::Lanes(di));
+  const auto* base = reinterpret_cast<const std::int32_t*>(column_sums);
+  const auto vy = hn::Set(di, y);
+  const auto vstride = hn::Set(di, static_cast<std::int32_t>(stride));
+  const auto zero = hn::Zero(di);
+  const auto lanes = hn::Iota(di, 0);
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    const auto xs = hn::Add(lanes, hn::Set(di, x));
+    const auto top =
+        hn::Sub(hn::Sub(vy, hn::PromoteTo(di, hn::LoadU(du8n, up + x))), hn::Set(di, 1));
+    const auto bottom = hn::Add(vy, hn::PromoteTo(di, hn::LoadU(du8n, down + x)));
+    const auto below_sum = hn::GatherIndex(di, base, hn::Add(hn::Mul(bottom, vstride), xs));
+    // Above row 0 the running sum is 0: read row 0 there and drop it.
+    const auto inside = hn::Gt(top, hn::Set(di, -1));
+    const auto above_sum =
+        hn::GatherIndex(di, base, hn::Add(hn::Mul(hn::Max(top, zero), vstride), xs));
+    hn::StoreU(hn::Sub(below_sum, hn::IfThenElseZero(inside, above_sum)), di,
+               reinterpret_cast<std::int32_t*>(out) + x);
+  }
+  detail::vertical_range(column_sums, stride, y, up, down, x, width, out);
+}
+
+void RegionMeanRow(std::uint32_t* row, const std::uint32_t* reciprocal, int width) {
+  const hn::ScalableTag<std::uint32_t> du;
+  const hn::Repartition<std::uint64_t, decltype(du)> du64;
+  const int n = static_cast<int>(hn::Lanes(du));
+  const auto half = hn::Set(du64, std::uint64_t{1} << 30);
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    const auto v = hn::LoadU(du, row + x);
+    const auto r = hn::LoadU(du, reciprocal + x);
+    // 32x32 -> 64-bit products of the even lanes, then of the odd lanes moved down.
+    const auto even = hn::ShiftRight<31>(hn::Add(hn::MulEven(v, r), half));
+    const auto v_odd = hn::BitCast(du, hn::ShiftRight<32>(hn::BitCast(du64, v)));
+    const auto r_odd = hn::BitCast(du, hn::ShiftRight<32>(hn::BitCast(du64, r)));
+    const auto odd = hn::ShiftRight<31>(hn::Add(hn::MulEven(v_odd, r_odd), half));
+    hn::StoreU(hn::OddEven(hn::BitCast(du, hn::ShiftLeft<32>(odd)), hn::BitCast(du, even)), du,
+               row + x);
+  }
+  detail::mean_range(row, reciprocal, x, width);
+}
+
+void BlockHorizontalSumsRow(const std::uint32_t* in, const std::uint8_t* left,
+                            const std::uint8_t* right, int width, int block, std::uint32_t* prefix,
+                            std::uint32_t* out) {
+  const hn::ScalableTag<std::uint32_t> du;
+  const int n = static_cast<int>(hn::Lanes(du));
+  const int vector_end = block - block % n;
+  // The running sums stay in a register along x (a store and reload per pixel would put the
+  // store-forwarding latency on the critical path).
+  for (int k = 0; k < vector_end; k += n) {
+    auto sum = hn::Zero(du);
+    hn::StoreU(sum, du, prefix + k);
+    for (int x = 0; x < width; ++x) {
+      sum = hn::Add(sum, hn::LoadU(du, in + x * block + k));
+      hn::StoreU(sum, du, prefix + (x + 1) * block + k);
+    }
+  }
+  for (int x = 0; x < width; ++x) {
+    const std::uint32_t* hi = prefix + (x + right[x] + 1) * block;
+    const std::uint32_t* lo = prefix + (x - left[x]) * block;
+    std::uint32_t* dst = out + x * block;
+    for (int k = 0; k < vector_end; k += n)
+      hn::StoreU(hn::Sub(hn::LoadU(du, hi + k), hn::LoadU(du, lo + k)), du, dst + k);
+  }
+  detail::block_prefix_range(in, width, block, vector_end, block, prefix);
+  detail::block_horizontal_range(prefix, left, right, width, block, vector_end, block, out);
+}
+
+void BlockVerticalSumsRow(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
+                          const std::uint8_t* down, int width, int block, std::uint32_t* out) {
+  const hn::ScalableTag<std::uint32_t> du;
+  const int n = static_cast<int>(hn::Lanes(du));
+  const int vector_end = block - block % n;
+  for (int x = 0; x < width; ++x) {
+    const int top = y - up[x] - 1;
+    const std::uint32_t* below = column_rows[y + down[x]] + x * block;
+    std::uint32_t* dst = out + x * block;
+    if (top >= 0) {
+      const std::uint32_t* above = column_rows[top] + x * block;
+      for (int k = 0; k < vector_end; k += n)
+        hn::StoreU(hn::Sub(hn::LoadU(du, below + k), hn::LoadU(du, above + k)), du, dst + k);
+    } else {
+      for (int k = 0; k < vector_end; k += n) hn::StoreU(hn::LoadU(du, below + k), du, dst + k);
+    }
+  }
+  detail::block_vertical_range(column_rows, y, up, down, width, block, vector_end, block, out);
+}
+
+void BlockRegionMeanRow(std::uint32_t* row, const std::uint32_t* reciprocal, int width, int block) {
+  const hn::ScalableTag<std::uint32_t> du;
+  const hn::Repartition<std::uint64_t, decltype(du)> du64;
+  const int n = static_cast<int>(hn::Lanes(du));
+  const int vector_end = block - block % n;
+  const auto half = hn::Set(du64, std::uint64_t{1} << 30);
+  for (int x = 0; x < width; ++x) {
+    const auto r = hn::Set(du, reciprocal[x]);
+    std::uint32_t* p = row + x * block;
+    for (int k = 0; k < vector_end; k += n) {
+      const auto v = hn::LoadU(du, p + k);
+      const auto even = hn::ShiftRight<31>(hn::Add(hn::MulEven(v, r), half));
+      const auto v_odd = hn::BitCast(du, hn::ShiftRight<32>(hn::BitCast(du64, v)));
+      const auto odd = hn::ShiftRight<31>(hn::Add(hn::MulEven(v_odd, r), half));
+      hn::StoreU(hn::OddEven(hn::BitCast(du, hn::ShiftLeft<32>(odd)), hn::BitCast(du, even)), du,
+                 p + k);
+    }
+  }
+  detail::block_mean_range(row, reciprocal, width, block, vector_end, block);
+}
+
+void BlocksToRows(const std::uint32_t* blocks, int width, int block, int count, std::uint32_t* rows,
+                  std::ptrdiff_t row_stride) {
+  // 4x4 tiles transposed in registers: 32-bit then 64-bit interleaves.
+  const hn::FixedTag<std::uint32_t, 4> d;
+  const hn::Repartition<std::uint64_t, decltype(d)> d64;
+  const int x_end = width - width % 4;
+  const int k_end = count - count % 4;
+  for (int x = 0; x < x_end; x += 4) {
+    const std::uint32_t* src = blocks + x * block;
+    for (int k = 0; k < k_end; k += 4) {
+      const auto r0 = hn::LoadU(d, src + k);
+      const auto r1 = hn::LoadU(d, src + block + k);
+      const auto r2 = hn::LoadU(d, src + 2 * block + k);
+      const auto r3 = hn::LoadU(d, src + 3 * block + k);
+      const auto t0 = hn::BitCast(d64, hn::InterleaveLower(d, r0, r1));
+      const auto t1 = hn::BitCast(d64, hn::InterleaveLower(d, r2, r3));
+      const auto t2 = hn::BitCast(d64, hn::InterleaveUpper(d, r0, r1));
+      const auto t3 = hn::BitCast(d64, hn::InterleaveUpper(d, r2, r3));
+      std::uint32_t* dst = rows + k * row_stride + x;
+      hn::StoreU(hn::BitCast(d, hn::InterleaveLower(d64, t0, t1)), d, dst);
+      hn::StoreU(hn::BitCast(d, hn::InterleaveUpper(d64, t0, t1)), d, dst + row_stride);
+      hn::StoreU(hn::BitCast(d, hn::InterleaveLower(d64, t2, t3)), d, dst + 2 * row_stride);
+      hn::StoreU(hn::BitCast(d, hn::InterleaveUpper(d64, t2, t3)), d, dst + 3 * row_stride);
+    }
+  }
+  detail::blocks_to_rows_rest(blocks, width, block, count, x_end, k_end, rows, row_stride);
+}
+
+void BlockIndicatorRow(const std::int16_t* value, int width, const std::int32_t* candidates,
+                       int count, std::uint32_t* out) {
+  const hn::ScalableTag<std::int32_t> di;
+  const int n = static_cast<int>(hn::Lanes(di));
+  const int vector_end = count - count % n;
+  const auto one = hn::Set(di, 1);
+  for (int x = 0; x < width; ++x) {
+    const auto v = hn::Set(di, value[x]);
+    auto* dst = reinterpret_cast<std::int32_t*>(out) + x * count;
+    for (int k = 0; k < vector_end; k += n)
+      hn::StoreU(hn::IfThenElseZero(hn::Eq(v, hn::LoadU(di, candidates + k)), one), di, dst + k);
+  }
+  detail::block_indicator_range(value, width, candidates, count, vector_end, count, out);
+}
+
+void BlockVoteRow(const std::uint32_t* votes, int width, const std::int32_t* candidates, int count,
+                  std::uint32_t* total, std::uint32_t* best_votes, std::int16_t* best_value) {
+  const hn::ScalableTag<std::int32_t> di;
+  const int n = static_cast<int>(hn::Lanes(di));
+  const int vector_end = count - count % n;
+  const auto* v32 = reinterpret_cast<const std::int32_t*>(votes);
+  for (int x = 0; x < width; ++x) {
+    for (int k = 0; k < vector_end; k += n) {
+      const auto v = hn::LoadU(di, v32 + x * count + k);
+      total[x] += static_cast<std::uint32_t>(hn::GetLane(hn::SumOfLanes(di, v)));
+      const std::int32_t most = hn::GetLane(hn::MaxOfLanes(di, v));
+      if (static_cast<std::uint32_t>(most) > best_votes[x]) {
+        best_votes[x] = static_cast<std::uint32_t>(most);
+        const intptr_t first = hn::FindFirstTrue(di, hn::Eq(v, hn::Set(di, most)));
+        best_value[x] = static_cast<std::int16_t>(candidates[k + first]);
+      }
+    }
+    detail::block_vote_range(votes, x, candidates, count, vector_end, count, total, best_votes,
+                             best_value);
+  }
+}
+
+void WtaUpdateRow(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int count, int width,
+                  int d, const WtaRow& s) {
+  // Costs are narrowed to 16 bits, one lane per 32-bit cost lane (a half-width u16 vector).
+  const hn::ScalableTag<std::int32_t> di32;
+  const hn::Rebind<std::uint16_t, decltype(di32)> du;
+  const hn::Rebind<std::int16_t, decltype(di32)> di;
+  const int n = static_cast<int>(hn::Lanes(di32));
+  const auto* cost_i = reinterpret_cast<const std::int32_t*>(cost);
+  const auto no_cost = hn::Set(du, kNoCost);
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    auto best = hn::LoadU(du, s.best + x);
+    auto second = hn::LoadU(du, s.second + x);
+    auto below = hn::LoadU(du, s.below + x);
+    auto above = hn::LoadU(du, s.above + x);
+    auto prev1 = hn::LoadU(du, s.prev1 + x);
+    auto prev2 = hn::LoadU(du, s.prev2 + x);
+    auto runmin = hn::LoadU(du, s.runmin + x);
+    auto disp = hn::LoadU(di, s.disp + x);
+    for (int k = 0; k < count; ++k) {
+      const auto c = hn::DemoteTo(du, hn::LoadU(di32, cost_i + k * cost_stride + x));
+      runmin = hn::Min(runmin, prev2);
+      const auto better = hn::Ne(hn::Min(c, best), best);  // c < best, unsigned
+      const auto next = hn::AndNot(
+          better,
+          hn::RebindMask(du, hn::Eq(disp, hn::Set(di, static_cast<std::int16_t>(d + k - 1)))));
+      best = hn::IfThenElse(better, c, best);
+      disp = hn::IfThenElse(hn::RebindMask(di, better),
+                            hn::Set(di, static_cast<std::int16_t>(d + k)), disp);
+      second = hn::IfThenElse(better, runmin, hn::IfThenElse(next, second, hn::Min(second, c)));
+      below = hn::IfThenElse(better, prev1, below);
+      above = hn::IfThenElse(better, no_cost, hn::IfThenElse(next, c, above));
+      prev2 = prev1;
+      prev1 = c;
+    }
+    hn::StoreU(best, du, s.best + x);
+    hn::StoreU(second, du, s.second + x);
+    hn::StoreU(below, du, s.below + x);
+    hn::StoreU(above, du, s.above + x);
+    hn::StoreU(prev1, du, s.prev1 + x);
+    hn::StoreU(prev2, du, s.prev2 + x);
+    hn::StoreU(runmin, du, s.runmin + x);
+    hn::StoreU(disp, di, s.disp + x);
+  }
+  for (int k = 0; k < count; ++k) {
+    const int dk = d + k;
+    const std::uint32_t* ck = cost + k * cost_stride;
+    detail::wta_left_range(ck, x, width, dk, s);
+    // Right pixel xr = x - dk: a shifted load of the same costs.
+    const auto vd = hn::Set(di, static_cast<std::int16_t>(dk));
+    int xr = std::min(dk, width);
+    for (; xr + n <= width; xr += n) {
+      const auto c = hn::DemoteTo(du, hn::LoadU(di32, cost_i + k * cost_stride + xr));
+      const auto best = hn::LoadU(du, s.best_right + xr - dk);
+      const auto better = hn::Ne(hn::Min(c, best), best);
+      hn::StoreU(hn::IfThenElse(better, c, best), du, s.best_right + xr - dk);
+      hn::StoreU(
+          hn::IfThenElse(hn::RebindMask(di, better), vd, hn::LoadU(di, s.disp_right + xr - dk)), di,
+          s.disp_right + xr - dk);
+    }
+    detail::wta_right_range(ck, xr, width, dk, s);
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace dco::kernels
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace dco::kernels {
+
+HWY_EXPORT(TargetName);
+HWY_EXPORT(CensusRow);
+HWY_EXPORT(CrossArmsRow);
+HWY_EXPORT(MatchingCostRow);
+HWY_EXPORT(BlockMatchingCostRow);
+HWY_EXPORT(HorizontalSumsRow);
+HWY_EXPORT(AccumulateRow);
+HWY_EXPORT(VerticalSumsRow);
+HWY_EXPORT(RegionMeanRow);
+HWY_EXPORT(BlockHorizontalSumsRow);
+HWY_EXPORT(BlockVerticalSumsRow);
+HWY_EXPORT(BlockRegionMeanRow);
+HWY_EXPORT(BlocksToRows);
+HWY_EXPORT(BlockIndicatorRow);
+HWY_EXPORT(BlockVoteRow);
+HWY_EXPORT(WtaUpdateRow);
+
+const char* simd_target() {
+  return HWY_DYNAMIC_DISPATCH(TargetName)();
+}
+
+void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,
+                std::uint64_t* out) {
+  HWY_DYNAMIC_DISPATCH(CensusRow)(rows, width, window_w, window_h, out);
+}
+
+void cross_arms_row(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height, int y,
+                    const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
+                    std::uint8_t* up, std::uint8_t* down) {
+  HWY_DYNAMIC_DISPATCH(CrossArmsRow)
+  (image, stride, width, height, y, params, left, right, up, down);
+}
+
+void matching_cost_row(const CostRow& row, const CostTableView& tables, int d, std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(MatchingCostRow)(row, tables, d, out);
+}
+
+void block_matching_cost_row(const CostRow& row, const CostTableView& tables, int d0, int count,
+                             std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(BlockMatchingCostRow)(row, tables, d0, count, out);
+}
+
+void horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
+                         const std::uint8_t* right, int width, std::uint32_t* prefix,
+                         std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(HorizontalSumsRow)(in, left, right, width, prefix, out);
+}
+
+void accumulate_row(const std::uint32_t* above, std::uint32_t* row, int width) {
+  HWY_DYNAMIC_DISPATCH(AccumulateRow)(above, row, width);
+}
+
+void vertical_sums_row(const std::uint32_t* column_sums, std::ptrdiff_t stride, int y,
+                       const std::uint8_t* up, const std::uint8_t* down, int width,
+                       std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(VerticalSumsRow)(column_sums, stride, y, up, down, width, out);
+}
+
+void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width) {
+  HWY_DYNAMIC_DISPATCH(RegionMeanRow)(row, reciprocal, width);
+}
+
+void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
+                               const std::uint8_t* right, int width, int block,
+                               std::uint32_t* prefix, std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(BlockHorizontalSumsRow)(in, left, right, width, block, prefix, out);
+}
+
+void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
+                             const std::uint8_t* down, int width, int block, std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(BlockVerticalSumsRow)(column_rows, y, up, down, width, block, out);
+}
+
+void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
+                           int block) {
+  HWY_DYNAMIC_DISPATCH(BlockRegionMeanRow)(row, reciprocal, width, block);
+}
+
+void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
+                    std::uint32_t* rows, std::ptrdiff_t row_stride) {
+  HWY_DYNAMIC_DISPATCH(BlocksToRows)(blocks, width, block, count, rows, row_stride);
+}
+
+void block_indicator_row(const std::int16_t* value, int width, const std::int32_t* candidates,
+                         int count, std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(BlockIndicatorRow)(value, width, candidates, count, out);
+}
+
+void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* candidates,
+                    int count, std::uint32_t* total, std::uint32_t* best_votes,
+                    std::int16_t* best_value) {
+  HWY_DYNAMIC_DISPATCH(BlockVoteRow)
+  (votes, width, candidates, count, total, best_votes, best_value);
+}
+
+void wta_update_row(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int count, int width,
+                    int d, const WtaRow& row) {
+  HWY_DYNAMIC_DISPATCH(WtaUpdateRow)(cost, cost_stride, count, width, d, row);
+}
+
+}  // namespace dco::kernels
+#endif  // HWY_ONCE

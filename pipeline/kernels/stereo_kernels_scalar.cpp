@@ -1,0 +1,106 @@
+#include <algorithm>
+
+#include "dco/kernels/stereo_kernels.hpp"
+#include "scalar_ranges.hpp"
+
+namespace dco::kernels {
+
+void pack_pixels(const std::uint8_t* src, int channels, int width, std::uint32_t* out) {
+  for (int x = 0; x < width; ++x) {
+    std::uint32_t word = 0;
+    for (int c = 0; c < channels; ++c) word |= std::uint32_t{src[x * channels + c]} << (8 * c);
+    out[x] = word;
+  }
+}
+
+namespace scalar {
+
+void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,
+                std::uint64_t* out) {
+  detail::census_range(rows, width, window_w, window_h, 0, width, out);
+}
+
+void cross_arms_row(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height, int y,
+                    const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
+                    std::uint8_t* up, std::uint8_t* down) {
+  detail::arms_range(image, stride, width, height, y, params, 0, width, left, right, up, down);
+}
+
+void matching_cost_row(const CostRow& row, const CostTableView& tables, int d, std::uint32_t* out) {
+  const int first = std::min(d, row.width);
+  std::fill(out, out + first, tables.unmatched);
+  detail::matched_cost_range(row, tables, d, first, row.width, out);
+}
+
+void block_matching_cost_row(const CostRow& row, const CostTableView& tables, int d0, int count,
+                             std::uint32_t* out) {
+  for (int x = 0; x < row.width; ++x)
+    detail::block_cost_range(row, tables, x, d0, count, 0, count, out);
+}
+
+void horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
+                         const std::uint8_t* right, int width, std::uint32_t* prefix,
+                         std::uint32_t* out) {
+  detail::prefix_sums(in, width, prefix);
+  detail::horizontal_range(prefix, left, right, 0, width, out);
+}
+
+void accumulate_row(const std::uint32_t* above, std::uint32_t* row, int width) {
+  for (int x = 0; x < width; ++x) row[x] += above[x];
+}
+
+void vertical_sums_row(const std::uint32_t* column_sums, std::ptrdiff_t stride, int y,
+                       const std::uint8_t* up, const std::uint8_t* down, int width,
+                       std::uint32_t* out) {
+  detail::vertical_range(column_sums, stride, y, up, down, 0, width, out);
+}
+
+void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width) {
+  detail::mean_range(row, reciprocal, 0, width);
+}
+
+void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
+                               const std::uint8_t* right, int width, int block,
+                               std::uint32_t* prefix, std::uint32_t* out) {
+  detail::block_prefix_range(in, width, block, 0, block, prefix);
+  detail::block_horizontal_range(prefix, left, right, width, block, 0, block, out);
+}
+
+void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
+                             const std::uint8_t* down, int width, int block, std::uint32_t* out) {
+  detail::block_vertical_range(column_rows, y, up, down, width, block, 0, block, out);
+}
+
+void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
+                           int block) {
+  detail::block_mean_range(row, reciprocal, width, block, 0, block);
+}
+
+void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
+                    std::uint32_t* rows, std::ptrdiff_t row_stride) {
+  detail::blocks_to_rows_rest(blocks, width, block, count, 0, count, rows, row_stride);
+}
+
+void block_indicator_row(const std::int16_t* value, int width, const std::int32_t* candidates,
+                         int count, std::uint32_t* out) {
+  detail::block_indicator_range(value, width, candidates, count, 0, count, out);
+}
+
+void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* candidates,
+                    int count, std::uint32_t* total, std::uint32_t* best_votes,
+                    std::int16_t* best_value) {
+  for (int x = 0; x < width; ++x)
+    detail::block_vote_range(votes, x, candidates, count, 0, count, total, best_votes, best_value);
+}
+
+void wta_update_row(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int count, int width,
+                    int d, const WtaRow& row) {
+  for (int k = 0; k < count; ++k) {
+    const std::uint32_t* c = cost + k * cost_stride;
+    detail::wta_left_range(c, 0, width, d + k, row);
+    detail::wta_right_range(c, std::min(d + k, width), width, d + k, row);
+  }
+}
+
+}  // namespace scalar
+}  // namespace dco::kernels

@@ -1,0 +1,426 @@
+#include "dco/pipeline/runtime/depth_runtime.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+#include <utility>
+
+#include "dco/core/error.hpp"
+
+namespace dco::pipeline::runtime {
+namespace {
+
+std::vector<int> checked_cpus(const RuntimeParams& params) {
+  validate(params);
+  return parse_affinity(params.affinity);
+}
+
+double ms_between(Clock::time_point from, Clock::time_point to) {
+  return std::chrono::duration<double, std::milli>(to - from).count();
+}
+
+DurationSummary summary(const Histogram& h) {
+  return {h.count(), h.percentile(50), h.percentile(99), h.mean_ms(), h.max_ms()};
+}
+
+// Takes the first free entry after the last one taken, so every entry is used (and its buffers
+// sized) within the first frames, and none allocates later.
+template <typename Flags>
+int take_free(Flags& free, std::size_t& cursor) {
+  for (std::size_t k = 1; k <= free.size(); ++k) {
+    const std::size_t i = (cursor + k) % free.size();
+    if (free[i]) {
+      free[i] = false;
+      cursor = i;
+      return static_cast<int>(i);
+    }
+  }
+  return -1;
+}
+
+std::string size_text(ImageView<const std::uint8_t> v) {
+  return std::to_string(v.width) + "x" + std::to_string(v.height) + "x" +
+         std::to_string(v.channels);
+}
+
+}  // namespace
+
+DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
+                           ResultCallback on_result, StageHook hook)
+    : pipeline_(pipeline),
+      params_(runtime),
+      cpus_(checked_cpus(runtime)),
+      on_result_(std::move(on_result)),
+      hook_(std::move(hook)),
+      stereo_(stereo::make_cpu_stereo_matcher(pipeline.stereo)),
+      contour_(contour::make_cpu_contour_extractor(pipeline.contour)),
+      densifier_(pipeline.densify),
+      // In flight at once: the contour window (3 frames), a full stereo queue and the frame in
+      // the stereo stage.
+      slots_(static_cast<std::size_t>(runtime.queue_depth) + 4),
+      slot_free_(slots_.size(), true),
+      stereo_queue_(static_cast<std::size_t>(runtime.queue_depth)),
+      // One in the contour stage, a full densify queue, one in the densify stage.
+      results_(static_cast<std::size_t>(runtime.queue_depth) + 2),
+      result_free_(results_.size(), true),
+      densify_queue_(static_cast<std::size_t>(runtime.queue_depth)) {
+  validate(pipeline_);
+  reset_state();
+}
+
+DepthRuntime::~DepthRuntime() {
+  stop();
+}
+
+void DepthRuntime::reset_state() {
+  input_free_.fill(true);
+  waiting_input_ = -1;
+  end_requested_ = false;
+  next_index_ = 0;
+  width_ = height_ = channels_ = 0;
+  for (std::size_t i = 0; i < slots_.size(); ++i) {
+    slot_free_[i] = true;
+    slots_[i].stereo_done = false;
+  }
+  stereo_queue_.clear();
+  received_ = 0;
+  for (std::size_t i = 0; i < results_.size(); ++i) result_free_[i] = true;
+  densify_queue_.clear();
+  densifier_.reset();
+  failure_ = nullptr;
+}
+
+void DepthRuntime::start() {
+  if (running()) throw Error("runtime: start while already running");
+  {
+    std::lock_guard lock(mutex_);
+    reset_state();
+    latency_.clear();
+    stereo_ms_.clear();
+    contour_ms_.clear();
+    densify_ms_.clear();
+    pushed_ = dropped_ = published_ = 0;
+    entry_high_water_ = 0;
+    // Fresh queues: their high-water marks are statistics too.
+    stereo_queue_ = BoundedQueue<int>(stereo_queue_.capacity());
+    densify_queue_ = BoundedQueue<int>(densify_queue_.capacity());
+  }
+  threads_.reserve(3);
+  threads_.emplace_back([this](std::stop_token stop) { stereo_loop(stop); });
+  if (params_.threads >= 2)
+    threads_.emplace_back([this](std::stop_token stop) { contour_loop(stop); });
+  if (params_.threads >= 3)
+    threads_.emplace_back([this](std::stop_token stop) { densify_loop(stop); });
+  if (cpus_.empty()) return;
+  for (std::size_t i = 0; i < threads_.size(); ++i) {
+    const int cpu = cpus_[i % cpus_.size()];
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(cpu, &set);
+    const int err = pthread_setaffinity_np(threads_[i].native_handle(), sizeof(set), &set);
+    if (err != 0) {
+      stop();
+      throw Error("runtime.affinity: cannot run a stage thread on CPU " + std::to_string(cpu) +
+                  ": " + std::strerror(err));
+    }
+  }
+}
+
+void DepthRuntime::stop() {
+  for (std::jthread& t : threads_) t.request_stop();
+  threads_.clear();  // joins
+  std::lock_guard lock(mutex_);
+  reset_state();
+}
+
+void DepthRuntime::rethrow_failure() {
+  if (failure_) std::rethrow_exception(failure_);
+}
+
+void DepthRuntime::fail(std::exception_ptr error) {
+  std::lock_guard lock(mutex_);
+  if (!failure_) failure_ = std::move(error);
+  changed_.notify_all();
+}
+
+void DepthRuntime::push(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                        Clock::time_point capture) {
+  if (left.empty() || right.empty()) throw Error("runtime: empty input image");
+  if (!left.same_size(right) || left.channels != right.channels)
+    throw Error("runtime: left image is " + size_text(left) + " but right image is " +
+                size_text(right) + "; a rectified pair has one size");
+  if (left.channels != 1 && left.channels != 3)
+    throw Error("runtime: images need 1 or 3 channels, not " + std::to_string(left.channels));
+  int input = -1;
+  {
+    std::unique_lock lock(mutex_);
+    rethrow_failure();
+    if (!running()) throw Error("runtime: push before start");
+    if (next_index_ > 0 &&
+        (left.width != width_ || left.height != height_ || left.channels != channels_))
+      throw Error("runtime: frame " + std::to_string(next_index_) + " is " + size_text(left) +
+                  " but the sequence started at " + std::to_string(width_) + "x" +
+                  std::to_string(height_) + "x" + std::to_string(channels_) +
+                  "; drain() before a new sequence");
+    if (params_.deterministic) changed_.wait(lock, [&] { return failure_ || waiting_input_ < 0; });
+    rethrow_failure();
+    // At most one input is in the stereo stage and one waits, so one of three is always free.
+    input = take_free(input_free_, input_cursor_);
+    width_ = left.width;
+    height_ = left.height;
+    channels_ = left.channels;
+    ++pushed_;
+  }
+  Input& in = inputs_[static_cast<std::size_t>(input)];
+  in.left.resize(left.width, left.height, left.channels);
+  in.right.resize(right.width, right.height, right.channels);
+  in.left.copy_from(left);
+  in.right.copy_from(right);
+  in.capture = capture;
+  in.entry = Clock::now();
+  std::lock_guard lock(mutex_);
+  in.index = next_index_++;
+  if (waiting_input_ >= 0) {  // newest wins
+    input_free_[static_cast<std::size_t>(waiting_input_)] = true;
+    ++dropped_;
+  }
+  waiting_input_ = input;
+  entry_high_water_ = 1;
+  changed_.notify_all();
+}
+
+void DepthRuntime::drain() {
+  std::unique_lock lock(mutex_);
+  rethrow_failure();
+  if (!running()) throw Error("runtime: drain before start");
+  const long target = drained_ + 1;
+  end_requested_ = true;
+  changed_.notify_all();
+  changed_.wait(lock, [&] { return failure_ || drained_ >= target; });
+  rethrow_failure();
+  next_index_ = 0;
+}
+
+int DepthRuntime::acquire_slot(std::stop_token stop) {
+  std::unique_lock lock(mutex_);
+  int slot = -1;
+  if (!changed_.wait(lock, stop, [&] { return (slot = take_free(slot_free_, slot_cursor_)) >= 0; }))
+    return -1;
+  slots_[static_cast<std::size_t>(slot)].stereo_done = false;
+  return slot;
+}
+
+void DepthRuntime::release_slot(int slot) {
+  std::lock_guard lock(mutex_);
+  slot_free_[static_cast<std::size_t>(slot)] = true;
+  changed_.notify_all();
+}
+
+void DepthRuntime::stereo_loop(std::stop_token stop) {
+  while (true) {
+    int input = -1;
+    {
+      std::unique_lock lock(mutex_);
+      if (!changed_.wait(lock, stop, [&] { return waiting_input_ >= 0 || end_requested_; })) return;
+      if (waiting_input_ >= 0) {
+        input = std::exchange(waiting_input_, -1);
+        changed_.notify_all();  // room at the entry
+      } else {
+        end_requested_ = false;
+      }
+    }
+    if (input < 0) {  // the end of the sequence follows the frames before it
+      if (params_.threads == 1) {
+        contour_end(stop);
+        continue;
+      }
+      std::unique_lock lock(mutex_);
+      if (!changed_.wait(lock, stop, [&] { return !stereo_queue_.full(); })) return;
+      stereo_queue_.push(kEnd);
+      changed_.notify_all();
+      continue;
+    }
+    const int slot = acquire_slot(stop);
+    if (slot < 0) return;
+    const Input& in = inputs_[static_cast<std::size_t>(input)];
+    SlotEntry& entry = slots_[static_cast<std::size_t>(slot)];
+    entry.times = {};
+    entry.times.capture = in.capture;
+    entry.times.entry = in.entry;
+    try {
+      if (hook_) hook_(Stage::kStereo, in.index);
+      entry.times.stereo_start = Clock::now();
+      prepare_frame(pipeline_.stereo, in.left.cview(), in.index, entry.slot);
+      if (params_.threads > 1) {
+        // Hand the frame on before its stereo: the previous frame's contours need only its
+        // grey image, and run meanwhile.
+        std::unique_lock lock(mutex_);
+        if (!changed_.wait(lock, stop, [&] { return !stereo_queue_.full(); })) return;
+        stereo_queue_.push(slot);
+        changed_.notify_all();
+      }
+      stereo_frame(*stereo_, in.left.cview(), in.right.cview(), entry.slot);
+    } catch (...) {
+      fail(std::current_exception());
+      return;
+    }
+    {
+      std::lock_guard lock(mutex_);
+      entry.times.stereo_end = Clock::now();
+      entry.stereo_done = true;
+      input_free_[static_cast<std::size_t>(input)] = true;
+      changed_.notify_all();
+    }
+    if (params_.threads == 1) contour_receive(stop, slot);
+  }
+}
+
+void DepthRuntime::contour_loop(std::stop_token stop) {
+  while (!stop.stop_requested()) {
+    int item = kEnd;
+    {
+      std::unique_lock lock(mutex_);
+      if (!changed_.wait(lock, stop, [&] { return !stereo_queue_.empty(); })) return;
+      item = stereo_queue_.pop();
+      changed_.notify_all();
+    }
+    if (item == kEnd)
+      contour_end(stop);
+    else
+      contour_receive(stop, item);
+  }
+}
+
+int DepthRuntime::window_slot(int frame) const {
+  return frame >= 0 ? window_[static_cast<std::size_t>(frame) % window_.size()] : -1;
+}
+
+void DepthRuntime::contour_receive(std::stop_token stop, int slot) {
+  // Frames are numbered in the order they passed the entry, as DepthPipeline numbers its pushes.
+  const int t = received_++;
+  window_[static_cast<std::size_t>(t) % window_.size()] = slot;
+  const ContourWindow w = window_on_arrival(pipeline_.contour.lookahead, t);
+  if (w.centre >= 0)
+    run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a),
+                window_slot(w.neighbour_b));
+  if (t >= 2) release_slot(window_slot(t - 2));  // in no later window, either lookahead
+}
+
+void DepthRuntime::contour_end(std::stop_token stop) {
+  if (pipeline_.contour.lookahead == 1 && received_ > 0) {
+    const ContourWindow w = window_at_end(received_ - 1);
+    run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a),
+                window_slot(w.neighbour_b));
+  }
+  for (int t = std::max(received_ - 2, 0); t < received_; ++t) release_slot(window_slot(t));
+  received_ = 0;
+  if (params_.threads < 3) {
+    densify_end();
+    return;
+  }
+  std::unique_lock lock(mutex_);
+  if (!changed_.wait(lock, stop, [&] { return !densify_queue_.full(); })) return;
+  densify_queue_.push(kEnd);
+  changed_.notify_all();
+}
+
+void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b) {
+  const SlotEntry& c = slots_[static_cast<std::size_t>(centre)];
+  int result = -1;
+  {
+    std::unique_lock lock(mutex_);
+    const auto ready = [&] {
+      return c.stereo_done && (result = take_free(result_free_, result_cursor_)) >= 0;
+    };
+    if (!changed_.wait(lock, stop, ready)) return;
+  }
+  ResultEntry& r = results_[static_cast<std::size_t>(result)];
+  const auto neighbour = [&](int slot) {
+    return slot >= 0 ? &slots_[static_cast<std::size_t>(slot)].slot : nullptr;
+  };
+  try {
+    if (hook_) hook_(Stage::kContour, c.slot.index);
+    r.times = c.times;
+    r.times.contour_start = Clock::now();
+    contour_frame(*contour_, c.slot, neighbour(neighbour_a), neighbour(neighbour_b), r.result);
+    r.times.contour_end = Clock::now();
+  } catch (...) {
+    fail(std::current_exception());
+    return;
+  }
+  if (params_.threads < 3) {
+    densify_receive(result);
+    return;
+  }
+  std::unique_lock lock(mutex_);
+  if (!changed_.wait(lock, stop, [&] { return !densify_queue_.full(); })) return;
+  densify_queue_.push(result);
+  changed_.notify_all();
+}
+
+void DepthRuntime::densify_loop(std::stop_token stop) {
+  while (!stop.stop_requested()) {
+    int item = kEnd;
+    {
+      std::unique_lock lock(mutex_);
+      if (!changed_.wait(lock, stop, [&] { return !densify_queue_.empty(); })) return;
+      item = densify_queue_.pop();
+      changed_.notify_all();
+    }
+    if (item == kEnd)
+      densify_end();
+    else
+      densify_receive(item);
+  }
+}
+
+void DepthRuntime::densify_receive(int result) {
+  ResultEntry& r = results_[static_cast<std::size_t>(result)];
+  try {
+    if (hook_) hook_(Stage::kDensify, r.result.index);
+    r.times.densify_start = Clock::now();
+    densify_frame(densifier_, r.result);
+    r.times.densify_end = Clock::now();
+    if (on_result_) on_result_(r.result, r.times);
+  } catch (...) {
+    fail(std::current_exception());
+    return;
+  }
+  std::lock_guard lock(mutex_);
+  const FrameTimes& t = r.times;
+  latency_.record(ms_between(t.capture, t.densify_end));
+  stereo_ms_.record(ms_between(t.stereo_start, t.stereo_end));
+  contour_ms_.record(ms_between(t.contour_start, t.contour_end));
+  densify_ms_.record(ms_between(t.densify_start, t.densify_end));
+  ++published_;
+  result_free_[static_cast<std::size_t>(result)] = true;
+  changed_.notify_all();
+}
+
+void DepthRuntime::densify_end() {
+  densifier_.reset();
+  std::lock_guard lock(mutex_);
+  ++drained_;
+  changed_.notify_all();
+}
+
+RuntimeStats DepthRuntime::stats() const {
+  std::lock_guard lock(mutex_);
+  RuntimeStats s;
+  s.latency = summary(latency_);
+  s.stereo = summary(stereo_ms_);
+  s.contour = summary(contour_ms_);
+  s.densify = summary(densify_ms_);
+  s.pushed = pushed_;
+  s.dropped = dropped_;
+  s.published = published_;
+  s.entry_high_water = entry_high_water_;
+  s.stereo_queue_high_water = stereo_queue_.high_water();
+  s.densify_queue_high_water = densify_queue_.high_water();
+  return s;
+}
+
+}  // namespace dco::pipeline::runtime

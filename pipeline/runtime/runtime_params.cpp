@@ -1,0 +1,61 @@
+#include "dco/pipeline/runtime/runtime_params.hpp"
+
+#include <sched.h>
+
+#include <algorithm>
+#include <string_view>
+
+#include "dco/core/config.hpp"
+#include "dco/core/error.hpp"
+
+namespace dco::pipeline::runtime {
+
+void register_params(ConfigSchema& s, RuntimeParams& p) {
+  s.add("runtime.threads", &p.threads, 1, 3,
+        "stage threads: 1 all in one, 2 stereo | contour+densify, 3 stereo | contour | densify");
+  s.add("runtime.affinity", &p.affinity, {},
+        "CPUs for the stage threads, e.g. \"0,1\" (thread i on entry i mod n); empty = any");
+  s.add("runtime.queue_depth", &p.queue_depth, 1, 8,
+        "frames each queue between stage threads holds (each one is a frame of latency)");
+  s.add("runtime.deterministic", &p.deterministic,
+        "never drop frames (push waits): same output as the offline pipeline, for replays");
+}
+
+std::vector<int> parse_affinity(const std::string& text) {
+  std::vector<int> cpus;
+  std::string_view rest = text;
+  while (!rest.empty()) {
+    const std::size_t comma = rest.find(',');
+    std::string_view item = rest.substr(0, comma);
+    rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
+    while (!item.empty() && item.front() == ' ') item.remove_prefix(1);
+    while (!item.empty() && item.back() == ' ') item.remove_suffix(1);
+    const bool digits =
+        !item.empty() && item.size() <= 4 &&
+        std::all_of(item.begin(), item.end(), [](char c) { return c >= '0' && c <= '9'; });
+    if (!digits)
+      throw Error("runtime.affinity: '" + std::string(item) + "' in \"" + text +
+                  "\" is not a CPU number");
+    const int cpu = std::stoi(std::string(item));
+    if (cpu >= CPU_SETSIZE)
+      throw Error("runtime.affinity: CPU " + std::to_string(cpu) + " is beyond the " +
+                  std::to_string(CPU_SETSIZE) + " CPUs the system can address");
+    if (std::find(cpus.begin(), cpus.end(), cpu) != cpus.end())
+      throw Error("runtime.affinity: CPU " + std::to_string(cpu) + " is listed twice in \"" + text +
+                  "\"");
+    cpus.push_back(cpu);
+    if (comma != std::string_view::npos && rest.empty())
+      throw Error("runtime.affinity: \"" + text + "\" ends with a comma");
+  }
+  return cpus;
+}
+
+void validate(const RuntimeParams& p) {
+  if (p.threads < 1 || p.threads > 3)
+    throw Error("runtime.threads must be 1, 2 or 3, not " + std::to_string(p.threads));
+  if (p.queue_depth < 1 || p.queue_depth > 8)
+    throw Error("runtime.queue_depth must be in [1, 8], not " + std::to_string(p.queue_depth));
+  parse_affinity(p.affinity);
+}
+
+}  // namespace dco::pipeline::runtime

@@ -1,0 +1,144 @@
+#include "dco/kernels/densify_kernels.hpp"
+#include "for_each_target.hpp"
+
+#include <cstdint>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <hwy/targets.h>
+
+namespace dco::kernels {
+namespace {
+
+// Widths around the lane counts of every target (4 .. 16 float lanes, SVE up to 64), odd ones,
+// and the one- and two-column rows that have no interior.
+const std::vector<int> kWidths = {1, 2, 3, 5, 8, 15, 16, 17, 18, 31, 33, 64, 65, 66, 130, 257};
+
+std::vector<float> random_floats(std::mt19937& rng, int n, float lo, float hi) {
+  std::uniform_real_distribution<float> dist(lo, hi);
+  std::vector<float> v(static_cast<std::size_t>(n));
+  for (float& e : v) e = dist(rng);
+  return v;
+}
+
+// A row of a diagonally dominant system, with or without the rows above and below.
+struct RowData {
+  std::vector<float> diag, inv, wx, wy, wy_above, x_above, x_below, b, x;
+
+  RowData(std::mt19937& rng, int w) {
+    wx = random_floats(rng, w, 0.0f, 2.0f);
+    wy = random_floats(rng, w, 0.0f, 2.0f);
+    wy_above = random_floats(rng, w, 0.0f, 2.0f);
+    x_above = random_floats(rng, w, -50.0f, 50.0f);
+    x_below = random_floats(rng, w, -50.0f, 50.0f);
+    b = random_floats(rng, w, -10.0f, 10.0f);
+    x = random_floats(rng, w, -50.0f, 50.0f);
+    diag = random_floats(rng, w, 4.0f, 9.0f);
+    inv.resize(diag.size());
+    for (std::size_t i = 0; i < diag.size(); ++i) inv[i] = 1.0f / diag[i];
+  }
+
+  GridRow row(bool above, bool below) const {
+    GridRow r;
+    r.width = static_cast<int>(diag.size());
+    r.diag = diag.data();
+    r.inv_diag = inv.data();
+    r.wx = wx.data();
+    if (below) r.wy = wy.data(), r.x_below = x_below.data();
+    if (above) r.wy_above = wy_above.data(), r.x_above = x_above.data();
+    return r;
+  }
+};
+
+TEST(DensifyKernels, SmoothRowMatchesScalar) {
+  std::mt19937 rng(5);
+  for_each_target([&] {
+    for (const int w : kWidths)
+      for (const int start : {0, 1})
+        for (const bool above : {false, true})
+          for (const bool below : {false, true}) {
+            const RowData data(rng, w);
+            const GridRow row = data.row(above, below);
+            std::vector<float> expected = data.x, actual = data.x;
+            scalar::grid_smooth_row(row, start, data.b.data(), expected.data());
+            grid_smooth_row(row, start, data.b.data(), actual.data());
+            for (int c = 0; c < w; ++c) {
+              ASSERT_EQ(actual[c], expected[c]) << "w " << w << " start " << start << " above "
+                                                << above << " below " << below << " column " << c;
+              // Only the pixels of the colour move.
+              if ((c - start) % 2 != 0) {
+                ASSERT_EQ(actual[c], data.x[c]);
+              }
+            }
+          }
+  });
+}
+
+TEST(DensifyKernels, SmoothRowSolvesTheRowEquation) {
+  // After the update, each updated pixel satisfies its own equation of A x = b exactly up to
+  // rounding: diag x - Σ w x(neighbours) = b.
+  std::mt19937 rng(6);
+  const int w = 41;
+  const RowData data(rng, w);
+  const GridRow row = data.row(true, true);
+  std::vector<float> x = data.x;
+  grid_smooth_row(row, 0, data.b.data(), x.data());
+  std::vector<float> ax(static_cast<std::size_t>(w));
+  grid_apply_row(row, x.data(), ax.data());
+  for (int c = 0; c < w; c += 2) EXPECT_NEAR(ax[c], data.b[c], 1e-3f) << c;
+}
+
+TEST(DensifyKernels, ApplyRowMatchesScalar) {
+  std::mt19937 rng(7);
+  for_each_target([&] {
+    for (const int w : kWidths)
+      for (const bool above : {false, true})
+        for (const bool below : {false, true}) {
+          const RowData data(rng, w);
+          const GridRow row = data.row(above, below);
+          std::vector<float> expected(static_cast<std::size_t>(w)), actual(expected.size());
+          scalar::grid_apply_row(row, data.x.data(), expected.data());
+          grid_apply_row(row, data.x.data(), actual.data());
+          for (int c = 0; c < w; ++c)
+            ASSERT_EQ(actual[c], expected[c]) << "w " << w << " column " << c;
+        }
+  });
+}
+
+TEST(DensifyKernels, ApplyRowIsTheStencil) {
+  // Hand-computed: a 3-pixel row with a row below only.
+  const float diag[] = {4, 5, 6}, wx[] = {1, 2, 0}, wy[] = {0.5f, 0.5f, 0.5f};
+  const float x[] = {1, 2, 3}, below[] = {10, 20, 30};
+  GridRow r;
+  r.width = 3;
+  r.diag = diag;
+  r.wx = wx;
+  r.wy = wy;
+  r.x_below = below;
+  float out[3];
+  grid_apply_row(r, x, out);
+  EXPECT_FLOAT_EQ(out[0], 4 * 1 - 1 * 2 - 0.5f * 10);
+  EXPECT_FLOAT_EQ(out[1], 5 * 2 - 2 * 3 - 1 * 1 - 0.5f * 20);
+  EXPECT_FLOAT_EQ(out[2], 6 * 3 - 2 * 2 - 0.5f * 30);
+}
+
+TEST(DensifyKernels, DotRowMatchesScalarAndDouble) {
+  std::mt19937 rng(8);
+  for_each_target([&] {
+    for (const int n : {0, 1, 15, 16, 17, 31, 32, 33, 100, 1280}) {
+      const std::vector<float> a = random_floats(rng, n, -3.0f, 3.0f);
+      const std::vector<float> b = random_floats(rng, n, -3.0f, 3.0f);
+      const double expected = scalar::dot_row(a.data(), b.data(), n);
+      ASSERT_EQ(dot_row(a.data(), b.data(), n), expected) << n;
+      double exact = 0;
+      for (int i = 0; i < n; ++i) exact += static_cast<double>(a[i]) * b[i];
+      EXPECT_NEAR(expected, exact, 1e-4 * (1 + n)) << n;
+    }
+  });
+}
+
+}  // namespace
+}  // namespace dco::kernels

@@ -1,0 +1,589 @@
+#include "dco/kernels/stereo_kernels.hpp"
+#include "for_each_target.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <functional>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <hwy/targets.h>
+
+namespace dco::kernels {
+namespace {
+
+// Widths around the lane counts of every target (4 .. 16 32-bit lanes, SVE up to 64), odd ones,
+// and one below a single vector.
+const std::vector<int> kWidths = {1, 3, 7, 8, 15, 16, 17, 31, 33, 63, 64, 65, 97, 130, 257};
+// Blocks shorter and longer than a vector, and not multiples of the lane count.
+const std::vector<int> kBlocks = {1, 3, 4, 16, 17, 40};
+
+template <typename T>
+std::vector<T> random_vector(std::mt19937& rng, std::size_t n, T lo, T hi) {
+  std::uniform_int_distribution<std::uint64_t> dist(lo, hi);
+  std::vector<T> v(n);
+  for (T& e : v) e = static_cast<T>(dist(rng));
+  return v;
+}
+
+std::vector<std::uint64_t> random_census(std::mt19937& rng, std::size_t n) {
+  std::vector<std::uint64_t> v(n);
+  for (auto& e : v) e = (std::uint64_t{rng()} << 32) | rng();
+  return v;
+}
+
+// Arm lengths that never leave [0, limit): left[x] <= x, right[x] <= limit - 1 - x.
+void random_arms(std::mt19937& rng, int limit, int max_arm, std::vector<std::uint8_t>& before,
+                 std::vector<std::uint8_t>& after) {
+  before.resize(static_cast<std::size_t>(limit));
+  after.resize(static_cast<std::size_t>(limit));
+  for (int i = 0; i < limit; ++i) {
+    before[i] = static_cast<std::uint8_t>(rng() % (std::min(i, max_arm) + 1));
+    after[i] = static_cast<std::uint8_t>(rng() % (std::min(limit - 1 - i, max_arm) + 1));
+  }
+}
+
+struct Tables {
+  std::vector<std::uint32_t> ad, census;
+  CostTableView view;
+  Tables(int channels, int max_arm) {
+    std::mt19937 rng(7);
+    const int ad_size = 255 * channels + 1;
+    ad = random_vector<std::uint32_t>(rng, static_cast<std::size_t>((max_arm + 1) * ad_size), 0,
+                                      2100);
+    census =
+        random_vector<std::uint32_t>(rng, static_cast<std::size_t>((max_arm + 1) * 65), 0, 2000);
+    view = {ad.data(), ad_size, census.data(), 65, 4096};
+  }
+};
+
+TEST(StereoKernels, RunsEveryTargetOfThisCpu) {
+  std::string names;
+  for (const std::int64_t target : hwy::SupportedAndGeneratedTargets())
+    names += std::string(" ") + hwy::TargetName(target);
+  std::printf("SIMD targets under test:%s\n", names.c_str());
+  EXPECT_NE(names.find(std::string(" ") + simd_target()), std::string::npos)
+      << "dispatch picked " << simd_target();
+#if HWY_ARCH_ARM_A64
+  // NEON is the baseline of every 64-bit Arm CPU: its path must be among those compared.
+  EXPECT_NE(names.find(" NEON"), std::string::npos) << names;
+#elif HWY_ARCH_X86_64
+  EXPECT_NE(names.find(" SSE4"), std::string::npos) << names;
+#endif
+}
+
+TEST(StereoKernels, PackPixelsPutsChannelsInBytes) {
+  const std::uint8_t bgr[6] = {1, 2, 3, 250, 251, 252};
+  std::uint32_t out[2];
+  pack_pixels(bgr, 3, 2, out);
+  EXPECT_EQ(out[0], 0x030201u);
+  EXPECT_EQ(out[1], 0xfcfbfau);
+  pack_pixels(bgr, 1, 2, out);
+  EXPECT_EQ(out[0], 1u);
+  EXPECT_EQ(out[1], 2u);
+}
+
+TEST(StereoKernels, CensusMatchesScalarAndTheDefinition) {
+  std::mt19937 rng(8);
+  for (const int w : {1, 4, 9, 16, 31, 64, 100}) {
+    const int h = 9;
+    // Few grey levels, so equal neighbours (not darker: bit clear) occur often.
+    const auto image = random_vector<std::uint8_t>(rng, static_cast<std::size_t>(w * h), 0, 3);
+    for (const auto& [ww, wh] : {std::pair{9, 7}, std::pair{3, 3}, std::pair{5, 5}, std::pair{1, 9},
+                                 std::pair{7, 9}, std::pair{13, 3}}) {
+      if (ww * wh - 1 > 64) continue;
+      for (int y = 0; y < h; ++y) {
+        std::vector<const std::uint8_t*> rows;
+        for (int j = 0; j < wh; ++j)
+          rows.push_back(image.data() + std::clamp(y + j - wh / 2, 0, h - 1) * w);
+        std::vector<std::uint64_t> expected(static_cast<std::size_t>(w));
+        scalar::census_row(rows.data(), w, ww, wh, expected.data());
+        if (y == h / 2 && w > ww) {  // one pixel by the definition, bit by bit
+          const int x = w / 2;
+          int bit = ww * wh - 2;
+          for (int j = 0; j < wh; ++j)
+            for (int dx = -(ww / 2); dx <= ww / 2; ++dx) {
+              if (j == wh / 2 && dx == 0) continue;
+              const int xx = std::clamp(x + dx, 0, w - 1);
+              const bool darker = rows[j][xx] < rows[wh / 2][x];
+              ASSERT_EQ((expected[x] >> bit) & 1u, darker ? 1u : 0u) << ww << "x" << wh;
+              --bit;
+            }
+        }
+        for_each_target([&] {
+          std::vector<std::uint64_t> out(expected.size(), 5);
+          census_row(rows.data(), w, ww, wh, out.data());
+          ASSERT_EQ(out, expected)
+              << "width " << w << " window " << ww << "x" << wh << " row " << y;
+        });
+      }
+    }
+  }
+}
+
+TEST(StereoKernels, CrossArmsMatchScalar) {
+  std::mt19937 rng(6);
+  for (const int channels : {1, 3}) {
+    for (const int w : {1, 5, 16, 40, 77, 130}) {
+      const int h = 31;
+      const std::ptrdiff_t stride = w + 3;
+      // Patches of similar colour with small noise, so arms of every length occur.
+      std::vector<std::uint32_t> image(static_cast<std::size_t>(h * stride));
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          std::uint8_t px[3];
+          for (int c = 0; c < channels; ++c)
+            px[c] =
+                static_cast<std::uint8_t>(((x / 9) * 37 + (y / 7) * 59 + c * 17) % 256 + rng() % 5);
+          pack_pixels(px, channels, 1, &image[y * stride + x]);
+        }
+      for (const ArmParams params :
+           {ArmParams{34, 17, 20, 6}, ArmParams{5, 2, 12, 3}, ArmParams{255, 0, 255, 1}}) {
+        for (int y = 0; y < h; ++y) {
+          std::vector<std::uint8_t> expected(static_cast<std::size_t>(4 * w));
+          std::uint8_t* e = expected.data();
+          scalar::cross_arms_row(image.data(), stride, w, h, y, params, e, e + w, e + 2 * w,
+                                 e + 3 * w);
+          for_each_target([&] {
+            std::vector<std::uint8_t> out(expected.size(), 99);
+            std::uint8_t* o = out.data();
+            cross_arms_row(image.data(), stride, w, h, y, params, o, o + w, o + 2 * w, o + 3 * w);
+            ASSERT_EQ(out, expected) << "channels " << channels << " width " << w << " row " << y
+                                     << " arm_max " << params.arm_max;
+          });
+        }
+      }
+    }
+  }
+}
+
+TEST(StereoKernels, MatchingCostMatchesScalar) {
+  std::mt19937 rng(1);
+  for (const int channels : {1, 3}) {
+    const Tables tables(channels, 34);
+    for (const int w : kWidths) {
+      std::vector<std::uint8_t> left_px =
+          random_vector<std::uint8_t>(rng, static_cast<std::size_t>(w * channels), 0, 255);
+      std::vector<std::uint8_t> right_px =
+          random_vector<std::uint8_t>(rng, static_cast<std::size_t>(w * channels), 0, 255);
+      if (w > 2) {  // the extreme differences: 0 and 255 in every channel
+        std::fill(left_px.begin(), left_px.begin() + channels, 0);
+        std::fill(right_px.begin(), right_px.begin() + channels, 255);
+      }
+      std::vector<std::uint32_t> left(static_cast<std::size_t>(w)), right(left.size());
+      pack_pixels(left_px.data(), channels, w, left.data());
+      pack_pixels(right_px.data(), channels, w, right.data());
+      const auto cl = random_census(rng, left.size());
+      auto cr = random_census(rng, left.size());
+      if (w > 2) cr[0] = ~cl[w - 1];  // Hamming distance 64
+      const auto arm = random_vector<std::uint8_t>(rng, left.size(), 0, 34);
+      const CostRow row{left.data(), right.data(), cl.data(), cr.data(), arm.data(), w};
+      for (const int d : {0, 1, 5, w / 2, w - 1, w, w + 3}) {
+        std::vector<std::uint32_t> expected(left.size(), 1), out(left.size(), 2);
+        scalar::matching_cost_row(row, tables.view, d, expected.data());
+        for_each_target([&] {
+          std::fill(out.begin(), out.end(), 2);
+          matching_cost_row(row, tables.view, d, out.data());
+          ASSERT_EQ(out, expected) << "channels " << channels << " width " << w << " d " << d;
+        });
+      }
+    }
+  }
+}
+
+TEST(StereoKernels, BlockMatchingCostMatchesTheRowKernel) {
+  std::mt19937 rng(15);
+  for (const int channels : {1, 3}) {
+    const Tables tables(channels, 34);
+    for (const int w : {1, 7, 20, 45, 130}) {
+      std::vector<std::uint32_t> left(static_cast<std::size_t>(w)), right(left.size());
+      for (auto& px : left) px = rng() & (channels == 3 ? 0xffffffu : 0xffu);
+      for (auto& px : right) px = rng() & (channels == 3 ? 0xffffffu : 0xffu);
+      const auto cl = random_census(rng, left.size());
+      const auto cr = random_census(rng, left.size());
+      const auto arm = random_vector<std::uint8_t>(rng, left.size(), 0, 34);
+      const CostRow row{left.data(), right.data(), cl.data(), cr.data(), arm.data(), w};
+      for (const int d0 : {0, 3, 16, w - 1}) {
+        for (const int count : kBlocks) {
+          // The block layout is the row kernel's slices, interleaved.
+          std::vector<std::uint32_t> expected(static_cast<std::size_t>(w * count));
+          std::vector<std::uint32_t> slice(left.size());
+          for (int k = 0; k < count; ++k) {
+            scalar::matching_cost_row(row, tables.view, d0 + k, slice.data());
+            for (int x = 0; x < w; ++x) expected[x * count + k] = slice[x];
+          }
+          std::vector<std::uint32_t> reference(expected.size());
+          scalar::block_matching_cost_row(row, tables.view, d0, count, reference.data());
+          ASSERT_EQ(reference, expected);
+          for_each_target([&] {
+            std::vector<std::uint32_t> out(expected.size(), 1);
+            block_matching_cost_row(row, tables.view, d0, count, out.data());
+            ASSERT_EQ(out, expected)
+                << "channels " << channels << " width " << w << " d0 " << d0 << " count " << count;
+          });
+        }
+      }
+    }
+  }
+}
+
+TEST(StereoKernels, MatchingCostOfIdenticalPixelsIsTheZeroEntry) {
+  const Tables tables(3, 4);
+  const int w = 40;
+  std::vector<std::uint32_t> px(w, 0x123456u);
+  std::vector<std::uint64_t> census(w, 0xf0f0u);
+  std::vector<std::uint8_t> arm(w, 3);
+  const CostRow row{px.data(), px.data(), census.data(), census.data(), arm.data(), w};
+  for_each_target([&] {
+    std::vector<std::uint32_t> out(w);
+    matching_cost_row(row, tables.view, 2, out.data());
+    EXPECT_EQ(out[0], 4096u);
+    EXPECT_EQ(out[1], 4096u);
+    for (int x = 2; x < w; ++x)
+      ASSERT_EQ(out[x], tables.ad[3 * tables.view.ad_size] + tables.census[3 * 65]) << x;
+  });
+}
+
+TEST(StereoKernels, HorizontalSumsMatchScalarAndBruteForce) {
+  std::mt19937 rng(2);
+  for (const int w : kWidths) {
+    const auto in = random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w), 0, 0xffffffffu);
+    std::vector<std::uint8_t> left, right;
+    random_arms(rng, w, 40, left, right);
+    std::vector<std::uint32_t> prefix(static_cast<std::size_t>(w) + 1), expected(in.size());
+    scalar::horizontal_sums_row(in.data(), left.data(), right.data(), w, prefix.data(),
+                                expected.data());
+    for (int x = 0; x < w; ++x) {
+      std::uint32_t sum = 0;  // wraps like the kernel
+      for (int i = x - left[x]; i <= x + right[x]; ++i) sum += in[i];
+      ASSERT_EQ(expected[x], sum);
+    }
+    for_each_target([&] {
+      std::vector<std::uint32_t> out(in.size());
+      horizontal_sums_row(in.data(), left.data(), right.data(), w, prefix.data(), out.data());
+      ASSERT_EQ(out, expected) << "width " << w;
+    });
+  }
+}
+
+TEST(StereoKernels, VerticalSumsMatchScalar) {
+  std::mt19937 rng(3);
+  for (const int w : kWidths) {
+    const int h = 23;
+    const std::ptrdiff_t stride = w + 5;  // rows padded, as in dco::Image
+    auto columns =
+        random_vector<std::uint32_t>(rng, static_cast<std::size_t>(h * stride), 0, 0xffffffffu);
+    std::vector<std::uint32_t> accumulated = columns, reference = columns;
+    for (int y = 1; y < h; ++y) {
+      scalar::accumulate_row(reference.data() + (y - 1) * stride, reference.data() + y * stride, w);
+      accumulate_row(accumulated.data() + (y - 1) * stride, accumulated.data() + y * stride, w);
+    }
+    ASSERT_EQ(accumulated, reference);
+    std::vector<std::vector<std::uint8_t>> up(h), down(h);
+    std::vector<std::uint8_t> column_up, column_down;
+    for (auto& r : up) r.resize(static_cast<std::size_t>(w));
+    for (auto& r : down) r.resize(static_cast<std::size_t>(w));
+    for (int x = 0; x < w; ++x) {
+      random_arms(rng, h, 9, column_up, column_down);
+      for (int y = 0; y < h; ++y) {
+        up[y][x] = column_up[y];
+        down[y][x] = column_down[y];
+      }
+    }
+    for (int y = 0; y < h; ++y) {
+      std::vector<std::uint32_t> expected(static_cast<std::size_t>(w));
+      scalar::vertical_sums_row(reference.data(), stride, y, up[y].data(), down[y].data(), w,
+                                expected.data());
+      for (int x = 0; x < w; ++x) {
+        std::uint32_t sum = 0;
+        for (int i = y - up[y][x]; i <= y + down[y][x]; ++i) sum += columns[i * stride + x];
+        ASSERT_EQ(expected[x], sum);
+      }
+      for_each_target([&] {
+        std::vector<std::uint32_t> out(static_cast<std::size_t>(w));
+        vertical_sums_row(accumulated.data(), stride, y, up[y].data(), down[y].data(), w,
+                          out.data());
+        ASSERT_EQ(out, expected) << "width " << w << " row " << y;
+      });
+    }
+  }
+}
+
+TEST(StereoKernels, RegionMeanMatchesScalar) {
+  std::mt19937 rng(4);
+  for (const int w : kWidths) {
+    auto sums = random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w), 0, 0xffffffffu);
+    std::vector<std::uint32_t> reciprocal(sums.size());
+    for (int x = 0; x < w; ++x) {
+      const std::uint64_t n = 1 + rng() % 5000;
+      reciprocal[x] = static_cast<std::uint32_t>(((std::uint64_t{1} << 31) + n / 2) / n);
+    }
+    if (w > 1) {  // the largest operands
+      sums[0] = 0xffffffffu;
+      reciprocal[0] = 1u << 31;
+      sums[1] = 0;
+    }
+    std::vector<std::uint32_t> expected = sums;
+    scalar::region_mean_row(expected.data(), reciprocal.data(), w);
+    if (w > 1) {
+      EXPECT_EQ(expected[0], 0xffffffffu);
+    }
+    for_each_target([&] {
+      std::vector<std::uint32_t> out = sums;
+      region_mean_row(out.data(), reciprocal.data(), w);
+      ASSERT_EQ(out, expected) << "width " << w;
+    });
+  }
+}
+
+TEST(StereoKernels, BlockHorizontalSumsMatchScalarAndBruteForce) {
+  std::mt19937 rng(12);
+  for (const int w : {1, 7, 16, 33}) {
+    for (const int block : kBlocks) {
+      const auto in =
+          random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w * block), 0, 0xffffffffu);
+      std::vector<std::uint8_t> left, right;
+      random_arms(rng, w, 40, left, right);
+      std::vector<std::uint32_t> prefix(static_cast<std::size_t>((w + 1) * block));
+      std::vector<std::uint32_t> expected(in.size());
+      scalar::block_horizontal_sums_row(in.data(), left.data(), right.data(), w, block,
+                                        prefix.data(), expected.data());
+      for (int x = 0; x < w; ++x)
+        for (int k = 0; k < block; ++k) {
+          std::uint32_t sum = 0;
+          for (int i = x - left[x]; i <= x + right[x]; ++i) sum += in[i * block + k];
+          ASSERT_EQ(expected[x * block + k], sum);
+        }
+      for_each_target([&] {
+        std::vector<std::uint32_t> out(in.size());
+        block_horizontal_sums_row(in.data(), left.data(), right.data(), w, block, prefix.data(),
+                                  out.data());
+        ASSERT_EQ(out, expected) << "width " << w << " block " << block;
+      });
+    }
+  }
+}
+
+TEST(StereoKernels, BlockVerticalSumsAndMeansMatchScalar) {
+  std::mt19937 rng(13);
+  for (const int w : {1, 7, 16, 33}) {
+    for (const int block : kBlocks) {
+      const int h = 19;
+      const std::ptrdiff_t stride = w * block + 2;
+      auto columns =
+          random_vector<std::uint32_t>(rng, static_cast<std::size_t>(h * stride), 0, 0xffffffffu);
+      std::vector<std::uint32_t> sums = columns;
+      for (int y = 1; y < h; ++y)
+        scalar::accumulate_row(sums.data() + ((y + 4) % h) * stride,
+                               sums.data() + ((y + 5) % h) * stride, w * block);
+      // Rows through a pointer table, out of memory order (as in a ring buffer).
+      std::vector<const std::uint32_t*> rows(static_cast<std::size_t>(h));
+      for (int i = 0; i < h; ++i) rows[i] = sums.data() + ((i + 5) % h) * stride;
+      std::vector<std::uint8_t> up(static_cast<std::size_t>(w)), down(up.size());
+      std::vector<std::uint8_t> column_up, column_down;
+      const int y = static_cast<int>(rng() % h);
+      for (int x = 0; x < w; ++x) {
+        random_arms(rng, h, 12, column_up, column_down);
+        up[x] = column_up[y];
+        down[x] = column_down[y];
+      }
+      std::vector<std::uint32_t> reciprocal(up.size());
+      for (auto& r : reciprocal) r = static_cast<std::uint32_t>(rng() % (1u << 31));
+      std::vector<std::uint32_t> expected(static_cast<std::size_t>(w * block));
+      scalar::block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block,
+                                      expected.data());
+      for (int x = 0; x < w; ++x)
+        for (int k = 0; k < block; ++k) {
+          std::uint32_t sum = 0;
+          for (int i = y - up[x]; i <= y + down[x]; ++i)
+            sum += columns[((i + 5) % h) * stride + x * block + k];
+          ASSERT_EQ(expected[x * block + k], sum);
+        }
+      std::vector<std::uint32_t> expected_mean = expected;
+      scalar::block_region_mean_row(expected_mean.data(), reciprocal.data(), w, block);
+      for (int x = 0; x < w; ++x) {  // the row kernel, pixel by pixel
+        std::vector<std::uint32_t> one(expected.begin() + x * block,
+                                       expected.begin() + (x + 1) * block);
+        const std::vector<std::uint32_t> r(static_cast<std::size_t>(block), reciprocal[x]);
+        scalar::region_mean_row(one.data(), r.data(), block);
+        ASSERT_TRUE(std::equal(one.begin(), one.end(), expected_mean.begin() + x * block));
+      }
+      for_each_target([&] {
+        std::vector<std::uint32_t> out(expected.size());
+        block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block, out.data());
+        ASSERT_EQ(out, expected) << "width " << w << " block " << block;
+        block_region_mean_row(out.data(), reciprocal.data(), w, block);
+        ASSERT_EQ(out, expected_mean) << "width " << w << " block " << block;
+      });
+    }
+  }
+}
+
+TEST(StereoKernels, BlocksToRowsTransposes) {
+  std::mt19937 rng(17);
+  for (const int w : {1, 4, 7, 16, 33}) {
+    for (const int block : kBlocks) {
+      for (const int count : {1, block / 2 + 1, block}) {
+        const auto blocks =
+            random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w * block), 0, 0xffffffffu);
+        const std::ptrdiff_t stride = w + 3;
+        std::vector<std::uint32_t> expected(static_cast<std::size_t>(stride * count), 7);
+        scalar::blocks_to_rows(blocks.data(), w, block, count, expected.data(), stride);
+        for (int k = 0; k < count; ++k)
+          for (int x = 0; x < w; ++x) ASSERT_EQ(expected[k * stride + x], blocks[x * block + k]);
+        for_each_target([&] {
+          std::vector<std::uint32_t> rows(expected.size(), 7);
+          blocks_to_rows(blocks.data(), w, block, count, rows.data(), stride);
+          ASSERT_EQ(rows, expected) << "width " << w << " block " << block << " count " << count;
+        });
+      }
+    }
+  }
+}
+
+TEST(StereoKernels, BlockIndicatorMatchesScalar) {
+  std::mt19937 rng(14);
+  for (const int w : {1, 7, 16, 33}) {
+    for (const int count : kBlocks) {
+      const auto value = random_vector<std::int16_t>(rng, static_cast<std::size_t>(w), 0, 6);
+      std::vector<std::int32_t> candidates(static_cast<std::size_t>(count));
+      for (int k = 0; k < count; ++k) candidates[k] = k % 5 - 1;  // -1: never a value here
+      std::vector<std::uint32_t> expected(static_cast<std::size_t>(w * count), 9);
+      scalar::block_indicator_row(value.data(), w, candidates.data(), count, expected.data());
+      for (int x = 0; x < w; ++x)
+        for (int k = 0; k < count; ++k)
+          ASSERT_EQ(expected[x * count + k], value[x] == candidates[k] ? 1u : 0u);
+      for_each_target([&] {
+        std::vector<std::uint32_t> out(expected.size(), 7);
+        block_indicator_row(value.data(), w, candidates.data(), count, out.data());
+        ASSERT_EQ(out, expected) << "width " << w << " count " << count;
+      });
+    }
+  }
+}
+
+TEST(StereoKernels, BlockVoteMatchesScalar) {
+  std::mt19937 rng(16);
+  for (const int w : {1, 7, 16, 33}) {
+    for (const int count : kBlocks) {
+      // Few distinct counts, so equal maxima within a block and against the running best occur.
+      const auto votes =
+          random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w * count), 0, 6);
+      std::vector<std::int32_t> candidates(static_cast<std::size_t>(count));
+      for (int k = 0; k < count; ++k) candidates[k] = 3 * k + 1;
+      const auto total0 = random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w), 0, 50);
+      const auto best0 = random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w), 0, 5);
+      const std::vector<std::int16_t> value0(static_cast<std::size_t>(w), -1);
+      auto total = total0;
+      auto best = best0;
+      auto value = value0;
+      scalar::block_vote_row(votes.data(), w, candidates.data(), count, total.data(), best.data(),
+                             value.data());
+      for (int x = 0; x < w; ++x) {  // by definition: the first bin holding the largest count
+        std::uint32_t sum = 0, most = best0[x];
+        std::int16_t winner = -1;
+        for (int k = 0; k < count; ++k) {
+          sum += votes[x * count + k];
+          if (votes[x * count + k] > most) {
+            most = votes[x * count + k];
+            winner = static_cast<std::int16_t>(candidates[k]);
+          }
+        }
+        ASSERT_EQ(total[x], total0[x] + sum);
+        ASSERT_EQ(best[x], most);
+        ASSERT_EQ(value[x], winner);
+      }
+      for_each_target([&] {
+        auto t = total0;
+        auto b = best0;
+        auto v = value0;
+        block_vote_row(votes.data(), w, candidates.data(), count, t.data(), b.data(), v.data());
+        ASSERT_EQ(t, total) << "width " << w << " count " << count;
+        ASSERT_EQ(b, best) << "width " << w << " count " << count;
+        ASSERT_EQ(v, value) << "width " << w << " count " << count;
+      });
+    }
+  }
+}
+
+// Winner-takes-all state for one row, owned.
+struct WtaState {
+  std::vector<std::uint16_t> best, second, below, above, prev1, prev2, runmin, best_right;
+  std::vector<std::int16_t> disp, disp_right;
+  explicit WtaState(int w)
+      : best(w, kNoCost),
+        second(w, kNoCost),
+        below(w, kNoCost),
+        above(w, kNoCost),
+        prev1(w, kNoCost),
+        prev2(w, kNoCost),
+        runmin(w, kNoCost),
+        best_right(w, kNoCost),
+        disp(w, -1),
+        disp_right(w, -1) {}
+  WtaRow row() {
+    return {best.data(),  second.data(), below.data(), above.data(),      prev1.data(),
+            prev2.data(), runmin.data(), disp.data(),  best_right.data(), disp_right.data()};
+  }
+  bool operator==(const WtaState&) const = default;
+};
+
+TEST(StereoKernels, WinnerTakesAllMatchesScalar) {
+  std::mt19937 rng(5);
+  for (const int w : kWidths) {
+    for (const int disparities : {1, 2, 3, std::min(w, 40)}) {
+      // Few distinct costs, so ties, the d - 1 / d + 1 neighbours and repeated minima all occur.
+      const std::ptrdiff_t stride = w + 3;
+      std::vector<std::uint32_t> volume(static_cast<std::size_t>(stride * disparities));
+      for (int d = 0; d < disparities; ++d)
+        for (int x = 0; x < w; ++x)
+          volume[d * stride + x] = static_cast<std::uint32_t>(rng() % (d % 3 == 0 ? 9 : 0xffff));
+      WtaState expected(w);
+      for (int d = 0; d < disparities; ++d)
+        scalar::wta_update_row(volume.data() + d * stride, stride, 1, w, d, expected.row());
+      WtaState batched(w);  // the scalar reference fed several disparities per call
+      for (int d = 0; d < disparities; d += 3)
+        scalar::wta_update_row(volume.data() + d * stride, stride, std::min(3, disparities - d), w,
+                               d, batched.row());
+      ASSERT_TRUE(batched == expected);
+      for (const int batch : {1, 4, 7}) {
+        for_each_target([&] {
+          WtaState state(w);
+          for (int d = 0; d < disparities; d += batch)
+            wta_update_row(volume.data() + d * stride, stride, std::min(batch, disparities - d), w,
+                           d, state.row());
+          ASSERT_TRUE(state == expected)
+              << "width " << w << " disparities " << disparities << " batch " << batch;
+        });
+      }
+    }
+  }
+}
+
+TEST(StereoKernels, WinnerTakesAllFindsTheMinimumAndItsNeighbours) {
+  const int w = 21;
+  const std::vector<std::uint32_t> costs = {50, 40, 10, 30, 20, 60};
+  for_each_target([&] {
+    WtaState state(w);
+    for (int d = 0; d < static_cast<int>(costs.size()); ++d) {
+      std::vector<std::uint32_t> slice(w, costs[d]);
+      wta_update_row(slice.data(), 0, 1, w, d, state.row());
+    }
+    for (int x = 0; x < w; ++x) {
+      ASSERT_EQ(state.disp[x], 2);
+      ASSERT_EQ(state.best[x], 10);
+      ASSERT_EQ(state.below[x], 40);
+      ASSERT_EQ(state.above[x], 30);
+      ASSERT_EQ(state.second[x], 20);  // best at least two disparities away
+    }
+    // Right pixel xr sees left pixel xr + d: only xr < w - d exist at disparity d.
+    for (int xr = 0; xr < w - 5; ++xr) ASSERT_EQ(state.disp_right[xr], 2);
+  });
+}
+
+}  // namespace
+}  // namespace dco::kernels

@@ -1,0 +1,447 @@
+// The real-time runtime: bit-identical to DepthPipeline when deterministic, drops at the entry
+// (and nowhere else) when the input outruns it, clean start/stop/restart, no allocation per frame
+// once warm, errors of a stage thread reported to the producer.
+
+#include <dirent.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <mutex>
+#include <new>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "dco/core/error.hpp"
+#include "dco/core/synthetic_scene.hpp"
+#include "dco/pipeline/depth_pipeline.hpp"
+#include "dco/pipeline/runtime/depth_runtime.hpp"
+#include "support/allocation_counter.hpp"
+#include "support/same_bytes.hpp"
+
+namespace dco::pipeline::runtime {
+namespace {
+
+using dco::testing::same_bytes;
+
+using ::testing::HasSubstr;
+using namespace std::chrono_literals;
+
+constexpr int kWidth = 160, kHeight = 96;
+
+struct Sequence {
+  std::vector<synthetic::StereoSample> frames;
+  PipelineParams params;
+};
+
+Sequence make_sequence(const char* name, int count) {
+  const synthetic::SceneRenderer scene(synthetic::preset(name, kWidth, kHeight));
+  Sequence s;
+  s.frames.resize(static_cast<std::size_t>(count));
+  for (int i = 0; i < count; ++i) scene.render(i, s.frames[static_cast<std::size_t>(i)]);
+  s.params.stereo.max_disparity = synthetic::covering_max_disparity(scene.config());
+  return s;
+}
+
+std::vector<DepthResult> offline(const Sequence& s) {
+  DepthPipeline pipeline(s.params);
+  std::vector<DepthResult> out;
+  DepthResult r;
+  for (const auto& f : s.frames)
+    if (pipeline.push(f.left.cview(), f.right.cview(), r)) out.push_back(r);
+  while (pipeline.finish(r)) out.push_back(r);
+  return out;
+}
+
+// Collects copies of every published result (copying allocates: not for the allocation test).
+struct Collector {
+  std::mutex mutex;
+  std::vector<DepthResult> results;
+  std::vector<FrameTimes> times;
+  DepthRuntime::ResultCallback callback() {
+    return [this](const DepthResult& r, const FrameTimes& t) {
+      std::lock_guard lock(mutex);
+      results.push_back(r);
+      times.push_back(t);
+    };
+  }
+};
+
+int thread_count() {
+  // A sanitizer starts its own background thread with the first thread the process creates:
+  // create (and join) one first, so that thread is there before any count is taken.
+  static const bool warmed_up = [] {
+    std::thread([] {}).join();
+    return true;
+  }();
+  (void)warmed_up;
+  int n = 0;
+  if (DIR* dir = opendir("/proc/self/task")) {
+    while (const dirent* e = readdir(dir))
+      if (e->d_name[0] != '.') ++n;
+    closedir(dir);
+  }
+  return n;
+}
+
+// The kernel clears a thread's id (which releases pthread_join) a moment before the thread leaves
+// /proc/self/task, so a count taken right after a join may still see it: give it a second.
+int settled_thread_count(int expected) {
+  int n = thread_count();
+  for (int i = 0; i < 200 && n != expected; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    n = thread_count();
+  }
+  return n;
+}
+
+void expect_identical(const std::vector<DepthResult>& expected, const std::vector<DepthResult>& got,
+                      const std::string& what) {
+  ASSERT_EQ(got.size(), expected.size()) << what;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    SCOPED_TRACE(what + ", result " + std::to_string(i));
+    EXPECT_EQ(got[i].index, expected[i].index);
+    EXPECT_EQ(got[i].flow_cue, expected[i].flow_cue);
+    EXPECT_TRUE(same_bytes(got[i].dense, expected[i].dense));
+    EXPECT_TRUE(same_bytes(got[i].sparse, expected[i].sparse));
+    EXPECT_TRUE(same_bytes(got[i].contours, expected[i].contours));
+    EXPECT_TRUE(same_bytes(got[i].m_fuse, expected[i].m_fuse));
+    EXPECT_TRUE(same_bytes(got[i].image, expected[i].image));
+    EXPECT_EQ(got[i].solver.iterations, expected[i].solver.iterations);
+  }
+}
+
+TEST(DepthRuntime, DeterministicModeEqualsTheOfflinePipelineBitForBit) {
+  for (int lookahead : {1, 0}) {
+    Sequence s = make_sequence("hand", 6);
+    s.params.contour.lookahead = lookahead;
+    const std::vector<DepthResult> expected = offline(s);
+    ASSERT_EQ(expected.size(), 6u);
+    for (int threads : {1, 2, 3}) {
+      RuntimeParams rp;
+      rp.deterministic = true;
+      rp.threads = threads;
+      Collector c;
+      DepthRuntime runtime(s.params, rp, c.callback());
+      runtime.start();
+      // Twice: drain ends a sequence and the next one starts afresh (no stability term from the
+      // first one's last frame).
+      for (int round = 0; round < 2; ++round) {
+        for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+        runtime.drain();
+        expect_identical(expected, c.results,
+                         "lookahead " + std::to_string(lookahead) + ", " + std::to_string(threads) +
+                             " thread(s), round " + std::to_string(round));
+        c.results.clear();
+      }
+      const RuntimeStats st = runtime.stats();
+      EXPECT_EQ(st.pushed, 12);
+      EXPECT_EQ(st.dropped, 0);
+      EXPECT_EQ(st.published, 12);
+      EXPECT_EQ(st.latency.count, 12);
+    }
+  }
+}
+
+TEST(DepthRuntime, ColourInputAtHalfResolutionEqualsTheOfflinePipeline) {
+  Sequence s = make_sequence("boxes", 3);
+  for (auto& f : s.frames) {  // a colour pair: the grey replicated with a tint
+    Image<std::uint8_t> l(kWidth, kHeight, 3), r(kWidth, kHeight, 3);
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x)
+        for (int ch = 0; ch < 3; ++ch) {
+          l.at(x, y, ch) = static_cast<std::uint8_t>(f.left.at(x, y) / (ch + 1) + 20 * ch);
+          r.at(x, y, ch) = static_cast<std::uint8_t>(f.right.at(x, y) / (ch + 1) + 20 * ch);
+        }
+    f.left = std::move(l);
+    f.right = std::move(r);
+  }
+  s.params.stereo.internal_resolution = "half";
+  s.params.contour.use_flow = false;  // DIS needs more than the halved 80x48
+  const std::vector<DepthResult> expected = offline(s);
+  RuntimeParams rp;
+  rp.deterministic = true;
+  Collector c;
+  DepthRuntime runtime(s.params, rp, c.callback());
+  runtime.start();
+  for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+  runtime.drain();
+  expect_identical(expected, c.results, "colour, half resolution");
+}
+
+TEST(DepthRuntime, FramesCarryTheirTimesInStageOrder) {
+  Sequence s = make_sequence("hand", 4);
+  RuntimeParams rp;
+  rp.deterministic = true;
+  rp.threads = 3;
+  Collector c;
+  DepthRuntime runtime(s.params, rp, c.callback());
+  runtime.start();
+  const Clock::time_point capture = Clock::now() - 5ms;
+  for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview(), capture);
+  runtime.drain();
+  ASSERT_EQ(c.times.size(), 4u);
+  for (const FrameTimes& t : c.times) {
+    EXPECT_EQ(t.capture, capture);
+    EXPECT_LE(t.capture, t.entry);
+    EXPECT_LE(t.entry, t.stereo_start);
+    EXPECT_LE(t.stereo_start, t.stereo_end);
+    EXPECT_LE(t.stereo_end, t.contour_start);
+    EXPECT_LE(t.contour_start, t.contour_end);
+    EXPECT_LE(t.contour_end, t.densify_start);
+    EXPECT_LE(t.densify_start, t.densify_end);
+  }
+  const RuntimeStats st = runtime.stats();
+  EXPECT_EQ(st.stereo.count, 4);
+  EXPECT_GE(st.latency.p50_ms, 5.0);  // at least the 5 ms between capture and push
+  EXPECT_GE(st.latency.p99_ms, st.latency.p50_ms);
+  EXPECT_GT(st.stereo.mean_ms, 0.0);
+  EXPECT_GT(st.densify.max_ms, 0.0);
+}
+
+TEST(DepthRuntime, WhenTheInputOutrunsItFramesAreDroppedAtTheEntryOnly) {
+  Sequence s = make_sequence("hand", 4);
+  for (int threads : {1, 2, 3}) {
+    RuntimeParams rp;
+    rp.threads = threads;
+    rp.queue_depth = 2;
+    Collector c;
+    // A stereo stage far slower than the producer.
+    DepthRuntime runtime(s.params, rp, c.callback(), [](Stage stage, int) {
+      if (stage == Stage::kStereo) std::this_thread::sleep_for(20ms);
+    });
+    runtime.start();
+    constexpr int kPushed = 40;
+    for (int i = 0; i < kPushed; ++i) {
+      const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
+      runtime.push(f.left.cview(), f.right.cview());
+      std::this_thread::sleep_for(1ms);
+    }
+    runtime.drain();
+    const RuntimeStats st = runtime.stats();
+    SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+    EXPECT_EQ(st.pushed, kPushed);
+    EXPECT_GT(st.dropped, kPushed / 2);
+    // Every frame that got past the entry came out, newest last.
+    EXPECT_EQ(st.published + st.dropped, st.pushed);
+    ASSERT_EQ(c.results.size(), static_cast<std::size_t>(st.published));
+    for (std::size_t i = 1; i < c.results.size(); ++i)
+      EXPECT_LT(c.results[i - 1].index, c.results[i].index);
+    EXPECT_EQ(c.results.back().index, kPushed - 1);
+    EXPECT_LE(st.entry_high_water, 1u);
+    EXPECT_LE(st.stereo_queue_high_water, 2u);
+    EXPECT_LE(st.densify_queue_high_water, 2u);
+  }
+}
+
+TEST(DepthRuntime, ASlowDensifyStageMakesTheEntryDropWithoutAnyQueueGrowing) {
+  Sequence s = make_sequence("hand", 4);
+  RuntimeParams rp;
+  rp.threads = 3;
+  rp.queue_depth = 1;
+  Collector c;
+  DepthRuntime runtime(s.params, rp, c.callback(), [](Stage stage, int) {
+    if (stage == Stage::kDensify) std::this_thread::sleep_for(25ms);
+  });
+  runtime.start();
+  for (int i = 0; i < 30; ++i) {
+    const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
+    runtime.push(f.left.cview(), f.right.cview());
+    std::this_thread::sleep_for(2ms);
+  }
+  runtime.drain();
+  const RuntimeStats st = runtime.stats();
+  EXPECT_GT(st.dropped, 10);
+  EXPECT_EQ(st.published + st.dropped, st.pushed);
+  EXPECT_LE(st.stereo_queue_high_water, 1u);
+  EXPECT_LE(st.densify_queue_high_water, 1u);
+}
+
+TEST(DepthRuntime, StartStopAndRestartLeaveNoThreadBehind) {
+  Sequence s = make_sequence("static", 3);
+  s.params.contour.use_flow = false;  // keep OpenCV's own worker threads out of the count
+  const int before = thread_count();
+  for (int threads : {1, 2, 3}) {
+    RuntimeParams rp;
+    rp.threads = threads;
+    rp.deterministic = true;
+    Collector c;
+    DepthRuntime runtime(s.params, rp, c.callback());
+    EXPECT_FALSE(runtime.running());
+    EXPECT_THROW(runtime.push(s.frames[0].left.cview(), s.frames[0].right.cview()), Error);
+    for (int round = 0; round < 3; ++round) {
+      runtime.start();
+      EXPECT_TRUE(runtime.running());
+      EXPECT_THROW(runtime.start(), Error);
+      EXPECT_EQ(settled_thread_count(before + threads), before + threads);
+      for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+      runtime.drain();
+      EXPECT_EQ(runtime.stats().published, 3);  // statistics restart with the runtime
+      runtime.stop();
+      EXPECT_FALSE(runtime.running());
+      EXPECT_EQ(settled_thread_count(before), before);
+    }
+    EXPECT_EQ(c.results.size(), 9u);
+  }
+}
+
+TEST(DepthRuntime, StopDiscardsFramesInFlightAndTheNextStartBeginsAfresh) {
+  Sequence s = make_sequence("hand", 4);
+  s.params.contour.use_flow = false;
+  const int before = thread_count();
+  RuntimeParams rp;
+  rp.threads = 3;
+  Collector c;
+  {
+    DepthRuntime runtime(s.params, rp, c.callback(),
+                         [](Stage, int) { std::this_thread::sleep_for(10ms); });
+    runtime.start();
+    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+    runtime.stop();  // frames still in the stages
+    EXPECT_EQ(settled_thread_count(before), before);
+    runtime.start();
+    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+    // Left running: the destructor stops it.
+  }
+  EXPECT_EQ(settled_thread_count(before), before);
+}
+
+TEST(DepthRuntime, AStageErrorReachesTheProducerAndARestartRecovers) {
+  Sequence s = make_sequence("static", 3);
+  RuntimeParams rp;
+  rp.deterministic = true;
+  Collector c;
+  DepthRuntime runtime(s.params, rp, c.callback());
+  runtime.start();
+  // Smaller than the 9x7 census window: the stereo stage (on its thread) refuses it.
+  const Image<std::uint8_t> tiny(6, 5);
+  runtime.push(tiny.cview(), tiny.cview());
+  try {
+    runtime.drain();
+    ADD_FAILURE() << "drain did not report the stereo stage's error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("census window"));
+  }
+  EXPECT_THROW(runtime.push(tiny.cview(), tiny.cview()), Error);
+  runtime.stop();
+  runtime.start();
+  for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+  runtime.drain();
+  EXPECT_EQ(c.results.size(), 3u);
+}
+
+TEST(DepthRuntime, BadInputIsRejectedAtTheEntry) {
+  Sequence s = make_sequence("static", 1);
+  const auto small = synthetic::SceneRenderer(synthetic::preset("static", 128, 96));
+  synthetic::StereoSample other;
+  small.render(0, other);
+  RuntimeParams rp;
+  rp.deterministic = true;
+  Collector c;
+  DepthRuntime runtime(s.params, rp, c.callback());
+  runtime.start();
+  const auto& f = s.frames[0];
+  EXPECT_THROW(runtime.push(f.left.cview(), other.right.cview()), Error);  // pair sizes differ
+  const Image<std::uint8_t> two(kWidth, kHeight, 2);
+  EXPECT_THROW(runtime.push(two.cview(), two.cview()), Error);
+  runtime.push(f.left.cview(), f.right.cview());
+  try {
+    runtime.push(other.left.cview(), other.right.cview());
+    ADD_FAILURE() << "a size change within a sequence was accepted";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("drain()"));
+  }
+  runtime.drain();
+  runtime.push(other.left.cview(), other.right.cview());  // a new sequence may change size
+  runtime.drain();
+  ASSERT_EQ(c.results.size(), 2u);
+  EXPECT_EQ(c.results[1].dense.width(), 128);
+}
+
+TEST(DepthRuntime, BadParamsAndUnavailableCpusAreRejected) {
+  const Sequence s = make_sequence("static", 1);
+  RuntimeParams rp;
+  rp.threads = 0;
+  EXPECT_THROW(DepthRuntime(s.params, rp, {}), Error);
+  rp = {};
+  rp.affinity = "0,zero";
+  EXPECT_THROW(DepthRuntime(s.params, rp, {}), Error);
+  PipelineParams bad = s.params;
+  bad.densify.lambda_d = 0;
+  EXPECT_THROW(DepthRuntime(bad, RuntimeParams{}, {}), Error);
+
+  const int before = thread_count();
+  rp = {};
+  rp.affinity = "1000";  // a CPU no machine here has
+  DepthRuntime runtime(s.params, rp, {});
+  try {
+    runtime.start();
+    ADD_FAILURE() << "pinned a thread to CPU 1000";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("CPU 1000"));
+  }
+  EXPECT_FALSE(runtime.running());
+  EXPECT_EQ(settled_thread_count(before), before);
+}
+
+TEST(DepthRuntime, PinnedThreadsProduceTheSameResults) {
+  const Sequence s = make_sequence("hand", 3);
+  const std::vector<DepthResult> expected = offline(s);
+  RuntimeParams rp;
+  rp.deterministic = true;
+  rp.affinity = "0";
+  Collector c;
+  DepthRuntime runtime(s.params, rp, c.callback());
+  runtime.start();
+  for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+  runtime.drain();
+  expect_identical(expected, c.results, "pinned to CPU 0");
+}
+
+TEST(DepthRuntime, WarmFramesDoNotAllocate) {
+  if (!testing::kCountsAlignedAlloc) GTEST_SKIP() << "the sanitizer runtime owns the allocator";
+  Sequence s = make_sequence("hand", 24);
+  s.params.contour.use_flow = false;  // OpenCV's DIS allocates inside every call
+  for (int threads : {1, 2, 3}) {
+    RuntimeParams rp;
+    rp.threads = threads;
+    rp.deterministic = true;
+    std::atomic<long> published{0};
+    DepthRuntime runtime(s.params, rp,
+                         [&](const DepthResult&, const FrameTimes&) { published.fetch_add(1); });
+    runtime.start();
+    // The first frames size every pooled buffer (each pool entry is used in turn).
+    for (int i = 0; i < 12; ++i) {
+      const auto& f = s.frames[static_cast<std::size_t>(i)];
+      runtime.push(f.left.cview(), f.right.cview());
+    }
+    while (published.load() < 11) std::this_thread::sleep_for(1ms);
+    testing::start_counting_allocations();
+    for (int i = 12; i < 24; ++i) {
+      const auto& f = s.frames[static_cast<std::size_t>(i)];
+      runtime.push(f.left.cview(), f.right.cview());
+    }
+    while (published.load() < 23) std::this_thread::sleep_for(1ms);
+    EXPECT_EQ(testing::stop_counting_allocations().total(), 0) << threads << " thread(s)";
+    runtime.drain();
+    EXPECT_EQ(published.load(), 24);
+  }
+}
+
+TEST(AllocationCounter, SeesAllocationsOnOtherThreads) {
+  testing::start_counting_allocations();
+  std::thread([] {
+    auto* v = new std::vector<int>(100);
+    testing::allocation_sink = v->data();
+    delete v;
+  }).join();
+  EXPECT_GE(testing::stop_counting_allocations().new_calls, 1);
+}
+
+}  // namespace
+}  // namespace dco::pipeline::runtime

@@ -1,0 +1,185 @@
+#include "dco/pipeline/stereo/disparity_search.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "dco/core/image.hpp"
+#include "dco/kernels/stereo_kernels.hpp"
+#include "dco/pipeline/stereo/census.hpp"
+#include "dco/pipeline/stereo/cross_aggregation.hpp"
+#include "dco/pipeline/stereo/cross_arms.hpp"
+#include "dco/pipeline/stereo/disparity_selection.hpp"
+#include "dco/pipeline/stereo/matching_cost.hpp"
+
+namespace dco::stereo {
+namespace {
+
+// A random pair with flat patches (long, irregular arms) and noise; the right image is the left
+// one shifted by `shift` plus noise, so the winners are not all alike.
+struct Pair {
+  Image<std::uint8_t> left, right, gray_left, gray_right;
+  Image<std::uint32_t> packed_left, packed_right;
+  Image<std::uint64_t> census_left, census_right;
+  CrossArms arms;
+  Image<std::uint8_t> shortest;
+  CostTables tables;
+
+  Pair(int w, int h, int channels, int arm_max, unsigned seed) {
+    std::mt19937 rng(seed);
+    left.resize(w, h, channels);
+    right.resize(w, h, channels);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < channels; ++c) {
+          const int patch = ((x / 5) * 7 + (y / 3) * 13 + c * 29) % 256;
+          left.at(x, y, c) = static_cast<std::uint8_t>(patch + static_cast<int>(rng() % 4));
+        }
+    constexpr int kShift = 3;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < channels; ++c)
+          right.at(x, y, c) = static_cast<std::uint8_t>(std::min(
+              255, left.at(std::min(x + kShift, w - 1), y, c) + static_cast<int>(rng() % 3)));
+    gray_left.resize(w, h);
+    gray_right.resize(w, h);
+    packed_left.resize(w, h);
+    packed_right.resize(w, h);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        gray_left.at(x, y) = left.at(x, y, 0);
+        gray_right.at(x, y) = right.at(x, y, 0);
+      }
+      kernels::pack_pixels(left.row(y), channels, w, packed_left.row(y));
+      kernels::pack_pixels(right.row(y), channels, w, packed_right.row(y));
+    }
+    census_left.resize(w, h);
+    census_right.resize(w, h);
+    census_transform(gray_left.cview(), 5, 3, census_left.view());
+    census_transform(gray_right.cview(), 5, 3, census_right.view());
+    compute_cross_arms(left.cview(), ArmRule{arm_max, arm_max / 2, 20, 6}, arms);
+    shortest.resize(w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        shortest.at(x, y) = static_cast<std::uint8_t>(shortest_arm(arms, x, y));
+    tables.build(CostModel{}, channels, arm_max);
+  }
+
+  MatchingImages images() const {
+    return {packed_left.cview(), packed_right.cview(), census_left.cview(), census_right.cview(),
+            shortest.cview()};
+  }
+};
+
+TEST(DisparitySearch, PackedCrossArmsEqualTheScalarArms) {
+  for (const int channels : {1, 3}) {
+    for (const int w : {9, 40, 77}) {
+      const Pair p(w, 23, channels, 12, 3u + static_cast<unsigned>(w));
+      for (const ArmRule rule : {ArmRule{12, 6, 20, 6}, ArmRule{34, 17, 20, 6}}) {
+        CrossArms expected, arms;
+        compute_cross_arms(p.left.cview(), rule, expected);
+        compute_cross_arms(p.packed_left.cview(), rule, arms);
+        for (const auto member :
+             {&CrossArms::left, &CrossArms::right, &CrossArms::up, &CrossArms::down})
+          for (int y = 0; y < 23; ++y)
+            for (int x = 0; x < w; ++x)
+              ASSERT_EQ((arms.*member).at(x, y), (expected.*member).at(x, y))
+                  << "channels " << channels << " width " << w << " at " << x << "," << y;
+      }
+    }
+  }
+}
+
+TEST(DisparitySearch, PackedCostSliceEqualsTheScalarSlice) {
+  for (const int channels : {1, 3}) {
+    for (const int w : {9, 16, 45}) {
+      const Pair p(w, 7, channels, 8, 11u + static_cast<unsigned>(w));
+      Image<std::uint32_t> expected(w, 7), out(w, 7);
+      for (const int d : {0, 1, 4, w - 1, w}) {
+        compute_cost_slice(p.left.cview(), p.right.cview(), p.census_left.cview(),
+                           p.census_right.cview(), p.shortest.cview(), p.tables, d,
+                           expected.view());
+        out.fill(0);
+        compute_cost_slice_packed(p.packed_left.cview(), p.packed_right.cview(),
+                                  p.census_left.cview(), p.census_right.cview(), p.shortest.cview(),
+                                  p.tables, d, out.view());
+        for (int y = 0; y < 7; ++y)
+          for (int x = 0; x < w; ++x)
+            ASSERT_EQ(out.at(x, y), expected.at(x, y)) << "channels " << channels << " width " << w
+                                                       << " d " << d << " at " << x << "," << y;
+      }
+    }
+  }
+}
+
+// Eq. 2 by definition: the mean over the cross-based region, summed pixel by pixel.
+void brute_force_mean(ImageView<std::uint32_t> slice, const CrossArms& a, PassOrder order) {
+  Image<std::uint32_t> in(slice.width, slice.height);
+  in.copy_from(slice);
+  for (int y = 0; y < slice.height; ++y)
+    for (int x = 0; x < slice.width; ++x) {
+      std::uint64_t sum = 0, n = 0;
+      if (order == PassOrder::kHorizontalFirst) {
+        for (int yy = y - a.up.at(x, y); yy <= y + a.down.at(x, y); ++yy)
+          for (int xx = x - a.left.at(x, yy); xx <= x + a.right.at(x, yy); ++xx, ++n)
+            sum += in.at(xx, yy);
+      } else {
+        for (int xx = x - a.left.at(x, y); xx <= x + a.right.at(x, y); ++xx)
+          for (int yy = y - a.up.at(xx, y); yy <= y + a.down.at(xx, y); ++yy, ++n)
+            sum += in.at(xx, yy);
+      }
+      const std::uint64_t recip = ((std::uint64_t{1} << 31) + n / 2) / n;
+      slice.at(x, y) = static_cast<std::uint32_t>((sum * recip + (std::uint64_t{1} << 30)) >> 31);
+    }
+}
+
+template <typename T>
+void expect_same(ImageView<const T> a, ImageView<const T> b, const char* what) {
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x)
+      ASSERT_EQ(a.row(y)[x], b.row(y)[x]) << what << " at " << x << "," << y;
+}
+
+TEST(DisparitySearch, EqualsCostAggregationAndWinnerTakesAllSliceBySlice) {
+  for (const int channels : {1, 3}) {
+    for (const int passes : {1, 2}) {
+      const int w = 45, h = 17;
+      const Pair p(w, h, channels, 7, 5u + static_cast<unsigned>(channels));
+      AggregationScratch scratch;
+      SupportRegions regions;
+      regions.build(p.arms, scratch);
+      // max_d near the width, and a count of disparities that is not a multiple of the batch.
+      for (const int max_d : {0, 5, w - 1}) {
+        WinnerTakesAll expected;
+        expected.reset(w, h);
+        Image<std::uint32_t> slice(w, h);
+        for (int d = 0; d <= max_d; ++d) {
+          compute_cost_slice(p.left.cview(), p.right.cview(), p.census_left.cview(),
+                             p.census_right.cview(), p.shortest.cview(), p.tables, d, slice.view());
+          for (int i = 0; i < passes; ++i)
+            brute_force_mean(slice.view(), p.arms,
+                             i % 2 == 0 ? PassOrder::kHorizontalFirst : PassOrder::kVerticalFirst);
+          expected.update(slice.cview(), d);
+        }
+        WinnerTakesAll wta;
+        wta.reset(w, h);
+        DisparitySearch search;
+        search.run(p.images(), p.tables, regions, passes, max_d, wta);
+        SCOPED_TRACE(testing::Message()
+                     << "channels " << channels << " passes " << passes << " max_d " << max_d);
+        expect_same(wta.left_disparity(), expected.left_disparity(), "left disparity");
+        expect_same(wta.right_disparity(), expected.right_disparity(), "right disparity");
+        expect_same(wta.best_cost(), expected.best_cost(), "best cost");
+        expect_same(wta.second_cost(), expected.second_cost(), "second cost");
+        expect_same(wta.cost_below(), expected.cost_below(), "cost below");
+        expect_same(wta.cost_above(), expected.cost_above(), "cost above");
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace dco::stereo

@@ -1,0 +1,143 @@
+// The runtime's building blocks: duration histograms, bounded queues and the runtime.* params.
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "dco/core/config.hpp"
+#include "dco/core/error.hpp"
+#include "dco/pipeline/runtime/bounded_queue.hpp"
+#include "dco/pipeline/runtime/histogram.hpp"
+#include "dco/pipeline/runtime/runtime_params.hpp"
+
+namespace dco::pipeline::runtime {
+namespace {
+
+using ::testing::HasSubstr;
+
+TEST(Histogram, PercentilesOfAUniformSpreadAreWithinOneBucket) {
+  Histogram h;
+  for (int i = 1; i <= 1000; ++i) h.record(i * 0.05);  // 0.05 .. 50 ms
+  EXPECT_EQ(h.count(), 1000);
+  EXPECT_NEAR(h.percentile(50), 25.0, Histogram::kLinearStepMs);
+  EXPECT_NEAR(h.percentile(99), 49.5, Histogram::kLinearStepMs);
+  EXPECT_DOUBLE_EQ(h.percentile(100), 50.0);
+  EXPECT_NEAR(h.percentile(0), 0.05, Histogram::kLinearStepMs);
+  EXPECT_NEAR(h.mean_ms(), 25.025, 1e-9);
+  EXPECT_DOUBLE_EQ(h.max_ms(), 50.0);
+}
+
+TEST(Histogram, ATailShowsInP99ButNotInP50) {
+  Histogram h;
+  for (int i = 0; i < 980; ++i) h.record(20.0);
+  for (int i = 0; i < 20; ++i) h.record(300.0);
+  EXPECT_NEAR(h.percentile(50), 20.0, Histogram::kLinearStepMs);
+  EXPECT_NEAR(h.percentile(98), 20.0, Histogram::kLinearStepMs);
+  // Beyond 100 ms buckets are 0.5 % wide.
+  EXPECT_NEAR(h.percentile(99), 300.0, 300.0 * (Histogram::kGrowth - 1));
+}
+
+TEST(Histogram, LongDurationsKeepARelativeResolutionAndOverflowToTheMaximum) {
+  Histogram h;
+  h.record(1234.5);
+  EXPECT_DOUBLE_EQ(h.percentile(50), 1234.5);  // one value: kept within [min, max]
+  h.record(1.0e6);                             // beyond the last bucket
+  EXPECT_DOUBLE_EQ(h.percentile(100), 1.0e6);
+  EXPECT_EQ(Histogram::bucket_of(1.0e6), Histogram::bucket_count() - 1);
+  EXPECT_EQ(Histogram::bucket_of(INFINITY), Histogram::bucket_count() - 1);
+  for (double ms : {0.01, 0.5, 99.99, 100.0, 150.0, 5000.0, 59000.0}) {
+    const int b = Histogram::bucket_of(ms);
+    EXPECT_LE(Histogram::bucket_low(b), ms) << ms;
+    EXPECT_GT(Histogram::bucket_high(b), ms) << ms;
+    EXPECT_LE(Histogram::bucket_high(b) - Histogram::bucket_low(b),
+              std::max(Histogram::kLinearStepMs, ms * (Histogram::kGrowth - 1)) * 1.0001)
+        << ms;
+  }
+}
+
+TEST(Histogram, EmptyAndClearedReportZero) {
+  Histogram h;
+  EXPECT_EQ(h.percentile(50), 0.0);
+  h.record(-3.0);  // a clock step backwards counts as 0
+  EXPECT_EQ(h.percentile(50), 0.0);
+  EXPECT_EQ(h.count(), 1);
+  h.record(7.0);
+  h.clear();
+  EXPECT_EQ(h.count(), 0);
+  EXPECT_EQ(h.percentile(99), 0.0);
+  EXPECT_EQ(h.max_ms(), 0.0);
+}
+
+TEST(BoundedQueue, KeepsOrderAndRefusesToGrow) {
+  BoundedQueue<int> q(2);
+  EXPECT_TRUE(q.push(1));
+  EXPECT_TRUE(q.push(2));
+  EXPECT_TRUE(q.full());
+  EXPECT_FALSE(q.push(3));
+  EXPECT_EQ(q.size(), 2u);
+  EXPECT_EQ(q.pop(), 1);
+  EXPECT_TRUE(q.push(4));
+  EXPECT_EQ(q.pop(), 2);
+  EXPECT_EQ(q.pop(), 4);
+  EXPECT_TRUE(q.empty());
+  EXPECT_EQ(q.high_water(), 2u);
+  EXPECT_EQ(q.capacity(), 2u);
+}
+
+TEST(RuntimeParams, AreSetThroughTheSchema) {
+  RuntimeParams p;
+  ConfigSchema schema;
+  register_params(schema, p);
+  schema.load_string(
+      "[runtime]\nthreads = 3\naffinity = \"0, 1\"\nqueue_depth = 2\ndeterministic = true\n",
+      "test");
+  EXPECT_EQ(p.threads, 3);
+  EXPECT_EQ(p.affinity, "0, 1");
+  EXPECT_EQ(p.queue_depth, 2);
+  EXPECT_TRUE(p.deterministic);
+  EXPECT_NO_THROW(validate(p));
+  EXPECT_EQ(parse_affinity(p.affinity), (std::vector<int>{0, 1}));
+  EXPECT_THAT(schema.describe(), HasSubstr("runtime.affinity"));
+}
+
+TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
+  RuntimeParams p;
+  ConfigSchema schema;
+  register_params(schema, p);
+  EXPECT_THROW(schema.set("runtime.threads=0"), Error);
+  EXPECT_THROW(schema.set("runtime.threads=4"), Error);
+  EXPECT_THROW(schema.set("runtime.queue_depth=0"), Error);
+  EXPECT_THROW(schema.set("runtime.deterministic=maybe"), Error);
+  RuntimeParams direct;
+  direct.threads = 7;
+  EXPECT_THROW(validate(direct), Error);
+  direct = {};
+  direct.queue_depth = 100;
+  EXPECT_THROW(validate(direct), Error);
+}
+
+TEST(RuntimeParams, BadAffinityListsNameTheEntry) {
+  const auto message = [](const std::string& text) {
+    try {
+      parse_affinity(text);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_THAT(message("0,x"), HasSubstr("'x'"));
+  EXPECT_THAT(message("-1"), HasSubstr("'-1'"));
+  EXPECT_THAT(message("1,1"), HasSubstr("listed twice"));
+  EXPECT_THAT(message("0,"), HasSubstr("ends with a comma"));
+  EXPECT_THAT(message("5000"), HasSubstr("beyond"));
+  EXPECT_EQ(message(""), "accepted");
+  RuntimeParams p;
+  p.affinity = "0;1";
+  EXPECT_THROW(validate(p), Error);
+}
+
+}  // namespace
+}  // namespace dco::pipeline::runtime

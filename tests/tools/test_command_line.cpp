@@ -1,0 +1,35 @@
+#include "dco/tools/command_line.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+namespace dco::tools {
+namespace {
+
+using ::testing::HasSubstr;
+
+TEST(ParseImageSize, ReadsWidthAndHeight) {
+  const ImageSize size = parse_image_size("--size", "1280x720");
+  EXPECT_EQ(size.width, 1280);
+  EXPECT_EQ(size.height, 720);
+}
+
+TEST(ParseImageSize, RefusesMalformedAndTooSmallSizes) {
+  for (const char* bad : {"", "1280", "1280x", "x720", "1280x720x3", "12a0x720", "1280 x720"}) {
+    try {
+      parse_image_size("--size", bad);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const UsageError& e) {
+      EXPECT_THAT(e.what(), HasSubstr("--size needs WIDTHxHEIGHT")) << bad;
+    }
+  }
+  try {
+    parse_image_size("--size", "32x720", 64);
+    ADD_FAILURE() << "accepted a width below the minimum";
+  } catch (const UsageError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("at least 64x64"));
+  }
+}
+
+}  // namespace
+}  // namespace dco::tools

@@ -1,0 +1,307 @@
+// dco-bench: the full depth pipeline in its real-time runtime on a synthetic sequence and on the
+// real Karlsruhe clip — throughput, per-stage times, latency and drops at a camera's frame rate —
+// next to OpenCV StereoSGBM (3-way) + WLS on the same frames in the same run.
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "dco/core/config.hpp"
+#include "dco/core/error.hpp"
+#include "dco/core/image.hpp"
+#include "dco/pipeline/depth_pipeline.hpp"
+#include "dco/pipeline/runtime/depth_runtime.hpp"
+#include "dco/tools/command_line.hpp"
+#include "dco/tools/frame_sequence.hpp"
+#include "dco/tools/json.hpp"
+#include "dco/tools/sgbm_wls.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+namespace rt = dco::pipeline::runtime;
+using dco::tools::UsageError;
+
+constexpr std::string_view kUsage =
+    R"(usage: dco-bench [--sequence synthetic|karlsruhe|all] [--synthetic NAME] [--size WxH]
+                 [--frames N] [--karlsruhe DIR] [--fps F] [--paced-frames N] [--json]
+                 [--config FILE] [--set KEY=VALUE]
+
+Runs the depth pipeline in the real-time runtime and, on the same frames in the same run,
+OpenCV StereoSGBM (3-way) + WLS. Per sequence:
+  throughput  runtime.deterministic on, frames pushed as fast as it takes them: ms per frame,
+              frames per second and the mean time of each stage;
+  latency     frames pushed at --fps (capture time = the frame's due time), newest wins at the
+              entry: capture-to-result latency p50 / p99 and the frames dropped;
+  peer        SGBM 3-way + WLS ms per frame; ratio = peer / dco.
+
+  --sequence S        synthetic, karlsruhe or all (default all)
+  --synthetic NAME    hand | boxes | static (default hand)
+  --size WxH          synthetic resolution (default 1280x720)
+  --frames N          frames of each sequence (default 10; the Karlsruhe clip has 20)
+  --karlsruhe DIR     the clip (default: the shared data's 2010_03_09_drive_0023), max-disp 96
+  --fps F             input rate of the latency run (default 30)
+  --paced-frames N    frames pushed in the latency run, the sequence played back and forth
+                      (default 90)
+  --json              print one JSON object instead of text: the first sequence's ms_per_frame,
+                      peer_ms_per_frame, ratio, latency_p50_ms, latency_p99_ms, ... at the top
+                      level and every sequence under "sequences"
+  --config FILE       TOML with [stereo], [contour], [densify] and [runtime] tables
+  --set KEY=VALUE     override one parameter, e.g. --set runtime.threads=3
+  -h, --help          print this help
+
+Exit status: 0 success, 1 bad data (missing frames, bad parameter), 2 bad command line.
+)";
+
+struct Options {
+  std::string sequence = "all";
+  std::string synthetic = "hand";
+  int width = 1280, height = 720, frames = 10;
+  fs::path karlsruhe = fs::path(DCO_DATA_DIR) / "karlsruhe_sequences" / "2010_03_09_drive_0023";
+  double fps = 30;
+  int paced_frames = 90;
+  bool json = false;
+  std::optional<fs::path> config;
+  std::vector<std::string> overrides;
+  bool help = false;
+};
+
+double parse_fps(const std::string& text) {
+  try {
+    std::size_t used = 0;
+    const double fps = std::stod(text, &used);
+    if (used == text.size() && fps > 0 && fps <= 1000) return fps;
+  } catch (const std::exception&) {
+  }
+  throw UsageError(fmt::format("--fps needs a rate in (0, 1000], not '{}'", text));
+}
+
+Options parse_args(int argc, char** argv) {
+  Options opt;
+  dco::tools::ArgCursor args(argc, argv);
+  while (args.next()) {
+    const std::string_view arg = args.name();
+    if (arg == "-h" || arg == "--help")
+      opt.help = args.flag();
+    else if (arg == "--sequence")
+      opt.sequence = args.value();
+    else if (arg == "--synthetic")
+      opt.synthetic = args.value();
+    else if (arg == "--size") {
+      const dco::tools::ImageSize size = dco::tools::parse_image_size("--size", args.value(), 64);
+      opt.width = size.width;
+      opt.height = size.height;
+    } else if (arg == "--frames")
+      opt.frames = args.int_value();
+    else if (arg == "--karlsruhe")
+      opt.karlsruhe = args.value();
+    else if (arg == "--fps")
+      opt.fps = parse_fps(args.value());
+    else if (arg == "--paced-frames")
+      opt.paced_frames = args.int_value();
+    else if (arg == "--json")
+      opt.json = args.flag();
+    else if (arg == "--config")
+      opt.config = args.value();
+    else if (arg == "--set")
+      opt.overrides.push_back(args.value());
+    else if (arg.starts_with("-"))
+      throw UsageError(fmt::format("unknown option {}", arg));
+    else
+      throw UsageError(fmt::format("unexpected argument '{}'", arg));
+  }
+  if (opt.help) return opt;
+  if (opt.sequence != "synthetic" && opt.sequence != "karlsruhe" && opt.sequence != "all")
+    throw UsageError(
+        fmt::format("--sequence must be synthetic, karlsruhe or all, not '{}'", opt.sequence));
+  if (opt.frames < 1) throw UsageError("--frames must be >= 1");
+  if (opt.paced_frames < 1) throw UsageError("--paced-frames must be >= 1");
+  return opt;
+}
+
+struct Params {
+  dco::pipeline::PipelineParams pipeline;
+  rt::RuntimeParams runtime;
+};
+
+Params load_params(const Options& opt) {
+  Params p;
+  dco::ConfigSchema schema;
+  dco::pipeline::register_params(schema, p.pipeline);
+  rt::register_params(schema, p.runtime);
+  if (opt.config) schema.load_file(*opt.config);
+  for (const std::string& assignment : opt.overrides) schema.set(assignment);
+  dco::pipeline::validate(p.pipeline);
+  rt::validate(p.runtime);
+  return p;
+}
+
+struct Frames {
+  std::string name;
+  std::vector<dco::tools::StereoInput> pairs;
+  int max_disparity = 0;
+};
+
+Frames load_frames(const Options& opt, bool synthetic, int default_max_disparity) {
+  Frames f;
+  std::unique_ptr<dco::tools::FrameSequence> source;
+  if (synthetic) {
+    f.name = fmt::format("synthetic {} {}x{}", opt.synthetic, opt.width, opt.height);
+    source = dco::tools::make_synthetic_sequence(opt.synthetic, opt.width, opt.height, opt.frames,
+                                                 false);
+  } else {
+    f.name = "karlsruhe " + opt.karlsruhe.filename().string();
+    const fs::path images = opt.karlsruhe / "images";
+    if (!fs::is_directory(images))
+      throw dco::Error(fmt::format("no Karlsruhe images in '{}'", images.string()));
+    source = dco::tools::make_pattern_sequence(
+        (images / "I1_%06d.png").string(), (images / "I2_%06d.png").string(), 0, -1, std::nullopt);
+  }
+  f.max_disparity = source->max_disparity().value_or(default_max_disparity);
+  dco::tools::StereoInput input;
+  while (static_cast<int>(f.pairs.size()) < opt.frames && source->next(input))
+    f.pairs.push_back(input);
+  if (f.pairs.empty()) throw dco::Error(fmt::format("{}: no frames", f.name));
+  return f;
+}
+
+struct Result {
+  std::string name;
+  int width = 0, height = 0, frames = 0, max_disparity = 0, threads = 0;
+  double ms_per_frame = 0;
+  rt::RuntimeStats throughput;
+  double fps = 0;
+  int paced_frames = 0;
+  rt::RuntimeStats paced;
+  double peer_ms_per_frame = 0;
+};
+
+double ms_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+Result run(const Options& opt, const Params& base, const Frames& frames) {
+  Params p = base;
+  p.pipeline.stereo.max_disparity = frames.max_disparity;
+  Result r;
+  r.name = frames.name;
+  r.width = frames.pairs[0].left.width();
+  r.height = frames.pairs[0].left.height();
+  r.frames = static_cast<int>(frames.pairs.size());
+  r.max_disparity = frames.max_disparity;
+  r.threads = p.runtime.threads;
+
+  {  // Throughput: every frame, as fast as the runtime takes them.
+    rt::RuntimeParams runtime = p.runtime;
+    runtime.deterministic = true;
+    rt::DepthRuntime pipeline(p.pipeline, runtime, {});
+    pipeline.start();
+    const auto start = std::chrono::steady_clock::now();
+    for (const auto& f : frames.pairs) pipeline.push(f.left.cview(), f.right.cview());
+    pipeline.drain();
+    r.ms_per_frame = ms_since(start) / r.frames;
+    r.throughput = pipeline.stats();
+  }
+  {  // Latency: a camera's pace; the sequence is played back and forth so motion stays smooth.
+    rt::DepthRuntime pipeline(p.pipeline, p.runtime, {});
+    pipeline.start();
+    const auto period = std::chrono::duration_cast<rt::Clock::duration>(
+        std::chrono::duration<double>(1.0 / opt.fps));
+    const int n = r.frames;
+    const auto start = rt::Clock::now();
+    for (int i = 0; i < opt.paced_frames; ++i) {
+      const int cycle = std::max(1, 2 * n - 2);
+      const int k = n == 1 ? 0 : (i % cycle < n ? i % cycle : cycle - i % cycle);
+      const auto due = start + i * period;
+      std::this_thread::sleep_until(due);
+      const auto& f = frames.pairs[static_cast<std::size_t>(k)];
+      pipeline.push(f.left.cview(), f.right.cview(), due);
+    }
+    pipeline.drain();
+    r.fps = opt.fps;
+    r.paced_frames = opt.paced_frames;
+    r.paced = pipeline.stats();
+  }
+  double peer_ms = 0;
+  for (const auto& f : frames.pairs)
+    peer_ms +=
+        dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity).time_ms;
+  r.peer_ms_per_frame = peer_ms / r.frames;
+  return r;
+}
+
+void print_text(const Result& r) {
+  const rt::RuntimeStats& t = r.throughput;
+  const rt::RuntimeStats& l = r.paced;
+  fmt::print("{}: {} frames of {}x{}, max-disp {}, {} stage thread(s)\n", r.name, r.frames, r.width,
+             r.height, r.max_disparity, r.threads);
+  fmt::print("  dco      {:8.1f} ms/frame  ({:.2f} fps)\n", r.ms_per_frame,
+             1000.0 / r.ms_per_frame);
+  fmt::print(
+      "  stages   stereo {:.1f}  contour {:.1f}  densify {:.1f} ms  (mean; p99 {:.1f} / {:.1f} / "
+      "{:.1f})\n",
+      t.stereo.mean_ms, t.contour.mean_ms, t.densify.mean_ms, t.stereo.p99_ms, t.contour.p99_ms,
+      t.densify.p99_ms);
+  fmt::print(
+      "  latency  p50 {:.1f} ms  p99 {:.1f} ms  (p99 - p50 {:.1f} ms) at {:g} fps input; "
+      "{} of {} frames dropped, {} published\n",
+      l.latency.p50_ms, l.latency.p99_ms, l.latency.p99_ms - l.latency.p50_ms, r.fps, l.dropped,
+      l.pushed, l.published);
+  fmt::print(
+      "  peer     {:8.1f} ms/frame  OpenCV StereoSGBM 3-way + WLS; ratio peer / dco {:.3f}\n",
+      r.peer_ms_per_frame, r.peer_ms_per_frame / r.ms_per_frame);
+}
+
+// The fields of one sequence, without braces.
+std::string json_fields(const Result& r) {
+  using dco::tools::json_number;
+  const rt::RuntimeStats& t = r.throughput;
+  const rt::RuntimeStats& l = r.paced;
+  return fmt::format(
+      "\"name\": {}, \"width\": {}, \"height\": {}, \"frames\": {}, \"max_disparity\": {}, "
+      "\"threads\": {}, \"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
+      "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
+      "\"latency_p99_ms\": {}, \"paced_frames\": {}, \"dropped\": {}, \"published\": {}, "
+      "\"peer_ms_per_frame\": {}, \"ratio\": {}",
+      dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity, r.threads,
+      json_number(r.ms_per_frame), json_number(1000.0 / r.ms_per_frame),
+      json_number(t.stereo.mean_ms), json_number(t.contour.mean_ms), json_number(t.densify.mean_ms),
+      json_number(r.fps), json_number(l.latency.p50_ms), json_number(l.latency.p99_ms), l.pushed,
+      l.dropped, l.published, json_number(r.peer_ms_per_frame),
+      json_number(r.peer_ms_per_frame / r.ms_per_frame));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return dco::tools::run_tool("dco-bench", [&] {
+    const Options opt = parse_args(argc, argv);
+    if (opt.help) {
+      fmt::print("{}", kUsage);
+      return 0;
+    }
+    const Params params = load_params(opt);
+    std::vector<Frames> sequences;
+    if (opt.sequence != "karlsruhe") sequences.push_back(load_frames(opt, true, 0));
+    if (opt.sequence != "synthetic") sequences.push_back(load_frames(opt, false, 96));
+    std::vector<Result> results;
+    for (const Frames& frames : sequences) {
+      results.push_back(run(opt, params, frames));
+      if (!opt.json) print_text(results.back());
+    }
+    if (opt.json) {
+      std::string all;
+      for (const Result& r : results) all += (all.empty() ? "{" : ", {") + json_fields(r) + "}";
+      fmt::print("{{{}, \"sequences\": [{}]}}\n", json_fields(results.front()), all);
+    }
+    return 0;
+  });
+}
