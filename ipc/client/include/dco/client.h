@@ -1,0 +1,145 @@
+/* libdco-client: read the depth frames dcod publishes in its shared-memory ring.
+ *
+ * Plain C, stable ABI: every struct a caller passes starts with `struct_size`, set by the
+ * matching *_init function, so fields can be appended without breaking old callers. A client
+ * handle is not thread-safe; use one per thread. Frames are read-only views into the mapping or
+ * copies into caller memory; neither path ever blocks the daemon. */
+#ifndef DCO_CLIENT_H
+#define DCO_CLIENT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(__GNUC__)
+#define DCO_CLIENT_API __attribute__((visibility("default")))
+#else
+#define DCO_CLIENT_API
+#endif
+
+typedef enum dco_status {
+  DCO_OK = 0,
+  DCO_E_INVALID_ARGUMENT = 1,  /* null pointer, bad struct_size, bad option */
+  DCO_E_NO_SEGMENT = 2,        /* the segment file does not exist */
+  DCO_E_IO = 3,                /* open, stat or mmap failed */
+  DCO_E_BAD_FORMAT = 4,        /* not a depth ring, other version, inconsistent or truncated */
+  DCO_E_PERMISSION = 5,        /* wrong owner, world-writable, not a regular file */
+  DCO_E_GEOMETRY = 6,          /* not the width/height the caller expects */
+  DCO_E_NO_FRAME = 7,          /* nothing published yet */
+  DCO_E_OVERTAKEN = 8,         /* the writer overwrote the slot (during every attempt) */
+  DCO_E_TIMEOUT = 9,           /* no new frame within the timeout */
+  DCO_E_WRITER_GONE = 10,      /* the writer stopped and no new ring replaced it */
+  DCO_E_BUFFER_TOO_SMALL = 11, /* a copy destination is smaller than the frame */
+  DCO_E_NOT_PUBLISHED = 12     /* the ring holds no such frame (other session, slot or index) */
+} dco_status;
+
+typedef struct dco_client dco_client;
+
+typedef struct dco_client_options {
+  uint32_t struct_size;
+  const char* path;         /* segment file, e.g. /run/dcod/depth.shm */
+  uint32_t expected_uid;    /* owner the file must have; default: the caller's uid */
+  uint32_t expected_width;  /* 0 = any */
+  uint32_t expected_height; /* 0 = any */
+  uint32_t max_attempts;    /* reads of an overwritten slot before DCO_E_OVERTAKEN; default 8 */
+} dco_client_options;
+
+typedef struct dco_frame_info {
+  uint32_t struct_size;
+  uint32_t slot;
+  uint64_t session_id;    /* changes when the daemon restarts */
+  uint64_t publish_index; /* 1, 2, ... within a session */
+  uint64_t frame_seq;     /* camera frame number */
+  int64_t capture_ns;     /* CLOCK_MONOTONIC */
+  int64_t publish_ns;     /* CLOCK_MONOTONIC */
+  double fx, fy, cx, cy;  /* rectified left camera, pixels */
+  double baseline_m;
+  uint32_t width;
+  uint32_t height;
+  uint32_t image_channels; /* 0 when the ring carries no image */
+  uint32_t reserved;
+  size_t depth_stride; /* bytes between rows of the view */
+  size_t image_stride;
+} dco_frame_info;
+
+/* A zero-copy frame: pointers into the read-only mapping. The pixels are only known to be one
+ * consistent frame if dco_client_still_valid() says so after they were read; the pointers stay
+ * mapped until the next call on the same client that returns a frame. */
+typedef struct dco_frame_view {
+  uint32_t struct_size;
+  uint32_t reserved;
+  dco_frame_info info;
+  const float* depth;   /* metres, info.height rows of info.depth_stride bytes */
+  const uint8_t* image; /* rectified left image, NULL without image */
+  uint64_t token;       /* seqlock value the view was taken at */
+} dco_frame_view;
+
+/* Caller memory a frame is copied into. */
+typedef struct dco_frame_buffer {
+  uint32_t struct_size;
+  uint32_t reserved;
+  float* depth;
+  size_t depth_stride; /* bytes; at least width * 4 */
+  size_t depth_capacity;
+  uint8_t* image; /* NULL: skip the image */
+  size_t image_stride;
+  size_t image_capacity;
+} dco_frame_buffer;
+
+DCO_CLIENT_API void dco_client_options_init(dco_client_options* options);
+DCO_CLIENT_API void dco_frame_view_init(dco_frame_view* view);
+DCO_CLIENT_API void dco_frame_buffer_init(dco_frame_buffer* buffer);
+DCO_CLIENT_API void dco_frame_info_init(dco_frame_info* info);
+
+/* Maps the segment read-only after checking its owner, mode and layout. */
+DCO_CLIENT_API dco_status dco_client_open(const dco_client_options* options, dco_client** out);
+DCO_CLIENT_API void dco_client_close(dco_client* client);
+
+/* The newest frame as a view (only a view whose counter was even when taken is returned). */
+DCO_CLIENT_API dco_status dco_client_latest(dco_client* client, dco_frame_view* view);
+/* 1 while the slot behind the view has not been rewritten, else 0. */
+DCO_CLIENT_API int dco_client_still_valid(const dco_client* client, const dco_frame_view* view);
+/* Waits up to timeout_ms for a frame newer than the last one this client returned. Remaps when
+ * the daemon restarted (new session id). DCO_E_WRITER_GONE as soon as the writer is seen to
+ * have stopped or died; calling again picks up a daemon that comes back. */
+DCO_CLIENT_API dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms,
+                                               dco_frame_view* view);
+/* Copies the frame a view names; DCO_E_OVERTAKEN when its slot changed before or during the
+ * copy. dst->image NULL skips the image. */
+DCO_CLIENT_API dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
+                                          dco_frame_buffer* dst);
+/* Copies the newest frame, retrying overwritten slots; succeeds only with an untorn copy. */
+DCO_CLIENT_API dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst,
+                                                 dco_frame_info* info);
+/* The frame an announcement names (the fields of an LCM DCO_DEPTH descriptor, or any other
+ * wake-up), accepted only when slot `slot` of the ring really holds publish index `publish_index`
+ * of session `session_id`, read consistently under the slot's seqlock. The announcement is
+ * trusted for nothing else: metadata and pixels come from the slot, so a forged one cannot make
+ * the caller accept depth the daemon did not write. DCO_E_NOT_PUBLISHED when the ring cannot have
+ * held that frame in that slot (other session, slot out of range, index 0, not yet published, or
+ * an older index in the slot), DCO_E_OVERTAKEN when the slot holds a newer frame or is being
+ * rewritten (the announced one is gone, if it was ever there). An announcement of a session other
+ * than the mapped one first follows a restarted daemon to its new ring. */
+DCO_CLIENT_API dco_status dco_client_view_announced(dco_client* client, uint64_t session_id,
+                                                    uint32_t slot, uint64_t publish_index,
+                                                    dco_frame_view* view);
+/* dco_client_view_announced, then dco_client_copy: succeeds only with an untorn copy of exactly
+ * the announced frame. info may be NULL. */
+DCO_CLIENT_API dco_status dco_client_read_announced(dco_client* client, uint64_t session_id,
+                                                    uint32_t slot, uint64_t publish_index,
+                                                    dco_frame_buffer* dst, dco_frame_info* info);
+/* Session of the mapped ring. */
+DCO_CLIENT_API uint64_t dco_client_session_id(const dco_client* client);
+
+DCO_CLIENT_API const char* dco_client_strerror(dco_status status);
+/* Details of the last failure on the calling thread (empty when there was none). */
+DCO_CLIENT_API const char* dco_client_last_error(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* DCO_CLIENT_H */

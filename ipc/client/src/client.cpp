@@ -1,0 +1,533 @@
+// libdco-client: the reader side of the depth ring (layout in dco/ipc/ring_layout.hpp).
+
+#include "dco/client.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <new>
+#include <string>
+
+#include "dco/ipc/ring_layout.hpp"
+
+namespace {
+
+namespace layout = dco::ipc::layout;
+
+constexpr std::uint32_t kDefaultAttempts = 8;
+// How often a waiting client looks for a replaced segment or a dead writer.
+constexpr std::int64_t kPathCheckNs = 20'000'000;
+constexpr std::int64_t kMaxPollSleepNs = 1'000'000;
+constexpr std::int64_t kMinPollSleepNs = 20'000;
+
+thread_local std::string t_last_error;
+
+dco_status fail(dco_status status, const std::string& message) {
+  t_last_error = message;
+  return status;
+}
+
+std::string errno_text(int err) {
+  return std::strerror(err);
+}
+
+std::int64_t now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+void sleep_ns(std::int64_t ns) {
+  timespec ts{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
+  while (nanosleep(&ts, &ts) != 0 && errno == EINTR) {
+  }
+}
+
+struct Mapping {
+  int fd = -1;
+  const unsigned char* base = nullptr;
+  std::size_t size = 0;
+  dev_t dev = 0;
+  ino_t ino = 0;
+  layout::Geometry geometry;
+  layout::Sizes sizes{};
+  std::uint64_t session_id = 0;
+
+  const layout::RingHeader* header() const {
+    return reinterpret_cast<const layout::RingHeader*>(base);
+  }
+  const unsigned char* slot(std::uint32_t i) const {
+    return base + sizes.slots_offset + sizes.slot_stride * i;
+  }
+  const layout::SlotHeader* slot_header(std::uint32_t i) const {
+    return reinterpret_cast<const layout::SlotHeader*>(slot(i));
+  }
+
+  void release() {
+    if (base != nullptr) munmap(const_cast<unsigned char*>(base), size);
+    if (fd >= 0) close(fd);
+    *this = Mapping{};
+  }
+};
+
+struct Expectations {
+  std::string path;
+  std::uint32_t uid = 0;
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+};
+
+dco_status check_header(const Mapping& m, const Expectations& e, std::uint64_t file_size) {
+  const layout::RingHeader& h = *m.header();
+  const std::string& p = e.path;
+  if (h.magic != layout::kMagic) return fail(DCO_E_BAD_FORMAT, p + ": not a dco depth ring");
+  if (h.version != layout::kVersion)
+    return fail(DCO_E_BAD_FORMAT, p + ": ring version " + std::to_string(h.version) +
+                                      ", this client reads version " +
+                                      std::to_string(layout::kVersion));
+  if (h.header_size != sizeof(layout::RingHeader) ||
+      h.depth_format != layout::kDepthFormatFloat32Metres)
+    return fail(DCO_E_BAD_FORMAT, p + ": unknown header size or depth format");
+  const bool has_image = h.image_format == layout::kImageFormatU8;
+  if ((h.image_format != layout::kImageFormatNone && !has_image) ||
+      has_image != (h.image_channels != 0))
+    return fail(DCO_E_BAD_FORMAT, p + ": inconsistent image format");
+  const layout::Geometry g{h.width, h.height, h.image_channels, h.slot_count};
+  const auto s = layout::compute_sizes(g);
+  if (!s) return fail(DCO_E_BAD_FORMAT, p + ": geometry or slot count out of range");
+  if (h.depth_stride != s->depth_stride || h.image_stride != s->image_stride ||
+      h.slot_header_size != sizeof(layout::SlotHeader) || h.depth_offset != s->depth_offset ||
+      h.image_offset != s->image_offset || h.slot_stride != s->slot_stride ||
+      h.slots_offset != s->slots_offset || h.file_size != s->file_size)
+    return fail(DCO_E_BAD_FORMAT, p + ": sizes in the header do not match its geometry");
+  if (file_size < s->file_size)
+    return fail(DCO_E_BAD_FORMAT, p + ": truncated (" + std::to_string(file_size) + " of " +
+                                      std::to_string(s->file_size) + " bytes)");
+  if ((e.width != 0 && e.width != h.width) || (e.height != 0 && e.height != h.height))
+    return fail(DCO_E_GEOMETRY, p + ": ring is " + std::to_string(h.width) + "x" +
+                                    std::to_string(h.height) + ", expected " +
+                                    std::to_string(e.width) + "x" + std::to_string(e.height));
+  return DCO_OK;
+}
+
+dco_status map_segment(const Expectations& e, Mapping& out) {
+  Mapping m;
+  m.fd = open(e.path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  if (m.fd < 0) {
+    const int err = errno;
+    if (err == ENOENT) return fail(DCO_E_NO_SEGMENT, e.path + ": no depth ring (is dcod running?)");
+    if (err == ELOOP) return fail(DCO_E_PERMISSION, e.path + ": is a symbolic link");
+    return fail(DCO_E_IO, e.path + ": " + errno_text(err));
+  }
+  struct stat st {};
+  if (fstat(m.fd, &st) != 0) {
+    const int err = errno;
+    m.release();
+    return fail(DCO_E_IO, e.path + ": " + errno_text(err));
+  }
+  dco_status status = DCO_OK;
+  if (!S_ISREG(st.st_mode)) {
+    status = fail(DCO_E_PERMISSION, e.path + ": not a regular file");
+  } else if (st.st_uid != e.uid) {
+    status = fail(DCO_E_PERMISSION, e.path + ": owned by uid " + std::to_string(st.st_uid) +
+                                        ", expected uid " + std::to_string(e.uid));
+  } else if ((st.st_mode & S_IWOTH) != 0) {
+    status = fail(DCO_E_PERMISSION, e.path + ": world-writable, refusing to trust it");
+  } else if (static_cast<std::uint64_t>(st.st_size) < sizeof(layout::RingHeader)) {
+    status = fail(DCO_E_BAD_FORMAT, e.path + ": truncated (" + std::to_string(st.st_size) +
+                                        " bytes, smaller than the ring header)");
+  }
+  if (status != DCO_OK) {
+    m.release();
+    return status;
+  }
+  m.size = static_cast<std::size_t>(st.st_size);
+  void* p = mmap(nullptr, m.size, PROT_READ, MAP_SHARED, m.fd, 0);
+  if (p == MAP_FAILED) {
+    const int err = errno;
+    m.size = 0;
+    m.release();
+    return fail(DCO_E_IO, e.path + ": mmap: " + errno_text(err));
+  }
+  m.base = static_cast<const unsigned char*>(p);
+  m.dev = st.st_dev;
+  m.ino = st.st_ino;
+  status = check_header(m, e, m.size);
+  if (status != DCO_OK) {
+    m.release();
+    return status;
+  }
+  const layout::RingHeader& h = *m.header();
+  m.geometry = {h.width, h.height, h.image_channels, h.slot_count};
+  m.sizes = *layout::compute_sizes(m.geometry);
+  m.session_id = h.session_id;
+  out = m;
+  return DCO_OK;
+}
+
+bool struct_ok(const void* p, std::uint32_t size, std::uint32_t expected) {
+  return p != nullptr && size >= expected;
+}
+
+}  // namespace
+
+struct dco_client {
+  Expectations expect;
+  std::uint32_t max_attempts = kDefaultAttempts;
+  Mapping map;
+  std::uint64_t last_index = 0;  // publish_index of the last frame returned
+  std::int64_t last_path_check_ns = 0;
+
+  ~dco_client() { map.release(); }
+
+  // Reads slot `slot`'s metadata under its seqlock into a view (pixels are left in place).
+  // False when the slot was being written or changed during the read.
+  bool read_slot(std::uint32_t slot, dco_frame_view* view) const {
+    const layout::SlotHeader& s = *map.slot_header(slot);
+    const std::uint64_t before = s.seqlock.load(std::memory_order_acquire);
+    if (before % 2 != 0) return false;
+    dco_frame_info info;
+    dco_frame_info_init(&info);
+    info.slot = slot;
+    info.session_id = map.session_id;
+    info.publish_index = s.publish_index;
+    info.frame_seq = s.frame_seq;
+    info.capture_ns = s.capture_ns;
+    info.publish_ns = s.publish_ns;
+    info.fx = s.fx;
+    info.fy = s.fy;
+    info.cx = s.cx;
+    info.cy = s.cy;
+    info.baseline_m = s.baseline_m;
+    layout::fence_acquire();
+    if (s.seqlock.load(std::memory_order_relaxed) != before) return false;
+    info.width = map.geometry.width;
+    info.height = map.geometry.height;
+    info.image_channels = map.geometry.image_channels;
+    info.depth_stride = map.sizes.depth_stride;
+    info.image_stride = map.sizes.image_stride;
+    const unsigned char* base = map.slot(slot);
+    view->info = info;
+    view->depth = reinterpret_cast<const float*>(base + map.sizes.depth_offset);
+    view->image = map.geometry.image_channels ? base + map.sizes.image_offset : nullptr;
+    view->token = before;
+    return true;
+  }
+
+  // Takes the newest slot's metadata under the seqlock; pixels are left in place.
+  dco_status take_latest(dco_frame_view* view) {
+    const layout::RingHeader& h = *map.header();
+    for (std::uint32_t attempt = 0; attempt < max_attempts; ++attempt) {
+      if (h.publish_count.load(std::memory_order_acquire) == 0)
+        return fail(DCO_E_NO_FRAME, expect.path + ": no frame published yet");
+      const std::uint32_t slot = h.newest_slot.load(std::memory_order_acquire);
+      if (slot >= map.geometry.slot_count)
+        return fail(DCO_E_BAD_FORMAT, expect.path + ": newest slot index out of range");
+      if (!read_slot(slot, view)) continue;
+      if (view->info.publish_index > last_index) last_index = view->info.publish_index;
+      return DCO_OK;
+    }
+    return fail(DCO_E_OVERTAKEN, expect.path + ": slot overwritten during " +
+                                     std::to_string(max_attempts) + " attempts");
+  }
+
+  // The frame an announcement names, only if the slot holds it (see dco_client_view_announced).
+  dco_status take_announced(std::uint64_t session_id, std::uint32_t slot,
+                            std::uint64_t publish_index, dco_frame_view* view) {
+    if (session_id != map.session_id) {
+      bool remapped = false;
+      const dco_status status = follow_path(&remapped);
+      if (status != DCO_OK) return status;
+      if (session_id != map.session_id)
+        return fail(DCO_E_NOT_PUBLISHED, expect.path + ": session " + std::to_string(session_id) +
+                                             " is not the ring's session " +
+                                             std::to_string(map.session_id));
+    }
+    if (slot >= map.geometry.slot_count)
+      return fail(DCO_E_NOT_PUBLISHED, expect.path + ": slot " + std::to_string(slot) +
+                                           " out of range (" +
+                                           std::to_string(map.geometry.slot_count) + " slots)");
+    const std::uint64_t published = map.header()->publish_count.load(std::memory_order_acquire);
+    if (publish_index == 0 || publish_index > published)
+      return fail(DCO_E_NOT_PUBLISHED, expect.path + ": publish index " +
+                                           std::to_string(publish_index) + " not published (" +
+                                           std::to_string(published) + " so far)");
+    for (std::uint32_t attempt = 0; attempt < max_attempts; ++attempt) {
+      dco_frame_view taken = *view;
+      if (!read_slot(slot, &taken)) continue;
+      const std::uint64_t held = taken.info.publish_index;
+      // The writer fills slots with rising indices: a larger one overwrote the announced frame,
+      // a smaller one means the announced index never went into this slot.
+      if (held > publish_index)
+        return fail(DCO_E_OVERTAKEN, expect.path + ": slot " + std::to_string(slot) +
+                                         " was rewritten after publish index " +
+                                         std::to_string(publish_index));
+      if (held < publish_index)
+        return fail(DCO_E_NOT_PUBLISHED, expect.path + ": publish index " +
+                                             std::to_string(publish_index) +
+                                             " was never written to slot " + std::to_string(slot));
+      *view = taken;
+      return DCO_OK;
+    }
+    return fail(DCO_E_OVERTAKEN, expect.path + ": slot " + std::to_string(slot) +
+                                     " being written during " + std::to_string(max_attempts) +
+                                     " attempts");
+  }
+
+  bool valid(const dco_frame_view* view) const {
+    if (view->info.session_id != map.session_id || view->info.slot >= map.geometry.slot_count)
+      return false;
+    layout::fence_acquire();
+    return map.slot_header(view->info.slot)->seqlock.load(std::memory_order_relaxed) == view->token;
+  }
+
+  // Follows a daemon restart: a different file at the path is a new ring. Returns true when it
+  // remapped.
+  dco_status follow_path(bool* remapped) {
+    *remapped = false;
+    last_path_check_ns = now_ns();
+    struct stat st {};
+    if (stat(expect.path.c_str(), &st) != 0) return DCO_OK;  // gone: keep the old ring
+    if (st.st_dev == map.dev && st.st_ino == map.ino) return DCO_OK;
+    Mapping fresh;
+    const dco_status status = map_segment(expect, fresh);
+    if (status != DCO_OK) return status;
+    map.release();
+    map = fresh;
+    last_index = 0;
+    *remapped = true;
+    return DCO_OK;
+  }
+
+  bool writer_gone() const {
+    if (map.header()->state.load(std::memory_order_acquire) == layout::kStateClosed) return true;
+    // The writer holds an exclusive lock for its lifetime; the kernel drops it when it dies.
+    if (flock(map.fd, LOCK_SH | LOCK_NB) != 0) return false;
+    flock(map.fd, LOCK_UN);
+    return true;
+  }
+};
+
+extern "C" {
+
+void dco_client_options_init(dco_client_options* options) {
+  if (options == nullptr) return;
+  *options = dco_client_options{};
+  options->struct_size = sizeof(dco_client_options);
+  options->expected_uid = static_cast<std::uint32_t>(getuid());
+  options->max_attempts = kDefaultAttempts;
+}
+
+void dco_frame_view_init(dco_frame_view* view) {
+  if (view == nullptr) return;
+  *view = dco_frame_view{};
+  view->struct_size = sizeof(dco_frame_view);
+  dco_frame_info_init(&view->info);
+}
+
+void dco_frame_buffer_init(dco_frame_buffer* buffer) {
+  if (buffer == nullptr) return;
+  *buffer = dco_frame_buffer{};
+  buffer->struct_size = sizeof(dco_frame_buffer);
+}
+
+void dco_frame_info_init(dco_frame_info* info) {
+  if (info == nullptr) return;
+  *info = dco_frame_info{};
+  info->struct_size = sizeof(dco_frame_info);
+}
+
+dco_status dco_client_open(const dco_client_options* options, dco_client** out) {
+  if (out == nullptr) return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: out is NULL");
+  *out = nullptr;
+  if (!struct_ok(options, options ? options->struct_size : 0, sizeof(dco_client_options)))
+    return fail(DCO_E_INVALID_ARGUMENT,
+                "dco_client_open: options missing or not set up by dco_client_options_init");
+  if (options->path == nullptr || options->path[0] == '\0')
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: no segment path");
+  auto* client = new (std::nothrow) dco_client;
+  if (client == nullptr) return fail(DCO_E_IO, "dco_client_open: out of memory");
+  client->expect = {options->path, options->expected_uid, options->expected_width,
+                    options->expected_height};
+  client->max_attempts = options->max_attempts ? options->max_attempts : kDefaultAttempts;
+  const dco_status status = map_segment(client->expect, client->map);
+  if (status != DCO_OK) {
+    delete client;
+    return status;
+  }
+  client->last_path_check_ns = now_ns();
+  *out = client;
+  return DCO_OK;
+}
+
+void dco_client_close(dco_client* client) {
+  delete client;
+}
+
+dco_status dco_client_latest(dco_client* client, dco_frame_view* view) {
+  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_latest: bad client or view");
+  if (now_ns() - client->last_path_check_ns >= kPathCheckNs) {
+    bool remapped = false;
+    const dco_status status = client->follow_path(&remapped);
+    if (status != DCO_OK) return status;
+  }
+  return client->take_latest(view);
+}
+
+int dco_client_still_valid(const dco_client* client, const dco_frame_view* view) {
+  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
+    return 0;
+  return client->valid(view) ? 1 : 0;
+}
+
+dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_frame_view* view) {
+  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)) ||
+      timeout_ms < 0)
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_wait_next: bad client, view or timeout");
+  const std::int64_t deadline = now_ns() + std::int64_t{timeout_ms} * 1'000'000;
+  std::int64_t pause = kMinPollSleepNs;
+  for (;;) {
+    const auto* h = client->map.header();
+    if (h->publish_count.load(std::memory_order_acquire) > client->last_index) {
+      const dco_status status = client->take_latest(view);
+      if (status != DCO_E_NO_FRAME) return status;
+    }
+    const std::int64_t now = now_ns();
+    if (now - client->last_path_check_ns >= kPathCheckNs) {
+      bool remapped = false;
+      const dco_status status = client->follow_path(&remapped);
+      if (status != DCO_OK) return status;
+      if (remapped) continue;
+      if (client->writer_gone())
+        return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
+    }
+    if (now >= deadline)
+      return fail(DCO_E_TIMEOUT, client->expect.path + ": no new frame within " +
+                                     std::to_string(timeout_ms) + " ms");
+    sleep_ns(std::min(pause, deadline - now));
+    pause = std::min(pause * 2, kMaxPollSleepNs);
+  }
+}
+
+dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
+                           dco_frame_buffer* dst) {
+  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)) ||
+      !struct_ok(dst, dst ? dst->struct_size : 0, sizeof(dco_frame_buffer)) ||
+      dst->depth == nullptr)
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_copy: bad client, view or buffer");
+  // Sizes and addresses come from the mapping; the view only names the slot and its token.
+  const Mapping& m = client->map;
+  const std::size_t depth_row = std::size_t{m.geometry.width} * sizeof(float);
+  const std::size_t rows = m.geometry.height;
+  if (dst->depth_stride < depth_row ||
+      dst->depth_capacity < dst->depth_stride * (rows - 1) + depth_row)
+    return fail(DCO_E_BUFFER_TOO_SMALL, "dco_client_copy: depth buffer too small");
+  const bool copy_image = dst->image != nullptr && m.geometry.image_channels != 0;
+  const std::size_t image_row = std::size_t{m.geometry.width} * m.geometry.image_channels;
+  if (copy_image && (dst->image_stride < image_row ||
+                     dst->image_capacity < dst->image_stride * (rows - 1) + image_row))
+    return fail(DCO_E_BUFFER_TOO_SMALL, "dco_client_copy: image buffer too small");
+  if (!client->valid(view))
+    return fail(DCO_E_OVERTAKEN, client->expect.path + ": slot overwritten before the copy");
+  const unsigned char* slot = m.slot(view->info.slot);
+  const unsigned char* depth = slot + m.sizes.depth_offset;
+  auto* out = reinterpret_cast<unsigned char*>(dst->depth);
+  for (std::size_t y = 0; y < rows; ++y)
+    std::memcpy(out + y * dst->depth_stride, depth + y * m.sizes.depth_stride, depth_row);
+  if (copy_image) {
+    const unsigned char* image = slot + m.sizes.image_offset;
+    for (std::size_t y = 0; y < rows; ++y)
+      std::memcpy(dst->image + y * dst->image_stride, image + y * m.sizes.image_stride, image_row);
+  }
+  if (!client->valid(view))
+    return fail(DCO_E_OVERTAKEN, client->expect.path + ": slot overwritten during the copy");
+  return DCO_OK;
+}
+
+dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst, dco_frame_info* info) {
+  if (client == nullptr || (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_latest: bad client or info");
+  dco_frame_view view;
+  dco_frame_view_init(&view);
+  for (std::uint32_t attempt = 0; attempt < client->max_attempts; ++attempt) {
+    dco_status status = dco_client_latest(client, &view);
+    if (status != DCO_OK) return status;
+    status = dco_client_copy(client, &view, dst);
+    if (status == DCO_E_OVERTAKEN) continue;
+    if (status == DCO_OK && info != nullptr) *info = view.info;
+    return status;
+  }
+  return fail(DCO_E_OVERTAKEN, client->expect.path + ": every copy was overtaken (" +
+                                   std::to_string(client->max_attempts) + " attempts)");
+}
+
+dco_status dco_client_view_announced(dco_client* client, uint64_t session_id, uint32_t slot,
+                                     uint64_t publish_index, dco_frame_view* view) {
+  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_view_announced: bad client or view");
+  return client->take_announced(session_id, slot, publish_index, view);
+}
+
+dco_status dco_client_read_announced(dco_client* client, uint64_t session_id, uint32_t slot,
+                                     uint64_t publish_index, dco_frame_buffer* dst,
+                                     dco_frame_info* info) {
+  if (client == nullptr || (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_announced: bad client or info");
+  dco_frame_view view;
+  dco_frame_view_init(&view);
+  dco_status status = client->take_announced(session_id, slot, publish_index, &view);
+  if (status != DCO_OK) return status;
+  status = dco_client_copy(client, &view, dst);
+  if (status == DCO_OK && info != nullptr) *info = view.info;
+  return status;
+}
+
+uint64_t dco_client_session_id(const dco_client* client) {
+  return client != nullptr ? client->map.session_id : 0;
+}
+
+const char* dco_client_strerror(dco_status status) {
+  switch (status) {
+    case DCO_OK:
+      return "success";
+    case DCO_E_INVALID_ARGUMENT:
+      return "invalid argument";
+    case DCO_E_NO_SEGMENT:
+      return "no depth ring at the path";
+    case DCO_E_IO:
+      return "I/O error";
+    case DCO_E_BAD_FORMAT:
+      return "not a valid depth ring";
+    case DCO_E_PERMISSION:
+      return "depth ring has the wrong owner or permissions";
+    case DCO_E_GEOMETRY:
+      return "depth ring has another geometry";
+    case DCO_E_NO_FRAME:
+      return "no frame published yet";
+    case DCO_E_OVERTAKEN:
+      return "frame overwritten while reading";
+    case DCO_E_TIMEOUT:
+      return "timed out";
+    case DCO_E_WRITER_GONE:
+      return "writer stopped";
+    case DCO_E_BUFFER_TOO_SMALL:
+      return "buffer too small";
+    case DCO_E_NOT_PUBLISHED:
+      return "the ring holds no such frame";
+  }
+  return "unknown status";
+}
+
+const char* dco_client_last_error(void) {
+  return t_last_error.c_str();
+}
+
+}  // extern "C"

@@ -1,0 +1,174 @@
+// dco-watch: follows the depth ring like a renderer would and prints, once per interval, the
+// frame rate, the latency from capture and from publish to the moment the frame was read, and
+// the newest frame's metadata.
+
+#include <dco/client.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace {
+
+constexpr const char* kDefaultPath = "/run/dcod/depth.shm";
+
+void usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: dco-watch [--path FILE] [--uid UID] [--frames N] [--interval-ms MS]\n"
+               "                 [--timeout-ms MS] [--copy]\n"
+               "  --path FILE       depth ring (default %s)\n"
+               "  --uid UID         owner the ring must have (default: own uid)\n"
+               "  --frames N        stop after N frames (default: run until stopped)\n"
+               "  --interval-ms MS  report period (default 1000)\n"
+               "  --timeout-ms MS   give up when no frame arrives for MS (default 2000)\n"
+               "  --copy            copy every frame (read_latest path) instead of a view\n",
+               kDefaultPath);
+}
+
+std::int64_t now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+bool parse_int(std::string_view text, long long lo, long long hi, long long* out) {
+  char* end = nullptr;
+  const std::string s(text);
+  errno = 0;
+  const long long v = std::strtoll(s.c_str(), &end, 10);
+  if (s.empty() || errno != 0 || *end != '\0' || v < lo || v > hi) return false;
+  *out = v;
+  return true;
+}
+
+double percentile(std::vector<double>& v, double p) {
+  if (v.empty()) return 0;
+  const auto k = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  dco::client::Options options;
+  options.path = kDefaultPath;
+  long long frames = 0;
+  long long interval_ms = 1000;
+  long long timeout_ms = 2000;
+  bool copy = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    const bool has_value = i + 1 < argc;
+    long long v = 0;
+    if (arg == "--help" || arg == "-h") {
+      usage(stdout);
+      return 0;
+    } else if (arg == "--copy") {
+      copy = true;
+    } else if (arg == "--path" && has_value) {
+      options.path = argv[++i];
+    } else if (arg == "--uid" && has_value && parse_int(argv[i + 1], 0, 0xffffffffLL, &v)) {
+      options.expected_uid = static_cast<std::uint32_t>(v);
+      ++i;
+    } else if (arg == "--frames" && has_value && parse_int(argv[i + 1], 1, 1LL << 40, &v)) {
+      frames = v;
+      ++i;
+    } else if (arg == "--interval-ms" && has_value && parse_int(argv[i + 1], 1, 3600000, &v)) {
+      interval_ms = v;
+      ++i;
+    } else if (arg == "--timeout-ms" && has_value && parse_int(argv[i + 1], 1, 3600000, &v)) {
+      timeout_ms = v;
+      ++i;
+    } else {
+      std::fprintf(stderr, "dco-watch: error: bad argument '%s'\n", argv[i]);
+      usage(stderr);
+      return 2;
+    }
+  }
+
+  try {
+    dco::client::Client client(options);
+    std::vector<float> depth;
+    std::vector<std::uint8_t> image;
+    dco_frame_buffer buffer;
+    dco_frame_buffer_init(&buffer);
+    std::vector<double> from_capture_ms;
+    std::vector<double> from_publish_ms;
+    long long received = 0;
+    long long torn = 0;
+    long long window_frames = 0;
+    std::uint64_t last_index = 0;
+    long long skipped = 0;
+    std::int64_t window_start = now_ns();
+    dco_frame_info newest;
+    dco_frame_info_init(&newest);
+    while (frames == 0 || received < frames) {
+      dco::client::FrameView view;
+      dco_frame_view_init(&view.raw);
+      const dco_status status =
+          dco_client_wait_next(client.handle(), static_cast<std::int32_t>(timeout_ms), &view.raw);
+      if (status == DCO_E_OVERTAKEN) {
+        ++torn;
+        continue;
+      }
+      if (status != DCO_OK) throw dco::client::Error(status);
+      const dco_frame_info info = view.info();
+      if (copy) {
+        const std::size_t depth_bytes = std::size_t{info.width} * info.height * sizeof(float);
+        const std::size_t image_bytes = std::size_t{info.width} * info.height * info.image_channels;
+        depth.resize(depth_bytes / sizeof(float));
+        image.resize(image_bytes);
+        buffer.depth = depth.data();
+        buffer.depth_stride = std::size_t{info.width} * sizeof(float);
+        buffer.depth_capacity = depth_bytes;
+        buffer.image = image_bytes ? image.data() : nullptr;
+        buffer.image_stride = std::size_t{info.width} * info.image_channels;
+        buffer.image_capacity = image_bytes;
+        if (!client.copy(view, buffer)) {
+          ++torn;
+          continue;
+        }
+      }
+      const std::int64_t t = now_ns();
+      if (last_index != 0 && info.publish_index > last_index + 1)
+        skipped += static_cast<long long>(info.publish_index - last_index - 1);
+      last_index = info.publish_index;
+      from_capture_ms.push_back(static_cast<double>(t - info.capture_ns) / 1e6);
+      from_publish_ms.push_back(static_cast<double>(t - info.publish_ns) / 1e6);
+      newest = info;
+      ++received;
+      ++window_frames;
+      const std::int64_t elapsed = t - window_start;
+      if (elapsed >= interval_ms * 1'000'000 || (frames != 0 && received == frames)) {
+        std::printf(
+            "fps %.1f  latency capture p50 %.2f ms max %.2f ms  publish p50 %.3f ms max %.3f ms  "
+            "skipped %lld  overtaken %lld\n"
+            "  session %016llx  seq %llu  index %llu  slot %u  %ux%u  image %u ch  "
+            "fx %.2f fy %.2f cx %.2f cy %.2f baseline %.4f m\n",
+            static_cast<double>(window_frames) * 1e9 / static_cast<double>(elapsed),
+            percentile(from_capture_ms, 0.5), percentile(from_capture_ms, 1.0),
+            percentile(from_publish_ms, 0.5), percentile(from_publish_ms, 1.0), skipped, torn,
+            static_cast<unsigned long long>(newest.session_id),
+            static_cast<unsigned long long>(newest.frame_seq),
+            static_cast<unsigned long long>(newest.publish_index), newest.slot, newest.width,
+            newest.height, newest.image_channels, newest.fx, newest.fy, newest.cx, newest.cy,
+            newest.baseline_m);
+        std::fflush(stdout);
+        from_capture_ms.clear();
+        from_publish_ms.clear();
+        window_frames = 0;
+        window_start = t;
+      }
+    }
+  } catch (const dco::client::Error& e) {
+    std::fprintf(stderr, "dco-watch: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

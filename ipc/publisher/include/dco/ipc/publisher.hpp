@@ -1,0 +1,89 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "dco/core/image.hpp"
+#include "dco/ipc/ring_writer.hpp"
+#include "dco/pipeline/runtime/depth_runtime.hpp"
+
+namespace lcm {
+class LCM;
+}
+
+namespace dco::ipc {
+
+struct PublisherOptions {
+  // LCM provider URL; empty = LCM's default (LCM_DEFAULT_URL, else udpm multicast).
+  std::string lcm_url;
+  double preview_hz = 2.0;  // DCO_DEPTH_PREVIEW rate by capture time; 0 = never
+  // The preview is the depth map shrunk by one whole factor until it fits this size.
+  int preview_max_width = 80;
+  int preview_max_height = 60;
+};
+
+struct DeviceStatus {
+  enum class State : std::int8_t { kDisconnected = 0, kStarting = 1, kStreaming = 2, kError = 3 };
+  State state = State::kDisconnected;
+  std::string device, serial, firmware;
+  int usb_speed_mbps = 0;
+  std::string error;
+};
+
+enum class LogLevel : std::int8_t { kDebug = 0, kInfo = 1, kWarning = 2, kError = 3 };
+
+// The daemon's publishing side: frames go into the shared-memory ring first and are then announced
+// on DCO_DEPTH (a descriptor naming session, slot and publish index, never pixels), with a small
+// preview on DCO_DEPTH_PREVIEW at a few Hz; runtime statistics, device status and log events go
+// to DCO_STATS, DCO_STATUS and DCO_LOG. Not thread-safe: one thread publishes.
+class DepthPublisher {
+ public:
+  // Throws dco::Error when LCM cannot be set up with the URL.
+  DepthPublisher(RingWriter& ring, const PublisherOptions& options);
+  DepthPublisher(const DepthPublisher&) = delete;
+  DepthPublisher& operator=(const DepthPublisher&) = delete;
+  ~DepthPublisher();
+
+  // Zero copy: fill the slot begin_write() returns, then publish() it. publish stamps the slot
+  // (RingWriter::publish), announces it and sends a preview when one is due; it returns the
+  // publish index.
+  RingWriter::Slot begin_write();
+  std::uint64_t publish(const FrameMeta& meta);
+  // Copies depth (and the image, exactly when the ring holds one) into the next slot, then
+  // publishes it. Throws dco::Error on a size mismatch.
+  std::uint64_t write(ImageView<const float> depth, ImageView<const std::uint8_t> image,
+                      const FrameMeta& meta);
+
+  // DCO_STATS from the runtime's counters and histograms; frame rates over the interval since the
+  // previous call (or since construction). now_ns: CLOCK_MONOTONIC.
+  void publish_stats(const pipeline::runtime::RuntimeStats& stats, std::int64_t now_ns);
+  void publish_status(const DeviceStatus& status, std::int64_t now_ns);
+  void log(LogLevel level, std::string_view source, std::string_view text, std::int64_t now_ns);
+
+  std::uint64_t previews_sent() const { return previews_sent_; }
+  lcm::LCM& lcm() { return *lcm_; }
+
+ private:
+  // `depth`: the published frame, for the preview.
+  void announce(std::uint64_t publish_index, std::uint32_t slot, const FrameMeta& meta,
+                ImageView<const float> depth);
+  void send_preview(std::uint64_t publish_index, const FrameMeta& meta,
+                    ImageView<const float> depth);
+  template <class Message>
+  void send(const char* channel, const Message& message);
+
+  RingWriter& ring_;
+  PublisherOptions options_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::uint32_t open_slot_ = 0;
+  ImageView<const float> open_depth_;  // the slot begin_write() opened
+  bool preview_sent_ = false;
+  std::int64_t last_preview_capture_ns_ = 0;
+  std::uint64_t previews_sent_ = 0;
+  std::int64_t stats_since_ns_ = 0;
+  long stats_pushed_ = 0, stats_published_ = 0;
+};
+
+}  // namespace dco::ipc

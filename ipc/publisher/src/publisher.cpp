@@ -1,0 +1,184 @@
+#include "dco/ipc/publisher.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "dco/core/error.hpp"
+#include "dco/ipc/lcm_messages.hpp"
+
+namespace dco::ipc {
+namespace {
+
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+std::int64_t as_lcm(std::uint64_t v) {
+  return static_cast<std::int64_t>(v);  // LCM has no unsigned types; the bits travel unchanged
+}
+
+// Nearest valid depth in a block: for occlusion the nearest surface is the one that matters.
+std::int16_t block_depth_mm(ImageView<const float> depth, int x0, int y0, int factor) {
+  float nearest = std::numeric_limits<float>::infinity();
+  for (int y = y0; y < std::min(y0 + factor, depth.height); ++y) {
+    const float* row = depth.row(y);
+    for (int x = x0; x < std::min(x0 + factor, depth.width); ++x)
+      if (row[x] > 0.0f && row[x] < nearest) nearest = row[x];
+  }
+  if (!std::isfinite(nearest)) return 0;
+  return static_cast<std::int16_t>(std::clamp(std::lround(nearest * 1000.0f), 1L, 32767L));
+}
+
+}  // namespace
+
+DepthPublisher::DepthPublisher(RingWriter& ring, const PublisherOptions& options)
+    : ring_(ring), options_(options), stats_since_ns_(monotonic_ns()) {
+  if (options.preview_hz < 0 || options.preview_max_width < 1 || options.preview_max_height < 1)
+    throw Error(fmt::format("publisher: preview rate {} Hz or size {}x{} out of range",
+                            options.preview_hz, options.preview_max_width,
+                            options.preview_max_height));
+  lcm_ = std::make_unique<lcm::LCM>(options.lcm_url);
+  if (!lcm_->good())
+    throw Error(
+        fmt::format("publisher: cannot set up LCM with '{}' (for udpm, is there a "
+                    "multicast route?)",
+                    options.lcm_url.empty() ? "the default URL" : options.lcm_url));
+}
+
+DepthPublisher::~DepthPublisher() = default;
+
+RingWriter::Slot DepthPublisher::begin_write() {
+  RingWriter::Slot slot = ring_.begin_write();
+  open_slot_ = slot.index;
+  open_depth_ = slot.depth;
+  return slot;
+}
+
+std::uint64_t DepthPublisher::publish(const FrameMeta& meta) {
+  const std::uint64_t index = ring_.publish(meta);
+  announce(index, open_slot_, meta, open_depth_);
+  return index;
+}
+
+std::uint64_t DepthPublisher::write(ImageView<const float> depth,
+                                    ImageView<const std::uint8_t> image, const FrameMeta& meta) {
+  const std::uint64_t index = ring_.write(depth, image, meta);
+  announce(index, ring_.current_slot(), meta, depth);
+  return index;
+}
+
+template <class Message>
+void DepthPublisher::send(const char* channel, const Message& message) {
+  if (lcm_->publish(channel, &message) != 0)
+    throw Error(fmt::format("publisher: LCM publish on {} failed", channel));
+}
+
+void DepthPublisher::announce(std::uint64_t publish_index, std::uint32_t slot,
+                              const FrameMeta& meta, ImageView<const float> depth) {
+  dco::depth_frame_t m;
+  m.session_id = as_lcm(ring_.session_id());
+  m.slot = static_cast<std::int32_t>(slot);
+  m.publish_index = as_lcm(publish_index);
+  m.frame_seq = as_lcm(meta.frame_seq);
+  m.capture_ns = meta.capture_ns;
+  m.publish_ns = monotonic_ns();
+  m.width = ring_.options().width;
+  m.height = ring_.options().height;
+  send(channel::kDepth, m);
+  if (options_.preview_hz > 0) {
+    const auto period_ns = static_cast<std::int64_t>(1e9 / options_.preview_hz);
+    if (!preview_sent_ || meta.capture_ns - last_preview_capture_ns_ >= period_ns)
+      send_preview(publish_index, meta, depth);
+  }
+}
+
+void DepthPublisher::send_preview(std::uint64_t publish_index, const FrameMeta& meta,
+                                  ImageView<const float> depth) {
+  // One whole factor for both axes keeps the preview's pixels square.
+  const int factor =
+      std::max((depth.width + options_.preview_max_width - 1) / options_.preview_max_width,
+               (depth.height + options_.preview_max_height - 1) / options_.preview_max_height);
+  dco::depth_preview_t m;
+  m.session_id = as_lcm(ring_.session_id());
+  m.publish_index = as_lcm(publish_index);
+  m.frame_seq = as_lcm(meta.frame_seq);
+  m.capture_ns = meta.capture_ns;
+  m.source_width = depth.width;
+  m.source_height = depth.height;
+  m.width = (depth.width + factor - 1) / factor;
+  m.height = (depth.height + factor - 1) / factor;
+  m.num_pixels = m.width * m.height;
+  m.depth_mm.resize(static_cast<std::size_t>(m.num_pixels));
+  for (int y = 0; y < m.height; ++y)
+    for (int x = 0; x < m.width; ++x)
+      m.depth_mm[static_cast<std::size_t>(y * m.width + x)] =
+          block_depth_mm(depth, x * factor, y * factor, factor);
+  send(channel::kDepthPreview, m);
+  preview_sent_ = true;
+  last_preview_capture_ns_ = meta.capture_ns;
+  ++previews_sent_;
+}
+
+void DepthPublisher::publish_stats(const pipeline::runtime::RuntimeStats& stats,
+                                   std::int64_t now_ns) {
+  dco::pipeline_stats_t m;
+  m.utime_ns = now_ns;
+  m.interval_s = static_cast<double>(now_ns - stats_since_ns_) * 1e-9;
+  // A runtime restart resets its counters; rates then count from zero.
+  const long pushed_before = stats.pushed >= stats_pushed_ ? stats_pushed_ : 0;
+  const long published_before = stats.published >= stats_published_ ? stats_published_ : 0;
+  m.fps_in =
+      m.interval_s > 0 ? static_cast<double>(stats.pushed - pushed_before) / m.interval_s : 0.0;
+  m.fps_out = m.interval_s > 0
+                  ? static_cast<double>(stats.published - published_before) / m.interval_s
+                  : 0.0;
+  m.pushed = stats.pushed;
+  m.dropped = stats.dropped;
+  m.published = stats.published;
+  m.latency_p50_ms = stats.latency.p50_ms;
+  m.latency_p99_ms = stats.latency.p99_ms;
+  m.stereo_p50_ms = stats.stereo.p50_ms;
+  m.stereo_p99_ms = stats.stereo.p99_ms;
+  m.contour_p50_ms = stats.contour.p50_ms;
+  m.contour_p99_ms = stats.contour.p99_ms;
+  m.densify_p50_ms = stats.densify.p50_ms;
+  m.densify_p99_ms = stats.densify.p99_ms;
+  m.entry_high_water = static_cast<std::int32_t>(stats.entry_high_water);
+  m.stereo_queue_high_water = static_cast<std::int32_t>(stats.stereo_queue_high_water);
+  m.densify_queue_high_water = static_cast<std::int32_t>(stats.densify_queue_high_water);
+  send(channel::kStats, m);
+  stats_since_ns_ = now_ns;
+  stats_pushed_ = stats.pushed;
+  stats_published_ = stats.published;
+}
+
+void DepthPublisher::publish_status(const DeviceStatus& status, std::int64_t now_ns) {
+  dco::device_status_t m;
+  m.utime_ns = now_ns;
+  m.state = static_cast<std::int8_t>(status.state);
+  m.device = status.device;
+  m.serial = status.serial;
+  m.firmware = status.firmware;
+  m.usb_speed_mbps = status.usb_speed_mbps;
+  m.error = status.error;
+  send(channel::kStatus, m);
+}
+
+void DepthPublisher::log(LogLevel level, std::string_view source, std::string_view text,
+                         std::int64_t now_ns) {
+  dco::log_event_t m;
+  m.utime_ns = now_ns;
+  m.level = static_cast<std::int8_t>(level);
+  m.source = std::string(source);
+  m.text = std::string(text);
+  send(channel::kLog, m);
+}
+
+}  // namespace dco::ipc

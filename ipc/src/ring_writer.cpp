@@ -1,0 +1,225 @@
+#include "dco/ipc/ring_writer.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/mman.h>
+#include <sys/random.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <new>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "dco/core/error.hpp"
+#include "dco/ipc/ring_layout.hpp"
+
+namespace dco::ipc {
+namespace {
+
+namespace layout = dco::ipc::layout;
+
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+std::uint64_t random_session_id() {
+  std::uint64_t id = 0;
+  while (id == 0) {
+    if (getrandom(&id, sizeof(id), 0) != static_cast<ssize_t>(sizeof(id)))
+      throw Error(fmt::format("getrandom: {}", std::strerror(errno)));
+  }
+  return id;
+}
+
+[[noreturn]] void fail_errno(const std::filesystem::path& path, const char* what) {
+  throw Error(fmt::format("{}: {}: {}", path.string(), what, std::strerror(errno)));
+}
+
+}  // namespace
+
+RingWriter::RingWriter(const std::filesystem::path& path, const RingOptions& options)
+    : path_(path), options_(options) {
+  const layout::Geometry g{static_cast<std::uint32_t>(std::max(options.width, 0)),
+                           static_cast<std::uint32_t>(std::max(options.height, 0)),
+                           static_cast<std::uint32_t>(std::max(options.image_channels, 0)),
+                           static_cast<std::uint32_t>(std::max(options.slot_count, 0))};
+  const auto sizes = layout::compute_sizes(g);
+  if (!sizes || options.image_channels < 0)
+    throw Error(fmt::format(
+        "{}: ring geometry {}x{}, {} image channels, {} slots out of range (1..{} px, 0/1/3 "
+        "channels, {}..{} slots)",
+        path.string(), options.width, options.height, options.image_channels, options.slot_count,
+        layout::kMaxDimension, layout::kMinSlots, layout::kMaxSlots));
+
+  session_id_ = random_session_id();
+
+  // Built under a temporary name and renamed into place, so a reader never maps a half-made ring.
+  const std::filesystem::path tmp = path.string() + ".tmp." + std::to_string(getpid());
+  unlink(tmp.c_str());  // left behind by a writer with our pid that died while creating
+  fd_ = open(tmp.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, 0640);
+  if (fd_ < 0) fail_errno(tmp, "cannot create the depth ring");
+  size_ = sizes->file_size;
+  const auto cleanup = [&](const char* what) {
+    const int err = errno;
+    if (base_ != nullptr) munmap(base_, size_);
+    base_ = nullptr;
+    close(fd_);
+    fd_ = -1;
+    unlink(tmp.c_str());
+    errno = err;
+    fail_errno(tmp, what);
+  };
+  // The umask may have dropped bits of 0640; the mode is part of the contract with readers.
+  if (fchmod(fd_, 0640) != 0) cleanup("fchmod");
+  // Readers take a shared lock to learn whether the writer died; the kernel drops ours with us.
+  if (flock(fd_, LOCK_EX | LOCK_NB) != 0) cleanup("flock");
+  if (ftruncate(fd_, static_cast<off_t>(size_)) != 0) cleanup("ftruncate");
+  void* p = mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, 0);
+  if (p == MAP_FAILED) cleanup("mmap");
+  base_ = static_cast<unsigned char*>(p);
+
+  auto* h = new (base_) layout::RingHeader{};
+  h->magic = layout::kMagic;
+  h->version = layout::kVersion;
+  h->header_size = sizeof(layout::RingHeader);
+  h->width = g.width;
+  h->height = g.height;
+  h->depth_format = layout::kDepthFormatFloat32Metres;
+  h->image_format = g.image_channels ? layout::kImageFormatU8 : layout::kImageFormatNone;
+  h->image_channels = g.image_channels;
+  h->slot_count = g.slot_count;
+  h->depth_stride = sizes->depth_stride;
+  h->image_stride = sizes->image_stride;
+  h->slot_header_size = sizeof(layout::SlotHeader);
+  h->depth_offset = sizes->depth_offset;
+  h->image_offset = sizes->image_offset;
+  h->slot_stride = sizes->slot_stride;
+  h->slots_offset = sizes->slots_offset;
+  h->file_size = sizes->file_size;
+  h->session_id = session_id_;
+  h->writer_pid = getpid();
+  h->created_ns = monotonic_ns();
+  h->state.store(layout::kStateLive, std::memory_order_relaxed);
+  // Touching every page now keeps page faults out of the first frames' publish times.
+  std::memset(base_ + sizes->slots_offset, 0, size_ - sizes->slots_offset);
+  for (std::uint32_t i = 0; i < g.slot_count; ++i) new (slot_base(i)) layout::SlotHeader{};
+  // The first slot written is 0, so "newest" starts at the last one.
+  writing_ = g.slot_count - 1;
+  h->newest_slot.store(writing_, std::memory_order_relaxed);
+
+  if (rename(tmp.c_str(), path.c_str()) != 0) cleanup("cannot move the depth ring into place");
+}
+
+RingWriter::~RingWriter() {
+  auto* h = reinterpret_cast<layout::RingHeader*>(base_);
+  h->state.store(layout::kStateClosed, std::memory_order_release);
+  // Only remove the file while it is still ours: a newer writer may have replaced it.
+  struct stat mine {};
+  struct stat there {};
+  if (fstat(fd_, &mine) == 0 && stat(path_.c_str(), &there) == 0 && mine.st_dev == there.st_dev &&
+      mine.st_ino == there.st_ino)
+    unlink(path_.c_str());
+  munmap(base_, size_);
+  close(fd_);
+}
+
+unsigned char* RingWriter::slot_base(std::uint32_t index) const {
+  const auto* h = reinterpret_cast<const layout::RingHeader*>(base_);
+  return base_ + h->slots_offset + h->slot_stride * index;
+}
+
+RingWriter::Slot RingWriter::begin_write() {
+  assert(!open_slot_ && "publish() the open slot first");
+  const auto* h = reinterpret_cast<const layout::RingHeader*>(base_);
+  writing_ = (writing_ + 1) % h->slot_count;
+  unsigned char* base = slot_base(writing_);
+  auto* s = reinterpret_cast<layout::SlotHeader*>(base);
+  const std::uint64_t c = s->seqlock.load(std::memory_order_relaxed);
+  s->seqlock.store(c + 1, std::memory_order_relaxed);
+  layout::fence_release();
+  open_slot_ = true;
+  Slot slot;
+  slot.index = writing_;
+  slot.depth = ImageView<float>(reinterpret_cast<float*>(base + h->depth_offset), options_.width,
+                                options_.height, 1,
+                                static_cast<std::ptrdiff_t>(h->depth_stride / sizeof(float)));
+  if (h->image_channels != 0)
+    slot.image = ImageView<std::uint8_t>(base + h->image_offset, options_.width, options_.height,
+                                         options_.image_channels,
+                                         static_cast<std::ptrdiff_t>(h->image_stride));
+  return slot;
+}
+
+std::uint64_t RingWriter::publish(const FrameMeta& meta) {
+  assert(open_slot_ && "begin_write() first");
+  auto* h = reinterpret_cast<layout::RingHeader*>(base_);
+  auto* s = reinterpret_cast<layout::SlotHeader*>(slot_base(writing_));
+  const std::uint64_t index = published_ + 1;
+  s->publish_index = index;
+  s->frame_seq = meta.frame_seq;
+  s->capture_ns = meta.capture_ns;
+  s->publish_ns = monotonic_ns();
+  s->fx = meta.fx;
+  s->fy = meta.fy;
+  s->cx = meta.cx;
+  s->cy = meta.cy;
+  s->baseline_m = meta.baseline_m;
+  s->seqlock.store(s->seqlock.load(std::memory_order_relaxed) + 1, std::memory_order_release);
+  h->newest_slot.store(writing_, std::memory_order_release);
+  h->publish_count.store(index, std::memory_order_release);
+  published_ = index;
+  open_slot_ = false;
+  return index;
+}
+
+std::uint64_t RingWriter::write(ImageView<const float> depth, ImageView<const std::uint8_t> image,
+                                const FrameMeta& meta) {
+  if (!depth.same_size(options_.width, options_.height) || depth.channels != 1)
+    throw Error(fmt::format("{}: depth is {}x{}x{}, the ring holds {}x{}x1", path_.string(),
+                            depth.width, depth.height, depth.channels, options_.width,
+                            options_.height));
+  // A slot's depth and image are one frame: an image ring never gets depth without its image.
+  const bool image_ok = options_.image_channels == 0
+                            ? image.empty()
+                            : image.same_size(options_.width, options_.height) &&
+                                  image.channels == options_.image_channels;
+  if (!image_ok)
+    throw Error(fmt::format("{}: image is {}x{}x{}, the ring holds {}x{}x{}", path_.string(),
+                            image.width, image.height, image.channels, options_.width,
+                            options_.height, options_.image_channels));
+  const Slot slot = begin_write();
+  const std::size_t depth_row = static_cast<std::size_t>(options_.width) * sizeof(float);
+  for (int y = 0; y < options_.height; ++y) std::memcpy(slot.depth.row(y), depth.row(y), depth_row);
+  if (options_.image_channels != 0) {
+    const std::size_t image_row = static_cast<std::size_t>(options_.width) * image.channels;
+    for (int y = 0; y < options_.height; ++y)
+      std::memcpy(slot.image.row(y), image.row(y), image_row);
+  }
+  return publish(meta);
+}
+
+std::filesystem::path RingWriter::default_directory() {
+  if (const char* runtime = std::getenv("RUNTIME_DIRECTORY"); runtime != nullptr && *runtime) {
+    // systemd may list several directories separated by ':'; the first is ours.
+    const std::string dirs(runtime);
+    return dirs.substr(0, dirs.find(':'));
+  }
+  if (access("/run/dcod", W_OK | X_OK) == 0) return "/run/dcod";
+  std::string tmpl = (std::filesystem::temp_directory_path() / "dcod.XXXXXX").string();
+  if (mkdtemp(tmpl.data()) == nullptr)
+    throw Error(
+        fmt::format("{}: cannot create a runtime directory: {}", tmpl, std::strerror(errno)));
+  return tmpl;
+}
+
+}  // namespace dco::ipc
