@@ -20,6 +20,7 @@
 
 #include "dco/core/error.hpp"
 #include "dco/ipc/ring_layout.hpp"
+#include "dco/ipc/ring_wake.hpp"
 
 namespace dco::ipc {
 namespace {
@@ -123,6 +124,7 @@ RingWriter::RingWriter(const std::filesystem::path& path, const RingOptions& opt
 RingWriter::~RingWriter() {
   auto* h = reinterpret_cast<layout::RingHeader*>(base_);
   h->state.store(layout::kStateClosed, std::memory_order_release);
+  layout::change_and_wake(h->wake);
   // Only remove the file while it is still ours: a newer writer may have replaced it.
   struct stat mine {};
   struct stat there {};
@@ -177,6 +179,7 @@ std::uint64_t RingWriter::publish(const FrameMeta& meta) {
   s->seqlock.store(s->seqlock.load(std::memory_order_relaxed) + 1, std::memory_order_release);
   h->newest_slot.store(writing_, std::memory_order_release);
   h->publish_count.store(index, std::memory_order_release);
+  layout::change_and_wake(h->wake);
   published_ = index;
   open_slot_ = false;
   return index;

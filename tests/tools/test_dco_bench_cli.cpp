@@ -2,6 +2,10 @@
 // promised fields with consistent values, the text names every measurement, bad input gives one
 // clear error line and a non-zero exit.
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <regex>
 #include <string>
@@ -103,6 +107,72 @@ TEST(DcoBenchCli, BadDataAndParametersExitWithOne) {
   expect_data({"--sequence", "synthetic", "--synthetic", "cats"}, "cats");
 }
 
+// The ipc benchmark sends udpm multicast, so it runs only where a private network namespace can
+// be made (it makes its own); elsewhere the test is skipped.
+bool private_netns_available() {
+  const std::string unshare = geteuid() == 0 ? "unshare -n" : "unshare -rn";
+  return std::system((unshare + " sh -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo' "
+                                ">/dev/null 2>&1")
+                         .c_str()) == 0;
+}
+
+TEST(DcoBenchCli, IpcJsonCountsEveryFrameOfEveryClient) {
+  if (!private_netns_available()) GTEST_SKIP() << "cannot make a private network namespace";
+  TempDir dir;
+  constexpr int kFrames = 20;
+  const CliRun r = run_bench(dir, {"ipc", "--clients", "1,3", "--rates", "60", "--frames",
+                                   std::to_string(kFrames), "--size", "320x180", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one object on one line";
+  const double p99 = json_value(r.out, "p99_us");
+  const double inline_p99 = json_value(r.out, "inline_p99_us");
+  EXPECT_GT(p99, 0);
+  EXPECT_GT(inline_p99, 0);
+  EXPECT_GE(json_value(r.out, "lost"), 0);
+  EXPECT_GT(json_value(r.out, "ratio"), 0);
+  // Per run: every frame a client got or lost is counted once, and the percentiles are ordered.
+  const std::regex run_pattern(
+      "\"clients\": ([0-9]+), \"rate_hz\": 60, \"received\": ([0-9]+), \"p50_us\": ([0-9.eE+-]+), "
+      "\"p99_us\": ([0-9.eE+-]+), \"max_us\": ([0-9.eE+-]+), \"lost\": ([0-9]+), .*?"
+      "\"inline_received\": ([0-9]+), \"inline_p50_us\": ([0-9.eE+-]+), "
+      "\"inline_p99_us\": ([0-9.eE+-]+), \"inline_max_us\": ([0-9.eE+-]+), "
+      "\"inline_lost\": ([0-9]+), .*?\"ratio\": ([0-9.eE+-]+)\\}");
+  std::vector<int> clients;
+  double worst_p99 = 0, smallest_ratio = 1e300;
+  for (auto it = std::sregex_iterator(r.out.begin(), r.out.end(), run_pattern);
+       it != std::sregex_iterator(); ++it) {
+    const std::smatch& m = *it;
+    const int n = std::stoi(m[1].str());
+    clients.push_back(n);
+    EXPECT_EQ(std::stol(m[2].str()) + std::stol(m[6].str()), n * kFrames) << m[0];
+    EXPECT_LE(std::stod(m[3].str()), std::stod(m[4].str()));
+    EXPECT_LE(std::stod(m[4].str()), std::stod(m[5].str()));
+    EXPECT_EQ(std::stol(m[7].str()) + std::stol(m[11].str()), n * kFrames) << m[0];
+    EXPECT_LE(std::stod(m[8].str()), std::stod(m[9].str()));
+    EXPECT_LE(std::stod(m[9].str()), std::stod(m[10].str()));
+    EXPECT_NEAR(std::stod(m[12].str()), std::stod(m[9].str()) / std::stod(m[4].str()),
+                1e-3 * std::stod(m[12].str()));
+    worst_p99 = std::max(worst_p99, std::stod(m[4].str()));
+    smallest_ratio = std::min(smallest_ratio, std::stod(m[12].str()));
+  }
+  EXPECT_EQ(clients, (std::vector<int>{1, 3})) << r.out;
+  EXPECT_DOUBLE_EQ(p99, worst_p99);
+  EXPECT_NEAR(json_value(r.out, "ratio"), smallest_ratio, 1e-9 * smallest_ratio);
+}
+
+TEST(DcoBenchCli, IpcBadCommandLinesExitWithTwo) {
+  TempDir dir;
+  const auto expect_usage = [&](const std::vector<std::string>& args, const std::string& what) {
+    testing::expect_one_error_line(run_bench(dir, args), "dco-bench ipc", 2, what);
+  };
+  expect_usage({"ipc", "--clients", "0"}, "--clients");
+  expect_usage({"ipc", "--clients", "1,x"}, "--clients");
+  expect_usage({"ipc", "--rates", "fast"}, "--rates");
+  expect_usage({"ipc", "--frames", "1"}, "--frames");
+  expect_usage({"ipc", "--size", "8x8"}, "--size");
+  expect_usage({"ipc", "--sequence", "synthetic"}, "unknown option --sequence");
+}
+
 TEST(DcoBenchCli, HelpDescribesTheRuns) {
   TempDir dir;
   const CliRun r = run_bench(dir, {"--help"});
@@ -110,6 +180,12 @@ TEST(DcoBenchCli, HelpDescribesTheRuns) {
   EXPECT_THAT(r.out, HasSubstr("usage: dco-bench"));
   EXPECT_THAT(r.out, HasSubstr("--paced-frames"));
   EXPECT_THAT(r.out, HasSubstr("--json"));
+  EXPECT_THAT(r.out, HasSubstr("dco-bench ipc --help"));
+  const CliRun ipc = run_bench(dir, {"ipc", "--help"});
+  EXPECT_EQ(ipc.exit_code, 0);
+  EXPECT_THAT(ipc.out, HasSubstr("usage: dco-bench ipc"));
+  EXPECT_THAT(ipc.out, HasSubstr("--clients"));
+  EXPECT_THAT(ipc.out, HasSubstr("inline p99 / ring p99"));
 }
 
 }  // namespace

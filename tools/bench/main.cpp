@@ -1,6 +1,7 @@
 // dco-bench: the full depth pipeline in its real-time runtime on a synthetic sequence and on the
 // real Karlsruhe clip — throughput, per-stage times, latency and drops at a camera's frame rate —
-// next to OpenCV StereoSGBM (3-way) + WLS on the same frames in the same run.
+// next to OpenCV StereoSGBM (3-way) + WLS on the same frames in the same run. `dco-bench ipc`
+// measures depth delivery through the shared-memory ring instead (ipc_bench.cpp).
 
 #include <algorithm>
 #include <chrono>
@@ -22,6 +23,7 @@
 #include "dco/tools/frame_sequence.hpp"
 #include "dco/tools/json.hpp"
 #include "dco/tools/sgbm_wls.hpp"
+#include "ipc_bench.hpp"
 
 namespace {
 
@@ -56,6 +58,9 @@ OpenCV StereoSGBM (3-way) + WLS. Per sequence:
   --config FILE       TOML with [stereo], [contour], [densify] and [runtime] tables
   --set KEY=VALUE     override one parameter, e.g. --set runtime.threads=3
   -h, --help          print this help
+
+`dco-bench ipc [...]` measures depth delivery to client processes instead: see
+`dco-bench ipc --help`.
 
 Exit status: 0 success, 1 bad data (missing frames, bad parameter), 2 bad command line.
 )";
@@ -282,6 +287,8 @@ std::string json_fields(const Result& r) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string_view(argv[1]) == "ipc")
+    return dco::bench::run_ipc_bench(argc - 1, argv + 1);
   return dco::tools::run_tool("dco-bench", [&] {
     const Options opt = parse_args(argc, argv);
     if (opt.help) {

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "dco/ipc/ring_layout.hpp"
+#include "dco/ipc/ring_wake.hpp"
 
 namespace {
 
@@ -24,8 +25,6 @@ namespace layout = dco::ipc::layout;
 constexpr std::uint32_t kDefaultAttempts = 8;
 // How often a waiting client looks for a replaced segment or a dead writer.
 constexpr std::int64_t kPathCheckNs = 20'000'000;
-constexpr std::int64_t kMaxPollSleepNs = 1'000'000;
-constexpr std::int64_t kMinPollSleepNs = 20'000;
 
 thread_local std::string t_last_error;
 
@@ -42,12 +41,6 @@ std::int64_t now_ns() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
-}
-
-void sleep_ns(std::int64_t ns) {
-  timespec ts{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
-  while (nanosleep(&ts, &ts) != 0 && errno == EINTR) {
-  }
 }
 
 struct Mapping {
@@ -393,15 +386,18 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
       timeout_ms < 0)
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_wait_next: bad client, view or timeout");
   const std::int64_t deadline = now_ns() + std::int64_t{timeout_ms} * 1'000'000;
-  std::int64_t pause = kMinPollSleepNs;
   for (;;) {
     const auto* h = client->map.header();
+    // Read the wake word before looking for a frame: a publish after the look changes it, so the
+    // sleep below returns at once instead of missing that frame.
+    const std::uint32_t seen = h->wake.load(std::memory_order_acquire);
     if (h->publish_count.load(std::memory_order_acquire) > client->last_index) {
       const dco_status status = client->take_latest(view);
       if (status != DCO_E_NO_FRAME) return status;
     }
     const std::int64_t now = now_ns();
-    if (now - client->last_path_check_ns >= kPathCheckNs) {
+    const bool closed = h->state.load(std::memory_order_acquire) == layout::kStateClosed;
+    if (closed || now - client->last_path_check_ns >= kPathCheckNs) {
       bool remapped = false;
       const dco_status status = client->follow_path(&remapped);
       if (status != DCO_OK) return status;
@@ -412,8 +408,10 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     if (now >= deadline)
       return fail(DCO_E_TIMEOUT, client->expect.path + ": no new frame within " +
                                      std::to_string(timeout_ms) + " ms");
-    sleep_ns(std::min(pause, deadline - now));
-    pause = std::min(pause * 2, kMaxPollSleepNs);
+    // A writer that dies never wakes us, and a restarted one writes a new file: wake up for the
+    // path check at the latest.
+    const std::int64_t next_check = client->last_path_check_ns + kPathCheckNs;
+    layout::wait_for_change(h->wake, seen, std::min(deadline, next_check) - now);
   }
 }
 

@@ -18,7 +18,7 @@
 namespace dco::ipc::layout {
 
 inline constexpr std::uint64_t kMagic = 0x31474e49524f4344ull;  // "DCORING1" little-endian
-inline constexpr std::uint32_t kVersion = 1;
+inline constexpr std::uint32_t kVersion = 2;
 inline constexpr std::uint32_t kDepthFormatFloat32Metres = 1;
 inline constexpr std::uint32_t kImageFormatNone = 0;
 inline constexpr std::uint32_t kImageFormatU8 = 1;  // interleaved 8-bit, 1 or 3 channels
@@ -32,6 +32,7 @@ inline constexpr std::uint32_t kStateClosed = 2;  // the writer stopped cleanly
 
 static_assert(std::atomic<std::uint64_t>::is_always_lock_free);
 static_assert(std::atomic<std::uint32_t>::is_always_lock_free);
+static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t));
 
 struct alignas(64) RingHeader {
   std::uint64_t magic;
@@ -59,6 +60,9 @@ struct alignas(64) RingHeader {
   alignas(64) std::atomic<std::uint64_t> publish_count;  // frames published so far
   std::atomic<std::uint32_t> newest_slot;                // valid once publish_count > 0
   std::atomic<std::uint32_t> state;
+  // Futex word readers sleep on: the writer changes it after every publish and on close, then
+  // wakes the sleepers, so a reader never has to poll for the next frame.
+  std::atomic<std::uint32_t> wake;
 };
 
 struct alignas(64) SlotHeader {
