@@ -31,6 +31,9 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
         "grey-level scale of the image guidance on smoothness weights (0 = off)");
   s.add("densify.background_fill", &p.background_fill, 0.0, 1.0,
         "weight (times lambda_d) pulling holes towards the farther of their row neighbours");
+  s.add("densify.fill_edge_weight", &p.fill_edge_weight, 0.0, 1.0,
+        "holes take the row neighbour reached without crossing an edge weaker than this "
+        "(0 = always the farther one)");
   s.add("densify.solve_resolution", &p.solve_resolution, {"auto", "full", "half"},
         "auto = solve at half size, then refine at full size, when wider than 640 px");
   s.add("densify.fine_sweeps", &p.fine_sweeps, 0, 100,
@@ -153,24 +156,46 @@ void Densifier::build_system(const DensifyInputs& in) {
   const bool has_previous = !in.previous.empty() && in.previous.same_size(w, h);
   constexpr float kRegulariser = 1e-6f;
   const auto lh = static_cast<float>(params_.lambda_d * params_.background_fill);
+  // Hint of each hole: the nearest known values to its left and right in its row. Holes next to a
+  // jump are mostly occlusions, which belong to the farther surface; but when an image edge (a
+  // weak smoothness weight) lies between the hole and one of them only, the hole belongs to the
+  // other side's surface.
+  const float crossing = static_cast<float>(params_.fill_edge_weight) * edge_scale;
+  left_path_.resize(static_cast<std::size_t>(w));
   for (int y = 0; y < h; ++y) {
     const float* sp = in.sparse.row(y);
-    // Nearest known value to the left of each pixel; the right one comes from a backward scan.
+    const float* ex = system_.wx.row(y);  // ex[x]: the edge between x and x + 1
     float* hint = hint_.row(y);
     float last = 0.0f;
+    float weakest = edge_scale;
     for (int x = 0; x < w; ++x) {
-      if (known(sp[x])) last = sp[x];
+      if (known(sp[x])) {
+        last = sp[x];
+        weakest = edge_scale;
+      }
       hint[x] = last;
+      left_path_[static_cast<std::size_t>(x)] = weakest;
+      weakest = std::min(weakest, ex[x]);
     }
     last = 0.0f;
+    weakest = edge_scale;
     for (int x = w - 1; x >= 0; --x) {
-      if (known(sp[x])) last = sp[x];
+      if (known(sp[x])) {
+        last = sp[x];
+        weakest = edge_scale;
+      }
+      const float left = hint[x];
       const float right = last;
-      // Holes next to a jump are mostly occlusions, which belong to the farther surface.
-      if (hint[x] <= 0.0f)
+      if (left <= 0.0f) {
         hint[x] = right;
-      else if (right > 0.0f)
-        hint[x] = std::min(hint[x], right);
+      } else if (right > 0.0f) {
+        const bool left_crossed = left_path_[static_cast<std::size_t>(x)] < crossing;
+        const bool right_crossed = weakest < crossing;
+        hint[x] = left_crossed == right_crossed ? std::min(left, right)
+                  : left_crossed                ? right
+                                                : left;
+      }
+      if (x > 0) weakest = std::min(weakest, ex[x - 1]);
     }
   }
   for (int y = 0; y < h; ++y) {

@@ -3,6 +3,9 @@
 #include <limits>
 #include <string>
 
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/mat.hpp>
+
 #include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
@@ -70,6 +73,12 @@ class CpuStereoMatcher final : public StereoMatcher {
     histogram_vote(disp_.view(), max_d_, regions_, vote_, vote_scratch_, changed_.view());
     if (params_.max_neighbour_jump >= 0)
       discontinuity_check(disp_.view(), params_.max_neighbour_jump, jump_scratch_);
+    if (params_.speckle_size > 0) {
+      cv::Mat disp(h_, w_, CV_16SC1, disp_.row(0),
+                   static_cast<std::size_t>(disp_.stride()) * sizeof(std::int16_t));
+      cv::filterSpeckles(disp, kInvalidDisparity, params_.speckle_size, params_.speckle_range,
+                         speckle_buffer_);
+    }
     timings_.refine_ms = t.lap_ms();
 
     write_output(left.width, left.height, disparity);
@@ -215,6 +224,7 @@ class CpuStereoMatcher final : public StereoMatcher {
   VoteScratch vote_scratch_;
   Image<float> values_, raw_;
   Image<std::int16_t> jump_scratch_;
+  cv::Mat speckle_buffer_;  // filterSpeckles' work area, kept across frames
 };
 
 }  // namespace

@@ -47,6 +47,10 @@ void register_params(ConfigSchema& s, StereoParams& p) {
   s.add("stereo.vote_fill", &p.vote_fill, "votes also fill pixels that failed the checks");
   s.add("stereo.max_neighbour_jump", &p.max_neighbour_jump, -1, 64,
         "drop pixels beside a larger disparity jump (internal px, -1 = off)");
+  s.add("stereo.speckle_size", &p.speckle_size, 0, 100000,
+        "drop islands of fewer internal pixels than this after the checks (0 = off)");
+  s.add("stereo.speckle_range", &p.speckle_range, 0, 64,
+        "largest step between neighbours of one island, internal px");
   s.add("stereo.subpixel", &p.subpixel, "parabola fit of the winning cost");
 }
 
@@ -73,6 +77,8 @@ void validate(const StereoParams& p) {
   require(p.vote_iterations >= 0 && p.vote_min_count >= 1 && p.vote_tolerance >= 0,
           "vote_iterations and vote_tolerance must be >= 0 and vote_min_count >= 1");
   require(p.max_neighbour_jump >= -1, "max_neighbour_jump must be >= -1");
+  require(p.speckle_size >= 0 && p.speckle_range >= 0,
+          "speckle_size and speckle_range must be >= 0");
   require(p.vote_min_ratio >= 0 && p.vote_min_ratio <= 1, "vote_min_ratio must be in [0, 1]");
 }
 

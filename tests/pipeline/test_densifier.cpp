@@ -272,6 +272,33 @@ TEST(Densifier, ImageEdgesWeakenSmoothing) {
   EXPECT_LT(dense.at(25, 5), 12.0f);
 }
 
+TEST(Densifier, HoleInsideAnObjectKeepsTheObjectsDepthNotTheBackgrounds) {
+  // The object (grey 50, disparity 40) ends at the image edge between x = 24 and 25; the
+  // background (grey 200, disparity 10) starts there. The hole x = 10..34 straddles the edge:
+  // its object part must take the object's value, although the farther neighbour is background.
+  const int w = 60, h = 10;
+  Image<float> sparse(w, h);
+  Image<std::uint8_t> image(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      sparse.at(x, y) = x < 10 ? 40.0f : (x >= 35 ? 10.0f : kUnknown);
+      image.at(x, y) = x < 25 ? 50 : 200;
+    }
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  in.image = image.cview();
+  DensifyParams params;
+  ASSERT_GT(params.fill_edge_weight, 0.0);
+  Image<float> aware, farther;
+  Densifier(params).compute(in, aware);
+  for (int x = 10; x < 25; ++x) EXPECT_GT(aware.at(x, 5), 39.0f) << x;
+  for (int x = 25; x < 35; ++x) EXPECT_LT(aware.at(x, 5), 11.0f) << x;
+  // With the plain "farther neighbour" rule the object's part of the hole sinks towards 10.
+  params.fill_edge_weight = 0;
+  Densifier(params).compute(in, farther);
+  EXPECT_LT(farther.at(24, 5), aware.at(24, 5) - 2.0f);
+}
+
 TEST(Densifier, HalfResolutionSolveKeepsAContourOnAnOddColumn) {
   // The contour sits on column 31, inside the 2x2 aggregate of columns 30..31: the aggregated
   // solve blurs that aggregate, and the full-resolution sweeps must put the step back.

@@ -16,6 +16,7 @@
 
 #include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
+#include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/stereo/image_ops.hpp"
 #include "support/allocation_counter.hpp"
 #include "support/same_bytes.hpp"
@@ -432,6 +433,68 @@ TEST(CpuStereoMatcher, DiscontinuityCheckOnlyRemovesPixels) {
     }
   // The rectangle's left and right edges are depth jumps of 12 px: pixels there go.
   EXPECT_GT(removed, 2 * 60);
+}
+
+// Sizes of the 4-connected islands of known pixels in an internal-resolution sparse map.
+std::vector<int> island_sizes(ImageView<const float> map) {
+  const int w = map.width, h = map.height;
+  std::vector<char> seen(static_cast<std::size_t>(w) * h, 0);
+  std::vector<int> sizes, stack;
+  for (int start = 0; start < w * h; ++start) {
+    if (seen[start] || !std::isfinite(map.row(start / w)[start % w])) continue;
+    int size = 0;
+    stack.push_back(start);
+    seen[start] = 1;
+    while (!stack.empty()) {
+      const int i = stack.back();
+      stack.pop_back();
+      ++size;
+      const int x = i % w, y = i / w;
+      const int next[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
+      for (const auto& n : next) {
+        if (n[0] < 0 || n[0] >= w || n[1] < 0 || n[1] >= h) continue;
+        const int j = n[1] * w + n[0];
+        if (!seen[j] && std::isfinite(map.row(n[1])[n[0]])) {
+          seen[j] = 1;
+          stack.push_back(j);
+        }
+      }
+    }
+    sizes.push_back(size);
+  }
+  return sizes;
+}
+
+TEST(CpuStereoMatcher, SpeckleFilterOnlyRemovesSmallIslands) {
+  // A noisy textured pair: some wrong matches survive the checks as tiny islands.
+  const synthetic::SceneRenderer scene(synthetic::preset("hand", 320, 180));
+  synthetic::StereoSample s;
+  scene.render(0, s);
+  StereoParams with_filter, without;
+  with_filter.max_disparity = without.max_disparity =
+      synthetic::covering_max_disparity(scene.config());
+  without.speckle_size = 0;
+  with_filter.speckle_size = 4;
+  const auto a = make_cpu_stereo_matcher(with_filter);
+  const auto b = make_cpu_stereo_matcher(without);
+  Image<float> da, db;
+  a->compute(s.left.cview(), s.right.cview(), da);
+  b->compute(s.left.cview(), s.right.cview(), db);
+  const auto small = [](const std::vector<int>& sizes) {
+    return std::count_if(sizes.begin(), sizes.end(), [](int n) { return n < 4; });
+  };
+  EXPECT_GT(small(island_sizes(b->internal_sparse_disparity())), 0)
+      << "the scene has islands for the filter to remove";
+  EXPECT_EQ(small(island_sizes(a->internal_sparse_disparity())), 0);
+  long removed = 0;
+  for (int y = 0; y < da.height(); ++y)
+    for (int x = 0; x < da.width(); ++x) {
+      if (std::isfinite(da.at(x, y)))
+        ASSERT_EQ(std::memcmp(&da.at(x, y), &db.at(x, y), sizeof(float)), 0) << x << "," << y;
+      else
+        removed += std::isfinite(db.at(x, y));
+    }
+  EXPECT_GT(removed, 0);
 }
 
 TEST(CpuStereoMatcher, RepeatedComputeIsBitIdentical) {

@@ -26,6 +26,10 @@ struct DensifyParams {
   // contour encloses without any sparse value still get one, and the system stays definite.
   double min_edge_weight = 0.001;
   double background_fill = 0.05;  // weak data term for holes: the farther of the row neighbours
+  // ... unless only one of the two is reached without crossing an edge whose smoothness weight
+  // (relative, after contours, Canny strength and image guidance) is below this; then that one.
+  // A hole inside an object then keeps the object's depth instead of the background's. 0 = off.
+  double fill_edge_weight = 0.05;
   double color_sigma = 4;  // grey-level scale of exp(-|I_p - I_q| / sigma) on the weights; 0 = off
   // "full" solves Eq. 20 at the input resolution; "half" solves its 2x2-aggregated (Galerkin)
   // system and then runs `fine_sweeps` Gauss-Seidel sweeps of the full system on the result, so
@@ -94,6 +98,7 @@ class Densifier {
   Image<float> coarse_rhs_, coarse_solution_;
   Image<std::uint8_t> barrier_;
   std::vector<int> fuse_column_;           // column of M_fuse for each input column
+  std::vector<float> left_path_;           // weakest edge between a hole and its left value
   std::array<float, 256> color_weight_{};  // exp(-diff / color_sigma) per grey-level difference
   bool has_solution_ = false;
   SolverReport report_;
