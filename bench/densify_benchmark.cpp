@@ -45,18 +45,6 @@ const Frames& frames() {
   return f;
 }
 
-densify::DensifyInputs inputs_of(const dco::pipeline::DepthResult& r,
-                                 ImageView<const float> previous) {
-  densify::DensifyInputs in;
-  in.sparse = r.sparse.cview();
-  in.m_fuse = r.m_fuse.cview();
-  in.m_intensity = r.m_intensity.cview();
-  in.contours = r.contours.cview();
-  in.image = r.image.cview();
-  in.previous = previous;
-  return in;
-}
-
 // One frame as the pipeline runs it: warm-started from, and stabilised towards, the previous
 // frame's solution (computed outside the timed region).
 void run_dco(benchmark::State& state, const char* solve_resolution) {
@@ -68,9 +56,9 @@ void run_dco(benchmark::State& state, const char* solve_resolution) {
   for (auto _ : state) {
     state.PauseTiming();
     densifier.reset();
-    densifier.compute(inputs_of(f.previous, {}), dense);
+    densifier.compute(dco::pipeline::densify_inputs(f.previous, {}), dense);
     state.ResumeTiming();
-    densifier.compute(inputs_of(f.current, densifier.last_solution()), dense);
+    densifier.compute(dco::pipeline::densify_inputs(f.current, densifier.last_solution()), dense);
     benchmark::DoNotOptimize(dense.view().row(0));
   }
   state.counters["iterations"] = densifier.last_report().iterations;
@@ -93,9 +81,9 @@ void BM_EigenCg_Jacobi(benchmark::State& state) {
   params.solve_resolution = "full";
   densify::Densifier densifier(params);
   Image<float> dense;
-  densifier.compute(inputs_of(f.previous, {}), dense);
+  densifier.compute(dco::pipeline::densify_inputs(f.previous, {}), dense);
   const Image<float> warm = dense;
-  densifier.compute(inputs_of(f.current, warm.cview()), dense);
+  densifier.compute(dco::pipeline::densify_inputs(f.current, warm.cview()), dense);
   const densify::GridSystem& a = densifier.last_system();
   const int w = a.width(), h = a.height();
   const auto index = [w](int x, int y) { return static_cast<Eigen::Index>(y) * w + x; };

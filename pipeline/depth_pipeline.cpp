@@ -80,17 +80,23 @@ void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centr
   out.flow_cue = flow;
 }
 
-void densify_frame(densify::Densifier& densifier, DepthResult& out) {
+densify::DensifyInputs densify_inputs(const DepthResult& r, ImageView<const float> previous) {
   densify::DensifyInputs d;
-  d.sparse = out.sparse.cview();
-  d.m_fuse = out.m_fuse.cview();
-  d.m_intensity = out.m_intensity.cview();
-  d.contours = out.contours.cview();
-  d.image = out.image.cview();
+  d.sparse = r.sparse.cview();
+  d.m_fuse = r.m_fuse.cview();
+  d.m_intensity = r.m_intensity.cview();
+  d.contours = r.contours.cview();
+  d.image = r.image.cview();
+  d.previous = previous;
+  return d;
+}
+
+void densify_frame(densify::Densifier& densifier, DepthResult& out) {
   // The densifier's own last solution is the previous frame's dense map (Eq. 18).
-  const ImageView<const float> previous = densifier.last_solution();
-  if (previous.same_size(out.sparse.view())) d.previous = previous;
-  densifier.compute(d, out.dense);
+  const ImageView<const float> last = densifier.last_solution();
+  densifier.compute(
+      densify_inputs(out, last.same_size(out.sparse.view()) ? last : ImageView<const float>{}),
+      out.dense);
   out.densify_timings = densifier.last_timings();
   out.solver = densifier.last_report();
 }

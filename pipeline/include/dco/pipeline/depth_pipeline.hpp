@@ -67,6 +67,9 @@ void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> 
 //    and stereo timings into it.
 void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centre,
                    const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out);
+// What the densifier reads of a result the contour step filled; `previous` is the stability
+// term's previous frame (empty for none).
+densify::DensifyInputs densify_inputs(const DepthResult& r, ImageView<const float> previous);
 // 4. Densification of a result the contour step filled. The densifier's last solution is the
 //    previous frame's dense map (Eq. 18), so results go through it in order.
 void densify_frame(densify::Densifier& densifier, DepthResult& out);
