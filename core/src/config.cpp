@@ -187,7 +187,10 @@ void ConfigSchema::load_string(std::string_view toml_text, std::string_view orig
     }
   };
   walk(walk, root, "");
-  for (const auto& [e, v] : accepted) store(*e, v);
+  for (const auto& [e, v] : accepted) {
+    store(*e, v);
+    assigned_.push_back(e->key);
+  }
 }
 
 void ConfigSchema::set(std::string_view assignment) {
@@ -221,6 +224,59 @@ void ConfigSchema::assign(const Entry& e, std::string_view text, const std::stri
   }
   if (const std::string p = problem(e, v); !p.empty()) throw Error(where + ": " + p);
   store(e, v);
+  assigned_.push_back(e.key);
+}
+
+bool ConfigSchema::was_set(std::string_view key) const {
+  return std::find(assigned_.begin(), assigned_.end(), key) != assigned_.end();
+}
+
+std::string ConfigSchema::value_text(const Entry& e) {
+  if (const auto* d = std::get_if<double*>(&e.target)) return fmt::format("{}", **d);
+  if (const auto* i = std::get_if<int*>(&e.target)) return fmt::format("{}", **i);
+  if (const auto* b = std::get_if<bool*>(&e.target)) return **b ? "true" : "false";
+  std::string quoted = "\"";
+  for (const char c : *std::get<std::string*>(e.target)) {
+    if (c == '"' || c == '\\') quoted += '\\';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+std::string ConfigSchema::range_text(const Entry& e) {
+  if (std::holds_alternative<double*>(e.target) || std::holds_alternative<int*>(e.target))
+    return fmt::format("[{}, {}]", e.min, e.max);
+  if (std::holds_alternative<bool*>(e.target)) return "true|false";
+  return e.choices.empty() ? "any string" : join(e.choices, "|");
+}
+
+std::vector<std::pair<std::string, std::string>> ConfigSchema::values() const {
+  std::vector<std::pair<std::string, std::string>> out;
+  out.reserve(entries_.size());
+  for (const Entry& e : entries_) out.emplace_back(e.key, value_text(e));
+  return out;
+}
+
+std::string ConfigSchema::to_toml() const {
+  // Sections in order of first appearance, keys in registration order within each.
+  std::vector<std::string> sections;
+  for (const Entry& e : entries_) {
+    const std::string section = e.key.substr(0, e.key.rfind('.') + 1);
+    if (std::find(sections.begin(), sections.end(), section) == sections.end())
+      sections.push_back(section);
+  }
+  std::string out;
+  for (const std::string& section : sections) {
+    if (!section.empty())
+      out +=
+          fmt::format("{}[{}]\n", out.empty() ? "" : "\n", section.substr(0, section.size() - 1));
+    for (const Entry& e : entries_) {
+      if (e.key.substr(0, e.key.rfind('.') + 1) != section) continue;
+      out += fmt::format("# {} ({})\n{} = {}\n", e.doc, range_text(e), e.key.substr(section.size()),
+                         value_text(e));
+    }
+  }
+  return out;
 }
 
 std::string ConfigSchema::describe() const {
@@ -229,20 +285,7 @@ std::string ConfigSchema::describe() const {
   };
   std::vector<Row> rows;
   for (const Entry& e : entries_) {
-    Row r{e.key, "", "", e.doc};
-    if (const auto* d = std::get_if<double*>(&e.target)) {
-      r.value = fmt::format("{}", **d);
-      r.range = fmt::format("[{}, {}]", e.min, e.max);
-    } else if (const auto* i = std::get_if<int*>(&e.target)) {
-      r.value = fmt::format("{}", **i);
-      r.range = fmt::format("[{}, {}]", e.min, e.max);
-    } else if (const auto* b = std::get_if<bool*>(&e.target)) {
-      r.value = **b ? "true" : "false";
-      r.range = "true|false";
-    } else {
-      r.value = "\"" + *std::get<std::string*>(e.target) + "\"";
-      r.range = e.choices.empty() ? "any string" : join(e.choices, "|");
-    }
+    Row r{e.key, value_text(e), range_text(e), e.doc};
     rows.push_back(std::move(r));
   }
   std::size_t wk = 0, wv = 0, wr = 0;

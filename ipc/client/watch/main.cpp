@@ -13,21 +13,27 @@
 #include <string_view>
 #include <vector>
 
+#include "overlay.hpp"
+
 namespace {
 
 constexpr const char* kDefaultPath = "/run/dcod/depth.shm";
 
 void usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: dco-watch [--path FILE] [--uid UID] [--frames N] [--interval-ms MS]\n"
-               "                 [--timeout-ms MS] [--copy]\n"
-               "  --path FILE       depth ring (default %s)\n"
-               "  --uid UID         owner the ring must have (default: own uid)\n"
-               "  --frames N        stop after N frames (default: run until stopped)\n"
-               "  --interval-ms MS  report period (default 1000)\n"
-               "  --timeout-ms MS   give up when no frame arrives for MS (default 2000)\n"
-               "  --copy            copy every frame (read_latest path) instead of a view\n",
-               kDefaultPath);
+  std::fprintf(
+      out,
+      "usage: dco-watch [--path FILE] [--uid UID] [--frames N] [--interval-ms MS]\n"
+      "                 [--timeout-ms MS] [--copy] [--overlay FILE.ppm] [--virtual-depth M]\n"
+      "  --path FILE       depth ring (default %s)\n"
+      "  --uid UID         owner the ring must have (default: own uid)\n"
+      "  --frames N        stop after N frames (default: run until stopped)\n"
+      "  --interval-ms MS  report period (default 1000)\n"
+      "  --timeout-ms MS   give up when no frame arrives for MS (default 2000)\n"
+      "  --copy            copy every frame (read_latest path) instead of a view\n"
+      "  --overlay FILE    at every report, write the newest frame as a PPM picture: the\n"
+      "                    camera image with a virtual box that real surfaces occlude\n"
+      "  --virtual-depth M distance of that box (default 1.0 m)\n",
+      kDefaultPath);
 }
 
 std::int64_t now_ns() {
@@ -42,6 +48,16 @@ bool parse_int(std::string_view text, long long lo, long long hi, long long* out
   errno = 0;
   const long long v = std::strtoll(s.c_str(), &end, 10);
   if (s.empty() || errno != 0 || *end != '\0' || v < lo || v > hi) return false;
+  *out = v;
+  return true;
+}
+
+bool parse_double(std::string_view text, double* out) {
+  char* end = nullptr;
+  const std::string s(text);
+  errno = 0;
+  const double v = std::strtod(s.c_str(), &end);
+  if (s.empty() || errno != 0 || *end != '\0' || !(v > 0) || v > 1e6) return false;
   *out = v;
   return true;
 }
@@ -62,6 +78,8 @@ int main(int argc, char** argv) {
   long long interval_ms = 1000;
   long long timeout_ms = 2000;
   bool copy = false;
+  std::string overlay;
+  double virtual_depth_m = 1.0;
   for (int i = 1; i < argc; ++i) {
     const std::string_view arg = argv[i];
     const bool has_value = i + 1 < argc;
@@ -71,6 +89,11 @@ int main(int argc, char** argv) {
       return 0;
     } else if (arg == "--copy") {
       copy = true;
+    } else if (arg == "--overlay" && has_value) {
+      overlay = argv[++i];
+    } else if (arg == "--virtual-depth" && has_value &&
+               parse_double(argv[i + 1], &virtual_depth_m)) {
+      ++i;
     } else if (arg == "--path" && has_value) {
       options.path = argv[++i];
     } else if (arg == "--uid" && has_value && parse_int(argv[i + 1], 0, 0xffffffffLL, &v)) {
@@ -108,6 +131,7 @@ int main(int argc, char** argv) {
     std::int64_t window_start = now_ns();
     dco_frame_info newest;
     dco_frame_info_init(&newest);
+    std::vector<std::uint8_t> overlay_rgb;
     while (frames == 0 || received < frames) {
       dco::client::FrameView view;
       dco_frame_view_init(&view.raw);
@@ -146,6 +170,16 @@ int main(int argc, char** argv) {
       ++window_frames;
       const std::int64_t elapsed = t - window_start;
       if (elapsed >= interval_ms * 1'000'000 || (frames != 0 && received == frames)) {
+        if (!overlay.empty()) {
+          render_occlusion_overlay(view, virtual_depth_m, overlay_rgb);
+          std::string error;
+          // A frame overwritten while it was drawn is skipped, never written torn.
+          if (client.still_valid(view) &&
+              !write_ppm(overlay, overlay_rgb, info.width, info.height, error)) {
+            std::fprintf(stderr, "dco-watch: error: %s\n", error.c_str());
+            return 1;
+          }
+        }
         std::printf(
             "fps %.1f  latency capture p50 %.2f ms max %.2f ms  publish p50 %.3f ms max %.3f ms  "
             "skipped %lld  overtaken %lld\n"

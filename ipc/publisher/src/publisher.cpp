@@ -54,6 +54,11 @@ DepthPublisher::DepthPublisher(RingWriter& ring, const PublisherOptions& options
 
 DepthPublisher::~DepthPublisher() = default;
 
+void DepthPublisher::set_preview_hz(double hz) {
+  if (!(hz >= 0)) throw Error(fmt::format("publisher: preview rate {} Hz out of range", hz));
+  options_.preview_hz = hz;
+}
+
 RingWriter::Slot DepthPublisher::begin_write() {
   RingWriter::Slot slot = ring_.begin_write();
   open_slot_ = slot.index;

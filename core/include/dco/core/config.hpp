@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -27,8 +28,16 @@ class ConfigSchema {
   void set(std::string_view assignment);
 
   bool has(std::string_view key) const;
+  // True once a file or an override gave the key a value (even its default).
+  bool was_set(std::string_view key) const;
   // One line per key: name, current value, range or choices, and the doc string.
   std::string describe() const;
+  // Every key with its current value as TOML would write it ("12.5", "true", "\"fast\""), in
+  // registration order.
+  std::vector<std::pair<std::string, std::string>> values() const;
+  // The current values as a TOML document that load_file accepts, one table per section, each
+  // key preceded by its doc string and range as a comment.
+  std::string to_toml() const;
 
  private:
   struct Entry {
@@ -40,8 +49,11 @@ class ConfigSchema {
   };
   const Entry* find(std::string_view key) const;
   void assign(const Entry& e, std::string_view text, const std::string& where);
+  static std::string value_text(const Entry& e);
+  static std::string range_text(const Entry& e);
 
   std::vector<Entry> entries_;
+  std::vector<std::string> assigned_;
 };
 
 }  // namespace dco

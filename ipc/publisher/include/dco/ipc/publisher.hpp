@@ -62,6 +62,9 @@ class DepthPublisher {
   void publish_status(const DeviceStatus& status, std::int64_t now_ns);
   void log(LogLevel level, std::string_view source, std::string_view text, std::int64_t now_ns);
 
+  // Changes the DCO_DEPTH_PREVIEW rate (a configuration reload); throws dco::Error when < 0.
+  void set_preview_hz(double hz);
+
   std::uint64_t previews_sent() const { return previews_sent_; }
   lcm::LCM& lcm() { return *lcm_; }
 

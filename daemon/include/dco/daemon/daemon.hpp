@@ -1,0 +1,92 @@
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "dco/core/image.hpp"
+#include "dco/core/rectifier.hpp"
+#include "dco/daemon/daemon_config.hpp"
+#include "dco/daemon/logger.hpp"
+#include "dco/daemon/service_notifier.hpp"
+#include "dco/drivers/frame_source.hpp"
+#include "dco/ipc/publisher.hpp"
+#include "dco/ipc/ring_writer.hpp"
+#include "dco/pipeline/runtime/depth_runtime.hpp"
+
+namespace dco::daemon {
+
+// dcod's wiring and lifecycle: source -> rectify -> real-time runtime -> depth ring + LCM, with
+// the service manager told about readiness, status and health. The source delivers on its own
+// thread, the runtime publishes on its last stage's thread, and the thread that calls run()
+// handles signals, statistics, status and the watchdog.
+class Daemon final : public drivers::FrameSink {
+ public:
+  Daemon(ConfigSources sources, LoadedConfig config, Logger& log);
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+  ~Daemon() override;
+
+  // Runs until SIGTERM or SIGINT, the end of a finite source, service.max_frames, or a failure.
+  // The caller must have blocked SIGTERM, SIGINT and SIGHUP in every thread (they are read from
+  // a signalfd). Returns the exit status: 0 after a clean stop, 1 after a failure (logged).
+  int run();
+
+ private:
+  void on_frame(const drivers::StereoFrame& frame) override;
+  void on_end() override;
+  void on_error(const std::string& message) override;
+  void on_result(const pipeline::DepthResult& result, const pipeline::runtime::FrameTimes& times);
+
+  void open();  // source, rectifier, ring, publisher; throws dco::Error
+  // What the source knows better than a default (the disparity range of a synthetic scene).
+  void apply_source_hints(LoadedConfig& config) const;
+  void start_pipeline();  // a new runtime from the current config, started
+  void start_source();
+  void stop_all();
+  void reload();
+  void tick(std::int64_t now_ns);
+  bool healthy(std::int64_t now_ns) const;
+  std::string status_line() const;
+  void wake();
+
+  const ConfigSources sources_;
+  LoadedConfig loaded_;
+  Logger& log_;
+  ServiceNotifier notifier_;
+
+  std::unique_ptr<drivers::FrameSource> source_;
+  std::optional<Rectifier> rectifier_;  // only when frames need remapping
+  RectifiedGeometry geometry_;
+  Image<std::uint8_t> rect_left_, rect_right_;
+  std::unique_ptr<ipc::RingWriter> ring_;
+  std::mutex publish_mutex_;  // the publisher: frames (runtime thread), stats and logs (others)
+  std::unique_ptr<ipc::DepthPublisher> publisher_;
+  std::unique_ptr<pipeline::runtime::DepthRuntime> runtime_;
+
+  // Source sequence numbers by capture time, so a result names the camera frame it came from.
+  std::mutex seq_mutex_;
+  std::array<std::pair<std::int64_t, std::uint64_t>, 32> pushed_{};
+  std::size_t pushed_cursor_ = 0;
+
+  std::atomic<std::int64_t> last_publish_ns_{0};
+  std::atomic<std::int64_t> pipeline_start_ns_{0};
+  std::atomic<long> published_{0};
+  std::atomic<int> max_frames_{0};
+  std::atomic<bool> source_ended_{false}, max_reached_{false}, failed_{false};
+  std::mutex error_mutex_;
+  std::string error_;
+
+  int event_fd_ = -1;
+  bool stalled_ = false;
+  std::int64_t next_stats_ns_ = 0, last_ping_ns_ = 0;
+  long last_pushed_ = 0, last_published_ = 0;
+  std::int64_t last_rate_ns_ = 0;
+  double fps_in_ = 0, fps_out_ = 0;
+};
+
+}  // namespace dco::daemon

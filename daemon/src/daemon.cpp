@@ -1,0 +1,399 @@
+#include "dco/daemon/daemon.hpp"
+
+#include <poll.h>
+#include <signal.h>
+#include <sys/eventfd.h>
+#include <sys/signalfd.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+
+#include <fmt/format.h>
+
+#include "dco/core/depth_conversion.hpp"
+#include "dco/core/error.hpp"
+
+namespace dco::daemon {
+namespace {
+
+using pipeline::runtime::Clock;
+
+std::int64_t monotonic_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
+      .count();
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& s : items) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+
+}  // namespace
+
+Daemon::Daemon(ConfigSources sources, LoadedConfig config, Logger& log)
+    : sources_(std::move(sources)), loaded_(std::move(config)), log_(log) {
+  event_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+  if (event_fd_ < 0) throw Error(std::string("eventfd: ") + std::strerror(errno));
+  max_frames_ = loaded_.config.max_frames;
+}
+
+Daemon::~Daemon() {
+  stop_all();
+  if (event_fd_ >= 0) close(event_fd_);
+}
+
+void Daemon::wake() {
+  const std::uint64_t one = 1;
+  [[maybe_unused]] const ssize_t n = write(event_fd_, &one, sizeof one);
+}
+
+void Daemon::apply_source_hints(LoadedConfig& config) const {
+  const auto& hint = source_->info().max_disparity;
+  if (!config.max_disparity_given && hint)
+    config.config.pipeline.stereo.max_disparity = std::clamp(*hint, 1, 1024);
+}
+
+void Daemon::open() {
+  const DaemonConfig& c = loaded_.config;
+  source_ = drivers::open_source(c.source);
+  apply_source_hints(loaded_);
+  if (!loaded_.max_disparity_given && source_->info().max_disparity)
+    log_.info(fmt::format("stereo.max_disparity = {} (covers the source's nearest depth)",
+                          loaded_.config.pipeline.stereo.max_disparity));
+  Rectifier rectifier(source_->calibration());
+  geometry_ = rectifier.geometry();
+  if (rectifier.needs_remap()) rectifier_.emplace(std::move(rectifier));
+
+  ipc::RingOptions ring;
+  ring.width = geometry_.width;
+  ring.height = geometry_.height;
+  ring.image_channels = c.ring_image ? 1 : 0;
+  ring.slot_count = c.ring_slots;
+  const std::filesystem::path path = c.ring_path.empty()
+                                         ? ipc::RingWriter::default_directory() / "depth.shm"
+                                         : std::filesystem::path(c.ring_path);
+  ring_ = std::make_unique<ipc::RingWriter>(path, ring);
+
+  ipc::PublisherOptions options;
+  options.lcm_url = c.lcm_url;
+  options.preview_hz = c.preview_hz;
+  publisher_ = std::make_unique<ipc::DepthPublisher>(*ring_, options);
+  log_.set_forward([this](LogLevel level, std::string_view text) {
+    std::lock_guard lock(publish_mutex_);
+    if (publisher_) publisher_->log(level, "dcod", text, monotonic_ns());
+  });
+}
+
+void Daemon::start_pipeline() {
+  runtime_ = std::make_unique<pipeline::runtime::DepthRuntime>(
+      loaded_.config.pipeline, loaded_.config.runtime,
+      [this](const pipeline::DepthResult& r, const pipeline::runtime::FrameTimes& t) {
+        on_result(r, t);
+      });
+  runtime_->start();
+  pipeline_start_ns_ = monotonic_ns();
+}
+
+void Daemon::start_source() {
+  source_->start(*this);
+}
+
+void Daemon::stop_all() {
+  // The source first: it pushes into the runtime, which must be idle before it stops.
+  if (source_) source_->stop();
+  if (runtime_) runtime_->stop();
+}
+
+void Daemon::on_frame(const drivers::StereoFrame& frame) {
+  {
+    std::lock_guard lock(seq_mutex_);
+    pushed_[pushed_cursor_++ % pushed_.size()] = {frame.capture_ns, frame.seq};
+  }
+  const Clock::time_point capture{std::chrono::nanoseconds(frame.capture_ns)};
+  if (rectifier_) {
+    rectifier_->rectify(frame.left, frame.right, rect_left_, rect_right_);
+    runtime_->push(rect_left_.cview(), rect_right_.cview(), capture);
+  } else {
+    runtime_->push(frame.left, frame.right, capture);
+  }
+}
+
+void Daemon::on_end() {
+  source_ended_ = true;
+  wake();
+}
+
+void Daemon::on_error(const std::string& message) {
+  {
+    std::lock_guard lock(error_mutex_);
+    error_ = message;
+  }
+  failed_ = true;
+  wake();
+}
+
+void Daemon::on_result(const pipeline::DepthResult& result,
+                       const pipeline::runtime::FrameTimes& times) {
+  const int max_frames = max_frames_;
+  if (max_frames > 0 && published_ >= max_frames) return;
+  const std::int64_t capture_ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(times.capture.time_since_epoch())
+          .count();
+  ipc::FrameMeta meta;
+  meta.capture_ns = capture_ns;
+  meta.frame_seq = static_cast<std::uint64_t>(result.index);
+  {
+    std::lock_guard lock(seq_mutex_);
+    for (const auto& [ns, seq] : pushed_)
+      if (ns == capture_ns) meta.frame_seq = seq;
+  }
+  meta.fx = meta.fy = geometry_.f;
+  meta.cx = geometry_.cx_left;
+  meta.cy = geometry_.cy;
+  meta.baseline_m = geometry_.baseline_m;
+  try {
+    std::lock_guard lock(publish_mutex_);
+    const ipc::RingWriter::Slot slot = publisher_->begin_write();
+    disparity_to_depth(result.dense.cview(), geometry_, slot.depth);
+    if (!slot.image.empty())
+      for (int y = 0; y < slot.image.height; ++y)
+        std::memcpy(slot.image.row(y), result.image.row(y),
+                    static_cast<std::size_t>(slot.image.width));
+    publisher_->publish(meta);
+  } catch (const std::exception& e) {
+    on_error(std::string("publishing: ") + e.what());
+    return;
+  }
+  last_publish_ns_ = monotonic_ns();
+  if (++published_ == max_frames) {
+    max_reached_ = true;
+    wake();
+  }
+}
+
+bool Daemon::healthy(std::int64_t now_ns) const {
+  const std::int64_t last = std::max(last_publish_ns_.load(), pipeline_start_ns_.load());
+  return static_cast<double>(now_ns - last) < loaded_.config.stall_timeout_s * 1e9;
+}
+
+std::string Daemon::status_line() const {
+  const pipeline::runtime::RuntimeStats s = runtime_->stats();
+  return fmt::format(
+      "{}: {:.1f} fps in, {:.1f} fps out, {} published, {} dropped, latency p50 {:.1f} ms p99 "
+      "{:.1f} ms{}",
+      source_->info().description, fps_in_, fps_out_, published_.load(), s.dropped,
+      s.latency.p50_ms, s.latency.p99_ms, stalled_ ? "; STALLED" : "");
+}
+
+void Daemon::tick(std::int64_t now_ns) {
+  const bool ok = healthy(now_ns);
+  if (!ok && !stalled_) {
+    stalled_ = true;
+    log_.warning(fmt::format(
+        "no frame published for {:.1f} s: watchdog pings withheld",
+        static_cast<double>(now_ns - std::max(last_publish_ns_.load(), pipeline_start_ns_.load())) *
+            1e-9));
+  } else if (ok && stalled_) {
+    stalled_ = false;
+    log_.info("frames flow again");
+  }
+  if (const auto period = notifier_.watchdog_period();
+      period && ok && now_ns - last_ping_ns_ >= period->count() * 1000 / 4) {
+    notifier_.watchdog();
+    last_ping_ns_ = now_ns;
+  }
+  if (now_ns < next_stats_ns_) return;
+  next_stats_ns_ = now_ns + static_cast<std::int64_t>(1e9 / loaded_.config.stats_hz);
+  const pipeline::runtime::RuntimeStats stats = runtime_->stats();
+  if (last_rate_ns_ > 0 && now_ns > last_rate_ns_) {
+    const double dt = static_cast<double>(now_ns - last_rate_ns_) * 1e-9;
+    fps_in_ = static_cast<double>(std::max(0L, stats.pushed - last_pushed_)) / dt;
+    fps_out_ = static_cast<double>(std::max(0L, stats.published - last_published_)) / dt;
+  }
+  last_rate_ns_ = now_ns;
+  last_pushed_ = stats.pushed;
+  last_published_ = stats.published;
+  ipc::DeviceStatus status;
+  status.state = published_ == 0 ? ipc::DeviceStatus::State::kStarting
+                 : ok            ? ipc::DeviceStatus::State::kStreaming
+                                 : ipc::DeviceStatus::State::kError;
+  status.device = source_->info().description;
+  if (!ok) status.error = "no frame published within service.stall_timeout_s";
+  try {
+    std::lock_guard lock(publish_mutex_);
+    publisher_->publish_stats(stats, now_ns);
+    publisher_->publish_status(status, now_ns);
+  } catch (const std::exception& e) {
+    on_error(std::string("publishing statistics: ") + e.what());
+  }
+  notifier_.status(status_line());
+}
+
+void Daemon::reload() {
+  notifier_.reloading();
+  LoadedConfig next;
+  try {
+    next = load_config(sources_);
+    parse_log_level(next.config.log_level);
+  } catch (const Error& e) {
+    log_.error(std::string("reload failed, the running configuration stays: ") + e.what());
+    notifier_.ready(status_line());
+    return;
+  }
+  apply_source_hints(next);
+  std::vector<std::string> live, restarted, refused;
+  for (const std::string& key : changed_keys(loaded_, next)) {
+    switch (reload_kind(key)) {
+      case Reload::kLive:
+        live.push_back(key);
+        break;
+      case Reload::kPipeline:
+        restarted.push_back(key);
+        break;
+      case Reload::kRestart:
+        refused.push_back(key);
+        break;
+    }
+  }
+  // What only a restart changes keeps its running value, so the next reload compares against it.
+  for (std::size_t i = 0; i < next.values.size(); ++i)
+    if (reload_kind(next.values[i].first) == Reload::kRestart) next.values[i] = loaded_.values[i];
+  next.config.source = loaded_.config.source;
+  next.config.ring_path = loaded_.config.ring_path;
+  next.config.ring_slots = loaded_.config.ring_slots;
+  next.config.ring_image = loaded_.config.ring_image;
+  next.config.lcm_url = loaded_.config.lcm_url;
+
+  log_.set_level(parse_log_level(next.config.log_level));
+  max_frames_ = next.config.max_frames;
+  {
+    std::lock_guard lock(publish_mutex_);
+    publisher_->set_preview_hz(next.config.preview_hz);
+  }
+  const bool restart_pipeline = !restarted.empty();
+  loaded_ = std::move(next);
+  if (restart_pipeline) {
+    try {
+      source_->stop();
+      runtime_->stop();
+      start_pipeline();
+      start_source();
+    } catch (const std::exception& e) {
+      on_error(std::string("restarting the pipeline: ") + e.what());
+      return;
+    }
+  }
+  std::string summary = "reloaded";
+  if (live.empty() && restarted.empty() && refused.empty()) summary += ": nothing changed";
+  if (!live.empty()) summary += "; applied " + join(live);
+  if (!restarted.empty()) summary += "; restarted the pipeline for " + join(restarted);
+  if (!refused.empty()) summary += "; not applied, need a restart of dcod: " + join(refused);
+  if (refused.empty())
+    log_.info(summary);
+  else
+    log_.warning(summary);
+  notifier_.ready(status_line());
+}
+
+int Daemon::run() {
+  try {
+    open();
+    start_pipeline();
+    start_source();
+  } catch (const std::exception& e) {
+    log_.error(e.what());
+    stop_all();
+    log_.set_forward({});
+    return 1;
+  }
+  sigset_t mask;
+  sigemptyset(&mask);
+  sigaddset(&mask, SIGTERM);
+  sigaddset(&mask, SIGINT);
+  sigaddset(&mask, SIGHUP);
+  const int signal_fd = signalfd(-1, &mask, SFD_CLOEXEC | SFD_NONBLOCK);
+  if (signal_fd < 0) {
+    log_.error(std::string("signalfd: ") + std::strerror(errno));
+    stop_all();
+    log_.set_forward({});
+    return 1;
+  }
+  log_.info(fmt::format("{} -> {} ({}x{}, {} slots)", source_->info().description,
+                        ring_->path().string(), geometry_.width, geometry_.height,
+                        ring_->options().slot_count));
+  const std::int64_t start_ns = monotonic_ns();
+  next_stats_ns_ = start_ns + static_cast<std::int64_t>(1e9 / loaded_.config.stats_hz);
+  last_rate_ns_ = start_ns;
+  notifier_.ready(status_line());
+  if (notifier_.watchdog_period()) {
+    notifier_.watchdog();
+    last_ping_ns_ = start_ns;
+  }
+
+  int status = 0;
+  for (bool running = true; running;) {
+    int timeout_ms = 250;
+    if (const auto period = notifier_.watchdog_period())
+      timeout_ms = std::clamp(static_cast<int>(period->count() / 8000), 1, timeout_ms);
+    pollfd fds[2] = {{signal_fd, POLLIN, 0}, {event_fd_, POLLIN, 0}};
+    if (poll(fds, 2, timeout_ms) < 0 && errno != EINTR) {
+      log_.error(std::string("poll: ") + std::strerror(errno));
+      status = 1;
+      break;
+    }
+    signalfd_siginfo info{};
+    while (read(signal_fd, &info, sizeof info) == static_cast<ssize_t>(sizeof info)) {
+      if (info.ssi_signo == SIGHUP) {
+        reload();
+      } else {
+        log_.info(fmt::format("stopping on {}", info.ssi_signo == SIGTERM ? "SIGTERM" : "SIGINT"));
+        running = false;
+      }
+    }
+    std::uint64_t events = 0;
+    [[maybe_unused]] const ssize_t n = read(event_fd_, &events, sizeof events);
+    if (failed_) {
+      std::lock_guard lock(error_mutex_);
+      log_.error(error_);
+      status = 1;
+      break;
+    }
+    if (!running) break;
+    if (max_reached_) {
+      log_.info(
+          fmt::format("published {} frames (service.max_frames): stopping", published_.load()));
+      break;
+    }
+    if (source_ended_) {
+      source_->stop();
+      try {
+        runtime_->drain();
+      } catch (const std::exception& e) {
+        log_.error(e.what());
+        status = 1;
+        break;
+      }
+      log_.info(
+          fmt::format("the source ended after {} published frames: stopping", published_.load()));
+      break;
+    }
+    tick(monotonic_ns());
+  }
+  notifier_.stopping();
+  stop_all();
+  log_.info("stopped");
+  log_.set_forward({});
+  {
+    std::lock_guard lock(publish_mutex_);
+    publisher_.reset();
+  }
+  ring_.reset();
+  close(signal_fd);
+  return status;
+}
+
+}  // namespace dco::daemon

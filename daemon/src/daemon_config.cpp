@@ -1,0 +1,73 @@
+#include "dco/daemon/daemon_config.hpp"
+
+#include <fmt/format.h>
+
+#include "dco/core/config.hpp"
+#include "dco/core/error.hpp"
+
+namespace dco::daemon {
+namespace {
+
+void register_params(ConfigSchema& s, DaemonConfig& c) {
+  s.add("source.uri", &c.source, {},
+        "frames from: synthetic://NAME?width=&height=&fps=&frames=, replay://DIR?fps=&loop=, "
+        "indemind://[SERIAL]");
+  s.add("ring.path", &c.ring_path, {},
+        "depth ring file; empty = $RUNTIME_DIRECTORY (or /run/dcod, else a temp dir)/depth.shm");
+  s.add("ring.slots", &c.ring_slots, 3, 64, "frames the ring holds (readers get the newest)");
+  s.add("ring.image", &c.ring_image, "each slot also carries the rectified left image");
+  s.add("lcm.url", &c.lcm_url, {}, "LCM provider; empty = $LCM_DEFAULT_URL, else udpm multicast");
+  s.add("lcm.preview_hz", &c.preview_hz, 0.0, 30.0, "DCO_DEPTH_PREVIEW rate (0 = off)");
+  s.add("lcm.stats_hz", &c.stats_hz, 0.1, 10.0, "DCO_STATS and DCO_STATUS rate");
+  s.add("service.stall_timeout_s", &c.stall_timeout_s, 0.1, 600.0,
+        "no frame published for this long = unhealthy: watchdog pings stop");
+  s.add("service.max_frames", &c.max_frames, 0, 2000000000,
+        "exit cleanly after publishing this many frames (0 = run until stopped)");
+  s.add("log.level", &c.log_level, {"debug", "info", "warning", "error"},
+        "least severe message written (journal or stderr, and DCO_LOG)");
+  pipeline::register_params(s, c.pipeline);
+  pipeline::runtime::register_params(s, c.runtime);
+}
+
+}  // namespace
+
+LoadedConfig load_config(const ConfigSources& sources) {
+  LoadedConfig out;
+  ConfigSchema schema;
+  register_params(schema, out.config);
+  if (sources.file) schema.load_file(*sources.file);
+  for (const std::string& s : sources.sets) schema.set(s);
+  if (sources.source) {
+    if (sources.source->empty()) throw Error("--source: empty URI");
+    out.config.source = *sources.source;
+  }
+  if (out.config.source.empty()) throw Error("source.uri: empty (e.g. synthetic://hand)");
+  const std::string where = sources.file ? sources.file->string() : std::string("configuration");
+  try {
+    pipeline::validate(out.config.pipeline);
+    pipeline::runtime::validate(out.config.runtime);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: {}", where, e.what()));
+  }
+  out.values = schema.values();
+  out.toml = schema.to_toml();
+  out.max_disparity_given = schema.was_set("stereo.max_disparity");
+  return out;
+}
+
+std::vector<std::string> changed_keys(const LoadedConfig& before, const LoadedConfig& after) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < after.values.size() && i < before.values.size(); ++i)
+    if (before.values[i] != after.values[i]) out.push_back(after.values[i].first);
+  return out;
+}
+
+Reload reload_kind(const std::string& key) {
+  const auto starts = [&](const char* prefix) { return key.rfind(prefix, 0) == 0; };
+  if (starts("source.") || starts("ring.") || key == "lcm.url") return Reload::kRestart;
+  if (starts("stereo.") || starts("contour.") || starts("densify.") || starts("runtime."))
+    return Reload::kPipeline;
+  return Reload::kLive;
+}
+
+}  // namespace dco::daemon

@@ -1,0 +1,65 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "dco/core/calibration.hpp"
+#include "dco/core/image.hpp"
+
+namespace dco::drivers {
+
+// One stereo pair as a camera delivered it. The views belong to the source and are valid during
+// the FrameSink::on_frame call only.
+struct StereoFrame {
+  std::uint64_t seq = 0;        // 0, 1, 2, ... per source; continues across stop/start
+  std::int64_t capture_ns = 0;  // CLOCK_MONOTONIC
+  ImageView<const std::uint8_t> left, right;  // raw (rectify with the source's calibration)
+};
+
+struct SourceInfo {
+  std::string uri;          // as given
+  std::string description;  // one line for logs and status ("synthetic hand 640x360 @ 30 fps")
+  int width = 0, height = 0, channels = 1;
+  double fps = 0;  // pacing; 0 = as fast as the consumer takes frames
+  // A disparity search range that covers what the source shows, when it knows (synthetic scenes).
+  std::optional<int> max_disparity;
+};
+
+// Where a running source delivers. Called on the source's own thread, one call at a time.
+class FrameSink {
+ public:
+  virtual ~FrameSink() = default;
+  virtual void on_frame(const StereoFrame& frame) = 0;
+  // A finite source (a replay without loop) delivered its last frame.
+  virtual void on_end() = 0;
+  // The source cannot go on (unreadable file, vanished device); no frame follows.
+  virtual void on_error(const std::string& message) = 0;
+};
+
+// A camera or a stand-in for one (architecture § Interfaces). Frames come from buffers the
+// source owns, so the steady state allocates nothing.
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  virtual const SourceInfo& info() const = 0;
+  // The calibration of the delivered frames (raw or already rectified).
+  virtual const StereoCalibration& calibration() const = 0;
+  // Starts delivering on a thread of the source's own. Throws dco::Error when already running.
+  virtual void start(FrameSink& sink) = 0;
+  // Stops and joins; no sink call happens after it returns. A stopped source can start again and
+  // goes on where it stopped.
+  virtual void stop() = 0;
+};
+
+// Opens a source by URI:
+//   synthetic://NAME?width=W&height=H&fps=F&frames=N&color=0|1&stall_after=N
+//   replay://DIR?fps=F&loop=0|1
+// Throws dco::Error with a one-line reason for an unknown scheme, unknown or bad parameters, a
+// missing or unreadable recording and for cameras this build cannot open; never falls back to
+// another source.
+std::unique_ptr<FrameSource> open_source(std::string_view uri);
+
+}  // namespace dco::drivers

@@ -1,0 +1,140 @@
+// replay://DIR: a recorded stereo sequence from image files, paced like the camera it came from.
+//
+// DIR holds either images/I1_*.png + images/I2_*.png (the Karlsruhe sequences' layout) or
+// left/* + right/* (any image files, paired in name order), and one calibration file: calib.toml
+// (dco's format), calib.txt (Middlebury or Karlsruhe) or calib_cam_to_cam.txt (KITTI). The whole
+// recording is decoded up front, so replay never touches the disk while it streams and a looped
+// replay allocates nothing per frame.
+
+#include <algorithm>
+#include <filesystem>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "../src/paced_source.hpp"
+#include "../src/sources.hpp"
+#include "dco/core/error.hpp"
+#include "dco/core/image_io.hpp"
+
+namespace dco::drivers {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::size_t kMaxRecordingBytes = std::size_t{2} << 30;
+
+bool is_image(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return ext == ".png" || ext == ".pgm" || ext == ".ppm" || ext == ".jpg" || ext == ".jpeg" ||
+         ext == ".bmp";
+}
+
+// Image files in `dir` whose name starts with `prefix`, in name order.
+std::vector<fs::path> list_images(const fs::path& dir, const std::string& prefix) {
+  std::vector<fs::path> out;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const fs::path& p = entry.path();
+    if (entry.is_regular_file() && is_image(p) && p.filename().string().rfind(prefix, 0) == 0)
+      out.push_back(p);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+class ReplaySource final : public PacedSource {
+ public:
+  explicit ReplaySource(SourceUri& uri) : dir_(uri.path()) {
+    info_.uri = uri.text();
+    info_.fps = uri.number("fps", 30, 0, 1000);
+    loop_ = uri.flag("loop", false);
+    uri.finish();
+    const std::string where = "replay://" + dir_.string();
+    if (!fs::is_directory(dir_)) throw Error(where + ": no such directory");
+
+    std::vector<fs::path> left, right;
+    if (fs::is_directory(dir_ / "images")) {
+      left = list_images(dir_ / "images", "I1_");
+      right = list_images(dir_ / "images", "I2_");
+    } else {
+      left = list_images(dir_ / "left", "");
+      right = list_images(dir_ / "right", "");
+    }
+    if (left.empty())
+      throw Error(where +
+                  ": no frames (expected images/I1_*.png + images/I2_*.png, or left/ + right/)");
+    if (left.size() != right.size())
+      throw Error(fmt::format("{}: {} left but {} right images", where, left.size(), right.size()));
+
+    calibration_ = load_calibration(find_calibration(where));
+    const CameraIntrinsics& cam = calibration_.left;
+    std::size_t bytes = 0;
+    frames_.reserve(left.size());
+    for (std::size_t i = 0; i < left.size(); ++i) {
+      Frame f{load_image(left[i]), load_image(right[i])};
+      for (const auto* img : {&f.left, &f.right}) {
+        if (img->width() != cam.width || img->height() != cam.height ||
+            img->channels() != f.left.channels())
+          throw Error(fmt::format(
+              "{}: {} is {}x{}x{}, the calibration and the first frame say "
+              "{}x{}x{}",
+              where, (img == &f.left ? left[i] : right[i]).filename().string(), img->width(),
+              img->height(), img->channels(), cam.width, cam.height, f.left.channels()));
+      }
+      bytes +=
+          2 * static_cast<std::size_t>(f.left.stride()) * static_cast<std::size_t>(f.left.height());
+      if (bytes > kMaxRecordingBytes)
+        throw Error(fmt::format("{}: the recording is larger than {} MiB", where,
+                                kMaxRecordingBytes >> 20));
+      frames_.push_back(std::move(f));
+    }
+    info_.width = cam.width;
+    info_.height = cam.height;
+    info_.channels = frames_.front().left.channels();
+    info_.description =
+        fmt::format("replay {} ({} frames{}) {}x{} @ {} fps", dir_.string(), frames_.size(),
+                    loop_ ? ", looped" : "", cam.width, cam.height,
+                    info_.fps > 0 ? fmt::format("{}", info_.fps) : std::string("max"));
+  }
+  ~ReplaySource() override { stop(); }
+
+  const SourceInfo& info() const override { return info_; }
+  const StereoCalibration& calibration() const override { return calibration_; }
+
+ private:
+  struct Frame {
+    Image<std::uint8_t> left, right;
+  };
+
+  fs::path find_calibration(const std::string& where) const {
+    for (const char* name : {"calib.toml", "calib.txt", "calib_cam_to_cam.txt"})
+      if (fs::is_regular_file(dir_ / name)) return dir_ / name;
+    throw Error(where + ": no calibration (calib.toml, calib.txt or calib_cam_to_cam.txt)");
+  }
+
+  bool produce(std::uint64_t seq, ImageView<const std::uint8_t>& left,
+               ImageView<const std::uint8_t>& right) override {
+    if (!loop_ && seq >= frames_.size()) return false;
+    const Frame& f = frames_[seq % frames_.size()];
+    left = f.left.cview();
+    right = f.right.cview();
+    return true;
+  }
+
+  fs::path dir_;
+  bool loop_ = false;
+  StereoCalibration calibration_;
+  std::vector<Frame> frames_;
+  SourceInfo info_;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSource> open_replay(SourceUri& uri) {
+  return std::make_unique<ReplaySource>(uri);
+}
+
+}  // namespace dco::drivers

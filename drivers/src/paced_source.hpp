@@ -1,0 +1,40 @@
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <thread>
+
+#include "dco/drivers/frame_source.hpp"
+
+namespace dco::drivers {
+
+// The thread, pacing and stop/start of sources that make their frames on demand (synthetic
+// scenes, recordings): frame k is due at start + k / fps; a source that falls behind does not
+// burst to catch up. Subclasses fill frames in produce() and call stop() in their destructor.
+class PacedSource : public FrameSource {
+ public:
+  void start(FrameSink& sink) override;
+  void stop() override;
+
+ protected:
+  // Fills the views with frame `seq`; they must stay valid until the next call. Returns false
+  // after the last frame of a finite source; throws dco::Error when the source cannot go on.
+  virtual bool produce(std::uint64_t seq, ImageView<const std::uint8_t>& left,
+                       ImageView<const std::uint8_t>& right) = 0;
+  // After this many frames the source keeps running but delivers nothing more: a camera that hung
+  // (0 = never).
+  void set_stall_after(std::uint64_t frames) { stall_after_ = frames; }
+
+ private:
+  void run(std::stop_token stop, FrameSink& sink);
+
+  std::uint64_t next_seq_ = 0;
+  std::uint64_t stall_after_ = 0;
+  std::mutex mutex_;
+  std::condition_variable_any wake_;
+  std::jthread thread_;
+};
+
+}  // namespace dco::drivers

@@ -1,0 +1,312 @@
+#include <sys/stat.h>
+
+#include <map>
+#include <regex>
+
+#include <gtest/gtest.h>
+
+#include "dco/client.hpp"
+#include "dco/core/calibration.hpp"
+#include "dco/core/depth_conversion.hpp"
+#include "dco/core/disparity_io.hpp"
+#include "dcod_process.hpp"
+#include "dco/core/synthetic_scene.hpp"
+#include "support/synthetic_recording.hpp"
+#include "support/temp_dir.hpp"
+
+namespace dco::testing {
+namespace {
+
+using namespace std::chrono_literals;
+
+// A small, fast scene so the tests spend their time on the lifecycle, not on stereo.
+std::vector<std::string> base_args(const TempDir& dir, const std::string& source) {
+  return {"--source",        source,  "--set",
+          "lcm.url=memq://", "--set", "ring.path=" + (dir.path() / "depth.shm").string()};
+}
+const std::string kScene = "synthetic://hand?width=160&height=96&fps=30";
+
+TEST(Dcod, ReadyWatchdogPingsAndACleanStopOnSigterm) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o;
+  o.args = base_args(dir, kScene);
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  o.watchdog = 400ms;
+  DcodProcess dcod(o);
+  const auto ready = notify.wait_for("READY=1", 20s);
+  ASSERT_TRUE(ready) << dcod.log();
+  EXPECT_TRUE(std::filesystem::exists(dir / "depth.shm"));
+  EXPECT_TRUE(notify.wait_for("STATUS=synthetic hand 160x96", 3s));
+  // Pings at a quarter of the period while frames flow.
+  const std::size_t before = notify.messages().size();
+  std::this_thread::sleep_for(1000ms);
+  EXPECT_GE(notify.count("WATCHDOG=1", before), 5) << dcod.log();
+
+  dco::client::Options co;
+  co.path = (dir / "depth.shm").string();
+  dco::client::Client client(co);
+  const auto frame = client.wait_next(2s);
+  ASSERT_TRUE(frame.has_value());
+  EXPECT_EQ(frame->info().width, 160u);
+  EXPECT_EQ(frame->info().image_channels, 1u);
+
+  const auto term = SteadyClock::now();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+  EXPECT_LT(SteadyClock::now() - term, 1s) << "SIGTERM must stop dcod within a second";
+  EXPECT_TRUE(notify.wait_for("STOPPING=1", 100ms));
+  EXPECT_FALSE(std::filesystem::exists(dir / "depth.shm")) << "the ring is removed on stop";
+  EXPECT_NE(dcod.log().find("stopping on SIGTERM"), std::string::npos) << dcod.log();
+}
+
+TEST(Dcod, AStalledSourceStopsTheWatchdogPings) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o;
+  o.args = base_args(dir, "synthetic://hand?width=160&height=96&fps=30&stall_after=15");
+  o.args.insert(o.args.end(), {"--set", "service.stall_timeout_s=0.5"});
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  o.watchdog = 400ms;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  // 15 frames at 30 fps, then the camera hangs: after the stall timeout no more pings.
+  ASSERT_TRUE(notify.wait_for("STALLED", 5s)) << dcod.log();
+  const std::size_t stalled = notify.messages().size();
+  std::this_thread::sleep_for(1500ms);
+  EXPECT_EQ(notify.count("WATCHDOG=1", stalled), 0) << dcod.log();
+  EXPECT_GE(notify.count("WATCHDOG=1", 0, stalled), 2) << "it pinged while frames flowed";
+  EXPECT_TRUE(dcod.running()) << "a stalled dcod waits for the service manager's verdict";
+  EXPECT_NE(dcod.log().find("watchdog pings withheld"), std::string::npos) << dcod.log();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+}
+
+TEST(Dcod, SighupReloadsWhatItCanAndNamesTheRest) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  const auto config = dir.write("dcod.toml", "[densify]\nlambda_s = 1.2\n[lcm]\npreview_hz = 2\n");
+  DcodOptions o;
+  o.args = base_args(dir, kScene);
+  o.args.insert(o.args.end(), {"--config", config.string()});
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  dco::client::Options co;
+  co.path = (dir / "depth.shm").string();
+  dco::client::Client client(co);
+  ASSERT_TRUE(client.wait_next(2s));
+
+  dir.write("dcod.toml", "[densify]\nlambda_s = 2\n[lcm]\npreview_hz = 5\n[ring]\nslots = 6\n");
+  const std::size_t before = notify.messages().size();
+  dcod.signal(SIGHUP);
+  ASSERT_TRUE(notify.wait_for("RELOADING=1", 5s, before)) << dcod.log();
+  ASSERT_TRUE(notify.wait_for("READY=1", 5s, before)) << dcod.log();
+  const std::string log = dcod.log();
+  EXPECT_NE(log.find("applied lcm.preview_hz"), std::string::npos) << log;
+  EXPECT_NE(log.find("restarted the pipeline for densify.lambda_s"), std::string::npos) << log;
+  EXPECT_NE(log.find("need a restart of dcod: ring.slots"), std::string::npos) << log;
+  // Frames flow again after the pipeline restart, into the same ring session.
+  const std::uint64_t session = client.session_id();
+  const auto after = client.wait_next(3s);
+  ASSERT_TRUE(after.has_value()) << dcod.log();
+  EXPECT_EQ(after->info().session_id, session);
+
+  // A broken file leaves the running configuration in place.
+  dir.write("dcod.toml", "[densify]\nlambda_s = -1\n");
+  dcod.signal(SIGHUP);
+  std::this_thread::sleep_for(500ms);
+  EXPECT_NE(dcod.log().find("reload failed, the running configuration stays"), std::string::npos)
+      << dcod.log();
+  EXPECT_TRUE(client.wait_next(3s).has_value());
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+}
+
+TEST(Dcod, BadConfigurationsFailWithFileLineAndReason) {
+  TempDir dir;
+  const auto exe = std::string(DCOD_EXE);
+  const auto file = dir.write("bad.toml", "[service]\nstall_timeout_s = 1\nmax_frame = 3\n");
+  auto r = run_command(exe + " --config " + file.string());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find(file.string() + ":3: unknown key 'service.max_frame'"), std::string::npos)
+      << r.output;
+
+  r = run_command(exe + " --set ring.slots=99");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("--set ring.slots=99"), std::string::npos) << r.output;
+
+  r = run_command(exe + " --frobnicate");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("unknown argument '--frobnicate'"), std::string::npos) << r.output;
+
+  // A camera that is not there is an error, never a silent fallback to another source.
+  r = run_command(exe + " --source indemind:// --set lcm.url=memq:// --set ring.path=" +
+                  (dir / "r.shm").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("indemind://"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "r.shm"));
+
+  r = run_command(exe + " --print-config --set service.max_frames=9");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.output.find("[service]"), std::string::npos);
+  EXPECT_NE(r.output.find("max_frames = 9"), std::string::npos) << r.output;
+}
+
+TEST(Dcod, ThreeWatchClientsInAPrivateNetworkNamespace) {
+  if (!private_network_available())
+    GTEST_SKIP() << "cannot create a private network namespace; udpm never runs outside one";
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o;
+  o.args = {"--source", kScene,
+            "--set",    "lcm.url=udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304",
+            "--set",    "ring.path=" + (dir / "depth.shm").string()};
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  o.watchdog = 2s;
+  o.private_network = true;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  std::vector<std::FILE*> watchers;
+  for (int i = 0; i < 3; ++i) {
+    const std::string cmd = std::string(DCO_WATCH_EXE) + " --path " + (dir / "depth.shm").string() +
+                            " --frames 30 --interval-ms 400 --timeout-ms 5000 2>&1" +
+                            (i == 1 ? " --overlay " + (dir / "overlay.ppm").string() : "") +
+                            (i == 2 ? " --copy" : "");
+    watchers.push_back(popen(cmd.c_str(), "r"));
+  }
+  std::string overlay_report;
+  for (std::FILE* w : watchers) {
+    std::string out;
+    char buf[512];
+    while (std::fgets(buf, sizeof buf, w) != nullptr) out += buf;
+    if (w == watchers[1]) overlay_report = out;
+    EXPECT_EQ(pclose(w), 0) << out;
+    EXPECT_NE(out.find("fps"), std::string::npos) << out;
+    EXPECT_NE(out.find("160x96"), std::string::npos) << out;
+  }
+  EXPECT_TRUE(dcod.running()) << dcod.log();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+
+  // The overlay: the hand (nearer than the virtual box at 1 m) cuts the box, the wall does not.
+  std::ifstream ppm(dir / "overlay.ppm", std::ios::binary);
+  std::string magic;
+  int w = 0, h = 0, max = 0;
+  ppm >> magic >> w >> h >> max;
+  ppm.get();
+  ASSERT_EQ(magic, "P6");
+  ASSERT_EQ(w, 160);
+  ASSERT_EQ(h, 96);
+  std::vector<unsigned char> rgb(160 * 96 * 3);
+  ppm.read(reinterpret_cast<char*>(rgb.data()), static_cast<std::streamsize>(rgb.size()));
+  ASSERT_TRUE(ppm.good());
+  // The picture is the last report's frame: compare it with that frame's true depth, away from
+  // the box's depth where a pixel could go either way.
+  std::smatch seq;
+  std::string rest = overlay_report, last_seq;
+  while (std::regex_search(rest, seq, std::regex("seq ([0-9]+)"))) {
+    last_seq = seq[1];
+    rest = seq.suffix();
+  }
+  ASSERT_FALSE(last_seq.empty()) << overlay_report;
+  synthetic::SceneRenderer scene(synthetic::preset("hand", 160, 96));
+  synthetic::StereoSample truth;
+  scene.render(std::stoi(last_seq), truth);
+  long hand = 0, hand_in_front = 0, wall = 0, wall_behind = 0;
+  for (int y = 24; y < 72; ++y)
+    for (int x = 40; x < 120; ++x) {
+      const unsigned char* p = &rgb[static_cast<std::size_t>(y * 160 + x) * 3];
+      const bool shows_camera = p[0] == p[1] && p[1] == p[2];
+      float nearest = 1e9f, farthest = 0;  // over the 3x3 neighbourhood: interiors only
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          nearest = std::min(nearest, truth.depth_m.at(x + dx, y + dy));
+          farthest = std::max(farthest, truth.depth_m.at(x + dx, y + dy));
+        }
+      if (farthest < 0.8f) {  // the hand, 0.45-0.56 m
+        ++hand;
+        hand_in_front += shows_camera;
+      } else if (nearest > 1.5f) {  // the wall, 2.8 m
+        ++wall;
+        wall_behind += !shows_camera;
+      }
+    }
+  ASSERT_GT(wall, 500);
+  EXPECT_GE(wall_behind, wall * 95 / 100) << "the box covers what is behind it";
+  if (hand > 50) {
+    EXPECT_GE(hand_in_front, hand * 90 / 100) << "what is nearer cuts the box";
+  }
+}
+
+TEST(Dcod, ReplayInDeterministicModeIsBitIdenticalToDcoDepth) {
+  TempDir dir;
+  constexpr int kFrames = 6;
+  const auto rec = dir / "rec";
+  write_synthetic_recording(rec, kFrames, 160, 96);
+  const auto offline = dir / "offline";
+  const auto r = run_command(
+      std::string(DCO_DEPTH_EXE) + " --left-pattern " + (rec / "left" / "%06d.png").string() +
+      " --right-pattern " + (rec / "right" / "%06d.png").string() + " --calib " +
+      (rec / "calib.toml").string() + " --max-disp 40 --out-dir " + offline.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+
+  DcodOptions o;
+  o.args = base_args(dir, "replay://" + rec.string() + "?fps=6");
+  o.args.insert(o.args.end(),
+                {"--set", "runtime.deterministic=true", "--set", "stereo.max_disparity=40"});
+  o.log = dir / "dcod.log";
+  DcodProcess dcod(o);
+  const auto ring = dir / "depth.shm";
+  for (int i = 0; i < 400 && !std::filesystem::exists(ring) && dcod.running(); ++i)
+    std::this_thread::sleep_for(10ms);
+  ASSERT_TRUE(std::filesystem::exists(ring)) << dcod.log();
+  dco::client::Options co;
+  co.path = ring.string();
+  dco::client::Client client(co);
+
+  std::map<std::uint64_t, std::vector<float>> received;
+  while (received.size() < kFrames) {
+    const auto f = client.wait_next(3s);
+    if (!f) break;
+    std::vector<float> depth(160 * 96);
+    for (std::uint32_t y = 0; y < 96; ++y)
+      std::memcpy(&depth[y * 160], f->depth_row(y), 160 * sizeof(float));
+    if (client.still_valid(*f)) received[f->info().frame_seq] = std::move(depth);
+  }
+  EXPECT_EQ(dcod.wait(10s), 0) << "a replay without loop ends cleanly\n" << dcod.log();
+  ASSERT_EQ(received.size(), static_cast<std::size_t>(kFrames)) << dcod.log();
+
+  const RectifiedGeometry geometry = load_calibration(rec / "calib.toml").rectified;
+  for (int i = 0; i < kFrames; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%06d.pfm", i);
+    const Image<float> disparity = read_pfm(offline / name);
+    Image<float> expected(disparity.width(), disparity.height());
+    disparity_to_depth(disparity.cview(), geometry, expected.view());
+    const std::vector<float>& got = received[static_cast<std::uint64_t>(i)];
+    long differing = 0;
+    for (int y = 0; y < 96; ++y)
+      differing += std::memcmp(&got[static_cast<std::size_t>(y) * 160], expected.row(y),
+                               160 * sizeof(float)) != 0;
+    EXPECT_EQ(differing, 0) << "frame " << i << ": rows that differ from dco-depth";
+  }
+}
+
+TEST(DcodService, UnitVerifiesAndItsExposureIsAtMost2_5) {
+  const std::string unit = DCOD_TEST_UNIT;
+  auto verify = run_command("systemd-analyze verify " + unit);
+  EXPECT_EQ(verify.status, 0) << verify.output;
+  auto security = run_command("systemd-analyze security --offline=true " + unit);
+  const std::regex score("Overall exposure level for dcod.service: ([0-9.]+)");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(security.output, m, score)) << security.output;
+  EXPECT_LE(std::stod(m[1]), 2.5) << security.output;
+}
+
+}  // namespace
+}  // namespace dco::testing

@@ -1,0 +1,90 @@
+// dcod at its highest rate for 100k frames: resident memory may not grow by more than 1 MB after
+// the warm-up and the number of open descriptors stays the same. Prints the figures for
+// bench/RESULTS.md.
+
+#include <dirent.h>
+
+#include <cstdio>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "dco/client.hpp"
+#include "dcod_process.hpp"
+#include "support/temp_dir.hpp"
+
+namespace dco::testing {
+namespace {
+
+using namespace std::chrono_literals;
+
+long rss_kib(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  return -1;
+}
+
+long open_fds(pid_t pid) {
+  const std::string path = "/proc/" + std::to_string(pid) + "/fd";
+  DIR* d = opendir(path.c_str());
+  if (d == nullptr) return -1;
+  long n = 0;
+  while (readdir(d) != nullptr) ++n;
+  closedir(d);
+  return n - 2;
+}
+
+TEST(DcodSoak, HundredThousandFramesKeepMemoryAndDescriptorsFlat) {
+  constexpr long kFrames = 100000;
+  constexpr long kWarmUp = 5000;
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o;
+  o.args = {"--source", "synthetic://hand?width=160&height=96&fps=0",
+            "--set",    "lcm.url=memq://",
+            "--set",    "ring.path=" + (dir / "depth.shm").string(),
+            "--set",    "service.max_frames=" + std::to_string(kFrames),
+            "--set",    "lcm.preview_hz=30"};
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  dco::client::Options co;
+  co.path = (dir / "depth.shm").string();
+  dco::client::Client client(co);
+
+  long warm_rss = -1, warm_fds = -1, max_rss = 0, max_fds = 0, last_fds = 0;
+  std::uint64_t seen = 0;
+  const auto start = SteadyClock::now();
+  while (dcod.running()) {
+    if (const auto f = client.latest()) seen = f->info().publish_index;
+    const long rss = rss_kib(dcod.pid());
+    const long fds = open_fds(dcod.pid());
+    if (rss < 0 || fds < 0) break;  // exited between the checks
+    if (seen >= kWarmUp && warm_rss < 0) {
+      warm_rss = rss;
+      warm_fds = fds;
+    }
+    if (warm_rss >= 0) {
+      max_rss = std::max(max_rss, rss);
+      max_fds = std::max(max_fds, fds);
+      last_fds = fds;
+    }
+    std::this_thread::sleep_for(200ms);
+  }
+  const double seconds = std::chrono::duration<double>(SteadyClock::now() - start).count();
+  EXPECT_EQ(dcod.wait(10s), 0) << dcod.log();
+  EXPECT_NE(dcod.log().find("published 100000 frames"), std::string::npos) << dcod.log();
+  ASSERT_GE(warm_rss, 0) << "never saw the warm-up end";
+  std::printf(
+      "soak: %ld frames in %.0f s (%.0f fps); RSS after %ld frames %ld KiB, max after "
+      "%ld KiB (+%ld KiB); fds %ld -> max %ld, last %ld\n",
+      kFrames, seconds, static_cast<double>(kFrames) / seconds, kWarmUp, warm_rss, max_rss,
+      max_rss - warm_rss, warm_fds, max_fds, last_fds);
+  EXPECT_LE(max_rss - warm_rss, 1024);
+  EXPECT_EQ(max_fds, warm_fds);
+}
+
+}  // namespace
+}  // namespace dco::testing

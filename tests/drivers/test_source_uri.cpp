@@ -1,0 +1,53 @@
+#include <gtest/gtest.h>
+
+#include "dco/core/error.hpp"
+#include "dco/drivers/frame_source.hpp"
+#include "dco/drivers/source_uri.hpp"
+
+namespace dco::drivers {
+namespace {
+
+std::string error_of(std::string_view uri) {
+  try {
+    open_source(uri);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SourceUri, SplitsSchemePathAndTypedParameters) {
+  SourceUri uri("replay:///data/clip?fps=12.5&loop=1&frames=3");
+  EXPECT_EQ(uri.scheme(), "replay");
+  EXPECT_EQ(uri.path(), "/data/clip");
+  EXPECT_DOUBLE_EQ(uri.number("fps", 30, 0, 100), 12.5);
+  EXPECT_TRUE(uri.flag("loop", false));
+  EXPECT_EQ(uri.integer("frames", 0, 0, 10), 3);
+  EXPECT_EQ(uri.integer("absent", 7, 0, 10), 7);
+  EXPECT_NO_THROW(uri.finish());
+}
+
+TEST(SourceUri, RejectsMalformedAndUnreadParameters) {
+  EXPECT_THROW(SourceUri("no-scheme"), Error);
+  EXPECT_THROW(SourceUri("://x"), Error);
+  EXPECT_THROW(SourceUri("synthetic://hand?fps"), Error);
+  EXPECT_THROW(SourceUri("synthetic://hand?fps=1&fps=2"), Error);
+  SourceUri out_of_range("synthetic://hand?fps=5000");
+  EXPECT_THROW(out_of_range.number("fps", 30, 0, 1000), Error);
+  SourceUri not_a_number("synthetic://hand?width=wide");
+  EXPECT_THROW(not_a_number.integer("width", 640, 32, 8192), Error);
+  SourceUri unread("synthetic://hand?widht=3");
+  EXPECT_THROW(unread.finish(), Error);
+}
+
+TEST(OpenSource, NamesTheProblemAndNeverFallsBack) {
+  EXPECT_NE(error_of("synthetic://hand?widht=320").find("unknown parameter 'widht'"),
+            std::string::npos);
+  EXPECT_NE(error_of("synthetic://teapot").find("teapot"), std::string::npos);
+  EXPECT_NE(error_of("indemind://").find("not supported by this build"), std::string::npos);
+  EXPECT_NE(error_of("webcam://0").find("unknown scheme 'webcam'"), std::string::npos);
+  EXPECT_NE(error_of("replay:///nonexistent/dir").find("no such directory"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace dco::drivers

@@ -1,0 +1,215 @@
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "dco/core/calibration.hpp"
+#include "dco/core/error.hpp"
+#include "dco/core/image_io.hpp"
+#include "dco/core/synthetic_scene.hpp"
+#include "dco/drivers/frame_source.hpp"
+#include "support/synthetic_recording.hpp"
+#include "support/temp_dir.hpp"
+
+namespace dco::drivers {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Records what a source delivers; frames are copied since their views live for the call only.
+class RecordingSink : public FrameSink {
+ public:
+  struct Frame {
+    std::uint64_t seq = 0;
+    std::int64_t capture_ns = 0;
+    Image<std::uint8_t> left, right;
+  };
+
+  void on_frame(const StereoFrame& f) override {
+    Frame copy;
+    copy.seq = f.seq;
+    copy.capture_ns = f.capture_ns;
+    copy.left.resize(f.left.width, f.left.height, f.left.channels);
+    copy.left.copy_from(f.left);
+    copy.right.resize(f.right.width, f.right.height, f.right.channels);
+    copy.right.copy_from(f.right);
+    std::lock_guard lock(mutex_);
+    frames_.push_back(std::move(copy));
+    changed_.notify_all();
+  }
+  void on_end() override {
+    std::lock_guard lock(mutex_);
+    ended_ = true;
+    changed_.notify_all();
+  }
+  void on_error(const std::string& message) override {
+    std::lock_guard lock(mutex_);
+    error_ = message;
+    changed_.notify_all();
+  }
+
+  bool wait_for_end(std::chrono::milliseconds timeout) {
+    std::unique_lock lock(mutex_);
+    return changed_.wait_for(lock, timeout, [&] { return ended_ || !error_.empty(); });
+  }
+  std::size_t count() {
+    std::lock_guard lock(mutex_);
+    return frames_.size();
+  }
+  std::vector<Frame> frames() {
+    std::lock_guard lock(mutex_);
+    return frames_;
+  }
+  bool ended() {
+    std::lock_guard lock(mutex_);
+    return ended_;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<Frame> frames_;
+  bool ended_ = false;
+  std::string error_;
+};
+
+bool same_pixels(ImageView<const std::uint8_t> a, ImageView<const std::uint8_t> b) {
+  if (a.width != b.width || a.height != b.height || a.channels != b.channels) return false;
+  for (int y = 0; y < a.height; ++y)
+    if (std::memcmp(a.row(y), b.row(y), static_cast<std::size_t>(a.width * a.channels)) != 0)
+      return false;
+  return true;
+}
+
+TEST(SyntheticSource, DeliversTheRenderersFramesAtItsPace) {
+  auto source = open_source("synthetic://hand?width=160&height=96&fps=50");
+  EXPECT_EQ(source->info().width, 160);
+  EXPECT_EQ(source->info().height, 96);
+  ASSERT_TRUE(source->info().max_disparity.has_value());
+  EXPECT_TRUE(source->calibration().is_rectified);
+  RecordingSink sink;
+  source->start(sink);
+  std::this_thread::sleep_for(500ms);
+  source->stop();
+  const auto frames = sink.frames();
+  // 50 fps for 0.5 s: about 25 frames; a loaded machine may deliver fewer, never a burst.
+  EXPECT_GE(frames.size(), 10u);
+  EXPECT_LE(frames.size(), 27u);
+  synthetic::SceneRenderer renderer(synthetic::preset("hand", 160, 96));
+  synthetic::StereoSample sample;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i].seq, i);
+    if (i > 0) {
+      EXPECT_GT(frames[i].capture_ns, frames[i - 1].capture_ns);
+    }
+  }
+  renderer.render(3, sample);
+  EXPECT_TRUE(same_pixels(frames[3].left.cview(), sample.left.cview()));
+  EXPECT_TRUE(same_pixels(frames[3].right.cview(), sample.right.cview()));
+}
+
+TEST(SyntheticSource, AFiniteSourceEndsAndARestartGoesOn) {
+  auto source = open_source("synthetic://boxes?width=96&height=64&fps=0&frames=5");
+  RecordingSink sink;
+  source->start(sink);
+  ASSERT_TRUE(sink.wait_for_end(10s));
+  source->stop();
+  EXPECT_EQ(sink.count(), 5u);
+  EXPECT_TRUE(sink.ended());
+
+  auto endless = open_source("synthetic://boxes?width=96&height=64&fps=200");
+  RecordingSink first, second;
+  endless->start(first);
+  EXPECT_THROW(endless->start(first), Error) << "started twice";
+  std::this_thread::sleep_for(100ms);
+  endless->stop();
+  const std::size_t n = first.count();
+  ASSERT_GT(n, 0u);
+  endless->start(second);
+  std::this_thread::sleep_for(100ms);
+  endless->stop();
+  ASSERT_GT(second.count(), 0u);
+  EXPECT_EQ(second.frames().front().seq, n) << "a restart continues the sequence";
+}
+
+TEST(SyntheticSource, StallAfterStopsDeliveringWithoutEnding) {
+  auto source = open_source("synthetic://hand?width=96&height=64&fps=0&stall_after=4");
+  RecordingSink sink;
+  source->start(sink);
+  std::this_thread::sleep_for(300ms);
+  EXPECT_EQ(sink.count(), 4u);
+  EXPECT_FALSE(sink.ended());
+  const auto before = std::chrono::steady_clock::now();
+  source->stop();
+  EXPECT_LT(std::chrono::steady_clock::now() - before, 200ms) << "stop wakes a stalled source";
+}
+
+using dco::testing::write_synthetic_recording;
+
+TEST(ReplaySource, ReplaysTheFilesInOrderAndLoops) {
+  dco::testing::TempDir dir;
+  write_synthetic_recording(dir.path(), 3, 96, 64);
+  auto once = open_source("replay://" + dir.path().string() + "?fps=0");
+  RecordingSink sink;
+  once->start(sink);
+  ASSERT_TRUE(sink.wait_for_end(10s));
+  once->stop();
+  const auto frames = sink.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  synthetic::SceneRenderer renderer(synthetic::preset("hand", 96, 64));
+  synthetic::StereoSample sample;
+  for (int i = 0; i < 3; ++i) {
+    renderer.render(i, sample);
+    EXPECT_TRUE(same_pixels(frames[static_cast<std::size_t>(i)].left.cview(), sample.left.cview()));
+    EXPECT_TRUE(
+        same_pixels(frames[static_cast<std::size_t>(i)].right.cview(), sample.right.cview()));
+  }
+
+  auto looped = open_source("replay://" + dir.path().string() + "?fps=0&loop=1");
+  RecordingSink loop_sink;
+  looped->start(loop_sink);
+  std::this_thread::sleep_for(100ms);
+  looped->stop();
+  const auto loop_frames = loop_sink.frames();
+  ASSERT_GE(loop_frames.size(), 4u);
+  EXPECT_FALSE(loop_sink.ended());
+  EXPECT_EQ(loop_frames[3].seq, 3u);
+  EXPECT_TRUE(same_pixels(loop_frames[3].left.cview(), loop_frames[0].left.cview()));
+}
+
+TEST(ReplaySource, BrokenRecordingsAreRefusedWithTheReason) {
+  const auto error_of = [](const std::filesystem::path& dir) -> std::string {
+    try {
+      open_source("replay://" + dir.string());
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  dco::testing::TempDir empty;
+  EXPECT_NE(error_of(empty.path()).find("no frames"), std::string::npos);
+
+  dco::testing::TempDir uneven;
+  write_synthetic_recording(uneven.path(), 2, 96, 64);
+  std::filesystem::remove(uneven.path() / "right" / "000001.png");
+  EXPECT_NE(error_of(uneven.path()).find("2 left but 1 right"), std::string::npos);
+
+  dco::testing::TempDir uncalibrated;
+  write_synthetic_recording(uncalibrated.path(), 1, 96, 64);
+  std::filesystem::remove(uncalibrated.path() / "calib.toml");
+  EXPECT_NE(error_of(uncalibrated.path()).find("no calibration"), std::string::npos);
+
+  dco::testing::TempDir wrong_size;
+  write_synthetic_recording(wrong_size.path(), 2, 96, 64);
+  Image<std::uint8_t> narrow(80, 64);
+  narrow.fill(0);
+  save_image(wrong_size.path() / "right" / "000001.png", narrow.cview());
+  EXPECT_NE(error_of(wrong_size.path()).find("000001.png is 80x64"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace dco::drivers
