@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -44,8 +45,19 @@ class NotifySocket {
     addr.sun_family = AF_UNIX;
     std::strncpy(addr.sun_path, path.c_str(), sizeof(addr.sun_path) - 1);
     EXPECT_EQ(bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0) << path;
+    // Reads all the time, like systemd: a full socket would block the daemon's sd_notify.
+    reader_ = std::jthread([this](std::stop_token stop) {
+      while (!stop.stop_requested()) {
+        pollfd p{fd_, POLLIN, 0};
+        if (poll(&p, 1, 20) > 0) drain();
+      }
+    });
   }
-  ~NotifySocket() { close(fd_); }
+  ~NotifySocket() {
+    reader_.request_stop();
+    reader_.join();
+    close(fd_);
+  }
 
   const std::filesystem::path& path() const { return path_; }
 
@@ -53,20 +65,19 @@ class NotifySocket {
   bool collect(std::chrono::milliseconds timeout,
                const std::function<bool(const std::vector<Notification>&)>& done) {
     const auto end = SteadyClock::now() + timeout;
-    while (!done(messages_)) {
-      const auto left =
-          std::chrono::duration_cast<std::chrono::milliseconds>(end - SteadyClock::now());
-      if (left.count() <= 0) return false;
-      pollfd p{fd_, POLLIN, 0};
-      if (poll(&p, 1, static_cast<int>(std::min<long>(left.count(), 50))) > 0) drain();
+    while (!done(messages())) {
+      if (SteadyClock::now() >= end) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     return true;
   }
   void drain() {
     char buf[4096];
     ssize_t n = 0;
-    while ((n = recv(fd_, buf, sizeof buf, 0)) > 0)
+    while ((n = recv(fd_, buf, sizeof buf, 0)) > 0) {
+      std::lock_guard lock(mutex_);
       messages_.push_back({SteadyClock::now(), std::string(buf, static_cast<std::size_t>(n))});
+    }
   }
   // Waits for a datagram containing `text` (a line such as "READY=1"); returns its time.
   std::optional<SteadyClock::time_point> wait_for(const std::string& text,
@@ -85,21 +96,24 @@ class NotifySocket {
   }
   // Datagrams containing `text` among messages [from, to) in arrival order (to = -1: all so far).
   long count(const std::string& text, std::size_t from, std::size_t to = std::size_t(-1)) {
-    drain();
+    const std::vector<Notification> m = messages();
     long n = 0;
-    for (std::size_t i = from; i < std::min(to, messages_.size()); ++i)
-      if (messages_[i].text.find(text) != std::string::npos) ++n;
+    for (std::size_t i = from; i < std::min(to, m.size()); ++i)
+      if (m[i].text.find(text) != std::string::npos) ++n;
     return n;
   }
-  const std::vector<Notification>& messages() {
-    drain();
+  // A snapshot of everything received so far, in arrival order.
+  std::vector<Notification> messages() {
+    std::lock_guard lock(mutex_);
     return messages_;
   }
 
  private:
   std::filesystem::path path_;
   int fd_ = -1;
+  std::mutex mutex_;
   std::vector<Notification> messages_;
+  std::jthread reader_;
 };
 
 // Root gets a network namespace directly; anyone else through a user namespace.
