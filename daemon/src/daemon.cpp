@@ -180,8 +180,7 @@ bool Daemon::healthy(std::int64_t now_ns) const {
   return static_cast<double>(now_ns - last) < loaded_.config.stall_timeout_s * 1e9;
 }
 
-std::string Daemon::status_line() const {
-  const pipeline::runtime::RuntimeStats s = runtime_->stats();
+std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const {
   return fmt::format(
       "{}: {:.1f} fps in, {:.1f} fps out, {} published, {} dropped, latency p50 {:.1f} ms p99 "
       "{:.1f} ms{}",
@@ -230,7 +229,7 @@ void Daemon::tick(std::int64_t now_ns) {
   } catch (const std::exception& e) {
     on_error(std::string("publishing statistics: ") + e.what());
   }
-  notifier_.status(status_line());
+  notifier_.status(status_line(stats));
 }
 
 void Daemon::reload() {
@@ -241,7 +240,7 @@ void Daemon::reload() {
     parse_log_level(next.config.log_level);
   } catch (const Error& e) {
     log_.error(std::string("reload failed, the running configuration stays: ") + e.what());
-    notifier_.ready(status_line());
+    notifier_.ready(status_line(runtime_->stats()));
     return;
   }
   apply_source_hints(next);
@@ -296,7 +295,7 @@ void Daemon::reload() {
     log_.info(summary);
   else
     log_.warning(summary);
-  notifier_.ready(status_line());
+  notifier_.ready(status_line(runtime_->stats()));
 }
 
 int Daemon::run() {
@@ -328,7 +327,7 @@ int Daemon::run() {
   const std::int64_t start_ns = monotonic_ns();
   next_stats_ns_ = start_ns + static_cast<std::int64_t>(1e9 / loaded_.config.stats_hz);
   last_rate_ns_ = start_ns;
-  notifier_.ready(status_line());
+  notifier_.ready(status_line(runtime_->stats()));
   if (notifier_.watchdog_period()) {
     notifier_.watchdog();
     last_ping_ns_ = start_ns;

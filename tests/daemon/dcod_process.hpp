@@ -28,6 +28,8 @@
 
 #include <gtest/gtest.h>
 
+#include "support/commands.hpp"
+
 namespace dco::testing {
 
 using SteadyClock = std::chrono::steady_clock;
@@ -116,17 +118,6 @@ class NotifySocket {
   std::jthread reader_;
 };
 
-// Root gets a network namespace directly; anyone else through a user namespace.
-inline std::string unshare_command() {
-  return geteuid() == 0 ? "unshare -n" : "unshare -rn";
-}
-inline const char* kNetnsSetup = "ip link set lo up && ip route add 224.0.0.0/4 dev lo";
-
-inline bool private_network_available() {
-  const std::string probe = unshare_command() + " sh -c '" + kNetnsSetup + "' >/dev/null 2>&1";
-  return std::system(probe.c_str()) == 0;
-}
-
 struct DcodOptions {
   std::vector<std::string> args;
   std::filesystem::path log;              // stderr goes here
@@ -202,21 +193,5 @@ class DcodProcess {
   bool exited_ = false;
   int status_ = -1;
 };
-
-// Runs a command to completion; its exit status and everything it printed.
-struct CommandResult {
-  int status = -1;
-  std::string output;
-};
-inline CommandResult run_command(const std::string& command) {
-  CommandResult r;
-  FILE* p = popen((command + " 2>&1").c_str(), "r");
-  if (p == nullptr) return r;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, p) != nullptr) r.output += buf;
-  const int status = pclose(p);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-  return r;
-}
 
 }  // namespace dco::testing

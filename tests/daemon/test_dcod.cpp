@@ -9,8 +9,8 @@
 #include "dco/core/calibration.hpp"
 #include "dco/core/depth_conversion.hpp"
 #include "dco/core/disparity_io.hpp"
-#include "dcod_process.hpp"
 #include "dco/core/synthetic_scene.hpp"
+#include "dcod_process.hpp"
 #include "support/synthetic_recording.hpp"
 #include "support/temp_dir.hpp"
 
@@ -157,8 +157,8 @@ TEST(Dcod, BadConfigurationsFailWithFileLineAndReason) {
 }
 
 TEST(Dcod, ThreeWatchClientsInAPrivateNetworkNamespace) {
-  if (!private_network_available())
-    GTEST_SKIP() << "cannot create a private network namespace; udpm never runs outside one";
+  if (const std::string problem = private_network_problem(); !problem.empty())
+    GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
   TempDir dir;
   NotifySocket notify(dir / "notify");
   DcodOptions o;

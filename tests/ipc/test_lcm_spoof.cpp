@@ -11,26 +11,11 @@
 
 #include <gtest/gtest.h>
 
+#include "support/commands.hpp"
 #include "support/temp_dir.hpp"
 
 namespace dco::ipc::testing {
 namespace {
-
-struct CommandResult {
-  int status = -1;
-  std::string output;
-};
-
-CommandResult run(const std::string& command) {
-  CommandResult r;
-  FILE* p = popen((command + " 2>&1").c_str(), "r");
-  if (p == nullptr) return r;
-  char buf[512];
-  while (std::fgets(buf, sizeof(buf), p) != nullptr) r.output += buf;
-  const int status = pclose(p);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-  return r;
-}
 
 // The value after `key` in a line of "key value" pairs, -1 when absent.
 long field(const std::string& line, const std::string& key) {
@@ -45,25 +30,19 @@ long field(const std::string& line, const std::string& key) {
   return -1;
 }
 
-// Root gets a network namespace directly; anyone else through a user namespace.
-std::string unshare_command() {
-  return geteuid() == 0 ? "unshare -n" : "unshare -rn";
-}
-
 TEST(LcmSpoof, ForgedDescriptorsFromAnotherProcessAreNeverAccepted) {
-  const std::string unshare = unshare_command();
-  const std::string setup = "ip link set lo up && ip route add 224.0.0.0/4 dev lo";
-  const CommandResult probe = run(unshare + " sh -c '" + setup + "'");
-  if (probe.status != 0)
-    GTEST_SKIP() << "cannot set up a private network namespace (`" << unshare << " sh -c '" << setup
-                 << "'` failed: " << probe.output << "); the udpm test never runs outside one";
+  if (const std::string problem = dco::testing::private_network_problem(); !problem.empty())
+    GTEST_SKIP() << "cannot set up a private network namespace (" << problem
+                 << "); the udpm test never runs outside one";
+  const std::string unshare = dco::testing::unshare_command();
+  const std::string setup = dco::testing::kNetnsSetup;
   dco::testing::TempDir dir;
   constexpr int kFrames = 120;
   const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
   // lo up with a multicast route: without the route LCM refuses to start.
-  const CommandResult r =
-      run(unshare + " sh -c '" + setup + " && exec \"$0\" \"$@\"' " + DCO_LCM_SPOOF_SCENARIO_EXE +
-          " " + dir.path().string() + " '" + url + "' " + std::to_string(kFrames) + " 4000");
+  const dco::testing::CommandResult r = dco::testing::run_command(
+      unshare + " sh -c '" + setup + " && exec \"$0\" \"$@\"' " + DCO_LCM_SPOOF_SCENARIO_EXE + " " +
+      dir.path().string() + " '" + url + "' " + std::to_string(kFrames) + " 4000");
   ASSERT_EQ(r.status, 0) << r.output;
   const std::string& line = r.output;
   EXPECT_EQ(field(line, "daemon_rc"), 0) << line;

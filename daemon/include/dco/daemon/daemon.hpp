@@ -51,7 +51,7 @@ class Daemon final : public drivers::FrameSink {
   void reload();
   void tick(std::int64_t now_ns);
   bool healthy(std::int64_t now_ns) const;
-  std::string status_line() const;
+  std::string status_line(const pipeline::runtime::RuntimeStats& stats) const;
   void wake();
 
   const ConfigSources sources_;
