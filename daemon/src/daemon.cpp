@@ -34,8 +34,11 @@ std::string join(const std::vector<std::string>& items) {
 
 }  // namespace
 
-Daemon::Daemon(ConfigSources sources, LoadedConfig config, Logger& log)
-    : sources_(std::move(sources)), loaded_(std::move(config)), log_(log) {
+Daemon::Daemon(ConfigSources sources, LoadedConfig config, Logger& log, SourceOpener open_source)
+    : sources_(std::move(sources)),
+      open_source_(std::move(open_source)),
+      loaded_(std::move(config)),
+      log_(log) {
   event_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
   if (event_fd_ < 0) throw Error(std::string("eventfd: ") + std::strerror(errno));
   max_frames_ = loaded_.config.max_frames;
@@ -59,7 +62,7 @@ void Daemon::apply_source_hints(LoadedConfig& config) const {
 
 void Daemon::open() {
   const DaemonConfig& c = loaded_.config;
-  source_ = drivers::open_source(c.source);
+  source_ = open_source_(c.source);
   apply_source_hints(loaded_);
   if (!loaded_.max_disparity_given && source_->info().max_disparity)
     log_.info(fmt::format("stereo.max_disparity = {} (covers the source's nearest depth)",
@@ -177,7 +180,10 @@ void Daemon::on_result(const pipeline::DepthResult& result,
 
 bool Daemon::healthy(std::int64_t now_ns) const {
   const std::int64_t last = std::max(last_publish_ns_.load(), pipeline_start_ns_.load());
-  return static_cast<double>(now_ns - last) < loaded_.config.stall_timeout_s * 1e9;
+  if (static_cast<double>(now_ns - last) < loaded_.config.stall_timeout_s * 1e9) return true;
+  // An unplugged camera is waited for, not a hang: a restart by the watchdog would not bring it
+  // back sooner, and the driver resumes by itself when it returns.
+  return source_->status().state == drivers::SourceStatus::State::kDisconnected;
 }
 
 std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const {
@@ -216,12 +222,31 @@ void Daemon::tick(std::int64_t now_ns) {
   last_rate_ns_ = now_ns;
   last_pushed_ = stats.pushed;
   last_published_ = stats.published;
+  drivers::SourceStatus source = source_->status();
   ipc::DeviceStatus status;
-  status.state = published_ == 0 ? ipc::DeviceStatus::State::kStarting
-                 : ok            ? ipc::DeviceStatus::State::kStreaming
-                                 : ipc::DeviceStatus::State::kError;
-  status.device = source_->info().description;
-  if (!ok) status.error = "no frame published within service.stall_timeout_s";
+  using State = ipc::DeviceStatus::State;
+  switch (source.state) {
+    case drivers::SourceStatus::State::kDisconnected:
+      status.state = State::kDisconnected;
+      break;
+    case drivers::SourceStatus::State::kError:
+      status.state = State::kError;
+      break;
+    case drivers::SourceStatus::State::kStarting:
+      status.state = State::kStarting;
+      break;
+    case drivers::SourceStatus::State::kStreaming:
+      status.state = published_ == 0 ? State::kStarting : ok ? State::kStreaming : State::kError;
+      break;
+  }
+  status.device = std::move(source.device);
+  status.serial = std::move(source.serial);
+  status.firmware = std::move(source.firmware);
+  status.usb_speed_mbps = source.usb_speed_mbps;
+  status.error = std::move(source.error);
+  status.counters = std::move(source.counters);
+  if (source.state == drivers::SourceStatus::State::kStreaming && published_ != 0 && !ok)
+    status.error = "no frame published within service.stall_timeout_s";
   try {
     std::lock_guard lock(publish_mutex_);
     publisher_->publish_stats(stats, now_ns);

@@ -9,13 +9,25 @@ std::unique_ptr<FrameSource> open_source(std::string_view text) {
   SourceUri uri(text);
   if (uri.scheme() == "synthetic") return open_synthetic(uri);
   if (uri.scheme() == "replay") return open_replay(uri);
-  if (uri.scheme() == "indemind" || uri.scheme() == "libcamera" || uri.scheme() == "lcmlog")
-    throw Error(
-        fmt::format("source '{}': {}:// is not supported by this build (available: "
-                    "synthetic://, replay://)",
-                    text, uri.scheme()));
-  throw Error(fmt::format("source '{}': unknown scheme '{}' (available: synthetic://, replay://)",
-                          text, uri.scheme()));
+  if (uri.scheme() == "indemind") return open_indemind(uri);
+#ifdef DCO_HAVE_LIBCAMERA
+  if (uri.scheme() == "libcamera") return open_libcamera(uri);
+  constexpr const char* kAvailable = "synthetic://, replay://, indemind://, libcamera://";
+#else
+  constexpr const char* kAvailable = "synthetic://, replay://, indemind://";
+#endif
+  if (uri.scheme() == "libcamera" || uri.scheme() == "lcmlog")
+    throw Error(fmt::format("source '{}': {}:// is not supported by this build (available: {})",
+                            text, uri.scheme(), kAvailable));
+  throw Error(fmt::format("source '{}': unknown scheme '{}' (available: {})", text, uri.scheme(),
+                          kAvailable));
+}
+
+SourceStatus FrameSource::status() const {
+  SourceStatus s;
+  s.state = SourceStatus::State::kStreaming;
+  s.device = info().description;
+  return s;
 }
 
 }  // namespace dco::drivers

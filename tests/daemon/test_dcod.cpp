@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "dco/client.hpp"
 #include "dco/core/calibration.hpp"
 #include "dco/core/depth_conversion.hpp"
@@ -148,6 +150,11 @@ TEST(Dcod, BadConfigurationsFailWithFileLineAndReason) {
                   (dir / "r.shm").string());
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.output.find("indemind://"), std::string::npos) << r.output;
+  // One clear line: no module here (or no USB at all in a bare container).
+  EXPECT_TRUE(r.output.find("no INDEMIND module (USB 05a9:f581) found") != std::string::npos ||
+              r.output.find("USB unavailable") != std::string::npos)
+      << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "r.shm"));
 
   r = run_command(exe + " --print-config --set service.max_frames=9");

@@ -44,7 +44,14 @@ TEST(OpenSource, NamesTheProblemAndNeverFallsBack) {
   EXPECT_NE(error_of("synthetic://hand?widht=320").find("unknown parameter 'widht'"),
             std::string::npos);
   EXPECT_NE(error_of("synthetic://teapot").find("teapot"), std::string::npos);
-  EXPECT_NE(error_of("indemind://").find("not supported by this build"), std::string::npos);
+  // No module is attached here: a clear error, never another source.
+  const std::string no_camera = error_of("indemind://");
+  EXPECT_TRUE(no_camera.find("no INDEMIND module") != std::string::npos ||
+              no_camera.find("USB unavailable") != std::string::npos)
+      << no_camera;
+  EXPECT_NE(error_of("indemind://?fps=60").find("fps"), std::string::npos);
+  EXPECT_NE(error_of("indemind://?imu_hz=300").find("imu_hz must divide 1000"), std::string::npos);
+  EXPECT_NE(error_of("lcmlog:///tmp/x").find("not supported by this build"), std::string::npos);
   EXPECT_NE(error_of("webcam://0").find("unknown scheme 'webcam'"), std::string::npos);
   EXPECT_NE(error_of("replay:///nonexistent/dir").find("no such directory"), std::string::npos);
 }

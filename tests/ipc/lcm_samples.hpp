@@ -70,6 +70,9 @@ inline dco::device_status_t sample_status() {
   m.firmware = "1.2.3";
   m.usb_speed_mbps = 480;
   m.error = "stall on endpoint 0x81";
+  m.counter_count = 2;
+  m.counter_names = {"frames", "stalls"};
+  m.counter_values = {1200, 1};
   return m;
 }
 

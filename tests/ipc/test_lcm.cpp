@@ -289,7 +289,14 @@ TEST(Publisher, StatsStatusAndLog) {
   s.pushed = 90;
   s.published = 75;
   pub.publish_stats(s, t0 + 2'000'000'000);
-  pub.publish_status({DeviceStatus::State::kStreaming, "INDEMIND", "SN1", "fw 2", 5000, ""}, t0);
+  pub.publish_status({DeviceStatus::State::kStreaming,
+                      "INDEMIND",
+                      "SN1",
+                      "fw 2",
+                      5000,
+                      "",
+                      {{"frames", 120}, {"lost_frames", 3}}},
+                     t0);
   pub.log(LogLevel::kWarning, "camera", "frame 12 arrived late", t0);
   handle_all(pub.lcm());
   ASSERT_EQ(got.stats.size(), 2u);
@@ -308,6 +315,9 @@ TEST(Publisher, StatsStatusAndLog) {
   EXPECT_EQ(m.densify_queue_high_water, 3);
   ASSERT_EQ(got.status.size(), 1u);
   EXPECT_EQ(got.status[0].state, std::int8_t{dco::device_status_t::STATE_STREAMING});
+  ASSERT_EQ(got.status[0].counter_count, 2);
+  EXPECT_EQ(got.status[0].counter_names[1], "lost_frames");
+  EXPECT_EQ(got.status[0].counter_values[1], 3);
   EXPECT_EQ(got.status[0].serial, "SN1");
   EXPECT_EQ(got.status[0].usb_speed_mbps, 5000);
   ASSERT_EQ(got.logs.size(), 1u);

@@ -173,6 +173,11 @@ void DepthPublisher::publish_status(const DeviceStatus& status, std::int64_t now
   m.firmware = status.firmware;
   m.usb_speed_mbps = status.usb_speed_mbps;
   m.error = status.error;
+  m.counter_count = static_cast<std::int32_t>(status.counters.size());
+  for (const auto& [name, value] : status.counters) {
+    m.counter_names.push_back(name);
+    m.counter_values.push_back(static_cast<std::int64_t>(value));
+  }
   send(channel::kStatus, m);
 }
 

@@ -3,6 +3,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -26,7 +27,11 @@ namespace dco::daemon {
 // handles signals, statistics, status and the watchdog.
 class Daemon final : public drivers::FrameSink {
  public:
-  Daemon(ConfigSources sources, LoadedConfig config, Logger& log);
+  // How a source URI becomes a source: drivers::open_source, or a simulated device in tests.
+  using SourceOpener = std::function<std::unique_ptr<drivers::FrameSource>(std::string_view)>;
+
+  Daemon(ConfigSources sources, LoadedConfig config, Logger& log,
+         SourceOpener open_source = drivers::open_source);
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
   ~Daemon() override;
@@ -55,6 +60,7 @@ class Daemon final : public drivers::FrameSink {
   void wake();
 
   const ConfigSources sources_;
+  const SourceOpener open_source_;
   LoadedConfig loaded_;
   Logger& log_;
   ServiceNotifier notifier_;

@@ -1,15 +1,27 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "dco/core/calibration.hpp"
 #include "dco/core/image.hpp"
 
 namespace dco::drivers {
+
+// One inertial sample in SI units, in the camera's frame of reference as the device reports it.
+struct ImuSample {
+  std::int64_t capture_ns = 0;  // CLOCK_MONOTONIC
+  std::array<float, 3> accel_mps2{};
+  std::array<float, 3> gyro_radps{};
+  float temperature_c = 0;
+};
 
 // One stereo pair as a camera delivered it. The views belong to the source and are valid during
 // the FrameSink::on_frame call only.
@@ -17,6 +29,21 @@ struct StereoFrame {
   std::uint64_t seq = 0;        // 0, 1, 2, ... per source; continues across stop/start
   std::int64_t capture_ns = 0;  // CLOCK_MONOTONIC
   ImageView<const std::uint8_t> left, right;  // raw (rectify with the source's calibration)
+  // IMU samples that arrived since the previous frame (empty for sources without an IMU).
+  std::span<const ImuSample> imu;
+};
+
+// What a source says about its device, for DCO_STATUS and the watchdog.
+struct SourceStatus {
+  enum class State { kStarting, kStreaming, kDisconnected, kError };
+  State state = State::kStarting;
+  std::string device;    // driver and model
+  std::string serial;    // module id where the device has one
+  std::string firmware;  // empty when unknown
+  int usb_speed_mbps = 0;
+  std::string error;  // the last fault, for humans
+  // Monotonic counters (frames, drops, faults by kind, reconnects...), in a fixed order.
+  std::vector<std::pair<std::string, std::uint64_t>> counters;
 };
 
 struct SourceInfo {
@@ -52,11 +79,15 @@ class FrameSource {
   // Stops and joins; no sink call happens after it returns. A stopped source can start again and
   // goes on where it stopped.
   virtual void stop() = 0;
+  // Any thread. Sources without a device (files, synthetic scenes) stream while started.
+  virtual SourceStatus status() const;
 };
 
 // Opens a source by URI:
 //   synthetic://NAME?width=W&height=H&fps=F&frames=N&color=0|1&stall_after=N
 //   replay://DIR?fps=F&loop=0|1
+//   indemind://[MODULE_ID]?width=W&height=H&fps=F&imu_hz=HZ&transfers=N&stall_ms=MS
+//   libcamera://LEFT_ID,RIGHT_ID?... or libcamera://ID?layout=sbs&... (builds with libcamera)
 // Throws dco::Error with a one-line reason for an unknown scheme, unknown or bad parameters, a
 // missing or unreadable recording and for cameras this build cannot open; never falls back to
 // another source.

@@ -24,6 +24,8 @@ class SourceUri {
   int integer(const std::string& key, int fallback, int min, int max);
   double number(const std::string& key, double fallback, double min, double max);
   bool flag(const std::string& key, bool fallback);
+  // The raw text of a parameter (a file name, a layout name); nullopt when absent.
+  std::optional<std::string> value(const std::string& key) { return take(key); }
   // Throws dco::Error for any parameter no getter asked for.
   void finish() const;
 

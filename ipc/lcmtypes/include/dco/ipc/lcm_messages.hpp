@@ -37,10 +37,11 @@ namespace wire {
 // One step of an encoding, after the 8-byte fingerprint. Counts and arrays refer to a count by
 // its number (0, 1, ...) in declaration order.
 enum class Kind : std::uint8_t {
-  kFixed,   // `bytes` bytes of scalars
-  kCount,   // int32 element count of later arrays
-  kArray,   // count[`count`] elements of `bytes` bytes each
-  kString,  // int32 length including the terminating NUL, then the bytes
+  kFixed,    // `bytes` bytes of scalars
+  kCount,    // int32 element count of later arrays
+  kArray,    // count[`count`] elements of `bytes` bytes each
+  kString,   // int32 length including the terminating NUL, then the bytes
+  kStrings,  // count[`count`] strings
 };
 
 struct Step {
@@ -60,6 +61,9 @@ constexpr Step array(std::uint32_t element_bytes, int count_number) {
 }
 constexpr Step string() {
   return {Kind::kString, 0, 0};
+}
+constexpr Step strings(int count_number) {
+  return {Kind::kStrings, 0, count_number};
 }
 
 template <class T>
@@ -83,7 +87,8 @@ struct Encoding<::dco::pipeline_stats_t> {
 template <>
 struct Encoding<::dco::device_status_t> {
   static constexpr const char* kName = "dco.device_status_t";
-  static constexpr std::array steps{fixed(8 + 1), string(), string(), string(), fixed(4), string()};
+  static constexpr std::array steps{fixed(8 + 1), string(), string(),   string(),   fixed(4),
+                                    string(),     count(),  strings(0), array(8, 0)};
 };
 template <>
 struct Encoding<::dco::log_event_t> {
@@ -111,6 +116,19 @@ inline std::string check(std::span<const Step> steps, const unsigned char* p, st
   int declared = 0;
   std::size_t pos = 0;
   const auto need = [&](std::uint64_t n) { return n <= size - pos; };
+  const auto one_string = [&]() -> std::string {
+    if (!need(4)) return "truncated";
+    const std::int64_t n = read_be(p + pos, 4);
+    pos += 4;
+    if (n < 1 || !need(static_cast<std::uint64_t>(n)))
+      return "string length " + std::to_string(n) + " out of range";
+    // A NUL inside would be cut off on re-encoding: one string, one encoding.
+    const auto* nul = std::memchr(p + pos, 0, static_cast<std::size_t>(n));
+    if (nul == nullptr) return "string not terminated";
+    if (nul != p + pos + n - 1) return "NUL inside a string";
+    pos += static_cast<std::size_t>(n);
+    return {};
+  };
   for (const Step& s : steps) {
     switch (s.kind) {
       case Kind::kFixed:
@@ -133,19 +151,13 @@ inline std::string check(std::span<const Step> steps, const unsigned char* p, st
         pos += n;
         break;
       }
-      case Kind::kString: {
-        if (!need(4)) return "truncated";
-        const std::int64_t n = read_be(p + pos, 4);
-        pos += 4;
-        if (n < 1 || !need(static_cast<std::uint64_t>(n)))
-          return "string length " + std::to_string(n) + " out of range";
-        // A NUL inside would be cut off on re-encoding: one string, one encoding.
-        const auto* nul = std::memchr(p + pos, 0, static_cast<std::size_t>(n));
-        if (nul == nullptr) return "string not terminated";
-        if (nul != p + pos + n - 1) return "NUL inside a string";
-        pos += static_cast<std::size_t>(n);
+      case Kind::kString:
+        if (std::string e = one_string(); !e.empty()) return e;
         break;
-      }
+      case Kind::kStrings:
+        for (std::int64_t i = 0; i < counts[s.count]; ++i)
+          if (std::string e = one_string(); !e.empty()) return e;
+        break;
     }
   }
   if (pos != size) return std::to_string(size - pos) + " bytes after the message";

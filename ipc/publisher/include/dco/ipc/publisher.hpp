@@ -4,6 +4,8 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "dco/core/image.hpp"
 #include "dco/ipc/ring_writer.hpp"
@@ -30,6 +32,7 @@ struct DeviceStatus {
   std::string device, serial, firmware;
   int usb_speed_mbps = 0;
   std::string error;
+  std::vector<std::pair<std::string, std::uint64_t>> counters;
 };
 
 enum class LogLevel : std::int8_t { kDebug = 0, kInfo = 1, kWarning = 2, kError = 3 };

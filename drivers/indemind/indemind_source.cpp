@@ -1,0 +1,552 @@
+#include "dco/drivers/indemind_source.hpp"
+
+#include <atomic>
+#include <condition_variable>
+#include <ctime>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "dco/core/error.hpp"
+#include "dco/indemind/clock_map.hpp"
+#include "dco/indemind/frame_assembler.hpp"
+#include "dco/indemind/frame_metadata.hpp"
+#include "dco/indemind/imu_report.hpp"
+#include "dco/indemind/stream_control.hpp"
+#include "module_calibration.hpp"
+#include "module_control.hpp"
+
+namespace dco::drivers {
+namespace {
+
+using namespace indemind;
+
+constexpr std::chrono::milliseconds kEventSlice{20};
+constexpr std::int64_t kReopenEveryNs = 250'000'000;
+constexpr std::size_t kMaxQueuedImu = 8192;
+constexpr double kStandardGravity = 9.80665;
+constexpr double kRadPerDegree = 3.14159265358979323846 / 180.0;
+
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+// Every fault the driver can see, counted where it is seen.
+struct Counters {
+  std::atomic<std::uint64_t> frames{0}, delivered{0}, delivery_drops{0};
+  std::atomic<std::uint64_t> lost_frames{0}, duplicate_frames{0}, backward_frames{0};
+  std::atomic<std::uint64_t> counter_restarts{0}, torn_frames{0};
+  std::atomic<std::uint64_t> bad_payloads{0}, short_frames{0}, oversized_frames{0};
+  std::atomic<std::uint64_t> error_frames{0}, corrupt_frames{0};
+  std::atomic<std::uint64_t> stalls{0}, transfer_errors{0}, stream_restarts{0};
+  std::atomic<std::uint64_t> imu_samples{0}, imu_bad_reports{0}, imu_duplicates{0};
+  std::atomic<std::uint64_t> imu_out_of_order{0}, imu_overflow{0};
+  std::atomic<std::uint64_t> disconnects{0}, reconnects{0}, control_busy{0};
+};
+
+class IndemindSource final : public FrameSource {
+ public:
+  IndemindSource(std::unique_ptr<UsbTransport> transport, IndemindOptions options, std::string uri)
+      : transport_(std::move(transport)), options_(std::move(options)) {
+    if (!options_.clock) options_.clock = monotonic_ns;
+    info_.uri = std::move(uri);
+    open_first();
+    info_.width = mode_.width;
+    info_.height = mode_.height;
+    info_.channels = 1;
+    info_.fps = mode_.fps;
+    info_.description = fmt::format(
+        "INDEMIND {} {}x{} @ {} fps{}", module_.info.id, mode_.width, mode_.height, mode_.fps,
+        options_.imu_hz > 0 ? fmt::format(" + IMU {} Hz", options_.imu_hz) : std::string());
+    // Five frame buffers rotate between assembler, event thread, slot and delivery: no
+    // allocation per frame.
+    spare_.resize(mode_.frame_bytes());
+    slot_.buffer.resize(mode_.frame_bytes());
+    deliver_.buffer.resize(mode_.frame_bytes());
+    imu_pending_.reserve(kMaxQueuedImu);
+    slot_.imu.reserve(kMaxQueuedImu);
+    deliver_.imu.reserve(kMaxQueuedImu);
+    transport_->watch_hotplug(kVendorId, kProductId, [this] { hotplug_note_ = true; });
+  }
+
+  ~IndemindSource() override {
+    stop();
+    device_.reset();
+  }
+
+  const SourceInfo& info() const override { return info_; }
+  const StereoCalibration& calibration() const override { return calibration_; }
+
+  void start(FrameSink& sink) override {
+    if (running_) throw Error("indemind: source already started");
+    sink_ = &sink;
+    running_ = true;
+    delivery_ = std::thread([this] { delivery_loop(); });
+    events_ = std::thread([this] { event_loop(); });
+  }
+
+  void stop() override {
+    if (!running_.exchange(false)) return;
+    {
+      // Under the lock, so the delivery thread cannot miss the wake-up between test and wait.
+      std::lock_guard lock(slot_mutex_);
+    }
+    slot_cv_.notify_all();
+    events_.join();
+    delivery_.join();
+  }
+
+  SourceStatus status() const override {
+    SourceStatus s;
+    s.state = state_.load();
+    s.device = fmt::format("INDEMIND {}", describe(module_.info));
+    s.serial = module_.info.id;
+    s.firmware = module_.info.firmware_version;
+    s.usb_speed_mbps = usb_speed_.load();
+    {
+      std::lock_guard lock(error_mutex_);
+      s.error = error_;
+    }
+    const Counters& c = counters_;
+    s.counters = {{"frames", c.frames},
+                  {"delivered", c.delivered},
+                  {"delivery_drops", c.delivery_drops},
+                  {"lost_frames", c.lost_frames},
+                  {"duplicate_frames", c.duplicate_frames},
+                  {"backward_frames", c.backward_frames},
+                  {"counter_restarts", c.counter_restarts},
+                  {"torn_frames", c.torn_frames},
+                  {"bad_payloads", c.bad_payloads},
+                  {"short_frames", c.short_frames},
+                  {"oversized_frames", c.oversized_frames},
+                  {"error_frames", c.error_frames},
+                  {"corrupt_frames", c.corrupt_frames},
+                  {"stalls", c.stalls},
+                  {"transfer_errors", c.transfer_errors},
+                  {"stream_restarts", c.stream_restarts},
+                  {"imu_samples", c.imu_samples},
+                  {"imu_bad_reports", c.imu_bad_reports},
+                  {"imu_duplicates", c.imu_duplicates},
+                  {"imu_out_of_order", c.imu_out_of_order},
+                  {"imu_overflow", c.imu_overflow},
+                  {"disconnects", c.disconnects},
+                  {"reconnects", c.reconnects},
+                  {"control_busy", c.control_busy}};
+    return s;
+  }
+
+ private:
+  // Opening ---------------------------------------------------------------------------------
+
+  void open_first() {
+    std::vector<UsbDeviceInfo> found = transport_->list(kVendorId, kProductId);
+    if (found.empty())
+      throw Error(
+          "indemind: no INDEMIND module (USB 05a9:f581) found; check the cable and that this "
+          "user may access it (udev rule, group dcod)");
+    std::vector<std::string> ids;
+    for (const UsbDeviceInfo& d : found) {
+      auto device = transport_->open(d);
+      ModuleCalibration m = read_module(*device);
+      if (!options_.module_id.empty() && m.info.id != options_.module_id) {
+        ids.push_back(m.info.id);
+        continue;
+      }
+      choose_mode(d.speed_mbps);
+      calibration_ = to_stereo_calibration(m, mode_.width, mode_.height);
+      module_ = std::move(m);
+      usb_speed_ = d.speed_mbps;
+      device_ = std::move(device);
+      return;
+    }
+    throw Error(fmt::format("indemind: no module with id '{}' (found: {})", options_.module_id,
+                            fmt::join(ids, ", ")));
+  }
+
+  ModuleCalibration read_module(UsbDevice& device) {
+    for (int i = 0; i < 3; ++i) device.claim_interface(i);
+    ModuleControl control(device);
+    ModuleCalibration m = control.read_calibration();
+    counters_.control_busy += control.busy_retries();
+    return m;
+  }
+
+  void choose_mode(int speed) {
+    if (options_.width == 0 && options_.height == 0 && options_.fps == 0) {
+      mode_ = default_stream_mode(speed);
+      return;
+    }
+    const StreamMode d = default_stream_mode(speed);
+    std::string why;
+    auto m = find_stream_mode(options_.width ? options_.width : d.width,
+                              options_.height ? options_.height : d.height,
+                              options_.fps ? options_.fps : d.fps, speed, why);
+    if (!m) throw Error("indemind: " + why);
+    mode_ = *m;
+  }
+
+  // The module came back (or another one arrived): take it only if it is the same module.
+  void try_reopen() {
+    for (const UsbDeviceInfo& d : transport_->list(kVendorId, kProductId)) {
+      std::unique_ptr<UsbDevice> device;
+      ModuleCalibration m;
+      try {
+        device = transport_->open(d);
+        m = read_module(*device);
+      } catch (const std::exception& e) {
+        set_error(std::string("reopening: ") + e.what());
+        continue;
+      }
+      if (m.info.id != module_.info.id ||
+          encode_calibration_blob(m) != encode_calibration_blob(module_)) {
+        set_error(fmt::format("a different module ('{}') was plugged in; waiting for '{}'",
+                              m.info.id, module_.info.id));
+        continue;
+      }
+      std::string why;
+      if (!find_stream_mode(mode_.width, mode_.height, mode_.fps, d.speed_mbps, why)) {
+        set_error("replugged: " + why);
+        continue;
+      }
+      device_ = std::move(device);
+      usb_speed_ = d.speed_mbps;
+      // A replugged module counts frames from anywhere and runs a new time line.
+      extender_.resync();
+      clock_.reset();
+      last_imu_device_ns_ = -1;
+      have_last_report_ = false;
+      ++counters_.reconnects;
+      state_ = SourceStatus::State::kStarting;
+      return;
+    }
+  }
+
+  // Streaming -------------------------------------------------------------------------------
+
+  void start_streaming() {
+    ModuleControl control(*device_);
+    const StreamControl committed = control.negotiate(mode_);
+    if (options_.imu_hz > 0) control.configure_imu(options_.imu_hz, ranges_);
+    counters_.control_busy += control.busy_retries();
+    assembler_.emplace(mode_.frame_bytes());
+    seen_ = {};
+    device_->start_in_stream(
+        kVideoEndpoint, EndpointType::kBulk, committed.max_payload_transfer_size,
+        options_.transfers,
+        [this](TransferStatus s, std::span<const std::uint8_t> d) { on_video(s, d); });
+    if (options_.imu_hz > 0)
+      device_->start_in_stream(
+          kImuEndpoint, EndpointType::kInterrupt, 64, 4,
+          [this](TransferStatus s, std::span<const std::uint8_t> d) { on_imu(s, d); });
+    streaming_ = true;
+    restart_ = false;
+    last_frame_ns_ = options_.clock();
+  }
+
+  void stop_streaming() {
+    if (device_) device_->stop_streams();
+    streaming_ = false;
+    if (assembler_) assembler_->reset();
+  }
+
+  void drop_device() {
+    stop_streaming();
+    device_.reset();
+    gone_ = false;
+    state_ = SourceStatus::State::kDisconnected;
+    ++counters_.disconnects;
+    set_error("module unplugged; waiting for it to come back");
+  }
+
+  void event_loop() {
+    std::int64_t next_reopen = 0;
+    while (running_) {
+      try {
+        step(next_reopen);
+      } catch (const UsbError& e) {
+        if (e.no_device()) {
+          if (device_) drop_device();
+        } else {
+          set_error(e.what());
+          if (device_) stop_streaming();
+          state_ = SourceStatus::State::kError;
+          next_reopen = options_.clock() + kReopenEveryNs;
+        }
+      } catch (const std::exception& e) {
+        set_error(e.what());
+        if (device_) stop_streaming();
+        state_ = SourceStatus::State::kError;
+        next_reopen = options_.clock() + kReopenEveryNs;
+      }
+    }
+    try {
+      stop_streaming();
+    } catch (const std::exception& e) {
+      set_error(e.what());
+    }
+  }
+
+  void step(std::int64_t& next_retry) {
+    const std::int64_t now = options_.clock();
+    if (!device_) {
+      if (hotplug_note_.exchange(false) || now >= next_retry) {
+        next_retry = now + kReopenEveryNs;
+        try_reopen();
+      }
+    } else if (!streaming_ && now >= next_retry) {
+      start_streaming();
+    }
+    transport_->handle_events(kEventSlice);
+    if (!device_) return;
+    hotplug_note_ = false;  // the module in hand is fine; its departure shows as kNoDevice
+    if (gone_) {
+      drop_device();
+      return;
+    }
+    if (!streaming_) return;
+    const bool stalled =
+        options_.clock() - last_frame_ns_ > std::int64_t{options_.stall_ms} * 1'000'000;
+    if (restart_ || stalled) {
+      if (stalled)
+        set_error(fmt::format("no frame for {} ms; restarting the stream", options_.stall_ms));
+      ++counters_.stream_restarts;
+      stop_streaming();
+      device_->clear_halt(kVideoEndpoint);
+      start_streaming();
+    }
+  }
+
+  void on_video(TransferStatus status, std::span<const std::uint8_t> data) {
+    switch (status) {
+      case TransferStatus::kCompleted:
+        if (assembler_->feed(data) && assembler_->take_frame(spare_)) accept_frame();
+        sync_assembler_counters();
+        break;
+      case TransferStatus::kStall:
+        ++counters_.stalls;
+        restart_ = true;
+        break;
+      case TransferStatus::kNoDevice:
+        gone_ = true;
+        break;
+      case TransferStatus::kCancelled:
+        break;
+      case TransferStatus::kTimedOut:
+      case TransferStatus::kOverflow:
+      case TransferStatus::kError:
+        ++counters_.transfer_errors;
+        // The frame in progress lost bytes somewhere.
+        assembler_->reset();
+        break;
+    }
+  }
+
+  void sync_assembler_counters() {
+    const AssemblerCounters& a = assembler_->counters();
+    // The assembler is rebuilt per stream; add what it counted since the last look.
+    auto sync = [](std::atomic<std::uint64_t>& total, std::uint64_t now, std::uint64_t& seen) {
+      if (now < seen) seen = 0;
+      total += now - seen;
+      seen = now;
+    };
+    sync(counters_.bad_payloads, a.bad_payloads, seen_.bad_payloads);
+    sync(counters_.short_frames, a.short_frames, seen_.short_frames);
+    sync(counters_.oversized_frames, a.oversized_frames, seen_.oversized_frames);
+    sync(counters_.error_frames, a.error_frames, seen_.error_frames);
+    sync(counters_.corrupt_frames, a.corrupt_frames, seen_.corrupt_frames);
+  }
+
+  void accept_frame() {
+    const std::size_t row = std::size_t(2) * mode_.width;
+    std::span<std::uint8_t> last(spare_.data() + (mode_.height - 1) * row, row);
+    const FrameMetadata meta = parse_frame_metadata(last);
+    if (meta.torn) {
+      ++counters_.torn_frames;
+      return;
+    }
+    const auto step = extender_.next(meta.counter);
+    switch (step.step) {
+      case CounterExtender::Step::kDuplicate:
+        ++counters_.duplicate_frames;
+        return;
+      case CounterExtender::Step::kBackward:
+        ++counters_.backward_frames;
+        return;
+      case CounterExtender::Step::kGap:
+        counters_.lost_frames += step.skipped;
+        break;
+      case CounterExtender::Step::kRestart:
+        ++counters_.counter_restarts;
+        break;
+      case CounterExtender::Step::kFirst:
+      case CounterExtender::Step::kNext:
+        break;
+    }
+    mask_frame_metadata(last, std::span<const std::uint8_t>(last.data() - row, row));
+    const std::int64_t now = options_.clock();
+    const std::int64_t device_ns = frame_device_ns(step.extended);
+    clock_.add(device_ns, now);
+    last_frame_ns_ = now;
+    ++counters_.frames;
+    state_ = SourceStatus::State::kStreaming;
+    {
+      std::lock_guard lock(slot_mutex_);
+      if (slot_.full) ++counters_.delivery_drops;
+      std::swap(slot_.buffer, spare_);
+      slot_.capture_ns = clock_.to_host(device_ns);
+      // Samples of a frame the consumer never took still belong to the time line: keep them.
+      for (const ImuSample& s : imu_pending_) {
+        if (slot_.imu.size() >= kMaxQueuedImu) {
+          ++counters_.imu_overflow;
+          break;
+        }
+        slot_.imu.push_back(s);
+      }
+      imu_pending_.clear();
+      slot_.full = true;
+    }
+    slot_cv_.notify_one();
+  }
+
+  std::int64_t frame_device_ns(std::uint64_t extended) const {
+    return static_cast<std::int64_t>(extended) * 1'000'000'000 / mode_.fps;
+  }
+
+  void on_imu(TransferStatus status, std::span<const std::uint8_t> data) {
+    if (status == TransferStatus::kNoDevice) {
+      gone_ = true;
+      return;
+    }
+    if (status == TransferStatus::kCancelled) return;
+    if (status != TransferStatus::kCompleted) {
+      ++counters_.transfer_errors;
+      return;
+    }
+    const auto report = parse_imu_report(data);
+    if (!report) {
+      ++counters_.imu_bad_reports;
+      return;
+    }
+    if (have_last_report_ && report->frame_counter == last_report_.frame_counter &&
+        report->ticks == last_report_.ticks) {
+      ++counters_.imu_duplicates;
+      return;
+    }
+    last_report_ = *report;
+    have_last_report_ = true;
+    // Samples before the first frame have no place on the frame counter's time line yet.
+    if (!extender_.started()) return;
+    const std::int64_t device_ns =
+        frame_device_ns(extender_.place(report->frame_counter)) +
+        static_cast<std::int64_t>(report->ticks * (1e9 / kImuTicksPerSecond));
+    if (device_ns <= last_imu_device_ns_) {
+      ++counters_.imu_out_of_order;
+      return;
+    }
+    last_imu_device_ns_ = device_ns;
+    clock_.add(device_ns, options_.clock());
+    const indemind::ImuSample scaled = to_sample(*report, ranges_);
+    drivers::ImuSample s;
+    s.capture_ns = clock_.to_host(device_ns);
+    for (int i = 0; i < 3; ++i) {
+      s.accel_mps2[i] = static_cast<float>(scaled.accel_g[i] * kStandardGravity);
+      s.gyro_radps[i] = static_cast<float>(scaled.gyro_dps[i] * kRadPerDegree);
+    }
+    s.temperature_c = scaled.temperature_c;
+    ++counters_.imu_samples;
+    if (imu_pending_.size() >= kMaxQueuedImu) {
+      ++counters_.imu_overflow;
+      return;
+    }
+    imu_pending_.push_back(s);
+  }
+
+  // Delivery --------------------------------------------------------------------------------
+
+  void delivery_loop() {
+    while (true) {
+      {
+        std::unique_lock lock(slot_mutex_);
+        slot_cv_.wait(lock, [this] { return slot_.full || !running_; });
+        if (!running_) return;
+        std::swap(slot_.buffer, deliver_.buffer);
+        std::swap(slot_.imu, deliver_.imu);
+        slot_.imu.clear();
+        deliver_.capture_ns = slot_.capture_ns;
+        slot_.full = false;
+      }
+      const int w = mode_.width, h = mode_.height;
+      const std::uint8_t* row0 = deliver_.buffer.data();
+      const bool swap = swaps_halves(module_.module_type);
+      StereoFrame f;
+      f.seq = seq_++;
+      f.capture_ns = deliver_.capture_ns;
+      f.left = ImageView<const std::uint8_t>(row0 + (swap ? w : 0), w, h, 1, 2 * w);
+      f.right = ImageView<const std::uint8_t>(row0 + (swap ? 0 : w), w, h, 1, 2 * w);
+      f.imu = deliver_.imu;
+      sink_->on_frame(f);
+      ++counters_.delivered;
+    }
+  }
+
+  void set_error(std::string message) {
+    std::lock_guard lock(error_mutex_);
+    error_ = std::move(message);
+  }
+
+  struct Slot {
+    std::vector<std::uint8_t> buffer;
+    std::vector<drivers::ImuSample> imu;
+    std::int64_t capture_ns = 0;
+    bool full = false;
+  };
+
+  std::unique_ptr<UsbTransport> transport_;
+  IndemindOptions options_;
+  SourceInfo info_;
+  StereoCalibration calibration_;
+  ModuleCalibration module_;
+  StreamMode mode_;
+  ImuRanges ranges_;
+  std::unique_ptr<UsbDevice> device_;
+  std::atomic<int> usb_speed_{0};
+
+  // Event thread only.
+  std::optional<FrameAssembler> assembler_;
+  AssemblerCounters seen_;
+  CounterExtender extender_;
+  ClockMap clock_;
+  std::vector<std::uint8_t> spare_;
+  std::vector<drivers::ImuSample> imu_pending_;
+  ImuReport last_report_;
+  bool have_last_report_ = false;
+  std::int64_t last_imu_device_ns_ = -1, last_frame_ns_ = 0;
+  bool streaming_ = false, restart_ = false, gone_ = false;
+
+  std::atomic<bool> hotplug_note_{false}, running_{false};
+  std::atomic<SourceStatus::State> state_{SourceStatus::State::kStarting};
+  mutable std::mutex error_mutex_;
+  std::string error_;
+  Counters counters_;
+
+  std::mutex slot_mutex_;
+  std::condition_variable slot_cv_;
+  Slot slot_, deliver_;
+  std::uint64_t seq_ = 0;
+  FrameSink* sink_ = nullptr;
+  std::thread events_, delivery_;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSource> open_indemind(std::unique_ptr<UsbTransport> transport,
+                                           IndemindOptions options, std::string uri) {
+  return std::make_unique<IndemindSource>(std::move(transport), std::move(options), std::move(uri));
+}
+
+}  // namespace dco::drivers

@@ -1,0 +1,44 @@
+#include <fmt/format.h>
+
+#include "dco/core/error.hpp"
+#include "dco/drivers/indemind_source.hpp"
+#include "dco/indemind/stream_control.hpp"
+#include "src/sources.hpp"
+
+namespace dco::drivers {
+
+std::unique_ptr<FrameSource> open_indemind(SourceUri& uri) {
+  IndemindOptions o;
+  o.module_id = uri.path();
+  o.width = uri.integer("width", 0, 0, 1280);
+  o.height = uri.integer("height", 0, 0, 800);
+  o.fps = uri.integer("fps", 0, 0, 200);
+  o.imu_hz = uri.integer("imu_hz", 1000, 0, 1000);
+  if (o.imu_hz > 0 && 1000 % o.imu_hz != 0)
+    throw Error(
+        fmt::format("source '{}': imu_hz must divide 1000 (100, 200, 250, 500, 1000)", uri.text()));
+  o.transfers = uri.integer("transfers", 8, 2, 64);
+  o.stall_ms = uri.integer("stall_ms", 1000, 100, 60000);
+  uri.finish();
+  if (o.width || o.height || o.fps) {
+    // Modes the module never offers are refused before touching USB; the link speed is checked
+    // once the module is found.
+    std::string why;
+    if (!indemind::find_stream_mode(o.width ? o.width : 640, o.height ? o.height : 400,
+                                    o.fps ? o.fps : 50, 0, why))
+      throw Error(fmt::format("source '{}': {}", uri.text(), why));
+  }
+  std::unique_ptr<UsbTransport> transport;
+  try {
+    transport = make_libusb_transport();
+  } catch (const UsbError& e) {
+    throw Error(fmt::format("source '{}': USB unavailable: {}", uri.text(), e.what()));
+  }
+  try {
+    return open_indemind(std::move(transport), std::move(o), uri.text());
+  } catch (const Error& e) {
+    throw Error(fmt::format("source '{}': {}", uri.text(), e.what()));
+  }
+}
+
+}  // namespace dco::drivers

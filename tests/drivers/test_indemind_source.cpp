@@ -1,0 +1,298 @@
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <random>
+#include <thread>
+
+#include "dco/core/error.hpp"
+#include "dco/drivers/indemind_source.hpp"
+#include "indemind_sim.hpp"
+
+namespace dco::drivers {
+namespace {
+
+using testing::SimulatedIndemind;
+using Fault = SimulatedIndemind::Fault;
+
+class Collector final : public FrameSink {
+ public:
+  void on_frame(const StereoFrame& f) override {
+    std::lock_guard lock(mutex_);
+    ++frames;
+    if (f.capture_ns <= last_capture_ns) ++non_increasing;
+    last_capture_ns = f.capture_ns;
+    captures.push_back(f.capture_ns);
+    width = f.left.width;
+    height = f.left.height;
+    left_differs_from_right =
+        std::memcmp(f.left.row(f.left.height / 2), f.right.row(f.right.height / 2),
+                    static_cast<std::size_t>(f.left.width)) != 0;
+    // The metadata row was masked: the last row starts like the one above it.
+    metadata_masked =
+        std::memcmp(f.left.row(f.left.height - 1), f.left.row(f.left.height - 2), 76) == 0;
+    imu += f.imu.size();
+    for (const ImuSample& s : f.imu) {
+      last_imu = s;
+      if (s.capture_ns <= last_imu_ns) ++imu_non_increasing;
+      last_imu_ns = s.capture_ns;
+    }
+  }
+  void on_end() override {}
+  void on_error(const std::string& m) override {
+    std::lock_guard lock(mutex_);
+    errors.push_back(m);
+  }
+  long count() {
+    std::lock_guard lock(mutex_);
+    return frames;
+  }
+
+  std::mutex mutex_;
+  long frames = 0, non_increasing = 0, imu_non_increasing = 0;
+  std::int64_t last_capture_ns = 0, last_imu_ns = 0;
+  std::vector<std::int64_t> captures;
+  int width = 0, height = 0;
+  bool left_differs_from_right = false, metadata_masked = false;
+  std::size_t imu = 0;
+  ImuSample last_imu;
+  std::vector<std::string> errors;
+};
+
+std::map<std::string, std::uint64_t> counters_of(const FrameSource& s) {
+  std::map<std::string, std::uint64_t> m;
+  for (const auto& [k, v] : s.status().counters) m[k] = v;
+  return m;
+}
+
+struct Rig {
+  explicit Rig(SimulatedIndemind::Options o = {}, IndemindOptions io = {}) {
+    auto owned = std::make_unique<SimulatedIndemind>(std::move(o));
+    sim = owned.get();
+    io.clock = [s = sim] { return s->now_ns(); };
+    source = open_indemind(std::move(owned), std::move(io), "indemind://");
+  }
+  bool wait_frames(long n, double seconds = 20) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (sink.count() < n) {
+      if (std::chrono::steady_clock::now() > until) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return true;
+  }
+  SimulatedIndemind* sim = nullptr;
+  std::unique_ptr<FrameSource> source;
+  Collector sink;
+};
+
+TEST(IndemindSource, NoModuleIsOneClearError) {
+  auto sim = std::make_unique<SimulatedIndemind>();
+  sim->set_present(false);
+  try {
+    open_indemind(std::move(sim), {}, "indemind://");
+    FAIL() << "opened a module that is not there";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no INDEMIND module (USB 05a9:f581) found"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(IndemindSource, RefusesModesTheLinkCannotCarryAndUnknownModules) {
+  SimulatedIndemind::Options usb2;
+  usb2.usb_speed_mbps = 480;
+  IndemindOptions fast;
+  fast.fps = 50;
+  try {
+    Rig rig(usb2, fast);
+    FAIL() << "USB 2 accepted 640x400@50";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("needs USB 3"), std::string::npos) << e.what();
+  }
+  IndemindOptions other;
+  other.module_id = "M-9";
+  try {
+    Rig rig({}, other);
+    FAIL() << "opened the wrong module";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no module with id 'M-9' (found: SIM-0042)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+struct ModeCase {
+  int width, height, fps, speed;
+};
+
+TEST(IndemindSource, StreamsEveryModeWithCalibrationAndImu) {
+  const ModeCase cases[] = {{1280, 800, 100, 5000}, {1280, 800, 50, 5000}, {1280, 800, 25, 5000},
+                            {640, 400, 200, 5000},  {640, 400, 100, 5000}, {640, 400, 50, 5000},
+                            {640, 400, 25, 5000},   {640, 400, 25, 480}};
+  for (const ModeCase& c : cases) {
+    SCOPED_TRACE(std::to_string(c.width) + "x" + std::to_string(c.height) + "@" +
+                 std::to_string(c.fps) + " on " + std::to_string(c.speed) + " Mb/s");
+    SimulatedIndemind::Options o;
+    o.usb_speed_mbps = c.speed;
+    IndemindOptions io;
+    io.width = c.width;
+    io.height = c.height;
+    io.fps = c.fps;
+    Rig rig(o, io);
+    EXPECT_EQ(rig.source->info().width, c.width);
+    EXPECT_EQ(rig.source->info().fps, c.fps);
+    EXPECT_EQ(rig.source->calibration().left.width, c.width);
+    rig.source->start(rig.sink);
+    ASSERT_TRUE(rig.wait_frames(12));
+    rig.source->stop();
+    EXPECT_EQ(rig.sim->transfers_in_flight(), 0);
+    const auto rec = rig.sim->record();
+    EXPECT_EQ(rec.transfers_submitted, rec.transfers_completed);
+    EXPECT_EQ(rec.flash_writes, 0u);
+    EXPECT_EQ(rec.imu_registers.at(0x19), 0);  // 1000 Hz
+    EXPECT_EQ(rec.imu_registers.at(0x1B), 3 << 3);
+    const auto n = counters_of(*rig.source);
+    EXPECT_EQ(n.at("frames"), rec.frames_intact);
+    EXPECT_EQ(n.at("lost_frames"), 0u);
+    EXPECT_EQ(rig.sink.width, c.width);
+    EXPECT_EQ(rig.sink.height, c.height);
+    EXPECT_TRUE(rig.sink.left_differs_from_right);
+    EXPECT_TRUE(rig.sink.metadata_masked);
+    EXPECT_EQ(rig.sink.non_increasing, 0);
+    // About 1000 / fps samples per frame, in SI units.
+    EXPECT_GT(rig.sink.imu, static_cast<std::size_t>(5 * 1000 / c.fps));
+    EXPECT_EQ(rig.sink.imu_non_increasing, 0);
+    EXPECT_NEAR(rig.sink.last_imu.accel_mps2[2], 9.80665, 1e-3);
+    EXPECT_NEAR(rig.sink.last_imu.accel_mps2[1], -41 / 2048.0 * 9.80665, 1e-4);
+    EXPECT_NEAR(rig.sink.last_imu.gyro_radps[0], 8 / 16.4 * 3.14159265 / 180, 1e-6);
+    EXPECT_EQ(rig.source->status().state, SourceStatus::State::kStreaming);
+  }
+}
+
+TEST(IndemindSource, CaptureTimesFollowTheModuleClock) {
+  SimulatedIndemind::Options o;
+  o.clock_skew_ppm = 150;
+  Rig rig(o);
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(400));  // 8 s of module time at 50 fps
+  rig.source->stop();
+  std::lock_guard lock(rig.sink.mutex_);
+  const auto& t = rig.sink.captures;
+  // Once the map has a few seconds, every capture time sits on a real frame start: the IMU's
+  // small delay (0.1 ms here) is all that remains.
+  int checked = 0;
+  for (std::size_t i = t.size() / 2; i < t.size(); ++i) {
+    const std::int64_t start = rig.sim->nearest_frame_start_ns(t[i]);
+    ASSERT_GE(start, 0);
+    EXPECT_NEAR(static_cast<double>(t[i] - start), 0.0, 300'000.0) << i;
+    ++checked;
+  }
+  EXPECT_GT(checked, 100);
+}
+
+TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {
+  Rig rig;
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(10));
+  rig.sim->set_present(false);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (rig.source->status().state != SourceStatus::State::kDisconnected &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  EXPECT_EQ(rig.source->status().state, SourceStatus::State::kDisconnected);
+  EXPECT_NE(rig.source->status().error.find("unplugged"), std::string::npos);
+  const long before = rig.sink.count();
+  rig.sim->set_present(true);
+  const std::int64_t replugged = rig.sim->now_ns();
+  ASSERT_TRUE(rig.wait_frames(before + 1));
+  const std::int64_t recovered = rig.sim->now_ns();
+  EXPECT_LT(recovered - replugged, 2'000'000'000);
+  rig.source->stop();
+  const auto n = counters_of(*rig.source);
+  EXPECT_EQ(n.at("disconnects"), 1u);
+  EXPECT_EQ(n.at("reconnects"), 1u);
+  EXPECT_TRUE(rig.sink.errors.empty());
+  const auto rec = rig.sim->record();
+  EXPECT_EQ(rec.transfers_submitted, rec.transfers_completed);
+}
+
+// A thousand faults of every kind, one at a time with clean frames between them: no crash, no
+// transfer left behind, recovery after each replug within 2 s, every fault in its counter.
+TEST(IndemindSource, CountsAThousandInjectedFaultsAndRecovers) {
+  SimulatedIndemind::Options o;
+  o.seed = 11;
+  IndemindOptions io;
+  io.width = 640;
+  io.height = 400;
+  io.fps = 200;
+  io.stall_ms = 300;
+  Rig rig(o, io);
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(5));
+  std::mt19937 rng(5);
+  for (int i = 0; i < 1000; ++i) {
+    const auto fault = static_cast<Fault>(rng() % SimulatedIndemind::kFaultKinds);
+    int param = 0;
+    if (fault == Fault::kSkipCounter) param = 1 + static_cast<int>(rng() % 5);
+    if (fault == Fault::kSilence) param = 500;  // longer than stall_ms: one stream restart
+    if (fault == Fault::kControlBusy) param = 3;
+    if (fault == Fault::kUnplug) param = 200;
+    const auto before = rig.sim->record();
+    const long delivered = rig.sink.count();
+    rig.sim->inject(fault, param);
+    // Wait until the fault has happened and a few sound frames were accepted after it.
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (true) {
+      const auto now = rig.sim->record();
+      const bool applied = now.frames_sent >= before.frames_sent + 4 &&
+                           now.frames_intact >= before.frames_intact + 3;
+      if (applied && rig.sink.count() > delivered) break;
+      ASSERT_LT(std::chrono::steady_clock::now(), until)
+          << "stuck after fault " << i << " (" << SimulatedIndemind::name(fault) << ")";
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  }
+  rig.source->stop();
+  const auto rec = rig.sim->record();
+  const auto n = counters_of(*rig.source);
+  auto injected = [&](Fault f) { return rec.injected[static_cast<int>(f)]; };
+  std::uint64_t total = 0;
+  for (auto v : rec.injected) total += v;
+  EXPECT_EQ(total, 1000u);
+  EXPECT_EQ(rig.sim->transfers_in_flight(), 0);
+  EXPECT_EQ(rec.transfers_submitted, rec.transfers_completed);
+  EXPECT_EQ(rec.flash_writes, 0u);
+  EXPECT_EQ(n.at("short_frames"), injected(Fault::kShortTransfer) + injected(Fault::kLostPayload));
+  EXPECT_EQ(n.at("oversized_frames"), injected(Fault::kExtraPayload));
+  EXPECT_EQ(n.at("error_frames"), injected(Fault::kErrorBit));
+  EXPECT_EQ(n.at("corrupt_frames"), injected(Fault::kBadHeader));
+  EXPECT_EQ(n.at("bad_payloads"), injected(Fault::kBadHeader));
+  EXPECT_EQ(n.at("torn_frames"), injected(Fault::kTornMetadata));
+  EXPECT_EQ(n.at("duplicate_frames"), injected(Fault::kDuplicateCounter));
+  EXPECT_EQ(n.at("stalls"), injected(Fault::kStall));
+  EXPECT_EQ(n.at("stream_restarts"), injected(Fault::kStall) + injected(Fault::kSilence));
+  EXPECT_EQ(n.at("imu_bad_reports"), injected(Fault::kImuShort));
+  EXPECT_EQ(n.at("imu_duplicates"), injected(Fault::kImuDuplicate));
+  EXPECT_EQ(n.at("control_busy"), rec.busy_answers);
+  EXPECT_EQ(n.at("disconnects"), injected(Fault::kUnplug));
+  EXPECT_EQ(n.at("reconnects"), injected(Fault::kUnplug));
+  // From each replug to the first sound frame the driver took, in module time.
+  EXPECT_EQ(rec.recoveries, injected(Fault::kUnplug));
+  EXPECT_LT(rec.worst_recovery_ns, 2'000'000'000);
+  EXPECT_EQ(n.at("frames"), rec.frames_intact);
+  EXPECT_EQ(n.at("lost_frames"), rec.expected_lost);
+  EXPECT_EQ(n.at("backward_frames"), 0u);
+  EXPECT_EQ(n.at("imu_out_of_order"), 0u);
+  // Every accepted frame was delivered or replaced by a newer one (at most one left at stop).
+  EXPECT_LE(n.at("delivered") + n.at("delivery_drops"), n.at("frames"));
+  EXPECT_GE(n.at("delivered") + n.at("delivery_drops") + 1, n.at("frames"));
+  EXPECT_EQ(rig.sink.non_increasing, 0);
+  EXPECT_TRUE(rig.sink.errors.empty());
+  for (int k = 0; k < SimulatedIndemind::kFaultKinds; ++k)
+    EXPECT_GT(rec.injected[k], 30u) << SimulatedIndemind::name(static_cast<Fault>(k));
+}
+
+}  // namespace
+}  // namespace dco::drivers
