@@ -65,6 +65,7 @@ class IndemindSource final : public FrameSource {
         options_.imu_hz > 0 ? fmt::format(" + IMU {} Hz", options_.imu_hz) : std::string());
     // Five frame buffers rotate between assembler, event thread, slot and delivery: no
     // allocation per frame.
+    assembler_.emplace(mode_.frame_bytes());
     spare_.resize(mode_.frame_bytes());
     slot_.buffer.resize(mode_.frame_bytes());
     deliver_.buffer.resize(mode_.frame_bytes());
@@ -202,8 +203,7 @@ class IndemindSource final : public FrameSource {
         set_error(std::string("reopening: ") + e.what());
         continue;
       }
-      if (m.info.id != module_.info.id ||
-          encode_calibration_blob(m) != encode_calibration_blob(module_)) {
+      if (!(m == module_)) {
         set_error(fmt::format("a different module ('{}') was plugged in; waiting for '{}'",
                               m.info.id, module_.info.id));
         continue;
@@ -233,8 +233,7 @@ class IndemindSource final : public FrameSource {
     const StreamControl committed = control.negotiate(mode_);
     if (options_.imu_hz > 0) control.configure_imu(options_.imu_hz, ranges_);
     counters_.control_busy += control.busy_retries();
-    assembler_.emplace(mode_.frame_bytes());
-    seen_ = {};
+    assembler_->reset();
     device_->start_in_stream(
         kVideoEndpoint, EndpointType::kBulk, committed.max_payload_transfer_size,
         options_.transfers,
@@ -251,7 +250,7 @@ class IndemindSource final : public FrameSource {
   void stop_streaming() {
     if (device_) device_->stop_streams();
     streaming_ = false;
-    if (assembler_) assembler_->reset();
+    assembler_->reset();
   }
 
   void drop_device() {
@@ -347,18 +346,14 @@ class IndemindSource final : public FrameSource {
   }
 
   void sync_assembler_counters() {
+    // One assembler lives as long as the source, so its counts are totals; the atomics make them
+    // readable from status().
     const AssemblerCounters& a = assembler_->counters();
-    // The assembler is rebuilt per stream; add what it counted since the last look.
-    auto sync = [](std::atomic<std::uint64_t>& total, std::uint64_t now, std::uint64_t& seen) {
-      if (now < seen) seen = 0;
-      total += now - seen;
-      seen = now;
-    };
-    sync(counters_.bad_payloads, a.bad_payloads, seen_.bad_payloads);
-    sync(counters_.short_frames, a.short_frames, seen_.short_frames);
-    sync(counters_.oversized_frames, a.oversized_frames, seen_.oversized_frames);
-    sync(counters_.error_frames, a.error_frames, seen_.error_frames);
-    sync(counters_.corrupt_frames, a.corrupt_frames, seen_.corrupt_frames);
+    counters_.bad_payloads = a.bad_payloads;
+    counters_.short_frames = a.short_frames;
+    counters_.oversized_frames = a.oversized_frames;
+    counters_.error_frames = a.error_frames;
+    counters_.corrupt_frames = a.corrupt_frames;
   }
 
   void accept_frame() {
@@ -517,8 +512,7 @@ class IndemindSource final : public FrameSource {
   std::atomic<int> usb_speed_{0};
 
   // Event thread only.
-  std::optional<FrameAssembler> assembler_;
-  AssemblerCounters seen_;
+  std::optional<FrameAssembler> assembler_;  // sized once the mode is known
   CounterExtender extender_;
   ClockMap clock_;
   std::vector<std::uint8_t> spare_;
