@@ -98,6 +98,7 @@ class IndemindSource final : public FrameSource {
       std::lock_guard lock(slot_mutex_);
     }
     slot_cv_.notify_all();
+    slot_free_cv_.notify_all();
     events_.join();
     delivery_.join();
   }
@@ -264,7 +265,7 @@ class IndemindSource final : public FrameSource {
 
   void event_loop() {
     std::int64_t next_reopen = 0;
-    while (running_) {
+    while (running_ && !transport_->finished()) {
       try {
         step(next_reopen);
       } catch (const UsbError& e) {
@@ -287,6 +288,17 @@ class IndemindSource final : public FrameSource {
       stop_streaming();
     } catch (const std::exception& e) {
       set_error(e.what());
+    }
+    if (transport_->finished()) {
+      // A recording played to its end: the frame in the slot still goes out, then the end.
+      std::string why = transport_->finish_error();
+      if (!why.empty()) set_error(why);
+      {
+        std::lock_guard lock(slot_mutex_);
+        ended_ = true;
+        end_error_ = std::move(why);
+      }
+      slot_cv_.notify_all();
     }
   }
 
@@ -390,7 +402,8 @@ class IndemindSource final : public FrameSource {
     ++counters_.frames;
     state_ = SourceStatus::State::kStreaming;
     {
-      std::lock_guard lock(slot_mutex_);
+      std::unique_lock lock(slot_mutex_);
+      if (options_.lossless) slot_free_cv_.wait(lock, [this] { return !slot_.full || !running_; });
       if (slot_.full) ++counters_.delivery_drops;
       std::swap(slot_.buffer, spare_);
       slot_.capture_ns = clock_.to_host(device_ns);
@@ -467,14 +480,23 @@ class IndemindSource final : public FrameSource {
     while (true) {
       {
         std::unique_lock lock(slot_mutex_);
-        slot_cv_.wait(lock, [this] { return slot_.full || !running_; });
+        slot_cv_.wait(lock, [this] { return slot_.full || !running_ || ended_; });
         if (!running_) return;
+        if (!slot_.full) {
+          lock.unlock();
+          if (end_error_.empty())
+            sink_->on_end();
+          else
+            sink_->on_error(end_error_);
+          return;
+        }
         std::swap(slot_.buffer, deliver_.buffer);
         std::swap(slot_.imu, deliver_.imu);
         slot_.imu.clear();
         deliver_.capture_ns = slot_.capture_ns;
         slot_.full = false;
       }
+      slot_free_cv_.notify_one();
       const int w = mode_.width, h = mode_.height;
       const std::uint8_t* row0 = deliver_.buffer.data();
       const bool swap = swaps_halves(module_.module_type);
@@ -529,8 +551,10 @@ class IndemindSource final : public FrameSource {
   Counters counters_;
 
   std::mutex slot_mutex_;
-  std::condition_variable slot_cv_;
+  std::condition_variable slot_cv_, slot_free_cv_;
   Slot slot_, deliver_;
+  bool ended_ = false;  // the transport finished: deliver what is left, then end
+  std::string end_error_;
   std::uint64_t seq_ = 0;
   FrameSink* sink_ = nullptr;
   std::thread events_, delivery_;

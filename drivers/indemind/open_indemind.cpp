@@ -1,7 +1,10 @@
+#include <optional>
+
 #include <fmt/format.h>
 
 #include "dco/core/error.hpp"
 #include "dco/drivers/indemind_source.hpp"
+#include "dco/drivers/usb_capture.hpp"
 #include "dco/indemind/stream_control.hpp"
 #include "src/sources.hpp"
 
@@ -19,7 +22,11 @@ std::unique_ptr<FrameSource> open_indemind(SourceUri& uri) {
         fmt::format("source '{}': imu_hz must divide 1000 (100, 200, 250, 500, 1000)", uri.text()));
   o.transfers = uri.integer("transfers", 8, 2, 64);
   o.stall_ms = uri.integer("stall_ms", 1000, 100, 60000);
+  const std::optional<std::string> record = uri.value("record");
+  const std::optional<std::string> replay = uri.value("replay");
   uri.finish();
+  if (record && replay)
+    throw Error(fmt::format("source '{}': record and replay exclude each other", uri.text()));
   if (o.width || o.height || o.fps) {
     // Modes the module never offers are refused before touching USB; the link speed is checked
     // once the module is found.
@@ -30,9 +37,20 @@ std::unique_ptr<FrameSource> open_indemind(SourceUri& uri) {
   }
   std::unique_ptr<UsbTransport> transport;
   try {
-    transport = make_libusb_transport();
+    if (replay) {
+      // The capture's own clock, and every recorded frame out, whatever the consumer's pace.
+      auto r = open_usb_replay(*replay);
+      o.clock = [t = r.get()] { return t->now_ns(); };
+      o.lossless = true;
+      transport = std::move(r);
+    } else {
+      transport = make_libusb_transport();
+      if (record) transport = make_recording_transport(std::move(transport), *record);
+    }
   } catch (const UsbError& e) {
     throw Error(fmt::format("source '{}': USB unavailable: {}", uri.text(), e.what()));
+  } catch (const Error& e) {
+    throw Error(fmt::format("source '{}': {}", uri.text(), e.what()));
   }
   try {
     return open_indemind(std::move(transport), std::move(o), uri.text());

@@ -1,6 +1,6 @@
 // dcod's daemon with the INDEMIND driver on a simulated module: depth from the camera's own
 // fisheye calibration reaches a client through the ring, and DCO_STATUS-bound state comes from the
-// driver.
+// driver; a USB capture of the module replays through dcod's own source URI.
 
 #include <gtest/gtest.h>
 #include <pthread.h>
@@ -10,12 +10,14 @@
 #include <algorithm>
 #include <atomic>
 #include <filesystem>
+#include <functional>
 #include <thread>
 #include <vector>
 
 #include "dco/client.hpp"
 #include "dco/daemon/daemon.hpp"
 #include "dco/drivers/indemind_source.hpp"
+#include "dco/drivers/usb_capture.hpp"
 #include "indemind_sim.hpp"
 
 namespace dco::daemon {
@@ -31,7 +33,18 @@ float median_depth(const dco::client::FrameView& v, int x0, int y0, int size) {
   return d[d.size() / 2];
 }
 
-TEST(DaemonIndemind, SimulatedModuleDeliversDepthEndToEnd) {
+struct Seen {
+  int status = -1;
+  std::uint32_t width = 0;
+  float box = 0, wall = 0;
+  long frames = 0;
+  std::string client_error;
+};
+
+// Runs the daemon on `source` until it exits, reading depth from its ring meanwhile; `after` runs
+// before the daemon (and the source it opened) is destroyed.
+Seen run_daemon(const std::string& source, std::vector<std::string> sets,
+                const Daemon::SourceOpener& opener, const std::function<void()>& after = {}) {
   // The daemon reads SIGTERM/SIGINT/SIGHUP from a signalfd: block them before any thread starts.
   sigset_t mask;
   sigemptyset(&mask);
@@ -45,29 +58,15 @@ TEST(DaemonIndemind, SimulatedModuleDeliversDepthEndToEnd) {
   std::filesystem::create_directories(dir);
   const std::string ring = (dir / "depth.shm").string();
   ConfigSources sources;
-  sources.sets = {"lcm.url=memq://", "ring.path=" + ring, "service.max_frames=12",
-                  "stereo.max_disparity=64"};
-  sources.source = "indemind://";
+  sources.sets = {"lcm.url=memq://", "ring.path=" + ring, "stereo.max_disparity=64"};
+  sources.sets.insert(sources.sets.end(), sets.begin(), sets.end());
+  sources.source = source;
   LoadedConfig config = load_config(sources);
   Logger log;
-
-  drivers::SourceStatus seen_status;
-  SimulatedIndemind* sim = nullptr;
-  Daemon daemon(sources, std::move(config), log, [&](std::string_view uri) {
-    SimulatedIndemind::Options o;
-    o.pace_real_time = true;  // capture times on CLOCK_MONOTONIC, as from the real module
-    auto owned = std::make_unique<SimulatedIndemind>(o);
-    sim = owned.get();
-    drivers::IndemindOptions io;
-    io.fps = 25;
-    io.clock = [s = sim] { return s->now_ns(); };
-    return drivers::open_indemind(std::move(owned), io, std::string(uri));
-  });
+  Daemon daemon(sources, std::move(config), log, opener);
 
   std::atomic<bool> done{false};
-  float box = 0, wall = 0;
-  std::uint32_t width = 0;
-  std::string client_error;
+  Seen seen;
   std::thread client([&] {
     try {
       while (!done && !std::filesystem::exists(ring))
@@ -78,30 +77,89 @@ TEST(DaemonIndemind, SimulatedModuleDeliversDepthEndToEnd) {
       for (int i = 0; i < 400 && !done; ++i) {
         auto v = c.wait_next(std::chrono::milliseconds(50));
         if (!v) continue;
-        width = v->info().width;
         // Rectified 640x400 with f = 250 px: the box (0.9 m) covers the centre, the wall (3 m) the
         // upper left.
         const float b = median_depth(*v, 290, 195, 20), w = median_depth(*v, 60, 60, 20);
+        const std::uint32_t width = v->info().width;
         if (c.still_valid(*v)) {
-          box = b;
-          wall = w;
+          seen.width = width;
+          seen.box = b;
+          seen.wall = w;
+          ++seen.frames;
         }
       }
     } catch (const std::exception& e) {
-      client_error = e.what();
+      // The client ends with "writer stopped" when the daemon closes the ring.
+      seen.client_error = e.what();
     }
   });
-  const int status = daemon.run();
+  seen.status = daemon.run();
   done = true;
   client.join();
-  EXPECT_EQ(status, 0);
-  // The client ends with "writer stopped" when the daemon closes the ring after max_frames.
-  EXPECT_EQ(width, 640u) << client_error;
-  EXPECT_NEAR(box, SimulatedIndemind::kBoxDepthM, 0.1 * SimulatedIndemind::kBoxDepthM);
-  EXPECT_NEAR(wall, SimulatedIndemind::kWallDepthM, 0.2 * SimulatedIndemind::kWallDepthM);
-  ASSERT_NE(sim, nullptr);
-  EXPECT_EQ(sim->record().flash_writes, 0u);
+  if (after) after();
   std::filesystem::remove_all(dir);
+  return seen;
+}
+
+TEST(DaemonIndemind, SimulatedModuleDeliversDepthEndToEnd) {
+  SimulatedIndemind* sim = nullptr;
+  std::uint64_t flash_writes = 1;
+  const Seen seen = run_daemon(
+      "indemind://", {"service.max_frames=12"},
+      [&](std::string_view uri) {
+        SimulatedIndemind::Options o;
+        o.pace_real_time = true;  // capture times on CLOCK_MONOTONIC, as from the real module
+        auto owned = std::make_unique<SimulatedIndemind>(o);
+        sim = owned.get();
+        drivers::IndemindOptions io;
+        io.fps = 25;
+        io.clock = [s = sim] { return s->now_ns(); };
+        return drivers::open_indemind(std::move(owned), io, std::string(uri));
+      },
+      [&] {
+        ASSERT_NE(sim, nullptr);
+        flash_writes = sim->record().flash_writes;
+      });
+  EXPECT_EQ(seen.status, 0);
+  EXPECT_EQ(seen.width, 640u) << seen.client_error;
+  EXPECT_NEAR(seen.box, SimulatedIndemind::kBoxDepthM, 0.1 * SimulatedIndemind::kBoxDepthM);
+  EXPECT_NEAR(seen.wall, SimulatedIndemind::kWallDepthM, 0.2 * SimulatedIndemind::kWallDepthM);
+  EXPECT_EQ(flash_writes, 0u);
+}
+
+TEST(DaemonIndemind, RecordedUsbCaptureReplaysThroughTheDaemon) {
+  // Two seconds of the simulated module at 25 fps, recorded at the transport seam.
+  const std::string capture = (std::filesystem::temp_directory_path() /
+                               ("dco_daemon_capture_" + std::to_string(getpid()) + ".usbcap"))
+                                  .string();
+  {
+    auto owned = std::make_unique<SimulatedIndemind>();
+    SimulatedIndemind* sim = owned.get();
+    drivers::IndemindOptions io;
+    io.fps = 25;
+    io.clock = [sim] { return sim->now_ns(); };
+    auto source = drivers::open_indemind(
+        drivers::make_recording_transport(std::move(owned), capture, io.clock), io, "indemind://");
+    struct Count final : drivers::FrameSink {
+      std::atomic<int> n{0};
+      void on_frame(const drivers::StereoFrame&) override { ++n; }
+      void on_end() override {}
+      void on_error(const std::string&) override {}
+    } sink;
+    source->start(sink);
+    while (sim->record().frames_intact < 50)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    source->stop();
+  }
+  // dcod's own URI, no simulator: every recorded frame goes through the pipeline, then dcod exits.
+  const Seen seen = run_daemon("indemind://?fps=25&replay=" + capture,
+                               {"runtime.deterministic=true"}, drivers::open_source);
+  std::filesystem::remove(capture);
+  EXPECT_EQ(seen.status, 0);
+  EXPECT_EQ(seen.width, 640u) << seen.client_error;
+  EXPECT_GE(seen.frames, 10);
+  EXPECT_NEAR(seen.box, SimulatedIndemind::kBoxDepthM, 0.1 * SimulatedIndemind::kBoxDepthM);
+  EXPECT_NEAR(seen.wall, SimulatedIndemind::kWallDepthM, 0.2 * SimulatedIndemind::kWallDepthM);
 }
 
 }  // namespace

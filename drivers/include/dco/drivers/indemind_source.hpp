@@ -16,6 +16,9 @@ struct IndemindOptions {
   int imu_hz = 1000;                   // 0: no IMU stream; else divides 1000
   int transfers = 8;                   // bulk transfers in flight
   int stall_ms = 1000;                 // no frame for this long: restart the stream
+  // Wait for the consumer instead of replacing a frame it has not taken (replays, where nothing
+  // is lost by waiting and every recorded frame should come out).
+  bool lossless = false;
   // CLOCK_MONOTONIC by default; a simulated device brings its own clock.
   std::function<std::int64_t()> clock;
 };
@@ -24,7 +27,8 @@ struct IndemindOptions {
 // module and reads its calibration from flash (throws dco::Error with one line when there is no
 // module, no permission, or no readable calibration). While started it owns one USB event thread
 // and one delivery thread; an unplugged module leaves it waiting (state kDisconnected) and the same
-// module plugged in again resumes the stream without a restart of the process.
+// module plugged in again resumes the stream without a restart of the process. A transport that
+// finishes (a replayed capture) ends the source after its last frame.
 std::unique_ptr<FrameSource> open_indemind(std::unique_ptr<UsbTransport> transport,
                                            IndemindOptions options, std::string uri);
 

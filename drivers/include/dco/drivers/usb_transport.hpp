@@ -108,6 +108,11 @@ class UsbTransport {
 
   // Runs transfer completions and hotplug notes for at most `timeout`.
   virtual void handle_events(std::chrono::milliseconds timeout) = 0;
+
+  // A recorded stream that has played to its end, or left the recording: the driver ends its
+  // source, with finish_error() (empty at a clean end). A live bus never finishes.
+  virtual bool finished() const { return false; }
+  virtual std::string finish_error() const { return {}; }
 };
 
 // libusb. Throws UsbError when libusb cannot start (no usbfs in a container, for example).

@@ -1,0 +1,235 @@
+// A transport that passes every call through to another one and writes it, with its outcome and
+// every transfer completion, to a capture file.
+
+#include <time.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <mutex>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "dco/core/error.hpp"
+#include "dco/drivers/usb_capture.hpp"
+
+namespace dco::drivers {
+namespace {
+
+using Kind = UsbCaptureRecord::Kind;
+using Outcome = UsbCaptureRecord::Outcome;
+
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
+
+class CaptureWriter {
+ public:
+  CaptureWriter(const std::string& path, std::function<std::int64_t()> clock)
+      : path_(path), clock_(clock ? std::move(clock) : monotonic_ns) {
+    file_ = std::fopen(path.c_str(), "wb");
+    if (!file_)
+      throw Error(fmt::format("USB capture '{}': cannot create: {}", path, std::strerror(errno)));
+    if (std::fwrite(kUsbCaptureMagic, sizeof kUsbCaptureMagic, 1, file_) != 1) fail();
+  }
+  ~CaptureWriter() {
+    if (file_ && std::fclose(file_) != 0)
+      std::fprintf(stderr, "dco: USB capture '%s': closing failed: %s\n", path_.c_str(),
+                   std::strerror(errno));
+  }
+
+  // Stamps and writes one record.
+  void write(UsbCaptureRecord& r) {
+    std::lock_guard lock(mutex_);
+    if (!file_) return;
+    r.t_ns = clock_();
+    buffer_.clear();
+    encode_usb_capture_record(r, buffer_);
+    if (std::fwrite(buffer_.data(), buffer_.size(), 1, file_) != 1) fail();
+  }
+
+ private:
+  void fail() {
+    std::fprintf(stderr, "dco: USB capture '%s': write failed (%s); recording stopped\n",
+                 path_.c_str(), std::strerror(errno));
+    std::fclose(file_);
+    file_ = nullptr;
+  }
+
+  std::string path_;
+  std::function<std::int64_t()> clock_;
+  std::mutex mutex_;
+  std::FILE* file_ = nullptr;
+  std::vector<std::uint8_t> buffer_;
+};
+
+// Runs `call`, notes its outcome in `r`, writes `r` and passes on what the call threw.
+template <typename F>
+auto recorded(CaptureWriter& w, UsbCaptureRecord& r, F&& call) {
+  try {
+    if constexpr (std::is_void_v<decltype(call())>) {
+      call();
+      w.write(r);
+    } else {
+      auto result = call();
+      w.write(r);
+      return result;
+    }
+  } catch (const UsbError& e) {
+    r.outcome = e.no_device() ? Outcome::kNoDevice : Outcome::kFailed;
+    r.message = e.what();
+    w.write(r);
+    throw;
+  }
+}
+
+class RecordingDevice final : public UsbDevice {
+ public:
+  RecordingDevice(std::unique_ptr<UsbDevice> inner, std::shared_ptr<CaptureWriter> writer,
+                  std::uint16_t id)
+      : inner_(std::move(inner)), writer_(std::move(writer)), id_(id) {}
+
+  const UsbDeviceInfo& info() const override { return inner_->info(); }
+
+  void claim_interface(int number) override {
+    UsbCaptureRecord r = make(Kind::kClaim);
+    r.interface = number;
+    recorded(*writer_, r, [&] { inner_->claim_interface(number); });
+  }
+
+  std::size_t control(std::uint8_t request_type, std::uint8_t request, std::uint16_t value,
+                      std::uint16_t index, std::span<std::uint8_t> data,
+                      std::chrono::milliseconds timeout) override {
+    UsbCaptureRecord r = make(Kind::kControl);
+    r.request_type = request_type;
+    r.request = request;
+    r.value = value;
+    r.index = index;
+    r.length = static_cast<std::uint32_t>(data.size());
+    const bool in = request_type & 0x80;
+    if (!in) r.data.assign(data.begin(), data.end());
+    try {
+      const std::size_t n = inner_->control(request_type, request, value, index, data, timeout);
+      if (in) r.data.assign(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(n));
+      writer_->write(r);
+      return n;
+    } catch (const UsbError& e) {
+      r.outcome = e.no_device() ? Outcome::kNoDevice : Outcome::kFailed;
+      r.message = e.what();
+      r.data.clear();
+      writer_->write(r);
+      throw;
+    }
+  }
+
+  void clear_halt(std::uint8_t endpoint) override {
+    UsbCaptureRecord r = make(Kind::kClearHalt);
+    r.endpoint = endpoint;
+    recorded(*writer_, r, [&] { inner_->clear_halt(endpoint); });
+  }
+
+  void start_in_stream(std::uint8_t endpoint, EndpointType type, std::size_t transfer_size,
+                       int transfers, TransferCallback on_complete) override {
+    UsbCaptureRecord r = make(Kind::kStartStream);
+    r.endpoint = endpoint;
+    r.type = type;
+    r.size = static_cast<std::uint32_t>(transfer_size);
+    r.transfers = static_cast<std::uint32_t>(transfers);
+    auto wrapped = [this, endpoint, cb = std::move(on_complete)](
+                       TransferStatus status, std::span<const std::uint8_t> data) {
+      // Cancellations are what stop_streams() does; a replay reproduces them by itself.
+      if (status != TransferStatus::kCancelled) {
+        UsbCaptureRecord t = make(Kind::kTransfer);
+        if (in_call_) t.flags = UsbCaptureRecord::kInCall;
+        t.endpoint = endpoint;
+        t.status = status;
+        t.data.assign(data.begin(), data.end());
+        writer_->write(t);
+      }
+      cb(status, data);
+    };
+    recorded(*writer_, r, [&] {
+      inner_->start_in_stream(endpoint, type, transfer_size, transfers, std::move(wrapped));
+    });
+  }
+
+  void stop_streams() override {
+    UsbCaptureRecord r = make(Kind::kStopStreams);
+    writer_->write(r);
+    in_call_ = true;
+    inner_->stop_streams();
+    in_call_ = false;
+  }
+
+  int transfers_in_flight() const override { return inner_->transfers_in_flight(); }
+
+ private:
+  UsbCaptureRecord make(Kind kind) const {
+    UsbCaptureRecord r;
+    r.kind = kind;
+    r.device = id_;
+    return r;
+  }
+
+  std::unique_ptr<UsbDevice> inner_;
+  std::shared_ptr<CaptureWriter> writer_;
+  std::uint16_t id_;
+  bool in_call_ = false;  // event thread only, like every call here
+};
+
+class RecordingTransport final : public UsbTransport {
+ public:
+  RecordingTransport(std::unique_ptr<UsbTransport> inner, const std::string& path,
+                     std::function<std::int64_t()> clock)
+      : inner_(std::move(inner)),
+        writer_(std::make_shared<CaptureWriter>(path, std::move(clock))) {}
+
+  std::vector<UsbDeviceInfo> list(std::uint16_t vendor, std::uint16_t product) override {
+    UsbCaptureRecord r;
+    r.kind = Kind::kList;
+    r.vendor = vendor;
+    r.product = product;
+    r.devices = inner_->list(vendor, product);
+    writer_->write(r);
+    return r.devices;
+  }
+
+  std::unique_ptr<UsbDevice> open(const UsbDeviceInfo& device) override {
+    UsbCaptureRecord r;
+    r.kind = Kind::kOpen;
+    r.port_path = device.port_path;
+    r.device = next_id_;
+    auto inner = recorded(*writer_, r, [&] { return inner_->open(device); });
+    return std::make_unique<RecordingDevice>(std::move(inner), writer_, next_id_++);
+  }
+
+  void watch_hotplug(std::uint16_t vendor, std::uint16_t product,
+                     std::function<void()> on_change) override {
+    inner_->watch_hotplug(vendor, product, [w = writer_, cb = std::move(on_change)] {
+      UsbCaptureRecord r;
+      r.kind = Kind::kHotplug;
+      w->write(r);
+      cb();
+    });
+  }
+
+  void handle_events(std::chrono::milliseconds timeout) override { inner_->handle_events(timeout); }
+
+ private:
+  std::unique_ptr<UsbTransport> inner_;
+  std::shared_ptr<CaptureWriter> writer_;
+  std::uint16_t next_id_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<UsbTransport> make_recording_transport(std::unique_ptr<UsbTransport> inner,
+                                                       const std::string& path,
+                                                       std::function<std::int64_t()> clock) {
+  return std::make_unique<RecordingTransport>(std::move(inner), path, std::move(clock));
+}
+
+}  // namespace dco::drivers

@@ -1,0 +1,372 @@
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <mutex>
+#include <random>
+#include <thread>
+
+#include "dco/core/error.hpp"
+#include "dco/drivers/indemind_source.hpp"
+#include "dco/drivers/usb_capture.hpp"
+#include "indemind_sim.hpp"
+#include "support/error_of.hpp"
+
+namespace dco::drivers {
+namespace {
+
+using testing::SimulatedIndemind;
+using Fault = SimulatedIndemind::Fault;
+using Kind = UsbCaptureRecord::Kind;
+
+std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() /
+          ("dco-usbcap-" + std::to_string(::getpid()) + "-" + name))
+      .string();
+}
+
+std::vector<std::uint8_t> read_all(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_all(const std::string& path, std::span<const std::uint8_t> bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+}
+
+std::uint64_t fnv1a(const ImageView<const std::uint8_t>& v) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (int y = 0; y < v.height; ++y)
+    for (int x = 0; x < v.width; ++x) h = (h ^ v.row(y)[x]) * 1099511628211ull;
+  return h;
+}
+
+struct Seen {
+  std::int64_t capture_ns;
+  std::uint64_t left, right;
+  std::size_t imu;
+  bool operator==(const Seen&) const = default;
+};
+
+class Recorder final : public FrameSink {
+ public:
+  void on_frame(const StereoFrame& f) override {
+    std::lock_guard lock(mutex);
+    frames.push_back({f.capture_ns, fnv1a(f.left), fnv1a(f.right), f.imu.size()});
+  }
+  void on_end() override {
+    std::lock_guard lock(mutex);
+    ended = true;
+  }
+  void on_error(const std::string& m) override {
+    std::lock_guard lock(mutex);
+    error = m;
+    ended = true;
+  }
+  std::size_t count() {
+    std::lock_guard lock(mutex);
+    return frames.size();
+  }
+  bool wait_end(double seconds = 60) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < until) {
+      {
+        std::lock_guard lock(mutex);
+        if (ended) return true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return false;
+  }
+  std::mutex mutex;
+  std::vector<Seen> frames;
+  bool ended = false;
+  std::string error;
+};
+
+std::map<std::string, std::uint64_t> counters_of(const FrameSource& s) {
+  std::map<std::string, std::uint64_t> m;
+  for (const auto& [k, v] : s.status().counters) m[k] = v;
+  // How many frames reached a consumer depends on its pace, not on the bus.
+  m.erase("delivered");
+  m.erase("delivery_drops");
+  return m;
+}
+
+IndemindOptions fast_mode() {
+  IndemindOptions io;
+  io.width = 640;
+  io.height = 400;
+  io.fps = 200;
+  io.stall_ms = 300;
+  return io;
+}
+
+// Streams from a simulated module through a recording transport, injecting a mix of faults (an
+// unplug and replug among them); returns the driver's counters.
+std::map<std::string, std::uint64_t> record_session(const std::string& path, Recorder& sink,
+                                                    int faults) {
+  SimulatedIndemind::Options o;
+  o.seed = 3;
+  auto sim_owned = std::make_unique<SimulatedIndemind>(o);
+  SimulatedIndemind* sim = sim_owned.get();
+  IndemindOptions io = fast_mode();
+  io.clock = [sim] { return sim->now_ns(); };
+  auto source = open_indemind(
+      make_recording_transport(std::move(sim_owned), path, [sim] { return sim->now_ns(); }), io,
+      "indemind://");
+  source->start(sink);
+  std::mt19937 rng(9);
+  const Fault kinds[] = {Fault::kShortTransfer,    Fault::kLostPayload, Fault::kExtraPayload,
+                         Fault::kErrorBit,         Fault::kBadHeader,   Fault::kTornMetadata,
+                         Fault::kDuplicateCounter, Fault::kSkipCounter, Fault::kStall,
+                         Fault::kSilence,          Fault::kImuShort,    Fault::kImuDuplicate,
+                         Fault::kControlBusy,      Fault::kUnplug};
+  for (int i = 0; i < faults; ++i) {
+    const Fault f = kinds[i % std::size(kinds)];
+    int param = 0;
+    if (f == Fault::kSkipCounter) param = 1 + static_cast<int>(rng() % 4);
+    if (f == Fault::kSilence) param = 500;
+    if (f == Fault::kControlBusy) param = 2;
+    if (f == Fault::kUnplug) param = 200;
+    const auto before = sim->record();
+    sim->inject(f, param);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (true) {
+      const auto now = sim->record();
+      if (now.frames_sent >= before.frames_sent + 4 &&
+          now.frames_intact >= before.frames_intact + 3)
+        break;
+      if (std::chrono::steady_clock::now() > until) {
+        ADD_FAILURE() << "stuck after fault " << i;
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  }
+  source->stop();
+  return counters_of(*source);
+}
+
+std::unique_ptr<FrameSource> open_replay(const std::string& path, IndemindOptions io) {
+  auto replay = open_usb_replay(path);
+  io.clock = [t = replay.get()] { return t->now_ns(); };
+  io.lossless = true;
+  return open_indemind(std::move(replay), io, "indemind://?replay");
+}
+
+TEST(UsbCapture, EveryRecordKindSurvivesTheFile) {
+  std::vector<UsbCaptureRecord> in(9);
+  in[0].kind = Kind::kList;
+  in[0].vendor = 0x05a9;
+  in[0].product = 0xf581;
+  in[0].devices = {{2, 7, "2-1.4", 5000, "SN1"}, {1, 3, "1-2", 480, ""}};
+  in[1].kind = Kind::kOpen;
+  in[1].port_path = "2-1.4";
+  in[1].outcome = UsbCaptureRecord::Outcome::kFailed;
+  in[1].message = "LIBUSB_ERROR_ACCESS";
+  in[2].kind = Kind::kClaim;
+  in[2].interface = 2;
+  in[3].kind = Kind::kControl;
+  in[3].request_type = 0xa1;
+  in[3].request = 0x81;
+  in[3].value = 0x0100;
+  in[3].index = 1;
+  in[3].length = 34;
+  in[3].data = {1, 2, 3};
+  in[4].kind = Kind::kClearHalt;
+  in[4].endpoint = 0x81;
+  in[5].kind = Kind::kStartStream;
+  in[5].endpoint = 0x89;
+  in[5].type = EndpointType::kInterrupt;
+  in[5].size = 64;
+  in[5].transfers = 4;
+  in[6].kind = Kind::kStopStreams;
+  in[6].outcome = UsbCaptureRecord::Outcome::kNoDevice;
+  in[6].message = "gone";
+  in[7].kind = Kind::kTransfer;
+  in[7].flags = UsbCaptureRecord::kInCall;
+  in[7].endpoint = 0x81;
+  in[7].status = TransferStatus::kOverflow;
+  in[7].data = std::vector<std::uint8_t>(1000, 7);
+  in[8].kind = Kind::kHotplug;
+  std::vector<std::uint8_t> bytes(std::begin(kUsbCaptureMagic), std::end(kUsbCaptureMagic));
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    in[i].device = static_cast<std::uint16_t>(i);
+    in[i].t_ns = 1000 + static_cast<std::int64_t>(i);
+    encode_usb_capture_record(in[i], bytes);
+  }
+  const UsbCapture c = parse_usb_capture(bytes);
+  EXPECT_EQ(c.problem, "");
+  EXPECT_EQ(c.bytes_read, bytes.size());
+  ASSERT_EQ(c.records.size(), in.size());
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    SCOPED_TRACE(to_string(in[i].kind));
+    const UsbCaptureRecord& a = in[i];
+    const UsbCaptureRecord& b = c.records[i];
+    EXPECT_EQ(b.kind, a.kind);
+    EXPECT_EQ(b.flags, a.flags);
+    EXPECT_EQ(b.device, a.device);
+    EXPECT_EQ(b.t_ns, a.t_ns);
+    EXPECT_EQ(b.outcome, a.outcome);
+    EXPECT_EQ(b.message, a.message);
+    EXPECT_EQ(b.port_path, a.port_path);
+    EXPECT_EQ(b.interface, a.interface);
+    EXPECT_EQ(b.request_type, a.request_type);
+    EXPECT_EQ(b.value, a.value);
+    EXPECT_EQ(b.length, a.length);
+    EXPECT_EQ(b.endpoint, a.endpoint);
+    EXPECT_EQ(b.type, a.type);
+    EXPECT_EQ(b.size, a.size);
+    EXPECT_EQ(b.transfers, a.transfers);
+    EXPECT_EQ(b.status, a.status);
+    EXPECT_EQ(b.data, a.data);
+    ASSERT_EQ(b.devices.size(), a.devices.size());
+    for (std::size_t d = 0; d < a.devices.size(); ++d) {
+      EXPECT_EQ(b.devices[d].port_path, a.devices[d].port_path);
+      EXPECT_EQ(b.devices[d].serial, a.devices[d].serial);
+      EXPECT_EQ(b.devices[d].speed_mbps, a.devices[d].speed_mbps);
+      EXPECT_EQ(b.devices[d].bus, a.devices[d].bus);
+    }
+  }
+
+  // Cut anywhere: the whole records before the cut come back, and the problem says where.
+  for (std::size_t cut = sizeof kUsbCaptureMagic; cut < bytes.size(); ++cut) {
+    const UsbCapture t = parse_usb_capture(std::span(bytes).first(cut));
+    EXPECT_LE(t.bytes_read, cut);
+    if (t.bytes_read < cut) {
+      EXPECT_NE(t.problem.find("ends inside"), std::string::npos) << cut;
+    }
+    for (std::size_t i = 0; i < t.records.size(); ++i) EXPECT_EQ(t.records[i].kind, in[i].kind);
+  }
+  // The file reader, which a replay uses, reads the same records and stops at the same damage.
+  const std::string file = temp_path("kinds.usbcap");
+  write_all(file, bytes);
+  {
+    UsbCaptureReader reader(file);
+    for (const UsbCaptureRecord& want : in) {
+      const auto got = reader.next();
+      ASSERT_TRUE(got);
+      EXPECT_EQ(got->kind, want.kind);
+      EXPECT_EQ(got->data, want.data);
+      EXPECT_EQ(got->t_ns, want.t_ns);
+    }
+    EXPECT_FALSE(reader.next());
+    EXPECT_EQ(reader.problem(), "");
+  }
+  for (const std::size_t cut : {std::size_t{20}, bytes.size() - 5}) {
+    write_all(file, std::span(bytes).first(cut));
+    UsbCaptureReader reader(file);
+    std::size_t n = 0;
+    while (reader.next()) ++n;
+    const UsbCapture whole = parse_usb_capture(std::span(bytes).first(cut));
+    EXPECT_EQ(n, whole.records.size());
+    EXPECT_EQ(reader.problem(), whole.problem);
+    EXPECT_NE(reader.problem(), "");
+  }
+  std::remove(file.c_str());
+
+  std::vector<std::uint8_t> damaged = bytes;
+  damaged[sizeof kUsbCaptureMagic] = 42;  // no such kind
+  EXPECT_NE(parse_usb_capture(damaged).problem.find("record 0 at byte 8 is damaged"),
+            std::string::npos);
+  const std::vector<std::uint8_t> png = {0x89, 'P', 'N', 'G', 13, 10, 26, 10, 0};
+  EXPECT_NE(testing::error_of([&] { parse_usb_capture(png); }).find("not a dco USB capture"),
+            std::string::npos);
+}
+
+TEST(UsbCapture, ReplayReproducesARecordedSessionWithFaultsFrameForFrame) {
+  const std::string path = temp_path("session.usbcap");
+  Recorder live;
+  const auto live_counters = record_session(path, live, 42);
+  ASSERT_GT(live.frames.size(), 100u);
+  ASSERT_GE(live_counters.at("reconnects"), 1u);
+
+  Recorder replayed;
+  auto source = open_replay(path, fast_mode());
+  source->start(replayed);
+  ASSERT_TRUE(replayed.wait_end());
+  source->stop();
+  EXPECT_EQ(replayed.error, "");
+  // Every frame the driver accepted comes out of the replay, in order; each one the live
+  // consumer saw is among them, byte for byte and with the same capture time.
+  EXPECT_EQ(replayed.frames.size(), live_counters.at("frames"));
+  EXPECT_EQ(counters_of(*source), live_counters);
+  std::size_t j = 0, matched = 0;
+  for (const Seen& s : live.frames) {
+    while (j < replayed.frames.size() && replayed.frames[j].capture_ns < s.capture_ns) ++j;
+    ASSERT_LT(j, replayed.frames.size());
+    EXPECT_EQ(replayed.frames[j].left, s.left);
+    EXPECT_EQ(replayed.frames[j].right, s.right);
+    EXPECT_EQ(replayed.frames[j].capture_ns, s.capture_ns);
+    // IMU samples of a frame the live consumer never took went out with the next one it took.
+    matched += replayed.frames[j].left == s.left && replayed.frames[j].right == s.right &&
+               replayed.frames[j].capture_ns == s.capture_ns;
+  }
+  EXPECT_EQ(matched, live.frames.size());
+
+  // Cut the file in the middle: the frames before the cut, then an error that says where.
+  std::vector<std::uint8_t> bytes = read_all(path);
+  const std::string cut_path = temp_path("cut.usbcap");
+  write_all(cut_path, std::span(bytes).first(bytes.size() / 2));
+  Recorder partial;
+  auto cut = open_replay(cut_path, fast_mode());
+  cut->start(partial);
+  ASSERT_TRUE(partial.wait_end());
+  cut->stop();
+  EXPECT_NE(partial.error.find("capture ends inside record"), std::string::npos) << partial.error;
+  EXPECT_GT(partial.frames.size(), 10u);
+  ASSERT_LT(partial.frames.size(), replayed.frames.size());
+  for (std::size_t i = 0; i < partial.frames.size(); ++i)
+    EXPECT_EQ(partial.frames[i], replayed.frames[i]) << i;
+
+  // A driver asked for another mode leaves the recording at the first control that differs.
+  IndemindOptions other = fast_mode();
+  other.fps = 100;
+  Recorder diverged;
+  auto wrong = open_replay(path, other);
+  wrong->start(diverged);
+  ASSERT_TRUE(diverged.wait_end());
+  wrong->stop();
+  EXPECT_NE(diverged.error.find("left the capture at record"), std::string::npos) << diverged.error;
+  EXPECT_EQ(diverged.frames.size(), 0u);
+  std::remove(path.c_str());
+  std::remove(cut_path.c_str());
+}
+
+TEST(UsbCapture, UriRefusesBadCapturesWithOneLine) {
+  const std::string missing = temp_path("missing.usbcap");
+  auto open = [](const std::string& text) { return open_source(text); };
+  EXPECT_NE(testing::error_of([&] { open("indemind://?replay=" + missing); }).find("cannot open"),
+            std::string::npos);
+  const std::string junk = temp_path("junk.usbcap");
+  write_all(junk, std::vector<std::uint8_t>{'h', 'e', 'l', 'l', 'o'});
+  EXPECT_NE(
+      testing::error_of([&] { open("indemind://?replay=" + junk); }).find("not a dco USB capture"),
+      std::string::npos);
+  EXPECT_NE(testing::error_of([&] {
+              open("indemind://?replay=a&record=b");
+            }).find("record and replay exclude each other"),
+            std::string::npos);
+  const std::string empty = temp_path("empty.usbcap");
+  write_all(empty, std::span(reinterpret_cast<const std::uint8_t*>(kUsbCaptureMagic), 8));
+  EXPECT_NE(
+      testing::error_of([&] { open("indemind://?replay=" + empty); }).find("holds no records"),
+      std::string::npos);
+  EXPECT_NE(testing::error_of([] {
+              make_recording_transport(std::make_unique<SimulatedIndemind>(),
+                                       "/nonexistent-dir/x.usbcap");
+            }).find("'/nonexistent-dir/x.usbcap': cannot create"),
+            std::string::npos);
+  std::remove(junk.c_str());
+  std::remove(empty.c_str());
+}
+
+}  // namespace
+}  // namespace dco::drivers
