@@ -1,0 +1,65 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "dco/compositor/scene.hpp"
+
+namespace dco::compositor {
+
+// The rectified left camera the depth map is aligned to (pinhole, pixels).
+struct Camera {
+  int width = 0, height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+};
+
+// One frame of real depth (metres; 0, NaN or inf where unknown) and the camera image it belongs
+// to (8-bit grey, or none).
+struct RealFrame {
+  Camera camera;
+  const float* depth = nullptr;
+  std::size_t depth_stride = 0;  // bytes
+  const std::uint8_t* image = nullptr;
+  std::size_t image_stride = 0;
+};
+
+struct RenderOptions {
+  // 0: hard occlusion (the depth test against real depth). N > 0: soft occlusion, each virtual
+  // pixel's coverage is the fraction of real depth behind it in a (2N+1)² window, so edges blend
+  // over N pixels around the depth contours and nowhere else.
+  int soft_radius_px = 0;
+  float near_m = 0.05f, far_m = 100.0f;
+};
+
+// A headless EGL (Mesa surfaceless) GLES 3 context and an offscreen framebuffer, rendering the
+// camera image with real depth in the depth buffer and virtual objects depth-tested against it.
+// Every GL call is checked; a failure throws Error naming the step.
+class Renderer {
+ public:
+  Renderer();
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Renders one frame; the framebuffer follows the frame's size (a daemon restarted with another
+  // resolution just reallocates). Returns the time from the first upload to glFinish, in ms.
+  double render(const RealFrame& frame, const Scene& scene, const RenderOptions& options);
+
+  // The last frame, top row first: RGBA8 where alpha is the virtual objects' coverage (0 where
+  // the camera shows, 255 where a virtual object is fully visible).
+  const std::vector<std::uint8_t>& read_rgba();
+
+  const char* gl_renderer() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Writes an 8-bit RGBA (4 channels), RGB (3) or grey (1) PNG, top row first. Throws Error.
+void write_png(const std::string& path, const std::uint8_t* pixels, int width, int height,
+               int channels);
+
+}  // namespace dco::compositor

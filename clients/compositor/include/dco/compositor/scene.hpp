@@ -1,0 +1,46 @@
+#pragma once
+
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace dco::compositor {
+
+// A failure the compositor reports in one line (bad arguments, EGL/GL errors, unreadable files).
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+using Vec3 = std::array<float, 3>;
+
+// Virtual objects in camera coordinates of the rectified left camera: x right, y down, z forward,
+// metres. Cubes are axis-aligned in that frame.
+struct Cube {
+  Vec3 center{};
+  float size = 0;
+  Vec3 color{0.9f, 0.3f, 0.2f};
+};
+struct Sphere {
+  Vec3 center{};
+  float radius = 0;
+  Vec3 color{0.2f, 0.5f, 0.9f};
+};
+struct Scene {
+  std::vector<Cube> cubes;
+  std::vector<Sphere> spheres;
+  bool empty() const { return cubes.empty() && spheres.empty(); }
+};
+
+// "X,Y,Z,SIZE[,R,G,B]" (command line) into a cube or a sphere of radius SIZE.
+Cube parse_cube(std::string_view text);
+Sphere parse_sphere(std::string_view text);
+
+// A scene file: one object per line, "cube X Y Z SIZE [R G B]" or "sphere X Y Z RADIUS [R G B]",
+// colours in 0..1, '#' starts a comment. Errors name the file and line.
+Scene parse_scene(std::string_view text, const std::string& name);
+Scene load_scene(const std::string& path);
+
+}  // namespace dco::compositor

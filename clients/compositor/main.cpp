@@ -1,0 +1,275 @@
+// dco-compositor: what a renderer on the headset does with dco. It follows the depth ring, puts
+// the camera image and the real depth into an offscreen GLES framebuffer, draws virtual objects
+// depth-tested against the real depth, and writes PNG frames with the render time of each.
+
+#include <dco/client.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include "dco/compositor/renderer.hpp"
+#include "dco/compositor/scene.hpp"
+
+namespace {
+
+using namespace dco::compositor;
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* kDefaultRing = "/run/dcod/depth.shm";
+
+void usage(std::FILE* out) {
+  std::fprintf(
+      out,
+      "usage: dco-compositor [--ring FILE] [--out FILE.png] [--mask FILE.png] [--frames N]\n"
+      "                      [--cube X,Y,Z,SIZE[,R,G,B]]... [--sphere X,Y,Z,R[,R,G,B]]...\n"
+      "                      [--scene FILE] [--soft N] [--wait S] [--width W --height H]\n"
+      "  --ring FILE     depth ring of dcod (default %s)\n"
+      "  --out FILE      composited frames as PNG; a printf pattern (frame_%%04d.png) keeps\n"
+      "                  every frame, a plain name the last one\n"
+      "  --mask FILE     where virtual objects are visible, as a grey PNG (same naming)\n"
+      "  --frames N      frames to composite, then exit 0 (default 1)\n"
+      "  --cube, --sphere  a virtual object in camera coordinates (x right, y down, z ahead,\n"
+      "                  metres); without any, a cube at 0,0,1,0.3 and a sphere at\n"
+      "                  0.25,0,1.5,0.2\n"
+      "  --scene FILE    objects from a file: 'cube X Y Z SIZE [R G B]', 'sphere X Y Z R ...'\n"
+      "  --soft N        soft occlusion blending over N px around depth contours (0..8; 0 =\n"
+      "                  hard, the default)\n"
+      "  --wait S        how long to wait for the daemon, at start and after it stops (default 5)\n"
+      "  --width, --height  refuse a ring of another size\n",
+      kDefaultRing);
+}
+
+bool parse_int(const char* text, long lo, long hi, long* out) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text, &end, 10);
+  if (!*text || errno != 0 || *end != '\0' || v < lo || v > hi) return false;
+  *out = v;
+  return true;
+}
+
+// A file name, or a pattern with one %d (%0Nd) for the frame number; anything else is refused,
+// since the pattern never reaches printf as a format.
+void check_pattern(const std::string& pattern, const char* option) {
+  const auto p = pattern.find('%');
+  if (p == std::string::npos) return;
+  std::size_t i = p + 1;
+  while (i < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[i]))) ++i;
+  if (i >= pattern.size() || pattern[i] != 'd' || pattern.find('%', i) != std::string::npos)
+    throw Error(std::string(option) + " '" + pattern + "': a name with at most one %d or %0Nd");
+}
+
+std::string frame_name(const std::string& pattern, long index) {
+  const auto p = pattern.find('%');
+  if (p == std::string::npos) return pattern;
+  const auto d = pattern.find('d', p);
+  const std::string spec = pattern.substr(p + 1, d - p - 1);
+  const int width = spec.empty() ? 0 : std::atoi(spec.c_str());
+  std::string number = std::to_string(index);
+  if (static_cast<int>(number.size()) < width)
+    number.insert(0, static_cast<std::size_t>(width) - number.size(), '0');
+  return pattern.substr(0, p) + number + pattern.substr(d + 1);
+}
+
+struct Args {
+  std::string ring = kDefaultRing, out, mask, scene_file;
+  long frames = 1, soft = 0, wait_s = 5, width = 0, height = 0;
+  Scene scene;
+};
+
+int run(const Args& args) {
+  Scene scene = args.scene;
+  if (!args.scene_file.empty()) {
+    Scene more = load_scene(args.scene_file);
+    scene.cubes.insert(scene.cubes.end(), more.cubes.begin(), more.cubes.end());
+    scene.spheres.insert(scene.spheres.end(), more.spheres.begin(), more.spheres.end());
+  }
+  if (scene.empty()) {
+    scene.cubes.push_back(parse_cube("0,0,1,0.3"));
+    scene.spheres.push_back(parse_sphere("0.25,0,1.5,0.2"));
+  }
+
+  dco::client::Options options;
+  options.path = args.ring;
+  options.expected_width = static_cast<std::uint32_t>(args.width);
+  options.expected_height = static_cast<std::uint32_t>(args.height);
+  const auto patience = std::chrono::seconds(args.wait_s);
+
+  // The daemon may still be starting: wait for its ring, but not for ever.
+  std::optional<dco::client::Client> client;
+  for (const auto until = Clock::now() + patience;;) {
+    try {
+      client.emplace(options);
+      break;
+    } catch (const dco::client::Error& e) {
+      if (e.status() != DCO_E_NO_SEGMENT || Clock::now() >= until) {
+        if (e.status() == DCO_E_NO_SEGMENT)
+          std::fprintf(stderr,
+                       "dco-compositor: no depth ring at %s after %ld s: is dcod running?\n",
+                       args.ring.c_str(), args.wait_s);
+        else
+          std::fprintf(stderr, "dco-compositor: %s: %s\n", args.ring.c_str(), e.what());
+        return 1;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+
+  Renderer renderer;
+  std::fprintf(stderr, "dco-compositor: %s, %zu cubes, %zu spheres, %s occlusion\n",
+               renderer.gl_renderer(), scene.cubes.size(), scene.spheres.size(),
+               args.soft ? "soft" : "hard");
+  RenderOptions render_options;
+  render_options.soft_radius_px = static_cast<int>(args.soft);
+
+  std::vector<float> depth;
+  std::vector<std::uint8_t> image, mask, picture;
+  auto last_frame = Clock::now();
+  bool announced_gone = false;
+  for (long done = 0; done < args.frames;) {
+    std::optional<dco::client::FrameView> view;
+    try {
+      view = client->wait_next(std::chrono::milliseconds(200));
+    } catch (const dco::client::Error& e) {
+      if (e.status() != DCO_E_WRITER_GONE) throw;
+      if (!announced_gone)
+        std::fprintf(stderr, "dco-compositor: dcod stopped; waiting %ld s for it to come back\n",
+                     args.wait_s);
+      announced_gone = true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    if (!view) {
+      if (Clock::now() - last_frame > patience) {
+        std::fprintf(stderr, "dco-compositor: no frame from %s for %ld s\n", args.ring.c_str(),
+                     args.wait_s);
+        return 1;
+      }
+      continue;
+    }
+    if (announced_gone) std::fprintf(stderr, "dco-compositor: dcod is back\n");
+    announced_gone = false;
+    // A private copy: the slot may be rewritten while the GPU reads it.
+    const dco_frame_info& info = view->info();
+    depth.resize(static_cast<std::size_t>(info.width) * info.height);
+    image.resize(info.image_channels ? depth.size() * info.image_channels : 0);
+    dco_frame_buffer buffer;
+    dco_frame_buffer_init(&buffer);
+    buffer.depth = depth.data();
+    buffer.depth_stride = info.width * sizeof(float);
+    buffer.depth_capacity = depth.size() * sizeof(float);
+    if (!image.empty()) {
+      buffer.image = image.data();
+      buffer.image_stride = static_cast<std::size_t>(info.width) * info.image_channels;
+      buffer.image_capacity = image.size();
+    }
+    if (!client->copy(*view, buffer)) continue;  // overwritten while copying: take the next one
+    last_frame = Clock::now();
+    RealFrame frame;
+    frame.camera = {static_cast<int>(info.width),
+                    static_cast<int>(info.height),
+                    info.fx,
+                    info.fy,
+                    info.cx,
+                    info.cy};
+    frame.depth = depth.data();
+    frame.depth_stride = buffer.depth_stride;
+    // The compositor shows grey; a colour ring contributes its first channel.
+    if (info.image_channels == 1) {
+      frame.image = image.data();
+      frame.image_stride = buffer.image_stride;
+    }
+    const double ms = renderer.render(frame, scene, render_options);
+    std::printf("frame %ld seq %llu %ux%u: render %.2f ms (upload to glFinish)\n", done,
+                static_cast<unsigned long long>(info.frame_seq), info.width, info.height, ms);
+    std::fflush(stdout);
+    const std::vector<std::uint8_t>& rgba = renderer.read_rgba();
+    if (!args.out.empty()) {
+      // The picture a user sees is opaque; coverage goes to --mask.
+      picture.resize(rgba.size() / 4 * 3);
+      for (std::size_t i = 0, n = rgba.size() / 4; i < n; ++i)
+        std::copy_n(&rgba[4 * i], 3, &picture[3 * i]);
+      write_png(frame_name(args.out, done), picture.data(), frame.camera.width, frame.camera.height,
+                3);
+    }
+    if (!args.mask.empty()) {
+      mask.resize(rgba.size() / 4);
+      for (std::size_t i = 0; i < mask.size(); ++i) mask[i] = rgba[4 * i + 3];
+      write_png(frame_name(args.mask, done), mask.data(), frame.camera.width, frame.camera.height,
+                1);
+    }
+    ++done;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args args;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string_view a = argv[i];
+      if (a == "--help" || a == "-h") {
+        usage(stdout);
+        return 0;
+      }
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "dco-compositor: %s needs a value\n", argv[i]);
+        usage(stderr);
+        return 2;
+      }
+      const char* value = argv[++i];
+      auto number = [&](long lo, long hi, long* out) {
+        if (!parse_int(value, lo, hi, out))
+          throw Error(std::string(a) + " takes a whole number in " + std::to_string(lo) + ".." +
+                      std::to_string(hi) + ", not '" + value + "'");
+      };
+      if (a == "--ring") {
+        args.ring = value;
+      } else if (a == "--out") {
+        check_pattern(value, "--out");
+        args.out = value;
+      } else if (a == "--mask") {
+        check_pattern(value, "--mask");
+        args.mask = value;
+      } else if (a == "--scene")
+        args.scene_file = value;
+      else if (a == "--cube")
+        args.scene.cubes.push_back(parse_cube(value));
+      else if (a == "--sphere")
+        args.scene.spheres.push_back(parse_sphere(value));
+      else if (a == "--frames")
+        number(1, 1'000'000'000, &args.frames);
+      else if (a == "--soft")
+        number(0, 8, &args.soft);
+      else if (a == "--wait")
+        number(0, 3600, &args.wait_s);
+      else if (a == "--width")
+        number(1, 16384, &args.width);
+      else if (a == "--height")
+        number(1, 16384, &args.height);
+      else
+        throw Error("unknown option " + std::string(a));
+    }
+  } catch (const Error& e) {
+    std::fprintf(stderr, "dco-compositor: %s\n", e.what());
+    usage(stderr);
+    return 2;
+  }
+  try {
+    return run(args);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "dco-compositor: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,110 @@
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "dco/compositor/scene.hpp"
+
+namespace dco::compositor {
+namespace {
+
+std::vector<float> numbers(std::string_view text, char separator, const std::string& where) {
+  std::vector<float> out;
+  std::string s(text);
+  std::size_t pos = 0;
+  while (pos <= s.size()) {
+    while (pos < s.size() && separator == ' ' && (s[pos] == ' ' || s[pos] == '\t')) ++pos;
+    if (pos == s.size()) break;
+    std::size_t end =
+        s.find_first_of(separator == ' ' ? std::string(" \t") : std::string(1, separator), pos);
+    if (end == std::string::npos) end = s.size();
+    const std::string token = s.substr(pos, end - pos);
+    char* stop = nullptr;
+    errno = 0;
+    const float v = std::strtof(token.c_str(), &stop);
+    if (token.empty() || *stop != '\0' || errno != 0 || !std::isfinite(v))
+      throw Error(where + ": '" + token + "' is not a number");
+    out.push_back(v);
+    pos = end + 1;
+  }
+  return out;
+}
+
+void check_object(const std::vector<float>& v, const std::string& what, const std::string& where) {
+  if (v.size() != 4 && v.size() != 7)
+    throw Error(where + ": a " + what + " takes X Y Z SIZE and optionally R G B, got " +
+                std::to_string(v.size()) + " numbers");
+  if (v[2] <= 0) throw Error(where + ": the " + what + " must be in front of the camera (Z > 0)");
+  if (v[3] <= 0) throw Error(where + ": the " + what + "'s size must be positive");
+  for (std::size_t i = 4; i < v.size(); ++i)
+    if (v[i] < 0 || v[i] > 1) throw Error(where + ": colours are in 0..1");
+}
+
+template <typename T>
+T make(const std::vector<float>& v) {
+  T o;
+  o.center = {v[0], v[1], v[2]};
+  if constexpr (std::is_same_v<T, Cube>)
+    o.size = v[3];
+  else
+    o.radius = v[3];
+  if (v.size() == 7) o.color = {v[4], v[5], v[6]};
+  return o;
+}
+
+}  // namespace
+
+Cube parse_cube(std::string_view text) {
+  const std::string where = "--cube '" + std::string(text) + "'";
+  const auto v = numbers(text, ',', where);
+  check_object(v, "cube", where);
+  return make<Cube>(v);
+}
+
+Sphere parse_sphere(std::string_view text) {
+  const std::string where = "--sphere '" + std::string(text) + "'";
+  const auto v = numbers(text, ',', where);
+  check_object(v, "sphere", where);
+  return make<Sphere>(v);
+}
+
+Scene parse_scene(std::string_view text, const std::string& name) {
+  Scene scene;
+  std::istringstream in{std::string(text)};
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos) continue;
+    const auto word_end = line.find_first_of(" \t", first);
+    const std::string word = line.substr(first, word_end - first);
+    const std::string where = name + ":" + std::to_string(number);
+    const std::string rest = word_end == std::string::npos ? "" : line.substr(word_end);
+    if (word == "cube") {
+      const auto v = numbers(rest, ' ', where);
+      check_object(v, "cube", where);
+      scene.cubes.push_back(make<Cube>(v));
+    } else if (word == "sphere") {
+      const auto v = numbers(rest, ' ', where);
+      check_object(v, "sphere", where);
+      scene.spheres.push_back(make<Sphere>(v));
+    } else {
+      throw Error(where + ": unknown object '" + word + "' (cube or sphere)");
+    }
+  }
+  return scene;
+}
+
+Scene load_scene(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error("scene '" + path + "': cannot open: " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_scene(text.str(), path);
+}
+
+}  // namespace dco::compositor
