@@ -285,7 +285,10 @@ TEST(UsbCapture, ReplayReproducesARecordedSessionWithFaultsFrameForFrame) {
   const std::string path = temp_path("session.usbcap");
   Recorder live;
   const auto live_counters = record_session(path, live, 42);
-  ASSERT_GT(live.frames.size(), 100u);
+  // Virtual time outruns a loaded machine's consumer, which then sees only some of the frames
+  // the driver accepted; the replay must still give every accepted one.
+  ASSERT_GT(live_counters.at("frames"), 100u);
+  ASSERT_GT(live.frames.size(), 10u);
   ASSERT_GE(live_counters.at("reconnects"), 1u);
 
   Recorder replayed;
