@@ -132,8 +132,7 @@ int run(const Args& args) {
   RenderOptions render_options;
   render_options.soft_radius_px = static_cast<int>(args.soft);
 
-  std::vector<float> depth;
-  std::vector<std::uint8_t> image, mask, picture;
+  std::vector<std::uint8_t> mask, picture;
   auto last_frame = Clock::now();
   bool announced_gone = false;
   for (long done = 0; done < args.frames;) {
@@ -158,22 +157,7 @@ int run(const Args& args) {
     }
     if (announced_gone) std::fprintf(stderr, "dco-compositor: dcod is back\n");
     announced_gone = false;
-    // A private copy: the slot may be rewritten while the GPU reads it.
     const dco_frame_info& info = view->info();
-    depth.resize(static_cast<std::size_t>(info.width) * info.height);
-    image.resize(info.image_channels ? depth.size() * info.image_channels : 0);
-    dco_frame_buffer buffer;
-    dco_frame_buffer_init(&buffer);
-    buffer.depth = depth.data();
-    buffer.depth_stride = info.width * sizeof(float);
-    buffer.depth_capacity = depth.size() * sizeof(float);
-    if (!image.empty()) {
-      buffer.image = image.data();
-      buffer.image_stride = static_cast<std::size_t>(info.width) * info.image_channels;
-      buffer.image_capacity = image.size();
-    }
-    if (!client->copy(*view, buffer)) continue;  // overwritten while copying: take the next one
-    last_frame = Clock::now();
     RealFrame frame;
     frame.camera = {static_cast<int>(info.width),
                     static_cast<int>(info.height),
@@ -181,14 +165,18 @@ int run(const Args& args) {
                     info.fy,
                     info.cx,
                     info.cy};
-    frame.depth = depth.data();
-    frame.depth_stride = buffer.depth_stride;
-    // The compositor shows grey; a colour ring contributes its first channel.
+    // Straight from the ring, no copy: the upload has taken the pixels by the time render()
+    // returns, so a slot the daemon rewrote meanwhile shows below and the frame is skipped.
+    frame.depth = view->raw.depth;
+    frame.depth_stride = info.depth_stride;
+    // The compositor shows grey; a colour ring is drawn without its image.
     if (info.image_channels == 1) {
-      frame.image = image.data();
-      frame.image_stride = buffer.image_stride;
+      frame.image = view->raw.image;
+      frame.image_stride = info.image_stride;
     }
     const double ms = renderer.render(frame, scene, render_options);
+    if (!client->still_valid(*view)) continue;
+    last_frame = Clock::now();
     std::printf("frame %ld seq %llu %ux%u: render %.2f ms (upload to glFinish)\n", done,
                 static_cast<unsigned long long>(info.frame_seq), info.width, info.height, ms);
     std::fflush(stdout);

@@ -222,6 +222,13 @@ struct Renderer::Impl {
   EGLContext context = EGL_NO_CONTEXT;
   GLuint background = 0, object = 0, vao_empty = 0, vao_box = 0, vbo_box = 0;
   GLuint depth_tex = 0, image_tex = 0, fbo = 0, color_rb = 0, depth_rb = 0;
+  // Uniform locations, looked up once.
+  struct {
+    GLint depth, image, has_image, height, ab;
+  } bg{};
+  struct {
+    GLint proj, depth, height, width, ab, cam, soft_radius, color, sphere, sphere_cr;
+  } obj{};
   int width = 0, height = 0;
   std::vector<std::uint8_t> rgba, flipped;
   std::vector<float> vertices;
@@ -267,6 +274,13 @@ struct Renderer::Impl {
       egl_fail("making the context current without a surface");
     background = link(kFullScreenVs, kBackgroundFs, "background");
     object = link(kObjectVs, kObjectFs, "object");
+    auto at = [](GLuint program, const char* name) { return glGetUniformLocation(program, name); };
+    bg = {at(background, "u_depth"), at(background, "u_image"), at(background, "u_has_image"),
+          at(background, "u_height"), at(background, "u_ab")};
+    obj = {at(object, "u_proj"),        at(object, "u_depth"), at(object, "u_height"),
+           at(object, "u_width"),       at(object, "u_ab"),    at(object, "u_cam"),
+           at(object, "u_soft_radius"), at(object, "u_color"), at(object, "u_sphere"),
+           at(object, "u_sphere_cr")};
     glGenVertexArrays(1, &vao_empty);
     glGenVertexArrays(1, &vao_box);
     glGenBuffers(1, &vbo_box);
@@ -419,11 +433,11 @@ double Renderer::render(const RealFrame& frame, const Scene& scene, const Render
   // only the objects' own depth there.
   glDepthMask(options.soft_radius_px == 0 ? GL_TRUE : GL_FALSE);
   glUseProgram(m.background);
-  glUniform1i(glGetUniformLocation(m.background, "u_depth"), 0);
-  glUniform1i(glGetUniformLocation(m.background, "u_image"), 1);
-  glUniform1i(glGetUniformLocation(m.background, "u_has_image"), frame.image ? 1 : 0);
-  glUniform1i(glGetUniformLocation(m.background, "u_height"), cam.height);
-  glUniform2f(glGetUniformLocation(m.background, "u_ab"), a, b);
+  glUniform1i(m.bg.depth, 0);
+  glUniform1i(m.bg.image, 1);
+  glUniform1i(m.bg.has_image, frame.image ? 1 : 0);
+  glUniform1i(m.bg.height, cam.height);
+  glUniform2f(m.bg.ab, a, b);
   glBindVertexArray(m.vao_empty);
   glDrawArrays(GL_TRIANGLES, 0, 3);
   check_gl("drawing the camera image and real depth");
@@ -445,17 +459,15 @@ double Renderer::render(const RealFrame& frame, const Scene& scene, const Render
     // Colour blends by coverage; alpha accumulates coverage over the camera's 0.
     glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
     glUseProgram(m.object);
-    glUniformMatrix4fv(glGetUniformLocation(m.object, "u_proj"), 1, GL_FALSE, proj);
-    glUniform1i(glGetUniformLocation(m.object, "u_depth"), 0);
-    glUniform1i(glGetUniformLocation(m.object, "u_height"), cam.height);
-    glUniform1i(glGetUniformLocation(m.object, "u_width"), cam.width);
-    glUniform2f(glGetUniformLocation(m.object, "u_ab"), a, b);
-    glUniform4f(glGetUniformLocation(m.object, "u_cam"), static_cast<float>(cam.fx),
-                static_cast<float>(cam.fy), static_cast<float>(cam.cx), static_cast<float>(cam.cy));
-    glUniform1i(glGetUniformLocation(m.object, "u_soft_radius"), options.soft_radius_px);
-    const GLint color = glGetUniformLocation(m.object, "u_color");
-    const GLint is_sphere = glGetUniformLocation(m.object, "u_sphere");
-    const GLint sphere_cr = glGetUniformLocation(m.object, "u_sphere_cr");
+    glUniformMatrix4fv(m.obj.proj, 1, GL_FALSE, proj);
+    glUniform1i(m.obj.depth, 0);
+    glUniform1i(m.obj.height, cam.height);
+    glUniform1i(m.obj.width, cam.width);
+    glUniform2f(m.obj.ab, a, b);
+    glUniform4f(m.obj.cam, static_cast<float>(cam.fx), static_cast<float>(cam.fy),
+                static_cast<float>(cam.cx), static_cast<float>(cam.cy));
+    glUniform1i(m.obj.soft_radius, options.soft_radius_px);
+    const GLint color = m.obj.color, is_sphere = m.obj.sphere, sphere_cr = m.obj.sphere_cr;
     GLint first = 0;
     for (const Cube& c : scene.cubes) {
       glUniform3f(color, c.color[0], c.color[1], c.color[2]);

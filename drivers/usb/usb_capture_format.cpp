@@ -178,62 +178,64 @@ const char* to_string(UsbCaptureRecord::Kind kind) {
 }
 
 void encode_usb_capture_record(const UsbCaptureRecord& r, std::vector<std::uint8_t>& out) {
-  std::vector<std::uint8_t> body;
+  // The head first, its length patched once the body is in: no second buffer per record.
+  const std::size_t head = out.size();
+  put(out, static_cast<std::uint64_t>(r.kind), 1);
+  put(out, r.flags, 1);
+  put(out, r.device, 2);
+  put(out, 0, 4);
+  put(out, static_cast<std::uint64_t>(r.t_ns), 8);
   switch (r.kind) {
     case Kind::kList:
-      put(body, r.vendor, 2);
-      put(body, r.product, 2);
-      put(body, r.devices.size(), 4);
+      put(out, r.vendor, 2);
+      put(out, r.product, 2);
+      put(out, r.devices.size(), 4);
       for (const UsbDeviceInfo& d : r.devices) {
-        put(body, static_cast<std::uint64_t>(d.bus), 2);
-        put(body, static_cast<std::uint64_t>(d.address), 2);
-        put(body, static_cast<std::uint64_t>(d.speed_mbps), 4);
-        put_string(body, d.port_path);
-        put_string(body, d.serial);
+        put(out, static_cast<std::uint64_t>(d.bus), 2);
+        put(out, static_cast<std::uint64_t>(d.address), 2);
+        put(out, static_cast<std::uint64_t>(d.speed_mbps), 4);
+        put_string(out, d.port_path);
+        put_string(out, d.serial);
       }
       break;
     case Kind::kOpen:
-      put_string(body, r.port_path);
+      put_string(out, r.port_path);
       break;
     case Kind::kClaim:
-      put(body, static_cast<std::uint64_t>(r.interface), 1);
+      put(out, static_cast<std::uint64_t>(r.interface), 1);
       break;
     case Kind::kControl:
-      put(body, r.request_type, 1);
-      put(body, r.request, 1);
-      put(body, r.value, 2);
-      put(body, r.index, 2);
-      put(body, r.length, 4);
-      put_bytes(body, r.data);
+      put(out, r.request_type, 1);
+      put(out, r.request, 1);
+      put(out, r.value, 2);
+      put(out, r.index, 2);
+      put(out, r.length, 4);
+      put_bytes(out, r.data);
       break;
     case Kind::kClearHalt:
-      put(body, r.endpoint, 1);
+      put(out, r.endpoint, 1);
       break;
     case Kind::kStartStream:
-      put(body, r.endpoint, 1);
-      put(body, r.type == EndpointType::kBulk ? 0 : 1, 1);
-      put(body, r.size, 4);
-      put(body, r.transfers, 4);
+      put(out, r.endpoint, 1);
+      put(out, r.type == EndpointType::kBulk ? 0 : 1, 1);
+      put(out, r.size, 4);
+      put(out, r.transfers, 4);
       break;
     case Kind::kStopStreams:
     case Kind::kHotplug:
       break;
     case Kind::kTransfer:
-      put(body, r.endpoint, 1);
-      put(body, static_cast<std::uint64_t>(r.status), 1);
-      put_bytes(body, r.data);
+      put(out, r.endpoint, 1);
+      put(out, static_cast<std::uint64_t>(r.status), 1);
+      put_bytes(out, r.data);
       break;
   }
   if (is_call(r.kind)) {
-    put(body, static_cast<std::uint64_t>(r.outcome), 1);
-    if (r.outcome != Outcome::kOk) put_string(body, r.message);
+    put(out, static_cast<std::uint64_t>(r.outcome), 1);
+    if (r.outcome != Outcome::kOk) put_string(out, r.message);
   }
-  put(out, static_cast<std::uint64_t>(r.kind), 1);
-  put(out, r.flags, 1);
-  put(out, r.device, 2);
-  put(out, body.size(), 4);
-  put(out, static_cast<std::uint64_t>(r.t_ns), 8);
-  out.insert(out.end(), body.begin(), body.end());
+  const std::size_t length = out.size() - head - kHeadBytes;
+  for (int k = 0; k < 4; ++k) out[head + 4 + k] = static_cast<std::uint8_t>(length >> (8 * k));
 }
 
 namespace {
@@ -274,6 +276,16 @@ bool read_head(std::span<const std::uint8_t> head_bytes, std::size_t index, std:
   return true;
 }
 
+std::string ends_inside_head(std::size_t index, std::size_t pos) {
+  return "capture ends inside the head of record " + std::to_string(index) + " at byte " +
+         std::to_string(pos);
+}
+
+std::string ends_inside_record(std::size_t index, Kind kind, std::size_t pos) {
+  return "capture ends inside record " + std::to_string(index) + " (" + to_string(kind) +
+         ") at byte " + std::to_string(pos);
+}
+
 std::string back_in_time(std::size_t index, std::size_t pos) {
   return "record " + std::to_string(index) + " at byte " + std::to_string(pos) +
          " goes back in time";
@@ -291,16 +303,14 @@ UsbCapture parse_usb_capture(std::span<const std::uint8_t> bytes) {
   while (pos < bytes.size()) {
     const std::size_t index = c.records.size();
     if (bytes.size() - pos < kHeadBytes) {
-      c.problem = "capture ends inside the head of record " + std::to_string(index) + " at byte " +
-                  std::to_string(pos);
+      c.problem = ends_inside_head(index, pos);
       break;
     }
     UsbCaptureRecord r;
     std::uint32_t length = 0;
     if (!read_head(bytes.subspan(pos, kHeadBytes), index, pos, r.kind, length, c.problem)) break;
     if (bytes.size() - pos - kHeadBytes < length) {
-      c.problem = "capture ends inside record " + std::to_string(index) + " (" + to_string(r.kind) +
-                  ") at byte " + std::to_string(pos);
+      c.problem = ends_inside_record(index, r.kind, pos);
       break;
     }
     if (!decode_record(bytes.subspan(pos, kHeadBytes), bytes.subspan(pos + kHeadBytes, length),
@@ -347,17 +357,14 @@ std::optional<UsbCaptureRecord> UsbCaptureReader::next() {
     done_ = true;
     return std::nullopt;
   }
-  if (got < kHeadBytes)
-    return stop("capture ends inside the head of record " + std::to_string(index_) + " at byte " +
-                std::to_string(offset_));
+  if (got < kHeadBytes) return stop(ends_inside_head(index_, offset_));
   UsbCaptureRecord r;
   std::uint32_t length = 0;
   std::string problem;
   if (!read_head(head, index_, offset_, r.kind, length, problem)) return stop(problem);
   body_.resize(length);
   if (std::fread(body_.data(), 1, length, file_) != length)
-    return stop("capture ends inside record " + std::to_string(index_) + " (" + to_string(r.kind) +
-                ") at byte " + std::to_string(offset_));
+    return stop(ends_inside_record(index_, r.kind, offset_));
   if (!decode_record(head, body_, index_, offset_, r, problem)) return stop(problem);
   if (index_ > 0 && r.t_ns < last_t_ns_) return stop(back_in_time(index_, offset_));
   last_t_ns_ = r.t_ns;

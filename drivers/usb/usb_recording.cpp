@@ -81,6 +81,7 @@ auto recorded(CaptureWriter& w, UsbCaptureRecord& r, F&& call) {
   } catch (const UsbError& e) {
     r.outcome = e.no_device() ? Outcome::kNoDevice : Outcome::kFailed;
     r.message = e.what();
+    r.data.clear();  // a failed transfer moved no bytes
     w.write(r);
     throw;
   }
@@ -111,18 +112,11 @@ class RecordingDevice final : public UsbDevice {
     r.length = static_cast<std::uint32_t>(data.size());
     const bool in = request_type & 0x80;
     if (!in) r.data.assign(data.begin(), data.end());
-    try {
+    return recorded(*writer_, r, [&] {
       const std::size_t n = inner_->control(request_type, request, value, index, data, timeout);
       if (in) r.data.assign(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(n));
-      writer_->write(r);
       return n;
-    } catch (const UsbError& e) {
-      r.outcome = e.no_device() ? Outcome::kNoDevice : Outcome::kFailed;
-      r.message = e.what();
-      r.data.clear();
-      writer_->write(r);
-      throw;
-    }
+    });
   }
 
   void clear_halt(std::uint8_t endpoint) override {
@@ -142,12 +136,12 @@ class RecordingDevice final : public UsbDevice {
                        TransferStatus status, std::span<const std::uint8_t> data) {
       // Cancellations are what stop_streams() does; a replay reproduces them by itself.
       if (status != TransferStatus::kCancelled) {
-        UsbCaptureRecord t = make(Kind::kTransfer);
-        if (in_call_) t.flags = UsbCaptureRecord::kInCall;
-        t.endpoint = endpoint;
-        t.status = status;
-        t.data.assign(data.begin(), data.end());
-        writer_->write(t);
+        // One record serves every completion: its buffer stops growing after the first.
+        transfer_.flags = in_call_ ? UsbCaptureRecord::kInCall : 0;
+        transfer_.endpoint = endpoint;
+        transfer_.status = status;
+        transfer_.data.assign(data.begin(), data.end());
+        writer_->write(transfer_);
       }
       cb(status, data);
     };
@@ -177,7 +171,9 @@ class RecordingDevice final : public UsbDevice {
   std::unique_ptr<UsbDevice> inner_;
   std::shared_ptr<CaptureWriter> writer_;
   std::uint16_t id_;
-  bool in_call_ = false;  // event thread only, like every call here
+  // Event thread only, like every call here.
+  bool in_call_ = false;
+  UsbCaptureRecord transfer_ = make(Kind::kTransfer);
 };
 
 class RecordingTransport final : public UsbTransport {

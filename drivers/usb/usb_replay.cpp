@@ -44,7 +44,6 @@ struct Replay {
   std::deque<UsbCaptureRecord> window;  // records read ahead, the next one first
   std::size_t pos = 0;                  // records consumed
   std::atomic<std::int64_t> now{0};
-  std::atomic<std::size_t> played{0};
   std::atomic<bool> finished{false};
   mutable std::mutex error_mutex;
   std::string error;
@@ -70,7 +69,6 @@ struct Replay {
     UsbCaptureRecord r = std::move(window.front());
     window.pop_front();
     ++pos;
-    played = pos;
     idle_calls = 0;
     if (at_end())
       end(reader.problem().empty() ? std::string() : "capture '" + path + "': " + reader.problem());
@@ -334,7 +332,6 @@ class ReplayTransport final : public UsbReplayTransport {
     return r_->error;
   }
   std::int64_t now_ns() const override { return r_->now; }
-  std::size_t records_played() const override { return r_->played; }
 
  private:
   std::shared_ptr<Replay> r_;

@@ -117,7 +117,6 @@ std::unique_ptr<UsbTransport> make_recording_transport(std::unique_ptr<UsbTransp
 class UsbReplayTransport : public UsbTransport {
  public:
   virtual std::int64_t now_ns() const = 0;
-  virtual std::size_t records_played() const = 0;
 };
 
 // Throws dco::Error when the file cannot be read or is not a capture.
