@@ -1,13 +1,16 @@
 // dco-compositor: what a renderer on the headset does with dco. It follows the depth ring, puts
 // the camera image and the real depth into an offscreen GLES framebuffer, draws virtual objects
-// depth-tested against the real depth, and writes PNG frames with the render time of each.
+// depth-tested against the real depth, shows them in a window or writes PNG frames, and prints
+// the GPU time of each.
 
 #include <dco/client.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -27,17 +30,24 @@ using Clock = std::chrono::steady_clock;
 
 constexpr const char* kDefaultRing = "/run/dcod/depth.shm";
 
+std::atomic<bool> g_stop{false};
+extern "C" void on_stop_signal(int) {
+  g_stop = true;
+}
+
 void usage(std::FILE* out) {
   std::fprintf(
       out,
       "usage: dco-compositor [--ring FILE] [--out FILE.png] [--mask FILE.png] [--frames N]\n"
       "                      [--cube X,Y,Z,SIZE[,R,G,B]]... [--sphere X,Y,Z,R[,R,G,B]]...\n"
       "                      [--scene FILE] [--soft N] [--wait S] [--width W --height H]\n"
+      "                      [--window [--display NAME]]\n"
       "  --ring FILE     depth ring of dcod (default %s)\n"
       "  --out FILE      composited frames as PNG; a printf pattern (frame_%%04d.png) keeps\n"
       "                  every frame, a plain name the last one\n"
       "  --mask FILE     where virtual objects are visible, as a grey PNG (same naming)\n"
-      "  --frames N      frames to composite, then exit 0 (default 1)\n"
+      "  --frames N      frames to composite, then exit 0 (default 1; with --window 0: until\n"
+      "                  the window is closed); 0 = until stopped (SIGINT, SIGTERM)\n"
       "  --cube, --sphere  a virtual object in camera coordinates (x right, y down, z ahead,\n"
       "                  metres); without any, a cube at 0,0,1,0.3 and a sphere at\n"
       "                  0.25,0,1.5,0.2\n"
@@ -45,7 +55,9 @@ void usage(std::FILE* out) {
       "  --soft N        soft occlusion blending over N px around depth contours (0..8; 0 =\n"
       "                  hard, the default)\n"
       "  --wait S        how long to wait for the daemon, at start and after it stops (default 5)\n"
-      "  --width, --height  refuse a ring of another size\n",
+      "  --width, --height  refuse a ring of another size\n"
+      "  --window        also show the frames in an X11 window, scaled to fit\n"
+      "  --display NAME  the X display of the window (default $DISPLAY); implies --window\n",
       kDefaultRing);
 }
 
@@ -83,7 +95,9 @@ std::string frame_name(const std::string& pattern, long index) {
 
 struct Args {
   std::string ring = kDefaultRing, out, mask, scene_file;
-  long frames = 1, soft = 0, wait_s = 5, width = 0, height = 0;
+  long frames = -1, soft = 0, wait_s = 5, width = 0, height = 0;  // frames -1: the default
+  bool window = false;
+  std::string display;
   Scene scene;
 };
 
@@ -125,17 +139,34 @@ int run(const Args& args) {
     }
   }
 
-  Renderer renderer;
-  std::fprintf(stderr, "dco-compositor: %s, %zu cubes, %zu spheres, %s occlusion\n",
+  std::optional<Renderer> renderer_storage;
+  if (args.window) {
+    WindowOptions window;
+    window.display = args.display;
+    if (args.width > 0 && args.height > 0) {
+      window.width = static_cast<int>(args.width);
+      window.height = static_cast<int>(args.height);
+    }
+    renderer_storage.emplace(window);
+  } else {
+    renderer_storage.emplace();
+  }
+  Renderer& renderer = *renderer_storage;
+  std::fprintf(stderr, "dco-compositor: %s, %zu cubes, %zu spheres, %s occlusion%s\n",
                renderer.gl_renderer(), scene.cubes.size(), scene.spheres.size(),
-               args.soft ? "soft" : "hard");
+               args.soft ? "soft" : "hard", args.window ? ", in a window" : "");
+  const long frames = args.frames >= 0 ? args.frames : (args.window ? 0 : 1);
   RenderOptions render_options;
   render_options.soft_radius_px = static_cast<int>(args.soft);
 
   std::vector<std::uint8_t> mask, picture;
   auto last_frame = Clock::now();
   bool announced_gone = false;
-  for (long done = 0; done < args.frames;) {
+  for (long done = 0; frames == 0 || done < frames;) {
+    if (g_stop) {
+      std::fprintf(stderr, "dco-compositor: stopped after %ld frames\n", done);
+      return 0;
+    }
     std::optional<dco::client::FrameView> view;
     try {
       view = client->wait_next(std::chrono::milliseconds(200));
@@ -148,6 +179,11 @@ int run(const Args& args) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
     if (!view) {
+      // A window stays responsive (and repainted) while the daemon is quiet.
+      if (renderer.windowed() && !renderer.present()) {
+        std::fprintf(stderr, "dco-compositor: window closed after %ld frames\n", done);
+        return 0;
+      }
       if (Clock::now() - last_frame > patience) {
         std::fprintf(stderr, "dco-compositor: no frame from %s for %ld s\n", args.ring.c_str(),
                      args.wait_s);
@@ -174,12 +210,23 @@ int run(const Args& args) {
       frame.image = view->raw.image;
       frame.image_stride = info.image_stride;
     }
-    const double ms = renderer.render(frame, scene, render_options);
+    const RenderTimes times = renderer.render(frame, scene, render_options);
     if (!client->still_valid(*view)) continue;
     last_frame = Clock::now();
-    std::printf("frame %ld seq %llu %ux%u: render %.2f ms (upload to glFinish)\n", done,
-                static_cast<unsigned long long>(info.frame_seq), info.width, info.height, ms);
+    char gpu[32] = "n/a";
+    if (times.gpu_ms >= 0) std::snprintf(gpu, sizeof gpu, "%.2f ms", times.gpu_ms);
+    std::printf("frame %ld seq %llu %ux%u: GPU %s, upload to glFinish %.2f ms\n", done,
+                static_cast<unsigned long long>(info.frame_seq), info.width, info.height, gpu,
+                times.wall_ms);
     std::fflush(stdout);
+    if (renderer.windowed() && !renderer.present()) {
+      std::fprintf(stderr, "dco-compositor: window closed after %ld frames\n", done + 1);
+      return 0;
+    }
+    if (args.out.empty() && args.mask.empty()) {
+      ++done;
+      continue;
+    }
     const std::vector<std::uint8_t>& rgba = renderer.read_rgba();
     if (!args.out.empty()) {
       // The picture a user sees is opaque; coverage goes to --mask.
@@ -211,6 +258,10 @@ int main(int argc, char** argv) {
         usage(stdout);
         return 0;
       }
+      if (a == "--window") {
+        args.window = true;
+        continue;
+      }
       if (i + 1 >= argc) {
         std::fprintf(stderr, "dco-compositor: %s needs a value\n", argv[i]);
         usage(stderr);
@@ -237,7 +288,7 @@ int main(int argc, char** argv) {
       else if (a == "--sphere")
         args.scene.spheres.push_back(parse_sphere(value));
       else if (a == "--frames")
-        number(1, 1'000'000'000, &args.frames);
+        number(0, 1'000'000'000, &args.frames);
       else if (a == "--soft")
         number(0, 8, &args.soft);
       else if (a == "--wait")
@@ -246,7 +297,10 @@ int main(int argc, char** argv) {
         number(1, 16384, &args.width);
       else if (a == "--height")
         number(1, 16384, &args.height);
-      else
+      else if (a == "--display") {
+        args.display = value;
+        args.window = true;
+      } else
         throw Error("unknown option " + std::string(a));
     }
   } catch (const Error& e) {
@@ -254,6 +308,8 @@ int main(int argc, char** argv) {
     usage(stderr);
     return 2;
   }
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
   try {
     return run(args);
   } catch (const std::exception& e) {

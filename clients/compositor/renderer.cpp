@@ -1,19 +1,24 @@
-// Headless EGL + GLES 3 compositing: the camera image with real depth written into the depth
-// buffer, then virtual objects depth-tested against it.
+// EGL + GLES 3 compositing, headless or into an X11 window: the camera image with real depth
+// written into the depth buffer, then virtual objects depth-tested against it.
 
 #include "dco/compositor/renderer.hpp"
 
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 #include <GLES3/gl3.h>
+// After gl3.h, which defines what the extension header builds on.
+#include <GLES2/gl2ext.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
+
+#include "x11_window.hpp"
 
 namespace dco::compositor {
 namespace {
@@ -217,9 +222,26 @@ void append_box(std::vector<float>& out, const Vec3& c, float half) {
 
 }  // namespace
 
+bool has_extension(const char* name) {
+  GLint count = 0;
+  glGetIntegerv(GL_NUM_EXTENSIONS, &count);
+  for (GLint i = 0; i < count; ++i) {
+    const auto* e =
+        reinterpret_cast<const char*>(glGetStringi(GL_EXTENSIONS, static_cast<GLuint>(i)));
+    if (e && std::strcmp(e, name) == 0) return true;
+  }
+  return false;
+}
+
 struct Renderer::Impl {
+  std::unique_ptr<X11Window> window;  // null: headless
   EGLDisplay display = EGL_NO_DISPLAY;
   EGLContext context = EGL_NO_CONTEXT;
+  EGLSurface surface = EGL_NO_SURFACE;
+  // GPU timestamps before and after a frame (EXT_disjoint_timer_query); 0 where the GL has none.
+  GLuint stamps[2] = {0, 0};
+  PFNGLQUERYCOUNTEREXTPROC query_counter = nullptr;
+  PFNGLGETQUERYOBJECTUI64VEXTPROC query_result_64 = nullptr;
   GLuint background = 0, object = 0, vao_empty = 0, vao_box = 0, vbo_box = 0;
   GLuint depth_tex = 0, image_tex = 0, fbo = 0, color_rb = 0, depth_rb = 0;
   // Uniform locations, looked up once.
@@ -233,9 +255,9 @@ struct Renderer::Impl {
   std::vector<std::uint8_t> rgba, flipped;
   std::vector<float> vertices;
 
-  Impl() {
+  explicit Impl(const WindowOptions* options) {
     try {
-      init();
+      init(options);
     } catch (...) {
       release();
       throw;
@@ -243,14 +265,24 @@ struct Renderer::Impl {
   }
   ~Impl() { release(); }
 
-  void init() {
-    display = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    if (display == EGL_NO_DISPLAY) egl_fail("opening the surfaceless display");
+  void init(const WindowOptions* options) {
+    if (options) {
+      if (options->width <= 0 || options->height <= 0 || options->width > 16384 ||
+          options->height > 16384)
+        throw Error("compositor: window size " + std::to_string(options->width) + "x" +
+                    std::to_string(options->height) + " is outside 1..16384");
+      window = std::make_unique<X11Window>(options->display);
+      display = eglGetPlatformDisplay(EGL_PLATFORM_X11_KHR, window->native_display(), nullptr);
+      if (display == EGL_NO_DISPLAY) egl_fail("opening the X11 display");
+    } else {
+      display = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+      if (display == EGL_NO_DISPLAY) egl_fail("opening the surfaceless display");
+    }
     EGLint major = 0, minor = 0;
     if (!eglInitialize(display, &major, &minor)) egl_fail("eglInitialize");
     if (!eglBindAPI(EGL_OPENGL_ES_API)) egl_fail("binding GLES");
     const EGLint config_attribs[] = {EGL_SURFACE_TYPE,
-                                     EGL_PBUFFER_BIT,
+                                     window ? EGL_WINDOW_BIT : EGL_PBUFFER_BIT,
                                      EGL_RENDERABLE_TYPE,
                                      EGL_OPENGL_ES3_BIT,
                                      EGL_RED_SIZE,
@@ -270,8 +302,27 @@ struct Renderer::Impl {
                                       EGL_NONE};
     context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attribs);
     if (context == EGL_NO_CONTEXT) egl_fail("creating a GLES 3 context");
-    if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context))
-      egl_fail("making the context current without a surface");
+    if (window) {
+      EGLint visual = 0;
+      if (!eglGetConfigAttrib(display, config, EGL_NATIVE_VISUAL_ID, &visual))
+        egl_fail("asking the configuration's X visual");
+      window->create(static_cast<unsigned long>(visual), options->width, options->height,
+                     options->title);
+      surface = eglCreatePlatformWindowSurface(display, config, window->native_window(), nullptr);
+      if (surface == EGL_NO_SURFACE) egl_fail("creating the window surface");
+    }
+    if (!eglMakeCurrent(display, surface, surface, context))
+      egl_fail(window ? "making the context current on the window"
+                      : "making the context current without a surface");
+    // Two timestamps rather than one GL_TIME_ELAPSED_EXT query, whose result llvmpipe gets
+    // wrong; 64-bit results, since timestamps do not fit 32 bits.
+    if (has_extension("GL_EXT_disjoint_timer_query")) {
+      query_counter =
+          reinterpret_cast<PFNGLQUERYCOUNTEREXTPROC>(eglGetProcAddress("glQueryCounterEXT"));
+      query_result_64 = reinterpret_cast<PFNGLGETQUERYOBJECTUI64VEXTPROC>(
+          eglGetProcAddress("glGetQueryObjectui64vEXT"));
+      if (query_counter && query_result_64) glGenQueries(2, stamps);
+    }
     background = link(kFullScreenVs, kBackgroundFs, "background");
     object = link(kObjectVs, kObjectFs, "object");
     auto at = [](GLuint program, const char* name) { return glGetUniformLocation(program, name); };
@@ -320,14 +371,19 @@ struct Renderer::Impl {
       glDeleteFramebuffers(1, &fbo);
       glDeleteRenderbuffers(1, &color_rb);
       glDeleteRenderbuffers(1, &depth_rb);
+      if (stamps[0]) glDeleteQueries(2, stamps);
       eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
       eglDestroyContext(display, context);
       context = EGL_NO_CONTEXT;
     }
-    // The display is one per process and shared with every other renderer (and any other EGL
-    // user in it): terminating it here would pull it from under them. It lives until exit.
+    if (surface != EGL_NO_SURFACE) eglDestroySurface(display, surface);
+    surface = EGL_NO_SURFACE;
+    // An EGL display is one per process and platform display, shared with every other renderer
+    // (and any other EGL user in it): terminating it would pull it from under them, so it lives
+    // until exit, when Mesa tears it down (the X connection under it lives as long).
     eglReleaseThread();
     display = EGL_NO_DISPLAY;
+    window.reset();
   }
 
   void resize(int w, int h) {
@@ -379,14 +435,16 @@ struct Renderer::Impl {
   }
 };
 
-Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
+Renderer::Renderer() : impl_(std::make_unique<Impl>(nullptr)) {}
+Renderer::Renderer(const WindowOptions& window) : impl_(std::make_unique<Impl>(&window)) {}
 Renderer::~Renderer() = default;
 
 const char* Renderer::gl_renderer() const {
   return reinterpret_cast<const char*>(glGetString(GL_RENDERER));
 }
 
-double Renderer::render(const RealFrame& frame, const Scene& scene, const RenderOptions& options) {
+RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
+                             const RenderOptions& options) {
   Impl& m = *impl_;
   const Camera& cam = frame.camera;
   if (!(cam.fx > 0 && cam.fy > 0 && std::isfinite(cam.cx) && std::isfinite(cam.cy)))
@@ -394,6 +452,11 @@ double Renderer::render(const RealFrame& frame, const Scene& scene, const Render
   if (options.soft_radius_px < 0 || options.soft_radius_px > 8)
     throw Error("compositor: soft radius must be 0..8 px");
   const auto start = std::chrono::steady_clock::now();
+  if (m.stamps[0]) {
+    GLint disjoint = 0;
+    glGetIntegerv(GL_GPU_DISJOINT_EXT, &disjoint);  // clears the flag before the measurement
+    m.query_counter(m.stamps[0], GL_TIMESTAMP_EXT);
+  }
   m.resize(cam.width, cam.height);
   m.upload(frame);
 
@@ -487,10 +550,56 @@ double Renderer::render(const RealFrame& frame, const Scene& scene, const Render
     glBindVertexArray(0);
     check_gl("drawing the virtual objects");
   }
+  if (m.stamps[0]) m.query_counter(m.stamps[1], GL_TIMESTAMP_EXT);
   glFinish();
+  RenderTimes times;
+  times.wall_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (m.stamps[0]) {
+    GLuint64 begin = 0, end = 0;
+    GLint disjoint = 0;
+    m.query_result_64(m.stamps[0], GL_QUERY_RESULT, &begin);
+    m.query_result_64(m.stamps[1], GL_QUERY_RESULT, &end);
+    glGetIntegerv(GL_GPU_DISJOINT_EXT, &disjoint);
+    // A disjoint event (clock change, reset) makes the interval meaningless.
+    if (!disjoint && end >= begin) times.gpu_ms = static_cast<double>(end - begin) / 1e6;
+  }
   check_gl("finishing the frame");
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
+  return times;
+}
+
+bool Renderer::windowed() const {
+  return impl_->window != nullptr;
+}
+
+unsigned long Renderer::window_id() const {
+  return impl_->window ? impl_->window->window_id() : 0;
+}
+
+bool Renderer::present() {
+  Impl& m = *impl_;
+  if (!m.window || !m.window->poll()) return false;
+  const int ww = m.window->width(), wh = m.window->height();
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glViewport(0, 0, ww, wh);
+  glClearColor(0, 0, 0, 1);
+  glClear(GL_COLOR_BUFFER_BIT);
+  if (m.width > 0 && m.height > 0) {
+    // The largest rectangle of the frame's aspect that fits, centred. The offscreen framebuffer
+    // already holds the image's top row at GL's top, as the window wants it.
+    const double scale =
+        std::min(static_cast<double>(ww) / m.width, static_cast<double>(wh) / m.height);
+    const int dw = static_cast<int>(std::lround(m.width * scale));
+    const int dh = static_cast<int>(std::lround(m.height * scale));
+    const int x0 = (ww - dw) / 2, y0 = (wh - dh) / 2;
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, m.fbo);
+    glBlitFramebuffer(0, 0, m.width, m.height, x0, y0, x0 + dw, y0 + dh, GL_COLOR_BUFFER_BIT,
+                      dw == m.width && dh == m.height ? GL_NEAREST : GL_LINEAR);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  }
+  check_gl("showing the frame in the window");
+  if (!eglSwapBuffers(m.display, m.surface)) egl_fail("eglSwapBuffers");
+  return true;
 }
 
 const std::vector<std::uint8_t>& Renderer::read_rgba() {

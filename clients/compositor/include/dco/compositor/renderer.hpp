@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "dco/compositor/scene.hpp"
@@ -33,23 +34,44 @@ struct RenderOptions {
   float near_m = 0.05f, far_m = 100.0f;
 };
 
-// A headless EGL (Mesa surfaceless) GLES 3 context and an offscreen framebuffer, rendering the
-// camera image with real depth in the depth buffer and virtual objects depth-tested against it.
-// Every GL call is checked; a failure throws Error naming the step.
+// An on-screen window on an X display, for a desk setup or a headset driven as a display.
+struct WindowOptions {
+  std::string display;  // X display name; empty: $DISPLAY
+  int width = 640, height = 480;
+  std::string title = "dco-compositor";
+};
+
+struct RenderTimes {
+  double gpu_ms = -1;  // the GPU's own time (EXT_disjoint_timer_query); < 0 where the GL has none
+  double wall_ms = 0;  // from the first upload to glFinish
+};
+
+// An EGL GLES 3 context and an offscreen framebuffer, rendering the camera image with real depth
+// in the depth buffer and virtual objects depth-tested against it. Headless (Mesa surfaceless)
+// by default; with WindowOptions the frames are also shown in an X11 window. Every GL call is
+// checked; a failure throws Error naming the step.
 class Renderer {
  public:
   Renderer();
+  explicit Renderer(const WindowOptions& window);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
   // Renders one frame; the framebuffer follows the frame's size (a daemon restarted with another
-  // resolution just reallocates). Returns the time from the first upload to glFinish, in ms.
-  double render(const RealFrame& frame, const Scene& scene, const RenderOptions& options);
+  // resolution just reallocates).
+  RenderTimes render(const RealFrame& frame, const Scene& scene, const RenderOptions& options);
 
   // The last frame, top row first: RGBA8 where alpha is the virtual objects' coverage (0 where
   // the camera shows, 255 where a virtual object is fully visible).
   const std::vector<std::uint8_t>& read_rgba();
+
+  bool windowed() const;
+  // Windowed: handles the window's events and shows the last frame in it, scaled to fit with
+  // its aspect kept. False once the window was closed (nothing is drawn then). Headless: false.
+  bool present();
+  // The X window's id (0 when headless), for tools that look at the window.
+  unsigned long window_id() const;
 
   const char* gl_renderer() const;
 
