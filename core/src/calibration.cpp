@@ -222,6 +222,17 @@ StereoCalibration load_calibration(const std::filesystem::path& path) {
   return c;
 }
 
+std::string calibration_to_toml(const StereoCalibration& calib) {
+  return detail::format_toml(calib);
+}
+
+StereoCalibration calibration_from_toml(std::string_view text, const std::string& source) {
+  if (trim(text).empty()) fail_at(source, 0, "calibration is empty");
+  StereoCalibration c = detail::parse_toml(text, source);
+  c.validate();
+  return c;
+}
+
 void save_calibration(const std::filesystem::path& path, const StereoCalibration& calib) {
   const std::string out = detail::format_toml(calib);
   std::ofstream f(path, std::ios::binary);

@@ -15,6 +15,7 @@
 
 #include "dco/core/depth_conversion.hpp"
 #include "dco/core/error.hpp"
+#include "raw_recorder.hpp"
 
 namespace dco::daemon {
 namespace {
@@ -67,6 +68,7 @@ void Daemon::open() {
   if (!loaded_.max_disparity_given && source_->info().max_disparity)
     log_.info(fmt::format("stereo.max_disparity = {} (covers the source's nearest depth)",
                           loaded_.config.pipeline.stereo.max_disparity));
+  calibration_toml_ = calibration_to_toml(source_->calibration());
   Rectifier rectifier(source_->calibration());
   geometry_ = rectifier.geometry();
   if (rectifier.needs_remap()) rectifier_.emplace(std::move(rectifier));
@@ -112,6 +114,10 @@ void Daemon::stop_all() {
 }
 
 void Daemon::on_frame(const drivers::StereoFrame& frame) {
+  {
+    std::lock_guard lock(raw_mutex_);
+    if (raw_) raw_->offer(frame);
+  }
   {
     std::lock_guard lock(seq_mutex_);
     pushed_[pushed_cursor_++ % pushed_.size()] = {frame.capture_ns, frame.seq};
@@ -255,6 +261,66 @@ void Daemon::tick(std::int64_t now_ns) {
     on_error(std::string("publishing statistics: ") + e.what());
   }
   notifier_.status(status_line(stats));
+  report_raw_recording();
+}
+
+void Daemon::configure_raw_recording() {
+  const DaemonConfig& c = loaded_.config;
+  const std::string settings = c.raw_enabled
+                                   ? fmt::format("{} {} {}", c.raw_png_level,
+                                                 c.raw_max_message_bytes, c.runtime.deterministic)
+                                   : std::string();
+  if (settings == raw_settings_) return;
+  std::unique_ptr<RawRecorder> next;
+  if (c.raw_enabled) {
+    RawRecorderOptions o;
+    o.png_level = c.raw_png_level;
+    o.max_message_bytes = static_cast<std::size_t>(c.raw_max_message_bytes);
+    o.never_drop = c.runtime.deterministic;
+    next =
+        std::make_unique<RawRecorder>(calibration_toml_, o, [this](const ::dco::raw_stereo_t& m) {
+          std::lock_guard lock(publish_mutex_);
+          if (publisher_) publisher_->publish_raw(m);
+        });
+  }
+  std::unique_ptr<RawRecorder> previous;
+  {
+    std::lock_guard lock(raw_mutex_);
+    previous = std::move(raw_);
+    raw_ = std::move(next);
+  }
+  if (previous) {
+    const RawRecorder::Counts n = previous->close();  // sends what it holds
+    log_.info(fmt::format("raw recording stopped: {} pairs on DCO_RAW, {} dropped", n.recorded,
+                          n.dropped));
+  }
+  raw_dropped_reported_ = raw_oversized_reported_ = raw_failed_reported_ = 0;
+  raw_settings_ = settings;
+  if (c.raw_enabled)
+    log_.info(fmt::format(
+        "recording raw pairs on DCO_RAW (PNG level {}, messages up to {} bytes{})", c.raw_png_level,
+        c.raw_max_message_bytes, c.runtime.deterministic ? ", none dropped" : ""));
+}
+
+void Daemon::report_raw_recording() {
+  RawRecorder::Counts n;
+  std::string error;
+  {
+    std::lock_guard lock(raw_mutex_);
+    if (!raw_) return;
+    n = raw_->counts();
+    error = raw_->last_error();
+  }
+  if (n.dropped > raw_dropped_reported_)
+    log_.warning(
+        fmt::format("raw recording: {} pairs dropped (the encoder is slower than the "
+                    "camera; a lower raw.png_level helps)",
+                    n.dropped - raw_dropped_reported_));
+  if (n.oversized > raw_oversized_reported_ || n.failed > raw_failed_reported_)
+    log_.warning("raw recording: " + error);
+  raw_dropped_reported_ = n.dropped;
+  raw_oversized_reported_ = n.oversized;
+  raw_failed_reported_ = n.failed;
 }
 
 void Daemon::reload() {
@@ -300,6 +366,7 @@ void Daemon::reload() {
   }
   const bool restart_pipeline = !restarted.empty();
   loaded_ = std::move(next);
+  configure_raw_recording();
   if (restart_pipeline) {
     try {
       source_->stop();
@@ -327,6 +394,7 @@ int Daemon::run() {
   try {
     open();
     start_pipeline();
+    configure_raw_recording();
     start_source();
   } catch (const std::exception& e) {
     log_.error(e.what());
@@ -409,6 +477,13 @@ int Daemon::run() {
   }
   notifier_.stopping();
   stop_all();
+  report_raw_recording();
+  if (raw_) {
+    std::lock_guard lock(raw_mutex_);
+    const RawRecorder::Counts n = raw_->close();  // sends the pairs it still holds
+    raw_.reset();
+    log_.info(fmt::format("raw recording: {} pairs on DCO_RAW, {} dropped", n.recorded, n.dropped));
+  }
   log_.info("stopped");
   log_.set_forward({});
   {

@@ -11,7 +11,7 @@ namespace {
 void register_params(ConfigSchema& s, DaemonConfig& c) {
   s.add("source.uri", &c.source, {},
         "frames from: synthetic://NAME?width=&height=&fps=&frames=, replay://DIR?fps=&loop=, "
-        "indemind://[SERIAL]");
+        "lcmlog://FILE?fps=, indemind://[SERIAL]");
   s.add("ring.path", &c.ring_path, {},
         "depth ring file; empty = $RUNTIME_DIRECTORY (or /run/dcod, else a temp dir)/depth.shm");
   s.add("ring.slots", &c.ring_slots, 3, 64, "frames the ring holds (readers get the newest)");
@@ -25,6 +25,12 @@ void register_params(ConfigSchema& s, DaemonConfig& c) {
         "exit cleanly after publishing this many frames (0 = run until stopped)");
   s.add("log.level", &c.log_level, {"debug", "info", "warning", "error"},
         "least severe message written (journal or stderr, and DCO_LOG)");
+  s.add("raw.enabled", &c.raw_enabled,
+        "record the source's raw pairs on DCO_RAW (PNG, with calibration and IMU) for "
+        "lcm-logger and lcmlog:// replay; SIGHUP turns it on and off");
+  s.add("raw.png_level", &c.raw_png_level, 0, 9, "DCO_RAW zlib level (1: fast, most of the gain)");
+  s.add("raw.max_message_bytes", &c.raw_max_message_bytes, 65536, 268435456,
+        "larger DCO_RAW messages are not sent (udpm receivers need recv_buf_size above it)");
   pipeline::register_params(s, c.pipeline);
   pipeline::runtime::register_params(s, c.runtime);
 }

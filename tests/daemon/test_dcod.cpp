@@ -6,6 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <thread>
 
 #include "dco/client.hpp"
 #include "dco/core/calibration.hpp"
@@ -307,6 +311,83 @@ TEST(Dcod, ReplayInDeterministicModeIsBitIdenticalToDcoDepth) {
                                160 * sizeof(float)) != 0;
     EXPECT_EQ(differing, 0) << "frame " << i << ": rows that differ from dco-depth";
   }
+}
+
+// Depth of every frame dcod publishes into the ring at `ring`, by frame number, until `frames`
+// arrived or three quiet seconds.
+std::map<std::uint64_t, std::vector<float>> read_ring(const std::filesystem::path& ring, int frames,
+                                                      int w, int h) {
+  std::map<std::uint64_t, std::vector<float>> received;
+  for (int i = 0; i < 2000 && !std::filesystem::exists(ring); ++i)
+    std::this_thread::sleep_for(10ms);
+  if (!std::filesystem::exists(ring)) return received;
+  dco::client::Options co;
+  co.path = ring.string();
+  dco::client::Client client(co);
+  while (received.size() < static_cast<std::size_t>(frames)) {
+    const auto f = client.wait_next(3s);
+    if (!f) break;
+    std::vector<float> depth(static_cast<std::size_t>(w) * h);
+    for (int y = 0; y < h; ++y)
+      std::memcpy(&depth[static_cast<std::size_t>(y) * w],
+                  f->depth_row(static_cast<std::uint32_t>(y)),
+                  static_cast<std::size_t>(w) * sizeof(float));
+    if (client.still_valid(*f)) received[f->info().frame_seq] = std::move(depth);
+  }
+  return received;
+}
+
+TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
+  if (const std::string problem = private_network_problem(); !problem.empty())
+    GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
+  TempDir dir;
+  constexpr int kFrames = 8;
+  const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+  const auto log = dir / "field.log";
+  const std::string pipeline = " --set runtime.deterministic=true --set stereo.max_disparity=40";
+  // On the headset: dcod with raw recording and lcm-logger side by side in one network.
+  const std::string record =
+      unshare_command() + " sh -c '" + kNetnsSetup + " && lcm-logger -q --lcm-url=\"" + url +
+      "\" " + log.string() + " & L=$!; sleep 0.5; " + DCOD_EXE +
+      " --source \"synthetic://hand?width=160&height=96&fps=6&frames=" + std::to_string(kFrames) +
+      "\" --set \"lcm.url=" + url + "\" --set ring.path=" + (dir / "rec.shm").string() +
+      " --set raw.enabled=true" + pipeline + "; S=$?; sleep 0.5; kill -INT $L; wait $L; exit $S'";
+  std::map<std::uint64_t, std::vector<float>> recorded;
+  std::thread reader([&] { recorded = read_ring(dir / "rec.shm", kFrames, 160, 96); });
+  const auto r = run_command(record);
+  reader.join();
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("raw recording: 8 pairs on DCO_RAW, 0 dropped"), std::string::npos)
+      << r.output;
+  ASSERT_EQ(recorded.size(), static_cast<std::size_t>(kFrames)) << r.output;
+
+  // On the desk: the log through the same pipeline.
+  DcodOptions o;
+  o.args = base_args(dir, "lcmlog://" + log.string() + "?fps=6");
+  o.args.insert(o.args.end(),
+                {"--set", "runtime.deterministic=true", "--set", "stereo.max_disparity=40"});
+  o.log = dir / "replay.log";
+  DcodProcess dcod(o);
+  const auto replayed = read_ring(dir / "depth.shm", kFrames, 160, 96);
+  EXPECT_EQ(dcod.wait(10s), 0) << dcod.log();
+  ASSERT_EQ(replayed.size(), static_cast<std::size_t>(kFrames)) << dcod.log();
+  for (const auto& [seq, depth] : recorded) {
+    ASSERT_TRUE(replayed.count(seq)) << "frame " << seq;
+    EXPECT_EQ(std::memcmp(depth.data(), replayed.at(seq).data(), depth.size() * sizeof(float)), 0)
+        << "frame " << seq << " differs from what the headset published";
+  }
+  // The same log cut short: the frames before the cut, then one line naming it.
+  std::string bytes;
+  {
+    std::ifstream in(log, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  std::ofstream(dir / "cut.log", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  const auto cut = run_command(std::string(DCOD_EXE) + " --source lcmlog://" +
+                               (dir / "cut.log").string() + "?fps=0 --set lcm.url=memq:// " +
+                               "--set ring.path=" + (dir / "cut.shm").string() + pipeline);
+  EXPECT_EQ(cut.status, 1) << cut.output;
+  EXPECT_NE(cut.output.find("ends inside the event"), std::string::npos) << cut.output;
 }
 
 TEST(DcodService, UnitVerifiesAndItsExposureIsAtMost2_5) {

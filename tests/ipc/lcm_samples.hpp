@@ -91,11 +91,12 @@ inline dco::raw_stereo_t sample_raw() {
   m.capture_ns = 4;
   m.width = 8;
   m.height = 4;
-  m.num_bytes = 32;
-  for (int i = 0; i < m.num_bytes; ++i) {
-    m.left.push_back(static_cast<std::uint8_t>(i));
-    m.right.push_back(static_cast<std::uint8_t>(255 - i));
-  }
+  m.encoding = "png";
+  m.left_size = 32;
+  m.right_size = 20;
+  for (int i = 0; i < m.left_size; ++i) m.left.push_back(static_cast<std::uint8_t>(i));
+  for (int i = 0; i < m.right_size; ++i) m.right.push_back(static_cast<std::uint8_t>(255 - i));
+  m.calibration = "[left]\nwidth = 8\n";
   m.num_imu = 3;
   for (int i = 0; i < m.num_imu; ++i) {
     m.imu_ns.push_back(1000 * i);

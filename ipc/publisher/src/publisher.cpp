@@ -181,6 +181,10 @@ void DepthPublisher::publish_status(const DeviceStatus& status, std::int64_t now
   send(channel::kStatus, m);
 }
 
+void DepthPublisher::publish_raw(const ::dco::raw_stereo_t& message) {
+  send(channel::kRaw, message);
+}
+
 void DepthPublisher::log(LogLevel level, std::string_view source, std::string_view text,
                          std::int64_t now_ns) {
   dco::log_event_t m;

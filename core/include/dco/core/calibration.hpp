@@ -3,6 +3,7 @@
 #include <array>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace dco {
@@ -74,5 +75,10 @@ StereoCalibration load_calibration(const std::filesystem::path& path);
 
 // Writes dco's own TOML format; load_calibration reads it back to the same values.
 void save_calibration(const std::filesystem::path& path, const StereoCalibration& calib);
+
+// The same TOML as text, and back (validated; errors name `source` and the line), for
+// calibrations that travel inside recordings.
+std::string calibration_to_toml(const StereoCalibration& calib);
+StereoCalibration calibration_from_toml(std::string_view text, const std::string& source);
 
 }  // namespace dco

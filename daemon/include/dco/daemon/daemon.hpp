@@ -20,6 +20,10 @@
 #include "dco/pipeline/runtime/depth_runtime.hpp"
 
 namespace dco::daemon {
+class RawRecorder;
+}
+
+namespace dco::daemon {
 
 // dcod's wiring and lifecycle: source -> rectify -> real-time runtime -> depth ring + LCM, with
 // the service manager told about readiness, status and health. The source delivers on its own
@@ -54,6 +58,9 @@ class Daemon final : public drivers::FrameSink {
   void start_source();
   void stop_all();
   void reload();
+  // Starts, stops or re-creates the DCO_RAW recorder as the configuration says.
+  void configure_raw_recording();
+  void report_raw_recording();
   void tick(std::int64_t now_ns);
   bool healthy(std::int64_t now_ns) const;
   std::string status_line(const pipeline::runtime::RuntimeStats& stats) const;
@@ -73,6 +80,11 @@ class Daemon final : public drivers::FrameSink {
   std::mutex publish_mutex_;  // the publisher: frames (runtime thread), stats and logs (others)
   std::unique_ptr<ipc::DepthPublisher> publisher_;
   std::unique_ptr<pipeline::runtime::DepthRuntime> runtime_;
+  std::string calibration_toml_;  // the source's, as DCO_RAW carries it
+  std::mutex raw_mutex_;          // the recorder: offered frames (source thread), reloads (main)
+  std::unique_ptr<RawRecorder> raw_;
+  std::string raw_settings_;  // what raw_ was made with
+  std::uint64_t raw_dropped_reported_ = 0, raw_oversized_reported_ = 0, raw_failed_reported_ = 0;
 
   // Source sequence numbers by capture time, so a result names the camera frame it came from.
   std::mutex seq_mutex_;

@@ -24,6 +24,9 @@ struct DaemonConfig {
   double stall_timeout_s = 3;               // service.stall_timeout_s
   int max_frames = 0;                       // service.max_frames
   std::string log_level = "info";           // log.level
+  bool raw_enabled = false;                 // raw.enabled
+  int raw_png_level = 1;                    // raw.png_level
+  int raw_max_message_bytes = 4'000'000;    // raw.max_message_bytes
   pipeline::PipelineParams pipeline;
   pipeline::runtime::RuntimeParams runtime;
 };

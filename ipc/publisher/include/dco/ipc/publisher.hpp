@@ -10,6 +10,7 @@
 #include "dco/core/image.hpp"
 #include "dco/ipc/ring_writer.hpp"
 #include "dco/pipeline/runtime/depth_runtime.hpp"
+#include "dco/raw_stereo_t.hpp"
 
 namespace lcm {
 class LCM;
@@ -64,6 +65,8 @@ class DepthPublisher {
   void publish_stats(const pipeline::runtime::RuntimeStats& stats, std::int64_t now_ns);
   void publish_status(const DeviceStatus& status, std::int64_t now_ns);
   void log(LogLevel level, std::string_view source, std::string_view text, std::int64_t now_ns);
+  // DCO_RAW: a recorded raw pair (the daemon's raw recorder builds it).
+  void publish_raw(const ::dco::raw_stereo_t& message);
 
   // Changes the DCO_DEPTH_PREVIEW rate (a configuration reload); throws dco::Error when < 0.
   void set_preview_hz(double hz);

@@ -1,0 +1,118 @@
+// Plain std::string messages, no fmt: the fuzz build compiles this file on its own.
+#include <array>
+#include <string>
+
+#include "dco/core/error.hpp"
+#include "dco/drivers/lcm_log.hpp"
+
+namespace dco::drivers {
+namespace {
+
+// An event's head: sync word, event number, timestamp, channel length, data length; big-endian.
+constexpr std::size_t kHeadBytes = 4 + 8 + 8 + 4 + 4;
+
+std::uint64_t read_be(const std::uint8_t* p, int bytes) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = v << 8 | p[i];
+  return v;
+}
+
+void put_be(std::ostream& out, std::uint64_t v, int bytes) {
+  std::array<char, 8> b{};
+  for (int i = 0; i < bytes; ++i)
+    b[static_cast<std::size_t>(i)] = static_cast<char>(v >> (8 * (bytes - 1 - i)));
+  out.write(b.data(), bytes);
+}
+
+std::string cut(std::uint64_t got, std::uint64_t needed) {
+  return "the log ends inside the event (" + std::to_string(got) + " of " + std::to_string(needed) +
+         " bytes)";
+}
+
+}  // namespace
+
+LcmLogReader::LcmLogReader(const std::filesystem::path& path)
+    : file_(std::make_unique<std::ifstream>(path, std::ios::binary)),
+      in_(file_.get()),
+      name_(path.string()) {
+  if (!*file_) throw Error(name_ + ": cannot open the LCM log");
+  measure();
+}
+
+LcmLogReader::LcmLogReader(std::istream& in, std::string name) : in_(&in), name_(std::move(name)) {
+  measure();
+}
+
+void LcmLogReader::measure() {
+  const std::istream::pos_type start = in_->tellg();
+  if (start == std::istream::pos_type(-1) || !in_->seekg(0, std::ios::end)) {
+    in_->clear();
+    return;  // not seekable: lengths are checked against what arrives
+  }
+  const std::istream::pos_type end = in_->tellg();
+  in_->seekg(start);
+  if (end != std::istream::pos_type(-1) && end >= start)
+    size_ = static_cast<std::uint64_t>(end - start);
+}
+
+bool LcmLogReader::fail(const std::string& what) {
+  damage_ = name_ + ": event " + std::to_string(events_ + 1) + " at byte " +
+            std::to_string(offset_) + ": " + what + "; the " + std::to_string(events_) +
+            " events before it are good";
+  return false;
+}
+
+bool LcmLogReader::next(LcmLogEvent& event) {
+  if (!damage_.empty()) return false;
+  std::array<std::uint8_t, kHeadBytes> head{};
+  in_->read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size()));
+  const auto got = static_cast<std::size_t>(in_->gcount());
+  if (got == 0) return false;  // the clean end
+  if (got < 4 || read_be(head.data(), 4) != kSyncWord)
+    return fail(got < 4 ? "the log ends inside an event's sync word"
+                        : "no LCM sync word where an event should start");
+  if (got < kHeadBytes)
+    return fail("the log ends inside the event's head (" + std::to_string(got) + " of " +
+                std::to_string(kHeadBytes) + " bytes)");
+  const std::uint64_t channel_bytes = read_be(head.data() + 20, 4);
+  const std::uint64_t data_bytes = read_be(head.data() + 24, 4);
+  if (channel_bytes == 0 || channel_bytes > kMaxChannel)
+    return fail("a channel name of " + std::to_string(channel_bytes) + " bytes (1.." +
+                std::to_string(kMaxChannel) + ")");
+  if (data_bytes > kMaxData)
+    return fail("a message of " + std::to_string(data_bytes) + " bytes, more than LCM's " +
+                std::to_string(kMaxData));
+  // A length past the end of the file is a cut, found without allocating for it.
+  if (const std::uint64_t left = size_ - offset_ - kHeadBytes; channel_bytes + data_bytes > left)
+    return fail(cut(kHeadBytes + left, kHeadBytes + channel_bytes + data_bytes));
+  event.number = static_cast<std::int64_t>(read_be(head.data() + 4, 8));
+  event.timestamp_us = static_cast<std::int64_t>(read_be(head.data() + 12, 8));
+  event.offset = offset_;
+  event.channel.resize(channel_bytes);
+  in_->read(event.channel.data(), static_cast<std::streamsize>(channel_bytes));
+  const auto channel_got = static_cast<std::uint64_t>(in_->gcount());
+  event.data.resize(data_bytes);
+  std::uint64_t data_got = 0;
+  if (channel_got == channel_bytes && data_bytes > 0) {
+    in_->read(reinterpret_cast<char*>(event.data.data()), static_cast<std::streamsize>(data_bytes));
+    data_got = static_cast<std::uint64_t>(in_->gcount());
+  }
+  if (channel_got < channel_bytes || data_got < data_bytes)
+    return fail(cut(kHeadBytes + channel_got + data_got, kHeadBytes + channel_bytes + data_bytes));
+  offset_ += kHeadBytes + channel_bytes + data_bytes;
+  ++events_;
+  return true;
+}
+
+void write_lcm_log_event(std::ostream& out, const LcmLogEvent& event) {
+  put_be(out, LcmLogReader::kSyncWord, 4);
+  put_be(out, static_cast<std::uint64_t>(event.number), 8);
+  put_be(out, static_cast<std::uint64_t>(event.timestamp_us), 8);
+  put_be(out, event.channel.size(), 4);
+  put_be(out, event.data.size(), 4);
+  out.write(event.channel.data(), static_cast<std::streamsize>(event.channel.size()));
+  out.write(reinterpret_cast<const char*>(event.data.data()),
+            static_cast<std::streamsize>(event.data.size()));
+}
+
+}  // namespace dco::drivers

@@ -1,0 +1,103 @@
+// lcmlog://FILE: the raw stereo pairs an LCM log recorded on DCO_RAW (dcod with raw.enabled),
+// paced at `fps` (0 = as fast as the pipeline takes them), through the same pipeline as live.
+// The log streams: one event at a time, never the whole file in memory.
+
+#include <fmt/format.h>
+
+#include "../src/paced_source.hpp"
+#include "../src/sources.hpp"
+#include "dco/core/error.hpp"
+#include "dco/drivers/lcm_log.hpp"
+#include "dco/drivers/raw_stereo.hpp"
+#include "dco/ipc/lcm_messages.hpp"
+
+namespace dco::drivers {
+namespace {
+
+class LcmLogSource final : public PacedSource {
+ public:
+  explicit LcmLogSource(SourceUri& uri) : path_(uri.path()) {
+    info_.uri = uri.text();
+    info_.fps = uri.number("fps", 30, 0, 1000);
+    channel_ = uri.value("channel").value_or(ipc::channel::kRaw);
+    uri.finish();
+    where_ = "lcmlog://" + path_;
+    reader_ = std::make_unique<LcmLogReader>(path_);
+    // The first pair says the size and calibration every later one must have.
+    if (!read_pair()) {
+      if (!reader_->damage().empty()) throw Error(where_ + ": " + reader_->damage());
+      throw Error(
+          fmt::format("{}: no {} message in {} events (was dcod recording with "
+                      "raw.enabled = true?)",
+                      where_, channel_, reader_->events_read()));
+    }
+    calibration_toml_ = message_.calibration;
+    calibration_ = calibration_from_toml(calibration_toml_, where_ + " (recorded calibration)");
+    if (calibration_.left.width != message_.width || calibration_.left.height != message_.height)
+      throw Error(fmt::format("{}: frames of {}x{} but a calibration for {}x{}", where_,
+                              message_.width, message_.height, calibration_.left.width,
+                              calibration_.left.height));
+    info_.width = message_.width;
+    info_.height = message_.height;
+    info_.channels = left_.channels();
+    info_.description =
+        fmt::format("lcmlog {} {}x{} @ {} fps", path_, info_.width, info_.height,
+                    info_.fps > 0 ? fmt::format("{}", info_.fps) : std::string("max"));
+    pending_ = true;
+  }
+  ~LcmLogSource() override { stop(); }
+
+  const SourceInfo& info() const override { return info_; }
+  const StereoCalibration& calibration() const override { return calibration_; }
+
+ private:
+  // The next recorded pair into left_/right_; false at the end of the log. Damage ends the
+  // replay with an error naming where.
+  bool read_pair() {
+    while (reader_->next(event_)) {
+      if (event_.channel != channel_) continue;
+      std::string problem;
+      if (!ipc::decode_message(event_.data.data(), event_.data.size(), message_, problem))
+        throw Error(fmt::format("{}: event {} at byte {} on {}: {}", where_, event_.number,
+                                event_.offset, channel_, problem));
+      decode_raw_stereo(message_, left_, right_);
+      return true;
+    }
+    if (!reader_->damage().empty()) throw Error(where_ + ": " + reader_->damage());
+    return false;
+  }
+
+  bool produce(std::uint64_t, ImageView<const std::uint8_t>& left,
+               ImageView<const std::uint8_t>& right) override {
+    if (!pending_ && !read_pair()) return false;
+    pending_ = false;
+    if (message_.width != info_.width || message_.height != info_.height ||
+        left_.channels() != info_.channels)
+      throw Error(fmt::format("{}: frame {} is {}x{}x{}, the log started with {}x{}x{}", where_,
+                              message_.frame_seq, message_.width, message_.height, left_.channels(),
+                              info_.width, info_.height, info_.channels));
+    if (message_.calibration != calibration_toml_)
+      throw Error(fmt::format("{}: the calibration changes at frame {}; replay the parts apart",
+                              where_, message_.frame_seq));
+    left = left_.cview();
+    right = right_.cview();
+    return true;
+  }
+
+  std::string path_, where_, channel_, calibration_toml_;
+  std::unique_ptr<LcmLogReader> reader_;
+  LcmLogEvent event_;
+  ::dco::raw_stereo_t message_;
+  Image<std::uint8_t> left_, right_;
+  bool pending_ = false;  // the first pair, read at open, not yet delivered
+  StereoCalibration calibration_;
+  SourceInfo info_;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSource> open_lcmlog(SourceUri& uri) {
+  return std::make_unique<LcmLogSource>(uri);
+}
+
+}  // namespace dco::drivers

@@ -1,0 +1,268 @@
+// LCM logs: the reader against logs cut at every byte and damaged heads, the DCO_RAW codec
+// round trip, and the lcmlog:// source on good, cut and foreign logs.
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "dco/core/calibration.hpp"
+#include "dco/core/error.hpp"
+#include "dco/core/synthetic_scene.hpp"
+#include "dco/drivers/frame_source.hpp"
+#include "dco/drivers/lcm_log.hpp"
+#include "dco/drivers/raw_stereo.hpp"
+#include "dco/ipc/lcm_messages.hpp"
+#include "support/temp_dir.hpp"
+
+namespace dco::drivers {
+namespace {
+
+LcmLogEvent event_of(int i, const std::string& channel, std::vector<std::uint8_t> data) {
+  LcmLogEvent e;
+  e.number = i;
+  e.timestamp_us = 1'700'000'000'000'000 + 33'000 * i;
+  e.channel = channel;
+  e.data = std::move(data);
+  return e;
+}
+
+std::string log_of(const std::vector<LcmLogEvent>& events) {
+  std::ostringstream out;
+  for (const auto& e : events) write_lcm_log_event(out, e);
+  return out.str();
+}
+
+TEST(LcmLogReader, ReadsWhatWasWrittenAndSaysWhereACutLogEnds) {
+  std::vector<LcmLogEvent> events;
+  std::vector<std::size_t> ends;  // byte offset after each event
+  std::size_t at = 0;
+  for (int i = 0; i < 4; ++i) {
+    events.push_back(event_of(i, i % 2 ? "DCO_STATS" : "DCO_RAW",
+                              std::vector<std::uint8_t>(static_cast<std::size_t>(10 * i), 7)));
+    at += 28 + events.back().channel.size() + events.back().data.size();
+    ends.push_back(at);
+  }
+  const std::string whole = log_of(events);
+  ASSERT_EQ(whole.size(), at);
+  for (std::size_t cut = 0; cut <= whole.size(); ++cut) {
+    std::istringstream in(whole.substr(0, cut));
+    LcmLogReader reader(in, "cut.log");
+    LcmLogEvent e;
+    long n = 0;
+    while (reader.next(e)) {
+      ASSERT_EQ(e.channel, events[static_cast<std::size_t>(n)].channel);
+      ASSERT_EQ(e.data, events[static_cast<std::size_t>(n)].data);
+      ASSERT_EQ(e.timestamp_us, events[static_cast<std::size_t>(n)].timestamp_us);
+      ++n;
+    }
+    long whole_events = 0;
+    while (whole_events < 4 && ends[static_cast<std::size_t>(whole_events)] <= cut) ++whole_events;
+    EXPECT_EQ(n, whole_events) << "cut at " << cut;
+    const bool at_boundary = cut == 0 || ends[static_cast<std::size_t>(whole_events - 1)] == cut;
+    if (at_boundary) {
+      EXPECT_EQ(reader.damage(), "") << "cut at " << cut;
+    } else {
+      EXPECT_NE(reader.damage().find("cut.log: event " + std::to_string(n + 1) + " at byte"),
+                std::string::npos)
+          << reader.damage();
+      EXPECT_NE(reader.damage().find("ends inside"), std::string::npos) << reader.damage();
+      EXPECT_FALSE(reader.next(e)) << "nothing after damage";
+    }
+  }
+}
+
+TEST(LcmLogReader, DamagedHeadsAreNamed) {
+  const std::string good = log_of({event_of(0, "A", {1, 2, 3})});
+  auto damage_of = [](std::string bytes) {
+    std::istringstream in(bytes);
+    LcmLogReader reader(in, "bad.log");
+    LcmLogEvent e;
+    while (reader.next(e)) {
+    }
+    return reader.damage();
+  };
+  std::string no_sync = good + good;
+  no_sync[good.size()] ^= 0x10;
+  EXPECT_NE(damage_of(no_sync).find("event 2 at byte " + std::to_string(good.size()) +
+                                    ": no LCM sync word"),
+            std::string::npos)
+      << damage_of(no_sync);
+  std::string long_channel = good;
+  long_channel[20] = 0x7f;  // channel length's top byte
+  EXPECT_NE(damage_of(long_channel).find("channel name of"), std::string::npos);
+  std::string huge = good;
+  huge[24] = 0x40;  // data length 1 GiB and more
+  EXPECT_NE(damage_of(huge).find("more than LCM's"), std::string::npos) << damage_of(huge);
+  EXPECT_THROW(LcmLogReader("/nonexistent/x.log"), Error);
+}
+
+StereoFrame frame_of(const Image<std::uint8_t>& l, const Image<std::uint8_t>& r,
+                     const std::vector<ImuSample>& imu) {
+  StereoFrame f;
+  f.seq = 41;
+  f.capture_ns = 123456789;
+  f.left = l.cview();
+  f.right = r.cview();
+  f.imu = imu;
+  return f;
+}
+
+TEST(RawStereo, RoundTripIsLosslessForGreyAndColour) {
+  for (const bool colour : {false, true}) {
+    synthetic::SceneConfig c = synthetic::preset("hand", 96, 64);
+    c.color = colour;
+    synthetic::SceneRenderer scene(c);
+    synthetic::StereoSample s;
+    scene.render(3, s);
+    std::vector<ImuSample> imu(2);
+    imu[1].capture_ns = 99;
+    imu[1].accel_mps2 = {0.5f, 9.8f, -0.1f};
+    imu[1].gyro_radps = {0.01f, 0.02f, 0.03f};
+    RawStereoEncoder encoder;
+    ::dco::raw_stereo_t m;
+    encoder.encode(frame_of(s.left, s.right, imu), "calib", m);
+    EXPECT_EQ(m.frame_seq, 41);
+    EXPECT_EQ(m.encoding, "png");
+    EXPECT_LT(m.left_size + m.right_size, 2 * 96 * 64 * (colour ? 3 : 1)) << "compressed";
+    ASSERT_EQ(m.num_imu, 2);
+    EXPECT_EQ(m.imu_ns[1], 99);
+    EXPECT_FLOAT_EQ(m.accel[1][1], 9.8f);
+    EXPECT_FLOAT_EQ(m.gyro[1][2], 0.03f);
+    Image<std::uint8_t> left, right;
+    decode_raw_stereo(m, left, right);
+    decode_raw_stereo(m, left, right);  // again, into the same buffers
+    ASSERT_EQ(left.channels(), colour ? 3 : 1);
+    for (int y = 0; y < 64; ++y) {
+      ASSERT_EQ(0, std::memcmp(left.row(y), s.left.row(y), 96u * left.channels()));
+      ASSERT_EQ(0, std::memcmp(right.row(y), s.right.row(y), 96u * right.channels()));
+    }
+    // Damage is named, never silently decoded.
+    ::dco::raw_stereo_t bad = m;
+    bad.left.resize(bad.left.size() / 2);
+    EXPECT_THROW(decode_raw_stereo(bad, left, right), Error);
+    bad = m;
+    bad.width = 95;
+    EXPECT_THROW(decode_raw_stereo(bad, left, right), Error);
+    bad = m;
+    bad.encoding = "jpeg";
+    EXPECT_THROW(decode_raw_stereo(bad, left, right), Error);
+  }
+}
+
+// A log as dcod records it: the scene's pairs on DCO_RAW between other channels.
+std::string recorded_log(int frames, int width, int height) {
+  synthetic::SceneRenderer scene(synthetic::preset("hand", width, height));
+  const std::string calibration = calibration_to_toml(scene.calibration());
+  RawStereoEncoder encoder;
+  std::vector<LcmLogEvent> events;
+  synthetic::StereoSample s;
+  for (int i = 0; i < frames; ++i) {
+    scene.render(i, s);
+    StereoFrame f = frame_of(s.left, s.right, {});
+    f.seq = static_cast<std::uint64_t>(i);
+    ::dco::raw_stereo_t m;
+    encoder.encode(f, calibration, m);
+    std::vector<std::uint8_t> data(static_cast<std::size_t>(m.getEncodedSize()));
+    m.encode(data.data(), 0, static_cast<int>(data.size()));
+    events.push_back(event_of(2 * i, "DCO_RAW", std::move(data)));
+    events.push_back(event_of(2 * i + 1, "DCO_STATS", {1, 2, 3}));
+  }
+  return log_of(events);
+}
+
+struct Collect : FrameSink {
+  std::vector<std::vector<std::uint8_t>> lefts;
+  bool ended = false;
+  std::string error;
+  std::mutex mutex;
+  std::condition_variable done;
+  void on_frame(const StereoFrame& f) override {
+    std::vector<std::uint8_t> l;
+    for (int y = 0; y < f.left.height; ++y)
+      l.insert(l.end(), f.left.row(y), f.left.row(y) + f.left.width);
+    std::lock_guard lock(mutex);
+    lefts.push_back(std::move(l));
+  }
+  void on_end() override {
+    std::lock_guard lock(mutex);
+    ended = true;
+    done.notify_all();
+  }
+  void on_error(const std::string& m) override {
+    std::lock_guard lock(mutex);
+    error = m;
+    done.notify_all();
+  }
+  bool wait() {
+    std::unique_lock lock(mutex);
+    return done.wait_for(lock, std::chrono::seconds(20), [&] { return ended || !error.empty(); });
+  }
+};
+
+TEST(LcmLogSource, ReplaysTheRecordedPairsAndNamesDamage) {
+  dco::testing::TempDir dir;
+  const std::string log = recorded_log(5, 96, 64);
+  const auto path = dir.path() / "rec.log";
+  std::ofstream(path, std::ios::binary) << log;
+  {
+    auto source = open_source("lcmlog://" + path.string() + "?fps=0");
+    EXPECT_EQ(source->info().width, 96);
+    EXPECT_EQ(source->info().height, 64);
+    EXPECT_NE(source->info().description.find("lcmlog"), std::string::npos);
+    synthetic::SceneRenderer scene(synthetic::preset("hand", 96, 64));
+    EXPECT_EQ(calibration_to_toml(source->calibration()), calibration_to_toml(scene.calibration()));
+    Collect sink;
+    source->start(sink);
+    ASSERT_TRUE(sink.wait());
+    source->stop();
+    EXPECT_TRUE(sink.ended) << sink.error;
+    ASSERT_EQ(sink.lefts.size(), 5u);
+    synthetic::StereoSample s;
+    scene.render(4, s);
+    for (int y = 0; y < 64; ++y)
+      ASSERT_EQ(0,
+                std::memcmp(&sink.lefts[4][static_cast<std::size_t>(y) * 96], s.left.row(y), 96));
+  }
+  // Cut inside the fourth pair: three pairs, then the place of the cut.
+  const auto cut = dir.path() / "cut.log";
+  const std::size_t fourth = log.size() * 3 / 5 + 100;
+  std::ofstream(cut, std::ios::binary) << log.substr(0, fourth);
+  {
+    auto source = open_source("lcmlog://" + cut.string() + "?fps=0");
+    Collect sink;
+    source->start(sink);
+    ASSERT_TRUE(sink.wait());
+    source->stop();
+    EXPECT_EQ(sink.lefts.size(), 3u);
+    EXPECT_NE(sink.error.find("ends inside the event"), std::string::npos) << sink.error;
+    EXPECT_NE(sink.error.find("the 6 events before it are good"), std::string::npos) << sink.error;
+  }
+  // A log without DCO_RAW, and a file that is no log.
+  const auto stats_only = dir.path() / "stats.log";
+  std::ofstream(stats_only, std::ios::binary) << log_of({event_of(0, "DCO_STATS", {1})});
+  try {
+    open_source("lcmlog://" + stats_only.string());
+    ADD_FAILURE() << "opened a log without raw pairs";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no DCO_RAW message in 1 events"), std::string::npos)
+        << e.what();
+  }
+  const auto text = dir.path() / "notes.txt";
+  std::ofstream(text) << "not a log at all, just some words\n";
+  try {
+    open_source("lcmlog://" + text.string());
+    ADD_FAILURE() << "opened a text file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no LCM sync word"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace dco::drivers
