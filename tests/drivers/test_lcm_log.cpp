@@ -65,7 +65,8 @@ TEST(LcmLogReader, ReadsWhatWasWrittenAndSaysWhereACutLogEnds) {
     long whole_events = 0;
     while (whole_events < 4 && ends[static_cast<std::size_t>(whole_events)] <= cut) ++whole_events;
     EXPECT_EQ(n, whole_events) << "cut at " << cut;
-    const bool at_boundary = cut == 0 || ends[static_cast<std::size_t>(whole_events - 1)] == cut;
+    const bool at_boundary =
+        cut == 0 || (whole_events > 0 && ends[static_cast<std::size_t>(whole_events - 1)] == cut);
     if (at_boundary) {
       EXPECT_EQ(reader.damage(), "") << "cut at " << cut;
     } else {
