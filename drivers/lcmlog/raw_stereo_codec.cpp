@@ -29,9 +29,9 @@ void RawStereoEncoder::encode(const StereoFrame& frame, const std::string& calib
   out.encoding = "png";
   const auto compress = [&](const ImageView<const std::uint8_t>& eye, std::vector<std::uint8_t>& to,
                             std::int32_t& size) {
-    if (!cv::imencode(".png", as_mat(eye), buffer_, params_))
+    // Straight into the message, whose vector keeps its capacity from frame to frame.
+    if (!cv::imencode(".png", as_mat(eye), to, params_))
       throw Error("raw recording: PNG encoding failed");
-    to.assign(buffer_.begin(), buffer_.end());
     size = static_cast<std::int32_t>(to.size());
   };
   compress(l, out.left, out.left_size);

@@ -103,4 +103,14 @@ RealFrame frame_of(const ExactScene& e) {
   return f;
 }
 
+ipc::FrameMeta ring_meta() {
+  ipc::FrameMeta meta;
+  meta.fx = kCamera.fx;
+  meta.fy = kCamera.fy;
+  meta.cx = kCamera.cx;
+  meta.cy = kCamera.cy;
+  meta.baseline_m = 0.12;
+  return meta;
+}
+
 }  // namespace dco::compositor

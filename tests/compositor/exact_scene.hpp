@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dco/compositor/renderer.hpp"
+#include "dco/ipc/ring_writer.hpp"
 
 namespace dco::compositor {
 
@@ -24,6 +25,8 @@ struct ExactScene {
 ExactScene make_scene();
 bool in_hand(int u, int v);
 RealFrame frame_of(const ExactScene& e);
+// Ring metadata of kCamera, as dcod writes it with each frame.
+ipc::FrameMeta ring_meta();
 
 // Whether pixel (u, v) of a mask has a 4-neighbour of the other value.
 bool boundary(const std::vector<std::uint8_t>& m, int u, int v);

@@ -95,12 +95,7 @@ TEST(Compositor, FollowsTheRingAndWritesPngs) {
   ipc::RingOptions o;
   o.width = kW;
   o.height = kH;
-  ipc::FrameMeta meta;
-  meta.fx = kCamera.fx;
-  meta.fy = kCamera.fy;
-  meta.cx = kCamera.cx;
-  meta.cy = kCamera.cy;
-  meta.baseline_m = 0.12;
+  ipc::FrameMeta meta = ring_meta();
   std::atomic<bool> stop{false};
   std::thread writer([&] {
     // A daemon that publishes 30 fps, stops after a while and comes back with a smaller size.

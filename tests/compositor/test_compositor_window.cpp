@@ -143,12 +143,7 @@ TEST(CompositorWindow, TheCommandShowsTheDaemonsFramesInAWindow) {
   ipc::RingOptions o;
   o.width = kW;
   o.height = kH;
-  ipc::FrameMeta meta;
-  meta.fx = kCamera.fx;
-  meta.fy = kCamera.fy;
-  meta.cx = kCamera.cx;
-  meta.cy = kCamera.cy;
-  meta.baseline_m = 0.12;
+  ipc::FrameMeta meta = ring_meta();
   std::atomic<bool> stop{false};
   ipc::RingWriter w(ring, o);
   std::thread writer([&] {

@@ -259,60 +259,6 @@ TEST(Dcod, ThreeWatchClientsInAPrivateNetworkNamespace) {
   }
 }
 
-TEST(Dcod, ReplayInDeterministicModeIsBitIdenticalToDcoDepth) {
-  TempDir dir;
-  constexpr int kFrames = 6;
-  const auto rec = dir / "rec";
-  write_synthetic_recording(rec, kFrames, 160, 96);
-  const auto offline = dir / "offline";
-  const auto r = run_command(
-      std::string(DCO_DEPTH_EXE) + " --left-pattern " + (rec / "left" / "%06d.png").string() +
-      " --right-pattern " + (rec / "right" / "%06d.png").string() + " --calib " +
-      (rec / "calib.toml").string() + " --max-disp 40 --out-dir " + offline.string());
-  ASSERT_EQ(r.status, 0) << r.output;
-
-  DcodOptions o;
-  o.args = base_args(dir, "replay://" + rec.string() + "?fps=6");
-  o.args.insert(o.args.end(),
-                {"--set", "runtime.deterministic=true", "--set", "stereo.max_disparity=40"});
-  o.log = dir / "dcod.log";
-  DcodProcess dcod(o);
-  const auto ring = dir / "depth.shm";
-  for (int i = 0; i < 400 && !std::filesystem::exists(ring) && dcod.running(); ++i)
-    std::this_thread::sleep_for(10ms);
-  ASSERT_TRUE(std::filesystem::exists(ring)) << dcod.log();
-  dco::client::Options co;
-  co.path = ring.string();
-  dco::client::Client client(co);
-
-  std::map<std::uint64_t, std::vector<float>> received;
-  while (received.size() < kFrames) {
-    const auto f = client.wait_next(3s);
-    if (!f) break;
-    std::vector<float> depth(160 * 96);
-    for (std::uint32_t y = 0; y < 96; ++y)
-      std::memcpy(&depth[y * 160], f->depth_row(y), 160 * sizeof(float));
-    if (client.still_valid(*f)) received[f->info().frame_seq] = std::move(depth);
-  }
-  EXPECT_EQ(dcod.wait(10s), 0) << "a replay without loop ends cleanly\n" << dcod.log();
-  ASSERT_EQ(received.size(), static_cast<std::size_t>(kFrames)) << dcod.log();
-
-  const RectifiedGeometry geometry = load_calibration(rec / "calib.toml").rectified;
-  for (int i = 0; i < kFrames; ++i) {
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%06d.pfm", i);
-    const Image<float> disparity = read_pfm(offline / name);
-    Image<float> expected(disparity.width(), disparity.height());
-    disparity_to_depth(disparity.cview(), geometry, expected.view());
-    const std::vector<float>& got = received[static_cast<std::uint64_t>(i)];
-    long differing = 0;
-    for (int y = 0; y < 96; ++y)
-      differing += std::memcmp(&got[static_cast<std::size_t>(y) * 160], expected.row(y),
-                               160 * sizeof(float)) != 0;
-    EXPECT_EQ(differing, 0) << "frame " << i << ": rows that differ from dco-depth";
-  }
-}
-
 // Depth of every frame dcod publishes into the ring at `ring`, by frame number, until `frames`
 // arrived or three quiet seconds.
 std::map<std::uint64_t, std::vector<float>> read_ring(const std::filesystem::path& ring, int frames,
@@ -335,6 +281,48 @@ std::map<std::uint64_t, std::vector<float>> read_ring(const std::filesystem::pat
     if (client.still_valid(*f)) received[f->info().frame_seq] = std::move(depth);
   }
   return received;
+}
+
+TEST(Dcod, ReplayInDeterministicModeIsBitIdenticalToDcoDepth) {
+  TempDir dir;
+  constexpr int kFrames = 6;
+  const auto rec = dir / "rec";
+  write_synthetic_recording(rec, kFrames, 160, 96);
+  const auto offline = dir / "offline";
+  const auto r = run_command(
+      std::string(DCO_DEPTH_EXE) + " --left-pattern " + (rec / "left" / "%06d.png").string() +
+      " --right-pattern " + (rec / "right" / "%06d.png").string() + " --calib " +
+      (rec / "calib.toml").string() + " --max-disp 40 --out-dir " + offline.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+
+  DcodOptions o;
+  o.args = base_args(dir, "replay://" + rec.string() + "?fps=6");
+  o.args.insert(o.args.end(),
+                {"--set", "runtime.deterministic=true", "--set", "stereo.max_disparity=40"});
+  o.log = dir / "dcod.log";
+  DcodProcess dcod(o);
+  const auto ring = dir / "depth.shm";
+  for (int i = 0; i < 400 && !std::filesystem::exists(ring) && dcod.running(); ++i)
+    std::this_thread::sleep_for(10ms);
+  ASSERT_TRUE(std::filesystem::exists(ring)) << dcod.log();
+  auto received = read_ring(ring, kFrames, 160, 96);
+  EXPECT_EQ(dcod.wait(10s), 0) << "a replay without loop ends cleanly\n" << dcod.log();
+  ASSERT_EQ(received.size(), static_cast<std::size_t>(kFrames)) << dcod.log();
+
+  const RectifiedGeometry geometry = load_calibration(rec / "calib.toml").rectified;
+  for (int i = 0; i < kFrames; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%06d.pfm", i);
+    const Image<float> disparity = read_pfm(offline / name);
+    Image<float> expected(disparity.width(), disparity.height());
+    disparity_to_depth(disparity.cview(), geometry, expected.view());
+    const std::vector<float>& got = received[static_cast<std::uint64_t>(i)];
+    long differing = 0;
+    for (int y = 0; y < 96; ++y)
+      differing += std::memcmp(&got[static_cast<std::size_t>(y) * 160], expected.row(y),
+                               160 * sizeof(float)) != 0;
+    EXPECT_EQ(differing, 0) << "frame " << i << ": rows that differ from dco-depth";
+  }
 }
 
 TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {

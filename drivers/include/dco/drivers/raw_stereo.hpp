@@ -23,7 +23,6 @@ class RawStereoEncoder {
 
  private:
   std::vector<int> params_;
-  std::vector<unsigned char> buffer_;
 };
 
 // Decodes into `left` and `right`, reallocating them only when the size changes. Throws
