@@ -16,6 +16,7 @@
 #include "dco/core/depth_conversion.hpp"
 #include "dco/core/error.hpp"
 #include "raw_recorder.hpp"
+#include "replay_check.hpp"
 
 namespace dco::daemon {
 namespace {
@@ -57,17 +58,38 @@ void Daemon::wake() {
 
 void Daemon::apply_source_hints(LoadedConfig& config) const {
   const auto& hint = source_->info().max_disparity;
-  if (!config.max_disparity_given && hint)
-    config.config.pipeline.stereo.max_disparity = std::clamp(*hint, 1, 1024);
+  if (config.max_disparity_given || !hint) return;
+  config.config.pipeline.stereo.max_disparity = std::clamp(*hint, 1, 1024);
+  // The values say what runs (DCO_RAW records them, reloads compare them).
+  for (auto& [key, value] : config.values)
+    if (key == "stereo.max_disparity")
+      value = std::to_string(config.config.pipeline.stereo.max_disparity);
 }
 
 void Daemon::open() {
-  const DaemonConfig& c = loaded_.config;
-  source_ = open_source_(c.source);
+  source_ = open_source_(loaded_.config.source);
+  if (const std::string& recorded = source_->info().recorded_pipeline; !recorded.empty()) {
+    // The headset's algorithm settings come with its log; the file and --set still win.
+    sources_.recorded = recorded;
+    LoadedConfig with_recorded = load_config(sources_);
+    std::vector<std::string> from_log;
+    for (const std::string& key : changed_keys(loaded_, with_recorded))
+      for (const auto& [k, value] : with_recorded.values)
+        if (k == key) from_log.push_back(key + " = " + value);
+    log_.info(from_log.empty() ? std::string("the log's pipeline settings are this configuration's")
+                               : "from the log's pipeline settings: " + join(from_log));
+    if (!with_recorded.recorded_skipped.empty())
+      log_.warning("the log's pipeline settings name keys this build does not have, skipped: " +
+                   join(with_recorded.recorded_skipped));
+    loaded_ = std::move(with_recorded);
+    max_frames_ = loaded_.config.max_frames;
+  }
   apply_source_hints(loaded_);
+  const DaemonConfig& c = loaded_.config;
   if (!loaded_.max_disparity_given && source_->info().max_disparity)
     log_.info(fmt::format("stereo.max_disparity = {} (covers the source's nearest depth)",
                           loaded_.config.pipeline.stereo.max_disparity));
+  open_replay_check();
   calibration_toml_ = calibration_to_toml(source_->calibration());
   Rectifier rectifier(source_->calibration());
   geometry_ = rectifier.geometry();
@@ -91,6 +113,30 @@ void Daemon::open() {
     std::lock_guard lock(publish_mutex_);
     if (publisher_) publisher_->log(level, "dcod", text, monotonic_ns());
   });
+}
+
+void Daemon::open_replay_check() {
+  const auto log = drivers::lcmlog_path(loaded_.config.source);
+  if (!log) return;
+  if (!loaded_.config.runtime.deterministic) {
+    log_.info(
+        "the replay is not checked against the recorded depth (runtime.deterministic = false "
+        "drops frames by timing)");
+    return;
+  }
+  constexpr std::size_t kMaxPreviews = 100000;  // 2 Hz for 13 hours, under 1 GB
+  drivers::RecordedPreviews recorded = drivers::read_recorded_previews(*log, kMaxPreviews);
+  if (recorded.by_frame.empty()) {
+    log_.info("the log holds no DCO_DEPTH_PREVIEW: the replay is not checked against it");
+    return;
+  }
+  log_.info(fmt::format("checking the replay against {} recorded depth previews{}",
+                        recorded.by_frame.size(),
+                        recorded.truncated ? " (the first ones; the log holds more)" : ""));
+  if (recorded.undecodable > 0)
+    log_.warning(fmt::format("{} recorded depth previews do not decode and are not compared",
+                             recorded.undecodable));
+  replay_check_ = std::make_unique<ReplayCheck>(std::move(recorded));
 }
 
 void Daemon::start_pipeline() {
@@ -168,6 +214,7 @@ void Daemon::on_result(const pipeline::DepthResult& result,
     std::lock_guard lock(publish_mutex_);
     const ipc::RingWriter::Slot slot = publisher_->begin_write();
     disparity_to_depth(result.dense.cview(), geometry_, slot.depth);
+    if (replay_check_) replay_check_->check(meta.frame_seq, slot.depth);
     if (!slot.image.empty())
       for (int y = 0; y < slot.image.height; ++y)
         std::memcpy(slot.image.row(y), result.image.row(y),
@@ -266,10 +313,11 @@ void Daemon::tick(std::int64_t now_ns) {
 
 void Daemon::configure_raw_recording() {
   const DaemonConfig& c = loaded_.config;
-  const std::string settings = c.raw_enabled
-                                   ? fmt::format("{} {} {}", c.raw_png_level,
-                                                 c.raw_max_message_bytes, c.runtime.deterministic)
-                                   : std::string();
+  const std::string pipeline = pipeline_keys(loaded_);
+  const std::string settings =
+      c.raw_enabled ? fmt::format("{} {} {}\n{}", c.raw_png_level, c.raw_max_message_bytes,
+                                  c.runtime.deterministic, pipeline)
+                    : std::string();
   if (settings == raw_settings_) return;
   std::unique_ptr<RawRecorder> next;
   if (c.raw_enabled) {
@@ -277,6 +325,7 @@ void Daemon::configure_raw_recording() {
     o.png_level = c.raw_png_level;
     o.max_message_bytes = static_cast<std::size_t>(c.raw_max_message_bytes);
     o.never_drop = c.runtime.deterministic;
+    o.pipeline_config = pipeline;
     next =
         std::make_unique<RawRecorder>(calibration_toml_, o, [this](const ::dco::raw_stereo_t& m) {
           std::lock_guard lock(publish_mutex_);
@@ -483,6 +532,12 @@ int Daemon::run() {
     const RawRecorder::Counts n = raw_->close();  // sends the pairs it still holds
     raw_.reset();
     log_.info(fmt::format("raw recording: {} pairs on DCO_RAW, {} dropped", n.recorded, n.dropped));
+  }
+  if (replay_check_) {
+    if (const ReplayCheck::Result r = replay_check_->result(); r.identical == r.compared)
+      log_.info(replay_check_->summary());
+    else
+      log_.warning(replay_check_->summary());
   }
   log_.info("stopped");
   log_.set_forward({});

@@ -35,12 +35,45 @@ void register_params(ConfigSchema& s, DaemonConfig& c) {
   pipeline::runtime::register_params(s, c.runtime);
 }
 
+bool is_pipeline_key(const std::string& key) {
+  return key.starts_with("stereo.") || key.starts_with("contour.") || key.starts_with("densify.");
+}
+
 }  // namespace
+
+std::string pipeline_keys(const LoadedConfig& config) {
+  std::string out;
+  for (const auto& [key, value] : config.values) {
+    if (!is_pipeline_key(key)) continue;
+    // --set takes strings bare: "stereo.mode=fast".
+    const bool quoted = value.size() >= 2 && value.front() == '"' && value.back() == '"';
+    out += key + "=" + (quoted ? value.substr(1, value.size() - 2) : value) + "\n";
+  }
+  return out;
+}
 
 LoadedConfig load_config(const ConfigSources& sources) {
   LoadedConfig out;
   ConfigSchema schema;
   register_params(schema, out.config);
+  std::size_t begin = 0;
+  while (begin < sources.recorded.size()) {
+    std::size_t end = sources.recorded.find('\n', begin);
+    if (end == std::string::npos) end = sources.recorded.size();
+    const std::string line = sources.recorded.substr(begin, end - begin);
+    begin = end + 1;
+    if (line.empty()) continue;
+    const std::string key = line.substr(0, line.find('='));
+    if (!schema.has(key) || !is_pipeline_key(key)) {
+      out.recorded_skipped.push_back(key);
+      continue;
+    }
+    try {
+      schema.set(line);
+    } catch (const Error& e) {
+      throw Error(fmt::format("the log's recorded pipeline: {}", e.what()));
+    }
+  }
   if (sources.file) schema.load_file(*sources.file);
   for (const std::string& s : sources.sets) schema.set(s);
   if (sources.source) {

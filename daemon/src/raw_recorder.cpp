@@ -22,7 +22,10 @@ RawRecorder::RawRecorder(std::string calibration_toml, RawRecorderOptions option
       options_(options),
       send_(std::move(send)),
       encoder_(options.png_level),
-      thread_([this] { run(); }) {}
+      thread_([this] { run(); }) {
+  std::lock_guard lock(mutex_);  // the thread reads the message under it
+  message_.pipeline_config = options_.pipeline_config;
+}
 
 RawRecorder::~RawRecorder() {
   close();

@@ -24,6 +24,7 @@ struct RawRecorderOptions {
   int png_level = 1;
   std::size_t max_message_bytes = 4'000'000;
   bool never_drop = false;
+  std::string pipeline_config;  // the algorithm's keys, carried by every message
 };
 
 class RawRecorder {

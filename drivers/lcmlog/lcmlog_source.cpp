@@ -37,6 +37,7 @@ class LcmLogSource final : public PacedSource {
       throw Error(fmt::format("{}: frames of {}x{} but a calibration for {}x{}", where_,
                               message_.width, message_.height, calibration_.left.width,
                               calibration_.left.height));
+    info_.recorded_pipeline = message_.pipeline_config;
     info_.width = message_.width;
     info_.height = message_.height;
     info_.channels = left_.channels();
@@ -82,6 +83,11 @@ class LcmLogSource final : public PacedSource {
     left = left_.cview();
     right = right_.cview();
     return true;
+  }
+
+  // Replayed frames keep the numbers the headset gave them, so its log and the replay's agree.
+  std::uint64_t frame_number(std::uint64_t) const override {
+    return static_cast<std::uint64_t>(message_.frame_seq);
   }
 
   std::string path_, where_, channel_, calibration_toml_;

@@ -58,7 +58,7 @@ void PacedSource::run(std::stop_token stop, FrameSink& sink) {
       sink.on_error(e.what());
       return;
     }
-    frame.seq = next_seq_++;
+    frame.seq = frame_number(next_seq_++);
     frame.capture_ns = monotonic_ns();
     try {
       sink.on_frame(frame);

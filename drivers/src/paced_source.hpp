@@ -23,6 +23,9 @@ class PacedSource : public FrameSource {
   // after the last frame of a finite source; throws dco::Error when the source cannot go on.
   virtual bool produce(std::uint64_t seq, ImageView<const std::uint8_t>& left,
                        ImageView<const std::uint8_t>& right) = 0;
+  // The number frame `counter` (0, 1, ...) is delivered with, asked right after produce() made
+  // it: the counter itself, or the number a recording gave the frame.
+  virtual std::uint64_t frame_number(std::uint64_t counter) const { return counter; }
   // After this many frames the source keeps running but delivers nothing more: a camera that hung
   // (0 = never).
   void set_stall_after(std::uint64_t frames) { stall_after_ = frames; }

@@ -35,6 +35,43 @@ TEST(DaemonConfig, FileThenOverridesThenSource) {
   EXPECT_FALSE(load_config({}).max_disparity_given);
 }
 
+TEST(DaemonConfig, ALogsRecordedPipelineComesBeforeTheFileAndTheSets) {
+  dco::testing::TempDir dir;
+  ConfigSources headset;
+  headset.sets = {"stereo.max_disparity=40", "densify.lambda_s=2", "lcm.preview_hz=9",
+                  "runtime.deterministic=true"};
+  const std::string recorded = pipeline_keys(load_config(headset));
+  EXPECT_NE(recorded.find("stereo.max_disparity=40\n"), std::string::npos) << recorded;
+  EXPECT_NE(recorded.find("densify.lambda_s=2\n"), std::string::npos) << recorded;
+  // Only the algorithm travels: rates, the bus and the scheduling are the desk's business.
+  EXPECT_EQ(recorded.find("lcm."), std::string::npos) << recorded;
+  EXPECT_EQ(recorded.find("runtime."), std::string::npos) << recorded;
+
+  ConfigSources desk;
+  desk.recorded = recorded;
+  LoadedConfig c = load_config(desk);
+  EXPECT_EQ(c.config.pipeline.stereo.max_disparity, 40);
+  EXPECT_DOUBLE_EQ(c.config.pipeline.densify.lambda_s, 2);
+  EXPECT_TRUE(c.max_disparity_given);
+  EXPECT_EQ(pipeline_keys(c), recorded) << "the recorded keys reproduce themselves";
+  // The engineer's file and --set win over the log.
+  desk.file = dir.write("dcod.toml", "[densify]\nlambda_s = 3\n");
+  desk.sets = {"stereo.max_disparity=24"};
+  c = load_config(desk);
+  EXPECT_EQ(c.config.pipeline.stereo.max_disparity, 24);
+  EXPECT_DOUBLE_EQ(c.config.pipeline.densify.lambda_s, 3);
+  // A log from another build: keys this one lacks are skipped and named; a bad value is an error.
+  desk = {};
+  desk.recorded = "stereo.max_disparity=32\nstereo.warp_drive=9\nring.path=/tmp/x\n";
+  c = load_config(desk);
+  EXPECT_EQ(c.config.pipeline.stereo.max_disparity, 32);
+  EXPECT_EQ(c.recorded_skipped, (std::vector<std::string>{"stereo.warp_drive", "ring.path"}));
+  EXPECT_TRUE(c.config.ring_path.empty());
+  desk.recorded = "stereo.max_disparity=lots\n";
+  EXPECT_NE(load_error(desk).find("the log's recorded pipeline"), std::string::npos)
+      << load_error(desk);
+}
+
 TEST(DaemonConfig, PrintedConfigLoadsBackToTheSameValues) {
   dco::testing::TempDir dir;
   ConfigSources s;

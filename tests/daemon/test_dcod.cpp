@@ -16,6 +16,8 @@
 #include "dco/core/depth_conversion.hpp"
 #include "dco/core/disparity_io.hpp"
 #include "dco/core/synthetic_scene.hpp"
+#include "dco/drivers/lcm_log.hpp"
+#include "dco/ipc/lcm_messages.hpp"
 #include "dcod_process.hpp"
 #include "support/synthetic_recording.hpp"
 #include "support/temp_dir.hpp"
@@ -349,11 +351,62 @@ TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
       << r.output;
   ASSERT_EQ(recorded.size(), static_cast<std::size_t>(kFrames)) << r.output;
 
+  // dco-diag's key numbers against the log's own DCO_DEPTH announcements.
+  std::vector<double> latency_ms;
+  long previews = 0, raw_pairs = 0;
+  {
+    drivers::LcmLogReader log_reader(log);
+    drivers::LcmLogEvent event;
+    while (log_reader.next(event)) {
+      std::string problem;
+      ::dco::depth_frame_t frame;
+      if (event.channel == ipc::channel::kDepth &&
+          ipc::decode_message(event.data.data(), event.data.size(), frame, problem))
+        latency_ms.push_back(static_cast<double>(frame.publish_ns - frame.capture_ns) * 1e-6);
+      previews += event.channel == ipc::channel::kDepthPreview;
+      raw_pairs += event.channel == ipc::channel::kRaw;
+    }
+    ASSERT_TRUE(log_reader.damage().empty()) << log_reader.damage();
+  }
+  ASSERT_EQ(latency_ms.size(), static_cast<std::size_t>(kFrames));
+  std::sort(latency_ms.begin(), latency_ms.end());
+  const auto diag =
+      run_command(std::string(DCO_DIAG_EXE) + " " + log.string() + " --html " +
+                  (dir / "report.html").string() + " --json " + (dir / "report.json").string());
+  ASSERT_EQ(diag.status, 0) << diag.output;
+  EXPECT_NE(diag.output.find("8 published in 1 session"), std::string::npos) << diag.output;
+  std::string json;
+  {
+    std::ifstream in(dir / "report.json");
+    json.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  auto number = [&](const std::string& key) {
+    std::smatch m;
+    const std::regex pattern("\"" + key + "\": ([-0-9.e]+)");
+    EXPECT_TRUE(std::regex_search(json, m, pattern)) << key << " in " << json;
+    return m.empty() ? -1.0 : std::stod(m[1]);
+  };
+  EXPECT_EQ(number("frames"), kFrames);
+  EXPECT_EQ(number("unpublished_frames"), 0);
+  EXPECT_EQ(number("missing_announcements"), 0);
+  EXPECT_EQ(number("raw_pairs"), raw_pairs);
+  EXPECT_EQ(number("previews"), previews);
+  EXPECT_GE(previews, 1);
+  EXPECT_NEAR(number("max"), latency_ms.back(), 1e-3);
+  EXPECT_NEAR(number("p50"), latency_ms[kFrames / 2 - 1], 1e-3);  // nearest rank: the 4th of 8
+  std::string html;
+  {
+    std::ifstream in(dir / "report.html");
+    html.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+  EXPECT_NE(html.find("Latency histogram"), std::string::npos);
+
   // On the desk: the log through the same pipeline.
   DcodOptions o;
+  // The headset's pipeline keys come with the log: only the scheduling is set here.
   o.args = base_args(dir, "lcmlog://" + log.string() + "?fps=6");
-  o.args.insert(o.args.end(),
-                {"--set", "runtime.deterministic=true", "--set", "stereo.max_disparity=40"});
+  o.args.insert(o.args.end(), {"--set", "runtime.deterministic=true"});
   o.log = dir / "replay.log";
   DcodProcess dcod(o);
   const auto replayed = read_ring(dir / "depth.shm", kFrames, 160, 96);
@@ -364,6 +417,25 @@ TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
     EXPECT_EQ(std::memcmp(depth.data(), replayed.at(seq).data(), depth.size() * sizeof(float)), 0)
         << "frame " << seq << " differs from what the headset published";
   }
+  EXPECT_NE(dcod.log().find("from the log's pipeline settings: stereo.max_disparity = 40"),
+            std::string::npos)
+      << dcod.log();
+  // The replay checked itself against the headset's recorded previews.
+  EXPECT_NE(dcod.log().find("replay check: depth identical to the headset's in all " +
+                            std::to_string(previews) + " recorded previews replayed"),
+            std::string::npos)
+      << dcod.log();
+  // With another disparity range the depth is not the headset's, and the replay says so.
+  const auto other =
+      run_command(std::string(DCOD_EXE) + " --source lcmlog://" + log.string() +
+                  "?fps=0 --set lcm.url=memq:// --set ring.path=" + (dir / "other.shm").string() +
+                  " --set runtime.deterministic=true --set stereo.max_disparity=12");
+  EXPECT_EQ(other.status, 0) << other.output;
+  EXPECT_NE(other.output.find("replay check: depth differs from the headset's in"),
+            std::string::npos)
+      << other.output;
+  EXPECT_NE(other.output.find("preview pixels differ, by up to"), std::string::npos)
+      << other.output;
   // The same log cut short: the frames before the cut, then one line naming it.
   std::string bytes;
   {

@@ -38,6 +38,26 @@ std::int16_t block_depth_mm(ImageView<const float> depth, int x0, int y0, int fa
 
 }  // namespace
 
+int preview_factor(int width, int height, int max_width, int max_height) {
+  // One whole factor for both axes keeps the preview's pixels square.
+  return std::max({1, (width + max_width - 1) / std::max(1, max_width),
+                   (height + max_height - 1) / std::max(1, max_height)});
+}
+
+void make_depth_preview(ImageView<const float> depth, int factor, ::dco::depth_preview_t& out) {
+  if (factor < 1) throw Error(fmt::format("depth preview: factor {} out of range", factor));
+  out.source_width = depth.width;
+  out.source_height = depth.height;
+  out.width = (depth.width + factor - 1) / factor;
+  out.height = (depth.height + factor - 1) / factor;
+  out.num_pixels = out.width * out.height;
+  out.depth_mm.resize(static_cast<std::size_t>(out.num_pixels));
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x)
+      out.depth_mm[static_cast<std::size_t>(y * out.width + x)] =
+          block_depth_mm(depth, x * factor, y * factor, factor);
+}
+
 DepthPublisher::DepthPublisher(RingWriter& ring, const PublisherOptions& options)
     : ring_(ring), options_(options), stats_since_ns_(monotonic_ns()) {
   if (options.preview_hz < 0 || options.preview_max_width < 1 || options.preview_max_height < 1)
@@ -106,25 +126,15 @@ void DepthPublisher::announce(std::uint64_t publish_index, std::uint32_t slot,
 
 void DepthPublisher::send_preview(std::uint64_t publish_index, const FrameMeta& meta,
                                   ImageView<const float> depth) {
-  // One whole factor for both axes keeps the preview's pixels square.
-  const int factor =
-      std::max((depth.width + options_.preview_max_width - 1) / options_.preview_max_width,
-               (depth.height + options_.preview_max_height - 1) / options_.preview_max_height);
   dco::depth_preview_t m;
   m.session_id = as_lcm(ring_.session_id());
   m.publish_index = as_lcm(publish_index);
   m.frame_seq = as_lcm(meta.frame_seq);
   m.capture_ns = meta.capture_ns;
-  m.source_width = depth.width;
-  m.source_height = depth.height;
-  m.width = (depth.width + factor - 1) / factor;
-  m.height = (depth.height + factor - 1) / factor;
-  m.num_pixels = m.width * m.height;
-  m.depth_mm.resize(static_cast<std::size_t>(m.num_pixels));
-  for (int y = 0; y < m.height; ++y)
-    for (int x = 0; x < m.width; ++x)
-      m.depth_mm[static_cast<std::size_t>(y * m.width + x)] =
-          block_depth_mm(depth, x * factor, y * factor, factor);
+  make_depth_preview(depth,
+                     preview_factor(depth.width, depth.height, options_.preview_max_width,
+                                    options_.preview_max_height),
+                     m);
   send(channel::kDepthPreview, m);
   preview_sent_ = true;
   last_preview_capture_ns_ = meta.capture_ns;

@@ -21,7 +21,8 @@
 
 namespace dco::daemon {
 class RawRecorder;
-}
+class ReplayCheck;
+}  // namespace dco::daemon
 
 namespace dco::daemon {
 
@@ -57,6 +58,8 @@ class Daemon final : public drivers::FrameSink {
   void start_pipeline();  // a new runtime from the current config, started
   void start_source();
   void stop_all();
+  // Reads the recorded depth previews when the source replays a field log deterministically.
+  void open_replay_check();
   void reload();
   // Starts, stops or re-creates the DCO_RAW recorder as the configuration says.
   void configure_raw_recording();
@@ -66,7 +69,7 @@ class Daemon final : public drivers::FrameSink {
   std::string status_line(const pipeline::runtime::RuntimeStats& stats) const;
   void wake();
 
-  const ConfigSources sources_;
+  ConfigSources sources_;  // plus the pipeline keys a replayed log recorded
   const SourceOpener open_source_;
   LoadedConfig loaded_;
   Logger& log_;
@@ -85,6 +88,7 @@ class Daemon final : public drivers::FrameSink {
   std::unique_ptr<RawRecorder> raw_;
   std::string raw_settings_;  // what raw_ was made with
   std::uint64_t raw_dropped_reported_ = 0, raw_oversized_reported_ = 0, raw_failed_reported_ = 0;
+  std::unique_ptr<ReplayCheck> replay_check_;  // replaying a field log in deterministic mode
 
   // Source sequence numbers by capture time, so a result names the camera frame it came from.
   std::mutex seq_mutex_;

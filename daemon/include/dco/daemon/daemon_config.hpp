@@ -36,14 +36,21 @@ struct ConfigSources {
   std::optional<std::filesystem::path> file;  // --config
   std::vector<std::string> sets;              // --set key=value, in order
   std::optional<std::string> source;          // --source URI (after the file and the --sets)
+  // "key=value" lines a replayed log recorded (the headset's pipeline), before the file: what
+  // the engineer sets wins. Keys this build does not know are skipped.
+  std::string recorded;
 };
 
 struct LoadedConfig {
   DaemonConfig config;
   std::vector<std::pair<std::string, std::string>> values;  // key -> value as TOML writes it
   std::string toml;                                         // the effective config, commented
-  bool max_disparity_given = false;  // stereo.max_disparity came from the file or a --set
+  bool max_disparity_given = false;           // stereo.max_disparity came from the file or a --set
+  std::vector<std::string> recorded_skipped;  // recorded keys unknown to this build
 };
+
+// The algorithm's keys (stereo., contour., densify.) as "key=value" lines, for DCO_RAW.
+std::string pipeline_keys(const LoadedConfig& config);
 
 // Defaults, then the file, then the overrides. Throws dco::Error with "FILE:LINE: reason" (or the
 // override) for unknown keys and bad values, and with the parameter for invalid combinations.

@@ -26,8 +26,9 @@ struct ImuSample {
 // One stereo pair as a camera delivered it. The views belong to the source and are valid during
 // the FrameSink::on_frame call only.
 struct StereoFrame {
-  std::uint64_t seq = 0;        // 0, 1, 2, ... per source; continues across stop/start
-  std::int64_t capture_ns = 0;  // CLOCK_MONOTONIC
+  // 0, 1, 2, ... per source, continuing across stop/start; a replayed log keeps its numbers.
+  std::uint64_t seq = 0;
+  std::int64_t capture_ns = 0;                // CLOCK_MONOTONIC
   ImageView<const std::uint8_t> left, right;  // raw (rectify with the source's calibration)
   // IMU samples that arrived since the previous frame (empty for sources without an IMU).
   std::span<const ImuSample> imu;
@@ -53,6 +54,8 @@ struct SourceInfo {
   double fps = 0;  // pacing; 0 = as fast as the consumer takes frames
   // A disparity search range that covers what the source shows, when it knows (synthetic scenes).
   std::optional<int> max_disparity;
+  // A replayed field log: the pipeline keys the headset made its depth with ("key=value" lines).
+  std::string recorded_pipeline;
 };
 
 // Where a running source delivers. Called on the source's own thread, one call at a time.

@@ -99,9 +99,9 @@ template <>
 struct Encoding<::dco::raw_stereo_t> {
   static constexpr const char* kName = "dco.raw_stereo_t";
   static constexpr std::array steps{
-      fixed(8 * 2 + 4 * 2), string(), count(), array(1, 0), count(),
-      array(1, 1),          string(), count(), array(8, 2), array(12, 2),
-      array(12, 2)};
+      fixed(8 * 2 + 4 * 2), string(),    count(),  array(1, 0), count(),
+      array(1, 1),          string(),    string(), count(),     array(8, 2),
+      array(12, 2),         array(12, 2)};
 };
 
 inline std::int64_t read_be(const unsigned char* p, int bytes) {

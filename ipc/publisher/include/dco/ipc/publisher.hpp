@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dco/core/image.hpp"
+#include "dco/depth_preview_t.hpp"
 #include "dco/ipc/ring_writer.hpp"
 #include "dco/pipeline/runtime/depth_runtime.hpp"
 #include "dco/raw_stereo_t.hpp"
@@ -37,6 +38,14 @@ struct DeviceStatus {
 };
 
 enum class LogLevel : std::int8_t { kDebug = 0, kInfo = 1, kWarning = 2, kError = 3 };
+
+// DCO_DEPTH_PREVIEW's pixels: the nearest depth in each factor x factor block in millimetres (0 =
+// unknown, 32767 = that far or farther); sets the sizes, num_pixels and depth_mm of `out`. A
+// replay computes the same to compare with what a headset recorded. Throws dco::Error when
+// factor < 1.
+void make_depth_preview(ImageView<const float> depth, int factor, ::dco::depth_preview_t& out);
+// The smallest whole factor that shrinks width x height into max_width x max_height.
+int preview_factor(int width, int height, int max_width, int max_height);
 
 // The daemon's publishing side: frames go into the shared-memory ring first and are then announced
 // on DCO_DEPTH (a descriptor naming session, slot and publish index, never pixels), with a small

@@ -1,0 +1,37 @@
+#pragma once
+
+#include <cstdint>
+#include <mutex>
+#include <string>
+
+#include "dco/core/image.hpp"
+#include "dco/drivers/recorded_previews.hpp"
+
+namespace dco::daemon {
+
+// A replay of a field log checked against the depth the headset published: every replayed frame
+// with a recorded DCO_DEPTH_PREVIEW is shrunk the same way and compared pixel for pixel. In
+// deterministic mode a replay through the same build and configuration matches exactly.
+class ReplayCheck {
+ public:
+  explicit ReplayCheck(drivers::RecordedPreviews recorded) : recorded_(std::move(recorded)) {}
+
+  // The pipeline's thread: the depth published for camera frame `frame_seq`.
+  void check(std::uint64_t frame_seq, ImageView<const float> depth);
+
+  struct Result {
+    long recorded = 0, compared = 0, identical = 0;
+    std::string first_difference;  // empty while all compared frames match
+  };
+  Result result() const;
+  // One line for the daemon's log.
+  std::string summary() const;
+
+ private:
+  const drivers::RecordedPreviews recorded_;
+  mutable std::mutex mutex_;
+  Result result_;
+  ::dco::depth_preview_t replayed_;
+};
+
+}  // namespace dco::daemon

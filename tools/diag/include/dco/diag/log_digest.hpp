@@ -1,0 +1,111 @@
+#pragma once
+
+// What a dcod LCM log holds, gathered in one streaming pass: every published frame's latency,
+// the runtime's statistics, the device's state changes, the daemon's log, a sample of the depth
+// previews and the raw recording. Memory grows with the number of frames by 8 bytes a frame (a
+// day at 30 fps: 21 MB); previews and log lines are capped.
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <istream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "dco/depth_preview_t.hpp"
+#include "dco/device_status_t.hpp"
+#include "dco/log_event_t.hpp"
+#include "dco/pipeline_stats_t.hpp"
+
+namespace dco::diag {
+
+// Times are seconds since the log's first event, by the logger's clock: the one clock every
+// channel shares.
+struct FramePoint {
+  float t_s = 0;
+  float latency_ms = 0;  // capture to publication (DCO_DEPTH's publish_ns - capture_ns)
+};
+
+struct StatsPoint {
+  double t_s = 0;
+  long dropped = 0;  // at the pipeline's entry since the previous DCO_STATS (over restarts)
+  ::dco::pipeline_stats_t stats;
+};
+
+struct StatusChange {
+  double t_s = 0;
+  ::dco::device_status_t status;  // the first message with a new state or error
+};
+
+struct LogLine {
+  double t_s = 0;
+  ::dco::log_event_t event;
+};
+
+struct PreviewSample {
+  double t_s = 0;
+  ::dco::depth_preview_t preview;
+};
+
+// One run of dcod (a ring session): a restart of the daemon starts another.
+struct Session {
+  std::int64_t id = 0;
+  double first_s = 0, last_s = 0;
+  long frames = 0;
+  std::int64_t first_seq = 0, last_seq = 0;
+  std::int64_t last_index = 0;  // highest publish index seen
+  std::int64_t first_publish_ns = 0, last_publish_ns = 0;
+  // Camera frames between two published ones that were not published (dropped at the pipeline's
+  // entry), and publish indices missing from the log (announcements LCM or the logger lost).
+  long unpublished_frames = 0;
+  long missing_announcements = 0;
+  int width = 0, height = 0;
+};
+
+struct ChannelTally {
+  long events = 0;
+  std::uint64_t bytes = 0;
+  long undecodable = 0;
+  std::string first_problem;  // of the first undecodable message
+};
+
+struct DigestOptions {
+  std::size_t max_previews = 48;     // kept evenly over the log
+  std::size_t max_log_lines = 5000;  // DCO_LOG entries kept; the rest are only counted
+};
+
+struct LogDigest {
+  std::string name;
+  long events = 0;
+  std::uint64_t bytes = 0;       // read up to the end or the damage
+  std::uint64_t file_bytes = 0;  // the whole file, where known
+  std::string damage;            // empty when the whole log reads
+  std::int64_t first_us = 0;     // the logger's wall clock, µs since the epoch
+  double span_s = 0;             // first to last event
+  std::map<std::string, ChannelTally> channels;
+
+  std::vector<FramePoint> frames;  // every DCO_DEPTH, in log order
+  std::vector<Session> sessions;   // in order of appearance
+  std::vector<StatsPoint> stats;   // every DCO_STATS
+  long status_messages = 0;
+  std::vector<StatusChange> status_changes;
+  bool has_status = false;
+  ::dco::device_status_t last_status;
+  std::vector<LogLine> log;
+  long log_lines_dropped = 0;
+  std::array<long, 4> log_by_level{};  // DEBUG, INFO, WARNING, ERROR
+  std::vector<PreviewSample> previews;
+  long previews_seen = 0;
+  long raw_pairs = 0;
+  std::uint64_t raw_bytes = 0;
+  int raw_width = 0, raw_height = 0;
+};
+
+// Reads the log to its end or to the first damage (which `damage` then names); messages on dco's
+// channels that do not decode are counted per channel, never trusted. Throws dco::Error when the
+// file cannot be opened or holds no LCM event at all.
+LogDigest digest_log(const std::filesystem::path& path, const DigestOptions& options = {});
+LogDigest digest_log(std::istream& in, const std::string& name, const DigestOptions& options = {});
+
+}  // namespace dco::diag

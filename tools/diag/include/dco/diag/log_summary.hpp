@@ -1,0 +1,48 @@
+#pragma once
+
+// The key numbers of a digested log, as a person reads them (text) and as a script does (JSON).
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dco/diag/log_digest.hpp"
+
+namespace dco::diag {
+
+struct LatencySummary {
+  long frames = 0;
+  double mean_ms = 0, p50_ms = 0, p90_ms = 0, p99_ms = 0, max_ms = 0;
+};
+
+struct LogSummary {
+  long frames = 0;
+  long sessions = 0;
+  double fps = 0;  // published frames per second of publishing, over all sessions
+  long unpublished_frames = 0;
+  long missing_announcements = 0;
+  long dropped_at_entry = 0;  // the runtime's own count (DCO_STATS), over restarts
+  LatencySummary latency;
+  // The last DCO_STATS: stage times over that run so far.
+  std::optional<::dco::pipeline_stats_t> last_stats;
+  int entry_high_water = 0, stereo_queue_high_water = 0, densify_queue_high_water = 0;
+  long state_changes = 0;
+  long device_errors = 0;  // status changes into ERROR or with a new fault
+  long disconnects = 0;
+  long log_errors = 0, log_warnings = 0;
+  long undecodable = 0;
+};
+
+// p in [0, 100]: the nearest-rank percentile (the smallest value with at least p % of the values
+// at or below it); 0 for no values.
+double percentile(std::vector<float> values, double p);
+
+LogSummary summarize(const LogDigest& digest);
+
+// A few lines for a terminal; `report` names the HTML file when one was written.
+std::string text_summary(const LogDigest& digest, const LogSummary& summary,
+                         const std::string& report);
+// One JSON object with the same numbers (and the damage, if any).
+std::string json_summary(const LogDigest& digest, const LogSummary& summary);
+
+}  // namespace dco::diag

@@ -1,0 +1,81 @@
+// dco-diag: a report of a dcod LCM log (what lcm-logger recorded in the field): a text summary
+// on stdout, a self-contained HTML report, optionally the key numbers as JSON.
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "dco/core/error.hpp"
+#include "dco/diag/html_report.hpp"
+#include "dco/diag/log_digest.hpp"
+#include "dco/diag/log_summary.hpp"
+#include "dco/tools/command_line.hpp"
+
+namespace {
+
+constexpr const char* kUsage =
+    R"(usage: dco-diag LOG [--html FILE | --no-html] [--json FILE] [--previews N]
+
+Reads an LCM log of dcod's channels (lcm-logger) to its end or to the first damage and
+prints a summary. --html: the report's path (default LOG.html); --json: the key numbers as
+JSON ("-" = stdout instead of the summary); --previews: depth thumbnails in the report
+(default 48). Exit status 0 with a report, also for a damaged log (the summary says how far
+it read); 1 when the file is not an LCM log; 2 for a usage mistake.
+)";
+
+void write_file(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+  out.close();
+  if (!out) throw dco::Error("cannot write " + path.string());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return dco::tools::run_tool("dco-diag", [&] {
+    using dco::tools::UsageError;
+    std::string log, html, json;
+    bool no_html = false;
+    dco::diag::DigestOptions options;
+    dco::tools::ArgCursor args(argc, argv);
+    while (args.next()) {
+      const std::string_view name = args.name();
+      if (name == "--help" || name == "-h") {
+        std::fputs(kUsage, stdout);
+        return 0;
+      } else if (name == "--html") {
+        html = args.value();
+      } else if (name == "--no-html") {
+        no_html = args.flag();
+      } else if (name == "--json") {
+        json = args.value();
+      } else if (name == "--previews") {
+        const int n = args.int_value();
+        if (n < 0 || n > 10000) throw UsageError("--previews must be 0 to 10000");
+        options.max_previews = static_cast<std::size_t>(n);
+      } else if (!name.starts_with("-") && log.empty()) {
+        log = std::string(name);
+      } else {
+        throw UsageError(fmt::format("unexpected argument {}\n{}", name, kUsage));
+      }
+    }
+    if (log.empty()) throw UsageError(std::string("no log given\n") + kUsage);
+    if (no_html && !html.empty()) throw UsageError("--html and --no-html exclude each other");
+    if (!no_html && html.empty()) html = log + ".html";
+
+    const dco::diag::LogDigest digest = dco::diag::digest_log(log, options);
+    const dco::diag::LogSummary summary = dco::diag::summarize(digest);
+    if (!no_html) write_file(html, dco::diag::html_report(digest, summary));
+    if (json == "-") {
+      std::fputs(dco::diag::json_summary(digest, summary).c_str(), stdout);
+    } else {
+      if (!json.empty()) write_file(json, dco::diag::json_summary(digest, summary));
+      std::fputs(dco::diag::text_summary(digest, summary, no_html ? "" : html).c_str(), stdout);
+    }
+    return 0;
+  });
+}

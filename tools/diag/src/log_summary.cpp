@@ -1,0 +1,189 @@
+#include "dco/diag/log_summary.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <fmt/format.h>
+
+#include "dco/tools/json.hpp"
+
+namespace dco::diag {
+namespace {
+
+std::string human_bytes(std::uint64_t bytes) {
+  if (bytes < 10 * 1024) return fmt::format("{} B", bytes);
+  if (bytes < 10 * 1024 * 1024) return fmt::format("{} KiB", bytes / 1024);
+  return fmt::format("{} MiB", bytes / (1024 * 1024));
+}
+
+const char* state_name(std::int8_t state) {
+  switch (state) {
+    case ::dco::device_status_t::STATE_DISCONNECTED:
+      return "disconnected";
+    case ::dco::device_status_t::STATE_STARTING:
+      return "starting";
+    case ::dco::device_status_t::STATE_STREAMING:
+      return "streaming";
+    case ::dco::device_status_t::STATE_ERROR:
+      return "error";
+  }
+  return "unknown";
+}
+
+}  // namespace
+
+double percentile(std::vector<float> values, double p) {
+  if (values.empty()) return 0;
+  const auto rank =
+      static_cast<std::size_t>(std::clamp(std::ceil(p / 100.0 * static_cast<double>(values.size())),
+                                          1.0, static_cast<double>(values.size())));
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(rank - 1), values.end());
+  return values[rank - 1];
+}
+
+LogSummary summarize(const LogDigest& d) {
+  LogSummary s;
+  s.frames = static_cast<long>(d.frames.size());
+  s.sessions = static_cast<long>(d.sessions.size());
+  long intervals = 0;
+  double publishing_s = 0;
+  for (const Session& session : d.sessions) {
+    s.unpublished_frames += session.unpublished_frames;
+    s.missing_announcements += session.missing_announcements;
+    intervals += session.frames - 1;
+    publishing_s += (static_cast<double>(session.last_publish_ns) -
+                     static_cast<double>(session.first_publish_ns)) *
+                    1e-9;
+  }
+  if (publishing_s > 0) s.fps = static_cast<double>(intervals) / publishing_s;
+
+  std::vector<float> latency(d.frames.size());
+  std::transform(d.frames.begin(), d.frames.end(), latency.begin(),
+                 [](const FramePoint& f) { return f.latency_ms; });
+  s.latency.frames = s.frames;
+  if (!latency.empty()) {
+    s.latency.mean_ms =
+        std::accumulate(latency.begin(), latency.end(), 0.0) / static_cast<double>(latency.size());
+    s.latency.p50_ms = percentile(latency, 50);
+    s.latency.p90_ms = percentile(latency, 90);
+    s.latency.p99_ms = percentile(latency, 99);
+    s.latency.max_ms = *std::max_element(latency.begin(), latency.end());
+  }
+
+  for (const StatsPoint& p : d.stats) s.dropped_at_entry += p.dropped;
+  if (!d.stats.empty()) {
+    s.last_stats = d.stats.back().stats;
+    for (const StatsPoint& p : d.stats) {
+      s.entry_high_water = std::max(s.entry_high_water, p.stats.entry_high_water);
+      s.stereo_queue_high_water =
+          std::max(s.stereo_queue_high_water, p.stats.stereo_queue_high_water);
+      s.densify_queue_high_water =
+          std::max(s.densify_queue_high_water, p.stats.densify_queue_high_water);
+    }
+  }
+
+  for (std::size_t i = 0; i < d.status_changes.size(); ++i) {
+    const ::dco::device_status_t& now = d.status_changes[i].status;
+    const ::dco::device_status_t* before = i > 0 ? &d.status_changes[i - 1].status : nullptr;
+    if (before && before->state != now.state) ++s.state_changes;
+    if (now.state == ::dco::device_status_t::STATE_DISCONNECTED &&
+        (!before || before->state != now.state))
+      ++s.disconnects;
+    if ((now.state == ::dco::device_status_t::STATE_ERROR &&
+         (!before || before->state != now.state)) ||
+        (!now.error.empty() && (!before || before->error != now.error)))
+      ++s.device_errors;
+  }
+  s.log_errors = d.log_by_level[3];
+  s.log_warnings = d.log_by_level[2];
+  for (const auto& [name, tally] : d.channels) s.undecodable += tally.undecodable;
+  return s;
+}
+
+std::string text_summary(const LogDigest& d, const LogSummary& s, const std::string& report) {
+  std::string out = fmt::format("dco-diag: {}\n", d.name);
+  out += fmt::format(
+      "  log       {} events, {} over {:.2f} s ({})\n", d.events, human_bytes(d.bytes), d.span_s,
+      d.damage.empty() ? std::string("read to the end")
+                       : fmt::format("DAMAGED, read {} of {} bytes", d.bytes, d.file_bytes));
+  if (!d.damage.empty()) out += fmt::format("  damage    {}\n", d.damage);
+  std::string channels;
+  for (const auto& [name, tally] : d.channels)
+    channels += fmt::format("{}{} {}", channels.empty() ? "" : ", ", name, tally.events);
+  out += fmt::format("  channels  {}\n", channels);
+  for (const auto& [name, tally] : d.channels)
+    if (tally.undecodable > 0)
+      out += fmt::format("  BAD       {}: {} messages do not decode; first: {}\n", name,
+                         tally.undecodable, tally.first_problem);
+  out += fmt::format(
+      "  frames    {} published in {} session{}, {:.1f} fps; {} camera frames not published, {} "
+      "announcements missing from the log\n",
+      s.frames, s.sessions, s.sessions == 1 ? "" : "s", s.fps, s.unpublished_frames,
+      s.missing_announcements);
+  if (s.frames > 0)
+    out += fmt::format(
+        "  latency   p50 {:.2f} ms, p90 {:.2f} ms, p99 {:.2f} ms, max {:.2f} ms, mean {:.2f} ms "
+        "(capture to publication)\n",
+        s.latency.p50_ms, s.latency.p90_ms, s.latency.p99_ms, s.latency.max_ms, s.latency.mean_ms);
+  if (s.last_stats) {
+    const ::dco::pipeline_stats_t& t = *s.last_stats;
+    out += fmt::format(
+        "  stages    stereo {:.2f}/{:.2f} ms, contour {:.2f}/{:.2f} ms, densify {:.2f}/{:.2f} ms "
+        "(p50/p99, last DCO_STATS)\n",
+        t.stereo_p50_ms, t.stereo_p99_ms, t.contour_p50_ms, t.contour_p99_ms, t.densify_p50_ms,
+        t.densify_p99_ms);
+    out += fmt::format(
+        "  queues    {} dropped at the entry; high water: entry {}, stereo {}, densify {}\n",
+        s.dropped_at_entry, s.entry_high_water, s.stereo_queue_high_water,
+        s.densify_queue_high_water);
+  }
+  if (d.has_status)
+    out += fmt::format("  device    {} ({}){}; {} state changes, {} faults, {} disconnects\n",
+                       d.last_status.device.empty() ? "?" : d.last_status.device,
+                       state_name(d.last_status.state),
+                       d.last_status.error.empty() ? "" : ": " + d.last_status.error,
+                       s.state_changes, s.device_errors, s.disconnects);
+  out += fmt::format("  messages  {} errors, {} warnings, {} info in DCO_LOG\n", s.log_errors,
+                     s.log_warnings, d.log_by_level[1]);
+  if (d.raw_pairs > 0)
+    out += fmt::format("  raw       {} pairs of {}x{} on DCO_RAW, {} a pair\n", d.raw_pairs,
+                       d.raw_width, d.raw_height,
+                       human_bytes(d.raw_bytes / static_cast<std::uint64_t>(d.raw_pairs)));
+  if (!report.empty()) out += fmt::format("  report    {}\n", report);
+  return out;
+}
+
+std::string json_summary(const LogDigest& d, const LogSummary& s) {
+  using tools::json_number;
+  using tools::json_string;
+  // Stage times are null in a log without DCO_STATS.
+  const ::dco::pipeline_stats_t t = s.last_stats.value_or(::dco::pipeline_stats_t{});
+  const auto stage = [&](double ms) { return s.last_stats ? json_number(ms) : "null"; };
+  std::string channels;
+  for (const auto& [name, tally] : d.channels)
+    channels += fmt::format("{}{}: {{\"events\": {}, \"bytes\": {}, \"undecodable\": {}}}",
+                            channels.empty() ? "" : ", ", json_string(name), tally.events,
+                            tally.bytes, tally.undecodable);
+  return fmt::format(
+      "{{\"log\": {}, \"events\": {}, \"bytes_read\": {}, \"file_bytes\": {}, \"span_s\": {}, "
+      "\"damage\": {},\n \"channels\": {{{}}},\n"
+      " \"frames\": {}, \"sessions\": {}, \"fps\": {}, \"unpublished_frames\": {}, "
+      "\"missing_announcements\": {}, \"dropped_at_entry\": {},\n"
+      " \"latency_ms\": {{\"mean\": {}, \"p50\": {}, \"p90\": {}, \"p99\": {}, \"max\": {}}},\n"
+      " \"stage_ms\": {{\"stereo_p50\": {}, \"stereo_p99\": {}, \"contour_p50\": {}, "
+      "\"contour_p99\": {}, \"densify_p50\": {}, \"densify_p99\": {}}},\n"
+      " \"state_changes\": {}, \"device_errors\": {}, \"disconnects\": {}, \"log_errors\": {}, "
+      "\"log_warnings\": {}, \"previews\": {}, \"raw_pairs\": {}, \"undecodable\": {}}}\n",
+      json_string(d.name), d.events, d.bytes, d.file_bytes, json_number(d.span_s),
+      d.damage.empty() ? std::string("null") : json_string(d.damage), channels, s.frames,
+      s.sessions, json_number(s.fps), s.unpublished_frames, s.missing_announcements,
+      s.dropped_at_entry, json_number(s.latency.mean_ms), json_number(s.latency.p50_ms),
+      json_number(s.latency.p90_ms), json_number(s.latency.p99_ms), json_number(s.latency.max_ms),
+      stage(t.stereo_p50_ms), stage(t.stereo_p99_ms), stage(t.contour_p50_ms),
+      stage(t.contour_p99_ms), stage(t.densify_p50_ms), stage(t.densify_p99_ms), s.state_changes,
+      s.device_errors, s.disconnects, s.log_errors, s.log_warnings, d.previews_seen, d.raw_pairs,
+      s.undecodable);
+}
+
+}  // namespace dco::diag
