@@ -1,7 +1,7 @@
 # `cmake --preset package && cmake --build --preset package && cpack --config
 # build/package/CPackConfig.cmake` builds dco_<version>_<arch>.deb: dcod with its unit,
 # sysusers.d, tmpfiles.d, udev rule and /etc/dcod/dcod.toml (a conffile), the client library,
-# its headers and dco-watch. Dependencies come from dpkg-shlibdeps.
+# its headers, dco-watch, dco-compositor and dco-diag (reports of field logs). Dependencies come from dpkg-shlibdeps.
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME dco)
 set(CPACK_PACKAGE_VENDOR dco)

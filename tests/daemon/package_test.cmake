@@ -13,7 +13,7 @@ if(NOT n EQUAL 1)
   message(FATAL_ERROR "expected one .deb in ${WORK_DIR}, found: ${debs}")
 endif()
 execute_process(COMMAND dpkg-deb -c ${debs} OUTPUT_VARIABLE contents RESULT_VARIABLE rc)
-foreach(path bin/dcod bin/dco-watch lib/systemd/system/dcod.service lib/sysusers.d/dcod.conf
+foreach(path bin/dcod bin/dco-watch bin/dco-diag lib/systemd/system/dcod.service lib/sysusers.d/dcod.conf
              lib/tmpfiles.d/dcod.conf lib/udev/rules.d/60-dco-indemind.rules dcod/dcod.toml
              libdco-client.so include/dco/client.h)
   string(FIND "${contents}" "${path}" at)
