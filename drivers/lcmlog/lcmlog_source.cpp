@@ -62,6 +62,7 @@ class LcmLogSource final : public PacedSource {
         throw Error(fmt::format("{}: event {} at byte {} on {}: {}", where_, event_.number,
                                 event_.offset, channel_, problem));
       decode_raw_stereo(message_, left_, right_);
+      decode_raw_imu(message_, imu_);
       return true;
     }
     if (!reader_->damage().empty()) throw Error(where_ + ": " + reader_->damage());
@@ -89,12 +90,14 @@ class LcmLogSource final : public PacedSource {
   std::uint64_t frame_number(std::uint64_t) const override {
     return static_cast<std::uint64_t>(message_.frame_seq);
   }
+  std::span<const ImuSample> frame_imu() const override { return imu_; }
 
   std::string path_, where_, channel_, calibration_toml_;
   std::unique_ptr<LcmLogReader> reader_;
   LcmLogEvent event_;
   ::dco::raw_stereo_t message_;
   Image<std::uint8_t> left_, right_;
+  std::vector<ImuSample> imu_;
   bool pending_ = false;  // the first pair, read at open, not yet delivered
   StereoCalibration calibration_;
   SourceInfo info_;

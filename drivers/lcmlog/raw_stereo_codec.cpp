@@ -1,3 +1,5 @@
+#include <algorithm>
+
 #include <opencv2/imgcodecs.hpp>
 
 #include <fmt/format.h>
@@ -81,6 +83,24 @@ void decode_raw_stereo(const ::dco::raw_stereo_t& message, Image<std::uint8_t>& 
   };
   expand(message.left, left, "left");
   expand(message.right, right, "right");
+}
+
+void decode_raw_imu(const ::dco::raw_stereo_t& message, std::vector<ImuSample>& out) {
+  const auto n = static_cast<std::size_t>(std::max(0, message.num_imu));
+  if (message.imu_ns.size() < n || message.accel.size() < n || message.gyro.size() < n)
+    throw Error(
+        fmt::format("raw frame {}: {} IMU samples announced, fewer carried", message.frame_seq, n));
+  out.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (message.accel[i].size() != 3 || message.gyro[i].size() != 3)
+      throw Error(fmt::format("raw frame {}: IMU sample {} is not three values per sensor",
+                              message.frame_seq, i));
+    ImuSample& s = out[i];
+    s.capture_ns = message.imu_ns[i];
+    std::copy(message.accel[i].begin(), message.accel[i].end(), s.accel_mps2.begin());
+    std::copy(message.gyro[i].begin(), message.gyro[i].end(), s.gyro_radps.begin());
+    s.temperature_c = 0;  // not recorded
+  }
 }
 
 }  // namespace dco::drivers

@@ -4,6 +4,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
+#include <span>
 #include <thread>
 
 #include "dco/drivers/frame_source.hpp"
@@ -26,6 +27,8 @@ class PacedSource : public FrameSource {
   // The number frame `counter` (0, 1, ...) is delivered with, asked right after produce() made
   // it: the counter itself, or the number a recording gave the frame.
   virtual std::uint64_t frame_number(std::uint64_t counter) const { return counter; }
+  // The IMU samples that came with the frame produce() made (a recording's); none by default.
+  virtual std::span<const ImuSample> frame_imu() const { return {}; }
   // After this many frames the source keeps running but delivers nothing more: a camera that hung
   // (0 = never).
   void set_stall_after(std::uint64_t frames) { stall_after_ = frames; }

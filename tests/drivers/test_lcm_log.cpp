@@ -157,7 +157,8 @@ TEST(RawStereo, RoundTripIsLosslessForGreyAndColour) {
   }
 }
 
-// A log as dcod records it: the scene's pairs on DCO_RAW between other channels.
+// A log as dcod records it: the scene's pairs on DCO_RAW between other channels, numbered from
+// 100 as a recording switched on mid-run would be, frame i with i IMU samples.
 std::string recorded_log(int frames, int width, int height) {
   synthetic::SceneRenderer scene(synthetic::preset("hand", width, height));
   const std::string calibration = calibration_to_toml(scene.calibration());
@@ -166,8 +167,14 @@ std::string recorded_log(int frames, int width, int height) {
   synthetic::StereoSample s;
   for (int i = 0; i < frames; ++i) {
     scene.render(i, s);
-    StereoFrame f = frame_of(s.left, s.right, {});
-    f.seq = static_cast<std::uint64_t>(i);
+    std::vector<ImuSample> imu(static_cast<std::size_t>(i));
+    for (int k = 0; k < i; ++k) {
+      imu[static_cast<std::size_t>(k)].capture_ns = 1000 * i + k;
+      imu[static_cast<std::size_t>(k)].accel_mps2 = {static_cast<float>(i), 0.5f, 9.81f};
+      imu[static_cast<std::size_t>(k)].gyro_radps = {0.1f, static_cast<float>(k), 0.3f};
+    }
+    StereoFrame f = frame_of(s.left, s.right, imu);
+    f.seq = static_cast<std::uint64_t>(100 + i);
     ::dco::raw_stereo_t m;
     encoder.encode(f, calibration, m);
     std::vector<std::uint8_t> data(static_cast<std::size_t>(m.getEncodedSize()));
@@ -180,6 +187,8 @@ std::string recorded_log(int frames, int width, int height) {
 
 struct Collect : FrameSink {
   std::vector<std::vector<std::uint8_t>> lefts;
+  std::vector<std::uint64_t> seqs;
+  std::vector<std::vector<ImuSample>> imus;
   bool ended = false;
   std::string error;
   std::mutex mutex;
@@ -190,6 +199,8 @@ struct Collect : FrameSink {
       l.insert(l.end(), f.left.row(y), f.left.row(y) + f.left.width);
     std::lock_guard lock(mutex);
     lefts.push_back(std::move(l));
+    seqs.push_back(f.seq);
+    imus.emplace_back(f.imu.begin(), f.imu.end());
   }
   void on_end() override {
     std::lock_guard lock(mutex);
@@ -230,6 +241,16 @@ TEST(LcmLogSource, ReplaysTheRecordedPairsAndNamesDamage) {
     for (int y = 0; y < 64; ++y)
       ASSERT_EQ(0,
                 std::memcmp(&sink.lefts[4][static_cast<std::size_t>(y) * 96], s.left.row(y), 96));
+    // The headset's frame numbers and IMU samples come with the pairs.
+    EXPECT_EQ(sink.seqs, (std::vector<std::uint64_t>{100, 101, 102, 103, 104}));
+    for (std::size_t i = 0; i < 5; ++i) {
+      ASSERT_EQ(sink.imus[i].size(), i);
+      for (std::size_t k = 0; k < i; ++k) {
+        EXPECT_EQ(sink.imus[i][k].capture_ns, static_cast<std::int64_t>(1000 * i + k));
+        EXPECT_EQ(sink.imus[i][k].accel_mps2[0], static_cast<float>(i));
+        EXPECT_EQ(sink.imus[i][k].gyro_radps[1], static_cast<float>(k));
+      }
+    }
   }
   // Cut inside the fourth pair: three pairs, then the place of the cut.
   const auto cut = dir.path() / "cut.log";

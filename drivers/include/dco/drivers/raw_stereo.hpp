@@ -30,5 +30,8 @@ class RawStereoEncoder {
 // that differ from what the message says.
 void decode_raw_stereo(const ::dco::raw_stereo_t& message, Image<std::uint8_t>& left,
                        Image<std::uint8_t>& right);
+// The message's IMU samples into `out` (its capacity reused). Throws dco::Error when a row does
+// not hold three values.
+void decode_raw_imu(const ::dco::raw_stereo_t& message, std::vector<ImuSample>& out);
 
 }  // namespace dco::drivers
