@@ -22,7 +22,8 @@ RecordedPreviews read_recorded_previews(const std::filesystem::path& log, std::s
       out.truncated = true;
       break;
     }
-    out.by_frame[preview.frame_seq] = preview;
+    const std::int64_t frame = preview.frame_seq;
+    out.by_frame[frame] = std::move(preview);
   }
   return out;
 }

@@ -113,4 +113,11 @@ ipc::FrameMeta ring_meta() {
   return meta;
 }
 
+void write_scene(ipc::RingWriter& ring, const ExactScene& e, ipc::FrameMeta& meta,
+                 std::uint64_t seq, int width, int height) {
+  meta.frame_seq = seq;
+  ring.write(ImageView<const float>(e.depth.data(), width, height, 1, kW),
+             ImageView<const std::uint8_t>(e.image.data(), width, height, 1, kW), meta);
+}
+
 }  // namespace dco::compositor

@@ -27,6 +27,9 @@ bool in_hand(int u, int v);
 RealFrame frame_of(const ExactScene& e);
 // Ring metadata of kCamera, as dcod writes it with each frame.
 ipc::FrameMeta ring_meta();
+// Publishes the scene's top-left width x height as frame `seq`, the way dcod fills a slot.
+void write_scene(ipc::RingWriter& ring, const ExactScene& e, ipc::FrameMeta& meta,
+                 std::uint64_t seq, int width, int height);
 
 // Whether pixel (u, v) of a mask has a 4-neighbour of the other value.
 bool boundary(const std::vector<std::uint8_t>& m, int u, int v);

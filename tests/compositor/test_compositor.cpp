@@ -102,9 +102,7 @@ TEST(Compositor, FollowsTheRingAndWritesPngs) {
     {
       ipc::RingWriter w(ring, o);
       for (int i = 0; i < 15 && !stop; ++i) {
-        meta.frame_seq = static_cast<std::uint64_t>(i);
-        w.write(ImageView<const float>(e.depth.data(), kW, kH, 1, kW),
-                ImageView<const std::uint8_t>(e.image.data(), kW, kH, 1, kW), meta);
+        write_scene(w, e, meta, static_cast<std::uint64_t>(i), kW, kH);
         std::this_thread::sleep_for(std::chrono::milliseconds(33));
       }
     }
@@ -114,9 +112,7 @@ TEST(Compositor, FollowsTheRingAndWritesPngs) {
     small.height = kH / 2;
     ipc::RingWriter w(ring, small);
     for (int i = 0; i < 200 && !stop; ++i) {
-      meta.frame_seq = 1000 + static_cast<std::uint64_t>(i);
-      w.write(ImageView<const float>(e.depth.data(), kW / 2, kH / 2, 1, kW),
-              ImageView<const std::uint8_t>(e.image.data(), kW / 2, kH / 2, 1, kW), meta);
+      write_scene(w, e, meta, 1000 + static_cast<std::uint64_t>(i), kW / 2, kH / 2);
       std::this_thread::sleep_for(std::chrono::milliseconds(33));
     }
   });

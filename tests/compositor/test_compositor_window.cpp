@@ -148,9 +148,7 @@ TEST(CompositorWindow, TheCommandShowsTheDaemonsFramesInAWindow) {
   ipc::RingWriter w(ring, o);
   std::thread writer([&] {
     for (int i = 0; i < 300 && !stop; ++i) {
-      meta.frame_seq = static_cast<std::uint64_t>(i);
-      w.write(ImageView<const float>(e.depth.data(), kW, kH, 1, kW),
-              ImageView<const std::uint8_t>(e.image.data(), kW, kH, 1, kW), meta);
+      write_scene(w, e, meta, static_cast<std::uint64_t>(i), kW, kH);
       std::this_thread::sleep_for(std::chrono::milliseconds(33));
     }
   });

@@ -375,11 +375,7 @@ TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
                   (dir / "report.html").string() + " --json " + (dir / "report.json").string());
   ASSERT_EQ(diag.status, 0) << diag.output;
   EXPECT_NE(diag.output.find("8 published in 1 session"), std::string::npos) << diag.output;
-  std::string json;
-  {
-    std::ifstream in(dir / "report.json");
-    json.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  const std::string json = read_file(dir / "report.json");
   auto number = [&](const std::string& key) {
     std::smatch m;
     const std::regex pattern("\"" + key + "\": ([-0-9.e]+)");
@@ -394,11 +390,7 @@ TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
   EXPECT_GE(previews, 1);
   EXPECT_NEAR(number("max"), latency_ms.back(), 1e-3);
   EXPECT_NEAR(number("p50"), latency_ms[kFrames / 2 - 1], 1e-3);  // nearest rank: the 4th of 8
-  std::string html;
-  {
-    std::ifstream in(dir / "report.html");
-    html.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  const std::string html = read_file(dir / "report.html");
   EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
   EXPECT_NE(html.find("Latency histogram"), std::string::npos);
 
@@ -437,11 +429,7 @@ TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
   EXPECT_NE(other.output.find("preview pixels differ, by up to"), std::string::npos)
       << other.output;
   // The same log cut short: the frames before the cut, then one line naming it.
-  std::string bytes;
-  {
-    std::ifstream in(log, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  const std::string bytes = read_file(log);
   std::ofstream(dir / "cut.log", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
   const auto cut = run_command(std::string(DCOD_EXE) + " --source lcmlog://" +
                                (dir / "cut.log").string() + "?fps=0 --set lcm.url=memq:// " +

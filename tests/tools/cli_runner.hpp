@@ -27,10 +27,7 @@ struct CliRun {
 };
 
 inline std::string slurp(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  return dco::testing::read_file(path);
 }
 
 // Arguments are single-quoted for the shell; none of ours contains a quote.

@@ -13,11 +13,6 @@
 namespace dco::diag {
 namespace {
 
-const char* state_name(std::int8_t state) {
-  static const char* const names[] = {"disconnected", "starting", "streaming", "error"};
-  return state >= 0 && state <= 3 ? names[state] : "unknown";
-}
-
 const char* level_name(std::int8_t level) {
   static const char* const names[] = {"debug", "info", "warning", "error"};
   return level >= 0 && level <= 3 ? names[level] : "?";
@@ -112,9 +107,10 @@ std::string device_section(const LogDigest& d) {
       d.status_messages);
   for (const StatusChange& c : d.status_changes) {
     const ::dco::device_status_t& s = c.status;
-    out += row({fmt::format("{:.2f}", c.t_s),
-                fmt::format("<span class=\"{0}\">{0}</span>", state_name(s.state)), h(s.device),
-                h(s.serial), h(s.firmware), std::to_string(s.usb_speed_mbps), h(s.error)});
+    out +=
+        row({fmt::format("{:.2f}", c.t_s),
+             fmt::format("<span class=\"{0}\">{0}</span>", device_state_name(s.state)), h(s.device),
+             h(s.serial), h(s.firmware), std::to_string(s.usb_speed_mbps), h(s.error)});
   }
   out += "</table>\n";
   const ::dco::device_status_t& last = d.last_status;

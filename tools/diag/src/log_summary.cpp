@@ -17,21 +17,12 @@ std::string human_bytes(std::uint64_t bytes) {
   return fmt::format("{} MiB", bytes / (1024 * 1024));
 }
 
-const char* state_name(std::int8_t state) {
-  switch (state) {
-    case ::dco::device_status_t::STATE_DISCONNECTED:
-      return "disconnected";
-    case ::dco::device_status_t::STATE_STARTING:
-      return "starting";
-    case ::dco::device_status_t::STATE_STREAMING:
-      return "streaming";
-    case ::dco::device_status_t::STATE_ERROR:
-      return "error";
-  }
-  return "unknown";
-}
-
 }  // namespace
+
+const char* device_state_name(std::int8_t state) {
+  static const char* const names[] = {"disconnected", "starting", "streaming", "error"};
+  return state >= 0 && state <= 3 ? names[state] : "unknown";
+}
 
 double percentile(std::vector<float> values, double p) {
   if (values.empty()) return 0;
@@ -141,7 +132,7 @@ std::string text_summary(const LogDigest& d, const LogSummary& s, const std::str
   if (d.has_status)
     out += fmt::format("  device    {} ({}){}; {} state changes, {} faults, {} disconnects\n",
                        d.last_status.device.empty() ? "?" : d.last_status.device,
-                       state_name(d.last_status.state),
+                       device_state_name(d.last_status.state),
                        d.last_status.error.empty() ? "" : ": " + d.last_status.error,
                        s.state_changes, s.device_errors, s.disconnects);
   out += fmt::format("  messages  {} errors, {} warnings, {} info in DCO_LOG\n", s.log_errors,

@@ -33,6 +33,9 @@ struct LogSummary {
   long undecodable = 0;
 };
 
+// DCO_STATUS's state as a word ("streaming"); "unknown" for values the type does not define.
+const char* device_state_name(std::int8_t state);
+
 // p in [0, 100]: the nearest-rank percentile (the smallest value with at least p % of the values
 // at or below it); 0 for no values.
 double percentile(std::vector<float> values, double p);
