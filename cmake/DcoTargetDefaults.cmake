@@ -9,15 +9,21 @@ endif()
 
 function(dco_target_defaults target)
   target_compile_features(${target} PUBLIC cxx_std_20)
-  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Werror -Wshadow
-                                           -Wnon-virtual-dtor -Wno-error=deprecated-declarations)
+  target_compile_options(${target} PRIVATE
+    $<$<COMPILE_LANGUAGE:CXX>:-Wall -Wextra -Wpedantic -Werror -Wshadow -Wnon-virtual-dtor
+                              -Wno-error=deprecated-declarations>
+    # nvcc: its own warnings as errors, and the host compiler's on the host side of .cu files.
+    $<$<COMPILE_LANGUAGE:CUDA>:--Werror=all-warnings -Xcompiler=-Wall,-Wextra,-Werror>)
   if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU" AND CMAKE_CXX_COMPILER_VERSION VERSION_LESS 13)
     # GCC 12 reports impossible std::string overlaps at -O3 (GCC bug 105329).
-    target_compile_options(${target} PRIVATE -Wno-restrict)
+    target_compile_options(${target} PRIVATE $<$<COMPILE_LANGUAGE:CXX>:-Wno-restrict>
+                                             $<$<COMPILE_LANGUAGE:CUDA>:-Xcompiler=-Wno-restrict>)
   endif()
   if(DCO_ARCH_FLAGS)
     separate_arguments(_arch UNIX_COMMAND "${DCO_ARCH_FLAGS}")
-    target_compile_options(${target} PRIVATE ${_arch})
+    string(REPLACE ";" "," _arch_cuda "${_arch}")
+    target_compile_options(${target} PRIVATE $<$<COMPILE_LANGUAGE:CXX>:${_arch}>
+                                             $<$<COMPILE_LANGUAGE:CUDA>:-Xcompiler=${_arch_cuda}>)
   endif()
   if(DCO_SANITIZE)
     # Sanitizer instrumentation makes GCC's flow analysis report uninitialised reads inside

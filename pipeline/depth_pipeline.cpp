@@ -112,9 +112,10 @@ ContourWindow window_at_end(int last) {
   return {last, last >= 1 ? last - 1 : -1, -1};
 }
 
-DepthPipeline::DepthPipeline(const PipelineParams& params)
+DepthPipeline::DepthPipeline(const PipelineParams& params,
+                             const stereo::StereoMatcherFactory& stereo)
     : params_(params),
-      stereo_(stereo::make_cpu_stereo_matcher(params.stereo)),
+      stereo_(stereo::make_stereo_matcher(stereo, params.stereo)),
       contour_(contour::make_cpu_contour_extractor(params.contour)),
       densifier_(params.densify) {
   validate(params_);

@@ -15,6 +15,7 @@
 
 #include "dco/core/depth_conversion.hpp"
 #include "dco/core/error.hpp"
+#include "dco/gpu/backend.hpp"
 #include "raw_recorder.hpp"
 #include "replay_check.hpp"
 
@@ -140,11 +141,18 @@ void Daemon::open_replay_check() {
 }
 
 void Daemon::start_pipeline() {
+  const gpu::BackendChoice backend =
+      gpu::choose_backend(loaded_.config.runtime.backend, loaded_.config.pipeline.stereo);
+  if (backend.fell_back)
+    log_.warning(backend.message);
+  else
+    log_.info(backend.message);
   runtime_ = std::make_unique<pipeline::runtime::DepthRuntime>(
       loaded_.config.pipeline, loaded_.config.runtime,
       [this](const pipeline::DepthResult& r, const pipeline::runtime::FrameTimes& t) {
         on_result(r, t);
-      });
+      },
+      pipeline::runtime::DepthRuntime::StageHook{}, backend.stereo);
   runtime_->start();
   pipeline_start_ns_ = monotonic_ns();
 }

@@ -4,64 +4,28 @@
 // partial vector for the SIMD versions.
 
 #include <algorithm>
-#include <bit>
 #include <cstddef>
 #include <cstdint>
 
 #include "dco/kernels/stereo_kernels.hpp"
+#include "dco/kernels/stereo_pixel.hpp"
 
 namespace dco::kernels::detail {
 
-inline std::uint32_t absdiff_sum(std::uint32_t a, std::uint32_t b) {
-  std::uint32_t sum = 0;
-  for (int shift = 0; shift < 32; shift += 8) {
-    const int ca = static_cast<int>((a >> shift) & 0xff);
-    const int cb = static_cast<int>((b >> shift) & 0xff);
-    sum += static_cast<std::uint32_t>(ca > cb ? ca - cb : cb - ca);
-  }
-  return sum;
-}
+using pixel::absdiff_sum;
+using pixel::colour_diff;
 
 inline void census_range(const std::uint8_t* const* rows, int width, int window_w, int window_h,
                          int begin, int end, std::uint64_t* out) {
-  const int rx = window_w / 2;
-  const int ry = window_h / 2;
-  const std::uint8_t* centre = rows[ry];
-  for (int x = begin; x < end; ++x) {
-    std::uint64_t bits = 0;
-    for (int j = 0; j < window_h; ++j)
-      for (int dx = -rx; dx <= rx; ++dx) {
-        if (j == ry && dx == 0) continue;
-        bits = (bits << 1) | (rows[j][std::clamp(x + dx, 0, width - 1)] < centre[x]);
-      }
-    out[x] = bits;
-  }
-}
-
-inline int colour_diff(std::uint32_t a, std::uint32_t b) {
-  int d = 0;
-  for (int shift = 0; shift < 32; shift += 8) {
-    const int ca = static_cast<int>((a >> shift) & 0xff);
-    const int cb = static_cast<int>((b >> shift) & 0xff);
-    d = std::max(d, ca > cb ? ca - cb : cb - ca);
-  }
-  return d;
+  const auto row = [rows](int j) { return rows[j]; };
+  for (int x = begin; x < end; ++x) out[x] = pixel::census_bits(row, x, width, window_w, window_h);
 }
 
 // Length of the arm from `anchor` along `step` (elements), at most `limit` pixels.
 inline int arm_length(const std::uint32_t* anchor, std::ptrdiff_t step, int limit,
                       const ArmParams& p) {
-  std::uint32_t prev = *anchor;
-  int len = 0;
-  for (int i = 1; i <= limit; ++i) {
-    const std::uint32_t q = anchor[step * i];
-    const int to_anchor = colour_diff(q, *anchor);
-    if (to_anchor >= p.tau1 || colour_diff(q, prev) >= p.tau1) break;
-    if (i > p.arm_short && to_anchor >= p.tau2) break;
-    len = i;
-    prev = q;
-  }
-  return len;
+  return pixel::arm_length(
+      *anchor, [anchor, step](int i) { return anchor[step * i]; }, limit, p);
 }
 
 // Arms of columns [begin, end) of row y.
@@ -81,10 +45,8 @@ inline void arms_range(const std::uint32_t* image, std::ptrdiff_t stride, int wi
 
 // Cost of left pixel x at disparity d <= x.
 inline std::uint32_t matched_cost(const CostRow& row, const CostTableView& t, int x, int d) {
-  const std::uint32_t ad = absdiff_sum(row.left[x], row.right[x - d]);
-  const int hd = std::popcount(row.census_left[x] ^ row.census_right[x - d]);
-  const int arm = row.shortest_arm[x];
-  return t.ad[arm * t.ad_size + static_cast<int>(ad)] + t.census[arm * t.census_size + hd];
+  return pixel::matching_cost(row.left[x], row.right[x - d], row.census_left[x],
+                              row.census_right[x - d], row.shortest_arm[x], t);
 }
 
 // Columns [begin, end), all >= d.
@@ -121,9 +83,7 @@ inline void vertical_range(const std::uint32_t* column_sums, std::ptrdiff_t stri
 }
 
 inline void mean_range(std::uint32_t* row, const std::uint32_t* reciprocal, int begin, int end) {
-  constexpr std::uint64_t kHalf = std::uint64_t{1} << 30;
-  for (int x = begin; x < end; ++x)
-    row[x] = static_cast<std::uint32_t>((std::uint64_t{row[x]} * reciprocal[x] + kHalf) >> 31);
+  for (int x = begin; x < end; ++x) row[x] = pixel::region_mean(row[x], reciprocal[x]);
 }
 
 // Block layout: elements [begin, end) of every block.
@@ -158,11 +118,10 @@ inline void block_vertical_range(const std::uint32_t* const* column_rows, int y,
 
 inline void block_mean_range(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
                              int block, int begin, int end) {
-  constexpr std::uint64_t kHalf = std::uint64_t{1} << 30;
   for (int x = 0; x < width; ++x)
     for (int k = begin; k < end; ++k) {
       std::uint32_t& v = row[x * block + k];
-      v = static_cast<std::uint32_t>((std::uint64_t{v} * reciprocal[x] + kHalf) >> 31);
+      v = pixel::region_mean(v, reciprocal[x]);
     }
 }
 
@@ -200,24 +159,9 @@ inline void block_vote_range(const std::uint32_t* votes, int x, const std::int32
 
 // The left image's state: columns [begin, end).
 inline void wta_left_range(const std::uint32_t* cost, int begin, int end, int d, const WtaRow& r) {
-  const auto dd = static_cast<std::int16_t>(d);
-  for (int x = begin; x < end; ++x) {
-    const auto c = static_cast<std::uint16_t>(cost[x]);
-    r.runmin[x] = std::min(r.runmin[x], r.prev2[x]);  // best over disparities <= d - 2
-    if (c < r.best[x]) {
-      r.best[x] = c;
-      r.disp[x] = dd;
-      r.second[x] = r.runmin[x];
-      r.below[x] = r.prev1[x];
-      r.above[x] = kNoCost;
-    } else if (d == r.disp[x] + 1) {
-      r.above[x] = c;
-    } else {
-      r.second[x] = std::min(r.second[x], c);
-    }
-    r.prev2[x] = r.prev1[x];
-    r.prev1[x] = c;
-  }
+  for (int x = begin; x < end; ++x)
+    pixel::wta_feed(static_cast<std::uint16_t>(cost[x]), d, r.best[x], r.second[x], r.below[x],
+                    r.above[x], r.prev1[x], r.prev2[x], r.runmin[x], r.disp[x]);
 }
 
 // The right image's state: left columns [begin, end), all >= d (right column x - d).

@@ -49,13 +49,14 @@ std::string size_text(ImageView<const std::uint8_t> v) {
 }  // namespace
 
 DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
-                           ResultCallback on_result, StageHook hook)
+                           ResultCallback on_result, StageHook hook,
+                           const stereo::StereoMatcherFactory& stereo)
     : pipeline_(pipeline),
       params_(runtime),
       cpus_(checked_cpus(runtime)),
       on_result_(std::move(on_result)),
       hook_(std::move(hook)),
-      stereo_(stereo::make_cpu_stereo_matcher(pipeline.stereo)),
+      stereo_(stereo::make_stereo_matcher(stereo, pipeline.stereo)),
       contour_(contour::make_cpu_contour_extractor(pipeline.contour)),
       densifier_(pipeline.densify),
       // In flight at once: the contour window (3 frames), a full stereo queue and the frame in

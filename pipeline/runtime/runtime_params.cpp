@@ -19,6 +19,8 @@ void register_params(ConfigSchema& s, RuntimeParams& p) {
         "frames each queue between stage threads holds (each one is a frame of latency)");
   s.add("runtime.deterministic", &p.deterministic,
         "never drop frames (push waits): same output as the offline pipeline, for replays");
+  s.add("runtime.backend", &p.backend, {"auto", "cpu", "cuda"},
+        "where the sparse stereo stage runs: auto = CUDA when a device works, else the CPU");
 }
 
 std::vector<int> parse_affinity(const std::string& text) {
@@ -56,6 +58,8 @@ void validate(const RuntimeParams& p) {
   if (p.queue_depth < 1 || p.queue_depth > 8)
     throw Error("runtime.queue_depth must be in [1, 8], not " + std::to_string(p.queue_depth));
   parse_affinity(p.affinity);
+  if (p.backend != "auto" && p.backend != "cpu" && p.backend != "cuda")
+    throw Error("runtime.backend must be auto, cpu or cuda, not '" + p.backend + "'");
 }
 
 }  // namespace dco::pipeline::runtime

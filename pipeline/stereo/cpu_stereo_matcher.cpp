@@ -3,12 +3,10 @@
 #include <limits>
 #include <string>
 
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/mat.hpp>
-
 #include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
+#include "dco/kernels/stereo_pixel.hpp"
 #include "dco/pipeline/stereo/census.hpp"
 #include "dco/pipeline/stereo/cross_aggregation.hpp"
 #include "dco/pipeline/stereo/cross_arms.hpp"
@@ -38,7 +36,7 @@ class CpuStereoMatcher final : public StereoMatcher {
 
   void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                Image<float>& disparity) override {
-    check_input(left, right);
+    check_stereo_input(params_, left, right);
     Stopwatch t;
     timings_ = {};
 
@@ -73,12 +71,8 @@ class CpuStereoMatcher final : public StereoMatcher {
     histogram_vote(disp_.view(), max_d_, regions_, vote_, vote_scratch_, changed_.view());
     if (params_.max_neighbour_jump >= 0)
       discontinuity_check(disp_.view(), params_.max_neighbour_jump, jump_scratch_);
-    if (params_.speckle_size > 0) {
-      cv::Mat disp(h_, w_, CV_16SC1, disp_.row(0),
-                   static_cast<std::size_t>(disp_.stride()) * sizeof(std::int16_t));
-      cv::filterSpeckles(disp, kInvalidDisparity, params_.speckle_size, params_.speckle_range,
-                         speckle_buffer_);
-    }
+    if (params_.speckle_size > 0)
+      speckles_.apply(disp_.view(), params_.speckle_size, params_.speckle_range);
     timings_.refine_ms = t.lap_ms();
 
     write_output(left.width, left.height, disparity);
@@ -94,24 +88,6 @@ class CpuStereoMatcher final : public StereoMatcher {
   const StereoParams& params() const override { return params_; }
 
  private:
-  void check_input(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right) const {
-    if (left.empty() || right.empty()) throw Error("stereo: empty input image");
-    if (left.width != right.width || left.height != right.height || left.channels != right.channels)
-      throw Error("stereo: left image is " + size_text(left) + " but right image is " +
-                  size_text(right) + "; a rectified pair has one size");
-    if (left.channels != 1 && left.channels != 3)
-      throw Error("stereo: images need 1 or 3 channels, not " + std::to_string(left.channels));
-    const int scale = internal_scale(params_, left.width);
-    const int w = left.width / scale;
-    const int h = left.height / scale;
-    if (w < params_.census_width || h < params_.census_height)
-      throw Error("stereo: image " + size_text(left) + " is smaller than the census window");
-    const int max_d = params_.max_disparity / scale;
-    if (max_d >= w)
-      throw Error("stereo: max disparity " + std::to_string(params_.max_disparity) +
-                  " must be smaller than the image width " + std::to_string(left.width));
-  }
-
   void prepare(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right) {
     scale_ = internal_scale(params_, left.width);
     w_ = left.width / scale_;
@@ -163,35 +139,22 @@ class CpuStereoMatcher final : public StereoMatcher {
     // input size (input pixels).
     values_.resize(w_, h_);
     raw_.resize(w_, h_);
-    constexpr float kUnknown = std::numeric_limits<float>::infinity();
     const float max_value = static_cast<float>(params_.max_disparity) / static_cast<float>(scale_);
     for (int y = 0; y < h_; ++y) {
-      const std::int16_t* d = wta_.left_disparity().row(y);
-      float* r = raw_.row(y);
-      for (int x = 0; x < w_; ++x) {
-        const float offset = params_.subpixel ? subpixel_offset(wta_.cost_below().row(y)[x],
-                                                                wta_.best_cost().row(y)[x],
-                                                                wta_.cost_above().row(y)[x])
-                                              : 0.0f;
-        r[x] = std::clamp(static_cast<float>(d[x]) + offset, 0.0f, max_value);
-      }
-    }
-    for (int y = 0; y < h_; ++y) {
+      const std::int16_t* wta = wta_.left_disparity().row(y);
       const std::int16_t* d = disp_.row(y);
+      const std::uint16_t* below = wta_.cost_below().row(y);
+      const std::uint16_t* best = wta_.best_cost().row(y);
+      const std::uint16_t* above = wta_.cost_above().row(y);
       const std::uint8_t* ch = changed_.row(y);
+      float* r = raw_.row(y);
       float* v = values_.row(y);
       for (int x = 0; x < w_; ++x) {
-        if (d[x] == kInvalidDisparity) {
-          v[x] = kUnknown;
-          continue;
-        }
-        float offset = 0.0f;
-        if (params_.subpixel && !ch[x])
-          offset = subpixel_offset(wta_.cost_below().row(y)[x], wta_.best_cost().row(y)[x],
-                                   wta_.cost_above().row(y)[x]);
+        r[x] = kernels::pixel::raw_disparity(wta[x], below[x], best[x], above[x], params_.subpixel,
+                                             max_value);
         // The fit may lean past the searched range by less than a pixel; keep values inside it.
-        v[x] = std::min(static_cast<float>(d[x]) + offset, max_value);
-        if (!(v[x] > 0.0f)) v[x] = kUnknown;  // zero disparity has no finite depth
+        v[x] = kernels::pixel::sparse_disparity(d[x], ch[x] != 0, below[x], best[x], above[x],
+                                                params_.subpixel, max_value);
       }
     }
     const auto scale = static_cast<float>(scale_);
@@ -224,10 +187,34 @@ class CpuStereoMatcher final : public StereoMatcher {
   VoteScratch vote_scratch_;
   Image<float> values_, raw_;
   Image<std::int16_t> jump_scratch_;
-  cv::Mat speckle_buffer_;  // filterSpeckles' work area, kept across frames
+  SpeckleFilter speckles_;
 };
 
 }  // namespace
+
+void check_stereo_input(const StereoParams& params, ImageView<const std::uint8_t> left,
+                        ImageView<const std::uint8_t> right) {
+  if (left.empty() || right.empty()) throw Error("stereo: empty input image");
+  if (left.width != right.width || left.height != right.height || left.channels != right.channels)
+    throw Error("stereo: left image is " + size_text(left) + " but right image is " +
+                size_text(right) + "; a rectified pair has one size");
+  if (left.channels != 1 && left.channels != 3)
+    throw Error("stereo: images need 1 or 3 channels, not " + std::to_string(left.channels));
+  const int scale = internal_scale(params, left.width);
+  const int w = left.width / scale;
+  const int h = left.height / scale;
+  if (w < params.census_width || h < params.census_height)
+    throw Error("stereo: image " + size_text(left) + " is smaller than the census window");
+  const int max_d = params.max_disparity / scale;
+  if (max_d >= w)
+    throw Error("stereo: max disparity " + std::to_string(params.max_disparity) +
+                " must be smaller than the image width " + std::to_string(left.width));
+}
+
+std::unique_ptr<StereoMatcher> make_stereo_matcher(const StereoMatcherFactory& factory,
+                                                   const StereoParams& params) {
+  return factory ? factory(params) : make_cpu_stereo_matcher(params);
+}
 
 int internal_scale(const StereoParams& params, int input_width) {
   if (params.internal_resolution == "full") return 1;

@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include "dco/kernels/stereo_kernels.hpp"
+#include "dco/kernels/stereo_pixel.hpp"
 
 namespace dco::stereo {
 namespace {
@@ -46,7 +47,7 @@ void median3(Image<std::uint8_t>& img, Image<std::uint8_t>& tmp, bool along_x) {
       const int a = mid[x];
       const int b = along_x ? mid[std::max(x - 1, 0)] : before[x];
       const int c = along_x ? mid[std::min(x + 1, w - 1)] : after[x];
-      out[x] = static_cast<std::uint8_t>(std::max(std::min(a, b), std::min(std::max(a, b), c)));
+      out[x] = static_cast<std::uint8_t>(kernels::pixel::median3(a, b, c));
     }
   }
 }

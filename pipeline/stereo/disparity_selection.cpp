@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cassert>
-#include <cstdlib>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/mat.hpp>
 
 #include "dco/kernels/stereo_kernels.hpp"
+#include "dco/kernels/stereo_pixel.hpp"
 
 namespace dco::stereo {
 
@@ -39,17 +42,28 @@ void WinnerTakesAll::update_row(const std::uint32_t* costs, std::ptrdiff_t strid
   kernels::wta_update_row(costs, stride, count, w, d, row);
 }
 
+struct SpeckleFilter::Buffer {
+  cv::Mat mat;
+};
+SpeckleFilter::SpeckleFilter() : buffer_(std::make_unique<Buffer>()) {}
+SpeckleFilter::~SpeckleFilter() = default;
+SpeckleFilter::SpeckleFilter(SpeckleFilter&&) noexcept = default;
+SpeckleFilter& SpeckleFilter::operator=(SpeckleFilter&&) noexcept = default;
+
+void SpeckleFilter::apply(ImageView<std::int16_t> disparity, int max_size, int max_diff) {
+  cv::Mat map(disparity.height, disparity.width, CV_16SC1, disparity.data,
+              static_cast<std::size_t>(disparity.stride) * sizeof(std::int16_t));
+  cv::filterSpeckles(map, kInvalidDisparity, max_size, max_diff, buffer_->mat);
+}
+
 void left_right_check(ImageView<std::int16_t> left, ImageView<const std::int16_t> right,
                       int max_diff) {
   for (int y = 0; y < left.height; ++y) {
     std::int16_t* l = left.row(y);
     const std::int16_t* r = right.row(y);
-    for (int x = 0; x < left.width; ++x) {
-      if (l[x] == kInvalidDisparity) continue;
-      const int xr = x - l[x];
-      if (xr < 0 || r[xr] == kInvalidDisparity || std::abs(r[xr] - l[x]) > max_diff)
+    for (int x = 0; x < left.width; ++x)
+      if (l[x] != kInvalidDisparity && !kernels::pixel::left_right_agree(x, l[x], r, max_diff))
         l[x] = kInvalidDisparity;
-    }
   }
 }
 
@@ -60,10 +74,9 @@ void uniqueness_check(ImageView<std::int16_t> disparity, ImageView<const std::ui
     std::int16_t* d = disparity.row(y);
     const std::uint16_t* b = best.row(y);
     const std::uint16_t* s = second.row(y);
-    for (int x = 0; x < disparity.width; ++x) {
-      if (d[x] == kInvalidDisparity || s[x] == WinnerTakesAll::kNoCost) continue;
-      if (static_cast<double>(b[x]) > keep * static_cast<double>(s[x])) d[x] = kInvalidDisparity;
-    }
+    for (int x = 0; x < disparity.width; ++x)
+      if (d[x] != kInvalidDisparity && !kernels::pixel::unique_enough(b[x], s[x], keep))
+        d[x] = kInvalidDisparity;
   }
 }
 
@@ -73,22 +86,12 @@ void discontinuity_check(ImageView<std::int16_t> disparity, int max_jump,
   const int h = disparity.height;
   scratch.resize(w, h);
   scratch.copy_from(disparity);
+  const auto at = [&scratch](int x, int y) { return int{scratch.at(x, y)}; };
   for (int y = 0; y < h; ++y) {
     std::int16_t* out = disparity.row(y);
-    for (int x = 0; x < w; ++x) {
-      const int d = scratch.at(x, y);
-      if (d == kInvalidDisparity) continue;
-      bool jump = false;
-      for (int ny = std::max(y - 1, 0); ny <= std::min(y + 1, h - 1) && !jump; ++ny) {
-        const std::int16_t* row = scratch.row(ny);
-        for (int nx = std::max(x - 1, 0); nx <= std::min(x + 1, w - 1); ++nx)
-          if (row[nx] != kInvalidDisparity && std::abs(row[nx] - d) > max_jump) {
-            jump = true;
-            break;
-          }
-      }
-      if (jump) out[x] = kInvalidDisparity;
-    }
+    for (int x = 0; x < w; ++x)
+      if (out[x] != kInvalidDisparity && kernels::pixel::beside_jump(at, x, y, w, h, max_jump))
+        out[x] = kInvalidDisparity;
   }
 }
 

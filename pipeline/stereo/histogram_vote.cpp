@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include "dco/kernels/stereo_kernels.hpp"
+#include "dco/kernels/stereo_pixel.hpp"
 #include "dco/pipeline/stereo/disparity_selection.hpp"
 
 namespace dco::stereo {
@@ -47,6 +48,8 @@ void histogram_vote(ImageView<std::int16_t> disparity, int max_disparity,
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) changed.row(y)[x] = 0;
 
+  const kernels::pixel::VoteParams params{rule.min_count, rule.min_ratio, rule.tolerance,
+                                          rule.fill_invalid};
   for (int it = 0; it < rule.iterations; ++it) {
     // How often each disparity occurs: empty bins need no pass. Only disparities of the searched
     // range vote (values outside it cannot come from WTA).
@@ -80,14 +83,9 @@ void histogram_vote(ImageView<std::int16_t> disparity, int max_disparity,
       const std::int16_t* bd = scratch.best_disp.row(y);
       std::uint8_t* ch = changed.empty() ? nullptr : changed.row(y);
       for (int x = 0; x < w; ++x) {
-        const bool decided =
-            t[x] >= static_cast<std::uint32_t>(rule.min_count) &&
-            static_cast<double>(bv[x]) >= rule.min_ratio * static_cast<double>(t[x]);
-        if (!decided) continue;
-        if (d[x] == kInvalidDisparity && !rule.fill_invalid) continue;
-        if (d[x] != kInvalidDisparity && std::abs(bd[x] - d[x]) <= rule.tolerance) continue;
-        if (bd[x] != d[x]) {
-          d[x] = bd[x];
+        const std::int16_t v = kernels::pixel::voted_value(d[x], t[x], bv[x], bd[x], params);
+        if (v != d[x]) {
+          d[x] = v;
           if (ch) ch[x] = 1;
         }
       }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
@@ -98,12 +99,16 @@ TEST(Compositor, FollowsTheRingAndWritesPngs) {
   ipc::FrameMeta meta = ring_meta();
   std::atomic<bool> stop{false};
   std::thread writer([&] {
-    // A daemon that publishes 30 fps, stops after a while and comes back with a smaller size.
+    // A daemon that publishes 30 fps, stops once the compositor has shown its frames (a loaded
+    // machine may start the compositor late) and comes back with a smaller size.
     {
       ipc::RingWriter w(ring, o);
-      for (int i = 0; i < 15 && !stop; ++i) {
+      const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+      int after_first = 0;
+      for (int i = 0; after_first < 5 && !stop && std::chrono::steady_clock::now() < give_up; ++i) {
         write_scene(w, e, meta, static_cast<std::uint64_t>(i), kW, kH);
         std::this_thread::sleep_for(std::chrono::milliseconds(33));
+        if (i >= 14 && std::filesystem::exists(dir.path() / "frame_000.png")) ++after_first;
       }
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(300));

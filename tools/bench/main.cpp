@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -17,6 +19,7 @@
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
+#include "dco/gpu/backend.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/depth_runtime.hpp"
 #include "dco/tools/command_line.hpp"
@@ -34,7 +37,7 @@ using dco::tools::UsageError;
 constexpr std::string_view kUsage =
     R"(usage: dco-bench [--sequence synthetic|karlsruhe|all] [--synthetic NAME] [--size WxH]
                  [--frames N] [--karlsruhe DIR] [--fps F] [--paced-frames N] [--json]
-                 [--config FILE] [--set KEY=VALUE]
+                 [--backend auto|cpu|cuda] [--config FILE] [--set KEY=VALUE]
 
 Runs the depth pipeline in the real-time runtime and, on the same frames in the same run,
 OpenCV StereoSGBM (3-way) + WLS. Per sequence:
@@ -43,6 +46,9 @@ OpenCV StereoSGBM (3-way) + WLS. Per sequence:
   latency     frames pushed at --fps (capture time = the frame's due time), newest wins at the
               entry: capture-to-result latency p50 / p99 and the frames dropped;
   peer        SGBM 3-way + WLS ms per frame; ratio = peer / dco.
+With the CUDA backend it also runs the sparse stereo stage on the CPU and on the GPU over the
+same frames: both stage times and how many output pixels differ (the tolerance is zero: the GPU
+computes the same integer costs and decisions).
 
   --sequence S        synthetic, karlsruhe or all (default all)
   --synthetic NAME    hand | boxes | static (default hand)
@@ -55,6 +61,7 @@ OpenCV StereoSGBM (3-way) + WLS. Per sequence:
   --json              print one JSON object instead of text: the first sequence's ms_per_frame,
                       peer_ms_per_frame, ratio, latency_p50_ms, latency_p99_ms, ... at the top
                       level and every sequence under "sequences"
+  --backend B         runtime.backend: auto (CUDA when a device works), cpu or cuda
   --config FILE       TOML with [stereo], [contour], [densify] and [runtime] tables
   --set KEY=VALUE     override one parameter, e.g. --set runtime.threads=3
   -h, --help          print this help
@@ -117,6 +124,8 @@ Options parse_args(int argc, char** argv) {
       opt.config = args.value();
     else if (arg == "--set")
       opt.overrides.push_back(args.value());
+    else if (arg == "--backend")
+      opt.overrides.push_back("runtime.backend=" + args.value());
     else if (arg.starts_with("-"))
       throw UsageError(fmt::format("unknown option {}", arg));
     else
@@ -177,8 +186,47 @@ Frames load_frames(const Options& opt, bool synthetic, int default_max_disparity
   return f;
 }
 
+// The CUDA stage against the CPU stage on the same frames.
+struct BackendCheck {
+  double cpu_stereo_ms = 0, cuda_stereo_ms = 0;  // mean after the first (warm-up) frame
+  long differing_pixels = 0;                     // of the sparse maps at input size
+  double max_abs_diff = 0;                       // over pixels finite in both
+};
+
+BackendCheck compare_with_cpu(const dco::stereo::StereoParams& params, const Frames& frames,
+                              const dco::stereo::StereoMatcherFactory& cuda) {
+  BackendCheck c;
+  const auto cpu_stage = dco::stereo::make_cpu_stereo_matcher(params);
+  const auto cuda_stage = cuda(params);
+  dco::Image<float> a, b;
+  int timed = 0;
+  for (std::size_t i = 0; i < frames.pairs.size(); ++i) {
+    const auto& f = frames.pairs[i];
+    cpu_stage->compute(f.left.cview(), f.right.cview(), a);
+    cuda_stage->compute(f.left.cview(), f.right.cview(), b);
+    if (i > 0 || frames.pairs.size() == 1) {
+      c.cpu_stereo_ms += cpu_stage->last_timings().total_ms;
+      c.cuda_stereo_ms += cuda_stage->last_timings().total_ms;
+      ++timed;
+    }
+    for (int y = 0; y < a.height(); ++y)
+      for (int x = 0; x < a.width(); ++x) {
+        const float u = a.row(y)[x], v = b.row(y)[x];
+        if (std::memcmp(&u, &v, sizeof u) == 0) continue;
+        ++c.differing_pixels;
+        if (std::isfinite(u) && std::isfinite(v))
+          c.max_abs_diff = std::max(c.max_abs_diff, static_cast<double>(std::abs(u - v)));
+      }
+  }
+  c.cpu_stereo_ms /= timed;
+  c.cuda_stereo_ms /= timed;
+  return c;
+}
+
 struct Result {
   std::string name;
+  std::string backend, backend_message;
+  std::optional<BackendCheck> check;
   int width = 0, height = 0, frames = 0, max_disparity = 0, threads = 0;
   double ms_per_frame = 0;
   rt::RuntimeStats throughput;
@@ -203,11 +251,15 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
   r.frames = static_cast<int>(frames.pairs.size());
   r.max_disparity = frames.max_disparity;
   r.threads = p.runtime.threads;
+  const dco::gpu::BackendChoice backend =
+      dco::gpu::choose_backend(p.runtime.backend, p.pipeline.stereo);
+  r.backend = backend.backend;
+  r.backend_message = backend.message;
 
   {  // Throughput: every frame, as fast as the runtime takes them.
     rt::RuntimeParams runtime = p.runtime;
     runtime.deterministic = true;
-    rt::DepthRuntime pipeline(p.pipeline, runtime, {});
+    rt::DepthRuntime pipeline(p.pipeline, runtime, {}, {}, backend.stereo);
     pipeline.start();
     const auto start = std::chrono::steady_clock::now();
     for (const auto& f : frames.pairs) pipeline.push(f.left.cview(), f.right.cview());
@@ -216,7 +268,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
     r.throughput = pipeline.stats();
   }
   {  // Latency: a camera's pace; the sequence is played back and forth so motion stays smooth.
-    rt::DepthRuntime pipeline(p.pipeline, p.runtime, {});
+    rt::DepthRuntime pipeline(p.pipeline, p.runtime, {}, {}, backend.stereo);
     pipeline.start();
     const auto period = std::chrono::duration_cast<rt::Clock::duration>(
         std::chrono::duration<double>(1.0 / opt.fps));
@@ -240,6 +292,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
     peer_ms +=
         dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity).time_ms;
   r.peer_ms_per_frame = peer_ms / r.frames;
+  if (backend.stereo) r.check = compare_with_cpu(p.pipeline.stereo, frames, backend.stereo);
   return r;
 }
 
@@ -263,6 +316,14 @@ void print_text(const Result& r) {
   fmt::print(
       "  peer     {:8.1f} ms/frame  OpenCV StereoSGBM 3-way + WLS; ratio peer / dco {:.3f}\n",
       r.peer_ms_per_frame, r.peer_ms_per_frame / r.ms_per_frame);
+  fmt::print("  {}\n", r.backend_message);
+  if (r.check)
+    fmt::print(
+        "  stereo   CPU {:.2f} ms, CUDA {:.2f} ms per frame (ratio {:.1f}); {} output pixels "
+        "differ (max {:g} px)\n",
+        r.check->cpu_stereo_ms, r.check->cuda_stereo_ms,
+        r.check->cpu_stereo_ms / r.check->cuda_stereo_ms, r.check->differing_pixels,
+        r.check->max_abs_diff);
 }
 
 // The fields of one sequence, without braces.
@@ -271,17 +332,24 @@ std::string json_fields(const Result& r) {
   const rt::RuntimeStats& t = r.throughput;
   const rt::RuntimeStats& l = r.paced;
   return fmt::format(
-      "\"name\": {}, \"width\": {}, \"height\": {}, \"frames\": {}, \"max_disparity\": {}, "
-      "\"threads\": {}, \"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
-      "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
-      "\"latency_p99_ms\": {}, \"paced_frames\": {}, \"dropped\": {}, \"published\": {}, "
-      "\"peer_ms_per_frame\": {}, \"ratio\": {}",
-      dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity, r.threads,
-      json_number(r.ms_per_frame), json_number(1000.0 / r.ms_per_frame),
-      json_number(t.stereo.mean_ms), json_number(t.contour.mean_ms), json_number(t.densify.mean_ms),
-      json_number(r.fps), json_number(l.latency.p50_ms), json_number(l.latency.p99_ms), l.pushed,
-      l.dropped, l.published, json_number(r.peer_ms_per_frame),
-      json_number(r.peer_ms_per_frame / r.ms_per_frame));
+             "\"name\": {}, \"width\": {}, \"height\": {}, \"frames\": {}, \"max_disparity\": {}, "
+             "\"threads\": {}, \"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
+             "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
+             "\"latency_p99_ms\": {}, \"paced_frames\": {}, \"dropped\": {}, \"published\": {}, "
+             "\"peer_ms_per_frame\": {}, \"ratio\": {}",
+             dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity,
+             r.threads, json_number(r.ms_per_frame), json_number(1000.0 / r.ms_per_frame),
+             json_number(t.stereo.mean_ms), json_number(t.contour.mean_ms),
+             json_number(t.densify.mean_ms), json_number(r.fps), json_number(l.latency.p50_ms),
+             json_number(l.latency.p99_ms), l.pushed, l.dropped, l.published,
+             json_number(r.peer_ms_per_frame), json_number(r.peer_ms_per_frame / r.ms_per_frame)) +
+         fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
+         (r.check ? fmt::format(", \"cpu_stereo_ms\": {}, \"cuda_stereo_ms\": {}, "
+                                "\"cuda_differing_pixels\": {}, \"cuda_max_abs_diff\": {}",
+                                json_number(r.check->cpu_stereo_ms),
+                                json_number(r.check->cuda_stereo_ms), r.check->differing_pixels,
+                                json_number(r.check->max_abs_diff))
+                  : std::string());
 }
 
 }  // namespace

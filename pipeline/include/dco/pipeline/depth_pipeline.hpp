@@ -92,7 +92,9 @@ ContourWindow window_at_end(int last);
 // frame's dense map.
 class DepthPipeline {
  public:
-  explicit DepthPipeline(const PipelineParams& params);
+  // `stereo` makes the sparse stage (empty: the CPU one).
+  explicit DepthPipeline(const PipelineParams& params,
+                         const stereo::StereoMatcherFactory& stereo = {});
 
   // left/right: a rectified pair (8-bit, 1 or 3 channels). Returns true when `out` was filled.
   bool push(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,

@@ -68,8 +68,10 @@ class DepthRuntime {
   using StageHook = std::function<void(Stage, int index)>;
 
   // Throws dco::Error on invalid params.
+  // `stereo` makes the sparse stage (empty: the CPU one).
   DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
-               ResultCallback on_result, StageHook hook = {});
+               ResultCallback on_result, StageHook hook = {},
+               const stereo::StereoMatcherFactory& stereo = {});
   DepthRuntime(const DepthRuntime&) = delete;
   DepthRuntime& operator=(const DepthRuntime&) = delete;
   ~DepthRuntime();  // stops

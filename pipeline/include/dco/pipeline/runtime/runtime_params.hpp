@@ -22,6 +22,9 @@ struct RuntimeParams {
   // Never drop: push waits for room, so every frame is processed in order and the output equals
   // the offline DepthPipeline's (for replays and tests).
   bool deterministic = false;
+  // Where the stages run: "cuda" (a CUDA device), "cpu", or "auto" (CUDA when a device works,
+  // else the CPU). Resolved by the program that builds the runtime (dco::gpu::choose_backend).
+  std::string backend = "auto";
 };
 
 void register_params(ConfigSchema& schema, RuntimeParams& params);

@@ -2,12 +2,14 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 
 #include "dco/core/image.hpp"
+#include "dco/kernels/stereo_pixel.hpp"
 
 namespace dco::stereo {
 
-inline constexpr std::int16_t kInvalidDisparity = -1;
+inline constexpr std::int16_t kInvalidDisparity = kernels::pixel::kInvalid;
 
 // Winner-takes-all over aggregated cost slices fed in increasing disparity order (Eq. 3), for
 // the left image and, from the same slices, for the right image (a right pixel xr at disparity d
@@ -54,14 +56,24 @@ void uniqueness_check(ImageView<std::int16_t> disparity, ImageView<const std::ui
 void discontinuity_check(ImageView<std::int16_t> disparity, int max_jump,
                          Image<std::int16_t>& scratch);
 
+// Drops islands of fewer than max_size pixels whose neighbours step by at most max_diff
+// (cv::filterSpeckles): wrong matches that survived the checks. Keeps its work area across
+// frames.
+class SpeckleFilter {
+ public:
+  SpeckleFilter();
+  ~SpeckleFilter();
+  SpeckleFilter(SpeckleFilter&&) noexcept;
+  SpeckleFilter& operator=(SpeckleFilter&&) noexcept;
+  void apply(ImageView<std::int16_t> disparity, int max_size, int max_diff);
+
+ private:
+  struct Buffer;
+  std::unique_ptr<Buffer> buffer_;
+};
+
 // Parabola through the costs at d-1, d, d+1: the offset of its minimum, in [-0.5, 0.5]; 0 when
 // a neighbour is missing or the costs are not convex.
-inline float subpixel_offset(std::uint16_t below, std::uint16_t best, std::uint16_t above) {
-  if (below == WinnerTakesAll::kNoCost || above == WinnerTakesAll::kNoCost) return 0.0f;
-  const int curvature = int(below) + int(above) - 2 * int(best);
-  if (curvature <= 0) return 0.0f;
-  const float offset = float(int(below) - int(above)) / (2.0f * float(curvature));
-  return offset < -0.5f ? -0.5f : (offset > 0.5f ? 0.5f : offset);
-}
+using kernels::pixel::subpixel_offset;
 
 }  // namespace dco::stereo

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 
 #include "dco/core/image.hpp"
@@ -46,7 +47,17 @@ class StereoMatcher {
 // Internal downscale factor (1 or 2) for an input width under the params.
 int internal_scale(const StereoParams& params, int input_width);
 
+// Throws dco::Error when a pair cannot go through the stage under these params (empty, sizes or
+// channels that differ, too small for the census window, max disparity not below the width).
+void check_stereo_input(const StereoParams& params, ImageView<const std::uint8_t> left,
+                        ImageView<const std::uint8_t> right);
+
 // Throws dco::Error when the params are invalid.
 std::unique_ptr<StereoMatcher> make_cpu_stereo_matcher(const StereoParams& params);
+
+// Makes the stage of a backend (CPU, CUDA); an empty factory means the CPU one.
+using StereoMatcherFactory = std::function<std::unique_ptr<StereoMatcher>(const StereoParams&)>;
+std::unique_ptr<StereoMatcher> make_stereo_matcher(const StereoMatcherFactory& factory,
+                                                   const StereoParams& params);
 
 }  // namespace dco::stereo

@@ -1,0 +1,42 @@
+#pragma once
+
+#include <string>
+
+#include "dco/pipeline/stereo/stereo_matcher.hpp"
+
+// Where the stages run. The CUDA path (built when nvcc was found) computes the sparse stereo
+// stage on the GPU with the same per-pixel math as the CPU path; contours and densification stay
+// on the CPU.
+namespace dco::gpu {
+
+// What the CUDA runtime reports about device 0.
+struct CudaDevice {
+  bool usable = false;
+  std::string why;  // when not usable: the reason, in words
+  std::string name;
+  int compute_major = 0, compute_minor = 0;
+  double memory_gib = 0;
+  std::string describe() const;  // "NVIDIA H100 (sm_90, 79.1 GiB)"
+};
+
+// True when this build has the CUDA path.
+bool built_with_cuda();
+// Never throws; without CUDA in the build or without a working device, usable is false.
+CudaDevice probe_cuda();
+
+// The sparse stage on the GPU. Throws dco::Error when the build has no CUDA or CUDA cannot be
+// initialised (no device, no driver, out of memory).
+std::unique_ptr<stereo::StereoMatcher> make_cuda_stereo_matcher(const stereo::StereoParams& params);
+
+// runtime.backend resolved on this machine: "auto" takes CUDA when a device works (a stage is
+// made once to prove it) and else the CPU, saying why; "cuda" insists (dco::Error when CUDA is
+// unusable); "cpu" is the CPU. Throws dco::Error on any other name.
+struct BackendChoice {
+  std::string backend;                  // "cpu" or "cuda"
+  std::string message;                  // one line for the log: what was chosen and why
+  bool fell_back = false;               // "auto" wanted CUDA but could not have it
+  stereo::StereoMatcherFactory stereo;  // empty for the CPU
+};
+BackendChoice choose_backend(const std::string& requested, const stereo::StereoParams& params);
+
+}  // namespace dco::gpu

@@ -1,0 +1,76 @@
+#include "dco/gpu/backend.hpp"
+
+#include <fmt/format.h>
+
+#include "dco/core/error.hpp"
+
+#ifdef DCO_HAVE_CUDA
+#include "cuda_entry.hpp"
+#endif
+
+namespace dco::gpu {
+
+std::string CudaDevice::describe() const {
+  if (!usable) return "no usable CUDA device: " + why;
+  return fmt::format("{} (sm_{}{}, {:.1f} GiB)", name, compute_major, compute_minor, memory_gib);
+}
+
+bool built_with_cuda() {
+#ifdef DCO_HAVE_CUDA
+  return true;
+#else
+  return false;
+#endif
+}
+
+CudaDevice probe_cuda() {
+#ifdef DCO_HAVE_CUDA
+  return detail::cuda_probe();
+#else
+  CudaDevice d;
+  d.why = "this build has no CUDA path (nvcc was not found when it was configured)";
+  return d;
+#endif
+}
+
+std::unique_ptr<stereo::StereoMatcher> make_cuda_stereo_matcher(
+    const stereo::StereoParams& params) {
+#ifdef DCO_HAVE_CUDA
+  return detail::cuda_stereo_matcher(params);
+#else
+  (void)params;
+  throw Error("cuda: " + probe_cuda().why);
+#endif
+}
+
+BackendChoice choose_backend(const std::string& requested, const stereo::StereoParams& params) {
+  BackendChoice c;
+  if (requested == "cpu") {
+    c.backend = "cpu";
+    c.message = "backend cpu (runtime.backend = cpu)";
+    return c;
+  }
+  if (requested != "auto" && requested != "cuda")
+    throw Error("runtime.backend must be auto, cpu or cuda, not '" + requested + "'");
+  const CudaDevice device = probe_cuda();
+  std::string why = device.why;
+  if (device.usable) {
+    try {
+      make_cuda_stereo_matcher(params);  // initialises the context and the stream once
+      c.backend = "cuda";
+      c.message = "backend cuda on " + device.describe() +
+                  ": sparse stereo on the GPU, contours and densification on the CPU";
+      c.stereo = [](const stereo::StereoParams& p) { return make_cuda_stereo_matcher(p); };
+      return c;
+    } catch (const std::exception& e) {
+      why = e.what();
+    }
+  }
+  if (requested == "cuda") throw Error("runtime.backend = cuda, but " + why);
+  c.backend = "cpu";
+  c.fell_back = built_with_cuda();
+  c.message = "backend cpu (auto: " + why + ")";
+  return c;
+}
+
+}  // namespace dco::gpu

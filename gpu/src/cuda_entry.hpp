@@ -1,0 +1,13 @@
+#pragma once
+
+#include <memory>
+
+#include "dco/gpu/backend.hpp"
+
+// What the CUDA translation unit provides to backend.cpp (only in builds with CUDA).
+namespace dco::gpu::detail {
+
+CudaDevice cuda_probe();
+std::unique_ptr<stereo::StereoMatcher> cuda_stereo_matcher(const stereo::StereoParams& params);
+
+}  // namespace dco::gpu::detail

@@ -1,0 +1,39 @@
+#include <cuda_runtime.h>
+
+#include "cuda_entry.hpp"
+#include "cuda_grid.cuh"
+#include "dco/gpu/grid_stereo_matcher.hpp"
+
+namespace dco::gpu::detail {
+
+CudaDevice cuda_probe() {
+  CudaDevice d;
+  int count = 0;
+  const cudaError_t status = cudaGetDeviceCount(&count);
+  if (status != cudaSuccess) {
+    d.why = cudaGetErrorString(status);
+    return d;
+  }
+  if (count == 0) {
+    d.why = "the CUDA runtime sees no device";
+    return d;
+  }
+  cudaDeviceProp p{};
+  const cudaError_t props = cudaGetDeviceProperties(&p, 0);
+  if (props != cudaSuccess) {
+    d.why = cudaGetErrorString(props);
+    return d;
+  }
+  d.usable = true;
+  d.name = p.name;
+  d.compute_major = p.major;
+  d.compute_minor = p.minor;
+  d.memory_gib = static_cast<double>(p.totalGlobalMem) / (1024.0 * 1024.0 * 1024.0);
+  return d;
+}
+
+std::unique_ptr<stereo::StereoMatcher> cuda_stereo_matcher(const stereo::StereoParams& params) {
+  return std::make_unique<GridStereoMatcher<CudaGrid>>(params);
+}
+
+}  // namespace dco::gpu::detail

@@ -1,0 +1,51 @@
+#include <gtest/gtest.h>
+
+#include "dco/core/error.hpp"
+#include "dco/gpu/backend.hpp"
+
+namespace dco::gpu {
+namespace {
+
+TEST(Backend, CpuIsTheCpuStage) {
+  const BackendChoice c = choose_backend("cpu", {});
+  EXPECT_EQ(c.backend, "cpu");
+  EXPECT_FALSE(c.stereo);
+  EXPECT_FALSE(c.fell_back);
+}
+
+TEST(Backend, AutoTakesCudaExactlyWhenADeviceWorks) {
+  const CudaDevice device = probe_cuda();
+  const BackendChoice c = choose_backend("auto", {});
+  if (device.usable) {
+    EXPECT_EQ(c.backend, "cuda") << c.message;
+    ASSERT_TRUE(c.stereo);
+    EXPECT_NE(c.message.find(device.name), std::string::npos) << c.message;
+  } else {
+    EXPECT_EQ(c.backend, "cpu");
+    EXPECT_FALSE(c.stereo);
+    EXPECT_EQ(c.fell_back, built_with_cuda());
+    // The log line says why.
+    EXPECT_NE(c.message.find(device.why), std::string::npos) << c.message;
+    EXPECT_FALSE(device.why.empty());
+  }
+}
+
+TEST(Backend, CudaWithoutADeviceIsOneClearError) {
+  const CudaDevice device = probe_cuda();
+  if (device.usable) GTEST_SKIP() << "a CUDA device works here: " << device.describe();
+  try {
+    choose_backend("cuda", {});
+    FAIL() << "cuda chosen without a device";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("runtime.backend = cuda, but"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(make_cuda_stereo_matcher({}), Error);
+}
+
+TEST(Backend, UnknownNamesAreRefused) {
+  EXPECT_THROW(choose_backend("opencl", {}), Error);
+}
+
+}  // namespace
+}  // namespace dco::gpu
