@@ -3,13 +3,18 @@
 // Stereo pairs and stage settings on which the GPU stage must give the CPU stage's bytes.
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "dco/core/image.hpp"
 #include "dco/core/image_io.hpp"
 #include "dco/core/synthetic_scene.hpp"
+#include "dco/pipeline/stereo/stereo_matcher.hpp"
 #include "dco/pipeline/stereo/stereo_params.hpp"
+#include "support/same_bytes.hpp"
 
 namespace dco::gpu::testing {
 
@@ -82,6 +87,32 @@ inline std::vector<std::pair<std::string, stereo::StereoParams>> variants(
     p.arm_short = 6;
   });
   return v;
+}
+
+// Runs the stage make(params) and the CPU stage on the case under every variant, two frames each
+// (the second reuses every buffer of the first), and expects every output byte equal: the map at
+// input size, the internal raw and sparse maps and the internal grey image. Tolerance: none; the
+// stage computes the CPU's integer costs, sums and decisions and the same IEEE float operations.
+// then(variant, stage, cpu) runs after each comparison.
+template <class Make, class Then>
+void expect_same_as_cpu(const StereoCase& c, const Make& make, const Then& then) {
+  using dco::testing::same_bytes;
+  for (const auto& [variant, params] : variants(c.params)) {
+    SCOPED_TRACE(c.name + ", " + variant);
+    const auto cpu = stereo::make_cpu_stereo_matcher(params);
+    const std::unique_ptr<stereo::StereoMatcher> stage = make(params);
+    Image<float> expected, actual;
+    for (int frame = 0; frame < 2; ++frame) {
+      cpu->compute(c.left.cview(), c.right.cview(), expected);
+      stage->compute(c.left.cview(), c.right.cview(), actual);
+    }
+    EXPECT_EQ(stage->last_scale(), cpu->last_scale());
+    EXPECT_TRUE(same_bytes(actual.cview(), expected.cview()));
+    EXPECT_TRUE(same_bytes(stage->internal_raw_disparity(), cpu->internal_raw_disparity()));
+    EXPECT_TRUE(same_bytes(stage->internal_sparse_disparity(), cpu->internal_sparse_disparity()));
+    EXPECT_TRUE(same_bytes(stage->internal_left_gray(), cpu->internal_left_gray()));
+    then(variant, *stage, *cpu);
+  }
 }
 
 }  // namespace dco::gpu::testing

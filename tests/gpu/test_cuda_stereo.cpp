@@ -1,36 +1,24 @@
 #include <gtest/gtest.h>
 
-#include <chrono>
+#include <cstdio>
+#include <string>
 
 #include "dco/gpu/backend.hpp"
 #include "stereo_cases.hpp"
-#include "support/same_bytes.hpp"
 
 namespace dco::gpu {
 namespace {
 
-using dco::testing::same_bytes;
-
-// Tolerance: none. The device computes the CPU's integer costs, sums and decisions and the same
-// IEEE float operations for the subpixel fit, so every byte must agree.
+// The CUDA stage gives the CPU stage's bytes (tolerance: none) and prints both stage times.
 void expect_cuda_equals_cpu(const testing::StereoCase& c) {
-  for (const auto& [variant, params] : testing::variants(c.params)) {
-    SCOPED_TRACE(c.name + ", " + variant);
-    const auto cpu = stereo::make_cpu_stereo_matcher(params);
-    const auto cuda = make_cuda_stereo_matcher(params);
-    Image<float> expected, actual;
-    for (int frame = 0; frame < 2; ++frame) {
-      cpu->compute(c.left.cview(), c.right.cview(), expected);
-      cuda->compute(c.left.cview(), c.right.cview(), actual);
-    }
-    EXPECT_TRUE(same_bytes(actual.cview(), expected.cview()));
-    EXPECT_TRUE(same_bytes(cuda->internal_raw_disparity(), cpu->internal_raw_disparity()));
-    EXPECT_TRUE(same_bytes(cuda->internal_sparse_disparity(), cpu->internal_sparse_disparity()));
-    EXPECT_TRUE(same_bytes(cuda->internal_left_gray(), cpu->internal_left_gray()));
-    std::printf("%s, %s: CPU %.2f ms, CUDA %.2f ms (cost+aggregation+WTA %.2f ms)\n",
-                c.name.c_str(), variant.c_str(), cpu->last_timings().total_ms,
-                cuda->last_timings().total_ms, cuda->last_timings().initial_ms);
-  }
+  testing::expect_same_as_cpu(
+      c, [](const stereo::StereoParams& params) { return make_cuda_stereo_matcher(params); },
+      [&c](const std::string& variant, const stereo::StereoMatcher& cuda,
+           const stereo::StereoMatcher& cpu) {
+        std::printf("%s, %s: CPU %.2f ms, CUDA %.2f ms (cost+aggregation+WTA %.2f ms)\n",
+                    c.name.c_str(), variant.c_str(), cpu.last_timings().total_ms,
+                    cuda.last_timings().total_ms, cuda.last_timings().initial_ms);
+      });
 }
 
 class CudaStereo : public ::testing::Test {

@@ -1,44 +1,35 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
+#include <string>
 
 #include "dco/core/error.hpp"
 #include "dco/gpu/grid_stereo_matcher.hpp"
 #include "dco/gpu/host_grid.hpp"
 #include "stereo_cases.hpp"
-#include "support/same_bytes.hpp"
 
 namespace dco::gpu {
 namespace {
 
-using dco::testing::same_bytes;
 using testing::StereoCase;
 
 // Every output of the grid passes equals the CPU stage's, byte for byte.
 void expect_same_as_cpu(const StereoCase& c) {
-  for (const auto& [variant, params] : testing::variants(c.params)) {
-    SCOPED_TRACE(c.name + ", " + variant);
-    const auto cpu = stereo::make_cpu_stereo_matcher(params);
-    GridStereoMatcher<HostGrid> grid(params);
-    Image<float> expected, actual;
-    // Twice: the second frame reuses every buffer of the first.
-    for (int frame = 0; frame < 2; ++frame) {
-      cpu->compute(c.left.cview(), c.right.cview(), expected);
-      grid.compute(c.left.cview(), c.right.cview(), actual);
-    }
-    EXPECT_EQ(grid.last_scale(), cpu->last_scale());
-    EXPECT_TRUE(same_bytes(actual.cview(), expected.cview()));
-    EXPECT_TRUE(same_bytes(grid.internal_raw_disparity(), cpu->internal_raw_disparity()));
-    EXPECT_TRUE(same_bytes(grid.internal_sparse_disparity(), cpu->internal_sparse_disparity()));
-    EXPECT_TRUE(same_bytes(grid.internal_left_gray(), cpu->internal_left_gray()));
-    // Not trivially equal: the checks kept a good share of the pixels and removed others.
-    int kept = 0;
-    const ImageView<const float> sparse = grid.internal_sparse_disparity();
-    for (int y = 0; y < sparse.height; ++y)
-      for (int x = 0; x < sparse.width; ++x) kept += std::isfinite(sparse.row(y)[x]) ? 1 : 0;
-    EXPECT_GT(kept, sparse.width * sparse.height / 5);
-    EXPECT_LT(kept, sparse.width * sparse.height);
-  }
+  testing::expect_same_as_cpu(
+      c,
+      [](const stereo::StereoParams& params) {
+        return std::make_unique<GridStereoMatcher<HostGrid>>(params);
+      },
+      [](const std::string&, const stereo::StereoMatcher& grid, const stereo::StereoMatcher&) {
+        // Not trivially equal: the checks kept a good share of the pixels and removed others.
+        int kept = 0;
+        const ImageView<const float> sparse = grid.internal_sparse_disparity();
+        for (int y = 0; y < sparse.height; ++y)
+          for (int x = 0; x < sparse.width; ++x) kept += std::isfinite(sparse.row(y)[x]) ? 1 : 0;
+        EXPECT_GT(kept, sparse.width * sparse.height / 5);
+        EXPECT_LT(kept, sparse.width * sparse.height);
+      });
 }
 
 TEST(GridStereo, TsukubaIsTheCpuStageBitForBit) {

@@ -82,10 +82,9 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
     scale_ = stereo::internal_scale(params_, left.width);
     w_ = left.width / scale_;
     h_ = left.height / scale_;
-    max_d_ = params_.max_disparity / scale_;
-    depth_ = max_d_ + 1;
-    channels_ = left.channels;
-    const bool color = channels_ == 3 && params_.use_color;
+    depth_ = params_.max_disparity / scale_ + 1;  // disparities 0 .. max, in internal pixels
+    const int channels = left.channels;
+    const bool color = channels == 3 && params_.use_color;
     const std::size_t n = pixels();
 
     upload_image(left, staging_left_, input_left_);
@@ -93,18 +92,17 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
     const std::uint8_t* l = input_left_.data();
     const std::uint8_t* r = input_right_.data();
     if (scale_ == 2) {
-      small_left_.resize(n * channels_);
-      small_right_.resize(n * channels_);
+      small_left_.resize(n * channels);
+      small_right_.resize(n * channels);
+      grid_.launch(w_, h_, passes::DownsampleHalf{l, left.width, small_left_.data(), w_, channels});
       grid_.launch(w_, h_,
-                   passes::DownsampleHalf{l, left.width, small_left_.data(), w_, channels_});
-      grid_.launch(w_, h_,
-                   passes::DownsampleHalf{r, left.width, small_right_.data(), w_, channels_});
+                   passes::DownsampleHalf{r, left.width, small_right_.data(), w_, channels});
       l = small_left_.data();
       r = small_right_.data();
     }
     const std::uint8_t* grey_l = l;
     const std::uint8_t* grey_r = r;
-    if (channels_ == 3) {
+    if (channels == 3) {
       grey_left_.resize(n);
       grey_right_.resize(n);
       grid_.launch(w_, h_, passes::BgrToGrey{l, grey_left_.data(), w_});
@@ -236,17 +234,12 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
     }
     if (params_.speckle_size > 0) {
       // A flood fill: on the host, between two passes.
-      speckle_map_.resize(w_, h_);
       speckle_staging_.resize(n);
       grid_.download(speckle_staging_.data(), result_, n * sizeof(std::int16_t));
       grid_.synchronize();
-      for (int y = 0; y < h_; ++y)
-        std::memcpy(speckle_map_.row(y), speckle_staging_.data() + static_cast<std::size_t>(y) * w_,
-                    static_cast<std::size_t>(w_) * sizeof(std::int16_t));
-      speckles_.apply(speckle_map_.view(), params_.speckle_size, params_.speckle_range);
-      for (int y = 0; y < h_; ++y)
-        std::memcpy(speckle_staging_.data() + static_cast<std::size_t>(y) * w_, speckle_map_.row(y),
-                    static_cast<std::size_t>(w_) * sizeof(std::int16_t));
+      // The tight rows of the staging buffer are an image as they are.
+      speckles_.apply(ImageView<std::int16_t>(speckle_staging_.data(), w_, h_, 1, w_),
+                      params_.speckle_size, params_.speckle_range);
       grid_.upload(result_, speckle_staging_.data(), n * sizeof(std::int16_t));
     }
   }
@@ -295,7 +288,7 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
   stereo::CostTables tables_;
   kernels::CostTableView device_tables_;
   stereo::StereoTimings timings_;
-  int scale_ = 1, w_ = 0, h_ = 0, max_d_ = 0, depth_ = 1, channels_ = 1;
+  int scale_ = 1, w_ = 0, h_ = 0, depth_ = 1;
 
   Staging<std::uint8_t> staging_left_, staging_right_, staging_grey_;
   Staging<std::int16_t> speckle_staging_;
@@ -312,7 +305,6 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
   Buffer<std::uint16_t> best_, second_, below_, above_;
   Buffer<std::uint8_t> changed_;
   Buffer<float> raw_, sparse_, full_;
-  Image<std::int16_t> speckle_map_;
   stereo::SpeckleFilter speckles_;
   Image<std::uint8_t> grey_out_;
   Image<float> raw_out_, sparse_out_;
