@@ -125,6 +125,7 @@ RingWriter::~RingWriter() {
   auto* h = reinterpret_cast<layout::RingHeader*>(base_);
   h->state.store(layout::kStateClosed, std::memory_order_release);
   layout::change_and_wake(h->wake);
+  layout::change_and_wake(h->writes_begun);
   // Only remove the file while it is still ours: a newer writer may have replaced it.
   struct stat mine {};
   struct stat there {};
@@ -142,7 +143,10 @@ unsigned char* RingWriter::slot_base(std::uint32_t index) const {
 
 RingWriter::Slot RingWriter::begin_write() {
   assert(!open_slot_ && "publish() the open slot first");
-  const auto* h = reinterpret_cast<const layout::RingHeader*>(base_);
+  auto* h = reinterpret_cast<layout::RingHeader*>(base_);
+  // Readers that poll through a write get up now, while the slot fills, so they are running
+  // when it is published.
+  layout::change_and_wake(h->writes_begun);
   writing_ = (writing_ + 1) % h->slot_count;
   unsigned char* base = slot_base(writing_);
   auto* s = reinterpret_cast<layout::SlotHeader*>(base);

@@ -130,6 +130,8 @@ TEST(DcoBenchCli, IpcJsonCountsEveryFrameOfEveryClient) {
   EXPECT_GT(inline_p99, 0);
   EXPECT_GE(json_value(r.out, "lost"), 0);
   EXPECT_GT(json_value(r.out, "ratio"), 0);
+  EXPECT_EQ(json_value(r.out, "poll_us"), 2000) << "clients poll through the write by default";
+  EXPECT_GT(json_value(r.out, "client_cpu_us_per_frame"), 0);
   // Per run: every frame a client got or lost is counted once, and the percentiles are ordered.
   const std::regex run_pattern(
       "\"clients\": ([0-9]+), \"rate_hz\": 60, \"received\": ([0-9]+), \"p50_us\": ([0-9.eE+-]+), "
@@ -169,6 +171,8 @@ TEST(DcoBenchCli, IpcBadCommandLinesExitWithTwo) {
   expect_usage({"ipc", "--clients", "1,x"}, "--clients");
   expect_usage({"ipc", "--rates", "fast"}, "--rates");
   expect_usage({"ipc", "--frames", "1"}, "--frames");
+  expect_usage({"ipc", "--poll-us", "100001"}, "--poll-us");
+  expect_usage({"ipc", "--poll-us", "-1"}, "--poll-us");
   expect_usage({"ipc", "--size", "8x8"}, "--size");
   expect_usage({"ipc", "--sequence", "synthetic"}, "unknown option --sequence");
 }

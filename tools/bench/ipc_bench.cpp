@@ -1,9 +1,9 @@
 // dco-bench ipc: how fast a published depth frame reaches client processes through the
 // shared-memory ring, next to the same frames sent inline over LCM udpm in the same run.
 //
-// The benchmark starts its clients as copies of itself in a hidden role ("--role ring-reader" or
-// "--role lcm-reader"); each prints "ready" once connected and, when the publisher is done, one
-// line "frames N lat L1 L2 ..." with the latency of every frame it got (ns).
+// The benchmark starts its clients as copies of itself in a hidden role ("--role ring-reader PATH
+// POLL_US" or "--role lcm-reader URL"); each prints "ready" once connected and, when the publisher
+// is done, one line "frames N lat L1 L2 ..." with the latency of every frame it got (ns).
 
 #include "ipc_bench.hpp"
 
@@ -11,6 +11,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -46,7 +47,7 @@ using dco::tools::UsageError;
 
 constexpr std::string_view kUsage =
     R"(usage: dco-bench ipc [--clients LIST] [--rates LIST] [--frames N] [--size WxH]
-                     [--no-image] [--lcm-url URL] [--no-netns] [--json]
+                     [--no-image] [--poll-us US] [--lcm-url URL] [--no-netns] [--json]
 
 Publishes depth frames into the shared-memory ring, read by client processes through
 libdco-client (dco_client_wait_next, frames read in place), then sends the same frames inline
@@ -59,12 +60,17 @@ over LCM to as many subscriber processes; one run per client count and rate:
   ratio    inline p99 / ring p99
   write    the publisher's time to copy a frame into a slot and publish it (a writer that
            renders into the slot skips the copy) and to send it inline
+  cpu      a client process's CPU time from connecting to the end of the run divided by the
+           frames, mean over clients
 
   --clients LIST  client process counts, comma separated (default 1,4,8)
   --rates LIST    publish rates in Hz, comma separated (default 30,90)
   --frames N      frames per run (default 150)
   --size WxH      depth size (default 1280x720), float32
   --no-image      no 8-bit grey image with the depth (by default slots and messages carry one)
+  --poll-us US     ring clients wake when the writer starts a frame and poll up to US for
+                  it (dco_client_options::poll_us; default 2000); 0: they sleep until the
+                  frame is published
   --lcm-url URL   the inline peer's LCM URL
                   (default udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304)
   --no-netns      measure in the current network namespace; by default the benchmark runs
@@ -93,6 +99,7 @@ struct Options {
   int frames = 150;
   int width = 1280, height = 720;
   bool image = true;
+  int poll_us = 2000;
   std::string lcm_url = kDefaultLcmUrl;
   bool netns = true;
   bool json = false;
@@ -153,6 +160,8 @@ Options parse_args(int argc, char** argv) {
       opt.height = size.height;
     } else if (arg == "--no-image")
       opt.image = !args.flag();
+    else if (arg == "--poll-us")
+      opt.poll_us = args.int_value();
     else if (arg == "--lcm-url")
       opt.lcm_url = args.value();
     else if (arg == "--no-netns")
@@ -165,6 +174,7 @@ Options parse_args(int argc, char** argv) {
       throw UsageError(fmt::format("unexpected argument '{}'", arg));
   }
   if (opt.frames < 2 || opt.frames > 100000) throw UsageError("--frames must be in 2..100000");
+  if (opt.poll_us < 0 || opt.poll_us > 100000) throw UsageError("--poll-us must be in 0..100000");
   if (opt.width > 8192 || opt.height > 8192) throw UsageError("--size must be at most 8192x8192");
   return opt;
 }
@@ -198,16 +208,27 @@ fs::path self_exe() {
 
 // ---- client roles ----------------------------------------------------------------------------
 
-void print_latencies(const std::vector<std::int64_t>& lat) {
-  std::string line = fmt::format("frames {} lat", lat.size());
+std::int64_t cpu_time_us() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  const auto us = [](const timeval& t) { return std::int64_t{t.tv_sec} * 1'000'000 + t.tv_usec; };
+  return us(usage.ru_utime) + us(usage.ru_stime);
+}
+
+// The result line: frames received, the CPU time (µs) spent since the client was ready and every
+// latency (ns).
+void print_latencies(const std::vector<std::int64_t>& lat, std::int64_t cpu_us_at_ready) {
+  std::string line =
+      fmt::format("frames {} cpu_us {} lat", lat.size(), cpu_time_us() - cpu_us_at_ready);
   for (const std::int64_t v : lat) line += fmt::format(" {}", v);
   fmt::print("{}\n", line);
 }
 
-int ring_reader(const std::string& path) {
+int ring_reader(const std::string& path, std::uint32_t poll_us) {
   dco_client_options options;
   dco_client_options_init(&options);
   options.path = path.c_str();
+  options.poll_us = poll_us;
   dco_client* client = nullptr;
   if (dco_client_open(&options, &client) != DCO_OK) {
     fmt::print("error {}\n", dco::tools::one_line(dco_client_last_error()));
@@ -215,6 +236,7 @@ int ring_reader(const std::string& path) {
   }
   fmt::print("ready\n");
   std::fflush(stdout);
+  const std::int64_t cpu_at_ready = cpu_time_us();
   std::vector<std::int64_t> lat;
   lat.reserve(1 << 16);
   dco_frame_view view;
@@ -233,7 +255,7 @@ int ring_reader(const std::string& path) {
     break;
   }
   dco_client_close(client);
-  if (rc == 0) print_latencies(lat);
+  if (rc == 0) print_latencies(lat, cpu_at_ready);
   return rc;
 }
 
@@ -266,6 +288,7 @@ int lcm_reader(const std::string& url) {
   lcm.subscribeFunction(kEndChannel, &on_end, &reader);
   fmt::print("ready\n");
   std::fflush(stdout);
+  const std::int64_t cpu_at_ready = cpu_time_us();
   while (!reader.done) {
     const int r = lcm.handleTimeout(kClientTimeoutMs);
     if (r <= 0) {
@@ -273,7 +296,7 @@ int lcm_reader(const std::string& url) {
       return 1;
     }
   }
-  print_latencies(reader.lat);
+  print_latencies(reader.lat, cpu_at_ready);
   return 0;
 }
 
@@ -328,8 +351,13 @@ class Child {
     out_.erase(0, line.size() + 1);
   }
 
+  struct Result {
+    std::vector<std::int64_t> latency_ns;
+    std::int64_t cpu_us = 0;
+  };
+
   // Reads the result line after the publisher is done.
-  std::vector<std::int64_t> result() {
+  Result result() {
     const std::int64_t deadline = monotonic_ns() + std::int64_t{kClientTimeoutMs} * 2'000'000;
     while (read_some(deadline)) {
     }
@@ -337,16 +365,17 @@ class Child {
     waitpid(pid_, &status, 0);
     pid_ = -1;
     std::istringstream in(out_);
-    std::string word;
+    std::string frames_word, cpu_word, lat_word;
     std::size_t n = 0;
-    in >> word >> n;
-    if (word != "frames" || !(in >> word) || word != "lat" || !WIFEXITED(status) ||
-        WEXITSTATUS(status) != 0)
+    Result r;
+    in >> frames_word >> n >> cpu_word >> r.cpu_us >> lat_word;
+    if (!in || frames_word != "frames" || cpu_word != "cpu_us" || lat_word != "lat" ||
+        !WIFEXITED(status) || WEXITSTATUS(status) != 0)
       throw Error("client: " + dco::tools::one_line(out_.empty() ? "no result" : out_));
-    std::vector<std::int64_t> lat(n);
-    for (auto& v : lat)
+    r.latency_ns.resize(n);
+    for (auto& v : r.latency_ns)
       if (!(in >> v)) throw Error("client: truncated result");
-    return lat;
+    return r;
   }
 
  private:
@@ -371,6 +400,7 @@ class Child {
 struct Latency {
   double p50_us = 0, p99_us = 0, max_us = 0;
   long received = 0, lost = 0;
+  double cpu_us_per_frame = 0;  // a client's CPU time over the run / frames, mean over clients
 };
 
 double nearest_rank(const std::vector<std::int64_t>& sorted, double q) {
@@ -383,9 +413,11 @@ Latency summarize(std::vector<Child>& clients, int frames) {
   std::vector<std::int64_t> all;
   Latency l;
   for (Child& c : clients) {
-    const std::vector<std::int64_t> lat = c.result();
-    l.lost += std::max(0L, frames - static_cast<long>(lat.size()));
-    all.insert(all.end(), lat.begin(), lat.end());
+    const Child::Result r = c.result();
+    l.lost += std::max(0L, frames - static_cast<long>(r.latency_ns.size()));
+    all.insert(all.end(), r.latency_ns.begin(), r.latency_ns.end());
+    l.cpu_us_per_frame +=
+        static_cast<double>(r.cpu_us) / frames / static_cast<double>(clients.size());
   }
   std::sort(all.begin(), all.end());
   l.received = static_cast<long>(all.size());
@@ -453,7 +485,8 @@ void measure_ring(const Options& opt, const fs::path& path, Frame& frame, Run& r
   {
     dco::ipc::RingWriter writer(path, {opt.width, opt.height, opt.image ? 1 : 0, kRingSlots});
     for (int i = 0; i < run.clients; ++i)
-      clients.emplace_back(std::vector<std::string>{"--role", "ring-reader", path.string()});
+      clients.emplace_back(std::vector<std::string>{"--role", "ring-reader", path.string(),
+                                                    std::to_string(opt.poll_us)});
     for (Child& c : clients) c.wait_ready();
     const auto period = static_cast<std::int64_t>(1e9 / run.rate);
     const std::int64_t start = monotonic_ns() + 20'000'000;
@@ -518,6 +551,11 @@ void measure_inline(const Options& opt, const Frame& frame, Run& run) {
   run.inline_send_us = median(send_us);
 }
 
+std::string wait_text(const Options& opt) {
+  return opt.poll_us == 0 ? std::string("sleeping until woken")
+                          : fmt::format("polling up to {} us through each write", opt.poll_us);
+}
+
 std::string frame_text(const Options& opt) {
   const double mb = (4.0 + (opt.image ? 1.0 : 0.0)) * opt.width * opt.height / 1e6;
   return fmt::format("{}x{} float32 depth{} ({:.2f} MB per frame)", opt.width, opt.height,
@@ -525,18 +563,19 @@ std::string frame_text(const Options& opt) {
 }
 
 void print_text(const Options& opt, const std::vector<Run>& runs) {
-  fmt::print("ipc: {}, {} frames per run, ring of {} slots; inline peer: LCM {}\n", frame_text(opt),
-             opt.frames, kRingSlots, opt.lcm_url);
+  fmt::print("ipc: {}, {} frames per run, ring of {} slots, clients {}; inline peer: LCM {}\n",
+             frame_text(opt), opt.frames, kRingSlots, wait_text(opt), opt.lcm_url);
   fmt::print(
-      "clients  rate Hz |  ring p50 / p99 / max us   lost  write us |  inline p50 / p99 / max us"
-      "   lost   send us | ratio p99\n");
+      "clients  rate Hz |  ring p50 / p99 / max us   lost  write us  cpu us |  inline p50 / p99 / "
+      "max us   lost   send us  cpu us | ratio p99\n");
   for (const Run& r : runs)
     fmt::print(
-        "{:7d}  {:7g} | {:8.1f} {:8.1f} {:8.1f} {:6d} {:9.1f} | {:9.1f} {:8.1f} {:8.1f} {:6d} "
-        "{:9.1f} | {:9.1f}\n",
+        "{:7d}  {:7g} | {:8.1f} {:8.1f} {:8.1f} {:6d} {:9.1f} {:7.1f} | {:9.1f} {:8.1f} {:8.1f} "
+        "{:6d} {:9.1f} {:7.1f} | {:9.1f}\n",
         r.clients, r.rate, r.ring.p50_us, r.ring.p99_us, r.ring.max_us, r.ring.lost,
-        r.ring_write_us, r.inline_lcm.p50_us, r.inline_lcm.p99_us, r.inline_lcm.max_us,
-        r.inline_lcm.lost, r.inline_send_us, r.ratio());
+        r.ring_write_us, r.ring.cpu_us_per_frame, r.inline_lcm.p50_us, r.inline_lcm.p99_us,
+        r.inline_lcm.max_us, r.inline_lcm.lost, r.inline_send_us, r.inline_lcm.cpu_us_per_frame,
+        r.ratio());
 }
 
 void print_json(const Options& opt, const std::vector<Run>& runs) {
@@ -552,30 +591,33 @@ void print_json(const Options& opt, const std::vector<Run>& runs) {
     inline_lost += r.inline_lcm.lost;
     items += fmt::format(
         "{}{{\"clients\": {}, \"rate_hz\": {}, \"received\": {}, \"p50_us\": {}, \"p99_us\": {}, "
-        "\"max_us\": {}, \"lost\": {}, \"write_us\": {}, \"inline_received\": {}, "
-        "\"inline_p50_us\": {}, \"inline_p99_us\": {}, \"inline_max_us\": {}, \"inline_lost\": {}, "
-        "\"inline_send_us\": {}, \"ratio\": {}}}",
+        "\"max_us\": {}, \"lost\": {}, \"write_us\": {}, \"client_cpu_us_per_frame\": {}, "
+        "\"inline_received\": {}, \"inline_p50_us\": {}, \"inline_p99_us\": {}, "
+        "\"inline_max_us\": {}, \"inline_lost\": {}, \"inline_send_us\": {}, "
+        "\"inline_client_cpu_us_per_frame\": {}, \"ratio\": {}}}",
         items.empty() ? "" : ", ", r.clients, json_number(r.rate), r.ring.received,
         json_number(r.ring.p50_us), json_number(r.ring.p99_us), json_number(r.ring.max_us),
-        r.ring.lost, json_number(r.ring_write_us), r.inline_lcm.received,
-        json_number(r.inline_lcm.p50_us), json_number(r.inline_lcm.p99_us),
+        r.ring.lost, json_number(r.ring_write_us), json_number(r.ring.cpu_us_per_frame),
+        r.inline_lcm.received, json_number(r.inline_lcm.p50_us), json_number(r.inline_lcm.p99_us),
         json_number(r.inline_lcm.max_us), r.inline_lcm.lost, json_number(r.inline_send_us),
-        json_number(r.ratio()));
+        json_number(r.inline_lcm.cpu_us_per_frame), json_number(r.ratio()));
   }
   fmt::print(
       "{{\"p99_us\": {}, \"lost\": {}, \"inline_p99_us\": {}, \"inline_lost\": {}, \"ratio\": {}, "
-      "\"frames\": {}, \"width\": {}, \"height\": {}, \"image\": {}, \"runs\": [{}]}}\n",
+      "\"frames\": {}, \"width\": {}, \"height\": {}, \"image\": {}, \"poll_us\": {}, "
+      "\"runs\": [{}]}}\n",
       json_number(p99), lost, json_number(inline_p99), inline_lost, json_number(ratio), opt.frames,
-      opt.width, opt.height, opt.image ? "true" : "false", items);
+      opt.width, opt.height, opt.image ? "true" : "false", opt.poll_us, items);
 }
 
 }  // namespace
 
 int run_ipc_bench(int argc, char** argv) {
   return dco::tools::run_tool("dco-bench ipc", [&] {
-    if (argc == 4 && std::string_view(argv[1]) == "--role") {
-      if (std::string_view(argv[2]) == "ring-reader") return ring_reader(argv[3]);
-      if (std::string_view(argv[2]) == "lcm-reader") return lcm_reader(argv[3]);
+    if (argc >= 4 && std::string_view(argv[1]) == "--role") {
+      if (argc == 5 && std::string_view(argv[2]) == "ring-reader")
+        return ring_reader(argv[3], static_cast<std::uint32_t>(std::stoul(argv[4])));
+      if (argc == 4 && std::string_view(argv[2]) == "lcm-reader") return lcm_reader(argv[3]);
     }
     const Options opt = parse_args(argc, argv);
     if (opt.help) {

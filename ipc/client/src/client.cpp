@@ -8,7 +8,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <sched.h>
+
 #include <cerrno>
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -25,6 +28,9 @@ namespace layout = dco::ipc::layout;
 constexpr std::uint32_t kDefaultAttempts = 8;
 // How often a waiting client looks for a replaced segment or a dead writer.
 constexpr std::int64_t kPathCheckNs = 20'000'000;
+constexpr std::uint32_t kMaxPollUs = 100'000;
+// Options structs of callers built before poll_us end here; they get the default.
+constexpr std::uint32_t kOptionsSizeV1 = offsetof(dco_client_options, poll_us);
 
 thread_local std::string t_last_error;
 
@@ -169,6 +175,13 @@ bool struct_ok(const void* p, std::uint32_t size, std::uint32_t expected) {
   return p != nullptr && size >= expected;
 }
 
+// Polls `word` until it changes or the clock reaches `until_ns`, giving the CPU to anything else
+// runnable between looks (other readers on a busy machine, the writer itself).
+void poll_for_change(const std::atomic<std::uint32_t>& word, std::uint32_t seen,
+                     std::int64_t until_ns) {
+  while (word.load(std::memory_order_acquire) == seen && now_ns() < until_ns) sched_yield();
+}
+
 }  // namespace
 
 struct dco_client {
@@ -177,6 +190,8 @@ struct dco_client {
   Mapping map;
   std::uint64_t last_index = 0;  // publish_index of the last frame returned
   std::int64_t last_path_check_ns = 0;
+  std::int64_t poll_ns = 0;
+  std::uint32_t polled_write = 0;  // writes_begun value of the last write polled through
 
   ~dco_client() { map.release(); }
 
@@ -295,6 +310,7 @@ struct dco_client {
     map.release();
     map = fresh;
     last_index = 0;
+    polled_write = 0;
     *remapped = true;
     return DCO_OK;
   }
@@ -340,16 +356,22 @@ void dco_frame_info_init(dco_frame_info* info) {
 dco_status dco_client_open(const dco_client_options* options, dco_client** out) {
   if (out == nullptr) return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: out is NULL");
   *out = nullptr;
-  if (!struct_ok(options, options ? options->struct_size : 0, sizeof(dco_client_options)))
+  if (!struct_ok(options, options ? options->struct_size : 0, kOptionsSizeV1))
     return fail(DCO_E_INVALID_ARGUMENT,
                 "dco_client_open: options missing or not set up by dco_client_options_init");
   if (options->path == nullptr || options->path[0] == '\0')
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: no segment path");
+  const std::uint32_t poll_us =
+      options->struct_size >= sizeof(dco_client_options) ? options->poll_us : 0;
+  if (poll_us > kMaxPollUs)
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: poll_us " + std::to_string(poll_us) +
+                                            " above " + std::to_string(kMaxPollUs));
   auto* client = new (std::nothrow) dco_client;
   if (client == nullptr) return fail(DCO_E_IO, "dco_client_open: out of memory");
   client->expect = {options->path, options->expected_uid, options->expected_width,
                     options->expected_height};
   client->max_attempts = options->max_attempts ? options->max_attempts : kDefaultAttempts;
+  client->poll_ns = std::int64_t{poll_us} * 1000;
   const dco_status status = map_segment(client->expect, client->map);
   if (status != DCO_OK) {
     delete client;
@@ -391,7 +413,8 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     // Read the wake word before looking for a frame: a publish after the look changes it, so the
     // sleep below returns at once instead of missing that frame.
     const std::uint32_t seen = h->wake.load(std::memory_order_acquire);
-    if (h->publish_count.load(std::memory_order_acquire) > client->last_index) {
+    const std::uint64_t published = h->publish_count.load(std::memory_order_acquire);
+    if (published > client->last_index) {
       const dco_status status = client->take_latest(view);
       if (status != DCO_E_NO_FRAME) return status;
     }
@@ -410,8 +433,22 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
                                      std::to_string(timeout_ms) + " ms");
     // A writer that dies never wakes us, and a restarted one writes a new file: wake up for the
     // path check at the latest.
-    const std::int64_t next_check = client->last_path_check_ns + kPathCheckNs;
-    layout::wait_for_change(h->wake, seen, std::min(deadline, next_check) - now);
+    const std::int64_t until = std::min(deadline, client->last_path_check_ns + kPathCheckNs);
+    if (client->poll_ns == 0) {
+      layout::wait_for_change(h->wake, seen, until - now);
+      continue;
+    }
+    // Compared with the count read before the look for a frame: equal means no write began
+    // since, and the next one changes the word this sleeps on.
+    const std::uint32_t begun = h->writes_begun.load(std::memory_order_acquire);
+    if (begun == static_cast<std::uint32_t>(published)) {
+      layout::wait_for_change(h->writes_begun, begun, until - now);
+    } else if (begun != client->polled_write) {
+      client->polled_write = begun;
+      poll_for_change(h->wake, seen, std::min(until, now + client->poll_ns));
+    } else {  // this write outlasted the polling: sleep until it is published
+      layout::wait_for_change(h->wake, seen, until - now);
+    }
   }
 }
 

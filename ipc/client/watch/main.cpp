@@ -23,12 +23,15 @@ void usage(std::FILE* out) {
   std::fprintf(
       out,
       "usage: dco-watch [--path FILE] [--uid UID] [--frames N] [--interval-ms MS]\n"
-      "                 [--timeout-ms MS] [--copy] [--overlay FILE.ppm] [--virtual-depth M]\n"
+      "                 [--timeout-ms MS] [--poll-us US] [--copy] [--overlay FILE.ppm]\n"
+      "                 [--virtual-depth M]\n"
       "  --path FILE       depth ring (default %s)\n"
       "  --uid UID         owner the ring must have (default: own uid)\n"
       "  --frames N        stop after N frames (default: run until stopped)\n"
       "  --interval-ms MS  report period (default 1000)\n"
       "  --timeout-ms MS   give up when no frame arrives for MS (default 2000)\n"
+      "  --poll-us US      wake when the daemon starts writing a frame and poll up to US\n"
+      "                    for it, for the lowest latency (default 0: sleep until published)\n"
       "  --copy            copy every frame (read_latest path) instead of a view\n"
       "  --overlay FILE    at every report, write the newest frame as a PPM picture: the\n"
       "                    camera image with a virtual box that real surfaces occlude\n"
@@ -107,6 +110,9 @@ int main(int argc, char** argv) {
       ++i;
     } else if (arg == "--timeout-ms" && has_value && parse_int(argv[i + 1], 1, 3600000, &v)) {
       timeout_ms = v;
+      ++i;
+    } else if (arg == "--poll-us" && has_value && parse_int(argv[i + 1], 0, 100000, &v)) {
+      options.poll_us = static_cast<std::uint32_t>(v);
       ++i;
     } else {
       std::fprintf(stderr, "dco-watch: error: bad argument '%s'\n", argv[i]);

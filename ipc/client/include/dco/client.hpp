@@ -32,6 +32,7 @@ struct Options {
   std::uint32_t expected_width = 0;           // 0 = any
   std::uint32_t expected_height = 0;
   std::uint32_t max_attempts = 0;  // 0 = library default
+  std::uint32_t poll_us = 0;       // see dco_client_options::poll_us
 };
 
 // A zero-copy frame; check Client::still_valid after reading the pixels.
@@ -57,6 +58,7 @@ class Client {
     o.expected_width = options.expected_width;
     o.expected_height = options.expected_height;
     if (options.max_attempts) o.max_attempts = options.max_attempts;
+    o.poll_us = options.poll_us;
     check(dco_client_open(&o, &handle_));
   }
   Client(const Client&) = delete;

@@ -63,6 +63,11 @@ struct alignas(64) RingHeader {
   // Futex word readers sleep on: the writer changes it after every publish and on close, then
   // wakes the sleepers, so a reader never has to poll for the next frame.
   std::atomic<std::uint32_t> wake;
+  // Futex word for readers that poll through a write: the writer adds 1 and wakes them when it
+  // starts filling a slot (and on close). Between writes it equals publish_count's low 32 bits.
+  // It sits in what was padding, so readers that do not know it are unaffected, and with a
+  // writer that does not set it such readers just never see a write begin.
+  std::atomic<std::uint32_t> writes_begun;
 };
 
 struct alignas(64) SlotHeader {

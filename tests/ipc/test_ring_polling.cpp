@@ -1,0 +1,214 @@
+// Readers that poll through a write (dco_client_options::poll_us): the writer's write-begun
+// counter, every frame still delivered once and in order however a write compares with the
+// polling time, and a clean end when the writer stops.
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "dco/client.hpp"
+#include "dco/ipc/ring_layout.hpp"
+#include "ipc_test_support.hpp"
+
+namespace dco::ipc::testing {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr int kWidth = 64;
+constexpr int kHeight = 32;
+
+RingOptions small_ring() {
+  RingOptions o;
+  o.width = kWidth;
+  o.height = kHeight;
+  o.image_channels = 1;
+  o.slot_count = 3;
+  return o;
+}
+
+client::Client polling_client(const std::filesystem::path& path, std::uint32_t poll_us) {
+  client::Options o;
+  o.path = path.string();
+  o.poll_us = poll_us;
+  return client::Client(o);
+}
+
+// The ring's header as a reader maps it.
+class HeaderMap {
+ public:
+  explicit HeaderMap(const std::filesystem::path& path) {
+    fd_ = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) return;
+    void* p = mmap(nullptr, sizeof(layout::RingHeader), PROT_READ, MAP_SHARED, fd_, 0);
+    if (p != MAP_FAILED) header_ = static_cast<const layout::RingHeader*>(p);
+  }
+  ~HeaderMap() {
+    if (header_ != nullptr)
+      munmap(const_cast<layout::RingHeader*>(header_), sizeof(layout::RingHeader));
+    if (fd_ >= 0) close(fd_);
+  }
+  const layout::RingHeader* operator->() const { return header_; }
+  bool ok() const { return header_ != nullptr; }
+
+ private:
+  int fd_ = -1;
+  const layout::RingHeader* header_ = nullptr;
+};
+
+TEST(RingPolling, WritesBegunCountsWritesAndEqualsThePublishCountBetweenThem) {
+  TempDir dir;
+  RingWriter writer(dir.path() / "depth.shm", small_ring());
+  HeaderMap h(writer.path());
+  ASSERT_TRUE(h.ok());
+  EXPECT_EQ(h->writes_begun.load(), 0u);
+  for (std::uint64_t seq = 1; seq <= 3; ++seq) {
+    RingWriter::Slot slot = writer.begin_write();
+    (void)slot;
+    EXPECT_EQ(h->writes_begun.load(), seq) << "a write announces itself when it begins";
+    EXPECT_EQ(h->publish_count.load(), seq - 1);
+    FrameMeta meta;
+    meta.frame_seq = seq;
+    writer.publish(meta);
+    EXPECT_EQ(h->writes_begun.load(), h->publish_count.load());
+  }
+}
+
+// A writer that takes `write_time` to fill each slot, publishing every `period`.
+void write_slowly(RingWriter& writer, std::uint64_t frames, std::chrono::microseconds write_time,
+                  std::chrono::microseconds period) {
+  for (std::uint64_t seq = 1; seq <= frames; ++seq) {
+    const auto start = std::chrono::steady_clock::now();
+    RingWriter::Slot slot = writer.begin_write();
+    std::this_thread::sleep_for(write_time);
+    for (int y = 0; y < slot.depth.height; ++y)
+      for (int x = 0; x < slot.depth.width; ++x)
+        slot.depth.at(x, y) =
+            pattern_depth(seq, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
+    for (int y = 0; y < slot.image.height; ++y)
+      for (int x = 0; x < slot.image.width; ++x)
+        slot.image.at(x, y) =
+            pattern_image(seq, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
+    FrameMeta meta;
+    meta.frame_seq = seq;
+    writer.publish(meta);
+    std::this_thread::sleep_until(start + period);
+  }
+}
+
+struct Received {
+  std::vector<std::uint64_t> seqs;
+  int torn = 0;
+  std::string failure;
+};
+
+// Takes frames until the last one; every accepted view is checked against its frame's pattern.
+Received read_until(client::Client& c, std::uint64_t last) {
+  Received r;
+  while (r.seqs.empty() || r.seqs.back() < last) {
+    dco_frame_view v;
+    dco_frame_view_init(&v);
+    const dco_status s = dco_client_wait_next(c.handle(), 2000, &v);
+    if (s != DCO_OK) {
+      r.failure = std::string(dco_client_strerror(s)) + ": " + dco_client_last_error();
+      break;
+    }
+    const std::uint64_t sum =
+        frame_checksum(reinterpret_cast<const unsigned char*>(v.depth), v.info.depth_stride,
+                       v.image, v.info.image_stride, kWidth, kHeight, 1);
+    if (dco_client_still_valid(c.handle(), &v) &&
+        sum != expected_checksum(v.info.frame_seq, kWidth, kHeight, true))
+      ++r.torn;
+    r.seqs.push_back(v.info.frame_seq);
+  }
+  return r;
+}
+
+TEST(RingPolling, EveryFrameArrivesOnceAndInOrderWhetherTheWriteIsShorterOrLongerThanThePoll) {
+  TempDir dir;
+  RingWriter writer(dir.path() / "depth.shm", small_ring());
+  constexpr std::uint64_t kFrames = 60;
+  // 50 us of polling runs out during a 400 us write (the reader sleeps again until the publish);
+  // 20 ms outlasts it (the reader sees the publish while polling); 0 only ever sleeps.
+  const std::vector<std::uint32_t> polls{50, 20'000, 0};
+  std::vector<Received> got(polls.size());
+  std::vector<std::thread> readers;
+  for (std::size_t i = 0; i < polls.size(); ++i)
+    readers.emplace_back([&, i] {
+      client::Client c = polling_client(writer.path(), polls[i]);
+      got[i] = read_until(c, kFrames);
+    });
+  std::this_thread::sleep_for(20ms);  // the readers are waiting before the first frame
+  write_slowly(writer, kFrames, 400us, 3ms);
+  for (auto& t : readers) t.join();
+  for (std::size_t i = 0; i < polls.size(); ++i) {
+    SCOPED_TRACE("poll_us " + std::to_string(polls[i]));
+    const Received& r = got[i];
+    EXPECT_EQ(r.failure, "");
+    EXPECT_EQ(r.torn, 0);
+    ASSERT_FALSE(r.seqs.empty());
+    EXPECT_EQ(r.seqs.back(), kFrames);
+    for (std::size_t k = 1; k < r.seqs.size(); ++k)
+      EXPECT_LT(r.seqs[k - 1], r.seqs[k]) << "a frame came twice or out of order";
+    // A frame is skipped only when the reader falls more than a 3 ms period behind.
+    EXPECT_GE(r.seqs.size(), kFrames * 3 / 4);
+  }
+}
+
+TEST(RingPolling, AStoppingWriterEndsAPollingWait) {
+  TempDir dir;
+  auto writer = std::make_unique<RingWriter>(dir.path() / "depth.shm", small_ring());
+  client::Client c = polling_client(writer->path(), 20'000);
+  publish_pattern(*writer, 1);
+  ASSERT_TRUE(c.wait_next(100ms).has_value());
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(30ms);
+    writer.reset();
+  });
+  dco_frame_view v;
+  dco_frame_view_init(&v);
+  EXPECT_EQ(dco_client_wait_next(c.handle(), 5000, &v), DCO_E_WRITER_GONE)
+      << dco_client_last_error();
+  stopper.join();
+}
+
+TEST(RingPolling, PollTimeIsCheckedAndCallersBuiltBeforeItGetTheDefault) {
+  TempDir dir;
+  RingWriter writer(dir.path() / "depth.shm", small_ring());
+  const std::string path = writer.path().string();
+  dco_client_options o;
+  dco_client_options_init(&o);
+  o.path = path.c_str();
+  EXPECT_EQ(o.poll_us, 0u);
+  dco_client* c = nullptr;
+  o.poll_us = 100'001;
+  EXPECT_EQ(dco_client_open(&o, &c), DCO_E_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(dco_client_last_error()).find("poll_us 100001"), std::string::npos)
+      << dco_client_last_error();
+  o.poll_us = 100'000;
+  ASSERT_EQ(dco_client_open(&o, &c), DCO_OK) << dco_client_last_error();
+  dco_client_close(c);
+  // An options struct from before poll_us: its size ends where the field begins, and the
+  // garbage past it is never read.
+  o.poll_us = 0xdeadbeef;
+  o.struct_size = offsetof(dco_client_options, poll_us);
+  ASSERT_EQ(dco_client_open(&o, &c), DCO_OK) << dco_client_last_error();
+  publish_pattern(writer, 1);
+  dco_frame_view v;
+  dco_frame_view_init(&v);
+  EXPECT_EQ(dco_client_wait_next(c, 1000, &v), DCO_OK);
+  dco_client_close(c);
+}
+
+}  // namespace
+}  // namespace dco::ipc::testing
