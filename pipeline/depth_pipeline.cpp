@@ -112,11 +112,10 @@ ContourWindow window_at_end(int last) {
   return {last, last >= 1 ? last - 1 : -1, -1};
 }
 
-DepthPipeline::DepthPipeline(const PipelineParams& params,
-                             const stereo::StereoMatcherFactory& stereo)
+DepthPipeline::DepthPipeline(const PipelineParams& params, const StageFactories& stages)
     : params_(params),
-      stereo_(stereo::make_stereo_matcher(stereo, params.stereo)),
-      contour_(contour::make_cpu_contour_extractor(params.contour)),
+      stereo_(stereo::make_stereo_matcher(stages.stereo, params.stereo)),
+      contour_(contour::make_contour_extractor(stages.contour, params.contour)),
       densifier_(params.densify) {
   validate(params_);
 }

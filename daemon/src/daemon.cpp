@@ -152,7 +152,7 @@ void Daemon::start_pipeline() {
       [this](const pipeline::DepthResult& r, const pipeline::runtime::FrameTimes& t) {
         on_result(r, t);
       },
-      pipeline::runtime::DepthRuntime::StageHook{}, backend.stereo);
+      pipeline::runtime::DepthRuntime::StageHook{}, backend.stages);
   runtime_->start();
   pipeline_start_ns_ = monotonic_ns();
 }

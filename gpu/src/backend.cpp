@@ -43,6 +43,16 @@ std::unique_ptr<stereo::StereoMatcher> make_cuda_stereo_matcher(
 #endif
 }
 
+std::unique_ptr<contour::ContourExtractor> make_cuda_contour_extractor(
+    const contour::ContourParams& params) {
+#ifdef DCO_HAVE_CUDA
+  return detail::cuda_contour_extractor(params);
+#else
+  (void)params;
+  throw Error("cuda: " + probe_cuda().why);
+#endif
+}
+
 BackendChoice choose_backend(const std::string& requested, const stereo::StereoParams& params) {
   BackendChoice c;
   if (requested == "cpu") {
@@ -59,8 +69,12 @@ BackendChoice choose_backend(const std::string& requested, const stereo::StereoP
       make_cuda_stereo_matcher(params);  // initialises the context and the stream once
       c.backend = "cuda";
       c.message = "backend cuda on " + device.describe() +
-                  ": sparse stereo on the GPU, contours and densification on the CPU";
-      c.stereo = [](const stereo::StereoParams& p) { return make_cuda_stereo_matcher(p); };
+                  ": sparse stereo and the contour image passes on the GPU, optical flow and "
+                  "densification on the CPU";
+      c.stages.stereo = [](const stereo::StereoParams& p) { return make_cuda_stereo_matcher(p); };
+      c.stages.contour = [](const contour::ContourParams& p) {
+        return make_cuda_contour_extractor(p);
+      };
       return c;
     } catch (const std::exception& e) {
       why = e.what();

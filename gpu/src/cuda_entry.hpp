@@ -9,5 +9,7 @@ namespace dco::gpu::detail {
 
 CudaDevice cuda_probe();
 std::unique_ptr<stereo::StereoMatcher> cuda_stereo_matcher(const stereo::StereoParams& params);
+std::unique_ptr<contour::ContourExtractor> cuda_contour_extractor(
+    const contour::ContourParams& params);
 
 }  // namespace dco::gpu::detail

@@ -6,27 +6,16 @@
 #include <cstring>
 
 #include "dco/kernels/canny_kernels.hpp"
+#include "dco/kernels/contour_pixel.hpp"
 
 namespace dco::contour {
 namespace {
 
-constexpr float kTan22 = 0.41421356f;  // tan(22.5°): sector borders of the 4 directions
-constexpr float kTan67 = 2.41421356f;  // tan(67.5°)
+namespace px = kernels::pixel;
+
 constexpr std::uint8_t kWeak =
     kernels::kCannyWeak;  // passed T_low, not yet linked to a strong pixel
 constexpr std::uint8_t kEdge = kernels::kCannyStrong;
-
-// Branch-free: on textured images the direction is close to random, and mispredicted branches
-// would cost more than the whole gradient.
-inline std::uint8_t quantise(float gx, float gy) {
-  const float ax = std::fabs(gx);
-  const float ay = std::fabs(gy);
-  const int horizontal = ay <= ax * kTan22;
-  const int vertical = ay >= ax * kTan67;
-  const int diagonal = kDiagonalDown + 2 * ((gx > 0) != (gy > 0));  // kDiagonalDown or kDiagonalUp
-  return static_cast<std::uint8_t>((1 - horizontal) *
-                                   (vertical * kVertical + (1 - vertical) * diagonal));
-}
 
 }  // namespace
 
@@ -42,24 +31,15 @@ void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<floa
     const float* down = smoothed.row(std::min(y + 1, h - 1));
     float* m = magnitude.row(y);
     std::uint8_t* d = direction.row(y);
-    auto at = [&](int x) {
-      const int l = std::max(x - 1, 0);
-      const int r = std::min(x + 1, w - 1);
-      const float gx = (up[r] + 2 * mid[r] + down[r]) - (up[l] + 2 * mid[l] + down[l]);
-      const float gy = (down[l] + 2 * down[x] + down[r]) - (up[l] + 2 * up[x] + up[r]);
-      m[x] = std::sqrt(gx * gx + gy * gy) * inv;
-      d[x] = quantise(gx, gy);
+    auto at = [&](int l, int x, int r) {
+      const float gx = px::sobel_gx(up, mid, down, l, r);
+      const float gy = px::sobel_gy(up, down, l, x, r);
+      m[x] = px::gradient_magnitude(gx, gy, inv);
+      d[x] = px::gradient_direction(gx, gy);
     };
-    at(0);
-    for (int x = 1; x < w - 1; ++x) {
-      const float gx =
-          (up[x + 1] + 2 * mid[x + 1] + down[x + 1]) - (up[x - 1] + 2 * mid[x - 1] + down[x - 1]);
-      const float gy =
-          (down[x - 1] + 2 * down[x] + down[x + 1]) - (up[x - 1] + 2 * up[x] + up[x + 1]);
-      m[x] = std::sqrt(gx * gx + gy * gy) * inv;
-      d[x] = quantise(gx, gy);
-    }
-    if (w > 1) at(w - 1);
+    at(0, 0, std::min(1, w - 1));
+    for (int x = 1; x < w - 1; ++x) at(x - 1, x, x + 1);
+    if (w > 1) at(w - 2, w - 1, w - 1);
   }
 }
 
@@ -75,16 +55,8 @@ void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t>
   const bool gated = !gate.empty();
   if (gated) {
     if (scratch.gate_x.size() < static_cast<std::size_t>(w)) scratch.gate_x.resize(w);
-    for (int x = 0; x < w; ++x)
-      scratch.gate_x[x] = static_cast<std::int32_t>(static_cast<long long>(x) * gate.width / w);
+    for (int x = 0; x < w; ++x) scratch.gate_x[x] = px::gate_sample(x, w, gate.width);
   }
-  const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  if (scratch.stack.size() < pixels) scratch.stack.resize(pixels);
-  std::int32_t* stack = scratch.stack.data();
-  std::size_t top = 0;
-  std::uint8_t* base = edges.data;
-  const std::ptrdiff_t stride = edges.stride;
-
   // Non-maximum suppression, depth gate and dual threshold, a row at a time. Of two equal maxima
   // side by side only the first (left/upper) survives, so a plateau still thins to one pixel.
   if (gated && scratch.gate_row.size() < static_cast<std::size_t>(w)) scratch.gate_row.resize(w);
@@ -97,19 +69,34 @@ void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t>
     row.direction = direction.row(y);
     row.width = w;
     if (gated) {
-      const float* g = gate.row(static_cast<int>(static_cast<long long>(y) * gate.height / h));
+      const float* g = gate.row(px::gate_sample(y, h, gate.height));
       for (int x = 0; x < w; ++x) scratch.gate_row[x] = g[scratch.gate_x[x]];
       row.gate = scratch.gate_row.data();
     }
-    std::uint8_t* e = edges.row(y);
-    kernels::canny_classify_row(row, levels, e);
+    kernels::canny_classify_row(row, levels, edges.row(y));
+  }
+  canny_hysteresis(edges, scratch);
+}
+
+void canny_hysteresis(ImageView<std::uint8_t> edges, CannyScratch& scratch) {
+  const int w = edges.width;
+  const int h = edges.height;
+  if (w < 3 || h < 3) return;
+  const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  if (scratch.stack.size() < pixels) scratch.stack.resize(pixels);
+  std::int32_t* stack = scratch.stack.data();
+  std::size_t top = 0;
+  std::uint8_t* base = edges.data;
+  const std::ptrdiff_t stride = edges.stride;
+  for (int y = 1; y < h - 1; ++y) {
+    const std::uint8_t* e = edges.row(y);
     for (int x = 1; x < w - 1; ++x)
       if (e[x] == kEdge) stack[top++] = static_cast<std::int32_t>(y * stride + x);
   }
 
-  // Hysteresis: grow every strong pixel through 8-connected weak ones. Each pixel is marked before
-  // it is pushed, so the stack never holds more than one entry per pixel; the border rows and
-  // columns stay 0, so neighbours of a pushed pixel are always inside the image.
+  // Grow every strong pixel through 8-connected weak ones. Each pixel is marked before it is
+  // pushed, so the stack never holds more than one entry per pixel; the border rows and columns
+  // are 0, so neighbours of a pushed pixel are always inside the image.
   const std::ptrdiff_t offsets[8] = {-stride - 1, -stride,    -stride + 1, -1,
                                      1,           stride - 1, stride,      stride + 1};
   while (top > 0) {

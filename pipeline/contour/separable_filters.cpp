@@ -5,11 +5,14 @@
 #include <cassert>
 #include <cmath>
 
+#include "dco/kernels/contour_pixel.hpp"
+
 namespace dco::contour {
 namespace {
 
-// Same taps as cv::getGaussianKernel(5, 1.4, CV_32F).
-std::array<float, 5> gaussian_taps() {
+namespace px = kernels::pixel;
+
+std::array<float, 5> make_gaussian_taps() {
   constexpr double kSigma = 1.4;
   std::array<double, 5> w{};
   double sum = 0;
@@ -35,21 +38,22 @@ void horizontal_pass(const float* in, int width, const float* taps, int radius, 
     const float* src = in + k - radius;
     for (int x = lo; x < hi; ++x) out[x] += w * src[x];
   }
-  auto clamped = [&](int x) {
-    float s = 0.0f;
-    for (int k = 0; k < size; ++k) s += taps[k] * in[std::clamp(x + k - radius, 0, width - 1)];
-    return s;
-  };
-  for (int x = 0; x < lo; ++x) out[x] = clamped(x);
-  for (int x = hi; x < width; ++x) out[x] = clamped(x);
+  const auto tap = [taps](int k) { return taps[k]; };
+  for (int x = 0; x < lo; ++x) out[x] = px::clamped_tap_sum(in, width, x, radius, tap);
+  for (int x = hi; x < width; ++x) out[x] = px::clamped_tap_sum(in, width, x, radius, tap);
 }
 
 }  // namespace
 
+const std::array<float, 5>& gaussian5_taps() {
+  static const std::array<float, 5> taps = make_gaussian_taps();
+  return taps;
+}
+
 void gaussian_blur_5x5(ImageView<const std::uint8_t> in, ImageView<float> tmp,
                        ImageView<float> out) {
   assert(in.channels == 1 && tmp.same_size(in) && out.same_size(in));
-  static const std::array<float, 5> taps = gaussian_taps();
+  const std::array<float, 5>& taps = gaussian5_taps();
   const int w = in.width;
   const int h = in.height;
   for (int y = 0; y < h; ++y) {
@@ -60,9 +64,7 @@ void gaussian_blur_5x5(ImageView<const std::uint8_t> in, ImageView<float> tmp,
     const std::uint8_t* r4 = in.row(std::min(y + 2, h - 1));
     float* t = tmp.row(y);
     for (int x = 0; x < w; ++x)
-      t[x] = taps[0] * (static_cast<float>(r0[x]) + static_cast<float>(r4[x])) +
-             taps[1] * (static_cast<float>(r1[x]) + static_cast<float>(r3[x])) +
-             taps[2] * static_cast<float>(r2[x]);
+      t[x] = px::gaussian5_vertical(r0[x], r1[x], r2[x], r3[x], r4[x], taps.data());
   }
   for (int y = 0; y < h; ++y) horizontal_pass(tmp.row(y), w, taps.data(), 2, out.row(y));
 }

@@ -2,20 +2,10 @@
 
 #include <algorithm>
 #include <cassert>
-#include <cfloat>
-#include <cmath>
+
+#include "dco/kernels/contour_pixel.hpp"
 
 namespace dco::contour {
-namespace {
-
-// |q - d|, or 0 when either is missing: inf - finite, inf - inf and anything with NaN all fail the
-// comparison. Branch-free, so the row loop vectorises.
-inline float jump(float q, float d) {
-  const float diff = std::fabs(q - d);
-  return diff <= FLT_MAX ? diff : 0.0f;
-}
-
-}  // namespace
 
 void disparity_jump_strength(ImageView<const float> disparity, float full_jump,
                              ImageView<float> strength) {
@@ -29,11 +19,9 @@ void disparity_jump_strength(ImageView<const float> disparity, float full_jump,
     const float* mid = disparity.row(y);
     const float* down = disparity.row(std::min(y + 1, h - 1));
     float* s = strength.row(y);
-    auto at = [&](int x, int left, int right) {
-      const float d = mid[x];
-      const float j = std::max(std::max(jump(mid[left], d), jump(mid[right], d)),
-                               std::max(jump(up[x], d), jump(down[x], d)));
-      return std::min(j * inv, 1.0f);
+    // The first and last columns clamp their neighbours; the interior needs no clamp (vectorises).
+    const auto at = [&](int x, int left, int right) {
+      return kernels::pixel::jump_strength(mid[x], mid[left], mid[right], up[x], down[x], inv);
     };
     s[0] = at(0, 0, std::min(1, w - 1));
     for (int x = 1; x < w - 1; ++x) s[x] = at(x, x - 1, x + 1);

@@ -49,15 +49,14 @@ std::string size_text(ImageView<const std::uint8_t> v) {
 }  // namespace
 
 DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
-                           ResultCallback on_result, StageHook hook,
-                           const stereo::StereoMatcherFactory& stereo)
+                           ResultCallback on_result, StageHook hook, const StageFactories& stages)
     : pipeline_(pipeline),
       params_(runtime),
       cpus_(checked_cpus(runtime)),
       on_result_(std::move(on_result)),
       hook_(std::move(hook)),
-      stereo_(stereo::make_stereo_matcher(stereo, pipeline.stereo)),
-      contour_(contour::make_cpu_contour_extractor(pipeline.contour)),
+      stereo_(stereo::make_stereo_matcher(stages.stereo, pipeline.stereo)),
+      contour_(contour::make_contour_extractor(stages.contour, pipeline.contour)),
       densifier_(pipeline.densify),
       // In flight at once: the contour window (3 frames), a full stereo queue and the frame in
       // the stereo stage.

@@ -9,7 +9,8 @@ namespace {
 TEST(Backend, CpuIsTheCpuStage) {
   const BackendChoice c = choose_backend("cpu", {});
   EXPECT_EQ(c.backend, "cpu");
-  EXPECT_FALSE(c.stereo);
+  EXPECT_FALSE(c.stages.stereo);
+  EXPECT_FALSE(c.stages.contour);
   EXPECT_FALSE(c.fell_back);
 }
 
@@ -18,11 +19,13 @@ TEST(Backend, AutoTakesCudaExactlyWhenADeviceWorks) {
   const BackendChoice c = choose_backend("auto", {});
   if (device.usable) {
     EXPECT_EQ(c.backend, "cuda") << c.message;
-    ASSERT_TRUE(c.stereo);
+    ASSERT_TRUE(c.stages.stereo);
+    ASSERT_TRUE(c.stages.contour);
     EXPECT_NE(c.message.find(device.name), std::string::npos) << c.message;
   } else {
     EXPECT_EQ(c.backend, "cpu");
-    EXPECT_FALSE(c.stereo);
+    EXPECT_FALSE(c.stages.stereo);
+    EXPECT_FALSE(c.stages.contour);
     EXPECT_EQ(c.fell_back, built_with_cuda());
     // The log line says why.
     EXPECT_NE(c.message.find(device.why), std::string::npos) << c.message;
@@ -41,6 +44,7 @@ TEST(Backend, CudaWithoutADeviceIsOneClearError) {
         << e.what();
   }
   EXPECT_THROW(make_cuda_stereo_matcher({}), Error);
+  EXPECT_THROW(make_cuda_contour_extractor({}), Error);
 }
 
 TEST(Backend, UnknownNamesAreRefused) {

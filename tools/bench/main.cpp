@@ -4,6 +4,7 @@
 // measures depth delivery through the shared-memory ring instead (ipc_bench.cpp).
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -46,9 +47,9 @@ OpenCV StereoSGBM (3-way) + WLS. Per sequence:
   latency     frames pushed at --fps (capture time = the frame's due time), newest wins at the
               entry: capture-to-result latency p50 / p99 and the frames dropped;
   peer        SGBM 3-way + WLS ms per frame; ratio = peer / dco.
-With the CUDA backend it also runs the sparse stereo stage on the CPU and on the GPU over the
-same frames: both stage times and how many output pixels differ (the tolerance is zero: the GPU
-computes the same integer costs and decisions).
+With the CUDA backend it also runs the sparse stereo stage and the contour stage on the CPU and
+on the GPU over the same frames: the stage times and how many output pixels differ (the
+tolerance is zero: the GPU computes the same integer costs, float operations and decisions).
 
   --sequence S        synthetic, karlsruhe or all (default all)
   --synthetic NAME    hand | boxes | static (default hand)
@@ -186,40 +187,79 @@ Frames load_frames(const Options& opt, bool synthetic, int default_max_disparity
   return f;
 }
 
-// The CUDA stage against the CPU stage on the same frames.
+// The CUDA stages against the CPU stages on the same frames.
 struct BackendCheck {
   double cpu_stereo_ms = 0, cuda_stereo_ms = 0;  // mean after the first (warm-up) frame
   long differing_pixels = 0;                     // of the sparse maps at input size
   double max_abs_diff = 0;                       // over pixels finite in both
+  double cpu_contour_ms = 0, cuda_contour_ms = 0;
+  long differing_contour_pixels = 0;  // of the contour maps, M_fuse and M_I together
 };
 
-BackendCheck compare_with_cpu(const dco::stereo::StereoParams& params, const Frames& frames,
-                              const dco::stereo::StereoMatcherFactory& cuda) {
+long differing(dco::ImageView<const float> a, dco::ImageView<const float> b, double* max_abs) {
+  long n = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      const float u = a.row(y)[x], v = b.row(y)[x];
+      if (std::memcmp(&u, &v, sizeof u) == 0) continue;
+      ++n;
+      if (max_abs != nullptr && std::isfinite(u) && std::isfinite(v))
+        *max_abs = std::max(*max_abs, static_cast<double>(std::abs(u - v)));
+    }
+  return n;
+}
+
+long differing(dco::ImageView<const std::uint8_t> a, dco::ImageView<const std::uint8_t> b) {
+  long n = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) n += a.row(y)[x] != b.row(y)[x];
+  return n;
+}
+
+BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const Frames& frames,
+                              const dco::pipeline::StageFactories& cuda) {
+  namespace pl = dco::pipeline;
   BackendCheck c;
-  const auto cpu_stage = dco::stereo::make_cpu_stereo_matcher(params);
-  const auto cuda_stage = cuda(params);
-  dco::Image<float> a, b;
-  int timed = 0;
+  const auto cpu_stage = dco::stereo::make_cpu_stereo_matcher(params.stereo);
+  const auto cuda_stage = cuda.stereo(params.stereo);
+  const auto cpu_contour = dco::contour::make_cpu_contour_extractor(params.contour);
+  const auto cuda_contour = cuda.contour(params.contour);
+  // The CPU stage's slots of frames i - 2, i - 1 and i: the contours of i - 1 use all three.
+  std::array<pl::StereoSlot, 3> slots;
+  dco::Image<float> cuda_sparse;
+  pl::DepthResult a, b;
+  int timed = 0, contour_timed = 0;
   for (std::size_t i = 0; i < frames.pairs.size(); ++i) {
     const auto& f = frames.pairs[i];
-    cpu_stage->compute(f.left.cview(), f.right.cview(), a);
-    cuda_stage->compute(f.left.cview(), f.right.cview(), b);
+    pl::StereoSlot& slot = slots[i % 3];
+    pl::prepare_frame(params.stereo, f.left.cview(), static_cast<int>(i), slot);
+    pl::stereo_frame(*cpu_stage, f.left.cview(), f.right.cview(), slot);
+    cuda_stage->compute(f.left.cview(), f.right.cview(), cuda_sparse);
     if (i > 0 || frames.pairs.size() == 1) {
       c.cpu_stereo_ms += cpu_stage->last_timings().total_ms;
       c.cuda_stereo_ms += cuda_stage->last_timings().total_ms;
       ++timed;
     }
-    for (int y = 0; y < a.height(); ++y)
-      for (int x = 0; x < a.width(); ++x) {
-        const float u = a.row(y)[x], v = b.row(y)[x];
-        if (std::memcmp(&u, &v, sizeof u) == 0) continue;
-        ++c.differing_pixels;
-        if (std::isfinite(u) && std::isfinite(v))
-          c.max_abs_diff = std::max(c.max_abs_diff, static_cast<double>(std::abs(u - v)));
-      }
+    c.differing_pixels += differing(slot.sparse.cview(), cuda_sparse.cview(), &c.max_abs_diff);
+    if (i < 2) continue;
+    const pl::StereoSlot& centre = slots[(i - 1) % 3];
+    pl::contour_frame(*cpu_contour, centre, &slots[(i - 2) % 3], &slot, a);
+    pl::contour_frame(*cuda_contour, centre, &slots[(i - 2) % 3], &slot, b);
+    if (i > 2 || frames.pairs.size() == 3) {
+      c.cpu_contour_ms += a.contour_timings.total_ms;
+      c.cuda_contour_ms += b.contour_timings.total_ms;
+      ++contour_timed;
+    }
+    c.differing_contour_pixels += differing(a.contours.cview(), b.contours.cview()) +
+                                  differing(a.m_fuse.cview(), b.m_fuse.cview(), nullptr) +
+                                  differing(a.m_intensity.cview(), b.m_intensity.cview(), nullptr);
   }
   c.cpu_stereo_ms /= timed;
   c.cuda_stereo_ms /= timed;
+  if (contour_timed > 0) {
+    c.cpu_contour_ms /= contour_timed;
+    c.cuda_contour_ms /= contour_timed;
+  }
   return c;
 }
 
@@ -259,7 +299,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
   {  // Throughput: every frame, as fast as the runtime takes them.
     rt::RuntimeParams runtime = p.runtime;
     runtime.deterministic = true;
-    rt::DepthRuntime pipeline(p.pipeline, runtime, {}, {}, backend.stereo);
+    rt::DepthRuntime pipeline(p.pipeline, runtime, {}, {}, backend.stages);
     pipeline.start();
     const auto start = std::chrono::steady_clock::now();
     for (const auto& f : frames.pairs) pipeline.push(f.left.cview(), f.right.cview());
@@ -268,7 +308,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
     r.throughput = pipeline.stats();
   }
   {  // Latency: a camera's pace; the sequence is played back and forth so motion stays smooth.
-    rt::DepthRuntime pipeline(p.pipeline, p.runtime, {}, {}, backend.stereo);
+    rt::DepthRuntime pipeline(p.pipeline, p.runtime, {}, {}, backend.stages);
     pipeline.start();
     const auto period = std::chrono::duration_cast<rt::Clock::duration>(
         std::chrono::duration<double>(1.0 / opt.fps));
@@ -292,7 +332,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
     peer_ms +=
         dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity).time_ms;
   r.peer_ms_per_frame = peer_ms / r.frames;
-  if (backend.stereo) r.check = compare_with_cpu(p.pipeline.stereo, frames, backend.stereo);
+  if (backend.stages.stereo) r.check = compare_with_cpu(p.pipeline, frames, backend.stages);
   return r;
 }
 
@@ -324,6 +364,12 @@ void print_text(const Result& r) {
         r.check->cpu_stereo_ms, r.check->cuda_stereo_ms,
         r.check->cpu_stereo_ms / r.check->cuda_stereo_ms, r.check->differing_pixels,
         r.check->max_abs_diff);
+  if (r.check && r.check->cpu_contour_ms > 0)
+    fmt::print(
+        "  contour  CPU {:.2f} ms, CUDA {:.2f} ms per frame (ratio {:.1f}, DIS flow on the CPU in "
+        "both); {} output pixels differ\n",
+        r.check->cpu_contour_ms, r.check->cuda_contour_ms,
+        r.check->cpu_contour_ms / r.check->cuda_contour_ms, r.check->differing_contour_pixels);
 }
 
 // The fields of one sequence, without braces.
@@ -344,11 +390,15 @@ std::string json_fields(const Result& r) {
              json_number(l.latency.p99_ms), l.pushed, l.dropped, l.published,
              json_number(r.peer_ms_per_frame), json_number(r.peer_ms_per_frame / r.ms_per_frame)) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
-         (r.check ? fmt::format(", \"cpu_stereo_ms\": {}, \"cuda_stereo_ms\": {}, "
-                                "\"cuda_differing_pixels\": {}, \"cuda_max_abs_diff\": {}",
-                                json_number(r.check->cpu_stereo_ms),
-                                json_number(r.check->cuda_stereo_ms), r.check->differing_pixels,
-                                json_number(r.check->max_abs_diff))
+         (r.check ? fmt::format(
+                        ", \"cpu_stereo_ms\": {}, \"cuda_stereo_ms\": {}, "
+                        "\"cuda_differing_pixels\": {}, \"cuda_max_abs_diff\": {}, "
+                        "\"cpu_contour_ms\": {}, \"cuda_contour_ms\": {}, "
+                        "\"cuda_contour_differing_pixels\": {}",
+                        json_number(r.check->cpu_stereo_ms), json_number(r.check->cuda_stereo_ms),
+                        r.check->differing_pixels, json_number(r.check->max_abs_diff),
+                        json_number(r.check->cpu_contour_ms), json_number(r.check->cuda_contour_ms),
+                        r.check->differing_contour_pixels)
                   : std::string());
 }
 

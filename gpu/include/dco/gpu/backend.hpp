@@ -2,11 +2,13 @@
 
 #include <string>
 
+#include "dco/pipeline/contour/contour_extractor.hpp"
+#include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 
 // Where the stages run. The CUDA path (built when nvcc was found) computes the sparse stereo
-// stage on the GPU with the same per-pixel math as the CPU path; contours and densification stay
-// on the CPU.
+// stage and the image side of the contour stage on the GPU with the same per-pixel math as the
+// CPU path; DIS optical flow and densification stay on the CPU.
 namespace dco::gpu {
 
 // What the CUDA runtime reports about device 0.
@@ -27,15 +29,19 @@ CudaDevice probe_cuda();
 // The sparse stage on the GPU. Throws dco::Error when the build has no CUDA or CUDA cannot be
 // initialised (no device, no driver, out of memory).
 std::unique_ptr<stereo::StereoMatcher> make_cuda_stereo_matcher(const stereo::StereoParams& params);
+// The contour stage with its stereo cue, Gaussian, gradient and Canny classification on the GPU
+// (GridContourExtractor). Throws like make_cuda_stereo_matcher.
+std::unique_ptr<contour::ContourExtractor> make_cuda_contour_extractor(
+    const contour::ContourParams& params);
 
 // runtime.backend resolved on this machine: "auto" takes CUDA when a device works (a stage is
 // made once to prove it) and else the CPU, saying why; "cuda" insists (dco::Error when CUDA is
 // unusable); "cpu" is the CPU. Throws dco::Error on any other name.
 struct BackendChoice {
-  std::string backend;                  // "cpu" or "cuda"
-  std::string message;                  // one line for the log: what was chosen and why
-  bool fell_back = false;               // "auto" wanted CUDA but could not have it
-  stereo::StereoMatcherFactory stereo;  // empty for the CPU
+  std::string backend;              // "cpu" or "cuda"
+  std::string message;              // one line for the log: what was chosen and why
+  bool fell_back = false;           // "auto" wanted CUDA but could not have it
+  pipeline::StageFactories stages;  // empty for the CPU
 };
 BackendChoice choose_backend(const std::string& requested, const stereo::StereoParams& params);
 

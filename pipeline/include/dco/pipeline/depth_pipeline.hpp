@@ -84,6 +84,12 @@ ContourWindow window_on_arrival(int lookahead, int newest);
 // With lookahead 1, the window of the sequence's last frame, which has no successor.
 ContourWindow window_at_end(int last);
 
+// Makers of the stages that run on more than one backend; an empty one makes the CPU stage.
+struct StageFactories {
+  stereo::StereoMatcherFactory stereo;
+  contour::ContourExtractorFactory contour;
+};
+
 // Stereo -> contour -> densify, one frame after the other, on the calling thread (the offline
 // tools and the tests; the real-time runtime runs the same stages on their own threads).
 // The contour window follows contour.lookahead: with 1 it is centred on frame t, so t's result
@@ -92,9 +98,8 @@ ContourWindow window_at_end(int last);
 // frame's dense map.
 class DepthPipeline {
  public:
-  // `stereo` makes the sparse stage (empty: the CPU one).
-  explicit DepthPipeline(const PipelineParams& params,
-                         const stereo::StereoMatcherFactory& stereo = {});
+  // `stages` makes the stereo and contour stages (empty: the CPU ones).
+  explicit DepthPipeline(const PipelineParams& params, const StageFactories& stages = {});
 
   // left/right: a rectified pair (8-bit, 1 or 3 channels). Returns true when `out` was filled.
   bool push(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,

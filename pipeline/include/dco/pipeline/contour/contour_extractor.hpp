@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -79,5 +80,11 @@ class ContourExtractor {
 };
 
 std::unique_ptr<ContourExtractor> make_cpu_contour_extractor(const ContourParams& params);
+
+// Makes the stage of a backend (CPU, CUDA); an empty factory means the CPU one.
+using ContourExtractorFactory =
+    std::function<std::unique_ptr<ContourExtractor>(const ContourParams&)>;
+std::unique_ptr<ContourExtractor> make_contour_extractor(const ContourExtractorFactory& factory,
+                                                         const ContourParams& params);
 
 }  // namespace dco::contour

@@ -49,4 +49,9 @@ void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t>
                  ImageView<const float> gate, const CannyThresholds& thresholds,
                  ImageView<std::uint8_t> edges, CannyScratch& scratch);
 
+// The hysteresis step of gated_canny on its classified map (0, kernels::kCannyWeak,
+// kernels::kCannyStrong, with 0 on the border rows and columns): every weak pixel 8-connected to
+// a strong one through weak ones becomes 255, everything else 0.
+void canny_hysteresis(ImageView<std::uint8_t> edges, CannyScratch& scratch);
+
 }  // namespace dco::contour

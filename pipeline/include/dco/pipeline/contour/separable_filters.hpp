@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "dco/core/image.hpp"
@@ -8,6 +9,9 @@
 // allocates (OpenCV's filter engines build and free their buffers on every call). Borders replicate
 // the edge pixel, as cv::BORDER_REPLICATE.
 namespace dco::contour {
+
+// Taps of that blur: cv::getGaussianKernel(5, 1.4, CV_32F).
+const std::array<float, 5>& gaussian5_taps();
 
 // 5x5 Gaussian with sigma 1.4 (the classic Canny pre-filter) from 8-bit grey to float.
 // `tmp` and `out` have the size of `in`; all single-channel.

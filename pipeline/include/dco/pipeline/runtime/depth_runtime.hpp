@@ -68,10 +68,9 @@ class DepthRuntime {
   using StageHook = std::function<void(Stage, int index)>;
 
   // Throws dco::Error on invalid params.
-  // `stereo` makes the sparse stage (empty: the CPU one).
+  // `stages` makes the stereo and contour stages (empty: the CPU ones).
   DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
-               ResultCallback on_result, StageHook hook = {},
-               const stereo::StereoMatcherFactory& stereo = {});
+               ResultCallback on_result, StageHook hook = {}, const StageFactories& stages = {});
   DepthRuntime(const DepthRuntime&) = delete;
   DepthRuntime& operator=(const DepthRuntime&) = delete;
   ~DepthRuntime();  // stops

@@ -1,0 +1,150 @@
+#include "dco/pipeline/contour/flow_cue.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include <opencv2/video/tracking.hpp>
+
+#include "dco/core/cv_interop.hpp"
+#include "dco/core/error.hpp"
+#include "dco/pipeline/contour/flow_fusion.hpp"
+#include "dco/pipeline/contour/separable_filters.hpp"
+
+namespace dco::contour {
+namespace {
+
+int dis_preset(const std::string& name) {
+  if (name == "ultrafast") return cv::DISOpticalFlow::PRESET_ULTRAFAST;
+  if (name == "medium") return cv::DISOpticalFlow::PRESET_MEDIUM;
+  return cv::DISOpticalFlow::PRESET_FAST;
+}
+
+// DIS picks its coarsest pyramid level from the frame size; when that falls below the preset's
+// finest level it skips every level and returns uninitialised memory (or crashes on thin frames).
+// Same formula as OpenCV's dis_flow.cpp, patch size 8 in every preset.
+bool dis_handles(const cv::Ptr<cv::DISOpticalFlow>& dis, int w, int h) {
+  const double patch = dis->getPatchSize();
+  const int by_motion =
+      static_cast<int>(std::log(std::max(w, h) / (4.0 * patch)) / std::log(2.0) + 0.5);
+  const int by_size = static_cast<int>(std::log(std::min(w, h) / patch) / std::log(2.0));
+  return std::min(by_motion, by_size) >= dis->getFinestScale();
+}
+
+// DIS needs continuous rows; a padded view is copied into `buffer` (sized once, then reused).
+cv::Mat continuous(ImageView<const std::uint8_t> v, cv::Mat& buffer) {
+  const cv::Mat m = as_mat(v);
+  if (m.isContinuous()) return m;
+  m.copyTo(buffer);
+  return buffer;
+}
+
+template <typename T>
+std::string size_text(ImageView<T> v) {
+  return std::to_string(v.width) + "x" + std::to_string(v.height) + "x" +
+         std::to_string(v.channels);
+}
+
+// An optional input is either absent or a single-channel image of the internal size.
+template <typename T>
+void check_optional(ImageView<const T> v, ImageView<const std::uint8_t> centre, const char* name) {
+  if (v.empty()) return;
+  if (v.channels != 1 || !v.same_size(centre))
+    throw Error(std::string("contour: ") + name + " is " + size_text(v) + ", expected " +
+                std::to_string(centre.width) + "x" + std::to_string(centre.height) + "x1");
+}
+
+// Mat::setTo allocates on every call; a row memset does not.
+void zero(cv::Mat& m) {
+  for (int y = 0; y < m.rows; ++y) std::memset(m.ptr(y), 0, m.cols * m.elemSize());
+}
+
+}  // namespace
+
+void check_contour_input(const ContourInputs& in) {
+  if (in.image.empty() || in.image.channels != 1)
+    throw Error("contour: the input image must be a non-empty grey image, got " +
+                size_text(in.image));
+  if (in.centre.empty() || in.centre.channels != 1)
+    throw Error("contour: the centre frame must be a non-empty grey image, got " +
+                size_text(in.centre));
+  if (in.centre.width > in.image.width || in.centre.height > in.image.height)
+    throw Error("contour: the centre frame (" + size_text(in.centre) +
+                ") is larger than the input image (" + size_text(in.image) + ")");
+  check_optional(in.neighbour_a, in.centre, "neighbour_a");
+  check_optional(in.neighbour_b, in.centre, "neighbour_b");
+  check_optional(in.disparity, in.centre, "disparity");
+}
+
+struct FlowCue::State {
+  ContourParams params;
+  cv::Ptr<cv::DISOpticalFlow> dis;
+  cv::Mat flow_a, flow_b;  // CV_32FC2, kept so DIS writes into the same memory every frame
+  cv::Mat centre_copy, neighbour_copy;  // continuous copies of padded input views
+  Image<float> speed, amplitude_a, amplitude_b, contrast_a, contrast_b, fused, tmp;
+};
+
+FlowCue::FlowCue(const ContourParams& params)
+    : s_(new State{params,
+                   cv::DISOpticalFlow::create(dis_preset(params.dis_preset)),
+                   {},
+                   {},
+                   {},
+                   {},
+                   {},
+                   {},
+                   {},
+                   {},
+                   {},
+                   {},
+                   {}}) {}
+
+FlowCue::~FlowCue() = default;
+
+void FlowCue::check_size(ImageView<const std::uint8_t> centre) const {
+  if (!dis_handles(s_->dis, centre.width, centre.height))
+    throw Error("contour: the internal frame " + size_text(centre) +
+                " is too small for DIS optical flow with the '" + s_->params.dis_preset +
+                "' preset (use a larger internal resolution, another preset or use_flow=false)");
+}
+
+void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimings& timings,
+                      Stopwatch& t) {
+  State& s = *s_;
+  const int cw = in.centre.width, ch = in.centre.height;
+  for (Image<float>* img :
+       {&s.speed, &s.amplitude_a, &s.amplitude_b, &s.contrast_a, &s.contrast_b, &s.fused, &s.tmp})
+    img->resize(cw, ch);
+  s.flow_a.create(ch, cw, CV_32FC2);
+  s.flow_b.create(ch, cw, CV_32FC2);
+
+  const cv::Mat centre = continuous(in.centre, s.centre_copy);
+  // A flow Mat of the right size is taken by DIS as a candidate initial flow; zero it so that
+  // frame t's result depends on its window only, not on the previous call.
+  zero(s.flow_a);
+  zero(s.flow_b);
+  s.dis->calc(centre, continuous(in.neighbour_a, s.neighbour_copy), s.flow_a);
+  s.dis->calc(centre, continuous(in.neighbour_b, s.neighbour_copy), s.flow_b);
+  timings.flow_ms = t.lap_ms();
+
+  const ImageView<const float> fa = as_view<float>(static_cast<const cv::Mat&>(s.flow_a));
+  const ImageView<const float> fb = as_view<float>(static_cast<const cv::Mat&>(s.flow_b));
+  flow_amplitude(fa, s.speed.view(), s.amplitude_a.view());
+  flow_amplitude(fb, s.speed.view(), s.amplitude_b.view());
+  timings.amplitude_ms = t.lap_ms();
+
+  const auto distance = static_cast<float>(s.params.projection_distance);
+  projection_contrast(fa, distance, s.contrast_a.view());
+  projection_contrast(fb, distance, s.contrast_b.view());
+  fuse_amplitudes(s.amplitude_a.cview(), s.contrast_a.cview(), s.amplitude_b.cview(),
+                  s.contrast_b.cview(), s.fused.view());
+  timings.fusion_ms = t.lap_ms();
+
+  box_filter(s.fused.cview(), s.params.box_size, s.tmp.view(), dst);
+  timings.box_ms = t.lap_ms();
+  normalise_by_max(dst, static_cast<float>(s.params.flow_floor));
+  timings.normalise_ms = t.lap_ms();
+}
+
+}  // namespace dco::contour

@@ -1,0 +1,36 @@
+#pragma once
+
+#include <memory>
+
+#include "dco/core/image.hpp"
+#include "dco/core/stopwatch.hpp"
+#include "dco/pipeline/contour/contour_extractor.hpp"
+
+// The flow cue of the contour stage (§5.1–5.2) on the CPU: DIS optical flow from the centre frame
+// to each neighbour, the amplitude of each field, fusion by the projection test, box filter and
+// normalisation. Buffers are sized on the first frame of a size and reused. OpenCV stays out of
+// this header, so the GPU stages (compiled by nvcc) can hold one.
+namespace dco::contour {
+
+class FlowCue {
+ public:
+  explicit FlowCue(const ContourParams& params);
+  ~FlowCue();
+  FlowCue(const FlowCue&) = delete;
+  FlowCue& operator=(const FlowCue&) = delete;
+
+  // Throws dco::Error when the internal frame is too small for the DIS preset.
+  void check_size(ImageView<const std::uint8_t> centre) const;
+  // M_fuse from the flow into `dst` (the centre's size); fills the flow steps of `timings`.
+  void compute(const ContourInputs& in, ImageView<float> dst, ContourTimings& timings,
+               Stopwatch& t);
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
+// Throws dco::Error unless the inputs are consistent (see ContourInputs).
+void check_contour_input(const ContourInputs& in);
+
+}  // namespace dco::contour
