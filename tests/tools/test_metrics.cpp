@@ -101,6 +101,9 @@ TEST(Metrics, StepEdgeOcclusionErrors) {
   // The band (columns 0..6) holds column 3 but not the missing column 19.
   EXPECT_DOUBLE_EQ(m.band_err, 100.0 * 10 / 70);
   EXPECT_DOUBLE_EQ(m.band_err_pred, 100.0 * 10 / 70);
+  // Column 3 takes the foreground's disparity: the foreground is fattened, nothing thinned.
+  EXPECT_DOUBLE_EQ(m.band_front, 100.0 * 10 / 70);
+  EXPECT_DOUBLE_EQ(m.band_behind, 0.0);
 }
 
 TEST(Metrics, BandIsASevenBySevenDilationOfTheBoundary) {
@@ -126,6 +129,9 @@ TEST(Metrics, BandIsASevenBySevenDilationOfTheBoundary) {
     }
   ASSERT_EQ(band, 9 * 7 + 2 * 7);
   EXPECT_DOUBLE_EQ(m.band_err, 100.0 / band);
+  // The foreground pixel predicted behind: virtual content would show through it.
+  EXPECT_DOUBLE_EQ(m.band_behind, 100.0 / band);
+  EXPECT_DOUBLE_EQ(m.band_front, 0.0);
   EXPECT_DOUBLE_EQ(m.occ_err, 100.0 / (n * n));
 }
 

@@ -83,7 +83,7 @@ cv::Mat occlusion_band(const cv::Mat& sides) {
 }
 
 struct PlaneErrors {
-  double occ, occ_pred, band, band_pred;
+  double occ, occ_pred, band, band_pred, band_front, band_behind;
 };
 
 PlaneErrors plane_errors(ImageView<const float> prediction, ImageView<const float> gt,
@@ -92,6 +92,7 @@ PlaneErrors plane_errors(ImageView<const float> prediction, ImageView<const floa
   const cv::Mat band = occlusion_band(sides);
   std::int64_t n = 0, wrong = 0, n_pred = 0, wrong_pred = 0;
   std::int64_t n_band = 0, wrong_band = 0, n_band_pred = 0, wrong_band_pred = 0;
+  std::int64_t band_front = 0, band_behind = 0;
   for (int y = 0; y < gt.height; ++y) {
     const float* p = prediction.row(y);
     const auto* s = sides.ptr<std::uint8_t>(y);
@@ -105,30 +106,36 @@ PlaneErrors plane_errors(ImageView<const float> prediction, ImageView<const floa
       if (in_band[x]) {
         n_band += 1, wrong_band += is_wrong;
         n_band_pred += predicted, wrong_band_pred += predicted && is_wrong;
+        band_front += predicted && is_wrong && s[x] != kFront;
+        band_behind += predicted && is_wrong && s[x] == kFront;
       }
     }
   }
-  return {percent(wrong, n), percent(wrong_pred, n_pred), percent(wrong_band, n_band),
-          percent(wrong_band_pred, n_band_pred)};
+  return {percent(wrong, n),          percent(wrong_pred, n_pred),
+          percent(wrong_band, n_band), percent(wrong_band_pred, n_band_pred),
+          percent(band_front, n_band), percent(band_behind, n_band)};
 }
 
 void add_occlusion_metrics(ImageView<const float> prediction, ImageView<const float> gt,
                            SceneMetrics& m) {
   m.planes = occlusion_planes(gt);
   constexpr std::size_t kPlanes = kOcclusionPlaneQuantiles.size();
-  std::array<double, kPlanes> occ{}, occ_pred{}, band{}, band_pred{};
+  std::array<double, kPlanes> occ{}, occ_pred{}, band{}, band_pred{}, front{}, behind{};
   for (std::size_t i = 0; i < kPlanes; ++i) {
     if (std::isnan(m.planes[i])) {
-      occ[i] = occ_pred[i] = band[i] = band_pred[i] = kUndefined;
+      occ[i] = occ_pred[i] = band[i] = band_pred[i] = front[i] = behind[i] = kUndefined;
       continue;
     }
     const PlaneErrors e = plane_errors(prediction, gt, m.planes[i]);
     occ[i] = e.occ, occ_pred[i] = e.occ_pred, band[i] = e.band, band_pred[i] = e.band_pred;
+    front[i] = e.band_front, behind[i] = e.band_behind;
   }
   m.occ_err = mean_of_defined(occ);
   m.occ_err_pred = mean_of_defined(occ_pred);
   m.band_err = mean_of_defined(band);
   m.band_err_pred = mean_of_defined(band_pred);
+  m.band_front = mean_of_defined(front);
+  m.band_behind = mean_of_defined(behind);
 }
 
 // Scenes without the numbers (e.g. no nocc mask) hold NaN and drop out of the mean by themselves.
@@ -252,6 +259,8 @@ SceneMetrics mean_metrics(std::span<const SceneMetrics> scenes) {
   mean.occ_err_pred = mean_field(scenes, &SceneMetrics::occ_err_pred);
   mean.band_err = mean_field(scenes, &SceneMetrics::band_err);
   mean.band_err_pred = mean_field(scenes, &SceneMetrics::band_err_pred);
+  mean.band_front = mean_field(scenes, &SceneMetrics::band_front);
+  mean.band_behind = mean_field(scenes, &SceneMetrics::band_behind);
   // A time mean over some of the scenes would compare unequal workloads: all or nothing.
   const bool all_timed = std::none_of(scenes.begin(), scenes.end(),
                                       [](const SceneMetrics& s) { return std::isnan(s.time_ms); });

@@ -35,6 +35,8 @@ constexpr Column kColumns[] = {
     {"occErrP",  2, [](const SceneMetrics& m) { return m.occ_err_pred; }},
     {"bandErr",  2, [](const SceneMetrics& m) { return m.band_err; }},
     {"bandErrP", 2, [](const SceneMetrics& m) { return m.band_err_pred; }},
+    {"bandFr",   2, [](const SceneMetrics& m) { return m.band_front; }},
+    {"bandBh",   2, [](const SceneMetrics& m) { return m.band_behind; }},
     {"ms",       1, [](const SceneMetrics& m) { return m.time_ms; }},
 };
 // clang-format on
@@ -65,12 +67,13 @@ std::string scene_json(const SceneMetrics& m) {
       R"({{"scene": {}, "width": {}, "height": {}, "gt_pixels": {}, "predicted_pixels": {}, )"
       R"("density": {}, "all": {}, "pred": {}, "nocc": {}, "nocc_pred": {}, )"
       R"("occlusion": {{"planes": [{}], "occ_err": {}, "occ_err_pred": {}, "band_err": {}, )"
-      R"("band_err_pred": {}}}, "time_ms": {}}})",
+      R"("band_err_pred": {}, "band_front": {}, "band_behind": {}}}, "time_ms": {}}})",
       json_string(m.scene), m.width, m.height, m.gt_pixels, m.predicted_pixels,
       json_number(m.density), stats_json(m.all), stats_json(m.pred),
       m.has_nocc ? stats_json(m.nocc) : "null", m.has_nocc ? stats_json(m.nocc_pred) : "null",
       planes, json_number(m.occ_err), json_number(m.occ_err_pred), json_number(m.band_err),
-      json_number(m.band_err_pred), json_number(m.time_ms));
+      json_number(m.band_err_pred), json_number(m.band_front), json_number(m.band_behind),
+      json_number(m.time_ms));
 }
 
 std::string signed_cell(double value, int precision, int width) {
@@ -94,7 +97,7 @@ std::string format_metrics_table(std::span<const SceneMetrics> scenes) {
   out +=
       "(% of GT pixels; p = predicted pixels only, nocc = mask 255, avgerr in px; occ/band = wrong "
       "side of virtual planes at 20..80 % GT quantiles, band = within 3 px of the GT occlusion "
-      "boundary; - = not defined)\n";
+      "boundary, bandFr/bandBh = of it, predicted in front/behind; - = not defined)\n";
   return out;
 }
 

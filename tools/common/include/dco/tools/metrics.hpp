@@ -29,6 +29,11 @@
 //       occErr   % of GT pixels whose predicted side is wrong (missing prediction = wrong),
 //       bandErr  the same over GT pixels within Chebyshev distance 3 (a 7x7 dilation) of the GT
 //                occlusion boundary, i.e. GT pixels whose side differs from a 4-neighbour's;
+//       bandFront / bandBehind  the part of bandErr predicted in front of the plane where the
+//                truth is behind it (real surfaces fattened: a halo that hides virtual content
+//                around real objects) and behind where the truth is in front (virtual content
+//                showing through the rims of real objects); the rest of bandErr is missing
+//                predictions;
 //       the "pred" variants count predicted pixels only. Each is the mean over the planes where
 //       it is defined (a plane with nothing in front of it has no boundary and no band).
 //   - Rates are percentages. A number over zero pixels is NaN ("not defined"); means over scenes
@@ -65,6 +70,8 @@ struct SceneMetrics {
   double occ_err_pred = kUndefined;
   double band_err = kUndefined;
   double band_err_pred = kUndefined;
+  double band_front = kUndefined;   // of bandErr: predicted in front, truly behind
+  double band_behind = kUndefined;  // of bandErr: predicted behind, truly in front
 
   double time_ms = kUndefined;  // filled by whoever timed the method; NaN when unknown
 };
