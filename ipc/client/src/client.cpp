@@ -191,7 +191,8 @@ struct dco_client {
   std::uint64_t last_index = 0;  // publish_index of the last frame returned
   std::int64_t last_path_check_ns = 0;
   std::int64_t poll_ns = 0;
-  std::uint32_t polled_write = 0;  // writes_begun value of the last write polled through
+  std::uint32_t polled_write = 0;  // writes_begun value of the write polled through last
+  std::int64_t poll_end_ns = 0;    // when polling through that write stops
 
   ~dco_client() { map.release(); }
 
@@ -443,11 +444,16 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     const std::uint32_t begun = h->writes_begun.load(std::memory_order_acquire);
     if (begun == static_cast<std::uint32_t>(published)) {
       layout::wait_for_change(h->writes_begun, begun, until - now);
-    } else if (begun != client->polled_write) {
-      client->polled_write = begun;
-      poll_for_change(h->wake, seen, std::min(until, now + client->poll_ns));
-    } else {  // this write outlasted the polling: sleep until it is published
-      layout::wait_for_change(h->wake, seen, until - now);
+    } else {
+      if (begun != client->polled_write) {
+        client->polled_write = begun;
+        client->poll_end_ns = now + client->poll_ns;
+      }
+      // A path check falling due ends a poll early; the poll resumes after it.
+      if (now < client->poll_end_ns)
+        poll_for_change(h->wake, seen, std::min(until, client->poll_end_ns));
+      else  // this write outlasted the polling: sleep until it is published
+        layout::wait_for_change(h->wake, seen, until - now);
     }
   }
 }
