@@ -116,7 +116,7 @@ DepthPipeline::DepthPipeline(const PipelineParams& params, const StageFactories&
     : params_(params),
       stereo_(stereo::make_stereo_matcher(stages.stereo, params.stereo)),
       contour_(contour::make_contour_extractor(stages.contour, params.contour)),
-      densifier_(params.densify) {
+      densifier_(params.densify, stages.densify_solver) {
   validate(params_);
 }
 

@@ -53,6 +53,16 @@ std::unique_ptr<contour::ContourExtractor> make_cuda_contour_extractor(
 #endif
 }
 
+std::unique_ptr<densify::SystemSolver> make_cuda_densify_solver(
+    const densify::DensifyParams& params) {
+#ifdef DCO_HAVE_CUDA
+  return detail::cuda_densify_solver(params);
+#else
+  (void)params;
+  throw Error("cuda: " + probe_cuda().why);
+#endif
+}
+
 BackendChoice choose_backend(const std::string& requested, const stereo::StereoParams& params) {
   BackendChoice c;
   if (requested == "cpu") {
@@ -69,11 +79,14 @@ BackendChoice choose_backend(const std::string& requested, const stereo::StereoP
       make_cuda_stereo_matcher(params);  // initialises the context and the stream once
       c.backend = "cuda";
       c.message = "backend cuda on " + device.describe() +
-                  ": sparse stereo and the contour image passes on the GPU, optical flow and "
-                  "densification on the CPU";
+                  ": sparse stereo, the contour image passes and the densify solver on the "
+                  "GPU, optical flow and the densify system on the CPU";
       c.stages.stereo = [](const stereo::StereoParams& p) { return make_cuda_stereo_matcher(p); };
       c.stages.contour = [](const contour::ContourParams& p) {
         return make_cuda_contour_extractor(p);
+      };
+      c.stages.densify_solver = [](const densify::DensifyParams& p) {
+        return make_cuda_densify_solver(p);
       };
       return c;
     } catch (const std::exception& e) {

@@ -11,5 +11,6 @@ CudaDevice cuda_probe();
 std::unique_ptr<stereo::StereoMatcher> cuda_stereo_matcher(const stereo::StereoParams& params);
 std::unique_ptr<contour::ContourExtractor> cuda_contour_extractor(
     const contour::ContourParams& params);
+std::unique_ptr<densify::SystemSolver> cuda_densify_solver(const densify::DensifyParams& params);
 
 }  // namespace dco::gpu::detail

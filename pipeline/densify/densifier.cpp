@@ -73,8 +73,10 @@ void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::
   }
 }
 
-Densifier::Densifier(const DensifyParams& params) : params_(params) {
+Densifier::Densifier(const DensifyParams& params, const SystemSolverFactory& solver)
+    : params_(params) {
   validate(params_);
+  solver_ = make_system_solver(solver, params_);
   // Grey-level differences are integers: one table instead of two exp() per pixel.
   for (std::size_t diff = 0; diff < color_weight_.size(); ++diff)
     color_weight_[diff] =
@@ -225,29 +227,7 @@ void Densifier::build_system(const DensifyInputs& in) {
 }
 
 bool Densifier::solves_at_half(int width) const {
-  return params_.solve_resolution == "half" || (params_.solve_resolution == "auto" && width > 640);
-}
-
-void Densifier::solve_at_half() {
-  // The full system's memory traffic bounds every pass over it; the aggregated system has a
-  // quarter of the pixels and stays in cache, and the Galerkin operator keeps the contour cuts.
-  coarsen(system_, coarse_);
-  const int cw = coarse_.width();
-  const int ch = coarse_.height();
-  coarse_rhs_.resize(cw, ch);
-  coarse_solution_.resize(cw, ch);
-  restrict_sum(rhs_.cview(), coarse_rhs_.view());
-  restrict_mean(solution_.cview(), coarse_solution_.view());  // warm start
-  if (params_.multigrid) multigrid_.build(coarse_);
-  report_ = solve_pcg(coarse_, coarse_rhs_.cview(), coarse_solution_.view(),
-                      params_.multigrid ? &multigrid_ : nullptr, params_.max_iterations,
-                      params_.tolerance, scratch_);
-  prolong(coarse_solution_.cview(), solution_.view());
-  // The sweeps put the detail inside each 2x2 block back: a contour through a block, an edge of
-  // the image guidance, a single sparse pixel.
-  for (int sweep = 0; sweep < params_.fine_sweeps; ++sweep)
-    gauss_seidel(system_, rhs_.cview(), solution_.view(), 1, sweep % 2 == 0);
-  report_.output_residual = relative_residual(system_, rhs_.cview(), solution_.cview(), scratch_);
+  return densify::solves_at_half(params_, width);
 }
 
 void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
@@ -276,15 +256,7 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
       for (int x = 0; x < w; ++x)
         solution_.at(x, y) = known(in.sparse.row(y)[x]) ? in.sparse.row(y)[x] : 0.0f;
   }
-  if (solves_at_half(w)) {
-    solve_at_half();
-  } else {
-    if (params_.multigrid) multigrid_.build(system_);
-    report_ = solve_pcg(system_, rhs_.cview(), solution_.view(),
-                        params_.multigrid ? &multigrid_ : nullptr, params_.max_iterations,
-                        params_.tolerance, scratch_);
-    report_.output_residual = report_.final_residual;
-  }
+  report_ = solver_->solve(system_, rhs_.cview(), solution_.view());
   has_solution_ = true;
   timings_.solve_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();

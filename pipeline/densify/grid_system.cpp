@@ -3,6 +3,7 @@
 #include <cassert>
 
 #include "dco/kernels/densify_kernels.hpp"
+#include "dco/kernels/densify_pixel.hpp"
 
 namespace dco::densify {
 
@@ -25,13 +26,8 @@ void GridSystem::update_diagonal() {
     float* g = diag.row(y);
     float* inv = inv_diag.row(y);
     for (int x = 0; x < w; ++x) {
-      float s = d[x];
-      if (x + 1 < w) s += ex[x];
-      if (x > 0) s += ex[x - 1];
-      if (y + 1 < h) s += ey[x];
-      if (ey_above) s += ey_above[x];
-      g[x] = s;
-      inv[x] = s > 0 ? 1.0f / s : 0.0f;
+      g[x] = kernels::pixel::diagonal(d[x], ex, ey, ey_above, x, w, y + 1 < h);
+      inv[x] = kernels::pixel::inverse_diagonal(g[x]);
     }
   }
 }

@@ -1,4 +1,5 @@
 #include "dco/kernels/densify_kernels.hpp"
+#include "dco/kernels/densify_pixel.hpp"
 #include "densify_ranges.hpp"
 
 namespace dco::kernels::scalar {
@@ -12,12 +13,7 @@ void grid_apply_row(const GridRow& row, const float* x, float* out) {
 }
 
 double dot_row(const float* a, const float* b, int n) {
-  constexpr int kLanes = detail::kDotLanes;
-  float partial[kLanes] = {};
-  int i = 0;
-  for (; i + kLanes <= n; i += kLanes)
-    for (int lane = 0; lane < kLanes; ++lane) partial[lane] += a[i + lane] * b[i + lane];
-  return detail::finish_dot(a, b, i, n, partial);
+  return pixel::dot_row(a, b, n);
 }
 
 }  // namespace dco::kernels::scalar

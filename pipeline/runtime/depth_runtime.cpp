@@ -57,7 +57,7 @@ DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& 
       hook_(std::move(hook)),
       stereo_(stereo::make_stereo_matcher(stages.stereo, pipeline.stereo)),
       contour_(contour::make_contour_extractor(stages.contour, pipeline.contour)),
-      densifier_(pipeline.densify),
+      densifier_(pipeline.densify, stages.densify_solver),
       // In flight at once: the contour window (3 frames), a full stereo queue and the frame in
       // the stereo stage.
       slots_(static_cast<std::size_t>(runtime.queue_depth) + 4),

@@ -11,6 +11,7 @@ TEST(Backend, CpuIsTheCpuStage) {
   EXPECT_EQ(c.backend, "cpu");
   EXPECT_FALSE(c.stages.stereo);
   EXPECT_FALSE(c.stages.contour);
+  EXPECT_FALSE(c.stages.densify_solver);
   EXPECT_FALSE(c.fell_back);
 }
 
@@ -21,11 +22,13 @@ TEST(Backend, AutoTakesCudaExactlyWhenADeviceWorks) {
     EXPECT_EQ(c.backend, "cuda") << c.message;
     ASSERT_TRUE(c.stages.stereo);
     ASSERT_TRUE(c.stages.contour);
+    ASSERT_TRUE(c.stages.densify_solver);
     EXPECT_NE(c.message.find(device.name), std::string::npos) << c.message;
   } else {
     EXPECT_EQ(c.backend, "cpu");
     EXPECT_FALSE(c.stages.stereo);
     EXPECT_FALSE(c.stages.contour);
+    EXPECT_FALSE(c.stages.densify_solver);
     EXPECT_EQ(c.fell_back, built_with_cuda());
     // The log line says why.
     EXPECT_NE(c.message.find(device.why), std::string::npos) << c.message;
@@ -45,6 +48,7 @@ TEST(Backend, CudaWithoutADeviceIsOneClearError) {
   }
   EXPECT_THROW(make_cuda_stereo_matcher({}), Error);
   EXPECT_THROW(make_cuda_contour_extractor({}), Error);
+  EXPECT_THROW(make_cuda_densify_solver({}), Error);
 }
 
 TEST(Backend, UnknownNamesAreRefused) {

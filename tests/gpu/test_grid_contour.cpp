@@ -7,6 +7,7 @@
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/gpu/grid_contour_extractor.hpp"
 #include "dco/gpu/grid_stereo_matcher.hpp"
+#include "dco/gpu/grid_system_solver.hpp"
 #include "dco/gpu/host_grid.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "support/same_bytes.hpp"
@@ -55,7 +56,7 @@ TEST(GridContour, BadInputGetsTheCpuStagesError) {
   }
 }
 
-// The whole offline pipeline with both grid stages (as the CUDA backend wires them) gives the CPU
+// The whole offline pipeline with every grid stage (as the CUDA backend wires them) gives the CPU
 // pipeline's dense depth, frame for frame.
 TEST(GridStages, DepthPipelineWithGridStagesIsTheCpuPipelineBitForBit) {
   const synthetic::SceneRenderer scene(synthetic::preset("hand", 704, 396));
@@ -67,6 +68,9 @@ TEST(GridStages, DepthPipelineWithGridStagesIsTheCpuPipelineBitForBit) {
   };
   grid.contour = [](const contour::ContourParams& p) {
     return std::make_unique<GridContourExtractor<HostGrid>>(p);
+  };
+  grid.densify_solver = [](const densify::DensifyParams& p) {
+    return std::make_unique<GridSystemSolver<HostGrid>>(p);
   };
   pipeline::DepthPipeline cpu(params), on_grid(params, grid);
   synthetic::StereoSample s;

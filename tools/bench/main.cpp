@@ -47,9 +47,10 @@ OpenCV StereoSGBM (3-way) + WLS. Per sequence:
   latency     frames pushed at --fps (capture time = the frame's due time), newest wins at the
               entry: capture-to-result latency p50 / p99 and the frames dropped;
   peer        SGBM 3-way + WLS ms per frame; ratio = peer / dco.
-With the CUDA backend it also runs the sparse stereo stage and the contour stage on the CPU and
-on the GPU over the same frames: the stage times and how many output pixels differ (the
-tolerance is zero: the GPU computes the same integer costs, float operations and decisions).
+With the CUDA backend it also runs the sparse stereo stage, the contour stage and the densify
+solver on the CPU and on the GPU over the same frames: the stage times and how many output
+pixels differ (the tolerance is zero: the GPU computes the same integer costs, float operations
+and decisions).
 
   --sequence S        synthetic, karlsruhe or all (default all)
   --synthetic NAME    hand | boxes | static (default hand)
@@ -193,7 +194,9 @@ struct BackendCheck {
   long differing_pixels = 0;                     // of the sparse maps at input size
   double max_abs_diff = 0;                       // over pixels finite in both
   double cpu_contour_ms = 0, cuda_contour_ms = 0;
-  long differing_contour_pixels = 0;  // of the contour maps, M_fuse and M_I together
+  long differing_contour_pixels = 0;           // of the contour maps, M_fuse and M_I together
+  double cpu_solve_ms = 0, cuda_solve_ms = 0;  // the densify solver on the CPU's contour results
+  long differing_dense_pixels = 0;
 };
 
 long differing(dco::ImageView<const float> a, dco::ImageView<const float> b, double* max_abs) {
@@ -224,6 +227,9 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
   const auto cuda_stage = cuda.stereo(params.stereo);
   const auto cpu_contour = dco::contour::make_cpu_contour_extractor(params.contour);
   const auto cuda_contour = cuda.contour(params.contour);
+  dco::densify::Densifier cpu_densifier(params.densify),
+      cuda_densifier(params.densify, cuda.densify_solver);
+  pl::DepthResult dense_cpu, dense_cuda;
   // The CPU stage's slots of frames i - 2, i - 1 and i: the contours of i - 1 use all three.
   std::array<pl::StereoSlot, 3> slots;
   dco::Image<float> cuda_sparse;
@@ -253,12 +259,25 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
     c.differing_contour_pixels += differing(a.contours.cview(), b.contours.cview()) +
                                   differing(a.m_fuse.cview(), b.m_fuse.cview(), nullptr) +
                                   differing(a.m_intensity.cview(), b.m_intensity.cview(), nullptr);
+    // Both densifiers on the CPU's contour result, each with its own previous frame.
+    pl::contour_frame(*cpu_contour, centre, &slots[(i - 2) % 3], &slot, dense_cpu);
+    pl::contour_frame(*cpu_contour, centre, &slots[(i - 2) % 3], &slot, dense_cuda);
+    pl::densify_frame(cpu_densifier, dense_cpu);
+    pl::densify_frame(cuda_densifier, dense_cuda);
+    if (i > 2 || frames.pairs.size() == 3) {
+      c.cpu_solve_ms += dense_cpu.densify_timings.solve_ms;
+      c.cuda_solve_ms += dense_cuda.densify_timings.solve_ms;
+    }
+    c.differing_dense_pixels +=
+        differing(dense_cpu.dense.cview(), dense_cuda.dense.cview(), nullptr);
   }
   c.cpu_stereo_ms /= timed;
   c.cuda_stereo_ms /= timed;
   if (contour_timed > 0) {
     c.cpu_contour_ms /= contour_timed;
     c.cuda_contour_ms /= contour_timed;
+    c.cpu_solve_ms /= contour_timed;
+    c.cuda_solve_ms /= contour_timed;
   }
   return c;
 }
@@ -370,6 +389,12 @@ void print_text(const Result& r) {
         "both); {} output pixels differ\n",
         r.check->cpu_contour_ms, r.check->cuda_contour_ms,
         r.check->cpu_contour_ms / r.check->cuda_contour_ms, r.check->differing_contour_pixels);
+  if (r.check && r.check->cpu_solve_ms > 0)
+    fmt::print(
+        "  densify  solve CPU {:.2f} ms, CUDA {:.2f} ms per frame (ratio {:.1f}, the system built "
+        "on the CPU in both); {} output pixels differ\n",
+        r.check->cpu_solve_ms, r.check->cuda_solve_ms,
+        r.check->cpu_solve_ms / r.check->cuda_solve_ms, r.check->differing_dense_pixels);
 }
 
 // The fields of one sequence, without braces.
@@ -394,11 +419,13 @@ std::string json_fields(const Result& r) {
                         ", \"cpu_stereo_ms\": {}, \"cuda_stereo_ms\": {}, "
                         "\"cuda_differing_pixels\": {}, \"cuda_max_abs_diff\": {}, "
                         "\"cpu_contour_ms\": {}, \"cuda_contour_ms\": {}, "
-                        "\"cuda_contour_differing_pixels\": {}",
+                        "\"cuda_contour_differing_pixels\": {}, \"cpu_solve_ms\": {}, "
+                        "\"cuda_solve_ms\": {}, \"cuda_dense_differing_pixels\": {}",
                         json_number(r.check->cpu_stereo_ms), json_number(r.check->cuda_stereo_ms),
                         r.check->differing_pixels, json_number(r.check->max_abs_diff),
                         json_number(r.check->cpu_contour_ms), json_number(r.check->cuda_contour_ms),
-                        r.check->differing_contour_pixels)
+                        r.check->differing_contour_pixels, json_number(r.check->cpu_solve_ms),
+                        json_number(r.check->cuda_solve_ms), r.check->differing_dense_pixels)
                   : std::string());
 }
 

@@ -7,8 +7,9 @@
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 
 // Where the stages run. The CUDA path (built when nvcc was found) computes the sparse stereo
-// stage and the image side of the contour stage on the GPU with the same per-pixel math as the
-// CPU path; DIS optical flow and densification stay on the CPU.
+// stage, the image side of the contour stage and the densify solver on the GPU with the same
+// per-pixel math as the CPU path; DIS optical flow and building the densify system stay on the
+// CPU.
 namespace dco::gpu {
 
 // What the CUDA runtime reports about device 0.
@@ -33,6 +34,9 @@ std::unique_ptr<stereo::StereoMatcher> make_cuda_stereo_matcher(const stereo::St
 // (GridContourExtractor). Throws like make_cuda_stereo_matcher.
 std::unique_ptr<contour::ContourExtractor> make_cuda_contour_extractor(
     const contour::ContourParams& params);
+// The densify solver on the GPU (GridSystemSolver). Throws like make_cuda_stereo_matcher.
+std::unique_ptr<densify::SystemSolver> make_cuda_densify_solver(
+    const densify::DensifyParams& params);
 
 // runtime.backend resolved on this machine: "auto" takes CUDA when a device works (a stage is
 // made once to prove it) and else the CPU, saying why; "cuda" insists (dco::Error when CUDA is

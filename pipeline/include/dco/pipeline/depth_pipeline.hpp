@@ -88,6 +88,7 @@ ContourWindow window_at_end(int last);
 struct StageFactories {
   stereo::StereoMatcherFactory stereo;
   contour::ContourExtractorFactory contour;
+  densify::SystemSolverFactory densify_solver;  // the densifier builds its system on the CPU
 };
 
 // Stereo -> contour -> densify, one frame after the other, on the calling thread (the offline
@@ -98,7 +99,7 @@ struct StageFactories {
 // frame's dense map.
 class DepthPipeline {
  public:
-  // `stages` makes the stereo and contour stages (empty: the CPU ones).
+  // `stages` makes the stereo and contour stages and the densify solver (empty: the CPU ones).
   explicit DepthPipeline(const PipelineParams& params, const StageFactories& stages = {});
 
   // left/right: a rectified pair (8-bit, 1 or 3 channels). Returns true when `out` was filled.

@@ -10,6 +10,7 @@
 #include "dco/pipeline/densify/conjugate_gradients.hpp"
 #include "dco/pipeline/densify/grid_system.hpp"
 #include "dco/pipeline/densify/multigrid.hpp"
+#include "dco/pipeline/densify/system_solver.hpp"
 
 namespace dco {
 class ConfigSchema;
@@ -64,7 +65,8 @@ struct DensifyTimings {
 // The solution of the previous call is the starting point of the next (warm start).
 class Densifier {
  public:
-  explicit Densifier(const DensifyParams& params);
+  // `solver` makes the solver of the system (empty: the CPU one).
+  explicit Densifier(const DensifyParams& params, const SystemSolverFactory& solver = {});
 
   void compute(const DensifyInputs& in, Image<float>& dense);
 
@@ -87,15 +89,11 @@ class Densifier {
 
  private:
   void build_system(const DensifyInputs& in);
-  void solve_at_half();
 
   DensifyParams params_;
+  std::unique_ptr<SystemSolver> solver_;
   GridSystem system_;
-  Multigrid multigrid_;
-  CgScratch scratch_;
   Image<float> rhs_, hint_, solution_, smooth_strength_;
-  GridSystem coarse_;  // the half-resolution system when solve_resolution is half
-  Image<float> coarse_rhs_, coarse_solution_;
   Image<std::uint8_t> barrier_;
   std::vector<int> fuse_column_;           // column of M_fuse for each input column
   std::vector<float> left_path_;           // weakest edge between a hole and its left value

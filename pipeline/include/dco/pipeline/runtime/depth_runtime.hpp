@@ -68,7 +68,7 @@ class DepthRuntime {
   using StageHook = std::function<void(Stage, int index)>;
 
   // Throws dco::Error on invalid params.
-  // `stages` makes the stereo and contour stages (empty: the CPU ones).
+  // `stages` makes the stereo and contour stages and the densify solver (empty: the CPU ones).
   DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
                ResultCallback on_result, StageHook hook = {}, const StageFactories& stages = {});
   DepthRuntime(const DepthRuntime&) = delete;

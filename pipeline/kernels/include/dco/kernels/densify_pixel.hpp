@@ -1,0 +1,65 @@
+#pragma once
+
+// Per-pixel math of the densify solver (dco::densify::GridSystem), shared by the scalar row
+// kernels (the references the SIMD kernels match) and the GPU passes: the same float operations
+// in the same order, no fused multiply-add, so all of them give the same bits.
+
+#include "dco/kernels/densify_kernels.hpp"
+#include "dco/kernels/host_device.hpp"
+
+namespace dco::kernels::pixel {
+
+// Σ of the vertical neighbour terms of column c (0 on a row without neighbours).
+DCO_HD inline float vertical_term(const GridRow& r, int c) {
+  float v = 0.0f;
+  if (r.x_below != nullptr) v = r.wy[c] * r.x_below[c];
+  if (r.x_above != nullptr) v = v + r.wy_above[c] * r.x_above[c];
+  return v;
+}
+
+// The Gauss-Seidel value of x[c]: (b + Σ w x(neighbour)) / diag.
+DCO_HD inline float smooth_at(const GridRow& r, const float* b, const float* x, int c) {
+  float v = b[c];
+  if (c + 1 < r.width) v = v + r.wx[c] * x[c + 1];
+  if (c > 0) v = v + r.wx[c - 1] * x[c - 1];
+  return (v + vertical_term(r, c)) * r.inv_diag[c];
+}
+
+// (A x)[c].
+DCO_HD inline float apply_at(const GridRow& r, const float* x, int c) {
+  float v = r.diag[c] * x[c];
+  if (c + 1 < r.width) v = v - r.wx[c] * x[c + 1];
+  if (c > 0) v = v - r.wx[c - 1] * x[c - 1];
+  return v - vertical_term(r, c);
+}
+
+inline constexpr int kDotLanes = 16;
+
+// Σ a[i] b[i] of one row as dot_row defines it: sixteen float partial sums (lane i % 16), the
+// last n % 16 products in double, then the partial sums, all added up in double.
+DCO_HD inline double dot_row(const float* a, const float* b, int n) {
+  float partial[kDotLanes] = {};
+  int i = 0;
+  for (; i + kDotLanes <= n; i += kDotLanes)
+    for (int lane = 0; lane < kDotLanes; ++lane) partial[lane] += a[i + lane] * b[i + lane];
+  double sum = 0;
+  for (; i < n; ++i) sum += static_cast<double>(a[i]) * b[i];
+  for (int lane = 0; lane < kDotLanes; ++lane) sum += partial[lane];
+  return sum;
+}
+
+// diag = data + the weights of the edges that exist (GridSystem::update_diagonal).
+DCO_HD inline float diagonal(float data, const float* wx, const float* wy, const float* wy_above,
+                             int x, int width, bool has_below) {
+  float s = data;
+  if (x + 1 < width) s += wx[x];
+  if (x > 0) s += wx[x - 1];
+  if (has_below) s += wy[x];
+  if (wy_above != nullptr) s += wy_above[x];
+  return s;
+}
+DCO_HD inline float inverse_diagonal(float diag) {
+  return diag > 0 ? 1.0f / diag : 0.0f;
+}
+
+}  // namespace dco::kernels::pixel

@@ -1,0 +1,34 @@
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "dco/gpu/backend.hpp"
+#include "densify_cases.hpp"
+
+namespace dco::gpu {
+namespace {
+
+class CudaDensify : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const CudaDevice device = probe_cuda();
+    if (!device.usable) GTEST_SKIP() << "no CUDA device to run on: " << device.why;
+    std::printf("device: %s\n", device.describe().c_str());
+  }
+};
+
+// The CUDA solver gives the CPU solver's bytes (tolerance: none) and prints both solve times.
+TEST_F(CudaDensify, HeadsetFramesAreTheCpuSolverBitForBit) {
+  testing::expect_same_dense_as_cpu(
+      testing::densify_frames("hand", 1280, 720),
+      [](const densify::DensifyParams& p) { return make_cuda_densify_solver(p); },
+      [](const std::string& variant, const densify::Densifier& cpu,
+         const densify::Densifier& cuda) {
+        std::printf("%s: CPU solve %.2f ms, CUDA solve %.2f ms (%d iterations)\n", variant.c_str(),
+                    cpu.last_timings().solve_ms, cuda.last_timings().solve_ms,
+                    cuda.last_report().iterations);
+      });
+}
+
+}  // namespace
+}  // namespace dco::gpu
