@@ -111,7 +111,7 @@ PlaneErrors plane_errors(ImageView<const float> prediction, ImageView<const floa
       }
     }
   }
-  return {percent(wrong, n),          percent(wrong_pred, n_pred),
+  return {percent(wrong, n),           percent(wrong_pred, n_pred),
           percent(wrong_band, n_band), percent(wrong_band_pred, n_band_pred),
           percent(band_front, n_band), percent(band_behind, n_band)};
 }
