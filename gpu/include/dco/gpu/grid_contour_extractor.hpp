@@ -7,6 +7,7 @@
 #include "dco/core/image.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/gpu/contour_passes.hpp"
+#include "dco/gpu/grid_transfers.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 #include "dco/pipeline/contour/flow_cue.hpp"
 #include "dco/pipeline/contour/gated_canny.hpp"
@@ -53,7 +54,7 @@ class GridContourExtractor final : public contour::ContourExtractor {
     for (auto* b : {&blur_tmp_, &blurred_, &magnitude_}) b->resize(full);
     direction_.resize(full);
     classes_.resize(full);
-    upload(in.image, staging_image_, image_);
+    upload_rows(grid_, in.image, staging_image_, image_);
     passes::GaussianVertical vertical{image_.data(), blur_tmp_.data(), iw, ih, {}};
     passes::GaussianHorizontal horizontal{blur_tmp_.data(), blurred_.data(), iw, {}};
     const auto& taps = contour::gaussian5_taps();
@@ -69,7 +70,7 @@ class GridContourExtractor final : public contour::ContourExtractor {
     const bool stereo = params_.use_stereo && !in.disparity.empty();
     if (flow) {
       flow_cue_.compute(in, out.m_fuse.view(), timings_, t);
-      upload(out.m_fuse.cview(), staging_fuse_, fuse_);
+      upload_rows(grid_, out.m_fuse.cview(), staging_fuse_, fuse_);
     } else if (!stereo) {
       grid_.launch(cw, ch, passes::FillFloat{fuse_.data(), cw, 0.0f});
     }
@@ -78,7 +79,7 @@ class GridContourExtractor final : public contour::ContourExtractor {
     timings_.gaussian_ms += t.lap_ms();
     if (stereo) {
       for (auto* b : {&disparity_, &jumps_, &tmp_, &cue_}) b->resize(internal);
-      upload(in.disparity, staging_disparity_, disparity_);
+      upload_rows(grid_, in.disparity, staging_disparity_, disparity_);
       const float inv_jump = 1.0f / static_cast<float>(params_.stereo_jump);
       grid_.launch(cw, ch,
                    passes::JumpStrength{disparity_.data(), jumps_.data(), cw, ch, inv_jump});
@@ -92,13 +93,13 @@ class GridContourExtractor final : public contour::ContourExtractor {
     grid_.launch(iw, ih,
                  passes::CannyClassify{magnitude_.data(), direction_.data(), fuse_.data(), iw, ih,
                                        cw, ch, levels_, classes_.data()});
-    download(fuse_.data(), internal, staging_fuse_);
-    download(magnitude_.data(), full, staging_magnitude_);
-    download(classes_.data(), full, staging_classes_);
+    download_values(grid_, fuse_.data(), internal, staging_fuse_);
+    download_values(grid_, magnitude_.data(), full, staging_magnitude_);
+    download_values(grid_, classes_.data(), full, staging_classes_);
     grid_.synchronize();
-    copy_rows(staging_fuse_, out.m_fuse);
-    copy_rows(staging_magnitude_, out.m_intensity);
-    copy_rows(staging_classes_, out.contours);
+    copy_rows(staging_fuse_, cw, ch, out.m_fuse);
+    copy_rows(staging_magnitude_, iw, ih, out.m_intensity);
+    copy_rows(staging_classes_, iw, ih, out.contours);
     contour::canny_hysteresis(out.contours.view(), canny_);
     timings_.canny_ms = t.lap_ms();
     timings_.total_ms = t.total_ms();
@@ -118,31 +119,6 @@ class GridContourExtractor final : public contour::ContourExtractor {
     const float inv = 1.0f / static_cast<float>(size);
     grid_.launch(w, h, passes::BoxVertical{in, tmp_.data(), w, h, size, inv});
     grid_.launch(w, h, passes::BoxHorizontal{tmp_.data(), out, w, size, inv});
-  }
-
-  // Rows of a view into a tight host buffer, then onto the device.
-  template <class T>
-  void upload(ImageView<const T> v, Staging<T>& staging, Buffer<T>& device) {
-    const std::size_t row = static_cast<std::size_t>(v.width) * v.channels;
-    staging.resize(row * v.height);
-    device.resize(row * v.height);
-    for (int y = 0; y < v.height; ++y)
-      std::memcpy(staging.data() + row * y, v.row(y), row * sizeof(T));
-    grid_.upload(device.data(), staging.data(), row * v.height * sizeof(T));
-  }
-
-  template <class T>
-  void download(const T* device, std::size_t n, Staging<T>& staging) {
-    staging.resize(n);
-    grid_.download(staging.data(), device, n * sizeof(T));
-  }
-
-  // After the downloads completed: tight host rows into an image of the same size.
-  template <class T>
-  static void copy_rows(const Staging<T>& staging, Image<T>& out) {
-    const std::size_t row = static_cast<std::size_t>(out.width());
-    for (int y = 0; y < out.height(); ++y)
-      std::memcpy(out.row(y), staging.data() + row * y, row * sizeof(T));
   }
 
   contour::ContourParams params_;

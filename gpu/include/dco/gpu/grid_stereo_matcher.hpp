@@ -8,6 +8,7 @@
 
 #include "dco/core/image.hpp"
 #include "dco/core/stopwatch.hpp"
+#include "dco/gpu/grid_transfers.hpp"
 #include "dco/gpu/stereo_passes.hpp"
 #include "dco/pipeline/stereo/disparity_selection.hpp"
 #include "dco/pipeline/stereo/matching_cost.hpp"
@@ -68,16 +69,6 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
   std::size_t pixels() const { return static_cast<std::size_t>(w_) * static_cast<std::size_t>(h_); }
   std::size_t volume_size() const { return pixels() * static_cast<std::size_t>(depth_); }
 
-  // Rows of a view into a tight host buffer, then onto the device.
-  void upload_image(ImageView<const std::uint8_t> v, Staging<std::uint8_t>& staging,
-                    Buffer<std::uint8_t>& device) {
-    const std::size_t row = static_cast<std::size_t>(v.width) * v.channels;
-    staging.resize(row * v.height);
-    device.resize(row * v.height);
-    for (int y = 0; y < v.height; ++y) std::memcpy(staging.data() + row * y, v.row(y), row);
-    grid_.upload(device.data(), staging.data(), row * v.height);
-  }
-
   void prepare(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right) {
     scale_ = stereo::internal_scale(params_, left.width);
     w_ = left.width / scale_;
@@ -87,8 +78,8 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
     const bool color = channels == 3 && params_.use_color;
     const std::size_t n = pixels();
 
-    upload_image(left, staging_left_, input_left_);
-    upload_image(right, staging_right_, input_right_);
+    upload_rows(grid_, left, staging_left_, input_left_);
+    upload_rows(grid_, right, staging_right_, input_right_);
     const std::uint8_t* l = input_left_.data();
     const std::uint8_t* r = input_right_.data();
     if (scale_ == 2) {
@@ -244,20 +235,6 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
     }
   }
 
-  template <class T>
-  void download(const T* device, std::size_t n, Staging<T>& staging) {
-    staging.resize(n);
-    grid_.download(staging.data(), device, n * sizeof(T));
-  }
-  // After the downloads completed: tight host rows into an image.
-  template <class T>
-  static void copy_rows(const Staging<T>& staging, int width, int height, Image<T>& out) {
-    out.resize(width, height);
-    for (int y = 0; y < height; ++y)
-      std::memcpy(out.row(y), staging.data() + static_cast<std::size_t>(y) * width,
-                  static_cast<std::size_t>(width) * sizeof(T));
-  }
-
   void write_output(int width, int height, Image<float>& disparity) {
     const std::size_t n = pixels();
     const std::size_t full = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
@@ -271,10 +248,10 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
                      static_cast<float>(params_.max_disparity) / static_cast<float>(scale_)});
     grid_.launch(width, height,
                  passes::ExpandToInput{sparse_.data(), full_.data(), w_, h_, width, scale_});
-    download(full_.data(), full, staging_full_);
-    download(raw_.data(), n, staging_raw_);
-    download(sparse_.data(), n, staging_sparse_);
-    download(grey_for_host_, n, staging_grey_);
+    download_values(grid_, full_.data(), full, staging_full_);
+    download_values(grid_, raw_.data(), n, staging_raw_);
+    download_values(grid_, sparse_.data(), n, staging_sparse_);
+    download_values(grid_, grey_for_host_, n, staging_grey_);
     grid_.synchronize();
     copy_rows(staging_full_, width, height, disparity);
     copy_rows(staging_raw_, w_, h_, raw_out_);

@@ -9,6 +9,7 @@
 
 #include "dco/core/image.hpp"
 #include "dco/gpu/densify_passes.hpp"
+#include "dco/gpu/grid_transfers.hpp"
 #include "dco/pipeline/densify/densifier.hpp"
 #include "dco/pipeline/densify/system_solver.hpp"
 
@@ -36,15 +37,13 @@ class GridSystemSolver final : public densify::SystemSolver {
                               ImageView<float> x) override {
     const int w = a.width(), h = a.height();
     fine_.resize(w, h);
-    upload(a.data.cview(), fine_.data);
-    upload(a.wx.cview(), fine_.wx);
-    upload(a.wy.cview(), fine_.wy);
-    upload(a.diag.cview(), fine_.diag);
-    upload(a.inv_diag.cview(), fine_.inv_diag);
-    fine_b_.resize(static_cast<std::size_t>(w) * h);
-    fine_x_.resize(static_cast<std::size_t>(w) * h);
-    upload(b, fine_b_);
-    upload(ImageView<const float>(x), fine_x_);
+    upload_rows(grid_, a.data.cview(), upload_staging_[0], fine_.data);
+    upload_rows(grid_, a.wx.cview(), upload_staging_[1], fine_.wx);
+    upload_rows(grid_, a.wy.cview(), upload_staging_[2], fine_.wy);
+    upload_rows(grid_, a.diag.cview(), upload_staging_[3], fine_.diag);
+    upload_rows(grid_, a.inv_diag.cview(), upload_staging_[4], fine_.inv_diag);
+    upload_rows(grid_, b, upload_staging_[5], fine_b_);
+    upload_rows(grid_, ImageView<const float>(x), upload_staging_[6], fine_x_);
 
     densify::SolverReport report;
     if (densify::solves_at_half(params_, w)) {
@@ -65,11 +64,13 @@ class GridSystemSolver final : public densify::SystemSolver {
       report = pcg(fine_, fine_b_.data(), fine_x_.data());
       report.output_residual = report.final_residual;
     }
-    staging_.resize(static_cast<std::size_t>(w) * h);
-    grid_.download(staging_.data(), fine_x_.data(), staging_.size() * sizeof(float));
+    // The warm start's staging buffer is free again once the solve has synchronized.
+    Staging<float>& solution = upload_staging_[6];
+    download_values(grid_, static_cast<const float*>(fine_x_.data()),
+                    static_cast<std::size_t>(w) * h, solution);
     grid_.synchronize();
     for (int y = 0; y < h; ++y)
-      std::memcpy(x.row(y), staging_.data() + static_cast<std::size_t>(y) * w, w * sizeof(float));
+      std::memcpy(x.row(y), solution.data() + static_cast<std::size_t>(y) * w, w * sizeof(float));
     return report;
   }
 
@@ -101,17 +102,6 @@ class GridSystemSolver final : public densify::SystemSolver {
       for (auto* v : {&r, &z, &p, &ap}) v->resize(n);
     }
   };
-
-  void upload(ImageView<const float> v, Buffer<float>& device) {
-    const std::size_t row = static_cast<std::size_t>(v.width);
-    upload_staging_.resize(row * v.height);
-    device.resize(row * v.height);
-    for (int y = 0; y < v.height; ++y)
-      std::memcpy(upload_staging_.data() + row * y, v.row(y), row * sizeof(float));
-    grid_.upload(device.data(), upload_staging_.data(), row * v.height * sizeof(float));
-    // The staging buffer is reused by the next upload: wait until this one has left it.
-    grid_.synchronize();
-  }
 
   // densify::dot: each row's dot_row, added up in row order.
   double dot(const float* a, const float* b, int w, int h) {
@@ -272,7 +262,7 @@ class GridSystemSolver final : public densify::SystemSolver {
   Buffer<float> fine_b_, fine_x_, coarse_b_, coarse_x_, fine_residual_;
   Buffer<double> row_dots_;
   Staging<double> dots_staging_;
-  Staging<float> upload_staging_, staging_;
+  Staging<float> upload_staging_[7];  // the system's five images, b and the warm start
   Scratch scratch_;
   std::vector<std::unique_ptr<Level>> levels_;
   std::size_t level_count_ = 0;
