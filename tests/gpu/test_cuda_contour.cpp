@@ -3,19 +3,13 @@
 #include <cstdio>
 
 #include "contour_cases.hpp"
+#include "cuda_device_test.hpp"
 #include "dco/gpu/backend.hpp"
 
 namespace dco::gpu {
 namespace {
 
-class CudaContour : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const CudaDevice device = probe_cuda();
-    if (!device.usable) GTEST_SKIP() << "no CUDA device to run on: " << device.why;
-    std::printf("device: %s\n", device.describe().c_str());
-  }
-};
+class CudaContour : public testing::CudaDeviceTest {};
 
 // The CUDA stage gives the CPU stage's bytes (tolerance: none) and prints both stage times.
 TEST_F(CudaContour, FramesAreTheCpuStageBitForBit) {

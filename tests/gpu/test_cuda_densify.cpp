@@ -2,20 +2,14 @@
 
 #include <cstdio>
 
+#include "cuda_device_test.hpp"
 #include "dco/gpu/backend.hpp"
 #include "densify_cases.hpp"
 
 namespace dco::gpu {
 namespace {
 
-class CudaDensify : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const CudaDevice device = probe_cuda();
-    if (!device.usable) GTEST_SKIP() << "no CUDA device to run on: " << device.why;
-    std::printf("device: %s\n", device.describe().c_str());
-  }
-};
+class CudaDensify : public testing::CudaDeviceTest {};
 
 // The CUDA solver gives the CPU solver's bytes (tolerance: none) and prints both solve times.
 TEST_F(CudaDensify, HeadsetFramesAreTheCpuSolverBitForBit) {

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <string>
 
+#include "cuda_device_test.hpp"
 #include "dco/gpu/backend.hpp"
 #include "stereo_cases.hpp"
 
@@ -21,14 +22,7 @@ void expect_cuda_equals_cpu(const testing::StereoCase& c) {
       });
 }
 
-class CudaStereo : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const CudaDevice device = probe_cuda();
-    if (!device.usable) GTEST_SKIP() << "no CUDA device to run on: " << device.why;
-    std::printf("device: %s\n", device.describe().c_str());
-  }
-};
+class CudaStereo : public testing::CudaDeviceTest {};
 
 TEST_F(CudaStereo, RealPairsAreTheCpuStageBitForBit) {
   expect_cuda_equals_cpu(testing::real_pair("Teddy", "middlebury2003/Teddy/im2.png",
