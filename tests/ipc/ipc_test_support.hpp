@@ -15,9 +15,8 @@ namespace dco::ipc::testing {
 
 using TempDir = dco::testing::TempDir;
 
-// Writes frame `seq` of the test pattern straight into the next slot.
-inline std::uint64_t publish_pattern(RingWriter& writer, std::uint64_t seq) {
-  RingWriter::Slot slot = writer.begin_write();
+// Fills a slot with frame `seq` of the test pattern.
+inline void fill_pattern(const RingWriter::Slot& slot, std::uint64_t seq) {
   for (int y = 0; y < slot.depth.height; ++y)
     for (int x = 0; x < slot.depth.width; ++x)
       slot.depth.at(x, y) =
@@ -27,6 +26,11 @@ inline std::uint64_t publish_pattern(RingWriter& writer, std::uint64_t seq) {
       for (int x = 0; x < slot.image.width; ++x)
         slot.image.at(x, y) =
             pattern_image(seq, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
+}
+
+// Writes frame `seq` of the test pattern straight into the next slot.
+inline std::uint64_t publish_pattern(RingWriter& writer, std::uint64_t seq) {
+  fill_pattern(writer.begin_write(), seq);
   FrameMeta meta;
   meta.frame_seq = seq;
   meta.capture_ns = static_cast<std::int64_t>(seq) * 1000;

@@ -89,16 +89,9 @@ void write_slowly(RingWriter& writer, std::uint64_t frames, std::chrono::microse
                   std::chrono::microseconds period) {
   for (std::uint64_t seq = 1; seq <= frames; ++seq) {
     const auto start = std::chrono::steady_clock::now();
-    RingWriter::Slot slot = writer.begin_write();
+    const RingWriter::Slot slot = writer.begin_write();
     std::this_thread::sleep_for(write_time);
-    for (int y = 0; y < slot.depth.height; ++y)
-      for (int x = 0; x < slot.depth.width; ++x)
-        slot.depth.at(x, y) =
-            pattern_depth(seq, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
-    for (int y = 0; y < slot.image.height; ++y)
-      for (int x = 0; x < slot.image.width; ++x)
-        slot.image.at(x, y) =
-            pattern_image(seq, static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y));
+    fill_pattern(slot, seq);
     FrameMeta meta;
     meta.frame_seq = seq;
     writer.publish(meta);
