@@ -13,6 +13,7 @@
 #include <string>
 #include <string_view>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -229,7 +230,7 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
   const auto cuda_contour = cuda.contour(params.contour);
   dco::densify::Densifier cpu_densifier(params.densify),
       cuda_densifier(params.densify, cuda.densify_solver);
-  pl::DepthResult dense_cpu, dense_cuda;
+  dco::Image<float> cuda_dense;
   // The CPU stage's slots of frames i - 2, i - 1 and i: the contours of i - 1 use all three.
   std::array<pl::StereoSlot, 3> slots;
   dco::Image<float> cuda_sparse;
@@ -259,17 +260,16 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
     c.differing_contour_pixels += differing(a.contours.cview(), b.contours.cview()) +
                                   differing(a.m_fuse.cview(), b.m_fuse.cview(), nullptr) +
                                   differing(a.m_intensity.cview(), b.m_intensity.cview(), nullptr);
-    // Both densifiers on the CPU's contour result, each with its own previous frame.
-    pl::contour_frame(*cpu_contour, centre, &slots[(i - 2) % 3], &slot, dense_cpu);
-    pl::contour_frame(*cpu_contour, centre, &slots[(i - 2) % 3], &slot, dense_cuda);
-    pl::densify_frame(cpu_densifier, dense_cpu);
-    pl::densify_frame(cuda_densifier, dense_cuda);
+    // Both densifiers on the CPU's contour result `a`, each with its own previous frame.
+    pl::densify_frame(cuda_densifier, a);
+    std::swap(a.dense, cuda_dense);
+    const double cuda_solve_ms = a.densify_timings.solve_ms;
+    pl::densify_frame(cpu_densifier, a);
     if (i > 2 || frames.pairs.size() == 3) {
-      c.cpu_solve_ms += dense_cpu.densify_timings.solve_ms;
-      c.cuda_solve_ms += dense_cuda.densify_timings.solve_ms;
+      c.cpu_solve_ms += a.densify_timings.solve_ms;
+      c.cuda_solve_ms += cuda_solve_ms;
     }
-    c.differing_dense_pixels +=
-        differing(dense_cpu.dense.cview(), dense_cuda.dense.cview(), nullptr);
+    c.differing_dense_pixels += differing(a.dense.cview(), cuda_dense.cview(), nullptr);
   }
   c.cpu_stereo_ms /= timed;
   c.cuda_stereo_ms /= timed;
