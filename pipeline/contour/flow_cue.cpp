@@ -85,20 +85,10 @@ struct FlowCue::State {
   Image<float> speed, amplitude_a, amplitude_b, contrast_a, contrast_b, fused, tmp;
 };
 
-FlowCue::FlowCue(const ContourParams& params)
-    : s_(new State{params,
-                   cv::DISOpticalFlow::create(dis_preset(params.dis_preset)),
-                   {},
-                   {},
-                   {},
-                   {},
-                   {},
-                   {},
-                   {},
-                   {},
-                   {},
-                   {},
-                   {}}) {}
+FlowCue::FlowCue(const ContourParams& params) : s_(std::make_unique<State>()) {
+  s_->params = params;
+  s_->dis = cv::DISOpticalFlow::create(dis_preset(params.dis_preset));
+}
 
 FlowCue::~FlowCue() = default;
 
