@@ -137,8 +137,19 @@ Rectifier::Rectifier(const StereoCalibration& calib) {
   }
 }
 
+RemapTable Rectifier::table(bool left) const {
+  if (!needs_remap_) return {};
+  const cv::Mat& xy = left ? map_left_xy_ : map_right_xy_;
+  const cv::Mat& frac = left ? map_left_frac_ : map_right_frac_;
+  return {ImageView<const std::int16_t>(xy.ptr<std::int16_t>(), xy.cols, xy.rows, 2,
+                                        static_cast<int>(xy.step1())),
+          ImageView<const std::uint16_t>(frac.ptr<std::uint16_t>(), frac.cols, frac.rows, 1,
+                                         static_cast<int>(frac.step1()))};
+}
+
 void Rectifier::rectify(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                        Image<std::uint8_t>& left_out, Image<std::uint8_t>& right_out) const {
+                        Image<std::uint8_t>& left_out, Image<std::uint8_t>& right_out,
+                        PairRemapper* remapper) const {
   check_input(left, "left", in_width_, in_height_);
   check_input(right, "right", in_width_, in_height_);
   if (!left.same_size(right))
@@ -153,6 +164,10 @@ void Rectifier::rectify(ImageView<const std::uint8_t> left, ImageView<const std:
   }
   left_out.resize(geometry_.width, geometry_.height, left.channels);
   right_out.resize(geometry_.width, geometry_.height, right.channels);
+  if (remapper != nullptr) {
+    remapper->remap(left, right, left_out.view(), right_out.view());
+    return;
+  }
   remap_into(left, left_out, map_left_xy_, map_left_frac_);
   remap_into(right, right_out, map_right_xy_, map_right_frac_);
 }

@@ -147,6 +147,8 @@ void Daemon::start_pipeline() {
     log_.warning(backend.message);
   else
     log_.info(backend.message);
+  // The source is stopped here (first start or a restart), so nothing is rectifying.
+  remapper_ = rectifier_ && backend.remapper ? backend.remapper(*rectifier_) : nullptr;
   runtime_ = std::make_unique<pipeline::runtime::DepthRuntime>(
       loaded_.config.pipeline, loaded_.config.runtime,
       [this](const pipeline::DepthResult& r, const pipeline::runtime::FrameTimes& t) {
@@ -178,7 +180,7 @@ void Daemon::on_frame(const drivers::StereoFrame& frame) {
   }
   const Clock::time_point capture{std::chrono::nanoseconds(frame.capture_ns)};
   if (rectifier_) {
-    rectifier_->rectify(frame.left, frame.right, rect_left_, rect_right_);
+    rectifier_->rectify(frame.left, frame.right, rect_left_, rect_right_, remapper_.get());
     runtime_->push(rect_left_.cview(), rect_right_.cview(), capture);
   } else {
     runtime_->push(frame.left, frame.right, capture);

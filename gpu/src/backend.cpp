@@ -63,6 +63,16 @@ std::unique_ptr<densify::SystemSolver> make_cuda_densify_solver(
 #endif
 }
 
+std::unique_ptr<PairRemapper> make_cuda_pair_remapper(const Rectifier& rectifier) {
+  if (!rectifier.needs_remap())
+    throw Error("cuda: the calibration is already rectified; there is nothing to remap");
+#ifdef DCO_HAVE_CUDA
+  return detail::cuda_pair_remapper(rectifier);
+#else
+  throw Error("cuda: " + probe_cuda().why);
+#endif
+}
+
 BackendChoice choose_backend(const std::string& requested, const stereo::StereoParams& params) {
   BackendChoice c;
   if (requested == "cpu") {
@@ -79,8 +89,8 @@ BackendChoice choose_backend(const std::string& requested, const stereo::StereoP
       make_cuda_stereo_matcher(params);  // initialises the context and the stream once
       c.backend = "cuda";
       c.message = "backend cuda on " + device.describe() +
-                  ": sparse stereo, the contour image passes and the densify solver on the "
-                  "GPU, optical flow and the densify system on the CPU";
+                  ": rectification, sparse stereo, the contour image passes and the densify "
+                  "solver on the GPU, optical flow and the densify system on the CPU";
       c.stages.stereo = [](const stereo::StereoParams& p) { return make_cuda_stereo_matcher(p); };
       c.stages.contour = [](const contour::ContourParams& p) {
         return make_cuda_contour_extractor(p);
@@ -88,6 +98,7 @@ BackendChoice choose_backend(const std::string& requested, const stereo::StereoP
       c.stages.densify_solver = [](const densify::DensifyParams& p) {
         return make_cuda_densify_solver(p);
       };
+      c.remapper = [](const Rectifier& r) { return make_cuda_pair_remapper(r); };
       return c;
     } catch (const std::exception& e) {
       why = e.what();

@@ -20,7 +20,8 @@ void register_params(ConfigSchema& s, RuntimeParams& p) {
   s.add("runtime.deterministic", &p.deterministic,
         "never drop frames (push waits): same output as the offline pipeline, for replays");
   s.add("runtime.backend", &p.backend, {"auto", "cpu", "cuda"},
-        "where the sparse stereo stage runs: auto = CUDA when a device works, else the CPU");
+        "where rectification, the sparse stereo stage, the contour stage's image passes and the "
+        "densify solver run: auto = CUDA when a device works, else the CPU");
 }
 
 std::vector<int> parse_affinity(const std::string& text) {

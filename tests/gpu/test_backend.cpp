@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include "../core/example_rigs.hpp"
 #include "dco/core/error.hpp"
 #include "dco/gpu/backend.hpp"
 
@@ -12,6 +13,7 @@ TEST(Backend, CpuIsTheCpuStage) {
   EXPECT_FALSE(c.stages.stereo);
   EXPECT_FALSE(c.stages.contour);
   EXPECT_FALSE(c.stages.densify_solver);
+  EXPECT_FALSE(c.remapper);
   EXPECT_FALSE(c.fell_back);
 }
 
@@ -23,12 +25,14 @@ TEST(Backend, AutoTakesCudaExactlyWhenADeviceWorks) {
     ASSERT_TRUE(c.stages.stereo);
     ASSERT_TRUE(c.stages.contour);
     ASSERT_TRUE(c.stages.densify_solver);
+    ASSERT_TRUE(c.remapper);
     EXPECT_NE(c.message.find(device.name), std::string::npos) << c.message;
   } else {
     EXPECT_EQ(c.backend, "cpu");
     EXPECT_FALSE(c.stages.stereo);
     EXPECT_FALSE(c.stages.contour);
     EXPECT_FALSE(c.stages.densify_solver);
+    EXPECT_FALSE(c.remapper);
     EXPECT_EQ(c.fell_back, built_with_cuda());
     // The log line says why.
     EXPECT_NE(c.message.find(device.why), std::string::npos) << c.message;
@@ -49,6 +53,19 @@ TEST(Backend, CudaWithoutADeviceIsOneClearError) {
   EXPECT_THROW(make_cuda_stereo_matcher({}), Error);
   EXPECT_THROW(make_cuda_contour_extractor({}), Error);
   EXPECT_THROW(make_cuda_densify_solver({}), Error);
+  EXPECT_THROW(make_cuda_pair_remapper(Rectifier(test::pinhole_rig())), Error);
+}
+
+TEST(Backend, APassThroughRectifierHasNothingToRemap) {
+  StereoCalibration calib = test::pinhole_rig();
+  calib.is_rectified = true;
+  calib.rectified = {640, 480, 500, 320, 320, 240, 0.1};
+  try {
+    make_cuda_pair_remapper(Rectifier(calib));
+    FAIL() << "a remapper for a pass-through";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("already rectified"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Backend, UnknownNamesAreRefused) {

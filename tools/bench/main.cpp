@@ -17,10 +17,14 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <opencv2/calib3d.hpp>
 
+#include "dco/core/calibration.hpp"
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
+#include "dco/core/rectifier.hpp"
+#include "dco/core/stopwatch.hpp"
 #include "dco/gpu/backend.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/depth_runtime.hpp"
@@ -198,7 +202,66 @@ struct BackendCheck {
   long differing_contour_pixels = 0;           // of the contour maps, M_fuse and M_I together
   double cpu_solve_ms = 0, cuda_solve_ms = 0;  // the densify solver on the CPU's contour results
   long differing_dense_pixels = 0;
+  double cpu_rectify_ms = 0, cuda_rectify_ms = 0;  // per pair, the frames taken as raw images
+  long differing_rectified_pixels = 0;             // bytes, all channels
 };
+
+long differing_bytes(dco::ImageView<const std::uint8_t> a, dco::ImageView<const std::uint8_t> b) {
+  long n = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width * a.channels; ++x) n += a.row(y)[x] != b.row(y)[x];
+  return n;
+}
+
+// A raw rig of the frames' size (lens distortion, cameras slightly rotated against each other),
+// so both backends have real maps to rectify the frames through.
+dco::StereoCalibration bench_rig(int width, int height) {
+  dco::StereoCalibration c;
+  const double f = 0.8 * width;
+  c.left = {dco::CameraModel::kPinhole,   width, height, f, f, width / 2.0, height / 2.0,
+            {-0.05, 0.01, 5e-4, -3e-4, 0}};
+  c.right = {dco::CameraModel::kPinhole,
+             width,
+             height,
+             f * 1.01,
+             f * 1.01,
+             width / 2.0 + 2,
+             height / 2.0 - 2,
+             {-0.04, 0.008, -2e-4, 4e-4, 0}};
+  cv::Mat rotation;
+  cv::Rodrigues(cv::Vec3d(0.01, -0.02, 0.005), rotation);  // about 1.3 degrees
+  for (int i = 0; i < 9; ++i) c.rotation[i] = rotation.at<double>(i / 3, i % 3);
+  c.translation = {-0.1, 0.002, 0.001};
+  c.source = "bench rig";
+  return c;
+}
+
+// The CPU rectifier (cv::remap) against the GPU remapper on every frame pair.
+void compare_rectification(const Frames& frames, const dco::gpu::BackendChoice& backend,
+                           BackendCheck& c) {
+  const auto& first = frames.pairs.front();
+  const dco::Rectifier rectifier(bench_rig(first.left.width(), first.left.height()));
+  const auto remapper = backend.remapper(rectifier);
+  dco::Image<std::uint8_t> cpu_l, cpu_r, cuda_l, cuda_r;
+  int timed = 0;
+  for (std::size_t i = 0; i < frames.pairs.size(); ++i) {
+    const auto& f = frames.pairs[i];
+    dco::Stopwatch t;
+    rectifier.rectify(f.left.cview(), f.right.cview(), cpu_l, cpu_r);
+    const double cpu_ms = t.lap_ms();
+    rectifier.rectify(f.left.cview(), f.right.cview(), cuda_l, cuda_r, remapper.get());
+    const double cuda_ms = t.lap_ms();
+    if (i > 0 || frames.pairs.size() == 1) {
+      c.cpu_rectify_ms += cpu_ms;
+      c.cuda_rectify_ms += cuda_ms;
+      ++timed;
+    }
+    c.differing_rectified_pixels += differing_bytes(cpu_l.cview(), cuda_l.cview()) +
+                                    differing_bytes(cpu_r.cview(), cuda_r.cview());
+  }
+  c.cpu_rectify_ms /= timed;
+  c.cuda_rectify_ms /= timed;
+}
 
 long differing(dco::ImageView<const float> a, dco::ImageView<const float> b, double* max_abs) {
   long n = 0;
@@ -351,7 +414,10 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
     peer_ms +=
         dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity).time_ms;
   r.peer_ms_per_frame = peer_ms / r.frames;
-  if (backend.stages.stereo) r.check = compare_with_cpu(p.pipeline, frames, backend.stages);
+  if (backend.stages.stereo) {
+    r.check = compare_with_cpu(p.pipeline, frames, backend.stages);
+    compare_rectification(frames, backend, *r.check);
+  }
   return r;
 }
 
@@ -395,6 +461,12 @@ void print_text(const Result& r) {
         "on the CPU in both); {} output pixels differ\n",
         r.check->cpu_solve_ms, r.check->cuda_solve_ms,
         r.check->cpu_solve_ms / r.check->cuda_solve_ms, r.check->differing_dense_pixels);
+  if (r.check)
+    fmt::print(
+        "  rectify  CPU {:.2f} ms, CUDA {:.2f} ms per pair with transfers (ratio {:.1f}, the "
+        "frames through a distorted rig); {} output bytes differ\n",
+        r.check->cpu_rectify_ms, r.check->cuda_rectify_ms,
+        r.check->cpu_rectify_ms / r.check->cuda_rectify_ms, r.check->differing_rectified_pixels);
 }
 
 // The fields of one sequence, without braces.
@@ -420,12 +492,16 @@ std::string json_fields(const Result& r) {
                         "\"cuda_differing_pixels\": {}, \"cuda_max_abs_diff\": {}, "
                         "\"cpu_contour_ms\": {}, \"cuda_contour_ms\": {}, "
                         "\"cuda_contour_differing_pixels\": {}, \"cpu_solve_ms\": {}, "
-                        "\"cuda_solve_ms\": {}, \"cuda_dense_differing_pixels\": {}",
+                        "\"cuda_solve_ms\": {}, \"cuda_dense_differing_pixels\": {}, "
+                        "\"cpu_rectify_ms\": {}, \"cuda_rectify_ms\": {}, "
+                        "\"cuda_rectify_differing_bytes\": {}",
                         json_number(r.check->cpu_stereo_ms), json_number(r.check->cuda_stereo_ms),
                         r.check->differing_pixels, json_number(r.check->max_abs_diff),
                         json_number(r.check->cpu_contour_ms), json_number(r.check->cuda_contour_ms),
                         r.check->differing_contour_pixels, json_number(r.check->cpu_solve_ms),
-                        json_number(r.check->cuda_solve_ms), r.check->differing_dense_pixels)
+                        json_number(r.check->cuda_solve_ms), r.check->differing_dense_pixels,
+                        json_number(r.check->cpu_rectify_ms), json_number(r.check->cuda_rectify_ms),
+                        r.check->differing_rectified_pixels)
                   : std::string());
 }
 

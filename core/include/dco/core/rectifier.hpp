@@ -7,6 +7,24 @@
 
 namespace dco {
 
+// One camera's fixed-point rectification map, as cv::convertMaps makes it (CV_16SC2 + CV_16UC1):
+// output pixel (x, y) interpolates the raw image bilinearly around the integer source position
+// xy(x, y) = (sx, sy) with the 1/32-pixel fraction frac(x, y) = fy * 32 + fx.
+struct RemapTable {
+  ImageView<const std::int16_t> xy;  // two channels: sx, sy
+  ImageView<const std::uint16_t> frac;
+};
+
+// Applies a rig's two remap tables to a raw pair, somewhere other than cv::remap (the CUDA
+// backend's is dco::gpu::make_cuda_pair_remapper). It must give cv::remap's bytes (INTER_LINEAR,
+// constant 0 border). Outputs come sized to the rectified geometry with the inputs' channels.
+class PairRemapper {
+ public:
+  virtual ~PairRemapper() = default;
+  virtual void remap(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                     ImageView<std::uint8_t> left_out, ImageView<std::uint8_t> right_out) = 0;
+};
+
 // Undistortion + rectification maps for a stereo rig, built once from the calibration and applied
 // per frame with cv::remap into caller-owned buffers (no allocation per frame).
 // For a calibration that is already rectified the rectifier is a pass-through: `needs_remap()`
@@ -24,9 +42,17 @@ class Rectifier {
 
   // left/right: raw images of the calibrated size (1 or 3 channels, 8-bit). Outputs are resized
   // to the rectified size only if they have a different geometry (a one-time allocation).
-  // Throws dco::Error when an input has the wrong size.
+  // Throws dco::Error when an input has the wrong size. With a remapper the maps are applied by
+  // it instead of cv::remap (same bytes).
   void rectify(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-               Image<std::uint8_t>& left_out, Image<std::uint8_t>& right_out) const;
+               Image<std::uint8_t>& left_out, Image<std::uint8_t>& right_out,
+               PairRemapper* remapper = nullptr) const;
+
+  // The raw image size the maps read (0 x 0 for a pass-through of unknown size).
+  int input_width() const { return in_width_; }
+  int input_height() const { return in_height_; }
+  // The maps of the left (true) or right camera; empty views for a pass-through.
+  RemapTable table(bool left) const;
 
  private:
   bool needs_remap_ = false;

@@ -76,7 +76,8 @@ class Daemon final : public drivers::FrameSink {
   ServiceNotifier notifier_;
 
   std::unique_ptr<drivers::FrameSource> source_;
-  std::optional<Rectifier> rectifier_;  // only when frames need remapping
+  std::optional<Rectifier> rectifier_;      // only when frames need remapping
+  std::unique_ptr<PairRemapper> remapper_;  // the GPU's, with the CUDA backend
   RectifiedGeometry geometry_;
   Image<std::uint8_t> rect_left_, rect_right_;
   std::unique_ptr<ipc::RingWriter> ring_;

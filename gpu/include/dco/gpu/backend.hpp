@@ -1,15 +1,18 @@
 #pragma once
 
+#include <functional>
+#include <memory>
 #include <string>
 
+#include "dco/core/rectifier.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 
-// Where the stages run. The CUDA path (built when nvcc was found) computes the sparse stereo
-// stage, the image side of the contour stage and the densify solver on the GPU with the same
-// per-pixel math as the CPU path; DIS optical flow and building the densify system stay on the
-// CPU.
+// Where the stages run. The CUDA path (built when nvcc was found) computes the rectification,
+// the sparse stereo stage, the image side of the contour stage and the densify solver on the GPU
+// with the same per-pixel math as the CPU path; DIS optical flow and building the densify system
+// stay on the CPU.
 namespace dco::gpu {
 
 // What the CUDA runtime reports about device 0.
@@ -38,6 +41,10 @@ std::unique_ptr<contour::ContourExtractor> make_cuda_contour_extractor(
 std::unique_ptr<densify::SystemSolver> make_cuda_densify_solver(
     const densify::DensifyParams& params);
 
+// Rectification of raw pairs on the GPU (GridPairRemapper): the rectifier's maps, cv::remap's
+// bytes. Throws like make_cuda_stereo_matcher, and when the rectifier is a pass-through.
+std::unique_ptr<PairRemapper> make_cuda_pair_remapper(const Rectifier& rectifier);
+
 // runtime.backend resolved on this machine: "auto" takes CUDA when a device works (a stage is
 // made once to prove it) and else the CPU, saying why; "cuda" insists (dco::Error when CUDA is
 // unusable); "cpu" is the CPU. Throws dco::Error on any other name.
@@ -46,6 +53,8 @@ struct BackendChoice {
   std::string message;              // one line for the log: what was chosen and why
   bool fell_back = false;           // "auto" wanted CUDA but could not have it
   pipeline::StageFactories stages;  // empty for the CPU
+  // Where raw frames need rectifying: how to get the GPU's remapper (empty for the CPU).
+  std::function<std::unique_ptr<PairRemapper>(const Rectifier&)> remapper;
 };
 BackendChoice choose_backend(const std::string& requested, const stereo::StereoParams& params);
 
