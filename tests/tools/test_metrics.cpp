@@ -104,6 +104,39 @@ TEST(Metrics, StepEdgeOcclusionErrors) {
   // Column 3 takes the foreground's disparity: the foreground is fattened, nothing thinned.
   EXPECT_DOUBLE_EQ(m.band_front, 100.0 * 10 / 70);
   EXPECT_DOUBLE_EQ(m.band_behind, 0.0);
+  // The step is a depth edge and the whole band lies within 3 px of it.
+  EXPECT_DOUBLE_EQ(m.band_edge, m.band_err);
+  EXPECT_DOUBLE_EQ(m.band_surface, 0.0);
+}
+
+// A ramp (0.2 px of disparity per column: no depth edge) with a foreground block beside it. The
+// prediction is the ramp 1 px too near, so every plane crosses it 5 columns early, and the block
+// fattened by one column onto the ramp.
+TEST(Metrics, BandErrorSplitsIntoDepthEdgesAndSurfaceCrossings) {
+  constexpr int w = 60, h = 8, block = 50;
+  GroundTruth gt;
+  gt.disparity.resize(w, h);
+  Image<float> pred(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      gt.disparity.at(x, y) = x < block ? 10.0f + 0.2f * static_cast<float>(x) : 40.0f;
+      pred.at(x, y) = x < block - 1 ? gt.disparity.at(x, y) + 1.0f : 40.0f;
+    }
+  const SceneMetrics m = evaluate_disparity("ramp", pred.view(), gt);
+  EXPECT_GT(m.band_edge, 0.0);
+  EXPECT_GT(m.band_surface, 0.0);
+  EXPECT_NEAR(m.band_edge + m.band_surface, m.band_err, 1e-9);
+
+  // Without the block there is no depth edge: all of the band error is surface crossings.
+  for (int y = 0; y < h; ++y)
+    for (int x = block - 1; x < w; ++x) {
+      gt.disparity.at(x, y) = 10.0f + 0.2f * static_cast<float>(x);
+      pred.at(x, y) = gt.disparity.at(x, y) + 1.0f;
+    }
+  const SceneMetrics ramp = evaluate_disparity("ramp only", pred.view(), gt);
+  EXPECT_GT(ramp.band_err, 0.0);
+  EXPECT_DOUBLE_EQ(ramp.band_edge, 0.0);
+  EXPECT_DOUBLE_EQ(ramp.band_surface, ramp.band_err);
 }
 
 TEST(Metrics, BandIsASevenBySevenDilationOfTheBoundary) {

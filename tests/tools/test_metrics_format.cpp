@@ -27,7 +27,7 @@ std::vector<SceneMetrics> two_scenes() {
   a.nocc_pred = a.nocc;
   a.planes = {20, 25, 30, 35, 40};
   a.occ_err = 4, a.occ_err_pred = 4, a.band_err = 12, a.band_err_pred = 12;
-  a.band_front = 9, a.band_behind = 3;
+  a.band_front = 9, a.band_behind = 3, a.band_edge = 7, a.band_surface = 5;
   a.time_ms = 30;
   b.scene = "odd \"name\"";
   b.width = 4, b.height = 3;
@@ -50,6 +50,8 @@ TEST(MetricsFormat, TableHasFixedWidthRowsAndAMeanRow) {
   EXPECT_THAT(rows[0], HasSubstr("bandErr"));
   EXPECT_THAT(rows[0], HasSubstr("bandFr"));
   EXPECT_THAT(rows[0], HasSubstr("bandBh"));
+  EXPECT_THAT(rows[0], HasSubstr("bandEdge"));
+  EXPECT_THAT(rows[0], HasSubstr("bandSurf"));
   EXPECT_EQ(rows[1].rfind("middlebury2014/Motorcycle", 0), 0u);
   EXPECT_EQ(rows[3].rfind("mean ", 0), 0u);
   for (int i = 1; i <= 3; ++i) EXPECT_EQ(rows[i].size(), rows[0].size()) << rows[i];
@@ -71,7 +73,8 @@ TEST(MetricsFormat, JsonHoldsEveryScenePlusTheMean) {
   EXPECT_THAT(json, HasSubstr(R"("nocc": null, "nocc_pred": null)"));
   EXPECT_THAT(json, HasSubstr(R"("planes": [20, 25, 30, 35, 40])"));
   EXPECT_THAT(json, HasSubstr(R"("time_ms": null)"));
-  EXPECT_THAT(json, HasSubstr(R"("band_err_pred": 12, "band_front": 9, "band_behind": 3})"));
+  EXPECT_THAT(json, HasSubstr(R"("band_err_pred": 12, "band_front": 9, "band_behind": 3, )"
+                              R"("band_edge": 7, "band_surface": 5})"));
   EXPECT_THAT(json, HasSubstr(R"("mean": {"scene": "mean")"));
   EXPECT_THAT(json, HasSubstr(R"("density": 50)"));
   EXPECT_THAT(json, Not(HasSubstr("nan")));

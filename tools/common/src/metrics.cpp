@@ -82,21 +82,45 @@ cv::Mat occlusion_band(const cv::Mat& sides) {
   return band;
 }
 
+// GT pixels within Chebyshev distance kOcclusionBandRadius of a GT depth edge: a pair of
+// 4-neighbours with GT whose disparities differ by more than kDepthEdgeJump.
+cv::Mat depth_edge_zone(ImageView<const float> gt) {
+  cv::Mat edge = cv::Mat::zeros(gt.height, gt.width, CV_8U);
+  const auto jump = [](float a, float b) {
+    return is_valid_disparity(a) && is_valid_disparity(b) && std::abs(a - b) > kDepthEdgeJump;
+  };
+  for (int y = 0; y < gt.height; ++y) {
+    const float* g = gt.row(y);
+    const float* below = y + 1 < gt.height ? gt.row(y + 1) : nullptr;
+    auto* e = edge.ptr<std::uint8_t>(y);
+    auto* e_below = below ? edge.ptr<std::uint8_t>(y + 1) : nullptr;
+    for (int x = 0; x < gt.width; ++x) {
+      if (x + 1 < gt.width && jump(g[x], g[x + 1])) e[x] = e[x + 1] = 1;
+      if (below && jump(g[x], below[x])) e[x] = e_below[x] = 1;
+    }
+  }
+  const int size = 2 * kOcclusionBandRadius + 1;
+  cv::Mat zone;
+  cv::dilate(edge, zone, cv::getStructuringElement(cv::MORPH_RECT, {size, size}));
+  return zone;
+}
+
 struct PlaneErrors {
-  double occ, occ_pred, band, band_pred, band_front, band_behind;
+  double occ, occ_pred, band, band_pred, band_front, band_behind, band_edge, band_surface;
 };
 
 PlaneErrors plane_errors(ImageView<const float> prediction, ImageView<const float> gt,
-                         double plane) {
+                         const cv::Mat& edge_zone, double plane) {
   const cv::Mat sides = detail::plane_sides(gt, plane);
   const cv::Mat band = occlusion_band(sides);
   std::int64_t n = 0, wrong = 0, n_pred = 0, wrong_pred = 0;
   std::int64_t n_band = 0, wrong_band = 0, n_band_pred = 0, wrong_band_pred = 0;
-  std::int64_t band_front = 0, band_behind = 0;
+  std::int64_t band_front = 0, band_behind = 0, band_edge = 0;
   for (int y = 0; y < gt.height; ++y) {
     const float* p = prediction.row(y);
     const auto* s = sides.ptr<std::uint8_t>(y);
     const auto* in_band = band.ptr<std::uint8_t>(y);
+    const auto* near_edge = edge_zone.ptr<std::uint8_t>(y);
     for (int x = 0; x < gt.width; ++x) {
       if (s[x] == kNoGt) continue;
       const bool predicted = is_valid_disparity(p[x]);
@@ -108,27 +132,33 @@ PlaneErrors plane_errors(ImageView<const float> prediction, ImageView<const floa
         n_band_pred += predicted, wrong_band_pred += predicted && is_wrong;
         band_front += predicted && is_wrong && s[x] != kFront;
         band_behind += predicted && is_wrong && s[x] == kFront;
+        band_edge += is_wrong && near_edge[x];
       }
     }
   }
   return {percent(wrong, n),           percent(wrong_pred, n_pred),
           percent(wrong_band, n_band), percent(wrong_band_pred, n_band_pred),
-          percent(band_front, n_band), percent(band_behind, n_band)};
+          percent(band_front, n_band), percent(band_behind, n_band),
+          percent(band_edge, n_band),  percent(wrong_band - band_edge, n_band)};
 }
 
 void add_occlusion_metrics(ImageView<const float> prediction, ImageView<const float> gt,
                            SceneMetrics& m) {
   m.planes = occlusion_planes(gt);
   constexpr std::size_t kPlanes = kOcclusionPlaneQuantiles.size();
-  std::array<double, kPlanes> occ{}, occ_pred{}, band{}, band_pred{}, front{}, behind{};
+  std::array<double, kPlanes> occ{}, occ_pred{}, band{}, band_pred{}, front{}, behind{}, edge{},
+      surface{};
+  const cv::Mat edge_zone = depth_edge_zone(gt);
   for (std::size_t i = 0; i < kPlanes; ++i) {
     if (std::isnan(m.planes[i])) {
-      occ[i] = occ_pred[i] = band[i] = band_pred[i] = front[i] = behind[i] = kUndefined;
+      occ[i] = occ_pred[i] = band[i] = band_pred[i] = front[i] = behind[i] = edge[i] = surface[i] =
+          kUndefined;
       continue;
     }
-    const PlaneErrors e = plane_errors(prediction, gt, m.planes[i]);
+    const PlaneErrors e = plane_errors(prediction, gt, edge_zone, m.planes[i]);
     occ[i] = e.occ, occ_pred[i] = e.occ_pred, band[i] = e.band, band_pred[i] = e.band_pred;
     front[i] = e.band_front, behind[i] = e.band_behind;
+    edge[i] = e.band_edge, surface[i] = e.band_surface;
   }
   m.occ_err = mean_of_defined(occ);
   m.occ_err_pred = mean_of_defined(occ_pred);
@@ -136,6 +166,8 @@ void add_occlusion_metrics(ImageView<const float> prediction, ImageView<const fl
   m.band_err_pred = mean_of_defined(band_pred);
   m.band_front = mean_of_defined(front);
   m.band_behind = mean_of_defined(behind);
+  m.band_edge = mean_of_defined(edge);
+  m.band_surface = mean_of_defined(surface);
 }
 
 // Scenes without the numbers (e.g. no nocc mask) hold NaN and drop out of the mean by themselves.
@@ -261,6 +293,8 @@ SceneMetrics mean_metrics(std::span<const SceneMetrics> scenes) {
   mean.band_err_pred = mean_field(scenes, &SceneMetrics::band_err_pred);
   mean.band_front = mean_field(scenes, &SceneMetrics::band_front);
   mean.band_behind = mean_field(scenes, &SceneMetrics::band_behind);
+  mean.band_edge = mean_field(scenes, &SceneMetrics::band_edge);
+  mean.band_surface = mean_field(scenes, &SceneMetrics::band_surface);
   // A time mean over some of the scenes would compare unequal workloads: all or nothing.
   const bool all_timed = std::none_of(scenes.begin(), scenes.end(),
                                       [](const SceneMetrics& s) { return std::isnan(s.time_ms); });

@@ -37,6 +37,8 @@ constexpr Column kColumns[] = {
     {"bandErrP", 2, [](const SceneMetrics& m) { return m.band_err_pred; }},
     {"bandFr",   2, [](const SceneMetrics& m) { return m.band_front; }},
     {"bandBh",   2, [](const SceneMetrics& m) { return m.band_behind; }},
+    {"bandEdge", 2, [](const SceneMetrics& m) { return m.band_edge; }},
+    {"bandSurf", 2, [](const SceneMetrics& m) { return m.band_surface; }},
     {"ms",       1, [](const SceneMetrics& m) { return m.time_ms; }},
 };
 // clang-format on
@@ -67,13 +69,14 @@ std::string scene_json(const SceneMetrics& m) {
       R"({{"scene": {}, "width": {}, "height": {}, "gt_pixels": {}, "predicted_pixels": {}, )"
       R"("density": {}, "all": {}, "pred": {}, "nocc": {}, "nocc_pred": {}, )"
       R"("occlusion": {{"planes": [{}], "occ_err": {}, "occ_err_pred": {}, "band_err": {}, )"
-      R"("band_err_pred": {}, "band_front": {}, "band_behind": {}}}, "time_ms": {}}})",
+      R"("band_err_pred": {}, "band_front": {}, "band_behind": {}, "band_edge": {}, )"
+      R"("band_surface": {}}}, "time_ms": {}}})",
       json_string(m.scene), m.width, m.height, m.gt_pixels, m.predicted_pixels,
       json_number(m.density), stats_json(m.all), stats_json(m.pred),
       m.has_nocc ? stats_json(m.nocc) : "null", m.has_nocc ? stats_json(m.nocc_pred) : "null",
       planes, json_number(m.occ_err), json_number(m.occ_err_pred), json_number(m.band_err),
       json_number(m.band_err_pred), json_number(m.band_front), json_number(m.band_behind),
-      json_number(m.time_ms));
+      json_number(m.band_edge), json_number(m.band_surface), json_number(m.time_ms));
 }
 
 std::string signed_cell(double value, int precision, int width) {
@@ -97,7 +100,9 @@ std::string format_metrics_table(std::span<const SceneMetrics> scenes) {
   out +=
       "(% of GT pixels; p = predicted pixels only, nocc = mask 255, avgerr in px; occ/band = wrong "
       "side of virtual planes at 20..80 % GT quantiles, band = within 3 px of the GT occlusion "
-      "boundary, bandFr/bandBh = of it, predicted in front/behind; - = not defined)\n";
+      "boundary, bandFr/bandBh = of it, predicted in front/behind, bandEdge/bandSurf = of it, "
+      "within 3 px of a GT depth edge / where a plane crosses a smooth surface; - = not "
+      "defined)\n";
   return out;
 }
 

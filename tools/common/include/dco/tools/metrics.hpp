@@ -34,6 +34,10 @@
 //                around real objects) and behind where the truth is in front (virtual content
 //                showing through the rims of real objects); the rest of bandErr is missing
 //                predictions;
+//       bandEdge / bandSurface  bandErr split by where the band pixel is: within 3 px of a GT
+//                depth edge (4-neighbours whose GT disparities differ by more than 1.5 px, an
+//                object outline) or not (the plane crosses a smooth, slanted surface, where a
+//                sub-pixel disparity error moves the crossing by pixels); they add up to bandErr;
 //       the "pred" variants count predicted pixels only. Each is the mean over the planes where
 //       it is defined (a plane with nothing in front of it has no boundary and no band).
 //   - Rates are percentages. A number over zero pixels is NaN ("not defined"); means over scenes
@@ -43,6 +47,7 @@ namespace dco::tools {
 inline constexpr double kUndefined = std::numeric_limits<double>::quiet_NaN();
 inline constexpr std::array<double, 5> kOcclusionPlaneQuantiles = {0.20, 0.35, 0.50, 0.65, 0.80};
 inline constexpr int kOcclusionBandRadius = 3;
+inline constexpr float kDepthEdgeJump = 1.5f;  // px of GT disparity between 4-neighbours
 
 struct ErrorStats {
   std::int64_t pixels = 0;   // pixels these numbers are over
@@ -70,8 +75,10 @@ struct SceneMetrics {
   double occ_err_pred = kUndefined;
   double band_err = kUndefined;
   double band_err_pred = kUndefined;
-  double band_front = kUndefined;   // of bandErr: predicted in front, truly behind
-  double band_behind = kUndefined;  // of bandErr: predicted behind, truly in front
+  double band_front = kUndefined;    // of bandErr: predicted in front, truly behind
+  double band_behind = kUndefined;   // of bandErr: predicted behind, truly in front
+  double band_edge = kUndefined;     // of bandErr: near a GT depth edge
+  double band_surface = kUndefined;  // of bandErr: elsewhere (planes crossing smooth surfaces)
 
   double time_ms = kUndefined;  // filled by whoever timed the method; NaN when unknown
 };
