@@ -90,7 +90,7 @@ void discontinuity_check(ImageView<std::int16_t> disparity, int max_jump,
   for (int y = 0; y < h; ++y) {
     std::int16_t* out = disparity.row(y);
     for (int x = 0; x < w; ++x)
-      if (out[x] != kInvalidDisparity && kernels::pixel::beside_jump(at, x, y, w, h, max_jump))
+      if (out[x] != kInvalidDisparity && kernels::pixel::behind_jump(at, x, y, w, h, max_jump))
         out[x] = kInvalidDisparity;
   }
 }

@@ -46,7 +46,7 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "a pixel within this of the winning disparity keeps its own value");
   s.add("stereo.vote_fill", &p.vote_fill, "votes also fill pixels that failed the checks");
   s.add("stereo.max_neighbour_jump", &p.max_neighbour_jump, -1, 64,
-        "drop pixels beside a larger disparity jump (internal px, -1 = off)");
+        "drop pixels behind a nearer neighbour by more than this (internal px, -1 = off)");
   s.add("stereo.speckle_size", &p.speckle_size, 0, 100000,
         "drop islands of fewer internal pixels than this after the checks (0 = off)");
   s.add("stereo.speckle_range", &p.speckle_range, 0, 64,

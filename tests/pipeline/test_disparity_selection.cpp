@@ -257,15 +257,16 @@ Image<std::int16_t> grid16(const std::vector<std::vector<int>>& rows) {
   return img;
 }
 
-TEST(DiscontinuityCheck, DropsBothSidesOfAStepAndKeepsFlatAreas) {
+TEST(DiscontinuityCheck, DropsTheFarSideOfAStepAndKeepsFlatAreas) {
   Image<std::int16_t> scratch;
   auto disp =
       grid16({{5, 5, 5, 5, 9, 9, 9, 9}, {5, 5, 5, 5, 9, 9, 9, 9}, {5, 5, 5, 5, 9, 9, 9, 9}});
   const auto original = disp;
   discontinuity_check(disp.view(), 1, scratch);
+  // Column 3 (disparity 5) is behind its neighbours in column 4 (9): it goes; column 4 stays.
   for (int y = 0; y < 3; ++y)
     for (int x = 0; x < 8; ++x)
-      ASSERT_EQ(disp.at(x, y), (x == 3 || x == 4) ? kInv : original.at(x, y)) << x << "," << y;
+      ASSERT_EQ(disp.at(x, y), x == 3 ? kInv : original.at(x, y)) << x << "," << y;
   // A jump equal to max_jump is allowed.
   disp = original;
   discontinuity_check(disp.view(), 4, scratch);
@@ -273,15 +274,26 @@ TEST(DiscontinuityCheck, DropsBothSidesOfAStepAndKeepsFlatAreas) {
   disp = original;
   discontinuity_check(disp.view(), 3, scratch);
   EXPECT_EQ(disp.at(3, 1), kInv);
-  EXPECT_EQ(disp.at(4, 1), kInv);
+  EXPECT_EQ(disp.at(4, 1), 9);
   EXPECT_EQ(disp.at(2, 1), 5);
+}
+
+// A near object one pixel wide (a finger at half resolution) keeps its pixels; the far pixels on
+// both sides of it go.
+TEST(DiscontinuityCheck, KeepsAThinNearObject) {
+  Image<std::int16_t> scratch;
+  auto disp = row16({5, 5, 5, 20, 5, 5, 5});
+  discontinuity_check(disp.view(), 1, scratch);
+  EXPECT_EQ(values(disp), (std::vector<int>{5, 5, kInv, 20, kInv, 5, 5}));
 }
 
 TEST(DiscontinuityCheck, DecidesOnTheInputNotOnPixelsAlreadyDropped) {
   Image<std::int16_t> scratch;
-  auto disp = row16({5, 5, 5, 9, 9, 9});
+  // Column 1 is behind column 2, column 2 behind column 3: both go, although column 2 is gone by
+  // the time column 1 would look at the map being written.
+  auto disp = row16({5, 5, 9, 13, 13});
   discontinuity_check(disp.view(), 1, scratch);
-  EXPECT_EQ(values(disp), (std::vector<int>{5, 5, kInv, kInv, 9, 9}));
+  EXPECT_EQ(values(disp), (std::vector<int>{5, kInv, kInv, 13, 13}));
 }
 
 TEST(DiscontinuityCheck, IgnoresInvalidNeighboursAndUsesDiagonals) {
@@ -292,7 +304,7 @@ TEST(DiscontinuityCheck, IgnoresInvalidNeighboursAndUsesDiagonals) {
 
   auto corner = grid16({{5, 5, 5}, {5, 5, 5}, {5, 5, 9}});
   discontinuity_check(corner.view(), 2, scratch);
-  EXPECT_EQ(values(corner), (std::vector<int>{5, 5, 5, 5, kInv, kInv, 5, kInv, kInv}));
+  EXPECT_EQ(values(corner), (std::vector<int>{5, 5, 5, 5, kInv, kInv, 5, kInv, 9}));
 }
 
 TEST(DiscontinuityCheck, SmoothSlopeSurvivesUnlessMaxJumpIsZero) {
@@ -303,9 +315,11 @@ TEST(DiscontinuityCheck, SmoothSlopeSurvivesUnlessMaxJumpIsZero) {
   auto kept = ramp;
   discontinuity_check(kept.view(), 1, scratch);
   EXPECT_EQ(values(kept), values(ramp));
+  // With max_jump 0 every pixel is behind its right-hand neighbour, except the nearest column.
   auto dropped = ramp;
   discontinuity_check(dropped.view(), 0, scratch);
-  for (int v : values(dropped)) EXPECT_EQ(v, kInv);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 10; ++x) EXPECT_EQ(dropped.at(x, y), x == 9 ? 19 : kInv) << x << "," << y;
 }
 
 TEST(SubpixelOffset, ExactOnASampledParabola) {

@@ -348,7 +348,7 @@ struct JumpCheck {
     const int w = width;
     const auto value = [map, w](int xx, int yy) { return int{map[at(xx, yy, w)]}; };
     const std::int16_t d = map[at(x, y, w)];
-    out[at(x, y, w)] = d != px::kInvalid && px::beside_jump(value, x, y, width, height, max_jump)
+    out[at(x, y, w)] = d != px::kInvalid && px::behind_jump(value, x, y, width, height, max_jump)
                            ? px::kInvalid
                            : d;
   }

@@ -49,10 +49,12 @@ void left_right_check(ImageView<std::int16_t> left, ImageView<const std::int16_t
 void uniqueness_check(ImageView<std::int16_t> disparity, ImageView<const std::uint16_t> best,
                       ImageView<const std::uint16_t> second, double ratio);
 
-// Marks kInvalidDisparity where a reliable 8-neighbour's disparity differs by more than
+// Marks kInvalidDisparity where a reliable 8-neighbour's disparity is larger by more than
 // max_jump: at depth discontinuities half-resolution blocks and aggregation windows straddle two
-// surfaces, so the pixels on either side are the least trustworthy; the contour-aware densify
-// stage places the edge instead. `scratch` is resized on first use.
+// surfaces; the contour-aware densify stage places the edge instead. Only the far side of a jump
+// goes: dropping both sides erased near objects one or two internal pixels wide (fingers at half
+// resolution), and the far side alone keeps the sparse map about as accurate (bench/RESULTS.md).
+// `scratch` is resized on first use.
 void discontinuity_check(ImageView<std::int16_t> disparity, int max_jump,
                          Image<std::int16_t>& scratch);
 

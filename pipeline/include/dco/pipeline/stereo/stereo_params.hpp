@@ -43,7 +43,7 @@ struct StereoParams {
   // Checks that decide which pixels the sparse map keeps.
   int lr_max_diff = 1;         // left-right consistency, internal pixels
   double uniqueness = 0.15;    // best cost must beat the best non-adjacent cost by this fraction
-  int max_neighbour_jump = 1;  // drop pixels next to a jump larger than this (internal px; -1 off)
+  int max_neighbour_jump = 1;  // drop pixels behind a larger jump (internal px; -1 off)
   // Drop islands of fewer than speckle_size pixels (internal) whose neighbours differ by at most
   // speckle_range: isolated wrong matches that survived the checks (0 = off).
   int speckle_size = 4;

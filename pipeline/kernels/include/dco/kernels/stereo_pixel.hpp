@@ -174,14 +174,15 @@ DCO_HD inline bool unique_enough(std::uint16_t best, std::uint16_t second, doubl
   return second == kNoCost || !(static_cast<double>(best) > keep * static_cast<double>(second));
 }
 
-// A reliable 8-neighbour (at(x, y) is the map before the check) differs by more than max_jump.
+// A reliable 8-neighbour (at(x, y) is the map before the check) is nearer by more than max_jump:
+// the pixel is on the far side of a depth jump.
 template <class At>
-DCO_HD bool beside_jump(const At& at, int x, int y, int width, int height, int max_jump) {
+DCO_HD bool behind_jump(const At& at, int x, int y, int width, int height, int max_jump) {
   const int d = at(x, y);
   for (int ny = max_of(y - 1, 0); ny <= min_of(y + 1, height - 1); ++ny)
     for (int nx = max_of(x - 1, 0); nx <= min_of(x + 1, width - 1); ++nx) {
       const int n = at(nx, ny);
-      if (n != kInvalid && abs_of(n - d) > max_jump) return true;
+      if (n != kInvalid && n - d > max_jump) return true;
     }
   return false;
 }
