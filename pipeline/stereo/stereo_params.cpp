@@ -51,7 +51,8 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "drop islands of fewer internal pixels than this after the checks (0 = off)");
   s.add("stereo.speckle_range", &p.speckle_range, 0, 64,
         "largest step between neighbours of one island, internal px");
-  s.add("stereo.subpixel", &p.subpixel, "parabola fit of the winning cost");
+  s.add("stereo.subpixel", &p.subpixel,
+        "equiangular (V) fit of the winning cost and its neighbours");
 }
 
 void validate(const StereoParams& p) {

@@ -322,30 +322,39 @@ TEST(DiscontinuityCheck, SmoothSlopeSurvivesUnlessMaxJumpIsZero) {
     for (int x = 0; x < 10; ++x) EXPECT_EQ(dropped.at(x, y), x == 9 ? 19 : kInv) << x << "," << y;
 }
 
-TEST(SubpixelOffset, ExactOnASampledParabola) {
-  // 128 (t + 0.375)^2 + 100 at t = -1, 0, 1.
-  EXPECT_FLOAT_EQ(subpixel_offset(150, 118, 342), -0.375f);
-  EXPECT_FLOAT_EQ(subpixel_offset(342, 118, 150), 0.375f);
-  // 4 t^2 - 2 t + 4: vertex at 0.25.
-  EXPECT_FLOAT_EQ(subpixel_offset(10, 4, 6), 0.25f);
+TEST(SubpixelOffset, ExactOnASampledV) {
+  // 64 |t + 0.375| + 100 at t = -1, 0, 1.
+  EXPECT_FLOAT_EQ(subpixel_offset(140, 124, 188), -0.375f);
+  EXPECT_FLOAT_EQ(subpixel_offset(188, 124, 140), 0.375f);
+  // 40 |t - 0.25| + 100: tip at 0.25.
+  EXPECT_FLOAT_EQ(subpixel_offset(150, 110, 130), 0.25f);
   EXPECT_FLOAT_EQ(subpixel_offset(20, 10, 20), 0.0f);   // symmetric
-  EXPECT_FLOAT_EQ(subpixel_offset(10, 10, 30), -0.5f);  // vertex on the d-1/d midpoint
+  EXPECT_FLOAT_EQ(subpixel_offset(10, 10, 30), -0.5f);  // tip on the d-1/d midpoint
 }
 
-TEST(SubpixelOffset, ZeroWithoutCurvatureOrNeighbour) {
+// On a V a parabola fit leans towards the whole pixel (the pixel-locking the V fit avoids).
+TEST(SubpixelOffset, UnbiasedWhereAParabolaLocksToThePixel) {
+  // 64 |t - 0.25| + 100 at t = -1, 0, 1: a parabola through these puts the tip at 0.1667.
+  const float v = subpixel_offset(180, 116, 148);
+  EXPECT_FLOAT_EQ(v, 0.25f);
+  const float parabola = float(180 - 148) / (2.0f * float(180 + 148 - 2 * 116));
+  EXPECT_LT(parabola, 0.2f);
+}
+
+TEST(SubpixelOffset, ZeroWithoutAMinimumOrNeighbour) {
   EXPECT_EQ(subpixel_offset(10, 10, 10), 0.0f);  // flat
-  EXPECT_EQ(subpixel_offset(5, 10, 5), 0.0f);    // concave
-  EXPECT_EQ(subpixel_offset(20, 10, 0), 0.0f);   // linear: curvature 0
+  EXPECT_EQ(subpixel_offset(5, 10, 5), 0.0f);    // not a minimum
+  EXPECT_EQ(subpixel_offset(20, 10, 0), 0.0f);   // a neighbour below the winner
   EXPECT_EQ(subpixel_offset(kNo, 10, 20), 0.0f);
   EXPECT_EQ(subpixel_offset(20, 10, kNo), 0.0f);
   EXPECT_EQ(subpixel_offset(kNo, 10, kNo), 0.0f);
 }
 
-TEST(SubpixelOffset, ClampedToHalfAPixel) {
-  EXPECT_EQ(subpixel_offset(100, 20, 0), 0.5f);  // (100 - 0) / (2 * 60) = 0.83
-  EXPECT_EQ(subpixel_offset(0, 20, 100), -0.5f);
-  for (int below = 0; below < 60; below += 3)
-    for (int above = 0; above < 60; above += 5) {
+TEST(SubpixelOffset, NeverBeyondHalfAPixel) {
+  EXPECT_EQ(subpixel_offset(20, 20, 100), -0.5f);  // the tip on the d-1/d midpoint
+  EXPECT_EQ(subpixel_offset(100, 20, 20), 0.5f);
+  for (int below = 7; below < 60; below += 3)
+    for (int above = 7; above < 60; above += 5) {
       const float o =
           subpixel_offset(static_cast<std::uint16_t>(below), 7, static_cast<std::uint16_t>(above));
       ASSERT_GE(o, -0.5f);

@@ -74,8 +74,7 @@ class SpeckleFilter {
   std::unique_ptr<Buffer> buffer_;
 };
 
-// Parabola through the costs at d-1, d, d+1: the offset of its minimum, in [-0.5, 0.5]; 0 when
-// a neighbour is missing or the costs are not convex.
+// Equiangular (V) fit through the costs at d-1, d, d+1: the offset of its tip, in [-0.5, 0.5].
 using kernels::pixel::subpixel_offset;
 
 }  // namespace dco::stereo

@@ -205,14 +205,16 @@ DCO_HD inline std::int16_t voted_value(std::int16_t d, std::uint32_t total, std:
   return winner;
 }
 
-// Parabola through the costs at d-1, d, d+1: the offset of its minimum, in [-0.5, 0.5]; 0 when
-// a neighbour is missing or the costs are not convex.
+// Equiangular fit through the costs at d-1, d, d+1 (a V with equal slopes, the shape of
+// absolute-difference and census costs near their minimum; a parabola pulls estimates towards
+// whole pixels on them): the offset of its tip, in [-0.5, 0.5]; 0 when a neighbour is missing or
+// d is not a strict minimum of the three.
 DCO_HD inline float subpixel_offset(std::uint16_t below, std::uint16_t best, std::uint16_t above) {
-  if (below == kNoCost || above == kNoCost) return 0.0f;
-  const int curvature = int(below) + int(above) - 2 * int(best);
-  if (curvature <= 0) return 0.0f;
-  const float offset = float(int(below) - int(above)) / (2.0f * float(curvature));
-  return offset < -0.5f ? -0.5f : (offset > 0.5f ? 0.5f : offset);
+  if (below == kNoCost || above == kNoCost || below < best || above < best) return 0.0f;
+  const int rise = (below > above ? int(below) : int(above)) - int(best);
+  if (rise <= 0) return 0.0f;
+  // |below - above| <= rise, since both are at least best.
+  return float(int(below) - int(above)) / (2.0f * float(rise));
 }
 
 // The winner-takes-all disparity with its subpixel fit, in [0, max_value].
