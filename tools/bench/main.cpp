@@ -203,10 +203,11 @@ struct BackendCheck {
   double cpu_solve_ms = 0, cuda_solve_ms = 0;  // the densify solver on the CPU's contour results
   long differing_dense_pixels = 0;
   double cpu_rectify_ms = 0, cuda_rectify_ms = 0;  // per pair, the frames taken as raw images
-  long differing_rectified_pixels = 0;             // bytes, all channels
+  long differing_rectified_bytes = 0;
 };
 
-long differing_bytes(dco::ImageView<const std::uint8_t> a, dco::ImageView<const std::uint8_t> b) {
+// Bytes that differ, every channel.
+long differing(dco::ImageView<const std::uint8_t> a, dco::ImageView<const std::uint8_t> b) {
   long n = 0;
   for (int y = 0; y < a.height; ++y)
     for (int x = 0; x < a.width * a.channels; ++x) n += a.row(y)[x] != b.row(y)[x];
@@ -256,8 +257,8 @@ void compare_rectification(const Frames& frames, const dco::gpu::BackendChoice& 
       c.cuda_rectify_ms += cuda_ms;
       ++timed;
     }
-    c.differing_rectified_pixels += differing_bytes(cpu_l.cview(), cuda_l.cview()) +
-                                    differing_bytes(cpu_r.cview(), cuda_r.cview());
+    c.differing_rectified_bytes +=
+        differing(cpu_l.cview(), cuda_l.cview()) + differing(cpu_r.cview(), cuda_r.cview());
   }
   c.cpu_rectify_ms /= timed;
   c.cuda_rectify_ms /= timed;
@@ -273,13 +274,6 @@ long differing(dco::ImageView<const float> a, dco::ImageView<const float> b, dou
       if (max_abs != nullptr && std::isfinite(u) && std::isfinite(v))
         *max_abs = std::max(*max_abs, static_cast<double>(std::abs(u - v)));
     }
-  return n;
-}
-
-long differing(dco::ImageView<const std::uint8_t> a, dco::ImageView<const std::uint8_t> b) {
-  long n = 0;
-  for (int y = 0; y < a.height; ++y)
-    for (int x = 0; x < a.width; ++x) n += a.row(y)[x] != b.row(y)[x];
   return n;
 }
 
@@ -466,7 +460,7 @@ void print_text(const Result& r) {
         "  rectify  CPU {:.2f} ms, CUDA {:.2f} ms per pair with transfers (ratio {:.1f}, the "
         "frames through a distorted rig); {} output bytes differ\n",
         r.check->cpu_rectify_ms, r.check->cuda_rectify_ms,
-        r.check->cpu_rectify_ms / r.check->cuda_rectify_ms, r.check->differing_rectified_pixels);
+        r.check->cpu_rectify_ms / r.check->cuda_rectify_ms, r.check->differing_rectified_bytes);
 }
 
 // The fields of one sequence, without braces.
@@ -501,7 +495,7 @@ std::string json_fields(const Result& r) {
                         r.check->differing_contour_pixels, json_number(r.check->cpu_solve_ms),
                         json_number(r.check->cuda_solve_ms), r.check->differing_dense_pixels,
                         json_number(r.check->cpu_rectify_ms), json_number(r.check->cuda_rectify_ms),
-                        r.check->differing_rectified_pixels)
+                        r.check->differing_rectified_bytes)
                   : std::string());
 }
 

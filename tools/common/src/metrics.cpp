@@ -61,48 +61,40 @@ using detail::kBehind;
 using detail::kFront;
 constexpr auto kNoGt = detail::kNoValue;
 
-// GT pixels within Chebyshev distance kOcclusionBandRadius of a pixel whose GT side differs from
-// a 4-neighbour's (pixels without GT neither make nor break a boundary).
-cv::Mat occlusion_band(const cv::Mat& sides) {
-  cv::Mat boundary = cv::Mat::zeros(sides.size(), CV_8U);
-  for (int y = 0; y < sides.rows; ++y) {
-    const auto* s = sides.ptr<std::uint8_t>(y);
-    const auto* below = y + 1 < sides.rows ? sides.ptr<std::uint8_t>(y + 1) : nullptr;
-    auto* b = boundary.ptr<std::uint8_t>(y);
-    auto* b_below = below ? boundary.ptr<std::uint8_t>(y + 1) : nullptr;
-    for (int x = 0; x < sides.cols; ++x) {
-      if (s[x] == kNoGt) continue;
-      if (x + 1 < sides.cols && s[x + 1] != kNoGt && s[x + 1] != s[x]) b[x] = b[x + 1] = 1;
-      if (below && below[x] != kNoGt && below[x] != s[x]) b[x] = b_below[x] = 1;
+// Pixels within Chebyshev distance kOcclusionBandRadius of a pair of 4-neighbours for which
+// `marks(x0, y0, x1, y1)` holds (both pixels of a marked pair are marked).
+template <class Marks>
+cv::Mat band_around(int width, int height, const Marks& marks) {
+  cv::Mat marked = cv::Mat::zeros(height, width, CV_8U);
+  for (int y = 0; y < height; ++y) {
+    auto* m = marked.ptr<std::uint8_t>(y);
+    auto* m_below = y + 1 < height ? marked.ptr<std::uint8_t>(y + 1) : nullptr;
+    for (int x = 0; x < width; ++x) {
+      if (x + 1 < width && marks(x, y, x + 1, y)) m[x] = m[x + 1] = 1;
+      if (m_below && marks(x, y, x, y + 1)) m[x] = m_below[x] = 1;
     }
   }
   const int size = 2 * kOcclusionBandRadius + 1;
   cv::Mat band;
-  cv::dilate(boundary, band, cv::getStructuringElement(cv::MORPH_RECT, {size, size}));
+  cv::dilate(marked, band, cv::getStructuringElement(cv::MORPH_RECT, {size, size}));
   return band;
 }
 
-// GT pixels within Chebyshev distance kOcclusionBandRadius of a GT depth edge: a pair of
-// 4-neighbours with GT whose disparities differ by more than kDepthEdgeJump.
+// Around the GT occlusion boundary: pairs whose GT sides differ (pixels without GT neither make
+// nor break a boundary).
+cv::Mat occlusion_band(const cv::Mat& sides) {
+  return band_around(sides.cols, sides.rows, [&sides](int x0, int y0, int x1, int y1) {
+    const std::uint8_t a = sides.at<std::uint8_t>(y0, x0), b = sides.at<std::uint8_t>(y1, x1);
+    return a != kNoGt && b != kNoGt && a != b;
+  });
+}
+
+// Around the GT depth edges: pairs with GT whose disparities differ by more than kDepthEdgeJump.
 cv::Mat depth_edge_zone(ImageView<const float> gt) {
-  cv::Mat edge = cv::Mat::zeros(gt.height, gt.width, CV_8U);
-  const auto jump = [](float a, float b) {
+  return band_around(gt.width, gt.height, [&gt](int x0, int y0, int x1, int y1) {
+    const float a = gt.row(y0)[x0], b = gt.row(y1)[x1];
     return is_valid_disparity(a) && is_valid_disparity(b) && std::abs(a - b) > kDepthEdgeJump;
-  };
-  for (int y = 0; y < gt.height; ++y) {
-    const float* g = gt.row(y);
-    const float* below = y + 1 < gt.height ? gt.row(y + 1) : nullptr;
-    auto* e = edge.ptr<std::uint8_t>(y);
-    auto* e_below = below ? edge.ptr<std::uint8_t>(y + 1) : nullptr;
-    for (int x = 0; x < gt.width; ++x) {
-      if (x + 1 < gt.width && jump(g[x], g[x + 1])) e[x] = e[x + 1] = 1;
-      if (below && jump(g[x], below[x])) e[x] = e_below[x] = 1;
-    }
-  }
-  const int size = 2 * kOcclusionBandRadius + 1;
-  cv::Mat zone;
-  cv::dilate(edge, zone, cv::getStructuringElement(cv::MORPH_RECT, {size, size}));
-  return zone;
+  });
 }
 
 struct PlaneErrors {

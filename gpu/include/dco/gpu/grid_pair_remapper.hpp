@@ -58,11 +58,7 @@ class GridPairRemapper final : public PairRemapper {
       download_values(grid_, rectified_[side].data(), rectified_[side].size(), staging_out_[side]);
     }
     grid_.synchronize();
-    for (int side = 0; side < 2; ++side) {
-      const std::size_t row = static_cast<std::size_t>(width_) * out[side].channels;
-      for (int y = 0; y < height_; ++y)
-        std::memcpy(out[side].row(y), staging_out_[side].data() + row * y, row);
-    }
+    for (int side = 0; side < 2; ++side) copy_rows(staging_out_[side], out[side]);
   }
 
  private:

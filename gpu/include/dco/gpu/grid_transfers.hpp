@@ -29,14 +29,19 @@ void download_values(Grid& grid, const T* device, std::size_t n, Staging& stagin
   grid.download(staging.data(), device, n * sizeof(T));
 }
 
-// After the downloads completed: the tight rows of `staging` into an image `width` x `height`
-// (resized when it has another size).
+// After the downloads completed: the tight rows of `staging` into `out`, all its channels.
+template <class T, class Staging>
+void copy_rows(const Staging& staging, ImageView<T> out) {
+  const std::size_t row = static_cast<std::size_t>(out.width) * out.channels;
+  for (int y = 0; y < out.height; ++y)
+    std::memcpy(out.row(y), staging.data() + row * y, row * sizeof(T));
+}
+
+// The same into a one-channel image `width` x `height` (resized when it has another size).
 template <class T, class Staging>
 void copy_rows(const Staging& staging, int width, int height, Image<T>& out) {
   out.resize(width, height);
-  const std::size_t row = static_cast<std::size_t>(width);
-  for (int y = 0; y < height; ++y)
-    std::memcpy(out.row(y), staging.data() + row * y, row * sizeof(T));
+  copy_rows(staging, out.view());
 }
 
 }  // namespace dco::gpu
