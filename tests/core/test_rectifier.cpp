@@ -10,7 +10,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "dco/core/error.hpp"
-#include "example_rigs.hpp"
+#include "support/example_rigs.hpp"
 #include "test_support.hpp"
 
 namespace dco {

@@ -8,10 +8,11 @@
 #include <random>
 #include <string>
 
-#include "../core/example_rigs.hpp"
 #include "dco/core/image.hpp"
 #include "dco/core/rectifier.hpp"
 #include "dco/core/stopwatch.hpp"
+#include "support/example_rigs.hpp"
+#include "support/same_bytes.hpp"
 
 // Rectification cases shared by the host-grid and CUDA tests: both example rigs, grey and colour,
 // through a remapper against Rectifier's cv::remap.
@@ -29,14 +30,6 @@ inline Image<std::uint8_t> raw_image(int width, int height, int channels, unsign
         img.at(x, y, c) = static_cast<std::uint8_t>(((x / 8 + y / 8) % 2) ? noise(rng) : ramp);
       }
   return img;
-}
-
-inline std::int64_t differing_bytes(const Image<std::uint8_t>& a, const Image<std::uint8_t>& b) {
-  if (!a.view().same_size(b.view()) || a.channels() != b.channels()) return -1;
-  std::int64_t n = 0;
-  for (int y = 0; y < a.height(); ++y)
-    for (int x = 0; x < a.width() * a.channels(); ++x) n += a.row(y)[x] != b.row(y)[x];
-  return n;
 }
 
 using RemapperFactory = std::function<std::unique_ptr<PairRemapper>(const Rectifier&)>;
@@ -61,8 +54,8 @@ inline void expect_rigs_rectify_as_cpu(
         rectifier.rectify(l.cview(), r.cview(), out_l, out_r, remapper.get());
         const double other_ms = t.lap_ms();
         const std::string name = calib.source + (channels == 3 ? ", colour" : ", grey");
-        EXPECT_EQ(differing_bytes(cpu_l, out_l), 0) << name << " left";
-        EXPECT_EQ(differing_bytes(cpu_r, out_r), 0) << name << " right";
+        EXPECT_TRUE(dco::testing::same_bytes(cpu_l, out_l)) << name << " left";
+        EXPECT_TRUE(dco::testing::same_bytes(cpu_r, out_r)) << name << " right";
         if (report) report(name, cpu_ms, other_ms);
       }
     }

@@ -1,8 +1,8 @@
 #include <gtest/gtest.h>
 
-#include "../core/example_rigs.hpp"
 #include "dco/core/error.hpp"
 #include "dco/gpu/backend.hpp"
+#include "support/example_rigs.hpp"
 
 namespace dco::gpu {
 namespace {
