@@ -5,22 +5,42 @@
 namespace dco::densify {
 namespace {
 
-// y += alpha * x
-void axpy(float alpha, ImageView<const float> x, ImageView<float> y) {
-  for (int r = 0; r < y.height; ++r) {
-    const float* xr = x.row(r);
-    float* yr = y.row(r);
-    for (int c = 0; c < y.width; ++c) yr[c] += alpha * xr[c];
+// x += alpha p and r += (-alpha) A p in one sweep; returns dot(r, r).
+double step(float alpha, ImageView<const float> p, ImageView<const float> ap, ImageView<float> x,
+            ImageView<float> r) {
+  const int w = x.width;
+  double s = 0;
+  for (int y = 0; y < x.height; ++y) {
+    const float* pr = p.row(y);
+    const float* apr = ap.row(y);
+    float* xr = x.row(y);
+    float* rr = r.row(y);
+    for (int c = 0; c < w; ++c) xr[c] += alpha * pr[c];
+    for (int c = 0; c < w; ++c) rr[c] += -alpha * apr[c];
+    s += kernels::dot_row(rr, rr, w);
   }
+  return s;
 }
 
-// p = z + beta * p
-void update_direction(ImageView<const float> z, float beta, ImageView<float> p) {
-  for (int r = 0; r < p.height; ++r) {
-    const float* zr = z.row(r);
-    float* pr = p.row(r);
-    for (int c = 0; c < p.width; ++c) pr[c] = zr[c] + beta * pr[c];
+// p = z + beta p, ap = A p; returns dot(p, ap). Row y of A p reads rows y - 1 .. y + 1 of the
+// new p, so the update runs one row ahead.
+double update_apply_dot(const GridSystem& a, ImageView<const float> z, float beta,
+                        ImageView<float> p, ImageView<float> ap) {
+  const int w = p.width;
+  const int h = p.height;
+  const auto update = [&](int y) {
+    const float* zr = z.row(y);
+    float* pr = p.row(y);
+    for (int c = 0; c < w; ++c) pr[c] = zr[c] + beta * pr[c];
+  };
+  double s = 0;
+  update(0);
+  for (int y = 0; y < h; ++y) {
+    if (y + 1 < h) update(y + 1);
+    apply_row(a, p, y, ap.row(y));
+    s += kernels::dot_row(p.row(y), ap.row(y), w);
   }
+  return s;
 }
 
 void precondition(Multigrid* mg, ImageView<const float> r, ImageView<float> z) {
@@ -44,9 +64,7 @@ void CgScratch::resize(int width, int height) {
 double relative_residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
                          CgScratch& s) {
   s.resize(a.width(), a.height());
-  apply(a, x, s.ap.view());
-  for (int y = 0; y < x.height; ++y)
-    for (int c = 0; c < x.width; ++c) s.r.row(y)[c] = b.row(y)[c] - s.ap.row(y)[c];
+  residual(a, b, x, s.r.view());
   const double b_norm = std::sqrt(dot(b, b));
   return b_norm > 0 ? std::sqrt(dot(s.r.cview(), s.r.cview())) / b_norm : 0.0;
 }
@@ -62,10 +80,7 @@ SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<
     report.converged = true;
     return report;
   }
-  // r = b - A x
-  apply(a, x, s.r.view());
-  for (int y = 0; y < x.height; ++y)
-    for (int c = 0; c < x.width; ++c) s.r.row(y)[c] = b.row(y)[c] - s.r.row(y)[c];
+  residual(a, b, x, s.r.view());
   double r_norm = std::sqrt(dot(s.r.cview(), s.r.cview()));
   report.initial_residual = r_norm / b_norm;
   report.final_residual = report.initial_residual;
@@ -74,43 +89,44 @@ SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<
     return report;
   }
   precondition(mg, s.r.cview(), s.z.view());
-  s.p.copy_from(s.z.cview());
   double rz = dot(s.r.cview(), s.z.cview());
+  bool restart = true;  // the next direction is z itself, else z + beta p
+  float beta = 0.0f;
   for (int it = 1; it <= max_iterations; ++it) {
-    apply(a, s.p.cview(), s.ap.view());
-    const double pap = dot(s.p.cview(), s.ap.cview());
+    double pap = 0;
+    if (restart) {
+      s.p.copy_from(s.z.cview());
+      pap = apply_dot(a, s.p.cview(), s.ap.view());
+    } else {
+      pap = update_apply_dot(a, s.z.cview(), beta, s.p.view(), s.ap.view());
+    }
+    restart = false;
     if (!(pap > 0)) break;  // breakdown: A is not positive definite on p
     const auto alpha = static_cast<float>(rz / pap);
-    axpy(alpha, s.p.cview(), x);
-    axpy(-alpha, s.ap.cview(), s.r.view());
-    r_norm = std::sqrt(dot(s.r.cview(), s.r.cview()));
+    r_norm = std::sqrt(step(alpha, s.p.cview(), s.ap.cview(), x, s.r.view()));
     report.iterations = it;
     report.final_residual = r_norm / b_norm;
     if (report.final_residual <= tolerance) {
       // The recursive residual drifts from the true one in single precision: check the true
       // residual and, if it is still too large, restart from it (residual replacement).
-      apply(a, x, s.ap.view());
-      for (int y = 0; y < x.height; ++y)
-        for (int c = 0; c < x.width; ++c) s.r.row(y)[c] = b.row(y)[c] - s.ap.row(y)[c];
+      residual(a, b, x, s.r.view());
       report.final_residual = std::sqrt(dot(s.r.cview(), s.r.cview())) / b_norm;
       if (report.final_residual <= tolerance) {
         report.converged = true;
         return report;
       }
       precondition(mg, s.r.cview(), s.z.view());
-      s.p.copy_from(s.z.cview());
       rz = dot(s.r.cview(), s.z.cview());
+      restart = true;
       continue;
     }
     precondition(mg, s.r.cview(), s.z.view());
     const double rz_next = dot(s.r.cview(), s.z.cview());
-    update_direction(s.z.cview(), static_cast<float>(rz_next / rz), s.p.view());
+    beta = static_cast<float>(rz_next / rz);
     rz = rz_next;
   }
   // Report the true residual: the recursive one drifts from it in single precision.
-  apply(a, x, s.ap.view());
-  for (int y = 0; y < x.height; ++y)
-    for (int c = 0; c < x.width; ++c) s.r.row(y)[c] = b.row(y)[c] - s.ap.row(y)[c];
+  residual(a, b, x, s.r.view());
   report.final_residual = std::sqrt(dot(s.r.cview(), s.r.cview())) / b_norm;
   report.converged = report.final_residual <= tolerance;
   return report;

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
+#include "dco/kernels/densify_kernels.hpp"
 
 namespace dco::densify {
 namespace {
@@ -58,18 +60,28 @@ void validate(const DensifyParams& p) {
 void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::uint8_t> closed) {
   const int w = contours.width;
   const int h = contours.height;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) closed.row(y)[x] = contours.row(y)[x] ? 1 : 0;
-  for (int y = 0; y + 1 < h; ++y) {
-    std::uint8_t* top = closed.row(y);
-    std::uint8_t* bottom = closed.row(y + 1);
-    for (int x = 0; x + 1 < w; ++x) {
-      const bool a = top[x], b = top[x + 1], c = bottom[x], d = bottom[x + 1];
-      if (a && d && !b && !c)
-        top[x + 1] = 1;  // "\" corner contact
-      else if (b && c && !a && !d)
-        top[x] = 1;  // "/" corner contact
+  // A 2x2 block whose contour pixels touch only at a corner gets the upper pixel of the other
+  // diagonal: "\" (top-left, bottom-right) fills its top-right, "/" (top-right, bottom-left) its
+  // top-left. Each row is a function of its own and the next row of the input alone (a filled
+  // pixel never makes or breaks another block's case), so the rows are independent and the
+  // loops plain enough to vectorise.
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* top = contours.row(y);
+    std::uint8_t* out = closed.row(y);
+    if (y + 1 == h || w < 2) {
+      for (int x = 0; x < w; ++x) out[x] = top[x] ? 1 : 0;
+      continue;
     }
+    const std::uint8_t* bottom = contours.row(y + 1);
+    // The corner pixel below x must be set and x itself empty; then a contour pixel at the top
+    // of a neighbouring column whose bottom is empty completes a diagonal.
+    const auto fill = [&](int x, bool left_diagonal, bool right_diagonal) {
+      return static_cast<std::uint8_t>(top[x] || (bottom[x] && (left_diagonal || right_diagonal)));
+    };
+    out[0] = fill(0, false, top[1] && !bottom[1]);
+    for (int x = 1; x + 1 < w; ++x)
+      out[x] = fill(x, top[x - 1] && !bottom[x - 1], top[x + 1] && !bottom[x + 1]);
+    out[w - 1] = fill(w - 1, top[w - 2] && !bottom[w - 2], false);
   }
 }
 
@@ -123,32 +135,24 @@ void Densifier::build_system(const DensifyInputs& in) {
   const auto edge_scale = static_cast<float>(2.0 * params_.lambda_s);
   const auto floor = static_cast<float>(params_.min_edge_weight);
   const bool has_image = !in.image.empty() && params_.color_sigma > 0;
-  // Weight of the edge between pixels a and b of two rows (the same row for horizontal edges).
-  const auto edge = [&](std::uint8_t barrier_a, std::uint8_t barrier_b, float strength_a,
-                        float strength_b, int grey_a, int grey_b) {
-    if (barrier_a != barrier_b) return edge_scale * floor;  // Eq. 16, first case
-    float weight = 1.0f - std::min(strength_a, strength_b);
-    if (has_image) weight *= color_weight_[static_cast<std::size_t>(std::abs(grey_a - grey_b))];
-    return edge_scale * std::max(weight, floor);
-  };
+  const kernels::EdgeRule rule{edge_scale, floor, has_image ? color_weight_.data() : nullptr};
   for (int y = 0; y < h; ++y) {
     const std::uint8_t* bar = barrier_.row(y);
     const float* str = smooth_strength_.row(y);
-    const std::uint8_t* grey = has_image ? in.image.row(y) : bar;
+    const std::uint8_t* grey = has_image ? in.image.row(y) : nullptr;
     float* ex = system_.wx.row(y);
-    for (int x = 0; x + 1 < w; ++x)
-      ex[x] = edge(bar[x], bar[x + 1], str[x], str[x + 1], grey[x], grey[x + 1]);
+    kernels::edge_weights_row({bar, bar + 1, str, str + 1, grey, grey ? grey + 1 : nullptr}, rule,
+                              w - 1, ex);
     ex[w - 1] = 0.0f;
     float* ey = system_.wy.row(y);
     if (y + 1 == h) {
       std::fill(ey, ey + w, 0.0f);
       continue;
     }
-    const std::uint8_t* bar_below = barrier_.row(y + 1);
-    const float* str_below = smooth_strength_.row(y + 1);
-    const std::uint8_t* grey_below = has_image ? in.image.row(y + 1) : bar_below;
-    for (int x = 0; x < w; ++x)
-      ey[x] = edge(bar[x], bar_below[x], str[x], str_below[x], grey[x], grey_below[x]);
+    const std::uint8_t* grey_below = has_image ? in.image.row(y + 1) : nullptr;
+    kernels::edge_weights_row(
+        {bar, barrier_.row(y + 1), str, smooth_strength_.row(y + 1), grey, grey_below}, rule, w,
+        ey);
   }
 
   // Data (Eq. 13–14) and stability (Eq. 18–19) terms; a tiny pull towards 0 keeps the system

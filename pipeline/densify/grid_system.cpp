@@ -43,14 +43,39 @@ kernels::GridRow grid_row(const GridSystem& a, int r) {
   return row;
 }
 
+void apply_row(const GridSystem& a, ImageView<const float> x, int r, float* out) {
+  kernels::GridRow row = grid_row(a, r);
+  if (r + 1 < a.height()) row.x_below = x.row(r + 1);
+  if (r > 0) row.x_above = x.row(r - 1);
+  kernels::grid_apply_row(row, x.row(r), out);
+}
+
 void apply(const GridSystem& a, ImageView<const float> x, ImageView<float> y) {
+  assert(x.same_size(a.width(), a.height()) && y.same_size(a.width(), a.height()));
+  for (int r = 0; r < a.height(); ++r) apply_row(a, x, r, y.row(r));
+}
+
+double apply_dot(const GridSystem& a, ImageView<const float> x, ImageView<float> y) {
   const int h = a.height();
   assert(x.same_size(a.width(), h) && y.same_size(a.width(), h));
+  double s = 0;
   for (int r = 0; r < h; ++r) {
-    kernels::GridRow row = grid_row(a, r);
-    if (r + 1 < h) row.x_below = x.row(r + 1);
-    if (r > 0) row.x_above = x.row(r - 1);
-    kernels::grid_apply_row(row, x.row(r), y.row(r));
+    apply_row(a, x, r, y.row(r));
+    s += kernels::dot_row(x.row(r), y.row(r), a.width());
+  }
+  return s;
+}
+
+void residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
+              ImageView<float> r) {
+  const int h = a.height();
+  const int w = a.width();
+  assert(x.same_size(w, h) && b.same_size(w, h) && r.same_size(w, h));
+  for (int y = 0; y < h; ++y) {
+    float* rr = r.row(y);
+    apply_row(a, x, y, rr);
+    const float* br = b.row(y);
+    for (int c = 0; c < w; ++c) rr[c] = br[c] - rr[c];
   }
 }
 

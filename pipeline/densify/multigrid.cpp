@@ -10,12 +10,19 @@ void fill(ImageView<float> v, float value) {
   for (int y = 0; y < v.height; ++y) std::fill(v.row(y), v.row(y) + v.width, value);
 }
 
-// x(p) += x_c(parent of p).
-void prolong_add(ImageView<const float> coarse, ImageView<float> fine) {
-  for (int y = 0; y < fine.height; ++y) {
-    const float* c = coarse.row(y / 2);
-    float* f = fine.row(y);
-    for (int x = 0; x < fine.width; ++x) f[x] += c[x / 2];
+// coarse = restrict_sum(b - A x), one fine row at a time: the fine residual is never stored.
+void restrict_residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
+                       ImageView<float> coarse, std::vector<float>& row) {
+  const int w = a.width();
+  assert(row.size() >= static_cast<std::size_t>(w));
+  fill(coarse, 0.0f);
+  for (int y = 0; y < a.height(); ++y) {
+    apply_row(a, x, y, row.data());
+    const float* br = b.row(y);
+    float* c = coarse.row(y / 2);
+    for (int col = 0; col < w; ++col)
+      row[static_cast<std::size_t>(col)] = br[col] - row[static_cast<std::size_t>(col)];
+    for (int col = 0; col < w; ++col) c[col / 2] += row[static_cast<std::size_t>(col)];
   }
 }
 
@@ -75,8 +82,12 @@ void coarsen(const GridSystem& fine, GridSystem& coarse) {
   coarse.update_diagonal();
 }
 
-void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
-                  bool red_first) {
+namespace {
+
+// gauss_seidel, with prepare(row) called once for every row, in order, before any update reads it.
+template <class Prepare>
+void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
+                       int sweeps, bool red_first, Prepare&& prepare) {
   const int h = a.height();
   const auto smooth = [&](int r, int colour) {
     kernels::GridRow row = grid_row(a, r);
@@ -90,17 +101,27 @@ void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float
   // row r - 2s and then the second colour of the row above it: by then the values each update
   // reads (its row and the rows next to it) are exactly those the plain order, colour by colour
   // and sweep by sweep, would give it, so the result is identical.
-  for (int r = 0; r < h + 2 * sweeps; ++r)
+  if (sweeps > 0 && h > 0) prepare(0);
+  for (int r = 0; r < h + 2 * sweeps; ++r) {
+    if (sweeps > 0 && r + 1 < h) prepare(r + 1);  // row r's first update reads row r + 1
     for (int s = 0; s < sweeps; ++s) {
       const int row = r - 2 * s;
       if (row >= 0 && row < h) smooth(row, first);
       if (row >= 1 && row <= h) smooth(row - 1, 1 - first);
     }
+  }
+}
+
+}  // namespace
+
+void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
+                  bool red_first) {
+  gauss_seidel_rows(a, b, x, sweeps, red_first, [](int) {});
 }
 
 void Multigrid::build(const GridSystem& fine, int coarsest_size) {
   fine_ = &fine;
-  fine_residual_.resize(fine.width(), fine.height());
+  residual_row_.resize(static_cast<std::size_t>(fine.width()));  // the widest level
   std::size_t n = 0;
   int w = fine.width(), h = fine.height();
   levels_.reserve(32);  // `previous` points into levels_: it must not reallocate
@@ -113,7 +134,6 @@ void Multigrid::build(const GridSystem& fine, int coarsest_size) {
     h = level.system.height();
     level.b.resize(w, h);
     level.x.resize(w, h);
-    level.r.resize(w, h);
     previous = &level.system;
     ++n;
   }
@@ -133,19 +153,21 @@ void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x
     return;
   }
   gauss_seidel(a, b, x, smoothing_sweeps, /*red_first=*/true);
-  ImageView<float> r =
-      level == 0 ? fine_residual_.view() : levels_[static_cast<std::size_t>(level - 1)].r.view();
-  apply(a, x, r);
-  for (int y = 0; y < r.height; ++y) {
-    const float* br = b.row(y);
-    float* rr = r.row(y);
-    for (int c = 0; c < r.width; ++c) rr[c] = br[c] - rr[c];
-  }
   Level& next = levels_[static_cast<std::size_t>(level)];
-  restrict_sum(r, next.b.view());
+  restrict_residual(a, b, x, next.b.view(), residual_row_);
   cycle_at(level + 1, next.b.view(), next.x.view());
-  prolong_add(next.x.view(), x);
-  gauss_seidel(a, b, x, smoothing_sweeps, /*red_first=*/false);
+  // x += P x_coarse, a row at a time just before the smoother first reads it.
+  const ImageView<const float> coarse = next.x.cview();
+  const auto prolong_row = [&](int y) {
+    const float* c = coarse.row(y / 2);
+    float* f = x.row(y);
+    for (int col = 0; col < x.width; ++col) f[col] += c[col / 2];
+  };
+  if (smoothing_sweeps > 0) {
+    gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/false, prolong_row);
+  } else {
+    for (int y = 0; y < x.height; ++y) prolong_row(y);
+  }
 }
 
 }  // namespace dco::densify

@@ -99,6 +99,36 @@ void GridApplyRow(const GridRow& r, const float* x, float* out) {
   detail::apply_range(r, x, out, c, w);
 }
 
+void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) {
+  const hn::ScalableTag<float> df;
+  const hn::RebindToSigned<decltype(df)> di;
+  const hn::Rebind<std::uint8_t, decltype(df)> du8;
+  const int lanes = static_cast<int>(hn::Lanes(df));
+  const auto scale = hn::Set(df, rule.scale);
+  const auto floor = hn::Set(df, rule.floor);
+  const auto one = hn::Set(df, 1.0f);
+  const auto cut = hn::Mul(scale, floor);
+  const auto* colour = rule.colour;
+  int i = 0;
+  for (; i + lanes <= n; i += lanes) {
+    const auto ba = hn::PromoteTo(di, hn::LoadU(du8, e.barrier_a + i));
+    const auto bb = hn::PromoteTo(di, hn::LoadU(du8, e.barrier_b + i));
+    const auto sa = hn::LoadU(df, e.strength_a + i);
+    const auto sb = hn::LoadU(df, e.strength_b + i);
+    // min(a, b) as the reference picks it: b where b < a, else a (the same value, signed zeros
+    // and all).
+    auto weight = hn::Sub(one, hn::IfThenElse(hn::Lt(sb, sa), sb, sa));
+    if (colour != nullptr) {
+      const auto ga = hn::PromoteTo(di, hn::LoadU(du8, e.grey_a + i));
+      const auto gb = hn::PromoteTo(di, hn::LoadU(du8, e.grey_b + i));
+      weight = hn::Mul(weight, hn::GatherIndex(df, colour, hn::Abs(hn::Sub(ga, gb))));
+    }
+    const auto kept = hn::Mul(scale, hn::IfThenElse(hn::Lt(weight, floor), floor, weight));
+    hn::StoreU(hn::IfThenElse(hn::RebindMask(df, hn::Ne(ba, bb)), cut, kept), df, out + i);
+  }
+  detail::edge_range(e, rule, i, n, out);
+}
+
 double DotRow(const float* a, const float* b, int n) {
   // At most 16 lanes, so a vector is a whole number of the reference's partial sums: vector k of
   // a block holds partial sums k * lanes .. (k + 1) * lanes - 1.
@@ -144,6 +174,7 @@ namespace dco::kernels {
 HWY_EXPORT(GridSmoothRow);
 HWY_EXPORT(GridApplyRow);
 HWY_EXPORT(DotRow);
+HWY_EXPORT(EdgeWeightsRow);
 
 void grid_smooth_row(const GridRow& row, int start, const float* b, float* x) {
   HWY_DYNAMIC_DISPATCH(GridSmoothRow)(row, start, b, x);
@@ -155,6 +186,10 @@ void grid_apply_row(const GridRow& row, const float* x, float* out) {
 
 double dot_row(const float* a, const float* b, int n) {
   return HWY_DYNAMIC_DISPATCH(DotRow)(a, b, n);
+}
+
+void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out) {
+  HWY_DYNAMIC_DISPATCH(EdgeWeightsRow)(ends, rule, n, out);
 }
 
 }  // namespace dco::kernels

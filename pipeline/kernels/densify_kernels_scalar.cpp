@@ -4,6 +4,10 @@
 
 namespace dco::kernels::scalar {
 
+void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out) {
+  detail::edge_range(ends, rule, 0, n, out);
+}
+
 void grid_smooth_row(const GridRow& row, int start, const float* b, float* x) {
   detail::smooth_range(row, start, b, x, 0, row.width);
 }

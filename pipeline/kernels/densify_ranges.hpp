@@ -19,6 +19,17 @@ inline void apply_range(const GridRow& r, const float* x, float* out, int begin,
   for (int c = begin; c < end; ++c) out[c] = pixel::apply_at(r, x, c);
 }
 
+inline void edge_range(const EdgeEnds& e, const EdgeRule& rule, int begin, int end, float* out) {
+  for (int i = begin; i < end; ++i) {
+    float colour = 1.0f;
+    if (rule.colour != nullptr)
+      colour = rule.colour[e.grey_a[i] > e.grey_b[i] ? e.grey_a[i] - e.grey_b[i]
+                                                     : e.grey_b[i] - e.grey_a[i]];
+    out[i] = pixel::edge_weight(e.barrier_a[i] != e.barrier_b[i], e.strength_a[i], e.strength_b[i],
+                                colour, rule.scale, rule.floor);
+  }
+}
+
 inline constexpr int kDotLanes = pixel::kDotLanes;
 
 // Adds the products of [begin, n) in double and then the partial sums, lane by lane.

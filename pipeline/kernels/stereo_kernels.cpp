@@ -69,17 +69,14 @@ const char* TargetName() {
   return hwy::TargetName(HWY_TARGET);
 }
 
-// Largest per-channel |a - b| of packed pixels.
-template <class D, class V>
-V ColourDiff(D di, V a, V b) {
+// Per pixel of packed pixels: whether every channel of |a - b| (as bytes) is below `tau`
+// (broadcast bytes). Compared byte by byte, so no channel has to be shifted out; the unused bytes
+// of a packed pixel are 0 in both, so they always pass.
+template <class D, class V8>
+hn::Mask<D> AllChannelsBelow(D di, V8 diff8, V8 tau) {
   const hn::Repartition<std::uint8_t, D> du8;
-  const auto a8 = hn::BitCast(du8, a);
-  const auto b8 = hn::BitCast(du8, b);
-  const V diff = hn::BitCast(di, hn::Sub(hn::Max(a8, b8), hn::Min(a8, b8)));
-  const V byte_mask = hn::Set(di, 0xff);
-  return hn::Max(hn::Max(hn::And(diff, byte_mask), hn::And(hn::ShiftRight<8>(diff), byte_mask)),
-                 hn::Max(hn::And(hn::ShiftRight<16>(diff), byte_mask),
-                         hn::And(hn::ShiftRight<24>(diff), byte_mask)));
+  const auto below = hn::BitCast(di, hn::VecFromMask(du8, hn::Lt(diff8, tau)));
+  return hn::Eq(below, hn::Set(di, -1));
 }
 
 // Arm lengths of the anchors anchor[0 .. lanes), each stepping `step` elements per pixel, with
@@ -87,22 +84,26 @@ V ColourDiff(D di, V a, V b) {
 template <class D>
 hn::Vec<D> ArmLengths(D di, const std::uint32_t* anchor, std::ptrdiff_t step, int limit,
                       const ArmParams& p) {
+  const hn::Repartition<std::uint8_t, D> du8;
   const auto* base = reinterpret_cast<const std::int32_t*>(anchor);
   const auto a = hn::LoadU(di, base);
-  const auto tau1 = hn::Set(di, p.tau1);
-  const auto tau2 = hn::Set(di, p.tau2);
-  auto prev = a;
+  const auto a8 = hn::BitCast(du8, a);
+  // The thresholds are validated to 1 .. 255, so they fit a byte.
+  const auto tau1 = hn::Set(du8, static_cast<std::uint8_t>(p.tau1));
+  const auto tau2 = hn::Set(du8, static_cast<std::uint8_t>(p.tau2));
+  auto prev8 = a8;
   auto len = hn::Zero(di);
   auto active = hn::Eq(a, a);
   for (int i = 1; i <= limit; ++i) {
-    const auto q = hn::LoadU(di, base + step * i);
-    const auto to_anchor = ColourDiff(di, q, a);
-    auto ok = hn::And(hn::Lt(to_anchor, tau1), hn::Lt(ColourDiff(di, q, prev), tau1));
-    if (i > p.arm_short) ok = hn::And(ok, hn::Lt(to_anchor, tau2));
-    active = hn::And(active, ok);
+    const auto q8 = hn::BitCast(du8, hn::LoadU(di, base + step * i));
+    const auto to_anchor = hn::Sub(hn::Max(q8, a8), hn::Min(q8, a8));
+    const auto to_prev = hn::Sub(hn::Max(q8, prev8), hn::Min(q8, prev8));
+    active = hn::And(active, hn::And(AllChannelsBelow(di, to_anchor, tau1),
+                                     AllChannelsBelow(di, to_prev, tau1)));
+    if (i > p.arm_short) active = hn::And(active, AllChannelsBelow(di, to_anchor, tau2));
     if (hn::AllFalse(di, active)) break;
     len = hn::IfThenElse(active, hn::Set(di, i), len);
-    prev = hn::IfThenElse(active, q, prev);
+    prev8 = hn::BitCast(du8, hn::IfThenElse(active, hn::BitCast(di, q8), hn::BitCast(di, prev8)));
   }
   return len;
 }

@@ -53,7 +53,7 @@ class CpuStereoMatcher final : public StereoMatcher {
     for (int y = 0; y < h_; ++y)
       for (int x = 0; x < w_; ++x)
         shortest_arm_.at(x, y) = static_cast<std::uint8_t>(shortest_arm(arms_, x, y));
-    regions_.build(arms_, agg_scratch_);
+    regions_.build(arms_, agg_scratch_, params_.aggregation_passes);
     timings_.arms_ms = t.lap_ms();
 
     wta_.reset(w_, h_);

@@ -31,7 +31,7 @@ void AggregationScratch::resize(int width, int height) {
   prefix.resize(static_cast<std::size_t>(width) + 1);
 }
 
-void SupportRegions::build(const CrossArms& arms, AggregationScratch& scratch) {
+void SupportRegions::build(const CrossArms& arms, AggregationScratch& scratch, int passes) {
   arms_ = &arms;
   const int w = arms.width();
   const int h = arms.height();
@@ -39,7 +39,9 @@ void SupportRegions::build(const CrossArms& arms, AggregationScratch& scratch) {
   for (auto* size : {&size_hv_, &size_vh_}) size->resize(w, h);
   recip_hv_.resize(w, h);
   recip_vh_.resize(w, h);
+  vertical_first_built_ = passes >= 2;
   for (PassOrder order : {PassOrder::kHorizontalFirst, PassOrder::kVerticalFirst}) {
+    if (order == PassOrder::kVerticalFirst && !vertical_first_built_) break;
     Image<std::uint32_t>& size = order == PassOrder::kHorizontalFirst ? size_hv_ : size_vh_;
     Image<std::uint32_t>& recip = order == PassOrder::kHorizontalFirst ? recip_hv_ : recip_vh_;
     size.fill(1);
@@ -70,6 +72,7 @@ void SupportRegions::sum(ImageView<std::uint32_t> slice, PassOrder order,
 void SupportRegions::mean(ImageView<std::uint32_t> slice, PassOrder order,
                           AggregationScratch& scratch) const {
   sum(slice, order, scratch);
+  assert(order == PassOrder::kHorizontalFirst || vertical_first_built_);
   const Image<std::uint32_t>& recip = order == PassOrder::kHorizontalFirst ? recip_hv_ : recip_vh_;
   static_assert(kReciprocalShift == 31, "the mean kernel rounds with a shift of 31");
   for (int y = 0; y < slice.height; ++y)

@@ -70,7 +70,7 @@ void validate(const StereoParams& p) {
           "census window must hold 2..65 pixels (a 64-bit descriptor)");
   require(p.arm_max >= 2 && p.arm_max <= 255, "arm_max must be in 2..255");
   require(p.arm_short >= 0 && p.arm_short <= p.arm_max, "arm_short must be in 0..arm_max");
-  require(p.tau1 >= 1 && p.tau2 >= 1 && p.tau2 <= p.tau1, "need 1 <= tau2 <= tau1");
+  require(p.tau1 <= 255 && p.tau2 >= 1 && p.tau2 <= p.tau1, "need 1 <= tau2 <= tau1 <= 255");
   require(p.aggregation_passes >= 1 && p.aggregation_passes <= 8,
           "aggregation_passes must be in 1..8");
   require(p.lr_max_diff >= 0, "lr_max_diff must be >= 0");

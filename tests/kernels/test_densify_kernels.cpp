@@ -140,5 +140,63 @@ TEST(DensifyKernels, DotRowMatchesScalarAndDouble) {
   });
 }
 
+TEST(DensifyKernels, EdgeWeightsMatchScalar) {
+  std::mt19937 rng(9);
+  std::vector<float> colour(256);
+  for (int d = 0; d < 256; ++d) colour[static_cast<std::size_t>(d)] = 1.0f / (1.0f + 0.1f * d);
+  for_each_target([&] {
+    for (const int n : kWidths) {
+      std::vector<std::uint8_t> bar_a(static_cast<std::size_t>(n)), bar_b(bar_a.size());
+      std::vector<std::uint8_t> grey_a(bar_a.size()), grey_b(bar_a.size());
+      for (std::size_t i = 0; i < bar_a.size(); ++i) {
+        bar_a[i] = rng() % 4 == 0;
+        bar_b[i] = rng() % 4 == 0;
+        grey_a[i] = static_cast<std::uint8_t>(rng());
+        grey_b[i] = static_cast<std::uint8_t>(rng());
+      }
+      // Strengths up to 1 (weight 0, so the floor applies) and some equal pairs.
+      std::vector<float> str_a = random_floats(rng, n, 0.0f, 1.0f);
+      std::vector<float> str_b = random_floats(rng, n, 0.0f, 1.0f);
+      for (std::size_t i = 0; i < str_a.size(); i += 3) str_b[i] = str_a[i];
+      const EdgeEnds ends{bar_a.data(), bar_b.data(),  str_a.data(),
+                          str_b.data(), grey_a.data(), grey_b.data()};
+      const float* const tables[] = {nullptr, colour.data()};
+      for (const float* table : tables) {
+        const EdgeRule rule{2.4f, 0.01f, table};
+        std::vector<float> expected(bar_a.size()), out(bar_a.size(), -1.0f);
+        scalar::edge_weights_row(ends, rule, n, expected.data());
+        edge_weights_row(ends, rule, n, out.data());
+        ASSERT_EQ(out, expected) << "n " << n << (table ? " with" : " without") << " guidance";
+        for (std::size_t i = 0; i < out.size(); ++i) {
+          if (bar_a[i] != bar_b[i]) {
+            ASSERT_EQ(out[i], 2.4f * 0.01f) << "a barrier between the ends cuts the edge";
+          } else {
+            ASSERT_GE(out[i], 2.4f * 0.01f);
+            ASSERT_LE(out[i], 2.4f);
+          }
+        }
+      }
+    }
+  });
+}
+
+TEST(DensifyKernels, EdgeWeightIsThePaperWeightTimesTheGuidance) {
+  const std::uint8_t no_bar[2] = {0, 0}, bar[2] = {1, 0};
+  const float str_a[2] = {0.25f, 0.9f}, str_b[2] = {0.5f, 0.995f};
+  const std::uint8_t grey_a[2] = {100, 0}, grey_b[2] = {103, 0};
+  const float colour[256] = {1.0f, 0.5f, 0.25f, 0.125f};
+  float out[2];
+  scalar::edge_weights_row({no_bar, no_bar, str_a, str_b, grey_a, grey_b}, {2.0f, 0.01f, colour}, 2,
+                           out);
+  EXPECT_FLOAT_EQ(out[0], 2.0f * (1.0f - 0.25f) * 0.125f);  // min strength, |100 - 103| = 3
+  EXPECT_FLOAT_EQ(out[1], 2.0f * 0.1f);                     // 1 - 0.9, no grey difference
+  scalar::edge_weights_row({no_bar, no_bar, str_b, str_b, grey_a, grey_b}, {2.0f, 0.01f, nullptr},
+                           2, out);
+  EXPECT_FLOAT_EQ(out[1], 2.0f * 0.01f);  // 1 - 0.995 is below the floor
+  scalar::edge_weights_row({bar, no_bar, str_a, str_b, grey_a, grey_b}, {2.0f, 0.01f, colour}, 2,
+                           out);
+  EXPECT_FLOAT_EQ(out[0], 2.0f * 0.01f);
+}
+
 }  // namespace
 }  // namespace dco::kernels

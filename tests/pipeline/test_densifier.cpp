@@ -434,6 +434,44 @@ TEST(Densifier, DiagonalContourStillSeparates) {
   for (int i = 0; i < 4; ++i) EXPECT_TRUE(closed.at(i, i));
 }
 
+// The rule as a scan: every 2x2 block in row-major order, filling in place.
+Image<std::uint8_t> close_gaps_by_scan(const Image<std::uint8_t>& contours) {
+  const int w = contours.width(), h = contours.height();
+  Image<std::uint8_t> closed(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) closed.at(x, y) = contours.at(x, y) ? 1 : 0;
+  for (int y = 0; y + 1 < h; ++y)
+    for (int x = 0; x + 1 < w; ++x) {
+      const bool a = closed.at(x, y), b = closed.at(x + 1, y);
+      const bool c = closed.at(x, y + 1), d = closed.at(x + 1, y + 1);
+      if (a && d && !b && !c)
+        closed.at(x + 1, y) = 1;
+      else if (b && c && !a && !d)
+        closed.at(x, y) = 1;
+    }
+  return closed;
+}
+
+TEST(Densifier, DiagonalGapsCloseAsTheBlockByBlockScanDoes) {
+  std::mt19937 rng(17);
+  for (const int w : {1, 2, 3, 17, 64}) {
+    for (const int h : {1, 2, 9}) {
+      for (const int density : {5, 30, 60}) {
+        Image<std::uint8_t> contours(w, h), closed(w, h);
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x)
+            contours.at(x, y) = static_cast<int>(rng() % 100) < density ? 255 : 0;
+        close_diagonal_gaps(contours.cview(), closed.view());
+        const Image<std::uint8_t> expected = close_gaps_by_scan(contours);
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x)
+            ASSERT_EQ(closed.at(x, y), expected.at(x, y))
+                << w << "x" << h << " density " << density << " at " << x << "," << y;
+      }
+    }
+  }
+}
+
 TEST(Densifier, WarmStartConvergesFaster) {
   const Problem p = random_problem(160, 120, 6, 0.1);
   DensifyParams params;

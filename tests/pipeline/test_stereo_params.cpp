@@ -74,6 +74,7 @@ TEST(StereoParams, ValidateRejectsEachInvalidField) {
       {"tau1 0", [](StereoParams& p) { p.tau1 = 0; }, "tau"},
       {"tau2 0", [](StereoParams& p) { p.tau2 = 0; }, "tau2"},
       {"tau2 > tau1", [](StereoParams& p) { p.tau2 = 21; }, "tau2"},
+      {"tau1 256", [](StereoParams& p) { p.tau1 = 256; }, "255"},
       {"passes 0", [](StereoParams& p) { p.aggregation_passes = 0; }, "aggregation_passes"},
       {"passes 9", [](StereoParams& p) { p.aggregation_passes = 9; }, "aggregation_passes"},
       {"lr_max_diff -1", [](StereoParams& p) { p.lr_max_diff = -1; }, "lr_max_diff"},

@@ -26,8 +26,21 @@ kernels::GridRow grid_row(const GridSystem& a, int r);
 
 // y = A x.
 void apply(const GridSystem& a, ImageView<const float> x, ImageView<float> y);
+// out = row r of A x (reads rows r - 1 .. r + 1 of x).
+void apply_row(const GridSystem& a, ImageView<const float> x, int r, float* out);
 
 // Dot product and squared norm in double precision (sums over up to millions of floats).
 double dot(ImageView<const float> a, ImageView<const float> b);
+
+// The passes below each do the work of two or three of the plain ones in one sweep over the
+// rows, while the rows are still in cache; the arithmetic, and the order of every sum, is that
+// of the plain passes, so the results are the same bits.
+
+// y = A x; returns dot(x, y).
+double apply_dot(const GridSystem& a, ImageView<const float> x, ImageView<float> y);
+
+// r = b - A x.
+void residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
+              ImageView<float> r);
 
 }  // namespace dco::densify

@@ -30,7 +30,7 @@ class Multigrid {
  private:
   struct Level {
     GridSystem system;
-    Image<float> b, x, r;
+    Image<float> b, x;
   };
   void cycle_at(int level, ImageView<const float> b, ImageView<float> x);
   const GridSystem& system_at(int level) const {
@@ -39,7 +39,7 @@ class Multigrid {
 
   const GridSystem* fine_ = nullptr;
   std::vector<Level> levels_;  // coarse levels 1..n
-  Image<float> fine_residual_;
+  std::vector<float> residual_row_;
 };
 
 // Red-black Gauss-Seidel sweeps on A x = b; `red_first` picks the colour order.

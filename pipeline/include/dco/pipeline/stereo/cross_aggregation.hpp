@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cassert>
 #include <cstdint>
 #include <vector>
 
@@ -38,7 +39,9 @@ enum class PassOrder { kHorizontalFirst, kVerticalFirst };
 // Region sizes and their fixed-point reciprocals for both pass orders, built once per frame.
 class SupportRegions {
  public:
-  void build(const CrossArms& arms, AggregationScratch& scratch);
+  // Sizes and reciprocals of the pass orders that `passes` alternating passes use: horizontal
+  // first only for one pass, both from two on.
+  void build(const CrossArms& arms, AggregationScratch& scratch, int passes = 2);
 
   const CrossArms& arms() const { return *arms_; }
   // Unnormalised region sum, in place: slice(p) = sum over the region of p.
@@ -47,10 +50,12 @@ class SupportRegions {
   void mean(ImageView<std::uint32_t> slice, PassOrder order, AggregationScratch& scratch) const;
   // round(2^31 / region size) per pixel: the region mean is (sum * r + 2^30) >> 31.
   ImageView<const std::uint32_t> reciprocals(PassOrder order) const {
+    assert(order == PassOrder::kHorizontalFirst || vertical_first_built_);
     return order == PassOrder::kHorizontalFirst ? recip_hv_.view() : recip_vh_.view();
   }
   // Region sizes (pixels) for a pass order.
   ImageView<const std::uint32_t> sizes(PassOrder order) const {
+    assert(order == PassOrder::kHorizontalFirst || vertical_first_built_);
     return order == PassOrder::kHorizontalFirst ? size_hv_.view() : size_vh_.view();
   }
 
@@ -59,6 +64,7 @@ class SupportRegions {
 
  private:
   const CrossArms* arms_ = nullptr;
+  bool vertical_first_built_ = false;
   Image<std::uint32_t> size_hv_, size_vh_;
   Image<std::uint32_t> recip_hv_, recip_vh_;
 };

@@ -50,7 +50,7 @@ struct StereoParams {
   int speckle_range = 1;
 
   // Iterated histogram vote, Eq. 4, among reliable pixels of the support region.
-  int vote_iterations = 1;
+  int vote_iterations = 0;
   int vote_min_count = 20;      // support needed for a vote to decide
   double vote_min_ratio = 0.4;  // share of the support the winning disparity needs
   int vote_tolerance = 1;       // a pixel this close to the winner keeps its own value

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <cstdint>
+
 // Row kernels of the densify solver: the 5-point system of dco::densify::GridSystem. Every
 // function in dco::kernels dispatches at run time to the best SIMD target (see
 // stereo_kernels.hpp); the functions of the same name in dco::kernels::scalar are the plain
@@ -34,7 +36,29 @@ void grid_apply_row(const GridRow& row, const float* x, float* out);
 // products in double, all added up in double.
 double dot_row(const float* a, const float* b, int n);
 
+// The pixels at both ends of a run of smoothness edges: edge i joins pixel i of the "a" rows with
+// pixel i of the "b" rows (for the edges within a row, b is a one column further on).
+struct EdgeEnds {
+  const std::uint8_t* barrier_a = nullptr;  // 1 on a depth contour (closed), else 0
+  const std::uint8_t* barrier_b = nullptr;
+  const float* strength_a = nullptr;  // s_p = M_fuse * M_I of Eq. 17
+  const float* strength_b = nullptr;
+  const std::uint8_t* grey_a = nullptr;  // image guidance; unused without a colour table
+  const std::uint8_t* grey_b = nullptr;
+};
+
+struct EdgeRule {
+  float scale = 0.0f;             // 2 λ_s: each undirected edge appears twice in Eq. 20
+  float floor = 0.0f;             // least weight, so the system stays connected
+  const float* colour = nullptr;  // 256 weights by grey-level difference; null = no guidance
+};
+
+// out[i] = scale * floor where exactly one end is on a barrier (Eq. 16, first case), else
+// scale * max((1 - min(s_a, s_b)) * colour[|g_a - g_b|], floor), for i < n.
+void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out);
+
 namespace scalar {
+void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out);
 void grid_smooth_row(const GridRow& row, int start, const float* b, float* x);
 void grid_apply_row(const GridRow& row, const float* x, float* out);
 double dot_row(const float* a, const float* b, int n);

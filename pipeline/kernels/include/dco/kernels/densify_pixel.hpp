@@ -33,6 +33,14 @@ DCO_HD inline float apply_at(const GridRow& r, const float* x, int c) {
   return v - vertical_term(r, c);
 }
 
+// Weight of one smoothness edge (edge_weights_row); `colour` is 1 without image guidance.
+DCO_HD inline float edge_weight(bool barrier_between, float strength_a, float strength_b,
+                                float colour, float scale, float floor) {
+  if (barrier_between) return scale * floor;
+  const float weight = (1.0f - (strength_b < strength_a ? strength_b : strength_a)) * colour;
+  return scale * (weight < floor ? floor : weight);
+}
+
 inline constexpr int kDotLanes = 16;
 
 // Σ a[i] b[i] of one row as dot_row defines it: sixteen float partial sums (lane i % 16), the
