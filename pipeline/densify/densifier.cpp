@@ -74,14 +74,16 @@ void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::
     }
     const std::uint8_t* bottom = contours.row(y + 1);
     // The corner pixel below x must be set and x itself empty; then a contour pixel at the top
-    // of a neighbouring column whose bottom is empty completes a diagonal.
+    // of a neighbouring column whose bottom is empty completes a diagonal. Bitwise operators,
+    // not && and ||, so the loop has no branches and vectorises.
     const auto fill = [&](int x, bool left_diagonal, bool right_diagonal) {
-      return static_cast<std::uint8_t>(top[x] || (bottom[x] && (left_diagonal || right_diagonal)));
+      return static_cast<std::uint8_t>((top[x] != 0) |
+                                       ((bottom[x] != 0) & (left_diagonal | right_diagonal)));
     };
-    out[0] = fill(0, false, top[1] && !bottom[1]);
-    for (int x = 1; x + 1 < w; ++x)
-      out[x] = fill(x, top[x - 1] && !bottom[x - 1], top[x + 1] && !bottom[x + 1]);
-    out[w - 1] = fill(w - 1, top[w - 2] && !bottom[w - 2], false);
+    const auto diagonal_at = [&](int x) { return (top[x] != 0) & (bottom[x] == 0); };
+    out[0] = fill(0, false, diagonal_at(1));
+    for (int x = 1; x + 1 < w; ++x) out[x] = fill(x, diagonal_at(x - 1), diagonal_at(x + 1));
+    out[w - 1] = fill(w - 1, diagonal_at(w - 2), false);
   }
 }
 
