@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -248,6 +249,28 @@ TEST(RingClient, WriterGoneAfterACleanStop) {
   dco_frame_view_init(&v);
   EXPECT_EQ(dco_client_wait_next(c.handle(), 2000, &v), DCO_E_WRITER_GONE);
   EXPECT_THROW(c.wait_next(std::chrono::milliseconds(100)), client::Error);
+}
+
+// The writer publishes and closes right away while the client waits: however the two land
+// between the client's looks, the frame comes before the "writer stopped".
+TEST(RingClient, TheLastFrameBeforeAStopIsDelivered) {
+  TempDir dir;
+  for (int round = 0; round < 100; ++round) {
+    auto writer = std::make_unique<RingWriter>(dir.path() / "depth.shm", small_ring());
+    client::Client c = connect(writer->path());
+    std::thread stop([&] {
+      publish_pattern(*writer, static_cast<std::uint64_t>(round + 1));
+      writer.reset();
+    });
+    dco_frame_view v;
+    dco_frame_view_init(&v);
+    int frames = 0;
+    dco_status status = DCO_OK;
+    while ((status = dco_client_wait_next(c.handle(), 2000, &v)) == DCO_OK) ++frames;
+    stop.join();
+    ASSERT_EQ(status, DCO_E_WRITER_GONE) << "round " << round;
+    ASSERT_EQ(frames, 1) << "round " << round;
+  }
 }
 
 TEST(RingClient, FollowsARestartedWriterToItsNewSession) {

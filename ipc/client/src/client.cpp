@@ -426,8 +426,12 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
       const dco_status status = client->follow_path(&remapped);
       if (status != DCO_OK) return status;
       if (remapped) continue;
-      if (client->writer_gone())
+      if (client->writer_gone()) {
+        // A frame published between the look above and the close is still the client's: the
+        // writer publishes before it closes, so a count read after seeing it gone has it.
+        if (h->publish_count.load(std::memory_order_acquire) > client->last_index) continue;
         return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
+      }
     }
     if (now >= deadline)
       return fail(DCO_E_TIMEOUT, client->expect.path + ": no new frame within " +
