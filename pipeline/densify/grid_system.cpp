@@ -66,17 +66,18 @@ double apply_dot(const GridSystem& a, ImageView<const float> x, ImageView<float>
   return s;
 }
 
+void residual_row(const GridSystem& a, ImageView<const float> b, ImageView<const float> x, int r,
+                  float* out) {
+  apply_row(a, x, r, out);
+  const float* br = b.row(r);
+  for (int c = 0; c < a.width(); ++c) out[c] = br[c] - out[c];
+}
+
 void residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
               ImageView<float> r) {
-  const int h = a.height();
-  const int w = a.width();
-  assert(x.same_size(w, h) && b.same_size(w, h) && r.same_size(w, h));
-  for (int y = 0; y < h; ++y) {
-    float* rr = r.row(y);
-    apply_row(a, x, y, rr);
-    const float* br = b.row(y);
-    for (int c = 0; c < w; ++c) rr[c] = br[c] - rr[c];
-  }
+  assert(x.same_size(a.width(), a.height()) && b.same_size(a.width(), a.height()) &&
+         r.same_size(a.width(), a.height()));
+  for (int y = 0; y < a.height(); ++y) residual_row(a, b, x, y, r.row(y));
 }
 
 double dot(ImageView<const float> a, ImageView<const float> b) {

@@ -10,19 +10,19 @@ void fill(ImageView<float> v, float value) {
   for (int y = 0; y < v.height; ++y) std::fill(v.row(y), v.row(y) + v.width, value);
 }
 
+// coarse_row[x / 2] += fine_row[x]: one fine row's share of restrict_sum.
+void add_to_parents(const float* fine_row, int width, float* coarse_row) {
+  for (int x = 0; x < width; ++x) coarse_row[x / 2] += fine_row[x];
+}
+
 // coarse = restrict_sum(b - A x), one fine row at a time: the fine residual is never stored.
 void restrict_residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
                        ImageView<float> coarse, std::vector<float>& row) {
-  const int w = a.width();
-  assert(row.size() >= static_cast<std::size_t>(w));
+  assert(row.size() >= static_cast<std::size_t>(a.width()));
   fill(coarse, 0.0f);
   for (int y = 0; y < a.height(); ++y) {
-    apply_row(a, x, y, row.data());
-    const float* br = b.row(y);
-    float* c = coarse.row(y / 2);
-    for (int col = 0; col < w; ++col)
-      row[static_cast<std::size_t>(col)] = br[col] - row[static_cast<std::size_t>(col)];
-    for (int col = 0; col < w; ++col) c[col / 2] += row[static_cast<std::size_t>(col)];
+    residual_row(a, b, x, y, row.data());
+    add_to_parents(row.data(), a.width(), coarse.row(y / 2));
   }
 }
 
@@ -30,11 +30,7 @@ void restrict_residual(const GridSystem& a, ImageView<const float> b, ImageView<
 
 void restrict_sum(ImageView<const float> fine, ImageView<float> coarse) {
   fill(coarse, 0.0f);
-  for (int y = 0; y < fine.height; ++y) {
-    const float* f = fine.row(y);
-    float* c = coarse.row(y / 2);
-    for (int x = 0; x < fine.width; ++x) c[x / 2] += f[x];
-  }
+  for (int y = 0; y < fine.height; ++y) add_to_parents(fine.row(y), fine.width, coarse.row(y / 2));
 }
 
 void restrict_mean(ImageView<const float> fine, ImageView<float> coarse) {
@@ -96,14 +92,14 @@ void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<
     kernels::grid_smooth_row(row, (r + colour) % 2, b.row(r), x.row(r));
   };
   const int first = red_first ? 0 : 1;
-  // One pass over the rows does every colour of every sweep (the sweep is bound by memory
-  // traffic, and this keeps the few rows involved in cache). Sweep s updates the first colour of
+  // One pass over the rows does every colour of every sweep (this keeps the few rows involved in
+  // cache). Sweep s updates the first colour of
   // row r - 2s and then the second colour of the row above it: by then the values each update
   // reads (its row and the rows next to it) are exactly those the plain order, colour by colour
   // and sweep by sweep, would give it, so the result is identical.
-  if (sweeps > 0 && h > 0) prepare(0);
+  if (h > 0) prepare(0);
   for (int r = 0; r < h + 2 * sweeps; ++r) {
-    if (sweeps > 0 && r + 1 < h) prepare(r + 1);  // row r's first update reads row r + 1
+    if (r + 1 < h) prepare(r + 1);  // row r's first update reads row r + 1
     for (int s = 0; s < sweeps; ++s) {
       const int row = r - 2 * s;
       if (row >= 0 && row < h) smooth(row, first);
@@ -163,11 +159,7 @@ void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x
     float* f = x.row(y);
     for (int col = 0; col < x.width; ++col) f[col] += c[col / 2];
   };
-  if (smoothing_sweeps > 0) {
-    gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/false, prolong_row);
-  } else {
-    for (int y = 0; y < x.height; ++y) prolong_row(y);
-  }
+  gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/false, prolong_row);
 }
 
 }  // namespace dco::densify

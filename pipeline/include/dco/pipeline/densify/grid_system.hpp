@@ -42,5 +42,8 @@ double apply_dot(const GridSystem& a, ImageView<const float> x, ImageView<float>
 // r = b - A x.
 void residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
               ImageView<float> r);
+// out = row r of b - A x.
+void residual_row(const GridSystem& a, ImageView<const float> b, ImageView<const float> x, int r,
+                  float* out);
 
 }  // namespace dco::densify
