@@ -135,19 +135,9 @@ std::map<std::string, std::uint64_t> record_session(const std::string& path, Rec
     if (f == Fault::kSilence) param = 500;
     if (f == Fault::kControlBusy) param = 2;
     if (f == Fault::kUnplug) param = 200;
-    const auto before = sim->record();
-    sim->inject(f, param);
-    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-    while (true) {
-      const auto now = sim->record();
-      if (now.frames_sent >= before.frames_sent + 4 &&
-          now.frames_intact >= before.frames_intact + 3)
-        break;
-      if (std::chrono::steady_clock::now() > until) {
-        ADD_FAILURE() << "stuck after fault " << i;
-        break;
-      }
-      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    if (!sim->inject_and_settle(f, param)) {
+      ADD_FAILURE() << "stuck after fault " << i;
+      break;
     }
   }
   source->stop();

@@ -1,6 +1,7 @@
 #include "indemind_sim.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <thread>
@@ -675,6 +676,32 @@ void SimulatedIndemind::inject(Fault fault, int param) {
       s.frame_faults.emplace_back(fault, param);
       break;
   }
+}
+
+bool SimulatedIndemind::inject_and_settle(Fault fault, int param,
+                                          std::chrono::milliseconds timeout) {
+  auto applied = [](const Record& r) {
+    std::uint64_t n = 0;
+    for (auto v : r.injected) n += v;
+    return n;
+  };
+  const auto until = std::chrono::steady_clock::now() + timeout;
+  auto wait_for = [&](auto done) {
+    while (!done(record())) {
+      if (std::chrono::steady_clock::now() > until) return false;
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    return true;
+  };
+  const std::uint64_t before = applied(record());
+  inject(fault, param);
+  // Counting frames from before the fault was applied could count frames sent while the caller
+  // was descheduled, and a next fault would land on a frame that a silence or a skip hides.
+  if (!wait_for([&](const Record& r) { return applied(r) > before; })) return false;
+  const Record at = record();
+  return wait_for([&](const Record& r) {
+    return r.frames_sent >= at.frames_sent + 4 && r.frames_intact >= at.frames_intact + 3;
+  });
 }
 
 void SimulatedIndemind::set_present(bool present) {

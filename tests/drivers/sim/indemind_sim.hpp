@@ -95,6 +95,11 @@ class SimulatedIndemind final : public drivers::UsbTransport {
 
   // Any thread.
   void inject(Fault fault, int param = 0);
+  // Injects a fault, waits until the module has applied it (a busy extension unit: at once),
+  // then until it has sent 4 more frames, 3 of them sound. False if that takes longer than
+  // `timeout` of real time.
+  bool inject_and_settle(Fault fault, int param,
+                         std::chrono::milliseconds timeout = std::chrono::seconds(30));
   void set_present(bool present);  // plugged in (true) or not, from now on
   std::int64_t now_ns() const;
   Record record() const;
