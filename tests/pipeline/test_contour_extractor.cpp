@@ -398,10 +398,18 @@ TEST(ContourExtractor, ReportsEveryStepsTime) {
   EXPECT_EQ(t.stereo_cue_ms, 0);  // no disparity given
   EXPECT_GT(t.gaussian_ms, 0);
   EXPECT_GT(t.canny_ms, 0);
-  const double parts = t.flow_ms + t.amplitude_ms + t.fusion_ms + t.box_ms + t.normalise_ms +
-                       t.stereo_cue_ms + t.gaussian_ms + t.canny_ms;
-  EXPECT_GE(t.total_ms, parts * 0.999);
-  EXPECT_LT(t.total_ms, parts + 5.0);
+  // The steps account for the total. A preemption between two of them adds milliseconds that no
+  // step owns on a busy machine, so the least untimed remainder of up to three runs is compared.
+  double untimed = 1e9;
+  for (int run = 0; run < 3 && untimed >= 5.0; ++run) {
+    if (run > 0) extractor->compute(scene.inputs(), out);
+    const ContourTimings& r = extractor->last_timings();
+    const double parts = r.flow_ms + r.amplitude_ms + r.fusion_ms + r.box_ms + r.normalise_ms +
+                         r.stereo_cue_ms + r.gaussian_ms + r.canny_ms;
+    EXPECT_GE(r.total_ms, parts * 0.999);
+    untimed = std::min(untimed, r.total_ms - parts);
+  }
+  EXPECT_LT(untimed, 5.0);
 }
 
 std::string compute_error(const ContourInputs& in) {
