@@ -93,10 +93,10 @@ void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<
   };
   const int first = red_first ? 0 : 1;
   // One pass over the rows does every colour of every sweep (this keeps the few rows involved in
-  // cache). Sweep s updates the first colour of
-  // row r - 2s and then the second colour of the row above it: by then the values each update
-  // reads (its row and the rows next to it) are exactly those the plain order, colour by colour
-  // and sweep by sweep, would give it, so the result is identical.
+  // cache). Sweep s updates the first colour of row r - 2s and then the second colour of the row
+  // above it: by then the values each update reads (its row and the rows next to it) are exactly
+  // those the plain order, colour by colour and sweep by sweep, would give it, so the result is
+  // identical.
   if (h > 0) prepare(0);
   for (int r = 0; r < h + 2 * sweeps; ++r) {
     if (r + 1 < h) prepare(r + 1);  // row r's first update reads row r + 1

@@ -680,11 +680,6 @@ void SimulatedIndemind::inject(Fault fault, int param) {
 
 bool SimulatedIndemind::inject_and_settle(Fault fault, int param,
                                           std::chrono::milliseconds timeout) {
-  auto applied = [](const Record& r) {
-    std::uint64_t n = 0;
-    for (auto v : r.injected) n += v;
-    return n;
-  };
   const auto until = std::chrono::steady_clock::now() + timeout;
   auto wait_for = [&](auto done) {
     while (!done(record())) {
@@ -693,11 +688,11 @@ bool SimulatedIndemind::inject_and_settle(Fault fault, int param,
     }
     return true;
   };
-  const std::uint64_t before = applied(record());
+  const std::uint64_t before = record().faults_applied();
   inject(fault, param);
   // Counting frames from before the fault was applied could count frames sent while the caller
   // was descheduled, and a next fault would land on a frame that a silence or a skip hides.
-  if (!wait_for([&](const Record& r) { return applied(r) > before; })) return false;
+  if (!wait_for([&](const Record& r) { return r.faults_applied() > before; })) return false;
   const Record at = record();
   return wait_for([&](const Record& r) {
     return r.frames_sent >= at.frames_sent + 4 && r.frames_intact >= at.frames_intact + 3;

@@ -62,7 +62,12 @@ class SimulatedIndemind final : public drivers::UsbTransport {
 
   // What the module did, for comparison with the driver's counters.
   struct Record {
-    std::array<std::uint64_t, kFaultKinds> injected{};
+    std::array<std::uint64_t, kFaultKinds> injected{};  // applied, by kind
+    std::uint64_t faults_applied() const {
+      std::uint64_t n = 0;
+      for (auto v : injected) n += v;
+      return n;
+    }
     std::uint64_t frames_sent = 0;    // frames put on the wire (intact or not)
     std::uint64_t frames_intact = 0;  // frames sent whole and sound
     std::uint64_t frames_hidden = 0;  // counter values that never went on the wire (skips, stalls)
