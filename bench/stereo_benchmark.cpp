@@ -70,6 +70,7 @@ void run_dco(benchmark::State& state, bool color) {
     sum.initial_ms += t.initial_ms;
     sum.refine_ms += t.refine_ms;
     sum.sparse_ms += t.sparse_ms;
+    sum.boundary_ms += t.boundary_ms;
     benchmark::DoNotOptimize(disparity.data());
   }
   const double n = static_cast<double>(state.iterations());
@@ -79,6 +80,7 @@ void run_dco(benchmark::State& state, bool color) {
   state.counters["initial_ms"] = sum.initial_ms / n;
   state.counters["refine_ms"] = sum.refine_ms / n;
   state.counters["sparse_ms"] = sum.sparse_ms / n;
+  state.counters["boundary_ms"] = sum.boundary_ms / n;
 }
 
 void run_sgbm(benchmark::State& state, bool color, int threads) {

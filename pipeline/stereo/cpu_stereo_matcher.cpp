@@ -7,6 +7,7 @@
 #include "dco/core/stopwatch.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
 #include "dco/kernels/stereo_pixel.hpp"
+#include "dco/pipeline/stereo/boundary_refinement.hpp"
 #include "dco/pipeline/stereo/census.hpp"
 #include "dco/pipeline/stereo/cross_aggregation.hpp"
 #include "dco/pipeline/stereo/cross_arms.hpp"
@@ -29,6 +30,7 @@ class CpuStereoMatcher final : public StereoMatcher {
  public:
   explicit CpuStereoMatcher(const StereoParams& params) : params_(params) {
     validate(params_);
+    boundary_rule_ = boundary_rule(params_);
     model_ = {params_.lambda_ad, params_.lambda_census, params_.gamma_l, params_.epsilon};
     vote_ = {params_.vote_iterations, params_.vote_min_count, params_.vote_min_ratio,
              params_.vote_tolerance, params_.vote_fill};
@@ -77,6 +79,11 @@ class CpuStereoMatcher final : public StereoMatcher {
 
     write_output(left.width, left.height, disparity);
     timings_.sparse_ms = t.lap_ms();
+
+    if (refines_boundaries(params_, scale_)) {
+      refine_boundaries(left, right, disparity);
+      timings_.boundary_ms = t.lap_ms();
+    }
     timings_.total_ms = t.total_ms();
   }
 
@@ -133,6 +140,20 @@ class CpuStereoMatcher final : public StereoMatcher {
       tables_.build(model_, ad_left_.channels, params_.arm_max / scale_);
   }
 
+  void refine_boundaries(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                         Image<float>& disparity) {
+    ImageView<const std::uint8_t> l = left, r = right;
+    if (left.channels == 3) {
+      full_grey_left_.resize(left.width, left.height);
+      full_grey_right_.resize(right.width, right.height);
+      bgr_to_gray(left, full_grey_left_.view());
+      bgr_to_gray(right, full_grey_right_.view());
+      l = full_grey_left_.cview();
+      r = full_grey_right_.cview();
+    }
+    boundaries_.apply(values_.cview(), l, r, scale_, boundary_rule_, disparity.view());
+  }
+
   void write_output(int width, int height, Image<float>& disparity) {
     disparity.resize(width, height);
     // Value of every internal pixel first (internal pixels), then nearest-neighbour expansion to
@@ -168,6 +189,7 @@ class CpuStereoMatcher final : public StereoMatcher {
   StereoParams params_;
   CostModel model_;
   VoteRule vote_;
+  kernels::pixel::BoundaryRule boundary_rule_;
   StereoTimings timings_;
 
   int scale_ = 1, w_ = 0, h_ = 0, max_d_ = 0;
@@ -188,6 +210,8 @@ class CpuStereoMatcher final : public StereoMatcher {
   Image<float> values_, raw_;
   Image<std::int16_t> jump_scratch_;
   SpeckleFilter speckles_;
+  Image<std::uint8_t> full_grey_left_, full_grey_right_;
+  BoundaryRefiner boundaries_;
 };
 
 }  // namespace

@@ -53,6 +53,11 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "largest step between neighbours of one island, internal px");
   s.add("stereo.subpixel", &p.subpixel,
         "equiangular (V) fit of the winning cost and its neighbours");
+  s.add("stereo.boundary_radius", &p.boundary_radius, 0, 15,
+        "half size of the input-resolution window that picks the side of a depth edge when "
+        "matching at half size, input px (0 = off)");
+  s.add("stereo.boundary_ratio", &p.boundary_ratio, 0.01, 1.0,
+        "the side picked must cost at most this fraction of the other side");
 }
 
 void validate(const StereoParams& p) {
@@ -81,6 +86,8 @@ void validate(const StereoParams& p) {
   require(p.speckle_size >= 0 && p.speckle_range >= 0,
           "speckle_size and speckle_range must be >= 0");
   require(p.vote_min_ratio >= 0 && p.vote_min_ratio <= 1, "vote_min_ratio must be in [0, 1]");
+  require(p.boundary_radius >= 0 && p.boundary_radius <= 15, "boundary_radius must be in 0..15");
+  require(p.boundary_ratio > 0 && p.boundary_ratio <= 1, "boundary_ratio must be in (0, 1]");
 }
 
 }  // namespace dco::stereo

@@ -86,9 +86,10 @@ TEST(DenseDepthAccuracy, HandSilhouettesAtFullHeadsetSize) {
   const tools::BoundaryAccuracy mean = tools::mean_boundary_accuracy(silhouettes);
   std::printf("hand silhouettes within %d px: recall %.2f %%, precision %.2f %%\n",
               tools::kBoundaryTolerance, mean.recall, mean.precision);
-  // Dropping both sides of every disparity jump erased the thinnest fingers (86 % recall).
-  EXPECT_GE(mean.recall, 90.0);
-  EXPECT_GE(mean.precision, 75.0);
+  // Dropping both sides of every disparity jump erased the thinnest fingers (86 % recall);
+  // without the boundary refinement at input resolution the half-size matching leaves it at 93 %.
+  EXPECT_GE(mean.recall, 95.0);
+  EXPECT_GE(mean.precision, 85.0);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "dco/core/stopwatch.hpp"
 #include "dco/gpu/grid_transfers.hpp"
 #include "dco/gpu/stereo_passes.hpp"
+#include "dco/pipeline/stereo/boundary_refinement.hpp"
 #include "dco/pipeline/stereo/disparity_selection.hpp"
 #include "dco/pipeline/stereo/matching_cost.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
@@ -28,6 +29,7 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
   explicit GridStereoMatcher(const stereo::StereoParams& params, GridArgs&&... grid_args)
       : params_(params), grid_(std::forward<GridArgs>(grid_args)...) {
     stereo::validate(params_);
+    boundary_rule_ = stereo::boundary_rule(params_);
     model_ = {params_.lambda_ad, params_.lambda_census, params_.gamma_l, params_.epsilon};
   }
 
@@ -48,8 +50,16 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
     refine();
     grid_.synchronize();
     timings_.refine_ms = t.lap_ms();
-    write_output(left.width, left.height, disparity);
+    expand_output(left.width, left.height);
+    grid_.synchronize();
     timings_.sparse_ms = t.lap_ms();
+    if (stereo::refines_boundaries(params_, scale_)) {
+      refine_boundaries(left.width, left.height, left.channels);
+      grid_.synchronize();
+      timings_.boundary_ms = t.lap_ms();
+    }
+    download_output(left.width, left.height, disparity);
+    timings_.sparse_ms += t.lap_ms();
     timings_.total_ms = t.total_ms();
   }
 
@@ -91,16 +101,7 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
       l = small_left_.data();
       r = small_right_.data();
     }
-    const std::uint8_t* grey_l = l;
-    const std::uint8_t* grey_r = r;
-    if (channels == 3) {
-      grey_left_.resize(n);
-      grey_right_.resize(n);
-      grid_.launch(w_, h_, passes::BgrToGrey{l, grey_left_.data(), w_});
-      grid_.launch(w_, h_, passes::BgrToGrey{r, grey_right_.data(), w_});
-      grey_l = grey_left_.data();
-      grey_r = grey_right_.data();
-    }
+    const auto [grey_l, grey_r] = grey_pair(l, r, w_, h_, channels, grey_left_, grey_right_);
     grey_for_host_ = grey_l;
     const int ad_channels = color ? 3 : 1;
     packed_left_.resize(n);
@@ -125,6 +126,22 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
       device_tables_.ad = table_ad_.data();
       device_tables_.census = table_census_.data();
     }
+  }
+
+  // The grey of a width x height pair: the pair itself when it is grey, else converted into
+  // grey_l and grey_r.
+  std::pair<const std::uint8_t*, const std::uint8_t*> grey_pair(const std::uint8_t* l,
+                                                                const std::uint8_t* r, int width,
+                                                                int height, int channels,
+                                                                Buffer<std::uint8_t>& grey_l,
+                                                                Buffer<std::uint8_t>& grey_r) {
+    if (channels != 3) return {l, r};
+    const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    grey_l.resize(n);
+    grey_r.resize(n);
+    grid_.launch(width, height, passes::BgrToGrey{l, grey_l.data(), width});
+    grid_.launch(width, height, passes::BgrToGrey{r, grey_r.data(), width});
+    return {grey_l.data(), grey_r.data()};
   }
 
   void arms() {
@@ -235,7 +252,7 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
     }
   }
 
-  void write_output(int width, int height, Image<float>& disparity) {
+  void expand_output(int width, int height) {
     const std::size_t n = pixels();
     const std::size_t full = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     raw_.resize(n);
@@ -248,6 +265,24 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
                      static_cast<float>(params_.max_disparity) / static_cast<float>(scale_)});
     grid_.launch(width, height,
                  passes::ExpandToInput{sparse_.data(), full_.data(), w_, h_, width, scale_});
+  }
+
+  void refine_boundaries(int width, int height, int channels) {
+    const std::size_t n = pixels();
+    side_far_.resize(n);
+    side_near_.resize(n);
+    grid_.launch(
+        w_, h_, passes::BoundarySides{sparse_.data(), side_far_.data(), side_near_.data(), w_, h_});
+    const auto [l, r] = grey_pair(input_left_.data(), input_right_.data(), width, height, channels,
+                                  full_grey_left_, full_grey_right_);
+    grid_.launch(width, height,
+                 passes::RefineBoundary{l, r, side_far_.data(), side_near_.data(), full_.data(), w_,
+                                        h_, width, height, scale_, boundary_rule_});
+  }
+
+  void download_output(int width, int height, Image<float>& disparity) {
+    const std::size_t n = pixels();
+    const std::size_t full = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     download_values(grid_, full_.data(), full, staging_full_);
     download_values(grid_, raw_.data(), n, staging_raw_);
     download_values(grid_, sparse_.data(), n, staging_sparse_);
@@ -262,6 +297,7 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
   stereo::StereoParams params_;
   Grid grid_;
   stereo::CostModel model_;
+  kernels::pixel::BoundaryRule boundary_rule_;
   stereo::CostTables tables_;
   kernels::CostTableView device_tables_;
   stereo::StereoTimings timings_;
@@ -271,7 +307,7 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
   Staging<std::int16_t> speckle_staging_;
   Staging<float> staging_full_, staging_raw_, staging_sparse_;
   Buffer<std::uint8_t> input_left_, input_right_, small_left_, small_right_, grey_left_,
-      grey_right_;
+      grey_right_, full_grey_left_, full_grey_right_;
   const std::uint8_t* grey_for_host_ = nullptr;
   Buffer<std::uint32_t> packed_left_, packed_right_, table_ad_, table_census_;
   Buffer<std::uint64_t> census_left_, census_right_;
@@ -281,7 +317,7 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
   std::int16_t* result_ = nullptr;  // the checked map: disp_ or, after the jump check, jumped_
   Buffer<std::uint16_t> best_, second_, below_, above_;
   Buffer<std::uint8_t> changed_;
-  Buffer<float> raw_, sparse_, full_;
+  Buffer<float> raw_, sparse_, full_, side_far_, side_near_;
   stereo::SpeckleFilter speckles_;
   Image<std::uint8_t> grey_out_;
   Image<float> raw_out_, sparse_out_;

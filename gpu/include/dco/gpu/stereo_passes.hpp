@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "dco/kernels/boundary_pixel.hpp"
 #include "dco/kernels/host_device.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
 #include "dco/kernels/stereo_pixel.hpp"
@@ -380,6 +381,39 @@ struct ExpandToInput {
     const float v =
         sparse[at(px::min_of(x / scale, width - 1), px::min_of(y / scale, height - 1), width)];
     out[at(x, y, out_width)] = static_cast<float>(scale) * v;
+  }
+};
+
+// Grid (w, h) of the internal map: the far and near side around each pixel (px::side_range).
+struct BoundarySides {
+  const float* sparse;
+  float* far;
+  float* near;
+  int width, height;
+  DCO_HD void operator()(int x, int y) const {
+    const px::SideRange r = px::side_range(sparse, width, width, height, x, y);
+    far[at(x, y, width)] = r.far;
+    near[at(x, y, width)] = r.near;
+  }
+};
+
+// Grid (out_width, out_height) of the input: the boundary refinement, in place on `out` (each
+// point reads and writes its own value only). The rule (with its weight table) travels by value.
+struct RefineBoundary {
+  const std::uint8_t* left;
+  const std::uint8_t* right;
+  const float* far;
+  const float* near;
+  float* out;
+  int width, height, out_width, out_height, scale;
+  px::BoundaryRule rule;
+  DCO_HD void operator()(int x, int y) const {
+    const std::size_t i =
+        at(px::min_of(x / scale, width - 1), px::min_of(y / scale, height - 1), width);
+    if (!(near[i] - far[i] > px::kBoundaryMinStep)) return;
+    const px::GreyPair im{left, right, out_width, out_width, out_width, out_height};
+    float& v = out[at(x, y, out_width)];
+    v = px::refined_boundary_value(im, x, y, v, {far[i], near[i]}, static_cast<float>(scale), rule);
   }
 };
 

@@ -11,11 +11,12 @@ namespace dco::stereo {
 
 // Wall time of the last frame's sub-stages, named after the columns of the paper's Table 1.
 struct StereoTimings {
-  double prepare_ms = 0;  // downscale, grey conversion, census transform
-  double arms_ms = 0;     // adaptive filter area construction
-  double initial_ms = 0;  // cost, aggregation and winner-takes-all (initial parallax)
-  double refine_ms = 0;   // left-right and uniqueness checks, histogram vote
-  double sparse_ms = 0;   // subpixel fit and the map at input resolution
+  double prepare_ms = 0;   // downscale, grey conversion, census transform
+  double arms_ms = 0;      // adaptive filter area construction
+  double initial_ms = 0;   // cost, aggregation and winner-takes-all (initial parallax)
+  double refine_ms = 0;    // left-right and uniqueness checks, histogram vote
+  double sparse_ms = 0;    // subpixel fit and the map at input resolution
+  double boundary_ms = 0;  // boundary refinement at input resolution (half-size matching only)
   double total_ms = 0;
 };
 

@@ -57,6 +57,13 @@ struct StereoParams {
   bool vote_fill = false;       // votes also give values to pixels that failed the checks
 
   bool subpixel = true;
+
+  // Boundary refinement when matching at half size (kernels/boundary_pixel.hpp): around depth
+  // edges, each input pixel takes the far or the near side's value by a grey-level match over a
+  // (2 * boundary_radius + 1)^2 window at input resolution (input px; 0 = off). The winning
+  // side's cost must be at most boundary_ratio of the other's, else the pixel gets no value.
+  int boundary_radius = 3;
+  double boundary_ratio = 0.4;
 };
 
 // Registers every field under "stereo.<name>" with its valid range.

@@ -1,0 +1,31 @@
+#pragma once
+
+#include <cstdint>
+
+#include "dco/core/image.hpp"
+#include "dco/kernels/boundary_pixel.hpp"
+#include "dco/pipeline/stereo/stereo_params.hpp"
+
+namespace dco::stereo {
+
+// The rule of the boundary refinement (kernels/boundary_pixel.hpp) for these parameters: the
+// window radius, the ratio in 1/256 and the support-weight table.
+kernels::pixel::BoundaryRule boundary_rule(const StereoParams& params);
+
+// Whether the refinement runs: the stage matches below the input resolution and a window is set.
+bool refines_boundaries(const StereoParams& params, int scale);
+
+// Re-decides the side of every input pixel next to a depth edge of the half-size map, in place
+// on `disparity` (input size, input px, +inf = none). `sparse` is the internal map (internal px),
+// `left` and `right` the grey input images, `ranges` scratch of the internal size.
+class BoundaryRefiner {
+ public:
+  void apply(ImageView<const float> sparse, ImageView<const std::uint8_t> left,
+             ImageView<const std::uint8_t> right, int scale,
+             const kernels::pixel::BoundaryRule& rule, ImageView<float> disparity);
+
+ private:
+  Image<float> row_far_, row_near_, far_, near_;
+};
+
+}  // namespace dco::stereo

@@ -1,0 +1,110 @@
+#pragma once
+
+// Per-pixel math of the boundary refinement, shared by the CPU stereo stage and the CUDA passes
+// (gpu/). When the stereo stage matches at half size, every value covers a 2x2 block of the
+// input and a depth edge can only fall between blocks; around such edges this step decides, at
+// the input resolution, which side of the edge each input pixel belongs to. The candidate values
+// come from the half-size map (the surfaces on both sides); only the choice between them is made
+// at full size, from a grey-level absolute difference summed over a window weighted by grey
+// similarity to the centre pixel (adaptive support weights), so a window on a thin finger is not
+// dominated by the background around it. Integer sums only, so CPU and GPU agree bit for bit.
+
+#include <cstdint>
+
+#include "dco/kernels/host_device.hpp"
+#include "dco/kernels/stereo_pixel.hpp"
+
+namespace dco::kernels::pixel {
+
+inline constexpr int kBoundaryReach = 2;            // internal px searched for the two sides
+inline constexpr float kBoundaryMinStep = 1.0f;     // internal px between the sides: a depth edge
+inline constexpr int kBoundaryCap = 30;             // truncation of the grey-level difference
+inline constexpr int kBoundaryWeightOne = 1024;     // support weight of an equal grey level
+inline constexpr double kBoundaryGreyScale = 10.0;  // weight = exp(-|grey step| / this)
+
+struct BoundaryRule {
+  int radius = 0;          // window half size, input px (0 = off)
+  std::uint32_t keep = 0;  // the winning side's cost must be at most keep / 256 of the other's
+  std::uint16_t weight[256] = {};  // support weight per grey-level step to the centre pixel
+};
+
+// Smallest and largest value of the sparse map (internal px, +inf = none) within kBoundaryReach
+// of internal pixel (x, y): the far and the near surface when the pixel sits at a depth edge.
+struct SideRange {
+  float far, near;
+};
+
+DCO_HD inline SideRange side_range(const float* sparse, std::ptrdiff_t stride, int width,
+                                   int height, int x, int y) {
+  const float none = infinity();
+  SideRange r{none, -none};
+  for (int yy = max_of(0, y - kBoundaryReach); yy <= min_of(height - 1, y + kBoundaryReach); ++yy)
+    for (int xx = max_of(0, x - kBoundaryReach); xx <= min_of(width - 1, x + kBoundaryReach);
+         ++xx) {
+      const float v = sparse[yy * stride + xx];
+      if (!(v < none)) continue;
+      r.far = v < r.far ? v : r.far;
+      r.near = v > r.near ? v : r.near;
+    }
+  return r;
+}
+
+// The grey input images at full size.
+struct GreyPair {
+  const std::uint8_t* left;
+  const std::uint8_t* right;
+  std::ptrdiff_t left_stride, right_stride;  // elements
+  int width, height;
+};
+
+// Weighted, truncated grey-level difference of the window around input pixel (x, y) against the
+// right image shifted by disparity d; columns whose match falls outside the image cost the cap.
+DCO_HD inline std::uint32_t side_cost(const GreyPair& im, int x, int y, int d,
+                                      const BoundaryRule& rule) {
+  const int centre = im.left[y * im.left_stride + x];
+  std::uint32_t sum = 0;
+  for (int qy = max_of(0, y - rule.radius); qy <= min_of(im.height - 1, y + rule.radius); ++qy) {
+    const std::uint8_t* l = im.left + qy * im.left_stride;
+    const std::uint8_t* r = im.right + qy * im.right_stride;
+    for (int qx = max_of(0, x - rule.radius); qx <= min_of(im.width - 1, x + rule.radius); ++qx) {
+      const int grey = l[qx];
+      const int xr = qx - d;
+      const int e = xr >= 0 ? min_of(abs_of(grey - r[xr]), kBoundaryCap) : kBoundaryCap;
+      sum += static_cast<std::uint32_t>(rule.weight[abs_of(grey - centre)]) *
+             static_cast<std::uint32_t>(e);
+    }
+  }
+  return sum;
+}
+
+// The refined value of input pixel (x, y): `own` is its value from the half-size map (input px,
+// +inf = none), `range` the sides around its internal pixel, `scale` the internal downscale.
+// Away from a depth edge the value is kept. At one, the far side, the near side and the pixel's
+// own value compete; if a side wins, it must beat the other side by the rule's ratio, else the
+// pixel is left without a value for the densifier to fill.
+DCO_HD inline float refined_boundary_value(const GreyPair& im, int x, int y, float own,
+                                           SideRange range, float scale, const BoundaryRule& rule) {
+  if (!(range.near - range.far > kBoundaryMinStep)) return own;
+  const float none = infinity();
+  const float far = scale * range.far, near = scale * range.near;
+  const int d_far = static_cast<int>(far + 0.5f), d_near = static_cast<int>(near + 0.5f);
+  const std::uint32_t cost_far = side_cost(im, x, y, d_far, rule);
+  const std::uint32_t cost_near = side_cost(im, x, y, d_near, rule);
+  if (own < none) {
+    // The pixel's own value passed the checks: it stays unless a side matches strictly better.
+    // A side at the same whole disparity costs the same, and then the own value wins.
+    const int d_own = static_cast<int>(own + 0.5f);
+    const std::uint32_t cost_own = d_own == d_far    ? cost_far
+                                   : d_own == d_near ? cost_near
+                                                     : side_cost(im, x, y, d_own, rule);
+    if (cost_own <= cost_far && cost_own <= cost_near) return own;
+  }
+  const bool far_wins = cost_far <= cost_near;
+  const std::uint32_t best = far_wins ? cost_far : cost_near;
+  const std::uint32_t other = far_wins ? cost_near : cost_far;
+  const bool decided = best < other && static_cast<std::uint64_t>(best) * 256u <=
+                                           static_cast<std::uint64_t>(rule.keep) * other;
+  return decided ? (far_wins ? far : near) : none;
+}
+
+}  // namespace dco::kernels::pixel

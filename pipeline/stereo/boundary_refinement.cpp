@@ -1,0 +1,82 @@
+#include "dco/pipeline/stereo/boundary_refinement.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace dco::stereo {
+
+namespace px = kernels::pixel;
+
+px::BoundaryRule boundary_rule(const StereoParams& params) {
+  px::BoundaryRule rule;
+  rule.radius = params.boundary_radius;
+  rule.keep = static_cast<std::uint32_t>(std::lround(params.boundary_ratio * 256.0));
+  for (int i = 0; i < 256; ++i)
+    rule.weight[i] = static_cast<std::uint16_t>(
+        std::lround(px::kBoundaryWeightOne * std::exp(-i / px::kBoundaryGreyScale)));
+  return rule;
+}
+
+bool refines_boundaries(const StereoParams& params, int scale) {
+  return scale > 1 && params.boundary_radius > 0;
+}
+
+void BoundaryRefiner::apply(ImageView<const float> sparse, ImageView<const std::uint8_t> left,
+                            ImageView<const std::uint8_t> right, int scale,
+                            const px::BoundaryRule& rule, ImageView<float> disparity) {
+  const int w = sparse.width, h = sparse.height;
+  // side_range, separably: the window's minimum (+inf, "none", never wins it) and maximum
+  // ("none" counted as -inf) over rows first, then over columns. Min and max are exact, so this
+  // gives side_range's values.
+  const float none = px::infinity();
+  row_far_.resize(w, h);
+  row_near_.resize(w, h);
+  far_.resize(w, h);
+  near_.resize(w, h);
+  for (int y = 0; y < h; ++y) {
+    const float* v = sparse.row(y);
+    float* rf = row_far_.row(y);
+    float* rn = row_near_.row(y);
+    for (int x = 0; x < w; ++x) {
+      float lo = none, hi = -none;
+      for (int xx = std::max(0, x - px::kBoundaryReach);
+           xx <= std::min(w - 1, x + px::kBoundaryReach); ++xx) {
+        lo = std::min(lo, v[xx]);
+        hi = std::max(hi, v[xx] < none ? v[xx] : -none);
+      }
+      rf[x] = lo;
+      rn[x] = hi;
+    }
+  }
+  for (int y = 0; y < h; ++y) {
+    float* f = far_.row(y);
+    float* n = near_.row(y);
+    std::fill(f, f + w, none);
+    std::fill(n, n + w, -none);
+    for (int yy = std::max(0, y - px::kBoundaryReach);
+         yy <= std::min(h - 1, y + px::kBoundaryReach); ++yy) {
+      const float* rf = row_far_.row(yy);
+      const float* rn = row_near_.row(yy);
+      for (int x = 0; x < w; ++x) {
+        f[x] = std::min(f[x], rf[x]);
+        n[x] = std::max(n[x], rn[x]);
+      }
+    }
+  }
+  const auto s = static_cast<float>(scale);
+  const px::GreyPair im{left.data, right.data, left.stride, right.stride, left.width, left.height};
+  for (int y = 0; y < disparity.height; ++y) {
+    const int iy = std::min(y / scale, h - 1);
+    const float* far = far_.row(iy);
+    const float* near = near_.row(iy);
+    float* out = disparity.row(y);
+    for (int x = 0; x < disparity.width; ++x) {
+      const int ix = std::min(x / scale, w - 1);
+      // Most pixels are away from any edge: skip them before the call.
+      if (!(near[ix] - far[ix] > px::kBoundaryMinStep)) continue;
+      out[x] = px::refined_boundary_value(im, x, y, out[x], {far[ix], near[ix]}, s, rule);
+    }
+  }
+}
+
+}  // namespace dco::stereo
