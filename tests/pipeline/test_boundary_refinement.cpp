@@ -75,18 +75,14 @@ struct BarScene {
   }
 };
 
-StereoParams defaults() {
-  return StereoParams{};
-}
-
 TEST(BoundaryRefinement, PutsTheEdgeOfAFattenedBarOnItsInputPixel) {
   const BarScene s(41, 49);  // block 20 (columns 40, 41) straddles the bar's left edge
   Image<float> d(kWidth, kHeight);
   d.copy_from(s.expanded.cview());
   ASSERT_EQ(s.wrong(d.cview()), kHeight);  // column 40: the wall, given the bar's value
   BoundaryRefiner refiner;
-  refiner.apply(s.internal.cview(), s.left.cview(), s.right.cview(), 2, boundary_rule(defaults()),
-                d.view());
+  refiner.apply(s.internal.cview(), s.left.cview(), s.right.cview(), 2,
+                boundary_rule(StereoParams{}), d.view());
   EXPECT_EQ(s.wrong(d.cview()), 0);
   int fixed = 0;
   for (int y = 0; y < kHeight; ++y) fixed += d.row(y)[40] == kFar ? 1 : 0;
@@ -106,8 +102,8 @@ TEST(BoundaryRefinement, KeepsAFingerThreePixelsWide) {
   d.copy_from(s.expanded.cview());
   ASSERT_GT(s.wrong(d.cview()), 0);
   BoundaryRefiner refiner;
-  refiner.apply(s.internal.cview(), s.left.cview(), s.right.cview(), 2, boundary_rule(defaults()),
-                d.view());
+  refiner.apply(s.internal.cview(), s.left.cview(), s.right.cview(), 2,
+                boundary_rule(StereoParams{}), d.view());
   EXPECT_EQ(s.wrong(d.cview()), 0);
   for (int y = 4; y < kHeight - 4; ++y)
     for (int x = 43; x <= 45; ++x) EXPECT_EQ(d.row(y)[x], kNear) << x << "," << y;
@@ -120,8 +116,8 @@ TEST(BoundaryRefinement, AnUndecidableSideGetsNoGuess) {
   Image<float> d(kWidth, kHeight);
   d.copy_from(s.expanded.cview());
   BoundaryRefiner refiner;
-  refiner.apply(s.internal.cview(), s.left.cview(), s.right.cview(), 2, boundary_rule(defaults()),
-                d.view());
+  refiner.apply(s.internal.cview(), s.left.cview(), s.right.cview(), 2,
+                boundary_rule(StereoParams{}), d.view());
   for (int y = 0; y < kHeight; ++y)
     for (int x = 0; x < kWidth; ++x) EXPECT_EQ(d.row(y)[x], s.expanded.row(y)[x]) << x << "," << y;
 }
@@ -146,7 +142,7 @@ TEST(BoundaryRefinement, IsThePerPixelFunctionsEverywhere) {
   for (int y = 0; y < d.height(); ++y)
     for (int x = 0; x < d.width(); ++x)
       d.row(y)[x] = 2.0f * internal.row(std::min(y / 2, h - 1))[std::min(x / 2, w - 1)];
-  const px::BoundaryRule rule = boundary_rule(defaults());
+  const px::BoundaryRule rule = boundary_rule(StereoParams{});
   const px::GreyPair im{left.data(),         right.data(), left.view().stride,
                         right.view().stride, left.width(), left.height()};
   int changed = 0;

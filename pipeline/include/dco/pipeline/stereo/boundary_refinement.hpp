@@ -17,7 +17,8 @@ bool refines_boundaries(const StereoParams& params, int scale);
 
 // Re-decides the side of every input pixel next to a depth edge of the half-size map, in place
 // on `disparity` (input size, input px, +inf = none). `sparse` is the internal map (internal px),
-// `left` and `right` the grey input images, `ranges` scratch of the internal size.
+// `left` and `right` the grey input images; the sides found around each internal pixel are kept
+// between frames so that a frame of the same geometry allocates nothing.
 class BoundaryRefiner {
  public:
   void apply(ImageView<const float> sparse, ImageView<const std::uint8_t> left,
