@@ -22,7 +22,7 @@ class CpuSystemSolver final : public SystemSolver {
   SolverReport solve_at_half(const GridSystem& a, ImageView<const float> b, ImageView<float> x) {
     // The full system's memory traffic bounds every pass over it; the aggregated system has a
     // quarter of the pixels and stays in cache, and the Galerkin operator keeps the contour cuts.
-    coarsen(a, coarse_);
+    coarsen(a, coarse_, kHalfSizeEdgeScale);
     const int cw = coarse_.width();
     const int ch = coarse_.height();
     coarse_rhs_.resize(cw, ch);
@@ -34,16 +34,25 @@ class CpuSystemSolver final : public SystemSolver {
                                     params_.multigrid ? &multigrid_ : nullptr,
                                     params_.max_iterations, params_.tolerance, scratch_);
     prolong(coarse_solution_.cview(), x);
-    // The sweeps put the detail inside each 2x2 block back: a contour through a block, an edge
-    // of the image guidance, a single sparse pixel.
+    // The sweeps and iterations at full size put the detail inside each 2x2 block back: a
+    // contour through a block, an edge of the image guidance, a single sparse pixel.
     for (int sweep = 0; sweep < params_.fine_sweeps; ++sweep)
       gauss_seidel(a, b, x, 1, sweep % 2 == 0);
-    report.output_residual = relative_residual(a, b, x, scratch_);
+    if (params_.fine_iterations > 0) {
+      if (params_.multigrid) fine_multigrid_.build(a);
+      const SolverReport fine = solve_pcg(a, b, x, params_.multigrid ? &fine_multigrid_ : nullptr,
+                                          params_.fine_iterations, params_.tolerance, scratch_);
+      report.fine_iterations = fine.iterations;
+      report.output_residual = fine.final_residual;
+    } else {
+      report.output_residual = relative_residual(a, b, x, scratch_);
+    }
     return report;
   }
 
   DensifyParams params_;
   Multigrid multigrid_;
+  Multigrid fine_multigrid_;  // kept apart: rebuilding one hierarchy at two sizes reallocates
   CgScratch scratch_;
   GridSystem coarse_;
   Image<float> coarse_rhs_, coarse_solution_;

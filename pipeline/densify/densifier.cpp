@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 
 #include "dco/core/config.hpp"
@@ -40,6 +41,8 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
         "auto = solve at half size, then refine at full size, when wider than 640 px");
   s.add("densify.fine_sweeps", &p.fine_sweeps, 0, 100,
         "Gauss-Seidel sweeps at full size after a half-size solve");
+  s.add("densify.fine_iterations", &p.fine_iterations, 0, 100,
+        "conjugate-gradient iterations at full size after a half-size solve and its sweeps");
   s.add("densify.max_iterations", &p.max_iterations, 1, 10000, "conjugate-gradient iterations");
   s.add("densify.tolerance", &p.tolerance, 1e-9, 0.1, "relative residual to stop at");
   s.add("densify.multigrid", &p.multigrid, "multigrid V-cycle preconditioner");
@@ -54,6 +57,7 @@ void validate(const DensifyParams& p) {
       p.solve_resolution == "auto" || p.solve_resolution == "full" || p.solve_resolution == "half",
       "solve_resolution must be auto, full or half, not '" + p.solve_resolution + "'");
   require(p.fine_sweeps >= 0, "fine_sweeps must be >= 0");
+  require(p.fine_iterations >= 0, "fine_iterations must be >= 0");
   require(p.tolerance > 0 && p.tolerance < 1, "tolerance must be in (0, 1)");
 }
 
@@ -206,6 +210,7 @@ void Densifier::build_system(const DensifyInputs& in) {
       if (x > 0) weakest = std::min(weakest, ex[x - 1]);
     }
   }
+  float low = std::numeric_limits<float>::infinity(), high = 0.0f;
   for (int y = 0; y < h; ++y) {
     const float* sp = in.sparse.row(y);
     const float* hint = hint_.row(y);
@@ -217,6 +222,8 @@ void Densifier::build_system(const DensifyInputs& in) {
       if (known(sp[x])) {
         a += ld;
         rhs += ld * sp[x];
+        low = std::min(low, sp[x]);
+        high = std::max(high, sp[x]);
       } else if (lh > 0.0f && hint[x] > 0.0f) {
         a += lh;
         rhs += lh * hint[x];
@@ -224,12 +231,16 @@ void Densifier::build_system(const DensifyInputs& in) {
       if (prev && known(prev[x])) {
         a += ls2;
         rhs += ls2 * prev[x];
+        low = std::min(low, prev[x]);
+        high = std::max(high, prev[x]);
       }
       data[x] = a;
       b[x] = rhs;
     }
   }
   system_.update_diagonal();
+  data_low_ = high > 0.0f ? low : 0.0f;
+  data_high_ = high;
 }
 
 bool Densifier::solves_at_half(int width) const {
@@ -263,6 +274,13 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
         solution_.at(x, y) = known(in.sparse.row(y)[x]) ? in.sparse.row(y)[x] : 0.0f;
   }
   report_ = solver_->solve(system_, rhs_.cview(), solution_.view());
+  // An iterative solve stopped early can overshoot in a small region that contours cut off
+  // (weakly coupled, so it weighs little in the residual); the exact solution cannot.
+  if (data_high_ > 0.0f)
+    for (int y = 0; y < h; ++y) {
+      float* row = solution_.row(y);
+      for (int x = 0; x < w; ++x) row[x] = std::clamp(row[x], data_low_, data_high_);
+    }
   has_solution_ = true;
   timings_.solve_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();

@@ -52,7 +52,7 @@ void prolong(ImageView<const float> coarse, ImageView<float> fine) {
   }
 }
 
-void coarsen(const GridSystem& fine, GridSystem& coarse) {
+void coarsen(const GridSystem& fine, GridSystem& coarse, float edge_scale) {
   const int w = fine.width();
   const int h = fine.height();
   const int cw = (w + 1) / 2;
@@ -73,6 +73,13 @@ void coarsen(const GridSystem& fine, GridSystem& coarse) {
       // Only edges that leave the aggregate survive: odd column -> next aggregate, odd row -> next.
       if (x % 2 == 1 && x + 1 < w) cex[x / 2] += ex[x];
       if (y % 2 == 1 && y + 1 < h) cey[x / 2] += ey[x];
+    }
+  }
+  if (edge_scale != 1.0f) {
+    for (int y = 0; y < ch; ++y) {
+      float* cex = coarse.wx.row(y);
+      float* cey = coarse.wy.row(y);
+      for (int x = 0; x < cw; ++x) cex[x] *= edge_scale, cey[x] *= edge_scale;
     }
   }
   coarse.update_diagonal();

@@ -43,9 +43,19 @@ inline std::vector<std::pair<std::string, densify::DensifyParams>> solver_varian
     v.emplace_back(name, p);
   };
   add("full size", [](auto& p) { p.solve_resolution = "full"; });
-  add("half size, no sweeps", [](auto& p) {
+  add("half size, sweeps only", [](auto& p) {
     p.solve_resolution = "half";
-    p.fine_sweeps = 0;
+    p.fine_sweeps = 2;
+    p.fine_iterations = 0;
+  });
+  add("half size, sweeps and one iteration", [](auto& p) {
+    p.solve_resolution = "half";
+    p.fine_sweeps = 2;
+    p.fine_iterations = 1;
+  });
+  add("half size, no refinement", [](auto& p) {
+    p.solve_resolution = "half";
+    p.fine_iterations = 0;
   });
   add("plain conjugate gradients", [](auto& p) {
     p.solve_resolution = "full";
@@ -75,6 +85,7 @@ void expect_same_dense_as_cpu(const std::vector<pipeline::DepthResult>& frames, 
       other.compute(pipeline::densify_inputs(f, other_last), actual);
       EXPECT_TRUE(same_bytes(actual.cview(), expected.cview()));
       EXPECT_EQ(other.last_report().iterations, cpu.last_report().iterations);
+      EXPECT_EQ(other.last_report().fine_iterations, cpu.last_report().fine_iterations);
       EXPECT_EQ(other.last_report().final_residual, cpu.last_report().final_residual);
       EXPECT_EQ(other.last_report().output_residual, cpu.last_report().output_residual);
       EXPECT_EQ(other.last_report().converged, cpu.last_report().converged);

@@ -206,9 +206,13 @@ double total_ms(const dco::pipeline::DepthResult& r, bool sparse) {
 
 std::string timing_text(const dco::pipeline::DepthResult& r, bool sparse) {
   if (sparse) return fmt::format("stereo {:.1f} ms", r.stereo_timings.total_ms);
-  return fmt::format("stereo {:.1f} + contour {:.1f} + densify {:.1f} ms ({} it, res {:.1e})",
+  const std::string full_size = r.solver.fine_iterations > 0
+                                    ? fmt::format(" + {} at full size", r.solver.fine_iterations)
+                                    : std::string();
+  return fmt::format("stereo {:.1f} + contour {:.1f} + densify {:.1f} ms ({} it{}, res {:.1e})",
                      r.stereo_timings.total_ms, r.contour_timings.total_ms,
-                     r.densify_timings.total_ms, r.solver.iterations, r.solver.final_residual);
+                     r.densify_timings.total_ms, r.solver.iterations, full_size,
+                     r.solver.output_residual);
 }
 
 float median_disparity(const dco::Image<float>& d) {

@@ -112,6 +112,7 @@ struct RowDots {
 // pixel, summing the children in the order the CPU visits them.
 struct Coarsen {
   SystemView fine, coarse;
+  float edge_scale = 1.0f;
   DCO_HD void operator()(int cx, int cy) const {
     const int w = fine.width, h = fine.height;
     float d = 0.0f, ex = 0.0f, ey = 0.0f;
@@ -123,8 +124,8 @@ struct Coarsen {
       }
     const std::size_t o = at(cx, cy, coarse.width);
     coarse.data[o] = d;
-    coarse.wx[o] = ex;
-    coarse.wy[o] = ey;
+    coarse.wx[o] = ex * edge_scale;
+    coarse.wy[o] = ey * edge_scale;
   }
 };
 

@@ -49,19 +49,29 @@ class GridSystemSolver final : public densify::SystemSolver {
     if (densify::solves_at_half(params_, w)) {
       const int cw = (w + 1) / 2, ch = (h + 1) / 2;
       coarse_.resize(cw, ch);
-      grid_.launch(cw, ch, passes::Coarsen{fine_.view(), coarse_.view()});
+      grid_.launch(cw, ch,
+                   passes::Coarsen{fine_.view(), coarse_.view(), densify::kHalfSizeEdgeScale});
       grid_.launch(cw, ch, passes::Diagonal{coarse_.view()});
       coarse_b_.resize(static_cast<std::size_t>(cw) * ch);
       coarse_x_.resize(static_cast<std::size_t>(cw) * ch);
       grid_.launch(cw, ch, passes::Restrict{fine_b_.data(), w, h, coarse_b_.data(), cw, false});
       grid_.launch(cw, ch, passes::Restrict{fine_x_.data(), w, h, coarse_x_.data(), cw, true});
-      report = pcg(coarse_, coarse_b_.data(), coarse_x_.data());
+      report =
+          pcg(coarse_, coarse_b_.data(), coarse_x_.data(), params_.max_iterations, coarse_space_);
       grid_.launch(w, h, passes::Prolong{coarse_x_.data(), cw, fine_x_.data(), w, false});
       for (int sweep = 0; sweep < params_.fine_sweeps; ++sweep)
         gauss_seidel(fine_.view(), fine_b_.data(), fine_x_.data(), 1, sweep % 2 == 0);
-      report.output_residual = relative_residual(fine_.view(), fine_b_.data(), fine_x_.data());
+      if (params_.fine_iterations > 0) {
+        const densify::SolverReport refined =
+            pcg(fine_, fine_b_.data(), fine_x_.data(), params_.fine_iterations, fine_space_);
+        report.fine_iterations = refined.iterations;
+        report.output_residual = refined.final_residual;
+      } else {
+        report.output_residual =
+            relative_residual(fine_.view(), fine_b_.data(), fine_x_.data(), fine_space_);
+      }
     } else {
-      report = pcg(fine_, fine_b_.data(), fine_x_.data());
+      report = pcg(fine_, fine_b_.data(), fine_x_.data(), params_.max_iterations, fine_space_);
       report.output_residual = report.final_residual;
     }
     // The warm start's staging buffer is free again once the solve has synchronized.
@@ -102,6 +112,15 @@ class GridSystemSolver final : public densify::SystemSolver {
       for (auto* v : {&r, &z, &p, &ap}) v->resize(n);
     }
   };
+  // What one size's solve keeps between frames (device buffers are reallocated whenever their
+  // size changes, so the half-size solve and the full-size refinement each have their own).
+  struct Workspace {
+    Scratch scratch;
+    std::vector<std::unique_ptr<Level>> levels;
+    std::size_t level_count = 0;
+    System* finest = nullptr;
+    Buffer<float> fine_residual;
+  };
 
   // densify::dot: each row's dot_row, added up in row order.
   double dot(const float* a, const float* b, int w, int h) {
@@ -129,24 +148,23 @@ class GridSystemSolver final : public densify::SystemSolver {
     grid_.launch(a.width, a.height, passes::Residual{b, r, r, a.width});
   }
 
-  double relative_residual(passes::SystemView a, const float* b, const float* x) {
+  double relative_residual(passes::SystemView a, const float* b, const float* x, Workspace& space) {
     const std::size_t n = static_cast<std::size_t>(a.width) * a.height;
-    scratch_.resize(n);
-    residual(a, b, x, scratch_.r.data());
+    space.scratch.resize(n);
+    float* r = space.scratch.r.data();
+    residual(a, b, x, r);
     const double b_norm = std::sqrt(dot(b, b, a.width, a.height));
-    return b_norm > 0
-               ? std::sqrt(dot(scratch_.r.data(), scratch_.r.data(), a.width, a.height)) / b_norm
-               : 0.0;
+    return b_norm > 0 ? std::sqrt(dot(r, r, a.width, a.height)) / b_norm : 0.0;
   }
 
   // densify::Multigrid::build: Galerkin levels until the coarsest fits kCoarsestSize.
-  void build_hierarchy(System& finest) {
+  void build_hierarchy(System& finest, Workspace& space) {
     std::size_t n = 0;
     System* previous = &finest;
     int w = finest.width, h = finest.height;
     while (std::max(w, h) > kCoarsestSize && std::min(w, h) > 2) {
-      if (levels_.size() <= n) levels_.push_back(std::make_unique<Level>());
-      Level& level = *levels_[n];
+      if (space.levels.size() <= n) space.levels.push_back(std::make_unique<Level>());
+      Level& level = *space.levels[n];
       const int cw = (w + 1) / 2, ch = (h + 1) / 2;
       level.system.resize(cw, ch);
       grid_.launch(cw, ch, passes::Coarsen{previous->view(), level.system.view()});
@@ -157,54 +175,55 @@ class GridSystemSolver final : public densify::SystemSolver {
       w = cw, h = ch;
       ++n;
     }
-    level_count_ = n;
-    finest_ = &finest;
-    fine_residual_.resize(static_cast<std::size_t>(finest.width) * finest.height);
+    space.level_count = n;
+    space.finest = &finest;
+    space.fine_residual.resize(static_cast<std::size_t>(finest.width) * finest.height);
   }
 
-  System& system_at(std::size_t level) {
-    return level == 0 ? *finest_ : levels_[level - 1]->system;
+  static System& system_at(Workspace& space, std::size_t level) {
+    return level == 0 ? *space.finest : space.levels[level - 1]->system;
   }
 
   // densify::Multigrid::cycle_at: one V-cycle from x = 0.
-  void cycle_at(std::size_t level, const float* b, float* x) {
-    const passes::SystemView a = system_at(level).view();
+  void cycle_at(Workspace& space, std::size_t level, const float* b, float* x) {
+    const passes::SystemView a = system_at(space, level).view();
     grid_.launch(a.width, a.height, passes::FillZero{x, a.width});
-    if (level == level_count_) {
+    if (level == space.level_count) {
       gauss_seidel(a, b, x, kCoarsestSweeps, true);
       gauss_seidel(a, b, x, kCoarsestSweeps, false);
       return;
     }
     gauss_seidel(a, b, x, kSmoothingSweeps, true);
-    float* r = level == 0 ? fine_residual_.data() : levels_[level - 1]->r.data();
+    float* r = level == 0 ? space.fine_residual.data() : space.levels[level - 1]->r.data();
     residual(a, b, x, r);
-    Level& next = *levels_[level];
+    Level& next = *space.levels[level];
     const passes::SystemView c = next.system.view();
     grid_.launch(c.width, c.height,
                  passes::Restrict{r, a.width, a.height, next.b.data(), c.width, false});
-    cycle_at(level + 1, next.b.data(), next.x.data());
+    cycle_at(space, level + 1, next.b.data(), next.x.data());
     grid_.launch(a.width, a.height, passes::Prolong{next.x.data(), c.width, x, a.width, true});
     gauss_seidel(a, b, x, kSmoothingSweeps, false);
   }
 
-  void precondition(const float* r, float* z, int w, int h) {
+  void precondition(Workspace& space, const float* r, float* z, int w, int h) {
     if (params_.multigrid)
-      cycle_at(0, r, z);
+      cycle_at(space, 0, r, z);
     else
       grid_.launch(w, h, passes::Copy{r, z, w});
   }
 
   // densify::solve_pcg, step for step.
-  densify::SolverReport pcg(System& system, const float* b, float* x) {
+  densify::SolverReport pcg(System& system, const float* b, float* x, int max_iterations,
+                            Workspace& space) {
     const passes::SystemView a = system.view();
     const int w = a.width, h = a.height;
     densify::SolverReport report;
-    scratch_.resize(static_cast<std::size_t>(w) * h);
-    float* r = scratch_.r.data();
-    float* z = scratch_.z.data();
-    float* p = scratch_.p.data();
-    float* ap = scratch_.ap.data();
-    if (params_.multigrid) build_hierarchy(system);
+    space.scratch.resize(static_cast<std::size_t>(w) * h);
+    float* r = space.scratch.r.data();
+    float* z = space.scratch.z.data();
+    float* p = space.scratch.p.data();
+    float* ap = space.scratch.ap.data();
+    if (params_.multigrid) build_hierarchy(system, space);
     const double b_norm = std::sqrt(dot(b, b, w, h));
     if (b_norm == 0) {
       grid_.launch(w, h, passes::FillZero{x, w});
@@ -219,10 +238,10 @@ class GridSystemSolver final : public densify::SystemSolver {
       report.converged = true;
       return report;
     }
-    precondition(r, z, w, h);
+    precondition(space, r, z, w, h);
     grid_.launch(w, h, passes::Copy{z, p, w});
     double rz = dot(r, z, w, h);
-    for (int it = 1; it <= params_.max_iterations; ++it) {
+    for (int it = 1; it <= max_iterations; ++it) {
       grid_.launch(w, h, passes::Apply{a, p, ap});
       const double pap = dot(p, ap, w, h);
       if (!(pap > 0)) break;  // breakdown: A is not positive definite on p
@@ -240,12 +259,12 @@ class GridSystemSolver final : public densify::SystemSolver {
           report.converged = true;
           return report;
         }
-        precondition(r, z, w, h);
+        precondition(space, r, z, w, h);
         grid_.launch(w, h, passes::Copy{z, p, w});
         rz = dot(r, z, w, h);
         continue;
       }
-      precondition(r, z, w, h);
+      precondition(space, r, z, w, h);
       const double rz_next = dot(r, z, w, h);
       grid_.launch(w, h, passes::UpdateDirection{z, static_cast<float>(rz_next / rz), p, w});
       rz = rz_next;
@@ -259,14 +278,11 @@ class GridSystemSolver final : public densify::SystemSolver {
   densify::DensifyParams params_;
   Grid grid_;
   System fine_, coarse_;
-  Buffer<float> fine_b_, fine_x_, coarse_b_, coarse_x_, fine_residual_;
+  Buffer<float> fine_b_, fine_x_, coarse_b_, coarse_x_;
   Buffer<double> row_dots_;
   Staging<double> dots_staging_;
   Staging<float> upload_staging_[7];  // the system's five images, b and the warm start
-  Scratch scratch_;
-  std::vector<std::unique_ptr<Level>> levels_;
-  std::size_t level_count_ = 0;
-  System* finest_ = nullptr;
+  Workspace coarse_space_, fine_space_;
 };
 
 }  // namespace dco::gpu

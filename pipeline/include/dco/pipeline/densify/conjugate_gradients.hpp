@@ -14,6 +14,8 @@ struct SolverReport {
   // ||b - A x|| / ||b|| of the full-resolution system for the map that is output; equals
   // final_residual unless the system was solved at a coarser resolution.
   double output_residual = 0;
+  // Conjugate-gradient iterations on the full-resolution system after a coarser solve.
+  int fine_iterations = 0;
 };
 
 struct CgScratch {

@@ -33,10 +33,12 @@ struct DensifyParams {
   double fill_edge_weight = 0.05;
   double color_sigma = 4;  // grey-level scale of exp(-|I_p - I_q| / sigma) on the weights; 0 = off
   // "full" solves Eq. 20 at the input resolution; "half" solves its 2x2-aggregated (Galerkin)
-  // system and then runs `fine_sweeps` Gauss-Seidel sweeps of the full system on the result, so
-  // contours still act at the input resolution; "auto" = half when the input is wider than 640 px.
-  std::string solve_resolution = "full";
-  int fine_sweeps = 2;
+  // system and then runs `fine_sweeps` Gauss-Seidel sweeps and up to `fine_iterations`
+  // conjugate-gradient iterations of the full system from the result, so contours still act at
+  // the input resolution; "auto" = half when the input is wider than 640 px.
+  std::string solve_resolution = "auto";
+  int fine_sweeps = 0;
+  int fine_iterations = 2;
   int max_iterations = 60;
   double tolerance = 1e-4;  // relative residual ||b - Ax|| / ||b||
   bool multigrid = true;    // V-cycle preconditioner (else plain conjugate gradients)
@@ -98,6 +100,9 @@ class Densifier {
   std::vector<int> fuse_column_;           // column of M_fuse for each input column
   std::vector<float> left_path_;           // weakest edge between a hole and its left value
   std::array<float, 256> color_weight_{};  // exp(-diff / color_sigma) per grey-level difference
+  // Range of the frame's sparse and previous values: the exact minimiser of Eq. 20 is a
+  // weighted mean of them, so the solution is kept inside it.
+  float data_low_ = 0.0f, data_high_ = 0.0f;
   bool has_solution_ = false;
   SolverReport report_;
   DensifyTimings timings_;

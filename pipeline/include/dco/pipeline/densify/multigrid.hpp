@@ -47,8 +47,16 @@ void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float
                   bool red_first);
 
 // The Galerkin coarse system of 2x2 piecewise-constant aggregation; coarse size is
-// ceil(w/2) x ceil(h/2).
-void coarsen(const GridSystem& fine, GridSystem& coarse);
+// ceil(w/2) x ceil(h/2). The coarse edge weights are multiplied by `edge_scale` (see
+// kHalfSizeEdgeScale).
+void coarsen(const GridSystem& fine, GridSystem& coarse, float edge_scale = 1.0f);
+
+// The Galerkin operator is exact for fields constant on each aggregate, but for a smooth field
+// it doubles the smoothness energy: each coarse edge sums two fine edges while a coarse step
+// spans two fine steps, and the aggregates' inner edges carry half of the gradient too. Halving
+// the coarse edges makes the aggregated system the same energy at half size (exact for linear
+// fields), which is what a solve at half size wants; a preconditioner wants the plain operator.
+inline constexpr float kHalfSizeEdgeScale = 0.5f;
 
 // The transfers that go with `coarsen` (P: piecewise constant over each 2x2 aggregate):
 // coarse = P^T fine (sum of the children), coarse = mean of the children, fine = P coarse.

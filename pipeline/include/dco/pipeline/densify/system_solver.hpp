@@ -12,9 +12,9 @@ namespace dco::densify {
 struct DensifyParams;
 
 // Solves the densifier's system A x = b the way DensifyParams say: at full or half resolution
-// (the latter then refined by Gauss-Seidel sweeps at full size), multigrid-preconditioned or
-// plain conjugate gradients, up to max_iterations or the tolerance. x holds the warm start on
-// entry and the solution on return.
+// (the latter then refined by Gauss-Seidel sweeps and CG iterations at full size),
+// multigrid-preconditioned or plain conjugate gradients, up to max_iterations or the tolerance. x
+// holds the warm start on entry and the solution on return.
 class SystemSolver {
  public:
   virtual ~SystemSolver() = default;
