@@ -48,6 +48,31 @@ Problem random_problem(int w, int h, unsigned seed, double density) {
   return p;
 }
 
+// A near surface left of column `edge` and a far one from it on, a contour on that column, and
+// sparse values where known(x, y).
+struct TwoSurfaces {
+  Image<float> sparse;
+  Image<std::uint8_t> contours;
+  DensifyInputs inputs() const {
+    DensifyInputs in;
+    in.sparse = sparse.cview();
+    in.contours = contours.cview();
+    return in;
+  }
+};
+
+template <class Known>
+TwoSurfaces two_surfaces(int w, int h, int edge, float near, float far, Known known) {
+  TwoSurfaces t{Image<float>(w, h), Image<std::uint8_t>(w, h)};
+  t.contours.fill(0);
+  for (int y = 0; y < h; ++y) {
+    t.contours.at(edge, y) = 255;
+    for (int x = 0; x < w; ++x)
+      t.sparse.at(x, y) = known(x, y) ? (x < edge ? near : far) : kUnknown;
+  }
+  return t;
+}
+
 // Eq. 20 assembled from its definition: E = λd Σ w_sparse (D - Ds)^2
 //   + λs Σ_p Σ_{q∈N4(p)} w_pq (D_p - D_q)^2 + λs2 Σ w_stable (D - Dpre)^2,
 // with dco's two additions: w_pq scaled by exp(-|I_p - I_q| / color_sigma), and holes pulled
@@ -205,19 +230,12 @@ TEST(Densifier, ContourKeepsTwoSurfacesApart) {
   // Left half near (disparity 40), right half far (10); sparse values only far from the edge,
   // and a contour on the true boundary column: the fill must not blend across it.
   const int w = 60, h = 20, edge = 30;
-  Image<float> sparse(w, h);
-  Image<std::uint8_t> contours(w, h);
-  contours.fill(0);
-  for (int y = 0; y < h; ++y) {
-    contours.at(edge, y) = 255;
-    for (int x = 0; x < w; ++x) sparse.at(x, y) = x < 10 ? 40.0f : (x >= 50 ? 10.0f : kUnknown);
-  }
+  const TwoSurfaces scene =
+      two_surfaces(w, h, edge, 40.0f, 10.0f, [](int x, int) { return x < 10 || x >= 50; });
   DensifyParams params;
   params.background_fill = 0;
   Densifier d(params);
-  DensifyInputs in;
-  in.sparse = sparse.cview();
-  in.contours = contours.cview();
+  DensifyInputs in = scene.inputs();
   Image<float> dense;
   d.compute(in, dense);
   for (int y = 0; y < h; ++y) {
@@ -303,17 +321,9 @@ TEST(Densifier, HalfResolutionSolveKeepsAContourOnAnOddColumn) {
   // The contour sits on column 31, inside the 2x2 aggregate of columns 30..31: the aggregated
   // solve blurs that aggregate, and the full-resolution sweeps must put the step back.
   const int w = 64, h = 24, edge = 31;
-  Image<float> sparse(w, h);
-  Image<std::uint8_t> contours(w, h);
-  contours.fill(0);
-  for (int y = 0; y < h; ++y) {
-    contours.at(edge, y) = 255;
-    for (int x = 0; x < w; ++x)
-      sparse.at(x, y) = (x + y) % 3 != 0 ? kUnknown : (x < edge ? 40.0f : 10.0f);
-  }
-  DensifyInputs in;
-  in.sparse = sparse.cview();
-  in.contours = contours.cview();
+  const TwoSurfaces scene =
+      two_surfaces(w, h, edge, 40.0f, 10.0f, [](int x, int y) { return (x + y) % 3 == 0; });
+  const DensifyInputs in = scene.inputs();
   DensifyParams params;
   params.background_fill = 0;
   params.solve_resolution = "full";
@@ -362,24 +372,16 @@ TEST(Densifier, AnEarlyStopStaysWithinTheRangeOfTheData) {
   // preconditioner hands them the other surface's correction. The exact solution is a weighted
   // mean of the data, so the output must stay within [5, 50] wherever the solve stops.
   const int w = 96, h = 64, split = 48;
-  Image<float> sparse(w, h);
-  Image<std::uint8_t> contours(w, h);
-  contours.fill(0);
-  for (int y = 0; y < h; ++y) {
-    contours.at(split, y) = 255;
-    for (int x = 0; x < w; ++x)
-      sparse.at(x, y) = (x * 7 + y * 3) % 4 != 0 ? kUnknown : (x < split ? 50.0f : 5.0f);
-  }
+  TwoSurfaces scene =
+      two_surfaces(w, h, split, 50.0f, 5.0f, [](int x, int y) { return (x * 7 + y * 3) % 4 == 0; });
   for (int top = 4; top + 5 < h; top += 8)
     for (int y = top; y < top + 5; ++y)
       for (int x = split + 1; x < split + 6; ++x) {
         const bool border = y == top || y == top + 4 || x == split + 1 || x == split + 5;
-        contours.at(x, y) = border ? 255 : 0;
-        sparse.at(x, y) = kUnknown;
+        scene.contours.at(x, y) = border ? 255 : 0;
+        scene.sparse.at(x, y) = kUnknown;
       }
-  DensifyInputs in;
-  in.sparse = sparse.cview();
-  in.contours = contours.cview();
+  const DensifyInputs in = scene.inputs();
   for (const int iterations : {1, 2, 60}) {
     SCOPED_TRACE(iterations);
     DensifyParams params;
