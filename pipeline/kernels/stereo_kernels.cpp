@@ -198,35 +198,92 @@ void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, in
   const int half = static_cast<int>(hn::Lanes(du64));
   const int vector_end = count - count % n;
   const auto byte_mask = hn::Set(du, 0xffu);
+  const auto unmatched = hn::Set(du, t.unmatched);
+  const auto lanes = hn::Iota(di, 0);  // hoisted: Iota is not a single instruction everywhere
   const auto* ad_table = reinterpret_cast<const std::int32_t*>(t.ad);
   const auto* census_table = reinterpret_cast<const std::int32_t*>(t.census);
+  // With 16 lanes the census row of one arm (65 entries) is four vectors and one more entry, so
+  // lane permutes replace the second gather.
+  const bool census_in_registers = n >= 16 && t.census_size == 4 * n + 1;
+  const auto index_mask = hn::Set(du, static_cast<std::uint32_t>(n - 1));
+  const auto quarter_bit = hn::Set(du, static_cast<std::uint32_t>(n));
+  const auto half_bit = hn::Set(du, static_cast<std::uint32_t>(2 * n));
+  const auto last_entry = hn::Set(du, static_cast<std::uint32_t>(4 * n));
+  // Right pixels before the row start read as zero from here; their lanes become `unmatched`.
+  HWY_ALIGN std::uint32_t right_pad[HWY_MAX_BYTES / 4];
+  HWY_ALIGN std::uint64_t census_pad[HWY_MAX_BYTES / 4];
   for (int x = 0; x < row.width; ++x) {
-    // Lanes run over the disparities, so the right image is read backwards from x - d0.
-    const bool all_matched = x - d0 - (count - 1) >= 0;
-    const int vector_part = all_matched ? vector_end : 0;
+    std::uint32_t* dst = out + x * count;
+    if (x < d0) {
+      std::fill(dst, dst + count, t.unmatched);
+      continue;
+    }
     const auto a = hn::BitCast(du8, hn::Set(du, row.left[x]));
     const auto cl = hn::Set(du64, row.census_left[x]);
-    const auto ad_base = hn::Set(di, row.shortest_arm[x] * t.ad_size);
-    const auto census_base = hn::Set(di, row.shortest_arm[x] * t.census_size);
-    std::uint32_t* dst = out + x * count;
-    for (int k = 0; k < vector_part; k += n) {
-      const int xr = x - d0 - k;  // right pixel of lane 0
-      const auto b = hn::BitCast(du8, hn::Reverse(du, hn::LoadU(du, row.right + xr - (n - 1))));
+    const int arm = row.shortest_arm[x];
+    const auto ad_base = hn::Set(di, arm * t.ad_size);
+    const auto census_base = hn::Set(di, arm * t.census_size);
+    const std::uint32_t* census_row = t.census + arm * t.census_size;
+    auto c0 = hn::Zero(du), c1 = c0, c2 = c0, c3 = c0, c4 = c0;
+    if (census_in_registers) {
+      c0 = hn::LoadU(du, census_row);
+      c1 = hn::LoadU(du, census_row + n);
+      c2 = hn::LoadU(du, census_row + 2 * n);
+      c3 = hn::LoadU(du, census_row + 3 * n);
+      c4 = hn::Set(du, census_row[4 * n]);
+    }
+    for (int k = 0; k < vector_end; k += n) {
+      // Lanes run over the disparities, so the right image is read backwards: lane j of this
+      // vector is disparity d0 + k + j and right pixel xr - j.
+      const int xr = x - d0 - k;
+      if (xr < 0) {
+        hn::StoreU(unmatched, du, dst + k);
+        continue;
+      }
+      const std::uint32_t* right = row.right + xr - (n - 1);
+      const std::uint64_t* census_right = row.census_right + xr - (n - 1);
+      const bool partial = xr < n - 1;
+      if (partial) {
+        for (int i = 0; i < n; ++i) {
+          const int xi = xr - (n - 1) + i;
+          right_pad[i] = xi >= 0 ? row.right[xi] : 0u;
+          census_pad[i] = xi >= 0 ? row.census_right[xi] : 0u;
+        }
+        right = right_pad;
+        census_right = census_pad;
+      }
+      const auto b = hn::BitCast(du8, hn::Reverse(du, hn::LoadU(du, right)));
       const auto diff = hn::BitCast(du, hn::Sub(hn::Max(a, b), hn::Min(a, b)));
       const auto ad =
           hn::Add(hn::Add(hn::And(diff, byte_mask), hn::And(hn::ShiftRight<8>(diff), byte_mask)),
                   hn::Add(hn::And(hn::ShiftRight<16>(diff), byte_mask), hn::ShiftRight<24>(diff)));
-      const auto lo = hn::PopulationCount(
-          hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, row.census_right + xr - (half - 1)))));
-      const auto hi = hn::PopulationCount(hn::Xor(
-          cl, hn::Reverse(du64, hn::LoadU(du64, row.census_right + xr - half - (half - 1)))));
+      const auto lo =
+          hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right + half))));
+      const auto hi =
+          hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right))));
       const auto hd = hn::ConcatEven(du, hn::BitCast(du, hi), hn::BitCast(du, lo));
-      const auto ad_cost = hn::GatherIndex(di, ad_table, hn::Add(ad_base, hn::BitCast(di, ad)));
-      const auto census_cost =
-          hn::GatherIndex(di, census_table, hn::Add(census_base, hn::BitCast(di, hd)));
-      hn::StoreU(hn::BitCast(du, hn::Add(ad_cost, census_cost)), du, dst + k);
+      const auto ad_cost =
+          hn::BitCast(du, hn::GatherIndex(di, ad_table, hn::Add(ad_base, hn::BitCast(di, ad))));
+      hn::Vec<decltype(du)> census_cost;
+      if (census_in_registers) {
+        const auto idx = hn::IndicesFromVec(du, hn::And(hd, index_mask));
+        const auto odd_quarter = hn::TestBit(hd, quarter_bit);
+        const auto low = hn::IfThenElse(odd_quarter, hn::TableLookupLanes(c1, idx),
+                                        hn::TableLookupLanes(c0, idx));
+        const auto high = hn::IfThenElse(odd_quarter, hn::TableLookupLanes(c3, idx),
+                                         hn::TableLookupLanes(c2, idx));
+        census_cost = hn::IfThenElse(hn::Eq(hd, last_entry), c4,
+                                     hn::IfThenElse(hn::TestBit(hd, half_bit), high, low));
+      } else {
+        census_cost = hn::BitCast(
+            du, hn::GatherIndex(di, census_table, hn::Add(census_base, hn::BitCast(di, hd))));
+      }
+      auto cost = hn::Add(ad_cost, census_cost);
+      if (partial)
+        cost = hn::IfThenElse(hn::RebindMask(du, hn::Gt(lanes, hn::Set(di, xr))), unmatched, cost);
+      hn::StoreU(cost, du, dst + k);
     }
-    detail::block_cost_range(row, t, x, d0, count, vector_part, count, out);
+    detail::block_cost_range(row, t, x, d0, count, vector_end, count, out);
   }
 }
 

@@ -204,7 +204,10 @@ TEST(StereoKernels, BlockMatchingCostMatchesTheRowKernel) {
       for (auto& px : left) px = rng() & (channels == 3 ? 0xffffffu : 0xffu);
       for (auto& px : right) px = rng() & (channels == 3 ? 0xffffffu : 0xffu);
       const auto cl = random_census(rng, left.size());
-      const auto cr = random_census(rng, left.size());
+      auto cr = random_census(rng, left.size());
+      // Hamming distance 64, the one census entry past four 16-lane vectors: every other pixel
+      // at disparity 3.
+      for (int x = 3; x < w; x += 2) cr[x - 3] = ~cl[x];
       const auto arm = random_vector<std::uint8_t>(rng, left.size(), 0, 34);
       const CostRow row{left.data(), right.data(), cl.data(), cr.data(), arm.data(), w};
       for (const int d0 : {0, 3, 16, w - 1}) {
