@@ -204,7 +204,6 @@ TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {
   EXPECT_EQ(rig.source->status().state, SourceStatus::State::kDisconnected);
   EXPECT_NE(rig.source->status().error.find("unplugged"), std::string::npos);
   rig.sim->set_present(true);
-  const std::int64_t replugged = rig.sim->now_ns();
   // A frame already in the delivery slot may still go out after the unplug, so resumption is
   // a frame that arrives once the module has been reopened.
   while (counters_of(*rig.source).at("reconnects") == 0 &&
@@ -212,8 +211,6 @@ TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   ASSERT_EQ(counters_of(*rig.source).at("reconnects"), 1u);
   ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 1));
-  const std::int64_t recovered = rig.sim->now_ns();
-  EXPECT_LT(recovered - replugged, 2'000'000'000);
   rig.source->stop();
   const auto n = counters_of(*rig.source);
   EXPECT_EQ(n.at("disconnects"), 1u);
@@ -221,6 +218,10 @@ TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {
   EXPECT_TRUE(rig.sink.errors.empty());
   const auto rec = rig.sim->record();
   EXPECT_EQ(rec.transfers_submitted, rec.transfers_completed);
+  // Recovery in the module's time, replug to the first sound frame: the test thread's own view
+  // of the clock runs late whenever it is descheduled while the driver moves the clock on.
+  EXPECT_EQ(rec.recoveries, 1u);
+  EXPECT_LT(rec.worst_recovery_ns, 2'000'000'000);
 }
 
 // A thousand faults of every kind, one at a time with clean frames between them: no crash, no
