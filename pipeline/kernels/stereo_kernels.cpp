@@ -240,17 +240,19 @@ void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, in
         hn::StoreU(unmatched, du, dst + k);
         continue;
       }
-      const std::uint32_t* right = row.right + xr - (n - 1);
-      const std::uint64_t* census_right = row.census_right + xr - (n - 1);
+      // The right pixels xr - (n - 1) .. xr; from the padded copy when some precede the row.
       const bool partial = xr < n - 1;
+      const std::uint32_t* right = right_pad;
+      const std::uint64_t* census_right = census_pad;
       if (partial) {
         for (int i = 0; i < n; ++i) {
           const int xi = xr - (n - 1) + i;
           right_pad[i] = xi >= 0 ? row.right[xi] : 0u;
           census_pad[i] = xi >= 0 ? row.census_right[xi] : 0u;
         }
-        right = right_pad;
-        census_right = census_pad;
+      } else {
+        right = row.right + xr - (n - 1);
+        census_right = row.census_right + xr - (n - 1);
       }
       const auto b = hn::BitCast(du8, hn::Reverse(du, hn::LoadU(du, right)));
       const auto diff = hn::BitCast(du, hn::Sub(hn::Max(a, b), hn::Min(a, b)));
