@@ -115,11 +115,15 @@ SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<
         report.converged = true;
         return report;
       }
+      if (it == max_iterations) break;
       precondition(mg, s.r.cview(), s.z.view());
       rz = dot(s.r.cview(), s.z.cview());
       restart = true;
       continue;
     }
+    // The last iteration's direction would go unused: a V-cycle costs as much as several
+    // passes over the system.
+    if (it == max_iterations) break;
     precondition(mg, s.r.cview(), s.z.view());
     const double rz_next = dot(s.r.cview(), s.z.cview());
     beta = static_cast<float>(rz_next / rz);

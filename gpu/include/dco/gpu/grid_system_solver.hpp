@@ -259,11 +259,13 @@ class GridSystemSolver final : public densify::SystemSolver {
           report.converged = true;
           return report;
         }
+        if (it == max_iterations) break;
         precondition(space, r, z, w, h);
         grid_.launch(w, h, passes::Copy{z, p, w});
         rz = dot(r, z, w, h);
         continue;
       }
+      if (it == max_iterations) break;  // the next direction would go unused
       precondition(space, r, z, w, h);
       const double rz_next = dot(r, z, w, h);
       grid_.launch(w, h, passes::UpdateDirection{z, static_cast<float>(rz_next / rz), p, w});
