@@ -21,20 +21,23 @@ inline void census_range(const std::uint8_t* const* rows, int width, int window_
   for (int x = begin; x < end; ++x) out[x] = pixel::census_bits(row, x, width, window_w, window_h);
 }
 
-// Length of the arm from `anchor` along `step` (elements), at most `limit` pixels.
-inline int arm_length(const std::uint32_t* anchor, std::ptrdiff_t step, int limit,
-                      const ArmParams& p) {
+// Length of the arm from `anchor` along `step` (elements), at most `limit` pixels. Pixels are
+// packed words or grey bytes (a packed grey pixel is its byte).
+template <class Pixel>
+int arm_length(const Pixel* anchor, std::ptrdiff_t step, int limit, const ArmParams& p) {
   return pixel::arm_length(
-      *anchor, [anchor, step](int i) { return anchor[step * i]; }, limit, p);
+      std::uint32_t{*anchor}, [anchor, step](int i) { return std::uint32_t{anchor[step * i]}; },
+      limit, p);
 }
 
 // Arms of columns [begin, end) of row y.
-inline void arms_range(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height,
-                       int y, const ArmParams& p, int begin, int end, std::uint8_t* left,
-                       std::uint8_t* right, std::uint8_t* up, std::uint8_t* down) {
-  const std::uint32_t* row = image + y * stride;
+template <class Pixel>
+void arms_range(const Pixel* image, std::ptrdiff_t stride, int width, int height, int y,
+                const ArmParams& p, int begin, int end, std::uint8_t* left, std::uint8_t* right,
+                std::uint8_t* up, std::uint8_t* down) {
+  const Pixel* row = image + y * stride;
   for (int x = begin; x < end; ++x) {
-    const std::uint32_t* a = row + x;
+    const Pixel* a = row + x;
     left[x] = static_cast<std::uint8_t>(arm_length(a, -1, std::min(p.arm_max, x), p));
     right[x] = static_cast<std::uint8_t>(arm_length(a, 1, std::min(p.arm_max, width - 1 - x), p));
     up[x] = static_cast<std::uint8_t>(arm_length(a, -stride, std::min(p.arm_max, y), p));

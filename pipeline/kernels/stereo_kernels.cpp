@@ -147,6 +147,90 @@ void CrossArmsRow(const std::uint32_t* image, std::ptrdiff_t stride, int width, 
   }
 }
 
+// Arm lengths of the grey anchors anchor[0 .. lanes), each stepping `step` bytes per pixel, with
+// `limit` steps allowed in every lane and, with kLaneLimits, lane_limit[k] in lane k. Lanes stop
+// one by one; the loop ends when all have.
+template <bool kLaneLimits, class D>
+hn::Vec<D> GreyArmLengths(D d, const std::uint8_t* anchor, std::ptrdiff_t step, int limit,
+                          const ArmParams& p, hn::Vec<D> lane_limit) {
+  const auto a = hn::LoadU(d, anchor);
+  // The thresholds are validated to 1 .. 255 and arm_max to at most 255, so all fit a byte.
+  const auto tau1 = hn::Set(d, static_cast<std::uint8_t>(p.tau1));
+  const auto tau2 = hn::Set(d, static_cast<std::uint8_t>(p.tau2));
+  auto prev = a;
+  auto len = hn::Zero(d);
+  auto active = hn::Eq(a, a);
+  for (int i = 1; i <= limit; ++i) {
+    const auto q = hn::LoadU(d, anchor + step * i);
+    const auto to_anchor = hn::Sub(hn::Max(q, a), hn::Min(q, a));
+    const auto to_prev = hn::Sub(hn::Max(q, prev), hn::Min(q, prev));
+    active = hn::And(active, hn::And(hn::Lt(to_anchor, tau1), hn::Lt(to_prev, tau1)));
+    if (i > p.arm_short) active = hn::And(active, hn::Lt(to_anchor, tau2));
+    if constexpr (kLaneLimits)
+      active = hn::And(active, hn::Lt(hn::Set(d, static_cast<std::uint8_t>(i - 1)), lane_limit));
+    if (hn::AllFalse(d, active)) break;
+    len = hn::IfThenElse(active, hn::Set(d, static_cast<std::uint8_t>(i)), len);
+    prev = hn::IfThenElse(active, q, prev);
+  }
+  return len;
+}
+
+void GreyCrossArmsRow(const std::uint8_t* image, std::ptrdiff_t stride, int width, int height,
+                      int y, const ArmParams& p, std::uint8_t* left, std::uint8_t* right,
+                      std::uint8_t* up, std::uint8_t* down) {
+  const hn::ScalableTag<std::uint8_t> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const std::uint8_t* row = image + y * stride;
+  if (width < n) {
+    detail::arms_range(image, stride, width, height, y, p, 0, width, left, right, up, down);
+    return;
+  }
+  // Vectors at 0, n, 2n, ...; the last one moves left to end at the row end, so it recomputes a
+  // few pixels (to the same values) instead of leaving a partial vector.
+  const auto vector_at = [&](int x0) { return std::min(x0, width - n); };
+  const auto none = hn::Zero(d);
+  const int up_limit = std::min(p.arm_max, y);
+  const int down_limit = std::min(p.arm_max, height - 1 - y);
+  for (int x0 = 0; x0 < width; x0 += n) {
+    const int x = vector_at(x0);
+    hn::StoreU(GreyArmLengths<false>(d, row + x, -stride, up_limit, p, none), d, up + x);
+    hn::StoreU(GreyArmLengths<false>(d, row + x, stride, down_limit, p, none), d, down + x);
+  }
+  // Near the row ends the lanes have limits of their own and the vector reads past the row: such
+  // vectors read a zero-padded copy of the row's end, the lanes stopping at their limits.
+  constexpr int kMaxArm = 255;
+  HWY_ALIGN std::uint8_t padded[2 * kMaxArm + 2 * HWY_MAX_BYTES];
+  HWY_ALIGN std::uint8_t limits[HWY_MAX_BYTES];
+  const int reach = std::min(width, p.arm_max + 2 * n);  // pixels a border vector may read
+  std::fill(padded, padded + p.arm_max, std::uint8_t{0});
+  std::copy(row, row + reach, padded + p.arm_max);
+  for (int x0 = 0; x0 < width; x0 += n) {
+    const int x = vector_at(x0);
+    if (x >= p.arm_max) {
+      hn::StoreU(GreyArmLengths<false>(d, row + x, -1, p.arm_max, p, none), d, left + x);
+      continue;
+    }
+    for (int k = 0; k < n; ++k) limits[k] = static_cast<std::uint8_t>(std::min(p.arm_max, x + k));
+    hn::StoreU(GreyArmLengths<true>(d, padded + p.arm_max + x, -1, std::min(p.arm_max, x + n - 1),
+                                    p, hn::Load(d, limits)),
+               d, left + x);
+  }
+  const int base = width - reach;  // padded[k] = row[base + k]
+  std::copy(row + base, row + width, padded);
+  std::fill(padded + reach, padded + reach + p.arm_max, std::uint8_t{0});
+  for (int x0 = 0; x0 < width; x0 += n) {
+    const int x = vector_at(x0);
+    if (x + n - 1 + p.arm_max <= width - 1) {
+      hn::StoreU(GreyArmLengths<false>(d, row + x, 1, p.arm_max, p, none), d, right + x);
+      continue;
+    }
+    for (int k = 0; k < n; ++k)
+      limits[k] = static_cast<std::uint8_t>(std::min(p.arm_max, width - 1 - x - k));
+    hn::StoreU(GreyArmLengths<true>(d, padded + (x - base), 1, p.arm_max, p, hn::Load(d, limits)),
+               d, right + x);
+  }
+}
+
 void MatchingCostRow(const CostRow& row, const CostTableView& t, int d, std::uint32_t* out) {
   const hn::ScalableTag<std::uint32_t> du;
   const hn::RebindToSigned<decltype(du)> di;
@@ -575,6 +659,7 @@ namespace dco::kernels {
 HWY_EXPORT(TargetName);
 HWY_EXPORT(CensusRow);
 HWY_EXPORT(CrossArmsRow);
+HWY_EXPORT(GreyCrossArmsRow);
 HWY_EXPORT(MatchingCostRow);
 HWY_EXPORT(BlockMatchingCostRow);
 HWY_EXPORT(HorizontalSumsRow);
@@ -602,6 +687,13 @@ void cross_arms_row(const std::uint32_t* image, std::ptrdiff_t stride, int width
                     const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
                     std::uint8_t* up, std::uint8_t* down) {
   HWY_DYNAMIC_DISPATCH(CrossArmsRow)
+  (image, stride, width, height, y, params, left, right, up, down);
+}
+
+void grey_cross_arms_row(const std::uint8_t* image, std::ptrdiff_t stride, int width, int height,
+                         int y, const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
+                         std::uint8_t* up, std::uint8_t* down) {
+  HWY_DYNAMIC_DISPATCH(GreyCrossArmsRow)
   (image, stride, width, height, y, params, left, right, up, down);
 }
 

@@ -26,6 +26,12 @@ void cross_arms_row(const std::uint32_t* image, std::ptrdiff_t stride, int width
   detail::arms_range(image, stride, width, height, y, params, 0, width, left, right, up, down);
 }
 
+void grey_cross_arms_row(const std::uint8_t* image, std::ptrdiff_t stride, int width, int height,
+                         int y, const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
+                         std::uint8_t* up, std::uint8_t* down) {
+  detail::arms_range(image, stride, width, height, y, params, 0, width, left, right, up, down);
+}
+
 void matching_cost_row(const CostRow& row, const CostTableView& tables, int d, std::uint32_t* out) {
   const int first = std::min(d, row.width);
   std::fill(out, out + first, tables.unmatched);

@@ -49,7 +49,10 @@ class CpuStereoMatcher final : public StereoMatcher {
     // internal resolution.
     const ArmRule rule{params_.arm_max / scale_, params_.arm_short / scale_, params_.tau1,
                        params_.tau2};
-    compute_cross_arms(packed_left_.cview(), rule, arms_);
+    if (ad_left_.channels == 1)
+      compute_grey_cross_arms(ad_left_, rule, arms_);
+    else
+      compute_cross_arms(packed_left_.cview(), rule, arms_);
     if (params_.smooth_arms) smooth_cross_arms(arms_, arm_scratch_);
     shortest_arm_.resize(w_, h_);
     for (int y = 0; y < h_; ++y)

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cassert>
 #include <cstdlib>
+#include <string>
 
+#include "dco/core/error.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
 #include "dco/kernels/stereo_pixel.hpp"
 
@@ -92,6 +94,20 @@ void compute_cross_arms(ImageView<const std::uint32_t> packed, const ArmRule& ru
   for (int y = 0; y < packed.height; ++y)
     kernels::cross_arms_row(packed.data, packed.stride, packed.width, packed.height, y, params,
                             arms.left.row(y), arms.right.row(y), arms.up.row(y), arms.down.row(y));
+}
+
+void compute_grey_cross_arms(ImageView<const std::uint8_t> grey, const ArmRule& rule,
+                             CrossArms& arms) {
+  assert(rule.arm_max >= 0 && rule.arm_max <= 255);
+  if (grey.channels != 1)
+    throw Error("compute_grey_cross_arms: the image has " + std::to_string(grey.channels) +
+                " channels, not 1");
+  arms.resize(grey.width, grey.height);
+  const kernels::ArmParams params{rule.arm_max, rule.arm_short, rule.tau1, rule.tau2};
+  for (int y = 0; y < grey.height; ++y)
+    kernels::grey_cross_arms_row(grey.data, grey.stride, grey.width, grey.height, y, params,
+                                 arms.left.row(y), arms.right.row(y), arms.up.row(y),
+                                 arms.down.row(y));
 }
 
 void smooth_cross_arms(CrossArms& arms, Image<std::uint8_t>& scratch) {

@@ -161,6 +161,45 @@ TEST(StereoKernels, CrossArmsMatchScalar) {
   }
 }
 
+TEST(StereoKernels, GreyCrossArmsEqualThoseOfPackedPixels) {
+  std::mt19937 rng(7);
+  // Widths below, at and past every target's byte lanes (16 .. 64), and past arm_max 255 at both
+  // row ends.
+  for (const int w : {1, 7, 16, 17, 40, 64, 65, 130, 200, 333, 700}) {
+    const int h = 23;
+    const std::ptrdiff_t stride = w + 5;
+    std::vector<std::uint8_t> grey(static_cast<std::size_t>(h * stride));
+    std::vector<std::uint32_t> packed(grey.size());
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const auto v = static_cast<std::uint8_t>(((x / 11) * 37 + (y / 5) * 59) % 256 + rng() % 4);
+        grey[static_cast<std::size_t>(y * stride + x)] = v;
+        pack_pixels(&v, 1, 1, &packed[static_cast<std::size_t>(y * stride + x)]);
+      }
+    for (const ArmParams params : {ArmParams{34, 17, 20, 6}, ArmParams{17, 8, 20, 6},
+                                   ArmParams{5, 2, 12, 3}, ArmParams{255, 0, 255, 1}}) {
+      for (int y = 0; y < h; ++y) {
+        std::vector<std::uint8_t> expected(static_cast<std::size_t>(4 * w));
+        std::uint8_t* e = expected.data();
+        scalar::cross_arms_row(packed.data(), stride, w, h, y, params, e, e + w, e + 2 * w,
+                               e + 3 * w);
+        std::vector<std::uint8_t> reference(expected.size(), 99);
+        std::uint8_t* r = reference.data();
+        scalar::grey_cross_arms_row(grey.data(), stride, w, h, y, params, r, r + w, r + 2 * w,
+                                    r + 3 * w);
+        ASSERT_EQ(reference, expected) << "width " << w << " row " << y;
+        for_each_target([&] {
+          std::vector<std::uint8_t> out(expected.size(), 99);
+          std::uint8_t* o = out.data();
+          grey_cross_arms_row(grey.data(), stride, w, h, y, params, o, o + w, o + 2 * w, o + 3 * w);
+          ASSERT_EQ(out, expected)
+              << "width " << w << " row " << y << " arm_max " << params.arm_max;
+        });
+      }
+    }
+  }
+}
+
 TEST(StereoKernels, MatchingCostMatchesScalar) {
   std::mt19937 rng(1);
   for (const int channels : {1, 3}) {

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "dco/core/error.hpp"
 #include "pipeline_test_support.hpp"
 
 namespace dco::stereo {
@@ -199,6 +200,37 @@ TEST(CrossArms, ArmsOfStridedSubViewIgnoreTheSurroundings) {
       ASSERT_EQ(arms.up.at(x, y), y);
       ASSERT_EQ(arms.down.at(x, y), 9 - y);
     }
+}
+
+TEST(CrossArms, GreyKernelGivesTheReferenceArmsOnAStridedView) {
+  // Noisy patches inside a frame that differs: the byte kernel must see only the view.
+  std::mt19937 rng(3);
+  Image<std::uint8_t> big(300, 60);
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 300; ++x)
+      big.at(x, y) = static_cast<std::uint8_t>(((x / 13) * 41 + (y / 6) * 23) % 256 + rng() % 6);
+  const ImageView<const std::uint8_t> view = big.cview().sub(7, 3, 280, 50);
+  for (const ArmRule rule : {ArmRule{}, ArmRule{17, 8, 20, 6}, ArmRule{255, 100, 255, 40}}) {
+    CrossArms expected, arms;
+    compute_cross_arms(view, rule, expected);
+    compute_grey_cross_arms(view, rule, arms);
+    ASSERT_EQ(arms.width(), 280);
+    ASSERT_EQ(arms.height(), 50);
+    for (int y = 0; y < 50; ++y)
+      for (int x = 0; x < 280; ++x) {
+        ASSERT_EQ(arms.left.at(x, y), expected.left.at(x, y)) << x << "," << y;
+        ASSERT_EQ(arms.right.at(x, y), expected.right.at(x, y)) << x << "," << y;
+        ASSERT_EQ(arms.up.at(x, y), expected.up.at(x, y)) << x << "," << y;
+        ASSERT_EQ(arms.down.at(x, y), expected.down.at(x, y)) << x << "," << y;
+      }
+  }
+}
+
+TEST(CrossArms, GreyKernelRefusesColourImages) {
+  Image<std::uint8_t> colour(20, 10, 3);
+  colour.fill(0);
+  CrossArms arms;
+  EXPECT_THROW(compute_grey_cross_arms(colour.cview(), ArmRule{}, arms), Error);
 }
 
 TEST(SmoothCrossArms, RemovesOneRowSpikeAndOneColumnNotch) {

@@ -31,6 +31,10 @@ void compute_cross_arms(ImageView<const std::uint8_t> image, const ArmRule& rule
 // The same on pixels packed by kernels::pack_pixels, with the SIMD kernel: equal arms.
 void compute_cross_arms(ImageView<const std::uint32_t> packed, const ArmRule& rule,
                         CrossArms& arms);
+// The same on a one-channel image with the SIMD kernel on bytes (four times the pixels per
+// vector of the packed one): equal arms.
+void compute_grey_cross_arms(ImageView<const std::uint8_t> grey, const ArmRule& rule,
+                             CrossArms& arms);
 
 // Smooths the window shapes (§4.1): a 3-tap median of each arm length across the arm direction
 // (left/right arms over the pixel above and below, up/down arms over the pixels beside it)

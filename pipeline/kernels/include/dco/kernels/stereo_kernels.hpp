@@ -37,6 +37,11 @@ struct ArmParams {
 void cross_arms_row(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height, int y,
                     const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
                     std::uint8_t* up, std::uint8_t* down);
+// The same on a grey image (one byte per pixel, `stride` bytes apart): the arms cross_arms_row
+// gives for its packed pixels, a vector lane per byte instead of per word.
+void grey_cross_arms_row(const std::uint8_t* image, std::ptrdiff_t stride, int width, int height,
+                         int y, const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
+                         std::uint8_t* up, std::uint8_t* down);
 
 // Flat fixed-point cost tables of Eq. 1 (see dco::stereo::CostTables): the AD term of pixel x is
 // ad[arm[x] * ad_size + sum of |channel differences|], the census term
@@ -147,6 +152,9 @@ void census_row(const std::uint8_t* const* rows, int width, int window_w, int wi
 void cross_arms_row(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height, int y,
                     const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
                     std::uint8_t* up, std::uint8_t* down);
+void grey_cross_arms_row(const std::uint8_t* image, std::ptrdiff_t stride, int width, int height,
+                         int y, const ArmParams& params, std::uint8_t* left, std::uint8_t* right,
+                         std::uint8_t* up, std::uint8_t* down);
 void block_matching_cost_row(const CostRow& row, const CostTableView& tables, int d0, int count,
                              std::uint32_t* out);
 void matching_cost_row(const CostRow& row, const CostTableView& tables, int d, std::uint32_t* out);
