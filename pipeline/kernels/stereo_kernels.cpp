@@ -80,10 +80,11 @@ hn::Mask<D> AllChannelsBelow(D di, V8 diff8, V8 tau) {
 }
 
 // Arm lengths of the anchors anchor[0 .. lanes), each stepping `step` elements per pixel, with
-// `limit` steps allowed in every lane. Lanes stop one by one; the loop ends when all have.
-template <class D>
+// `limit` steps allowed in every lane and, with kLaneLimits, lane_limit[k] in lane k. Lanes stop
+// one by one; the loop ends when all have.
+template <bool kLaneLimits, class D>
 hn::Vec<D> ArmLengths(D di, const std::uint32_t* anchor, std::ptrdiff_t step, int limit,
-                      const ArmParams& p) {
+                      const ArmParams& p, hn::Vec<D> lane_limit) {
   const hn::Repartition<std::uint8_t, D> du8;
   const auto* base = reinterpret_cast<const std::int32_t*>(anchor);
   const auto a = hn::LoadU(di, base);
@@ -101,11 +102,65 @@ hn::Vec<D> ArmLengths(D di, const std::uint32_t* anchor, std::ptrdiff_t step, in
     active = hn::And(active, hn::And(AllChannelsBelow(di, to_anchor, tau1),
                                      AllChannelsBelow(di, to_prev, tau1)));
     if (i > p.arm_short) active = hn::And(active, AllChannelsBelow(di, to_anchor, tau2));
+    if constexpr (kLaneLimits) active = hn::And(active, hn::Lt(hn::Set(di, i - 1), lane_limit));
     if (hn::AllFalse(di, active)) break;
     len = hn::IfThenElse(active, hn::Set(di, i), len);
     prev8 = hn::BitCast(du8, hn::IfThenElse(active, hn::BitCast(di, q8), hn::BitCast(di, prev8)));
   }
   return len;
+}
+
+// Largest arm_max (validated) and the most lanes of any target, for the padded row ends.
+constexpr int kMaxArm = 255;
+constexpr int kMaxLanes = HWY_MAX_BYTES;
+
+// The horizontal arms of one row, for the packed (32-bit) and the grey (8-bit) kernels alike.
+// Vectors at 0, n, 2n, ...; the last one moves left to end at the row end, so it recomputes a few
+// pixels (to the same values) instead of leaving a partial vector. Near the row ends the lanes
+// have limits of their own and a vector would read past the row: such vectors read a
+// zero-padded copy of the row's end, the lanes stopping at their limits.
+template <class D, class Pixel, class Lengths>
+void HorizontalArms(D d, const Pixel* row, int width, const ArmParams& p, const Lengths& lengths,
+                    std::uint8_t* left, std::uint8_t* right) {
+  using T = hn::TFromD<D>;
+  const int n = static_cast<int>(hn::Lanes(d));
+  HWY_ALIGN Pixel padded[2 * kMaxArm + 2 * kMaxLanes];
+  HWY_ALIGN T limits[kMaxLanes];
+  const auto store = [&](hn::Vec<D> len, std::uint8_t* out) {
+    const hn::Rebind<std::uint8_t, D> du8;
+    if constexpr (sizeof(T) == 1)
+      hn::StoreU(len, d, out);
+    else
+      hn::StoreU(hn::DemoteTo(du8, len), du8, out);
+  };
+  const auto vector_at = [&](int x0) { return std::min(x0, width - n); };
+  const int reach = std::min(width, p.arm_max + 2 * n);  // pixels a border vector may read
+  std::fill(padded, padded + p.arm_max, Pixel{0});
+  std::copy(row, row + reach, padded + p.arm_max);
+  for (int x0 = 0; x0 < width; x0 += n) {
+    const int x = vector_at(x0);
+    if (x >= p.arm_max) {
+      store(lengths.template operator()<false>(row + x, -1, p.arm_max, hn::Zero(d)), left + x);
+      continue;
+    }
+    for (int k = 0; k < n; ++k) limits[k] = static_cast<T>(std::min(p.arm_max, x + k));
+    store(lengths.template operator()<true>(padded + p.arm_max + x, -1,
+                                            std::min(p.arm_max, x + n - 1), hn::Load(d, limits)),
+          left + x);
+  }
+  const int base = width - reach;  // padded[k] = row[base + k]
+  std::copy(row + base, row + width, padded);
+  std::fill(padded + reach, padded + reach + p.arm_max, Pixel{0});
+  for (int x0 = 0; x0 < width; x0 += n) {
+    const int x = vector_at(x0);
+    if (x + n - 1 + p.arm_max <= width - 1) {
+      store(lengths.template operator()<false>(row + x, 1, p.arm_max, hn::Zero(d)), right + x);
+      continue;
+    }
+    for (int k = 0; k < n; ++k) limits[k] = static_cast<T>(std::min(p.arm_max, width - 1 - x - k));
+    store(lengths.template operator()<true>(padded + (x - base), 1, p.arm_max, hn::Load(d, limits)),
+          right + x);
+  }
 }
 
 void CrossArmsRow(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height, int y,
@@ -114,37 +169,26 @@ void CrossArmsRow(const std::uint32_t* image, std::ptrdiff_t stride, int width, 
   const hn::ScalableTag<std::int32_t> di;
   const hn::Rebind<std::uint8_t, decltype(di)> du8n;
   const int n = static_cast<int>(hn::Lanes(di));
+  if (width < n) {
+    detail::arms_range(image, stride, width, height, y, p, 0, width, left, right, up, down);
+    return;
+  }
   const std::uint32_t* row = image + y * stride;
   const int up_limit = std::min(p.arm_max, y);
   const int down_limit = std::min(p.arm_max, height - 1 - y);
-  int x = 0;
-  for (; x + n <= width; x += n) {
-    hn::StoreU(hn::DemoteTo(du8n, ArmLengths(di, row + x, -stride, up_limit, p)), du8n, up + x);
-    hn::StoreU(hn::DemoteTo(du8n, ArmLengths(di, row + x, stride, down_limit, p)), du8n, down + x);
+  const auto none = hn::Zero(di);
+  for (int x0 = 0; x0 < width; x0 += n) {
+    const int x = std::min(x0, width - n);
+    hn::StoreU(hn::DemoteTo(du8n, ArmLengths<false>(di, row + x, -stride, up_limit, p, none)), du8n,
+               up + x);
+    hn::StoreU(hn::DemoteTo(du8n, ArmLengths<false>(di, row + x, stride, down_limit, p, none)),
+               du8n, down + x);
   }
-  for (; x < width; ++x) {
-    up[x] = static_cast<std::uint8_t>(detail::arm_length(row + x, -stride, up_limit, p));
-    down[x] = static_cast<std::uint8_t>(detail::arm_length(row + x, stride, down_limit, p));
-  }
-  // Horizontal arms: whole vectors where every lane may reach arm_max pixels inside the row.
-  for (x = 0; x < width; ++x) {
-    if (x >= p.arm_max && x + n <= width) {
-      hn::StoreU(hn::DemoteTo(du8n, ArmLengths(di, row + x, -1, p.arm_max, p)), du8n, left + x);
-      x += n - 1;
-    } else {
-      left[x] =
-          static_cast<std::uint8_t>(detail::arm_length(row + x, -1, std::min(p.arm_max, x), p));
-    }
-  }
-  for (x = 0; x < width; ++x) {
-    if (x + n - 1 + p.arm_max <= width - 1) {
-      hn::StoreU(hn::DemoteTo(du8n, ArmLengths(di, row + x, 1, p.arm_max, p)), du8n, right + x);
-      x += n - 1;
-    } else {
-      right[x] = static_cast<std::uint8_t>(
-          detail::arm_length(row + x, 1, std::min(p.arm_max, width - 1 - x), p));
-    }
-  }
+  const auto lengths = [&]<bool kLaneLimits>(const std::uint32_t* anchor, std::ptrdiff_t step,
+                                             int limit, hn::Vec<decltype(di)> lane_limit) {
+    return ArmLengths<kLaneLimits>(di, anchor, step, limit, p, lane_limit);
+  };
+  HorizontalArms(di, row, width, p, lengths, left, right);
 }
 
 // Arm lengths of the grey anchors anchor[0 .. lanes), each stepping `step` bytes per pixel, with
@@ -180,55 +224,24 @@ void GreyCrossArmsRow(const std::uint8_t* image, std::ptrdiff_t stride, int widt
                       std::uint8_t* up, std::uint8_t* down) {
   const hn::ScalableTag<std::uint8_t> d;
   const int n = static_cast<int>(hn::Lanes(d));
-  const std::uint8_t* row = image + y * stride;
   if (width < n) {
     detail::arms_range(image, stride, width, height, y, p, 0, width, left, right, up, down);
     return;
   }
-  // Vectors at 0, n, 2n, ...; the last one moves left to end at the row end, so it recomputes a
-  // few pixels (to the same values) instead of leaving a partial vector.
-  const auto vector_at = [&](int x0) { return std::min(x0, width - n); };
-  const auto none = hn::Zero(d);
+  const std::uint8_t* row = image + y * stride;
   const int up_limit = std::min(p.arm_max, y);
   const int down_limit = std::min(p.arm_max, height - 1 - y);
+  const auto none = hn::Zero(d);
   for (int x0 = 0; x0 < width; x0 += n) {
-    const int x = vector_at(x0);
+    const int x = std::min(x0, width - n);
     hn::StoreU(GreyArmLengths<false>(d, row + x, -stride, up_limit, p, none), d, up + x);
     hn::StoreU(GreyArmLengths<false>(d, row + x, stride, down_limit, p, none), d, down + x);
   }
-  // Near the row ends the lanes have limits of their own and the vector reads past the row: such
-  // vectors read a zero-padded copy of the row's end, the lanes stopping at their limits.
-  constexpr int kMaxArm = 255;
-  HWY_ALIGN std::uint8_t padded[2 * kMaxArm + 2 * HWY_MAX_BYTES];
-  HWY_ALIGN std::uint8_t limits[HWY_MAX_BYTES];
-  const int reach = std::min(width, p.arm_max + 2 * n);  // pixels a border vector may read
-  std::fill(padded, padded + p.arm_max, std::uint8_t{0});
-  std::copy(row, row + reach, padded + p.arm_max);
-  for (int x0 = 0; x0 < width; x0 += n) {
-    const int x = vector_at(x0);
-    if (x >= p.arm_max) {
-      hn::StoreU(GreyArmLengths<false>(d, row + x, -1, p.arm_max, p, none), d, left + x);
-      continue;
-    }
-    for (int k = 0; k < n; ++k) limits[k] = static_cast<std::uint8_t>(std::min(p.arm_max, x + k));
-    hn::StoreU(GreyArmLengths<true>(d, padded + p.arm_max + x, -1, std::min(p.arm_max, x + n - 1),
-                                    p, hn::Load(d, limits)),
-               d, left + x);
-  }
-  const int base = width - reach;  // padded[k] = row[base + k]
-  std::copy(row + base, row + width, padded);
-  std::fill(padded + reach, padded + reach + p.arm_max, std::uint8_t{0});
-  for (int x0 = 0; x0 < width; x0 += n) {
-    const int x = vector_at(x0);
-    if (x + n - 1 + p.arm_max <= width - 1) {
-      hn::StoreU(GreyArmLengths<false>(d, row + x, 1, p.arm_max, p, none), d, right + x);
-      continue;
-    }
-    for (int k = 0; k < n; ++k)
-      limits[k] = static_cast<std::uint8_t>(std::min(p.arm_max, width - 1 - x - k));
-    hn::StoreU(GreyArmLengths<true>(d, padded + (x - base), 1, p.arm_max, p, hn::Load(d, limits)),
-               d, right + x);
-  }
+  const auto lengths = [&]<bool kLaneLimits>(const std::uint8_t* anchor, std::ptrdiff_t step,
+                                             int limit, hn::Vec<decltype(d)> lane_limit) {
+    return GreyArmLengths<kLaneLimits>(d, anchor, step, limit, p, lane_limit);
+  };
+  HorizontalArms(d, row, width, p, lengths, left, right);
 }
 
 void MatchingCostRow(const CostRow& row, const CostTableView& t, int d, std::uint32_t* out) {
