@@ -55,9 +55,7 @@ class CpuStereoMatcher final : public StereoMatcher {
       compute_cross_arms(packed_left_.cview(), rule, arms_);
     if (params_.smooth_arms) smooth_cross_arms(arms_, arm_scratch_);
     shortest_arm_.resize(w_, h_);
-    for (int y = 0; y < h_; ++y)
-      for (int x = 0; x < w_; ++x)
-        shortest_arm_.at(x, y) = static_cast<std::uint8_t>(shortest_arm(arms_, x, y));
+    for (int y = 0; y < h_; ++y) shortest_arm_row(arms_, y, shortest_arm_.row(y));
     regions_.build(arms_, agg_scratch_, params_.aggregation_passes);
     timings_.arms_ms = t.lap_ms();
 
@@ -181,11 +179,21 @@ class CpuStereoMatcher final : public StereoMatcher {
                                                 params_.subpixel, max_value);
       }
     }
+    // Each internal row once, then copies for the input rows that repeat it.
     const auto scale = static_cast<float>(scale_);
     for (int y = 0; y < height; ++y) {
-      const float* src = values_.row(std::min(y / scale_, h_ - 1));
       float* dst = disparity.row(y);
-      for (int x = 0; x < width; ++x) dst[x] = scale * src[std::min(x / scale_, w_ - 1)];
+      const int source = std::min(y / scale_, h_ - 1);
+      if (y > 0 && source == std::min((y - 1) / scale_, h_ - 1)) {
+        std::copy(disparity.row(y - 1), disparity.row(y - 1) + width, dst);
+        continue;
+      }
+      const float* src = values_.row(source);
+      const int whole = std::min(w_, width / scale_);  // internal columns with all copies inside
+      for (int x = 0; x < whole; ++x)
+        for (int k = 0; k < scale_; ++k) dst[x * scale_ + k] = scale * src[x];
+      for (int x = whole * scale_; x < width; ++x)
+        dst[x] = scale * src[std::min(x / scale_, w_ - 1)];
     }
   }
 

@@ -40,16 +40,21 @@ void median3(Image<std::uint8_t>& img, Image<std::uint8_t>& tmp, bool along_x) {
   tmp.copy_from(img.cview());
   const int w = img.width();
   const int h = img.height();
+  const auto median = [](int a, int b, int c) {
+    return static_cast<std::uint8_t>(kernels::pixel::median3(a, b, c));
+  };
   for (int y = 0; y < h; ++y) {
     const std::uint8_t* mid = tmp.row(y);
-    const std::uint8_t* before = along_x ? mid : tmp.row(std::max(y - 1, 0));
-    const std::uint8_t* after = along_x ? mid : tmp.row(std::min(y + 1, h - 1));
     std::uint8_t* out = img.row(y);
-    for (int x = 0; x < w; ++x) {
-      const int a = mid[x];
-      const int b = along_x ? mid[std::max(x - 1, 0)] : before[x];
-      const int c = along_x ? mid[std::min(x + 1, w - 1)] : after[x];
-      out[x] = static_cast<std::uint8_t>(kernels::pixel::median3(a, b, c));
+    if (along_x) {
+      // Plain loops over the interior (vectorised by the compiler), the ends apart.
+      out[0] = median(mid[0], mid[0], mid[std::min(1, w - 1)]);
+      for (int x = 1; x < w - 1; ++x) out[x] = median(mid[x], mid[x - 1], mid[x + 1]);
+      if (w > 1) out[w - 1] = median(mid[w - 1], mid[w - 2], mid[w - 1]);
+    } else {
+      const std::uint8_t* before = tmp.row(std::max(y - 1, 0));
+      const std::uint8_t* after = tmp.row(std::min(y + 1, h - 1));
+      for (int x = 0; x < w; ++x) out[x] = median(mid[x], before[x], after[x]);
     }
   }
 }
@@ -118,6 +123,15 @@ void smooth_cross_arms(CrossArms& arms, Image<std::uint8_t>& scratch) {
   median3(arms.right, scratch, false);
   median3(arms.up, scratch, /*along_x=*/true);
   median3(arms.down, scratch, true);
+}
+
+void shortest_arm_row(const CrossArms& arms, int y, std::uint8_t* out) {
+  const std::uint8_t* left = arms.left.row(y);
+  const std::uint8_t* right = arms.right.row(y);
+  const std::uint8_t* up = arms.up.row(y);
+  const std::uint8_t* down = arms.down.row(y);
+  for (int x = 0; x < arms.width(); ++x)
+    out[x] = std::min(std::min(left[x], right[x]), std::min(up[x], down[x]));
 }
 
 }  // namespace dco::stereo

@@ -49,4 +49,7 @@ inline int shortest_arm(const CrossArms& arms, int x, int y) {
   return a < b ? a : b;
 }
 
+// shortest_arm of every pixel of row y.
+void shortest_arm_row(const CrossArms& arms, int y, std::uint8_t* out);
+
 }  // namespace dco::stereo
