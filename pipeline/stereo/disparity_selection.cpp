@@ -74,24 +74,40 @@ void uniqueness_check(ImageView<std::int16_t> disparity, ImageView<const std::ui
     std::int16_t* d = disparity.row(y);
     const std::uint16_t* b = best.row(y);
     const std::uint16_t* s = second.row(y);
+    // Branch-free, so the compiler vectorises it; an invalid pixel stays invalid either way.
     for (int x = 0; x < disparity.width; ++x)
-      if (d[x] != kInvalidDisparity && !kernels::pixel::unique_enough(b[x], s[x], keep))
-        d[x] = kInvalidDisparity;
+      d[x] = kernels::pixel::unique_enough(b[x], s[x], keep) ? d[x] : kInvalidDisparity;
   }
 }
 
 void discontinuity_check(ImageView<std::int16_t> disparity, int max_jump,
                          Image<std::int16_t>& scratch) {
+  assert(max_jump >= -1);
   const int w = disparity.width;
   const int h = disparity.height;
-  scratch.resize(w, h);
-  scratch.copy_from(disparity);
-  const auto at = [&scratch](int x, int y) { return int{scratch.at(x, y)}; };
+  // Row y of scratch: the largest value among the 8-neighbourhood (and the pixel) of each pixel
+  // of row y before the check. Unreliable neighbours (-1) never exceed a reliable value by more
+  // than max_jump >= -1, so the largest one decides kernels::pixel::behind_jump.
+  scratch.resize(w, 3);
+  std::int16_t* column_max = scratch.row(0);
+  std::int16_t* previous = scratch.row(1);  // row y - 1 before the check
+  std::int16_t* current = scratch.row(2);   // row y before the check
+  std::copy(disparity.row(0), disparity.row(0) + w, current);
   for (int y = 0; y < h; ++y) {
     std::int16_t* out = disparity.row(y);
-    for (int x = 0; x < w; ++x)
-      if (out[x] != kInvalidDisparity && kernels::pixel::behind_jump(at, x, y, w, h, max_jump))
-        out[x] = kInvalidDisparity;
+    const std::int16_t* above = y > 0 ? previous : current;
+    const std::int16_t* below = y + 1 < h ? disparity.row(y + 1) : current;  // not yet checked
+    for (int x = 0; x < w; ++x) column_max[x] = std::max(std::max(above[x], current[x]), below[x]);
+    std::swap(previous, current);
+    std::copy(below, below + w, current);  // row y + 1 before the check (unused past the end)
+    const auto check = [&](int x, int nearest) {
+      out[x] =
+          out[x] != kInvalidDisparity && nearest - out[x] > max_jump ? kInvalidDisparity : out[x];
+    };
+    check(0, std::max(column_max[0], column_max[std::min(1, w - 1)]));
+    for (int x = 1; x < w - 1; ++x)
+      check(x, std::max(std::max(column_max[x - 1], column_max[x]), column_max[x + 1]));
+    if (w > 1) check(w - 1, std::max(column_max[w - 2], column_max[w - 1]));
   }
 }
 

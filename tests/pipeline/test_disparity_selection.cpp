@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "dco/kernels/stereo_pixel.hpp"
+
 namespace dco::stereo {
 namespace {
 
@@ -305,6 +307,30 @@ TEST(DiscontinuityCheck, IgnoresInvalidNeighboursAndUsesDiagonals) {
   auto corner = grid16({{5, 5, 5}, {5, 5, 5}, {5, 5, 9}});
   discontinuity_check(corner.view(), 2, scratch);
   EXPECT_EQ(values(corner), (std::vector<int>{5, 5, 5, 5, kInv, kInv, 5, kInv, 9}));
+}
+
+// The row-maximum formulation against the per-pixel rule the GPU path runs, on random maps with
+// holes, every size from one pixel up and every max_jump the parameters allow.
+TEST(DiscontinuityCheck, EqualsThePerPixelRule) {
+  std::mt19937 rng(11);
+  Image<std::int16_t> scratch;
+  for (const auto& [w, h] : {std::pair{1, 1}, {1, 5}, {6, 1}, {2, 2}, {17, 9}, {64, 33}})
+    for (const int max_jump : {-1, 0, 1, 3, 64}) {
+      Image<std::int16_t> disp(w, h);
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+          disp.at(x, y) = rng() % 5 == 0 ? kInv : static_cast<std::int16_t>(rng() % 12);
+      const Image<std::int16_t> before = disp;
+      const auto at = [&before](int x, int y) { return int{before.at(x, y)}; };
+      discontinuity_check(disp.view(), max_jump, scratch);
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const bool dropped =
+              before.at(x, y) != kInv && kernels::pixel::behind_jump(at, x, y, w, h, max_jump);
+          ASSERT_EQ(disp.at(x, y), dropped ? kInv : before.at(x, y))
+              << w << "x" << h << " jump " << max_jump << " at " << x << "," << y;
+        }
+    }
 }
 
 TEST(DiscontinuityCheck, SmoothSlopeSurvivesUnlessMaxJumpIsZero) {
