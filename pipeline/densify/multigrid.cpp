@@ -10,9 +10,30 @@ void fill(ImageView<float> v, float value) {
   for (int y = 0; y < v.height; ++y) std::fill(v.row(y), v.row(y) + v.width, value);
 }
 
-// coarse_row[x / 2] += fine_row[x]: one fine row's share of restrict_sum.
+// coarse_row[x / 2] += fine_row[x] in the order of x: one fine row's share of restrict_sum.
+// Written per parent, so the compiler vectorises it.
 void add_to_parents(const float* fine_row, int width, float* coarse_row) {
-  for (int x = 0; x < width; ++x) coarse_row[x / 2] += fine_row[x];
+  const int pairs = width / 2;
+  for (int c = 0; c < pairs; ++c) {
+    float sum = coarse_row[c];
+    sum += fine_row[2 * c];
+    sum += fine_row[2 * c + 1];
+    coarse_row[c] = sum;
+  }
+  if (width % 2 != 0) coarse_row[pairs] += fine_row[width - 1];
+}
+
+// fine_row[x] (+)= coarse_row[x / 2].
+template <bool kAdd>
+void from_parents(const float* coarse_row, int width, float* fine_row) {
+  const int pairs = width / 2;
+  for (int c = 0; c < pairs; ++c) {
+    const float v = coarse_row[c];
+    fine_row[2 * c] = kAdd ? fine_row[2 * c] + v : v;
+    fine_row[2 * c + 1] = kAdd ? fine_row[2 * c + 1] + v : v;
+  }
+  if (width % 2 != 0)
+    fine_row[width - 1] = kAdd ? fine_row[width - 1] + coarse_row[pairs] : coarse_row[pairs];
 }
 
 // coarse = restrict_sum(b - A x), one fine row at a time: the fine residual is never stored.
@@ -45,11 +66,8 @@ void restrict_mean(ImageView<const float> fine, ImageView<float> coarse) {
 }
 
 void prolong(ImageView<const float> coarse, ImageView<float> fine) {
-  for (int y = 0; y < fine.height; ++y) {
-    const float* c = coarse.row(y / 2);
-    float* f = fine.row(y);
-    for (int x = 0; x < fine.width; ++x) f[x] = c[x / 2];
-  }
+  for (int y = 0; y < fine.height; ++y)
+    from_parents<false>(coarse.row(y / 2), fine.width, fine.row(y));
 }
 
 void coarsen(const GridSystem& fine, GridSystem& coarse, float edge_scale) {
@@ -68,12 +86,10 @@ void coarsen(const GridSystem& fine, GridSystem& coarse, float edge_scale) {
     float* cd = coarse.data.row(y / 2);
     float* cex = coarse.wx.row(y / 2);
     float* cey = coarse.wy.row(y / 2);
-    for (int x = 0; x < w; ++x) {
-      cd[x / 2] += d[x];
-      // Only edges that leave the aggregate survive: odd column -> next aggregate, odd row -> next.
-      if (x % 2 == 1 && x + 1 < w) cex[x / 2] += ex[x];
-      if (y % 2 == 1 && y + 1 < h) cey[x / 2] += ey[x];
-    }
+    add_to_parents(d, w, cd);
+    // Only edges that leave the aggregate survive: odd column -> next aggregate, odd row -> next.
+    for (int x = 1; x + 1 < w; x += 2) cex[x / 2] += ex[x];
+    if (y % 2 == 1 && y + 1 < h) add_to_parents(ey, w, cey);
   }
   if (edge_scale != 1.0f) {
     for (int y = 0; y < ch; ++y) {
@@ -161,11 +177,7 @@ void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x
   cycle_at(level + 1, next.b.view(), next.x.view());
   // x += P x_coarse, a row at a time just before the smoother first reads it.
   const ImageView<const float> coarse = next.x.cview();
-  const auto prolong_row = [&](int y) {
-    const float* c = coarse.row(y / 2);
-    float* f = x.row(y);
-    for (int col = 0; col < x.width; ++col) f[col] += c[col / 2];
-  };
+  const auto prolong_row = [&](int y) { from_parents<true>(coarse.row(y / 2), x.width, x.row(y)); };
   gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/false, prolong_row);
 }
 
