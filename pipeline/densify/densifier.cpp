@@ -14,8 +14,9 @@
 namespace dco::densify {
 namespace {
 
+// Finite and positive, written as two comparisons (NaN fails both) so loops over it vectorise.
 bool known(float d) {
-  return std::isfinite(d) && d > 0.0f;
+  return d > 0.0f && d < std::numeric_limits<float>::infinity();
 }
 
 void require(bool ok, const std::string& what) {
@@ -172,45 +173,44 @@ void Densifier::build_system(const DensifyInputs& in) {
   // jump are mostly occlusions, which belong to the farther surface; but when an image edge (a
   // weak smoothness weight) lies between the hole and one of them only, the hole belongs to the
   // other side's surface.
+  // Whether the path to a value crosses an edge weaker than `crossing` is tracked as a flag (no
+  // path starts weaker: crossing <= edge_scale), a chain of one-cycle operations along the row.
   const float crossing = static_cast<float>(params_.fill_edge_weight) * edge_scale;
-  left_path_.resize(static_cast<std::size_t>(w));
+  left_crossed_.resize(static_cast<std::size_t>(w));
   for (int y = 0; y < h; ++y) {
     const float* sp = in.sparse.row(y);
     const float* ex = system_.wx.row(y);  // ex[x]: the edge between x and x + 1
     float* hint = hint_.row(y);
     float last = 0.0f;
-    float weakest = edge_scale;
+    bool crossed = false;
     for (int x = 0; x < w; ++x) {
-      if (known(sp[x])) {
-        last = sp[x];
-        weakest = edge_scale;
-      }
+      const bool k = known(sp[x]);
+      last = k ? sp[x] : last;
+      crossed = !k && crossed;
       hint[x] = last;
-      left_path_[static_cast<std::size_t>(x)] = weakest;
-      weakest = std::min(weakest, ex[x]);
+      left_crossed_[static_cast<std::size_t>(x)] = crossed;
+      crossed = crossed || ex[x] < crossing;
     }
     last = 0.0f;
-    weakest = edge_scale;
+    crossed = false;
     for (int x = w - 1; x >= 0; --x) {
-      if (known(sp[x])) {
-        last = sp[x];
-        weakest = edge_scale;
-      }
+      const bool k = known(sp[x]);
+      last = k ? sp[x] : last;
+      crossed = !k && crossed;
       const float left = hint[x];
       const float right = last;
-      if (left <= 0.0f) {
-        hint[x] = right;
-      } else if (right > 0.0f) {
-        const bool left_crossed = left_path_[static_cast<std::size_t>(x)] < crossing;
-        const bool right_crossed = weakest < crossing;
-        hint[x] = left_crossed == right_crossed ? std::min(left, right)
-                  : left_crossed                ? right
-                                                : left;
-      }
-      if (x > 0) weakest = std::min(weakest, ex[x - 1]);
+      const bool left_crossed = left_crossed_[static_cast<std::size_t>(x)] != 0;
+      const float both = left_crossed == crossed ? std::min(left, right)
+                         : left_crossed          ? right
+                                                 : left;
+      hint[x] = left <= 0.0f ? right : right > 0.0f ? both : left;
+      if (x > 0) crossed = crossed || ex[x - 1] < crossing;
     }
   }
+  // Weights of 0 add exactly nothing (every sum here is positive or +0), so the terms a pixel
+  // lacks go in as zeros instead of branches.
   float low = std::numeric_limits<float>::infinity(), high = 0.0f;
+  const float hint_weight = lh > 0.0f ? lh : 0.0f;
   for (int y = 0; y < h; ++y) {
     const float* sp = in.sparse.row(y);
     const float* hint = hint_.row(y);
@@ -218,24 +218,22 @@ void Densifier::build_system(const DensifyInputs& in) {
     float* data = system_.data.row(y);
     float* b = rhs_.row(y);
     for (int x = 0; x < w; ++x) {
-      float a = kRegulariser, rhs = 0.0f;
-      if (known(sp[x])) {
-        a += ld;
-        rhs += ld * sp[x];
-        low = std::min(low, sp[x]);
-        high = std::max(high, sp[x]);
-      } else if (lh > 0.0f && hint[x] > 0.0f) {
-        a += lh;
-        rhs += lh * hint[x];
-      }
-      if (prev && known(prev[x])) {
-        a += ls2;
-        rhs += ls2 * prev[x];
-        low = std::min(low, prev[x]);
-        high = std::max(high, prev[x]);
-      }
-      data[x] = a;
-      b[x] = rhs;
+      const bool k = known(sp[x]);
+      const float weight = k ? ld : hint[x] > 0.0f ? hint_weight : 0.0f;
+      const float value = k ? sp[x] : hint[x];
+      data[x] = kRegulariser + weight;
+      b[x] = 0.0f + weight * value;
+      low = k ? std::min(low, sp[x]) : low;
+      high = k ? std::max(high, sp[x]) : high;
+    }
+    if (prev == nullptr) continue;
+    for (int x = 0; x < w; ++x) {
+      const bool k = known(prev[x]);
+      const float value = k ? prev[x] : 0.0f;
+      data[x] += k ? ls2 : 0.0f;
+      b[x] += (k ? ls2 : 0.0f) * value;
+      low = k ? std::min(low, value) : low;
+      high = k ? std::max(high, value) : high;
     }
   }
   system_.update_diagonal();
