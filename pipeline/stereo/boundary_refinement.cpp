@@ -70,11 +70,13 @@ void BoundaryRefiner::apply(ImageView<const float> sparse, ImageView<const std::
     const float* far = far_.row(iy);
     const float* near = near_.row(iy);
     float* out = disparity.row(y);
-    for (int x = 0; x < disparity.width; ++x) {
-      const int ix = std::min(x / scale, w - 1);
-      // Most pixels are away from any edge: skip them before the call.
+    // Most pixels are away from any edge: skip them an internal pixel at a time. Input column x
+    // belongs to internal column min(x / scale, w - 1).
+    for (int ix = 0; ix < w; ++ix) {
       if (!(near[ix] - far[ix] > px::kBoundaryMinStep)) continue;
-      out[x] = px::refined_boundary_value(im, x, y, out[x], {far[ix], near[ix]}, s, rule);
+      const int x_end = ix + 1 == w ? disparity.width : (ix + 1) * scale;
+      for (int x = ix * scale; x < x_end; ++x)
+        out[x] = px::refined_boundary_value(im, x, y, out[x], {far[ix], near[ix]}, s, rule);
     }
   }
 }
