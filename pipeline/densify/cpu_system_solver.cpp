@@ -22,7 +22,14 @@ class CpuSystemSolver final : public SystemSolver {
   SolverReport solve_at_half(const GridSystem& a, ImageView<const float> b, ImageView<float> x) {
     // The full system's memory traffic bounds every pass over it; the aggregated system has a
     // quarter of the pixels and stays in cache, and the Galerkin operator keeps the contour cuts.
-    coarsen(a, coarse_, kHalfSizeEdgeScale);
+    // The full-size iterations' hierarchy has that aggregate as its level 1: built first, it
+    // saves a pass over the full system.
+    const bool fine_multigrid = params_.fine_iterations > 0 && params_.multigrid;
+    if (fine_multigrid) fine_multigrid_.build(a);
+    if (fine_multigrid && fine_multigrid_.levels() > 1)
+      scale_edges(fine_multigrid_.coarse_system(1), coarse_, kHalfSizeEdgeScale);
+    else
+      coarsen(a, coarse_, kHalfSizeEdgeScale);
     const int cw = coarse_.width();
     const int ch = coarse_.height();
     coarse_rhs_.resize(cw, ch);
@@ -39,7 +46,6 @@ class CpuSystemSolver final : public SystemSolver {
     for (int sweep = 0; sweep < params_.fine_sweeps; ++sweep)
       gauss_seidel(a, b, x, 1, sweep % 2 == 0);
     if (params_.fine_iterations > 0) {
-      if (params_.multigrid) fine_multigrid_.build(a);
       const SolverReport fine = solve_pcg(a, b, x, params_.multigrid ? &fine_multigrid_ : nullptr,
                                           params_.fine_iterations, params_.tolerance, scratch_);
       report.fine_iterations = fine.iterations;

@@ -101,6 +101,21 @@ void coarsen(const GridSystem& fine, GridSystem& coarse, float edge_scale) {
   coarse.update_diagonal();
 }
 
+void scale_edges(const GridSystem& system, GridSystem& scaled, float edge_scale) {
+  const int w = system.width();
+  const int h = system.height();
+  scaled.resize(w, h);
+  scaled.data.copy_from(system.data.cview());
+  for (int y = 0; y < h; ++y) {
+    const float* ex = system.wx.row(y);
+    const float* ey = system.wy.row(y);
+    float* sx = scaled.wx.row(y);
+    float* sy = scaled.wy.row(y);
+    for (int x = 0; x < w; ++x) sx[x] = ex[x] * edge_scale, sy[x] = ey[x] * edge_scale;
+  }
+  scaled.update_diagonal();
+}
+
 namespace {
 
 // gauss_seidel, with prepare(row) called once for every row, in order, before any update reads it.

@@ -630,5 +630,39 @@ TEST(Multigrid, HalfSizeEdgeScaleKeepsTheEnergyOfARamp) {
   EXPECT_DOUBLE_EQ(coarse_energy(kHalfSizeEdgeScale), 1.5 * (w - 2) * h);
 }
 
+// The half-size solve takes its system from the full-size multigrid's level 1 with the edges
+// scaled: that must be the scaled coarsening itself, bit for bit, odd sizes included.
+TEST(Multigrid, ScaledLevelOneIsTheScaledCoarsening) {
+  for (const auto& [w, h] : {std::pair{9, 7}, std::pair{64, 30}}) {
+    GridSystem a;
+    a.resize(w, h);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(0.0f, 2.0f);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        a.data.at(x, y) = u(rng) * 1e-3f;
+        a.wx.at(x, y) = x + 1 < w ? u(rng) : 0.0f;
+        a.wy.at(x, y) = y + 1 < h ? u(rng) : 0.0f;
+      }
+    a.update_diagonal();
+    Multigrid mg;
+    mg.build(a, 4);
+    ASSERT_GT(mg.levels(), 1);
+    GridSystem expected, scaled;
+    coarsen(a, expected, kHalfSizeEdgeScale);
+    scale_edges(mg.coarse_system(1), scaled, kHalfSizeEdgeScale);
+    ASSERT_EQ(scaled.width(), expected.width());
+    ASSERT_EQ(scaled.height(), expected.height());
+    for (int y = 0; y < expected.height(); ++y)
+      for (int x = 0; x < expected.width(); ++x) {
+        ASSERT_EQ(scaled.data.at(x, y), expected.data.at(x, y));
+        ASSERT_EQ(scaled.wx.at(x, y), expected.wx.at(x, y));
+        ASSERT_EQ(scaled.wy.at(x, y), expected.wy.at(x, y));
+        ASSERT_EQ(scaled.diag.at(x, y), expected.diag.at(x, y));
+        ASSERT_EQ(scaled.inv_diag.at(x, y), expected.inv_diag.at(x, y));
+      }
+  }
+}
+
 }  // namespace
 }  // namespace dco::densify

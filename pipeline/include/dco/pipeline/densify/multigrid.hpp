@@ -23,6 +23,8 @@ class Multigrid {
   void cycle(ImageView<const float> r, ImageView<float> z);
 
   int levels() const { return static_cast<int>(levels_.size()) + 1; }
+  // The system of level 1 .. levels() - 1 (coarsen of the level above it).
+  const GridSystem& coarse_system(int level) const { return system_at(level); }
 
   int smoothing_sweeps = 2;
   int coarsest_sweeps = 40;
@@ -50,6 +52,10 @@ void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float
 // ceil(w/2) x ceil(h/2). The coarse edge weights are multiplied by `edge_scale` (see
 // kHalfSizeEdgeScale).
 void coarsen(const GridSystem& fine, GridSystem& coarse, float edge_scale = 1.0f);
+
+// `scaled` = `system` with its edge weights multiplied by `edge_scale`: what coarsen with that
+// scale gives when `system` is coarsen's result with scale 1.
+void scale_edges(const GridSystem& system, GridSystem& scaled, float edge_scale);
 
 // The Galerkin operator is exact for fields constant on each aggregate, but for a smooth field
 // it doubles the smoothness energy: each coarse edge sums two fine edges while a coarse step
