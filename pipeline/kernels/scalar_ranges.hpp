@@ -131,11 +131,12 @@ inline void block_mean_range(std::uint32_t* row, const std::uint32_t* reciprocal
 // Pixels [x_begin, width) of elements [k_begin, count), and elements [k_end, count) of pixels
 // [0, x_begin): what the 4x4 tiles leave.
 inline void blocks_to_rows_rest(const std::uint32_t* blocks, int width, int block, int count,
-                                int x_begin, int k_end, std::uint32_t* rows,
+                                int x_begin, int k_end, std::uint16_t* rows,
                                 std::ptrdiff_t row_stride) {
   for (int k = 0; k < count; ++k) {
-    std::uint32_t* dst = rows + k * row_stride;
-    for (int x = k < k_end ? x_begin : 0; x < width; ++x) dst[x] = blocks[x * block + k];
+    std::uint16_t* dst = rows + k * row_stride;
+    for (int x = k < k_end ? x_begin : 0; x < width; ++x)
+      dst[x] = static_cast<std::uint16_t>(blocks[x * block + k]);
   }
 }
 
@@ -161,17 +162,17 @@ inline void block_vote_range(const std::uint32_t* votes, int x, const std::int32
 }
 
 // The left image's state: columns [begin, end).
-inline void wta_left_range(const std::uint32_t* cost, int begin, int end, int d, const WtaRow& r) {
+inline void wta_left_range(const std::uint16_t* cost, int begin, int end, int d, const WtaRow& r) {
   for (int x = begin; x < end; ++x)
-    pixel::wta_feed(static_cast<std::uint16_t>(cost[x]), d, r.best[x], r.second[x], r.below[x],
-                    r.above[x], r.prev1[x], r.prev2[x], r.runmin[x], r.disp[x]);
+    pixel::wta_feed(cost[x], d, r.best[x], r.second[x], r.below[x], r.above[x], r.prev1[x],
+                    r.prev2[x], r.runmin[x], r.disp[x]);
 }
 
 // The right image's state: left columns [begin, end), all >= d (right column x - d).
-inline void wta_right_range(const std::uint32_t* cost, int begin, int end, int d, const WtaRow& r) {
+inline void wta_right_range(const std::uint16_t* cost, int begin, int end, int d, const WtaRow& r) {
   const auto dd = static_cast<std::int16_t>(d);
   for (int x = begin; x < end; ++x) {
-    const auto c = static_cast<std::uint16_t>(cost[x]);
+    const std::uint16_t c = cost[x];
     if (c < r.best_right[x - d]) {
       r.best_right[x - d] = c;
       r.disp_right[x - d] = dd;

@@ -533,13 +533,19 @@ void BlockRegionMeanRow(std::uint32_t* row, const std::uint32_t* reciprocal, int
   detail::block_mean_range(row, reciprocal, width, block, vector_end, block);
 }
 
-void BlocksToRows(const std::uint32_t* blocks, int width, int block, int count, std::uint32_t* rows,
+void BlocksToRows(const std::uint32_t* blocks, int width, int block, int count, std::uint16_t* rows,
                   std::ptrdiff_t row_stride) {
-  // 4x4 tiles transposed in registers: 32-bit then 64-bit interleaves.
+  // 4x4 tiles transposed in registers (32-bit then 64-bit interleaves), then narrowed to 16 bits
+  // (the values are below kNoCost, so the saturating narrowing is exact).
   const hn::FixedTag<std::uint32_t, 4> d;
   const hn::Repartition<std::uint64_t, decltype(d)> d64;
+  const hn::RebindToSigned<decltype(d)> di;
+  const hn::Rebind<std::uint16_t, decltype(d)> d16;
   const int x_end = width - width % 4;
   const int k_end = count - count % 4;
+  const auto narrow = [&](hn::Vec<decltype(d64)> v) {
+    return hn::DemoteTo(d16, hn::BitCast(di, v));
+  };
   for (int x = 0; x < x_end; x += 4) {
     const std::uint32_t* src = blocks + x * block;
     for (int k = 0; k < k_end; k += 4) {
@@ -551,11 +557,11 @@ void BlocksToRows(const std::uint32_t* blocks, int width, int block, int count, 
       const auto t1 = hn::BitCast(d64, hn::InterleaveLower(d, r2, r3));
       const auto t2 = hn::BitCast(d64, hn::InterleaveUpper(d, r0, r1));
       const auto t3 = hn::BitCast(d64, hn::InterleaveUpper(d, r2, r3));
-      std::uint32_t* dst = rows + k * row_stride + x;
-      hn::StoreU(hn::BitCast(d, hn::InterleaveLower(d64, t0, t1)), d, dst);
-      hn::StoreU(hn::BitCast(d, hn::InterleaveUpper(d64, t0, t1)), d, dst + row_stride);
-      hn::StoreU(hn::BitCast(d, hn::InterleaveLower(d64, t2, t3)), d, dst + 2 * row_stride);
-      hn::StoreU(hn::BitCast(d, hn::InterleaveUpper(d64, t2, t3)), d, dst + 3 * row_stride);
+      std::uint16_t* dst = rows + k * row_stride + x;
+      hn::StoreU(narrow(hn::InterleaveLower(d64, t0, t1)), d16, dst);
+      hn::StoreU(narrow(hn::InterleaveUpper(d64, t0, t1)), d16, dst + row_stride);
+      hn::StoreU(narrow(hn::InterleaveLower(d64, t2, t3)), d16, dst + 2 * row_stride);
+      hn::StoreU(narrow(hn::InterleaveUpper(d64, t2, t3)), d16, dst + 3 * row_stride);
     }
   }
   detail::blocks_to_rows_rest(blocks, width, block, count, x_end, k_end, rows, row_stride);
@@ -598,14 +604,11 @@ void BlockVoteRow(const std::uint32_t* votes, int width, const std::int32_t* can
   }
 }
 
-void WtaUpdateRow(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int count, int width,
+void WtaUpdateRow(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                   int d, const WtaRow& s) {
-  // Costs are narrowed to 16 bits, one lane per 32-bit cost lane (a half-width u16 vector).
-  const hn::ScalableTag<std::int32_t> di32;
-  const hn::Rebind<std::uint16_t, decltype(di32)> du;
-  const hn::Rebind<std::int16_t, decltype(di32)> di;
-  const int n = static_cast<int>(hn::Lanes(di32));
-  const auto* cost_i = reinterpret_cast<const std::int32_t*>(cost);
+  const hn::ScalableTag<std::uint16_t> du;
+  const hn::RebindToSigned<decltype(du)> di;
+  const int n = static_cast<int>(hn::Lanes(du));
   const auto no_cost = hn::Set(du, kNoCost);
   int x = 0;
   for (; x + n <= width; x += n) {
@@ -618,7 +621,7 @@ void WtaUpdateRow(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int cou
     auto runmin = hn::LoadU(du, s.runmin + x);
     auto disp = hn::LoadU(di, s.disp + x);
     for (int k = 0; k < count; ++k) {
-      const auto c = hn::DemoteTo(du, hn::LoadU(di32, cost_i + k * cost_stride + x));
+      const auto c = hn::LoadU(du, cost + k * cost_stride + x);
       runmin = hn::Min(runmin, prev2);
       const auto better = hn::Ne(hn::Min(c, best), best);  // c < best, unsigned
       const auto next = hn::AndNot(
@@ -644,13 +647,13 @@ void WtaUpdateRow(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int cou
   }
   for (int k = 0; k < count; ++k) {
     const int dk = d + k;
-    const std::uint32_t* ck = cost + k * cost_stride;
+    const std::uint16_t* ck = cost + k * cost_stride;
     detail::wta_left_range(ck, x, width, dk, s);
     // Right pixel xr = x - dk: a shifted load of the same costs.
     const auto vd = hn::Set(di, static_cast<std::int16_t>(dk));
     int xr = std::min(dk, width);
     for (; xr + n <= width; xr += n) {
-      const auto c = hn::DemoteTo(du, hn::LoadU(di32, cost_i + k * cost_stride + xr));
+      const auto c = hn::LoadU(du, ck + xr);
       const auto best = hn::LoadU(du, s.best_right + xr - dk);
       const auto better = hn::Ne(hn::Min(c, best), best);
       hn::StoreU(hn::IfThenElse(better, c, best), du, s.best_right + xr - dk);
@@ -756,7 +759,7 @@ void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, 
 }
 
 void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
-                    std::uint32_t* rows, std::ptrdiff_t row_stride) {
+                    std::uint16_t* rows, std::ptrdiff_t row_stride) {
   HWY_DYNAMIC_DISPATCH(BlocksToRows)(blocks, width, block, count, rows, row_stride);
 }
 
@@ -772,7 +775,7 @@ void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* c
   (votes, width, candidates, count, total, best_votes, best_value);
 }
 
-void wta_update_row(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int count, int width,
+void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row) {
   HWY_DYNAMIC_DISPATCH(WtaUpdateRow)(cost, cost_stride, count, width, d, row);
 }

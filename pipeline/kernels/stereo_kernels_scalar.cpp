@@ -83,7 +83,7 @@ void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, 
 }
 
 void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
-                    std::uint32_t* rows, std::ptrdiff_t row_stride) {
+                    std::uint16_t* rows, std::ptrdiff_t row_stride) {
   detail::blocks_to_rows_rest(blocks, width, block, count, 0, count, rows, row_stride);
 }
 
@@ -99,10 +99,10 @@ void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* c
     detail::block_vote_range(votes, x, candidates, count, 0, count, total, best_votes, best_value);
 }
 
-void wta_update_row(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int count, int width,
+void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row) {
   for (int k = 0; k < count; ++k) {
-    const std::uint32_t* c = cost + k * cost_stride;
+    const std::uint16_t* c = cost + k * cost_stride;
     detail::wta_left_range(c, 0, width, d + k, row);
     detail::wta_right_range(c, std::min(d + k, width), width, d + k, row);
   }

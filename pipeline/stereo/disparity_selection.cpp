@@ -26,16 +26,22 @@ void WinnerTakesAll::reset(int width, int height) {
 }
 
 void WinnerTakesAll::update(ImageView<const std::uint32_t> slice, int d) {
-  for (int y = 0; y < slice.height; ++y) update_row(slice.row(y), 0, 1, y, d);
+  narrowed_.resize(static_cast<std::size_t>(slice.width));
+  for (int y = 0; y < slice.height; ++y) {
+    const std::uint32_t* row = slice.row(y);
+    assert(std::all_of(row, row + slice.width, [](std::uint32_t c) { return c < kNoCost; }));
+    std::copy(row, row + slice.width, narrowed_.begin());
+    update_row(narrowed_.data(), 0, 1, y, d);
+  }
 }
 
-void WinnerTakesAll::update_row(const std::uint32_t* costs, std::ptrdiff_t stride, int count, int y,
+void WinnerTakesAll::update_row(const std::uint16_t* costs, std::ptrdiff_t stride, int count, int y,
                                 int d) {
   static_assert(kNoCost == kernels::kNoCost);
   const int w = best_.width();
   for (int k = 0; k < count; ++k)
     assert(std::all_of(costs + k * stride, costs + k * stride + w,
-                       [](std::uint32_t c) { return c < kNoCost; }));
+                       [](std::uint16_t c) { return c < kNoCost; }));
   const kernels::WtaRow row{best_.row(y),       second_.row(y),    below_.row(y),  above_.row(y),
                             prev1_.row(y),      prev2_.row(y),     runmin_.row(y), disp_.row(y),
                             best_right_.row(y), disp_right_.row(y)};

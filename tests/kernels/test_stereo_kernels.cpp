@@ -470,15 +470,17 @@ TEST(StereoKernels, BlocksToRowsTransposes) {
   for (const int w : {1, 4, 7, 16, 33}) {
     for (const int block : kBlocks) {
       for (const int count : {1, block / 2 + 1, block}) {
-        const auto blocks =
-            random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w * block), 0, 0xffffffffu);
+        // Region means below kNoCost, the largest included.
+        auto blocks =
+            random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w * block), 0, kNoCost - 1);
+        blocks[0] = kNoCost - 1;
         const std::ptrdiff_t stride = w + 3;
-        std::vector<std::uint32_t> expected(static_cast<std::size_t>(stride * count), 7);
+        std::vector<std::uint16_t> expected(static_cast<std::size_t>(stride * count), 7);
         scalar::blocks_to_rows(blocks.data(), w, block, count, expected.data(), stride);
         for (int k = 0; k < count; ++k)
           for (int x = 0; x < w; ++x) ASSERT_EQ(expected[k * stride + x], blocks[x * block + k]);
         for_each_target([&] {
-          std::vector<std::uint32_t> rows(expected.size(), 7);
+          std::vector<std::uint16_t> rows(expected.size(), 7);
           blocks_to_rows(blocks.data(), w, block, count, rows.data(), stride);
           ASSERT_EQ(rows, expected) << "width " << w << " block " << block << " count " << count;
         });
@@ -580,10 +582,10 @@ TEST(StereoKernels, WinnerTakesAllMatchesScalar) {
     for (const int disparities : {1, 2, 3, std::min(w, 40)}) {
       // Few distinct costs, so ties, the d - 1 / d + 1 neighbours and repeated minima all occur.
       const std::ptrdiff_t stride = w + 3;
-      std::vector<std::uint32_t> volume(static_cast<std::size_t>(stride * disparities));
+      std::vector<std::uint16_t> volume(static_cast<std::size_t>(stride * disparities));
       for (int d = 0; d < disparities; ++d)
         for (int x = 0; x < w; ++x)
-          volume[d * stride + x] = static_cast<std::uint32_t>(rng() % (d % 3 == 0 ? 9 : 0xffff));
+          volume[d * stride + x] = static_cast<std::uint16_t>(rng() % (d % 3 == 0 ? 9 : 0xffff));
       WtaState expected(w);
       for (int d = 0; d < disparities; ++d)
         scalar::wta_update_row(volume.data() + d * stride, stride, 1, w, d, expected.row());
@@ -608,11 +610,11 @@ TEST(StereoKernels, WinnerTakesAllMatchesScalar) {
 
 TEST(StereoKernels, WinnerTakesAllFindsTheMinimumAndItsNeighbours) {
   const int w = 21;
-  const std::vector<std::uint32_t> costs = {50, 40, 10, 30, 20, 60};
+  const std::vector<std::uint16_t> costs = {50, 40, 10, 30, 20, 60};
   for_each_target([&] {
     WtaState state(w);
     for (int d = 0; d < static_cast<int>(costs.size()); ++d) {
-      std::vector<std::uint32_t> slice(w, costs[d]);
+      std::vector<std::uint16_t> slice(w, costs[d]);
       wta_update_row(slice.data(), 0, 1, w, d, state.row());
     }
     for (int x = 0; x < w; ++x) {

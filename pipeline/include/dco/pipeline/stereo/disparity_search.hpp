@@ -34,7 +34,7 @@ class DisparitySearch {
                  const SupportRegions& regions, int max_d, WinnerTakesAll& wta);
 
   BlockAggregator aggregator_;
-  Image<std::uint32_t> lines_;  // one row per disparity of the batch
+  Image<std::uint16_t> lines_;  // one row per disparity of the batch
   Image<std::uint32_t> slice_;
   AggregationScratch scratch_;
 };

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "dco/core/image.hpp"
 #include "dco/kernels/stereo_pixel.hpp"
@@ -25,7 +26,7 @@ class WinnerTakesAll {
   void update(ImageView<const std::uint32_t> slice, int d);
   // Row y of the slices of disparities d .. d + count - 1 at once, that of d + k at
   // costs + k * stride: the same result as `count` calls of update.
-  void update_row(const std::uint32_t* costs, std::ptrdiff_t stride, int count, int y, int d);
+  void update_row(const std::uint16_t* costs, std::ptrdiff_t stride, int count, int y, int d);
 
   ImageView<const std::int16_t> left_disparity() const { return disp_.view(); }
   ImageView<const std::int16_t> right_disparity() const { return disp_right_.view(); }
@@ -37,6 +38,7 @@ class WinnerTakesAll {
  private:
   Image<std::uint16_t> best_, second_, below_, above_, prev1_, prev2_, runmin_, best_right_;
   Image<std::int16_t> disp_, disp_right_;
+  std::vector<std::uint16_t> narrowed_;  // one slice row as 16-bit costs
 };
 
 // Marks kInvalidDisparity where the right image's winner at x - d(x) differs from d(x) by more

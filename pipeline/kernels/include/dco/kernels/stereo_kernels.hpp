@@ -108,9 +108,10 @@ void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, con
 void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
                            int block);
 // Back to one row per block element: rows[k * row_stride + x] = blocks[x * block + k] for
-// k < count (<= block).
+// k < count (<= block), as the 16-bit costs the winner-takes-all state takes (every value must
+// be below kNoCost).
 void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
-                    std::uint32_t* rows, std::ptrdiff_t row_stride);
+                    std::uint16_t* rows, std::ptrdiff_t row_stride);
 
 // out[x * count + k] = 1 where value[x] == candidates[k], else 0: one histogram bin per block
 // element (count >= 1).
@@ -142,7 +143,7 @@ inline constexpr std::uint16_t kNoCost = 0xffff;
 // Feeds the costs of disparities d .. d + count - 1, those of d + k at cost + k * cost_stride
 // (every cost < kNoCost; disparities grow by one from 0 over the calls). Several disparities per
 // call keep the state in registers in between.
-void wta_update_row(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int count, int width,
+void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row);
 
 namespace scalar {
@@ -174,13 +175,13 @@ void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, con
 void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
                            int block);
 void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
-                    std::uint32_t* rows, std::ptrdiff_t row_stride);
+                    std::uint16_t* rows, std::ptrdiff_t row_stride);
 void block_indicator_row(const std::int16_t* value, int width, const std::int32_t* candidates,
                          int count, std::uint32_t* out);
 void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* candidates,
                     int count, std::uint32_t* total, std::uint32_t* best_votes,
                     std::int16_t* best_value);
-void wta_update_row(const std::uint32_t* cost, std::ptrdiff_t cost_stride, int count, int width,
+void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row);
 
 }  // namespace scalar
