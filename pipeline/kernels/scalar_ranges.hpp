@@ -100,22 +100,27 @@ inline void block_prefix_range(const std::uint32_t* in, int width, int block, in
 
 inline void block_horizontal_range(const std::uint32_t* prefix, const std::uint8_t* left,
                                    const std::uint8_t* right, int width, int block, int begin,
-                                   int end, std::uint32_t* out) {
+                                   int end, const std::uint32_t* above, std::uint32_t* out) {
   for (int x = 0; x < width; ++x) {
     const std::uint32_t* hi = prefix + (x + right[x] + 1) * block;
     const std::uint32_t* lo = prefix + (x - left[x]) * block;
-    for (int k = begin; k < end; ++k) out[x * block + k] = hi[k] - lo[k];
+    for (int k = begin; k < end; ++k)
+      out[x * block + k] = hi[k] - lo[k] + (above ? above[x * block + k] : 0u);
   }
 }
 
 inline void block_vertical_range(const std::uint32_t* const* column_rows, int y,
                                  const std::uint8_t* up, const std::uint8_t* down, int width,
-                                 int block, int begin, int end, std::uint32_t* out) {
+                                 int block, int begin, int end, const std::uint32_t* reciprocal,
+                                 std::uint32_t* out) {
   for (int x = 0; x < width; ++x) {
     const int top = y - up[x] - 1;
     const std::uint32_t* below = column_rows[y + down[x]] + x * block;
     const std::uint32_t* above = top >= 0 ? column_rows[top] + x * block : nullptr;
-    for (int k = begin; k < end; ++k) out[x * block + k] = above ? below[k] - above[k] : below[k];
+    for (int k = begin; k < end; ++k) {
+      const std::uint32_t sum = above ? below[k] - above[k] : below[k];
+      out[x * block + k] = reciprocal ? pixel::region_mean(sum, reciprocal[x]) : sum;
+    }
   }
 }
 

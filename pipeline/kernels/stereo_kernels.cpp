@@ -467,7 +467,7 @@ void RegionMeanRow(std::uint32_t* row, const std::uint32_t* reciprocal, int widt
 
 void BlockHorizontalSumsRow(const std::uint32_t* in, const std::uint8_t* left,
                             const std::uint8_t* right, int width, int block, std::uint32_t* prefix,
-                            std::uint32_t* out) {
+                            const std::uint32_t* above, std::uint32_t* out) {
   const hn::ScalableTag<std::uint32_t> du;
   const int n = static_cast<int>(hn::Lanes(du));
   const int vector_end = block - block % n;
@@ -485,18 +485,41 @@ void BlockHorizontalSumsRow(const std::uint32_t* in, const std::uint8_t* left,
     const std::uint32_t* hi = prefix + (x + right[x] + 1) * block;
     const std::uint32_t* lo = prefix + (x - left[x]) * block;
     std::uint32_t* dst = out + x * block;
-    for (int k = 0; k < vector_end; k += n)
-      hn::StoreU(hn::Sub(hn::LoadU(du, hi + k), hn::LoadU(du, lo + k)), du, dst + k);
+    if (above != nullptr) {
+      const std::uint32_t* up = above + x * block;
+      for (int k = 0; k < vector_end; k += n)
+        hn::StoreU(
+            hn::Add(hn::Sub(hn::LoadU(du, hi + k), hn::LoadU(du, lo + k)), hn::LoadU(du, up + k)),
+            du, dst + k);
+    } else {
+      for (int k = 0; k < vector_end; k += n)
+        hn::StoreU(hn::Sub(hn::LoadU(du, hi + k), hn::LoadU(du, lo + k)), du, dst + k);
+    }
   }
   detail::block_prefix_range(in, width, block, vector_end, block, prefix);
-  detail::block_horizontal_range(prefix, left, right, width, block, vector_end, block, out);
+  detail::block_horizontal_range(prefix, left, right, width, block, vector_end, block, above, out);
+}
+
+// (v * r + 2^30) >> 31 per 32-bit lane in 64-bit arithmetic (kernels::pixel::region_mean).
+template <class D>
+HWY_INLINE hn::Vec<D> RegionMean(D du, hn::Vec<D> v, hn::Vec<D> r) {
+  const hn::Repartition<std::uint64_t, D> du64;
+  const auto half = hn::Set(du64, std::uint64_t{1} << 30);
+  const auto even = hn::ShiftRight<31>(hn::Add(hn::MulEven(v, r), half));
+  const auto v_odd = hn::BitCast(du, hn::ShiftRight<32>(hn::BitCast(du64, v)));
+  const auto odd = hn::ShiftRight<31>(hn::Add(hn::MulEven(v_odd, r), half));
+  return hn::OddEven(hn::BitCast(du, hn::ShiftLeft<32>(odd)), hn::BitCast(du, even));
 }
 
 void BlockVerticalSumsRow(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
-                          const std::uint8_t* down, int width, int block, std::uint32_t* out) {
+                          const std::uint8_t* down, int width, int block,
+                          const std::uint32_t* reciprocal, std::uint32_t* out) {
   const hn::ScalableTag<std::uint32_t> du;
   const int n = static_cast<int>(hn::Lanes(du));
   const int vector_end = block - block % n;
+  const auto finish = [&](hn::Vec<decltype(du)> sum, int x) {
+    return reciprocal != nullptr ? RegionMean(du, sum, hn::Set(du, reciprocal[x])) : sum;
+  };
   for (int x = 0; x < width; ++x) {
     const int top = y - up[x] - 1;
     const std::uint32_t* below = column_rows[y + down[x]] + x * block;
@@ -504,31 +527,26 @@ void BlockVerticalSumsRow(const std::uint32_t* const* column_rows, int y, const 
     if (top >= 0) {
       const std::uint32_t* above = column_rows[top] + x * block;
       for (int k = 0; k < vector_end; k += n)
-        hn::StoreU(hn::Sub(hn::LoadU(du, below + k), hn::LoadU(du, above + k)), du, dst + k);
+        hn::StoreU(finish(hn::Sub(hn::LoadU(du, below + k), hn::LoadU(du, above + k)), x), du,
+                   dst + k);
     } else {
-      for (int k = 0; k < vector_end; k += n) hn::StoreU(hn::LoadU(du, below + k), du, dst + k);
+      for (int k = 0; k < vector_end; k += n)
+        hn::StoreU(finish(hn::LoadU(du, below + k), x), du, dst + k);
     }
   }
-  detail::block_vertical_range(column_rows, y, up, down, width, block, vector_end, block, out);
+  detail::block_vertical_range(column_rows, y, up, down, width, block, vector_end, block,
+                               reciprocal, out);
 }
 
 void BlockRegionMeanRow(std::uint32_t* row, const std::uint32_t* reciprocal, int width, int block) {
   const hn::ScalableTag<std::uint32_t> du;
-  const hn::Repartition<std::uint64_t, decltype(du)> du64;
   const int n = static_cast<int>(hn::Lanes(du));
   const int vector_end = block - block % n;
-  const auto half = hn::Set(du64, std::uint64_t{1} << 30);
   for (int x = 0; x < width; ++x) {
     const auto r = hn::Set(du, reciprocal[x]);
     std::uint32_t* p = row + x * block;
-    for (int k = 0; k < vector_end; k += n) {
-      const auto v = hn::LoadU(du, p + k);
-      const auto even = hn::ShiftRight<31>(hn::Add(hn::MulEven(v, r), half));
-      const auto v_odd = hn::BitCast(du, hn::ShiftRight<32>(hn::BitCast(du64, v)));
-      const auto odd = hn::ShiftRight<31>(hn::Add(hn::MulEven(v_odd, r), half));
-      hn::StoreU(hn::OddEven(hn::BitCast(du, hn::ShiftLeft<32>(odd)), hn::BitCast(du, even)), du,
-                 p + k);
-    }
+    for (int k = 0; k < vector_end; k += n)
+      hn::StoreU(RegionMean(du, hn::LoadU(du, p + k), r), du, p + k);
   }
   detail::block_mean_range(row, reciprocal, width, block, vector_end, block);
 }
@@ -744,13 +762,16 @@ void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int wi
 
 void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
                                const std::uint8_t* right, int width, int block,
-                               std::uint32_t* prefix, std::uint32_t* out) {
-  HWY_DYNAMIC_DISPATCH(BlockHorizontalSumsRow)(in, left, right, width, block, prefix, out);
+                               std::uint32_t* prefix, const std::uint32_t* above,
+                               std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(BlockHorizontalSumsRow)(in, left, right, width, block, prefix, above, out);
 }
 
 void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
-                             const std::uint8_t* down, int width, int block, std::uint32_t* out) {
-  HWY_DYNAMIC_DISPATCH(BlockVerticalSumsRow)(column_rows, y, up, down, width, block, out);
+                             const std::uint8_t* down, int width, int block,
+                             const std::uint32_t* reciprocal, std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(BlockVerticalSumsRow)
+  (column_rows, y, up, down, width, block, reciprocal, out);
 }
 
 void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,

@@ -67,14 +67,16 @@ void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int wi
 
 void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
                                const std::uint8_t* right, int width, int block,
-                               std::uint32_t* prefix, std::uint32_t* out) {
+                               std::uint32_t* prefix, const std::uint32_t* above,
+                               std::uint32_t* out) {
   detail::block_prefix_range(in, width, block, 0, block, prefix);
-  detail::block_horizontal_range(prefix, left, right, width, block, 0, block, out);
+  detail::block_horizontal_range(prefix, left, right, width, block, 0, block, above, out);
 }
 
 void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
-                             const std::uint8_t* down, int width, int block, std::uint32_t* out) {
-  detail::block_vertical_range(column_rows, y, up, down, width, block, 0, block, out);
+                             const std::uint8_t* down, int width, int block,
+                             const std::uint32_t* reciprocal, std::uint32_t* out) {
+  detail::block_vertical_range(column_rows, y, up, down, width, block, 0, block, reciprocal, out);
 }
 
 void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,

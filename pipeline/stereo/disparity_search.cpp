@@ -41,12 +41,11 @@ void DisparitySearch::run_fused(const MatchingImages& images, const CostTables& 
       kernels::block_matching_cost_row(row, wide, d0, kBatch, blocks);
     };
     // Each row's region means go straight into the winner-takes-all state.
-    const auto select = [&](int y, std::uint32_t* sums) {
-      kernels::block_region_mean_row(sums, recip.row(y), w, kBatch);
-      kernels::blocks_to_rows(sums, w, kBatch, count, lines_.data(), lines_.stride());
+    const auto select = [&](int y, std::uint32_t* means) {
+      kernels::blocks_to_rows(means, w, kBatch, count, lines_.data(), lines_.stride());
       wta.update_row(lines_.row(0), lines_.stride(), count, y, d0);
     };
-    aggregator_.run(kBatch, costs, select);
+    aggregator_.run(kBatch, costs, select, recip);
   }
 }
 

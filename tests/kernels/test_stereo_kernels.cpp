@@ -393,18 +393,29 @@ TEST(StereoKernels, BlockHorizontalSumsMatchScalarAndBruteForce) {
       std::vector<std::uint32_t> prefix(static_cast<std::size_t>((w + 1) * block));
       std::vector<std::uint32_t> expected(in.size());
       scalar::block_horizontal_sums_row(in.data(), left.data(), right.data(), w, block,
-                                        prefix.data(), expected.data());
+                                        prefix.data(), nullptr, expected.data());
       for (int x = 0; x < w; ++x)
         for (int k = 0; k < block; ++k) {
           std::uint32_t sum = 0;
           for (int i = x - left[x]; i <= x + right[x]; ++i) sum += in[i * block + k];
           ASSERT_EQ(expected[x * block + k], sum);
         }
+      // With the row above's running sums added in the same pass (wrapping like the sums).
+      const auto above =
+          random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w * block), 0, 0xffffffffu);
+      std::vector<std::uint32_t> expected_added(in.size());
+      scalar::block_horizontal_sums_row(in.data(), left.data(), right.data(), w, block,
+                                        prefix.data(), above.data(), expected_added.data());
+      for (std::size_t i = 0; i < in.size(); ++i)
+        ASSERT_EQ(expected_added[i], static_cast<std::uint32_t>(expected[i] + above[i]));
       for_each_target([&] {
         std::vector<std::uint32_t> out(in.size());
         block_horizontal_sums_row(in.data(), left.data(), right.data(), w, block, prefix.data(),
-                                  out.data());
+                                  nullptr, out.data());
         ASSERT_EQ(out, expected) << "width " << w << " block " << block;
+        block_horizontal_sums_row(in.data(), left.data(), right.data(), w, block, prefix.data(),
+                                  above.data(), out.data());
+        ASSERT_EQ(out, expected_added) << "width " << w << " block " << block;
       });
     }
   }
@@ -436,7 +447,7 @@ TEST(StereoKernels, BlockVerticalSumsAndMeansMatchScalar) {
       std::vector<std::uint32_t> reciprocal(up.size());
       for (auto& r : reciprocal) r = static_cast<std::uint32_t>(rng() % (1u << 31));
       std::vector<std::uint32_t> expected(static_cast<std::size_t>(w * block));
-      scalar::block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block,
+      scalar::block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block, nullptr,
                                       expected.data());
       for (int x = 0; x < w; ++x)
         for (int k = 0; k < block; ++k) {
@@ -454,12 +465,21 @@ TEST(StereoKernels, BlockVerticalSumsAndMeansMatchScalar) {
         scalar::region_mean_row(one.data(), r.data(), block);
         ASSERT_TRUE(std::equal(one.begin(), one.end(), expected_mean.begin() + x * block));
       }
+      std::vector<std::uint32_t> fused_mean(expected.size());
+      scalar::block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block,
+                                      reciprocal.data(), fused_mean.data());
+      ASSERT_EQ(fused_mean, expected_mean);
       for_each_target([&] {
         std::vector<std::uint32_t> out(expected.size());
-        block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block, out.data());
+        block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block, nullptr,
+                                out.data());
         ASSERT_EQ(out, expected) << "width " << w << " block " << block;
         block_region_mean_row(out.data(), reciprocal.data(), w, block);
         ASSERT_EQ(out, expected_mean) << "width " << w << " block " << block;
+        std::vector<std::uint32_t> means(expected.size());
+        block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block, reciprocal.data(),
+                                means.data());
+        ASSERT_EQ(means, expected_mean) << "width " << w << " block " << block;
       });
     }
   }

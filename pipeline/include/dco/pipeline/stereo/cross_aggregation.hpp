@@ -84,8 +84,9 @@ class BlockAggregator {
   // Once per frame: sizes the buffers for blocks of up to max_block values.
   void prepare(const CrossArms& arms, int max_block);
 
+  // With `reciprocals` (SupportRegions::reciprocals), take receives the region means instead.
   template <class Fill, class Take>
-  void run(int block, Fill&& fill, Take&& take) {
+  void run(int block, Fill&& fill, Take&& take, ImageView<const std::uint32_t> reciprocals = {}) {
     const CrossArms& a = *arms_;
     const int w = a.width();
     const int h = a.height();
@@ -93,14 +94,16 @@ class BlockAggregator {
     for (int ya = 0; ya < h + reach_down_; ++ya) {
       if (ya < h) {
         fill(ya, input_.data());
+        // Horizontal sums plus the row above's running column sums.
         kernels::block_horizontal_sums_row(input_.data(), a.left.row(ya), a.right.row(ya), w, block,
-                                           prefix_.data(), rows_[ya]);
-        if (ya > 0) kernels::accumulate_row(rows_[ya - 1], rows_[ya], w * block);
+                                           prefix_.data(), ya > 0 ? rows_[ya - 1] : nullptr,
+                                           rows_[ya]);
       }
       // Row yb has all of its vertical arms' rows once row yb + reach_down is in.
       const int yb = ya - reach_down_;
       if (yb < 0) continue;
       kernels::block_vertical_sums_row(rows_.data(), yb, a.up.row(yb), a.down.row(yb), w, block,
+                                       reciprocals.empty() ? nullptr : reciprocals.row(yb),
                                        sums_.data());
       take(yb, sums_.data());
     }

@@ -97,14 +97,18 @@ void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int wi
 // last whole vector take scalar code: blocks of 16 are whole vectors on every target up to 512
 // bits.
 // prefix: (width + 1) * block elements; out[x * block + k] = sum of in[i * block + k] over
-// i in [x - left[x], x + right[x]].
+// i in [x - left[x], x + right[x]], plus above[x * block + k] when `above` is given (the running
+// column sums of the previous row: the column accumulation in the same pass).
 void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
                                const std::uint8_t* right, int width, int block,
-                               std::uint32_t* prefix, std::uint32_t* out);
+                               std::uint32_t* prefix, const std::uint32_t* above,
+                               std::uint32_t* out);
 // column_rows[i]: row i of the running column sums, width * block elements (a table of row
-// pointers, so the rows may live in a ring buffer); rows y - up - 1 .. y + down are read.
+// pointers, so the rows may live in a ring buffer); rows y - up - 1 .. y + down are read. With
+// `reciprocal`, out holds the region means (block_region_mean_row of the sums) instead.
 void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
-                             const std::uint8_t* down, int width, int block, std::uint32_t* out);
+                             const std::uint8_t* down, int width, int block,
+                             const std::uint32_t* reciprocal, std::uint32_t* out);
 void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
                            int block);
 // Back to one row per block element: rows[k * row_stride + x] = blocks[x * block + k] for
@@ -169,9 +173,11 @@ void vertical_sums_row(const std::uint32_t* column_sums, std::ptrdiff_t stride, 
 void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width);
 void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
                                const std::uint8_t* right, int width, int block,
-                               std::uint32_t* prefix, std::uint32_t* out);
+                               std::uint32_t* prefix, const std::uint32_t* above,
+                               std::uint32_t* out);
 void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
-                             const std::uint8_t* down, int width, int block, std::uint32_t* out);
+                             const std::uint8_t* down, int width, int block,
+                             const std::uint32_t* reciprocal, std::uint32_t* out);
 void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
                            int block);
 void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
