@@ -306,6 +306,12 @@ void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, in
   const auto quarter_bit = hn::Set(du, static_cast<std::uint32_t>(n));
   const auto half_bit = hn::Set(du, static_cast<std::uint32_t>(2 * n));
   const auto last_entry = hn::Set(du, static_cast<std::uint32_t>(4 * n));
+  // Likewise the AD row when it is constant past its first six vectors (grey images: the
+  // exponential saturates near 80 grey levels): the index is clamped to where it turns constant.
+  const bool ad_in_registers =
+      n >= 16 && t.ad_flat_from > 0 && t.ad_flat_from < 6 * n && t.ad_size >= 6 * n;
+  const auto ad_clamp = hn::Set(du, static_cast<std::uint32_t>(t.ad_flat_from));
+  const auto third_bit = hn::Set(du, static_cast<std::uint32_t>(4 * n));
   // Right pixels before the row start read as zero from here; their lanes become `unmatched`.
   HWY_ALIGN std::uint32_t right_pad[HWY_MAX_BYTES / 4];
   HWY_ALIGN std::uint64_t census_pad[HWY_MAX_BYTES / 4];
@@ -328,6 +334,16 @@ void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, in
       c2 = hn::LoadU(du, census_row + 2 * n);
       c3 = hn::LoadU(du, census_row + 3 * n);
       c4 = hn::Set(du, census_row[4 * n]);
+    }
+    const std::uint32_t* ad_row = t.ad + arm * t.ad_size;
+    auto a0 = hn::Zero(du), a1 = a0, a2 = a0, a3 = a0, a4 = a0, a5 = a0;
+    if (ad_in_registers) {
+      a0 = hn::LoadU(du, ad_row);
+      a1 = hn::LoadU(du, ad_row + n);
+      a2 = hn::LoadU(du, ad_row + 2 * n);
+      a3 = hn::LoadU(du, ad_row + 3 * n);
+      a4 = hn::LoadU(du, ad_row + 4 * n);
+      a5 = hn::LoadU(du, ad_row + 5 * n);
     }
     for (int k = 0; k < vector_end; k += n) {
       // Lanes run over the disparities, so the right image is read backwards: lane j of this
@@ -361,8 +377,23 @@ void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, in
       const auto hi =
           hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right))));
       const auto hd = hn::ConcatEven(du, hn::BitCast(du, hi), hn::BitCast(du, lo));
-      const auto ad_cost =
-          hn::BitCast(du, hn::GatherIndex(di, ad_table, hn::Add(ad_base, hn::BitCast(di, ad))));
+      hn::Vec<decltype(du)> ad_cost;
+      if (ad_in_registers) {
+        const auto clamped = hn::Min(ad, ad_clamp);
+        const auto idx = hn::IndicesFromVec(du, hn::And(clamped, index_mask));
+        const auto odd = hn::TestBit(clamped, quarter_bit);  // vectors 1, 3, 5
+        const auto v01 =
+            hn::IfThenElse(odd, hn::TableLookupLanes(a1, idx), hn::TableLookupLanes(a0, idx));
+        const auto v23 =
+            hn::IfThenElse(odd, hn::TableLookupLanes(a3, idx), hn::TableLookupLanes(a2, idx));
+        const auto v45 =
+            hn::IfThenElse(odd, hn::TableLookupLanes(a5, idx), hn::TableLookupLanes(a4, idx));
+        ad_cost = hn::IfThenElse(hn::TestBit(clamped, third_bit), v45,
+                                 hn::IfThenElse(hn::TestBit(clamped, half_bit), v23, v01));
+      } else {
+        ad_cost =
+            hn::BitCast(du, hn::GatherIndex(di, ad_table, hn::Add(ad_base, hn::BitCast(di, ad))));
+      }
       hn::Vec<decltype(du)> census_cost;
       if (census_in_registers) {
         const auto idx = hn::IndicesFromVec(du, hn::And(hd, index_mask));

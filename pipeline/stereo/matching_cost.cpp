@@ -1,5 +1,6 @@
 #include "dco/pipeline/stereo/matching_cost.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cassert>
 #include <cmath>
@@ -30,12 +31,19 @@ void CostTables::build(const CostModel& model, int channels, int max_arm) {
       cen[hd] = static_cast<std::uint16_t>(
           std::lround(kCostScale * (1.0 - alpha) * (1.0 - std::exp(-hd / model.lambda_census))));
   }
+  ad_flat_from_ = 0;
+  for (int arm = 0; arm <= max_arm; ++arm) {
+    const std::uint16_t* ad = ad_row(arm);
+    int from = ad_size_ - 1;
+    while (from > 0 && ad[from - 1] == ad[ad_size_ - 1]) --from;
+    ad_flat_from_ = std::max(ad_flat_from_, from);
+  }
   wide_ad_.assign(ad_.begin(), ad_.end());
   wide_census_.assign(census_.begin(), census_.end());
 }
 
 kernels::CostTableView CostTables::wide() const {
-  return {wide_ad_.data(), ad_size_, wide_census_.data(), kCensusSize, kCostScale};
+  return {wide_ad_.data(), ad_size_, wide_census_.data(), kCensusSize, kCostScale, ad_flat_from_};
 }
 
 void compute_cost_slice(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,

@@ -273,6 +273,45 @@ TEST(StereoKernels, BlockMatchingCostMatchesTheRowKernel) {
   }
 }
 
+// Grey tables whose AD rows turn constant early (as the exponential of Eq. 1 does near 80 grey
+// levels) go through the kernel's register lookup: every head length it takes, and one it does
+// not, against the scalar reference, which reads the table itself.
+TEST(StereoKernels, BlockMatchingCostLooksUpShortAdRowsInRegisters) {
+  std::mt19937 rng(9);
+  for (const int flat_from : {1, 17, 63, 80, 95, 96}) {
+    Tables tables(1, 17);
+    for (int arm = 0; arm <= 17; ++arm) {
+      std::uint32_t* row = tables.ad.data() + arm * tables.view.ad_size;
+      // Rows turn constant at flat_from (arm 5: the entry before it differs) or earlier.
+      if (arm == 5) {
+        std::fill(row + flat_from, row + tables.view.ad_size, row[flat_from - 1] + 1);
+      } else {
+        const int from = static_cast<int>(rng() % flat_from) + 1;
+        std::fill(row + from, row + tables.view.ad_size, row[from - 1]);
+      }
+    }
+    tables.view.ad_flat_from = flat_from;
+    const int w = 150;
+    std::vector<std::uint32_t> left(static_cast<std::size_t>(w)), right(left.size());
+    for (auto& px : left) px = rng() & 0xffu;
+    for (auto& px : right) px = rng() & 0xffu;
+    right[40] = left[57] ^ 0xffu;  // differences of 255 occur
+    const auto cl = random_census(rng, left.size());
+    const auto cr = random_census(rng, left.size());
+    const auto arm = random_vector<std::uint8_t>(rng, left.size(), 0, 17);
+    const CostRow row{left.data(), right.data(), cl.data(), cr.data(), arm.data(), w};
+    for (const int d0 : {0, 16, 32}) {
+      std::vector<std::uint32_t> expected(static_cast<std::size_t>(w * 16));
+      scalar::block_matching_cost_row(row, tables.view, d0, 16, expected.data());
+      for_each_target([&] {
+        std::vector<std::uint32_t> out(expected.size(), 1);
+        block_matching_cost_row(row, tables.view, d0, 16, out.data());
+        ASSERT_EQ(out, expected) << "flat from " << flat_from << " d0 " << d0;
+      });
+    }
+  }
+}
+
 TEST(StereoKernels, MatchingCostOfIdenticalPixelsIsTheZeroEntry) {
   const Tables tables(3, 4);
   const int w = 40;

@@ -65,6 +65,30 @@ TEST(CostTables, EntriesAreRoundedFixedPointEquationOne) {
   }
 }
 
+// The kernel clamps AD indices to ad_flat_from: every arm's row must be constant from there on,
+// and the bound must be tight (some row changes just before it), or costs would be wrong or the
+// register lookup needlessly off. With the default model grey rows saturate within six vectors.
+TEST(CostTables, AdRowsAreConstantFromTheAdvertisedIndex) {
+  for (const CostModel m : {CostModel{}, CostModel{7.0, 25.0, 2.0, 0.3}})
+    for (int channels : {1, 3}) {
+      CostTables t;
+      t.build(m, channels, 17);
+      const kernels::CostTableView v = t.wide();
+      ASSERT_GT(v.ad_flat_from, 0);
+      bool changes_before = false;
+      for (int arm = 0; arm <= 17; ++arm) {
+        const std::uint16_t* row = t.ad_row(arm);
+        for (int s = v.ad_flat_from; s < v.ad_size; ++s)
+          ASSERT_EQ(row[s], row[v.ad_size - 1]) << "arm " << arm << " index " << s;
+        changes_before = changes_before || row[v.ad_flat_from - 1] != row[v.ad_size - 1];
+      }
+      EXPECT_TRUE(changes_before) << channels << " channels";
+      if (channels == 1 && m.lambda_ad == CostModel{}.lambda_ad) {
+        EXPECT_LT(v.ad_flat_from, 96);
+      }
+    }
+}
+
 TEST(CostTables, LongerArmsShiftWeightFromAdToCensus) {
   CostTables t;
   t.build(CostModel{}, 1, 34);

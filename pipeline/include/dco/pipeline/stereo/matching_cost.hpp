@@ -47,6 +47,7 @@ class CostTables {
   int channels_ = 0;
   int max_arm_ = -1;
   int ad_size_ = 0;
+  int ad_flat_from_ = 0;  // every AD row is constant from here on
   std::vector<std::uint16_t> ad_;
   std::vector<std::uint16_t> census_;
   std::vector<std::uint32_t> wide_ad_, wide_census_;

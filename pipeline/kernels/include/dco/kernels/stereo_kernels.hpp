@@ -52,6 +52,9 @@ struct CostTableView {
   const std::uint32_t* census = nullptr;
   int census_size = 0;
   std::uint32_t unmatched = 0;  // cost of a left pixel whose partner x - d is outside the image
+  // Every arm's AD row is constant from this index on (0: not known). A short enough head lets
+  // the kernel look the AD term up in registers instead of gathering it.
+  int ad_flat_from = 0;
 };
 
 // One image row: packed pixels, census descriptors and the shortest arm of each left pixel.
