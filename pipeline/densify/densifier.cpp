@@ -207,35 +207,12 @@ void Densifier::build_system(const DensifyInputs& in) {
       if (x > 0) crossed = crossed || ex[x - 1] < crossing;
     }
   }
-  // Weights of 0 add exactly nothing (every sum here is positive or +0), so the terms a pixel
-  // lacks go in as zeros instead of branches.
   float low = std::numeric_limits<float>::infinity(), high = 0.0f;
-  const float hint_weight = lh > 0.0f ? lh : 0.0f;
-  for (int y = 0; y < h; ++y) {
-    const float* sp = in.sparse.row(y);
-    const float* hint = hint_.row(y);
-    const float* prev = has_previous ? in.previous.row(y) : nullptr;
-    float* data = system_.data.row(y);
-    float* b = rhs_.row(y);
-    for (int x = 0; x < w; ++x) {
-      const bool k = known(sp[x]);
-      const float weight = k ? ld : hint[x] > 0.0f ? hint_weight : 0.0f;
-      const float value = k ? sp[x] : hint[x];
-      data[x] = kRegulariser + weight;
-      b[x] = 0.0f + weight * value;
-      low = k ? std::min(low, sp[x]) : low;
-      high = k ? std::max(high, sp[x]) : high;
-    }
-    if (prev == nullptr) continue;
-    for (int x = 0; x < w; ++x) {
-      const bool k = known(prev[x]);
-      const float value = k ? prev[x] : 0.0f;
-      data[x] += k ? ls2 : 0.0f;
-      b[x] += (k ? ls2 : 0.0f) * value;
-      low = k ? std::min(low, value) : low;
-      high = k ? std::max(high, value) : high;
-    }
-  }
+  const kernels::DataTermRule terms{kRegulariser, ld, lh > 0.0f ? lh : 0.0f, ls2};
+  for (int y = 0; y < h; ++y)
+    kernels::data_terms_row(in.sparse.row(y), hint_.row(y),
+                            has_previous ? in.previous.row(y) : nullptr, w, terms,
+                            system_.data.row(y), rhs_.row(y), &low, &high);
   system_.update_diagonal();
   data_low_ = high > 0.0f ? low : 0.0f;
   data_high_ = high;

@@ -15,49 +15,12 @@ void GridSystem::resize(int width, int height) {
   inv_diag.resize(width, height);
 }
 
-namespace {
-
-// One row of update_diagonal, the branches of kernels::pixel::diagonal hoisted out of the
-// interior (the compiler vectorises it); same additions in the same order.
-template <bool kBelow, bool kAbove>
-void diagonal_row(const float* d, const float* ex, const float* ey, const float* ey_above, int w,
-                  float* g, float* inv) {
-  const auto interior = [&](int x) {
-    float s = d[x];
-    s += ex[x];
-    s += ex[x - 1];
-    if constexpr (kBelow) s += ey[x];
-    if constexpr (kAbove) s += ey_above[x];
-    return s;
-  };
-  g[0] = kernels::pixel::diagonal(d[0], ex, ey, ey_above, 0, w, kBelow);
-  for (int x = 1; x < w - 1; ++x) g[x] = interior(x);
-  if (w > 1) g[w - 1] = kernels::pixel::diagonal(d[w - 1], ex, ey, ey_above, w - 1, w, kBelow);
-  for (int x = 0; x < w; ++x) inv[x] = kernels::pixel::inverse_diagonal(g[x]);
-}
-
-}  // namespace
-
 void GridSystem::update_diagonal() {
   const int w = width();
   const int h = height();
-  for (int y = 0; y < h; ++y) {
-    const float* d = data.row(y);
-    const float* ex = wx.row(y);
-    const float* ey = wy.row(y);
-    const float* ey_above = y > 0 ? wy.row(y - 1) : nullptr;
-    float* g = diag.row(y);
-    float* inv = inv_diag.row(y);
-    const bool below = y + 1 < h;
-    if (below && ey_above != nullptr)
-      diagonal_row<true, true>(d, ex, ey, ey_above, w, g, inv);
-    else if (below)
-      diagonal_row<true, false>(d, ex, ey, ey_above, w, g, inv);
-    else if (ey_above != nullptr)
-      diagonal_row<false, true>(d, ex, ey, ey_above, w, g, inv);
-    else
-      diagonal_row<false, false>(d, ex, ey, ey_above, w, g, inv);
-  }
+  for (int y = 0; y < h; ++y)
+    kernels::diagonal_row(data.row(y), wx.row(y), y + 1 < h ? wy.row(y) : nullptr,
+                          y > 0 ? wy.row(y - 1) : nullptr, w, diag.row(y), inv_diag.row(y));
 }
 
 kernels::GridRow grid_row(const GridSystem& a, int r) {

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 #include "dco/kernels/densify_kernels.hpp"
 #include "densify_ranges.hpp"
@@ -129,6 +130,74 @@ void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) 
   detail::edge_range(e, rule, i, n, out);
 }
 
+void DataTermsRow(const float* sparse, const float* hint, const float* previous, int width,
+                  const DataTermRule& rule, float* data, float* b, float* low, float* high) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const auto zero = hn::Zero(d);
+  const auto inf = hn::Set(d, std::numeric_limits<float>::infinity());
+  const auto regulariser = hn::Set(d, rule.regulariser);
+  const auto lambda_d = hn::Set(d, rule.lambda_d);
+  const auto hint_weight = hn::Set(d, rule.hint_weight);
+  const auto lambda_s2 = hn::Set(d, rule.lambda_s2);
+  // Min and max are exact, so the lanes' running extremes give the same result in any order.
+  auto lo = hn::Set(d, *low), hi = hn::Set(d, *high);
+  const auto known = [&](hn::Vec<decltype(d)> v) {
+    return hn::And(hn::Gt(v, zero), hn::Lt(v, inf));
+  };
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    const auto sp = hn::LoadU(d, sparse + x);
+    const auto h = hn::LoadU(d, hint + x);
+    const auto k = known(sp);
+    const auto has_hint = hn::Gt(h, zero);
+    const auto w = hn::IfThenElse(k, lambda_d, hn::IfThenElseZero(has_hint, hint_weight));
+    const auto v = hn::IfThenElse(k, sp, hn::IfThenElseZero(has_hint, h));
+    auto a = hn::Add(regulariser, w);
+    auto r = hn::Add(zero, hn::Mul(w, v));
+    lo = hn::IfThenElse(k, hn::Min(lo, sp), lo);
+    hi = hn::IfThenElse(k, hn::Max(hi, sp), hi);
+    if (previous != nullptr) {
+      const auto p = hn::LoadU(d, previous + x);
+      const auto kp = known(p);
+      const auto w2 = hn::IfThenElseZero(kp, lambda_s2);
+      a = hn::Add(a, w2);
+      r = hn::Add(r, hn::Mul(w2, hn::IfThenElseZero(kp, p)));
+      lo = hn::IfThenElse(kp, hn::Min(lo, p), lo);
+      hi = hn::IfThenElse(kp, hn::Max(hi, p), hi);
+    }
+    hn::StoreU(a, d, data + x);
+    hn::StoreU(r, d, b + x);
+  }
+  *low = hn::GetLane(hn::MinOfLanes(d, lo));
+  *high = hn::GetLane(hn::MaxOfLanes(d, hi));
+  detail::data_terms_range(sparse, hint, previous, rule, x, width, data, b, low, high);
+}
+
+void DiagonalRow(const float* data, const float* wx, const float* wy, const float* wy_above,
+                 int width, float* diag, float* inv_diag) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  if (width < 2) {
+    detail::diagonal_range(data, wx, wy, wy_above, width, 0, width, diag, inv_diag);
+    return;
+  }
+  detail::diagonal_range(data, wx, wy, wy_above, width, 0, 1, diag, inv_diag);
+  const auto zero = hn::Zero(d);
+  const auto one = hn::Set(d, 1.0f);
+  int x = 1;
+  // Interior columns have both row edges; the additions keep kernels::pixel::diagonal's order.
+  for (; x + n <= width - 1; x += n) {
+    auto s = hn::Add(hn::LoadU(d, data + x), hn::LoadU(d, wx + x));
+    s = hn::Add(s, hn::LoadU(d, wx + x - 1));
+    if (wy != nullptr) s = hn::Add(s, hn::LoadU(d, wy + x));
+    if (wy_above != nullptr) s = hn::Add(s, hn::LoadU(d, wy_above + x));
+    hn::StoreU(s, d, diag + x);
+    hn::StoreU(hn::IfThenElseZero(hn::Gt(s, zero), hn::Div(one, s)), d, inv_diag + x);
+  }
+  detail::diagonal_range(data, wx, wy, wy_above, width, x, width, diag, inv_diag);
+}
+
 double DotRow(const float* a, const float* b, int n) {
   // At most 16 lanes, so a vector is a whole number of the reference's partial sums: vector k of
   // a block holds partial sums k * lanes .. (k + 1) * lanes - 1.
@@ -175,6 +244,8 @@ HWY_EXPORT(GridSmoothRow);
 HWY_EXPORT(GridApplyRow);
 HWY_EXPORT(DotRow);
 HWY_EXPORT(EdgeWeightsRow);
+HWY_EXPORT(DataTermsRow);
+HWY_EXPORT(DiagonalRow);
 
 void grid_smooth_row(const GridRow& row, int start, const float* b, float* x) {
   HWY_DYNAMIC_DISPATCH(GridSmoothRow)(row, start, b, x);
@@ -190,6 +261,16 @@ double dot_row(const float* a, const float* b, int n) {
 
 void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out) {
   HWY_DYNAMIC_DISPATCH(EdgeWeightsRow)(ends, rule, n, out);
+}
+
+void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,
+                    const DataTermRule& rule, float* data, float* b, float* low, float* high) {
+  HWY_DYNAMIC_DISPATCH(DataTermsRow)(sparse, hint, previous, width, rule, data, b, low, high);
+}
+
+void diagonal_row(const float* data, const float* wx, const float* wy, const float* wy_above,
+                  int width, float* diag, float* inv_diag) {
+  HWY_DYNAMIC_DISPATCH(DiagonalRow)(data, wx, wy, wy_above, width, diag, inv_diag);
 }
 
 }  // namespace dco::kernels

@@ -4,6 +4,16 @@
 
 namespace dco::kernels::scalar {
 
+void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,
+                    const DataTermRule& rule, float* data, float* b, float* low, float* high) {
+  detail::data_terms_range(sparse, hint, previous, rule, 0, width, data, b, low, high);
+}
+
+void diagonal_row(const float* data, const float* wx, const float* wy, const float* wy_above,
+                  int width, float* diag, float* inv_diag) {
+  detail::diagonal_range(data, wx, wy, wy_above, width, 0, width, diag, inv_diag);
+}
+
 void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out) {
   detail::edge_range(ends, rule, 0, n, out);
 }

@@ -4,6 +4,9 @@
 // the borders and the last partial vector for the SIMD versions. The order of the float
 // operations here is the contract the vector code follows.
 
+#include <algorithm>
+#include <limits>
+
 #include "dco/kernels/densify_kernels.hpp"
 #include "dco/kernels/densify_pixel.hpp"
 
@@ -27,6 +30,40 @@ inline void edge_range(const EdgeEnds& e, const EdgeRule& rule, int begin, int e
                                                      : e.grey_b[i] - e.grey_a[i]];
     out[i] = pixel::edge_weight(e.barrier_a[i] != e.barrier_b[i], e.strength_a[i], e.strength_b[i],
                                 colour, rule.scale, rule.floor);
+  }
+}
+
+inline bool known_value(float v) {
+  return v > 0.0f && v < std::numeric_limits<float>::infinity();
+}
+
+inline void data_terms_range(const float* sparse, const float* hint, const float* previous,
+                             const DataTermRule& rule, int begin, int end, float* data, float* b,
+                             float* low, float* high) {
+  for (int x = begin; x < end; ++x) {
+    const bool k = known_value(sparse[x]);
+    const float w = k ? rule.lambda_d : hint[x] > 0.0f ? rule.hint_weight : 0.0f;
+    const float v = k ? sparse[x] : hint[x] > 0.0f ? hint[x] : 0.0f;
+    float a = rule.regulariser + w;
+    float r = 0.0f + w * v;
+    if (k) *low = std::min(*low, sparse[x]), *high = std::max(*high, sparse[x]);
+    if (previous != nullptr) {
+      const bool kp = known_value(previous[x]);
+      a = a + (kp ? rule.lambda_s2 : 0.0f);
+      r = r + (kp ? rule.lambda_s2 : 0.0f) * (kp ? previous[x] : 0.0f);
+      if (kp) *low = std::min(*low, previous[x]), *high = std::max(*high, previous[x]);
+    }
+    data[x] = a;
+    b[x] = r;
+  }
+}
+
+inline void diagonal_range(const float* data, const float* wx, const float* wy,
+                           const float* wy_above, int width, int begin, int end, float* diag,
+                           float* inv_diag) {
+  for (int x = begin; x < end; ++x) {
+    diag[x] = pixel::diagonal(data[x], wx, wy, wy_above, x, width, wy != nullptr);
+    inv_diag[x] = pixel::inverse_diagonal(diag[x]);
   }
 }
 

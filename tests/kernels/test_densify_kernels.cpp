@@ -1,8 +1,10 @@
 #include "dco/kernels/densify_kernels.hpp"
 #include "for_each_target.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -196,6 +198,93 @@ TEST(DensifyKernels, EdgeWeightIsThePaperWeightTimesTheGuidance) {
   scalar::edge_weights_row({bar, no_bar, str_a, str_b, grey_a, grey_b}, {2.0f, 0.01f, colour}, 2,
                            out);
   EXPECT_FLOAT_EQ(out[0], 2.0f * 0.01f);
+}
+
+// Sparse, hint and previous values as the densifier meets them: known ones, holes (+inf), a NaN,
+// zeros and negatives; with and without the previous frame and the hint weight.
+TEST(DensifyKernels, DataTermsRowMatchesScalarAndTheRule) {
+  std::mt19937 rng(21);
+  const float inf = std::numeric_limits<float>::infinity();
+  const auto values = [&](int w) {
+    std::vector<float> v = random_floats(rng, w, 0.5f, 90.0f);
+    for (float& e : v) {
+      const unsigned pick = rng() % 8;
+      if (pick == 0) e = inf;
+      if (pick == 1) e = 0.0f;
+      if (pick == 2) e = -e;
+      if (pick == 3) e = std::numeric_limits<float>::quiet_NaN();
+    }
+    return v;
+  };
+  const auto known = [inf](float v) { return v > 0.0f && v < inf; };
+  for (const int w : kWidths)
+    for (const bool with_previous : {false, true})
+      for (const float hint_weight : {0.0f, 0.04f}) {
+        const std::vector<float> sparse = values(w), previous = values(w);
+        std::vector<float> hint = random_floats(rng, w, 1.0f, 60.0f);
+        for (float& e : hint) e = rng() % 3 == 0 ? 0.0f : e;
+        const DataTermRule rule{1e-6f, 0.8f, hint_weight, 0.02f};
+        const float* prev = with_previous ? previous.data() : nullptr;
+        std::vector<float> data(static_cast<std::size_t>(w)), b(data.size());
+        float low = inf, high = 0.0f;
+        scalar::data_terms_row(sparse.data(), hint.data(), prev, w, rule, data.data(), b.data(),
+                               &low, &high);
+        float want_low = inf, want_high = 0.0f;
+        for (int x = 0; x < w; ++x) {
+          float a = rule.regulariser, r = 0.0f;
+          if (known(sparse[x])) {
+            a += rule.lambda_d, r += rule.lambda_d * sparse[x];
+            want_low = std::min(want_low, sparse[x]), want_high = std::max(want_high, sparse[x]);
+          } else if (hint[x] > 0.0f) {
+            a += hint_weight, r += hint_weight * hint[x];
+          }
+          if (prev && known(prev[x])) {
+            a += rule.lambda_s2, r += rule.lambda_s2 * prev[x];
+            want_low = std::min(want_low, prev[x]), want_high = std::max(want_high, prev[x]);
+          }
+          ASSERT_EQ(data[x], a) << x;
+          ASSERT_EQ(b[x], r) << x;
+        }
+        ASSERT_EQ(low, want_low);
+        ASSERT_EQ(high, want_high);
+        for_each_target([&] {
+          std::vector<float> out_data(data.size(), -1.0f), out_b(data.size(), -1.0f);
+          float out_low = inf, out_high = 0.0f;
+          data_terms_row(sparse.data(), hint.data(), prev, w, rule, out_data.data(), out_b.data(),
+                         &out_low, &out_high);
+          ASSERT_EQ(out_data, data) << "width " << w;
+          ASSERT_EQ(out_b, b) << "width " << w;
+          ASSERT_EQ(out_low, low) << "width " << w;
+          ASSERT_EQ(out_high, high) << "width " << w;
+        });
+      }
+}
+
+TEST(DensifyKernels, DiagonalRowMatchesScalar) {
+  std::mt19937 rng(22);
+  for (const int w : kWidths)
+    for (const int edges : {0, 1, 2, 3}) {  // bit 0: a row below, bit 1: a row above
+      std::vector<float> data = random_floats(rng, w, 0.0f, 1.0f);
+      std::vector<float> wx = random_floats(rng, w, 0.0f, 2.0f);
+      std::vector<float> wy = random_floats(rng, w, 0.0f, 2.0f);
+      std::vector<float> wy_above = random_floats(rng, w, 0.0f, 2.0f);
+      if (w > 2) {  // pixel 1 without data or edges: diagonal 0, inverse 0
+        data[1] = wx[0] = wx[1] = wy[1] = wy_above[1] = 0.0f;
+      }
+      const float* below = edges & 1 ? wy.data() : nullptr;
+      const float* above = edges & 2 ? wy_above.data() : nullptr;
+      std::vector<float> diag(static_cast<std::size_t>(w)), inv(diag.size());
+      scalar::diagonal_row(data.data(), wx.data(), below, above, w, diag.data(), inv.data());
+      if (w > 2) {
+        ASSERT_EQ(inv[1], 0.0f);
+      }
+      for_each_target([&] {
+        std::vector<float> out_diag(diag.size(), -1.0f), out_inv(diag.size(), -1.0f);
+        diagonal_row(data.data(), wx.data(), below, above, w, out_diag.data(), out_inv.data());
+        ASSERT_EQ(out_diag, diag) << "width " << w << " edges " << edges;
+        ASSERT_EQ(out_inv, inv) << "width " << w << " edges " << edges;
+      });
+    }
 }
 
 }  // namespace

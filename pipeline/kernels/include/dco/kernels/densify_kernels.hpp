@@ -57,7 +57,31 @@ struct EdgeRule {
 // scale * max((1 - min(s_a, s_b)) * colour[|g_a - g_b|], floor), for i < n.
 void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out);
 
+// The data terms of one row of Eq. 20 (data, Eq. 13–14; the hole hint; stability, Eq. 18–19).
+// A value is known when finite and positive. Pixel x gets
+//   data[x] = regulariser + w + w2,  b[x] = 0 + w * v + w2 * v2, where
+//   w, v = lambda_d, sparse[x] where sparse is known, else hint_weight, hint[x] where hint[x] > 0,
+//          else 0, 0;
+//   w2, v2 = lambda_s2, previous[x] where previous (nullable) is known, else 0, 0;
+// *low / *high become the least / largest of themselves and the known values read.
+struct DataTermRule {
+  float regulariser = 0.0f;
+  float lambda_d = 0.0f;
+  float hint_weight = 0.0f;  // >= 0
+  float lambda_s2 = 0.0f;
+};
+void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,
+                    const DataTermRule& rule, float* data, float* b, float* low, float* high);
+// diag[x] = data[x] + the weights of the edges of pixel x that exist (kernels::pixel::diagonal;
+// wy and wy_above null on the last and first row) and inv_diag[x] = 1 / diag[x] (0 where 0).
+void diagonal_row(const float* data, const float* wx, const float* wy, const float* wy_above,
+                  int width, float* diag, float* inv_diag);
+
 namespace scalar {
+void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,
+                    const DataTermRule& rule, float* data, float* b, float* low, float* high);
+void diagonal_row(const float* data, const float* wx, const float* wy, const float* wy_above,
+                  int width, float* diag, float* inv_diag);
 void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out);
 void grid_smooth_row(const GridRow& row, int start, const float* b, float* x);
 void grid_apply_row(const GridRow& row, const float* x, float* out);
