@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <queue>
+#include <random>
 #include <utility>
 
 #include <gtest/gtest.h>
@@ -10,6 +11,7 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/image.hpp"
+#include "dco/kernels/canny_kernels.hpp"
 #include "dco/pipeline/contour/separable_filters.hpp"
 
 namespace dco::contour {
@@ -196,6 +198,51 @@ TEST(GatedCanny, TinyImagesHaveNoEdges) {
     gated_canny(mag.view(), dir.view(), {}, {}, edges.view(), scratch);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) EXPECT_EQ(edges.at(x, y), 0);
+  }
+}
+
+// The hysteresis step against a plain breadth-first flood on random classified maps: strong
+// pixels in every position of the eight-byte words the scan skips by, and in the row tails.
+TEST(GatedCanny, HysteresisEqualsAFloodFromEveryStrongPixel) {
+  std::mt19937 rng(4);
+  for (const int w : {3, 9, 17, 64, 71}) {
+    const int h = 13;
+    Image<std::uint8_t> map(w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const bool border = x == 0 || y == 0 || x == w - 1 || y == h - 1;
+        const unsigned pick = rng() % 100;
+        map.at(x, y) = border      ? kernels::kCannyNone
+                       : pick < 3  ? kernels::kCannyStrong
+                       : pick < 45 ? kernels::kCannyWeak
+                                   : kernels::kCannyNone;
+      }
+    Image<std::uint8_t> expected(w, h);
+    expected.fill(0);
+    std::queue<std::pair<int, int>> todo;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        if (map.at(x, y) == kernels::kCannyStrong) {
+          expected.at(x, y) = kernels::kCannyStrong;
+          todo.emplace(x, y);
+        }
+    while (!todo.empty()) {
+      const auto [x, y] = todo.front();
+      todo.pop();
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = x + dx, ny = y + dy;
+          if (map.at(nx, ny) == kernels::kCannyWeak && expected.at(nx, ny) == 0) {
+            expected.at(nx, ny) = kernels::kCannyStrong;
+            todo.emplace(nx, ny);
+          }
+        }
+    }
+    CannyScratch scratch;
+    canny_hysteresis(map.view(), scratch);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        ASSERT_EQ(map.at(x, y), expected.at(x, y)) << "width " << w << " at " << x << "," << y;
   }
 }
 
