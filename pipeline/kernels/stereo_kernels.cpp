@@ -285,8 +285,11 @@ void MatchingCostRow(const CostRow& row, const CostTableView& t, int d, std::uin
   detail::matched_cost_range(row, t, d, x, w, out);
 }
 
-void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, int count,
-                          std::uint32_t* out) {
+// Costs of row `row` in the block layout; with kRunning, their running sums along the row instead:
+// out[(x + 1) * count + k] = out[x * count + k] + cost (out[0 .. count) = 0), the prefix sums
+// the horizontal aggregation needs, without a pass of their own.
+template <bool kRunning>
+void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, std::uint32_t* out) {
   const hn::ScalableTag<std::uint32_t> du;
   const hn::RebindToSigned<decltype(du)> di;
   const hn::Repartition<std::uint8_t, decltype(du)> du8;
@@ -315,10 +318,16 @@ void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, in
   // Right pixels before the row start read as zero from here; their lanes become `unmatched`.
   HWY_ALIGN std::uint32_t right_pad[HWY_MAX_BYTES / 4];
   HWY_ALIGN std::uint64_t census_pad[HWY_MAX_BYTES / 4];
+  if constexpr (kRunning) std::fill(out, out + count, 0u);
   for (int x = 0; x < row.width; ++x) {
-    std::uint32_t* dst = out + x * count;
+    std::uint32_t* dst = out + (kRunning ? x + 1 : x) * count;
+    const std::uint32_t* before = out + x * count;  // kRunning: the sums up to x - 1
+    const auto emit = [&](hn::Vec<decltype(du)> cost, int k) {
+      if constexpr (kRunning) cost = hn::Add(cost, hn::LoadU(du, before + k));
+      hn::StoreU(cost, du, dst + k);
+    };
     if (x < d0) {
-      std::fill(dst, dst + count, t.unmatched);
+      for (int k = 0; k < count; ++k) dst[k] = t.unmatched + (kRunning ? before[k] : 0u);
       continue;
     }
     const auto a = hn::BitCast(du8, hn::Set(du, row.left[x]));
@@ -350,7 +359,7 @@ void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, in
       // vector is disparity d0 + k + j and right pixel xr - j.
       const int xr = x - d0 - k;
       if (xr < 0) {
-        hn::StoreU(unmatched, du, dst + k);
+        emit(unmatched, k);
         continue;
       }
       // The right pixels xr - (n - 1) .. xr; from the padded copy when some precede the row.
@@ -411,10 +420,25 @@ void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, in
       auto cost = hn::Add(ad_cost, census_cost);
       if (partial)
         cost = hn::IfThenElse(hn::RebindMask(du, hn::Gt(lanes, hn::Set(di, xr))), unmatched, cost);
-      hn::StoreU(cost, du, dst + k);
+      emit(cost, k);
     }
-    detail::block_cost_range(row, t, x, d0, count, vector_end, count, out);
+    if constexpr (kRunning) {
+      for (int k = vector_end; k < count; ++k)
+        dst[k] = before[k] + (x >= d0 + k ? detail::matched_cost(row, t, x, d0 + k) : t.unmatched);
+    } else {
+      detail::block_cost_range(row, t, x, d0, count, vector_end, count, out);
+    }
   }
+}
+
+void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, int count,
+                          std::uint32_t* out) {
+  BlockCosts<false>(row, t, d0, count, out);
+}
+
+void BlockMatchingCostSumsRow(const CostRow& row, const CostTableView& t, int d0, int count,
+                              std::uint32_t* prefix) {
+  BlockCosts<true>(row, t, d0, count, prefix);
 }
 
 void HorizontalSumsRow(const std::uint32_t* in, const std::uint8_t* left, const std::uint8_t* right,
@@ -496,6 +520,30 @@ void RegionMeanRow(std::uint32_t* row, const std::uint32_t* reciprocal, int widt
   detail::mean_range(row, reciprocal, x, width);
 }
 
+void BlockWindowSumsRow(const std::uint32_t* prefix, const std::uint8_t* left,
+                        const std::uint8_t* right, int width, int block, const std::uint32_t* above,
+                        std::uint32_t* out) {
+  const hn::ScalableTag<std::uint32_t> du;
+  const int n = static_cast<int>(hn::Lanes(du));
+  const int vector_end = block - block % n;
+  for (int x = 0; x < width; ++x) {
+    const std::uint32_t* hi = prefix + (x + right[x] + 1) * block;
+    const std::uint32_t* lo = prefix + (x - left[x]) * block;
+    std::uint32_t* dst = out + x * block;
+    if (above != nullptr) {
+      const std::uint32_t* up = above + x * block;
+      for (int k = 0; k < vector_end; k += n)
+        hn::StoreU(
+            hn::Add(hn::Sub(hn::LoadU(du, hi + k), hn::LoadU(du, lo + k)), hn::LoadU(du, up + k)),
+            du, dst + k);
+    } else {
+      for (int k = 0; k < vector_end; k += n)
+        hn::StoreU(hn::Sub(hn::LoadU(du, hi + k), hn::LoadU(du, lo + k)), du, dst + k);
+    }
+  }
+  detail::block_horizontal_range(prefix, left, right, width, block, vector_end, block, above, out);
+}
+
 void BlockHorizontalSumsRow(const std::uint32_t* in, const std::uint8_t* left,
                             const std::uint8_t* right, int width, int block, std::uint32_t* prefix,
                             const std::uint32_t* above, std::uint32_t* out) {
@@ -512,23 +560,8 @@ void BlockHorizontalSumsRow(const std::uint32_t* in, const std::uint8_t* left,
       hn::StoreU(sum, du, prefix + (x + 1) * block + k);
     }
   }
-  for (int x = 0; x < width; ++x) {
-    const std::uint32_t* hi = prefix + (x + right[x] + 1) * block;
-    const std::uint32_t* lo = prefix + (x - left[x]) * block;
-    std::uint32_t* dst = out + x * block;
-    if (above != nullptr) {
-      const std::uint32_t* up = above + x * block;
-      for (int k = 0; k < vector_end; k += n)
-        hn::StoreU(
-            hn::Add(hn::Sub(hn::LoadU(du, hi + k), hn::LoadU(du, lo + k)), hn::LoadU(du, up + k)),
-            du, dst + k);
-    } else {
-      for (int k = 0; k < vector_end; k += n)
-        hn::StoreU(hn::Sub(hn::LoadU(du, hi + k), hn::LoadU(du, lo + k)), du, dst + k);
-    }
-  }
   detail::block_prefix_range(in, width, block, vector_end, block, prefix);
-  detail::block_horizontal_range(prefix, left, right, width, block, vector_end, block, above, out);
+  BlockWindowSumsRow(prefix, left, right, width, block, above, out);
 }
 
 // (v * r + 2^30) >> 31 per 32-bit lane in 64-bit arithmetic (kernels::pixel::region_mean).
@@ -727,11 +760,13 @@ HWY_EXPORT(CrossArmsRow);
 HWY_EXPORT(GreyCrossArmsRow);
 HWY_EXPORT(MatchingCostRow);
 HWY_EXPORT(BlockMatchingCostRow);
+HWY_EXPORT(BlockMatchingCostSumsRow);
 HWY_EXPORT(HorizontalSumsRow);
 HWY_EXPORT(AccumulateRow);
 HWY_EXPORT(VerticalSumsRow);
 HWY_EXPORT(RegionMeanRow);
 HWY_EXPORT(BlockHorizontalSumsRow);
+HWY_EXPORT(BlockWindowSumsRow);
 HWY_EXPORT(BlockVerticalSumsRow);
 HWY_EXPORT(BlockRegionMeanRow);
 HWY_EXPORT(BlocksToRows);
@@ -769,6 +804,17 @@ void matching_cost_row(const CostRow& row, const CostTableView& tables, int d, s
 void block_matching_cost_row(const CostRow& row, const CostTableView& tables, int d0, int count,
                              std::uint32_t* out) {
   HWY_DYNAMIC_DISPATCH(BlockMatchingCostRow)(row, tables, d0, count, out);
+}
+
+void block_matching_cost_sums_row(const CostRow& row, const CostTableView& tables, int d0,
+                                  int count, std::uint32_t* prefix) {
+  HWY_DYNAMIC_DISPATCH(BlockMatchingCostSumsRow)(row, tables, d0, count, prefix);
+}
+
+void block_window_sums_row(const std::uint32_t* prefix, const std::uint8_t* left,
+                           const std::uint8_t* right, int width, int block,
+                           const std::uint32_t* above, std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(BlockWindowSumsRow)(prefix, left, right, width, block, above, out);
 }
 
 void horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,

@@ -44,6 +44,22 @@ void block_matching_cost_row(const CostRow& row, const CostTableView& tables, in
     detail::block_cost_range(row, tables, x, d0, count, 0, count, out);
 }
 
+void block_matching_cost_sums_row(const CostRow& row, const CostTableView& tables, int d0,
+                                  int count, std::uint32_t* prefix) {
+  // The costs one block further on, then summed in place along the row.
+  for (int x = 0; x < row.width; ++x)
+    detail::block_cost_range(row, tables, x, d0, count, 0, count, prefix + count);
+  for (int k = 0; k < count; ++k) prefix[k] = 0;
+  for (int x = 0; x < row.width; ++x)
+    for (int k = 0; k < count; ++k) prefix[(x + 1) * count + k] += prefix[x * count + k];
+}
+
+void block_window_sums_row(const std::uint32_t* prefix, const std::uint8_t* left,
+                           const std::uint8_t* right, int width, int block,
+                           const std::uint32_t* above, std::uint32_t* out) {
+  detail::block_horizontal_range(prefix, left, right, width, block, 0, block, above, out);
+}
+
 void horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
                          const std::uint8_t* right, int width, std::uint32_t* prefix,
                          std::uint32_t* out) {

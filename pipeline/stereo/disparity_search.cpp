@@ -34,18 +34,18 @@ void DisparitySearch::run_fused(const MatchingImages& images, const CostTables& 
     // Always whole batches, so the kernels run on whole vectors; disparities past max_d are
     // aggregated but never reach the winner-takes-all state.
     const int count = std::min(kBatch, max_d - d0 + 1);
-    const auto costs = [&](int y, std::uint32_t* blocks) {
+    const auto cost_sums = [&](int y, std::uint32_t* prefix) {
       const kernels::CostRow row{images.left.row(y),         images.right.row(y),
                                  images.census_left.row(y),  images.census_right.row(y),
                                  images.shortest_arm.row(y), w};
-      kernels::block_matching_cost_row(row, wide, d0, kBatch, blocks);
+      kernels::block_matching_cost_sums_row(row, wide, d0, kBatch, prefix);
     };
     // Each row's region means go straight into the winner-takes-all state.
     const auto select = [&](int y, std::uint32_t* means) {
       kernels::blocks_to_rows(means, w, kBatch, count, lines_.data(), lines_.stride());
       wta.update_row(lines_.row(0), lines_.stride(), count, y, d0);
     };
-    aggregator_.run(kBatch, costs, select, recip);
+    aggregator_.run<true>(kBatch, cost_sums, select, recip);
   }
 }
 

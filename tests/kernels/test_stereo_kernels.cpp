@@ -261,10 +261,22 @@ TEST(StereoKernels, BlockMatchingCostMatchesTheRowKernel) {
           std::vector<std::uint32_t> reference(expected.size());
           scalar::block_matching_cost_row(row, tables.view, d0, count, reference.data());
           ASSERT_EQ(reference, expected);
+          // Running sums along the row, one block ahead (the aggregation's prefix).
+          std::vector<std::uint32_t> sums(static_cast<std::size_t>((w + 1) * count), 0);
+          for (int x = 0; x < w; ++x)
+            for (int k = 0; k < count; ++k)
+              sums[(x + 1) * count + k] = sums[x * count + k] + expected[x * count + k];
+          std::vector<std::uint32_t> reference_sums(sums.size(), 7);
+          scalar::block_matching_cost_sums_row(row, tables.view, d0, count, reference_sums.data());
+          ASSERT_EQ(reference_sums, sums);
           for_each_target([&] {
             std::vector<std::uint32_t> out(expected.size(), 1);
             block_matching_cost_row(row, tables.view, d0, count, out.data());
             ASSERT_EQ(out, expected)
+                << "channels " << channels << " width " << w << " d0 " << d0 << " count " << count;
+            std::vector<std::uint32_t> out_sums(sums.size(), 7);
+            block_matching_cost_sums_row(row, tables.view, d0, count, out_sums.data());
+            ASSERT_EQ(out_sums, sums)
                 << "channels " << channels << " width " << w << " d0 " << d0 << " count " << count;
           });
         }
@@ -448,6 +460,10 @@ TEST(StereoKernels, BlockHorizontalSumsMatchScalarAndBruteForce) {
       for (std::size_t i = 0; i < in.size(); ++i)
         ASSERT_EQ(expected_added[i], static_cast<std::uint32_t>(expected[i] + above[i]));
       for_each_target([&] {
+        std::vector<std::uint32_t> from_prefix(in.size());
+        block_window_sums_row(prefix.data(), left.data(), right.data(), w, block, above.data(),
+                              from_prefix.data());
+        ASSERT_EQ(from_prefix, expected_added) << "width " << w << " block " << block;
         std::vector<std::uint32_t> out(in.size());
         block_horizontal_sums_row(in.data(), left.data(), right.data(), w, block, prefix.data(),
                                   nullptr, out.data());

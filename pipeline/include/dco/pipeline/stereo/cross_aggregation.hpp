@@ -85,7 +85,10 @@ class BlockAggregator {
   void prepare(const CrossArms& arms, int max_block);
 
   // With `reciprocals` (SupportRegions::reciprocals), take receives the region means instead.
-  template <class Fill, class Take>
+  // With kFillsPrefix, fill(y, prefix) writes the running sums of row y's values along the row
+  // ((width + 1) * block elements, as kernels::block_matching_cost_sums_row does) instead of the
+  // values.
+  template <bool kFillsPrefix = false, class Fill, class Take>
   void run(int block, Fill&& fill, Take&& take, ImageView<const std::uint32_t> reciprocals = {}) {
     const CrossArms& a = *arms_;
     const int w = a.width();
@@ -93,11 +96,17 @@ class BlockAggregator {
     for (int i = 0; i < h; ++i) rows_[i] = ring_.row(i % ring_.height());
     for (int ya = 0; ya < h + reach_down_; ++ya) {
       if (ya < h) {
-        fill(ya, input_.data());
         // Horizontal sums plus the row above's running column sums.
-        kernels::block_horizontal_sums_row(input_.data(), a.left.row(ya), a.right.row(ya), w, block,
-                                           prefix_.data(), ya > 0 ? rows_[ya - 1] : nullptr,
-                                           rows_[ya]);
+        const std::uint32_t* above = ya > 0 ? rows_[ya - 1] : nullptr;
+        if constexpr (kFillsPrefix) {
+          fill(ya, prefix_.data());
+          kernels::block_window_sums_row(prefix_.data(), a.left.row(ya), a.right.row(ya), w, block,
+                                         above, rows_[ya]);
+        } else {
+          fill(ya, input_.data());
+          kernels::block_horizontal_sums_row(input_.data(), a.left.row(ya), a.right.row(ya), w,
+                                             block, prefix_.data(), above, rows_[ya]);
+        }
       }
       // Row yb has all of its vertical arms' rows once row yb + reach_down is in.
       const int yb = ya - reach_down_;

@@ -73,6 +73,11 @@ void matching_cost_row(const CostRow& row, const CostTableView& tables, int d, s
 // cost of left pixel x at disparity d0 + k.
 void block_matching_cost_row(const CostRow& row, const CostTableView& tables, int d0, int count,
                              std::uint32_t* out);
+// Their running sums along the row instead, as block_horizontal_sums_row's prefix:
+// prefix[(x + 1) * count + k] = prefix[x * count + k] + cost, prefix[0 .. count) = 0
+// ((width + 1) * count elements, uint32 wrap-around).
+void block_matching_cost_sums_row(const CostRow& row, const CostTableView& tables, int d0,
+                                  int count, std::uint32_t* prefix);
 
 // out[x] = sum of in[x - left[x] .. x + right[x]] with uint32 wrap-around; arms stay inside the
 // row. `prefix` holds width + 1 elements of scratch.
@@ -106,6 +111,11 @@ void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left
                                const std::uint8_t* right, int width, int block,
                                std::uint32_t* prefix, const std::uint32_t* above,
                                std::uint32_t* out);
+// The second half of block_horizontal_sums_row, from prefix sums already made (e.g. by
+// block_matching_cost_sums_row).
+void block_window_sums_row(const std::uint32_t* prefix, const std::uint8_t* left,
+                           const std::uint8_t* right, int width, int block,
+                           const std::uint32_t* above, std::uint32_t* out);
 // column_rows[i]: row i of the running column sums, width * block elements (a table of row
 // pointers, so the rows may live in a ring buffer); rows y - up - 1 .. y + down are read. With
 // `reciprocal`, out holds the region means (block_region_mean_row of the sums) instead.
@@ -165,6 +175,8 @@ void grey_cross_arms_row(const std::uint8_t* image, std::ptrdiff_t stride, int w
                          std::uint8_t* up, std::uint8_t* down);
 void block_matching_cost_row(const CostRow& row, const CostTableView& tables, int d0, int count,
                              std::uint32_t* out);
+void block_matching_cost_sums_row(const CostRow& row, const CostTableView& tables, int d0,
+                                  int count, std::uint32_t* prefix);
 void matching_cost_row(const CostRow& row, const CostTableView& tables, int d, std::uint32_t* out);
 void horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
                          const std::uint8_t* right, int width, std::uint32_t* prefix,
@@ -178,6 +190,9 @@ void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left
                                const std::uint8_t* right, int width, int block,
                                std::uint32_t* prefix, const std::uint32_t* above,
                                std::uint32_t* out);
+void block_window_sums_row(const std::uint32_t* prefix, const std::uint8_t* left,
+                           const std::uint8_t* right, int width, int block,
+                           const std::uint32_t* above, std::uint32_t* out);
 void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
                              const std::uint8_t* down, int width, int block,
                              const std::uint32_t* reciprocal, std::uint32_t* out);
