@@ -1,0 +1,113 @@
+// SIMD version of the flow cue's projection test, compiled once per Highway target and dispatched
+// at run time: the two bilinear samples per pixel are gathers, the rest whole-vector arithmetic
+// in the reference's order; the tail goes to the scalar range.
+
+#include <cstddef>
+
+#include "dco/kernels/flow_kernels.hpp"
+#include "flow_ranges.hpp"
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "flow_kernels.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace dco::kernels {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+// std::clamp(v, lo, hi), operation for operation.
+template <class V>
+HWY_INLINE V ClampAsStd(V v, V lo, V hi) {
+  return hn::IfThenElse(hn::Lt(v, lo), lo, hn::IfThenElse(hn::Lt(hi, v), hi, v));
+}
+
+void ProjectionContrastRow(const FlowField& f, int y, float distance, float min_length,
+                           float* contrast) {
+  const hn::ScalableTag<float> d;
+  const hn::RebindToSigned<decltype(d)> di;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const float* row = f.data + y * f.stride;
+  const auto zero = hn::Zero(d);
+  const auto one = hn::Set(d, 1.0f);
+  const auto max_x = hn::Set(d, static_cast<float>(f.width - 1));
+  const auto max_y = hn::Set(d, static_cast<float>(f.height - 1));
+  const auto last_x = hn::Set(di, f.width - 1);
+  const auto last_y = hn::Set(di, f.height - 1);
+  const auto stride = hn::Set(di, static_cast<int>(f.stride));
+  const auto dist = hn::Set(d, distance);
+  const auto min_len = hn::Set(d, min_length);
+  const auto yf = hn::Set(d, static_cast<float>(y));
+  const auto lanes = hn::ConvertTo(d, hn::Iota(di, 0));
+  // Bilinear sample of both channels at (px, py), already clamped.
+  const auto sample = [&](hn::Vec<decltype(d)> px, hn::Vec<decltype(d)> py, hn::Vec<decltype(d)>& u,
+                          hn::Vec<decltype(d)>& v) {
+    const auto x0 = hn::ConvertTo(di, px);
+    const auto y0 = hn::ConvertTo(di, py);
+    const auto x1 = hn::Min(hn::Add(x0, hn::Set(di, 1)), last_x);
+    const auto y1 = hn::Min(hn::Add(y0, hn::Set(di, 1)), last_y);
+    const auto fx = hn::Sub(px, hn::ConvertTo(d, x0));
+    const auto fy = hn::Sub(py, hn::ConvertTo(d, y0));
+    const auto gx = hn::Sub(one, fx), gy = hn::Sub(one, fy);
+    const auto w00 = hn::Mul(gx, gy), w10 = hn::Mul(fx, gy), w01 = hn::Mul(gx, fy),
+               w11 = hn::Mul(fx, fy);
+    const auto r0 = hn::Mul(y0, stride), r1 = hn::Mul(y1, stride);
+    const auto c0 = hn::Add(x0, x0), c1 = hn::Add(x1, x1);
+    const auto i00 = hn::Add(r0, c0), i10 = hn::Add(r0, c1), i01 = hn::Add(r1, c0),
+               i11 = hn::Add(r1, c1);
+    const auto one_i = hn::Set(di, 1);
+    const auto at = [&](hn::Vec<decltype(di)> i) { return hn::GatherIndex(d, f.data, i); };
+    u = hn::Add(
+        hn::Add(hn::Add(hn::Mul(w00, at(i00)), hn::Mul(w10, at(i10))), hn::Mul(w01, at(i01))),
+        hn::Mul(w11, at(i11)));
+    v = hn::Add(hn::Add(hn::Add(hn::Mul(w00, at(hn::Add(i00, one_i))),
+                                hn::Mul(w10, at(hn::Add(i10, one_i)))),
+                        hn::Mul(w01, at(hn::Add(i01, one_i)))),
+                hn::Mul(w11, at(hn::Add(i11, one_i))));
+  };
+  int x = 0;
+  for (; x + n <= f.width; x += n) {
+    hn::Vec<decltype(d)> u, v;
+    hn::LoadInterleaved2(d, row + 2 * x, u, v);
+    const auto len = hn::Sqrt(hn::Add(hn::Mul(u, u), hn::Mul(v, v)));
+    const auto moving = hn::Not(hn::Lt(len, min_len));
+    if (hn::AllFalse(d, moving)) {
+      hn::StoreU(zero, d, contrast + x);
+      continue;
+    }
+    // Lanes too slow to have a direction divide by a safe 1 and are zeroed at the end.
+    const auto safe_len = hn::IfThenElse(moving, len, one);
+    const auto ex = hn::Div(u, safe_len);
+    const auto ey = hn::Div(v, safe_len);
+    const auto dx = hn::Mul(dist, ex);
+    const auto dy = hn::Mul(dist, ey);
+    const auto xf = hn::Add(hn::Set(d, static_cast<float>(x)), lanes);
+    hn::Vec<decltype(d)> u0, v0, u1, v1;
+    sample(ClampAsStd(hn::Sub(xf, dx), zero, max_x), ClampAsStd(hn::Sub(yf, dy), zero, max_y), u0,
+           v0);
+    sample(ClampAsStd(hn::Add(xf, dx), zero, max_x), ClampAsStd(hn::Add(yf, dy), zero, max_y), u1,
+           v1);
+    const auto c = hn::Sub(hn::Add(hn::Mul(u1, ex), hn::Mul(v1, ey)),
+                           hn::Add(hn::Mul(u0, ex), hn::Mul(v0, ey)));
+    hn::StoreU(hn::IfThenElseZero(moving, c), d, contrast + x);
+  }
+  detail::projection_contrast_range(f, y, distance, min_length, x, f.width, contrast);
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace dco::kernels
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace dco::kernels {
+
+HWY_EXPORT(ProjectionContrastRow);
+
+void projection_contrast_row(const FlowField& flow, int y, float distance, float min_length,
+                             float* contrast) {
+  HWY_DYNAMIC_DISPATCH(ProjectionContrastRow)(flow, y, distance, min_length, contrast);
+}
+
+}  // namespace dco::kernels
+#endif  // HWY_ONCE
