@@ -124,15 +124,6 @@ inline void block_vertical_range(const std::uint32_t* const* column_rows, int y,
   }
 }
 
-inline void block_mean_range(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
-                             int block, int begin, int end) {
-  for (int x = 0; x < width; ++x)
-    for (int k = begin; k < end; ++k) {
-      std::uint32_t& v = row[x * block + k];
-      v = pixel::region_mean(v, reciprocal[x]);
-    }
-}
-
 // Pixels [x_begin, width) of elements [k_begin, count), and elements [k_end, count) of pixels
 // [0, x_begin): what the 4x4 tiles leave.
 inline void blocks_to_rows_rest(const std::uint32_t* blocks, int width, int block, int count,

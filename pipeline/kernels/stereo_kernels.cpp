@@ -602,19 +602,6 @@ void BlockVerticalSumsRow(const std::uint32_t* const* column_rows, int y, const 
                                reciprocal, out);
 }
 
-void BlockRegionMeanRow(std::uint32_t* row, const std::uint32_t* reciprocal, int width, int block) {
-  const hn::ScalableTag<std::uint32_t> du;
-  const int n = static_cast<int>(hn::Lanes(du));
-  const int vector_end = block - block % n;
-  for (int x = 0; x < width; ++x) {
-    const auto r = hn::Set(du, reciprocal[x]);
-    std::uint32_t* p = row + x * block;
-    for (int k = 0; k < vector_end; k += n)
-      hn::StoreU(RegionMean(du, hn::LoadU(du, p + k), r), du, p + k);
-  }
-  detail::block_mean_range(row, reciprocal, width, block, vector_end, block);
-}
-
 void BlocksToRows(const std::uint32_t* blocks, int width, int block, int count, std::uint16_t* rows,
                   std::ptrdiff_t row_stride) {
   // 4x4 tiles transposed in registers (32-bit then 64-bit interleaves), then narrowed to 16 bits
@@ -768,7 +755,6 @@ HWY_EXPORT(RegionMeanRow);
 HWY_EXPORT(BlockHorizontalSumsRow);
 HWY_EXPORT(BlockWindowSumsRow);
 HWY_EXPORT(BlockVerticalSumsRow);
-HWY_EXPORT(BlockRegionMeanRow);
 HWY_EXPORT(BlocksToRows);
 HWY_EXPORT(BlockIndicatorRow);
 HWY_EXPORT(BlockVoteRow);
@@ -849,11 +835,6 @@ void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, con
                              const std::uint32_t* reciprocal, std::uint32_t* out) {
   HWY_DYNAMIC_DISPATCH(BlockVerticalSumsRow)
   (column_rows, y, up, down, width, block, reciprocal, out);
-}
-
-void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
-                           int block) {
-  HWY_DYNAMIC_DISPATCH(BlockRegionMeanRow)(row, reciprocal, width, block);
 }
 
 void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,

@@ -95,11 +95,6 @@ void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, con
   detail::block_vertical_range(column_rows, y, up, down, width, block, 0, block, reciprocal, out);
 }
 
-void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
-                           int block) {
-  detail::block_mean_range(row, reciprocal, width, block, 0, block);
-}
-
 void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
                     std::uint16_t* rows, std::ptrdiff_t row_stride) {
   detail::blocks_to_rows_rest(blocks, width, block, count, 0, count, rows, row_stride);

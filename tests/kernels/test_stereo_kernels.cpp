@@ -511,14 +511,11 @@ TEST(StereoKernels, BlockVerticalSumsAndMeansMatchScalar) {
             sum += columns[((i + 5) % h) * stride + x * block + k];
           ASSERT_EQ(expected[x * block + k], sum);
         }
+      // The means: the row kernel's, pixel by pixel.
       std::vector<std::uint32_t> expected_mean = expected;
-      scalar::block_region_mean_row(expected_mean.data(), reciprocal.data(), w, block);
-      for (int x = 0; x < w; ++x) {  // the row kernel, pixel by pixel
-        std::vector<std::uint32_t> one(expected.begin() + x * block,
-                                       expected.begin() + (x + 1) * block);
+      for (int x = 0; x < w; ++x) {
         const std::vector<std::uint32_t> r(static_cast<std::size_t>(block), reciprocal[x]);
-        scalar::region_mean_row(one.data(), r.data(), block);
-        ASSERT_TRUE(std::equal(one.begin(), one.end(), expected_mean.begin() + x * block));
+        scalar::region_mean_row(expected_mean.data() + x * block, r.data(), block);
       }
       std::vector<std::uint32_t> fused_mean(expected.size());
       scalar::block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block,
@@ -529,8 +526,6 @@ TEST(StereoKernels, BlockVerticalSumsAndMeansMatchScalar) {
         block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block, nullptr,
                                 out.data());
         ASSERT_EQ(out, expected) << "width " << w << " block " << block;
-        block_region_mean_row(out.data(), reciprocal.data(), w, block);
-        ASSERT_EQ(out, expected_mean) << "width " << w << " block " << block;
         std::vector<std::uint32_t> means(expected.size());
         block_vertical_sums_row(rows.data(), y, up.data(), down.data(), w, block, reciprocal.data(),
                                 means.data());

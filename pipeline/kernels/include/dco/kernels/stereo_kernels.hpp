@@ -118,12 +118,10 @@ void block_window_sums_row(const std::uint32_t* prefix, const std::uint8_t* left
                            const std::uint32_t* above, std::uint32_t* out);
 // column_rows[i]: row i of the running column sums, width * block elements (a table of row
 // pointers, so the rows may live in a ring buffer); rows y - up - 1 .. y + down are read. With
-// `reciprocal`, out holds the region means (block_region_mean_row of the sums) instead.
+// `reciprocal`, out holds the region means of the sums instead (region_mean_row per element).
 void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
                              const std::uint8_t* down, int width, int block,
                              const std::uint32_t* reciprocal, std::uint32_t* out);
-void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
-                           int block);
 // Back to one row per block element: rows[k * row_stride + x] = blocks[x * block + k] for
 // k < count (<= block), as the 16-bit costs the winner-takes-all state takes (every value must
 // be below kNoCost).
@@ -196,8 +194,6 @@ void block_window_sums_row(const std::uint32_t* prefix, const std::uint8_t* left
 void block_vertical_sums_row(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
                              const std::uint8_t* down, int width, int block,
                              const std::uint32_t* reciprocal, std::uint32_t* out);
-void block_region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width,
-                           int block);
 void blocks_to_rows(const std::uint32_t* blocks, int width, int block, int count,
                     std::uint16_t* rows, std::ptrdiff_t row_stride);
 void block_indicator_row(const std::int16_t* value, int width, const std::int32_t* candidates,
