@@ -10,14 +10,10 @@
 #include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/kernels/densify_kernels.hpp"
+#include "dco/kernels/densify_pixel.hpp"
 
 namespace dco::densify {
 namespace {
-
-// Finite and positive, written as two comparisons (NaN fails both) so loops over it vectorise.
-bool known(float d) {
-  return d > 0.0f && d < std::numeric_limits<float>::infinity();
-}
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw Error("densify parameters: " + what);
@@ -184,7 +180,7 @@ void Densifier::build_system(const DensifyInputs& in) {
     float last = 0.0f;
     bool crossed = false;
     for (int x = 0; x < w; ++x) {
-      const bool k = known(sp[x]);
+      const bool k = kernels::pixel::known_value(sp[x]);
       last = k ? sp[x] : last;
       crossed = !k && crossed;
       hint[x] = last;
@@ -194,7 +190,7 @@ void Densifier::build_system(const DensifyInputs& in) {
     last = 0.0f;
     crossed = false;
     for (int x = w - 1; x >= 0; --x) {
-      const bool k = known(sp[x]);
+      const bool k = kernels::pixel::known_value(sp[x]);
       last = k ? sp[x] : last;
       crossed = !k && crossed;
       const float left = hint[x];
@@ -246,7 +242,8 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
     solution_.resize(w, h);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x)
-        solution_.at(x, y) = known(in.sparse.row(y)[x]) ? in.sparse.row(y)[x] : 0.0f;
+        solution_.at(x, y) =
+            kernels::pixel::known_value(in.sparse.row(y)[x]) ? in.sparse.row(y)[x] : 0.0f;
   }
   report_ = solver_->solve(system_, rhs_.cview(), solution_.view());
   // An iterative solve stopped early can overshoot in a small region that contours cut off

@@ -5,7 +5,6 @@
 // operations here is the contract the vector code follows.
 
 #include <algorithm>
-#include <limits>
 
 #include "dco/kernels/densify_kernels.hpp"
 #include "dco/kernels/densify_pixel.hpp"
@@ -33,22 +32,18 @@ inline void edge_range(const EdgeEnds& e, const EdgeRule& rule, int begin, int e
   }
 }
 
-inline bool known_value(float v) {
-  return v > 0.0f && v < std::numeric_limits<float>::infinity();
-}
-
 inline void data_terms_range(const float* sparse, const float* hint, const float* previous,
                              const DataTermRule& rule, int begin, int end, float* data, float* b,
                              float* low, float* high) {
   for (int x = begin; x < end; ++x) {
-    const bool k = known_value(sparse[x]);
+    const bool k = pixel::known_value(sparse[x]);
     const float w = k ? rule.lambda_d : hint[x] > 0.0f ? rule.hint_weight : 0.0f;
     const float v = k ? sparse[x] : hint[x] > 0.0f ? hint[x] : 0.0f;
     float a = rule.regulariser + w;
     float r = 0.0f + w * v;
     if (k) *low = std::min(*low, sparse[x]), *high = std::max(*high, sparse[x]);
     if (previous != nullptr) {
-      const bool kp = known_value(previous[x]);
+      const bool kp = pixel::known_value(previous[x]);
       a = a + (kp ? rule.lambda_s2 : 0.0f);
       r = r + (kp ? rule.lambda_s2 : 0.0f) * (kp ? previous[x] : 0.0f);
       if (kp) *low = std::min(*low, previous[x]), *high = std::max(*high, previous[x]);

@@ -114,16 +114,22 @@ hn::Vec<D> ArmLengths(D di, const std::uint32_t* anchor, std::ptrdiff_t step, in
 constexpr int kMaxArm = 255;
 constexpr int kMaxLanes = HWY_MAX_BYTES;
 
-// The horizontal arms of one row, for the packed (32-bit) and the grey (8-bit) kernels alike.
-// Vectors at 0, n, 2n, ...; the last one moves left to end at the row end, so it recomputes a few
-// pixels (to the same values) instead of leaving a partial vector. Near the row ends the lanes
-// have limits of their own and a vector would read past the row: such vectors read a
-// zero-padded copy of the row's end, the lanes stopping at their limits.
+// The four arms of row y, for the packed (32-bit) and the grey (8-bit) kernels alike: `lengths`
+// is their ArmLengths or GreyArmLengths. Vectors at 0, n, 2n, ...; the last one moves left to end
+// at the row end, so it recomputes a few pixels (to the same values) instead of leaving a partial
+// vector. Near the row ends the lanes have limits of their own and a vector would read past the
+// row: such vectors read a zero-padded copy of the row's end, the lanes stopping at their limits.
 template <class D, class Pixel, class Lengths>
-void HorizontalArms(D d, const Pixel* row, int width, const ArmParams& p, const Lengths& lengths,
-                    std::uint8_t* left, std::uint8_t* right) {
+void RowArms(D d, const Pixel* image, std::ptrdiff_t stride, int width, int height, int y,
+             const ArmParams& p, const Lengths& lengths, std::uint8_t* left, std::uint8_t* right,
+             std::uint8_t* up, std::uint8_t* down) {
   using T = hn::TFromD<D>;
   const int n = static_cast<int>(hn::Lanes(d));
+  if (width < n) {
+    detail::arms_range(image, stride, width, height, y, p, 0, width, left, right, up, down);
+    return;
+  }
+  const Pixel* row = image + y * stride;
   HWY_ALIGN Pixel padded[2 * kMaxArm + 2 * kMaxLanes];
   HWY_ALIGN T limits[kMaxLanes];
   const auto store = [&](hn::Vec<D> len, std::uint8_t* out) {
@@ -134,6 +140,14 @@ void HorizontalArms(D d, const Pixel* row, int width, const ArmParams& p, const 
       hn::StoreU(hn::DemoteTo(du8, len), du8, out);
   };
   const auto vector_at = [&](int x0) { return std::min(x0, width - n); };
+  // Vertical arms: every lane has the row's limit.
+  const int up_limit = std::min(p.arm_max, y);
+  const int down_limit = std::min(p.arm_max, height - 1 - y);
+  for (int x0 = 0; x0 < width; x0 += n) {
+    const int x = vector_at(x0);
+    store(lengths.template operator()<false>(row + x, -stride, up_limit, hn::Zero(d)), up + x);
+    store(lengths.template operator()<false>(row + x, stride, down_limit, hn::Zero(d)), down + x);
+  }
   const int reach = std::min(width, p.arm_max + 2 * n);  // pixels a border vector may read
   std::fill(padded, padded + p.arm_max, Pixel{0});
   std::copy(row, row + reach, padded + p.arm_max);
@@ -167,28 +181,11 @@ void CrossArmsRow(const std::uint32_t* image, std::ptrdiff_t stride, int width, 
                   const ArmParams& p, std::uint8_t* left, std::uint8_t* right, std::uint8_t* up,
                   std::uint8_t* down) {
   const hn::ScalableTag<std::int32_t> di;
-  const hn::Rebind<std::uint8_t, decltype(di)> du8n;
-  const int n = static_cast<int>(hn::Lanes(di));
-  if (width < n) {
-    detail::arms_range(image, stride, width, height, y, p, 0, width, left, right, up, down);
-    return;
-  }
-  const std::uint32_t* row = image + y * stride;
-  const int up_limit = std::min(p.arm_max, y);
-  const int down_limit = std::min(p.arm_max, height - 1 - y);
-  const auto none = hn::Zero(di);
-  for (int x0 = 0; x0 < width; x0 += n) {
-    const int x = std::min(x0, width - n);
-    hn::StoreU(hn::DemoteTo(du8n, ArmLengths<false>(di, row + x, -stride, up_limit, p, none)), du8n,
-               up + x);
-    hn::StoreU(hn::DemoteTo(du8n, ArmLengths<false>(di, row + x, stride, down_limit, p, none)),
-               du8n, down + x);
-  }
   const auto lengths = [&]<bool kLaneLimits>(const std::uint32_t* anchor, std::ptrdiff_t step,
                                              int limit, hn::Vec<decltype(di)> lane_limit) {
     return ArmLengths<kLaneLimits>(di, anchor, step, limit, p, lane_limit);
   };
-  HorizontalArms(di, row, width, p, lengths, left, right);
+  RowArms(di, image, stride, width, height, y, p, lengths, left, right, up, down);
 }
 
 // Arm lengths of the grey anchors anchor[0 .. lanes), each stepping `step` bytes per pixel, with
@@ -223,25 +220,11 @@ void GreyCrossArmsRow(const std::uint8_t* image, std::ptrdiff_t stride, int widt
                       int y, const ArmParams& p, std::uint8_t* left, std::uint8_t* right,
                       std::uint8_t* up, std::uint8_t* down) {
   const hn::ScalableTag<std::uint8_t> d;
-  const int n = static_cast<int>(hn::Lanes(d));
-  if (width < n) {
-    detail::arms_range(image, stride, width, height, y, p, 0, width, left, right, up, down);
-    return;
-  }
-  const std::uint8_t* row = image + y * stride;
-  const int up_limit = std::min(p.arm_max, y);
-  const int down_limit = std::min(p.arm_max, height - 1 - y);
-  const auto none = hn::Zero(d);
-  for (int x0 = 0; x0 < width; x0 += n) {
-    const int x = std::min(x0, width - n);
-    hn::StoreU(GreyArmLengths<false>(d, row + x, -stride, up_limit, p, none), d, up + x);
-    hn::StoreU(GreyArmLengths<false>(d, row + x, stride, down_limit, p, none), d, down + x);
-  }
   const auto lengths = [&]<bool kLaneLimits>(const std::uint8_t* anchor, std::ptrdiff_t step,
                                              int limit, hn::Vec<decltype(d)> lane_limit) {
     return GreyArmLengths<kLaneLimits>(d, anchor, step, limit, p, lane_limit);
   };
-  HorizontalArms(d, row, width, p, lengths, left, right);
+  RowArms(d, image, stride, width, height, y, p, lengths, left, right, up, down);
 }
 
 void MatchingCostRow(const CostRow& row, const CostTableView& t, int d, std::uint32_t* out) {

@@ -54,8 +54,9 @@ void BoundaryRefiner::apply(ImageView<const float> sparse, ImageView<const std::
       float lo = none, hi = -none;
       for (int k = -kReach; k <= kReach; ++k) {
         const float e = v[x + k];
+        const float near = e < none ? e : -none;  // "none" never counts as the near side
         lo = e < lo ? e : lo;
-        hi = (e < none ? e : -none) > hi ? (e < none ? e : -none) : hi;
+        hi = near > hi ? near : hi;
       }
       rf[x] = lo;
       rn[x] = hi;

@@ -329,8 +329,10 @@ TEST(ShortestArm, IsTheMinimumOfTheFour) {
   arms.right.at(1, 0) = 7;
   arms.up.at(1, 0) = 2;
   arms.down.at(1, 0) = 6;
-  EXPECT_EQ(shortest_arm(arms, 0, 0), 3);
-  EXPECT_EQ(shortest_arm(arms, 1, 0), 2);
+  std::uint8_t shortest[2] = {};
+  shortest_arm_row(arms, 0, shortest);
+  EXPECT_EQ(shortest[0], 3);
+  EXPECT_EQ(shortest[1], 2);
 }
 
 }  // namespace

@@ -62,9 +62,7 @@ struct Pair {
     census_transform(gray_right.cview(), 5, 3, census_right.view());
     compute_cross_arms(left.cview(), ArmRule{arm_max, arm_max / 2, 20, 6}, arms);
     shortest.resize(w, h);
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x)
-        shortest.at(x, y) = static_cast<std::uint8_t>(shortest_arm(arms, x, y));
+    for (int y = 0; y < h; ++y) shortest_arm_row(arms, y, shortest.row(y));
     tables.build(CostModel{}, channels, arm_max);
   }
 

@@ -219,22 +219,22 @@ TEST(GatedCanny, HysteresisEqualsAFloodFromEveryStrongPixel) {
       }
     Image<std::uint8_t> expected(w, h);
     expected.fill(0);
-    std::queue<std::pair<int, int>> todo;
+    std::queue<std::pair<int, int>> frontier;
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x)
         if (map.at(x, y) == kernels::kCannyStrong) {
           expected.at(x, y) = kernels::kCannyStrong;
-          todo.emplace(x, y);
+          frontier.emplace(x, y);
         }
-    while (!todo.empty()) {
-      const auto [x, y] = todo.front();
-      todo.pop();
+    while (!frontier.empty()) {
+      const auto [x, y] = frontier.front();
+      frontier.pop();
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           const int nx = x + dx, ny = y + dy;
           if (map.at(nx, ny) == kernels::kCannyWeak && expected.at(nx, ny) == 0) {
             expected.at(nx, ny) = kernels::kCannyStrong;
-            todo.emplace(nx, ny);
+            frontier.emplace(nx, ny);
           }
         }
     }

@@ -42,14 +42,7 @@ void compute_grey_cross_arms(ImageView<const std::uint8_t> grey, const ArmRule& 
 // `scratch` is resized to the arm size on first use.
 void smooth_cross_arms(CrossArms& arms, Image<std::uint8_t>& scratch);
 
-// Shortest of the four arms, the L_min of Eq. 1.
-inline int shortest_arm(const CrossArms& arms, int x, int y) {
-  const int a = arms.left.at(x, y) < arms.right.at(x, y) ? arms.left.at(x, y) : arms.right.at(x, y);
-  const int b = arms.up.at(x, y) < arms.down.at(x, y) ? arms.up.at(x, y) : arms.down.at(x, y);
-  return a < b ? a : b;
-}
-
-// shortest_arm of every pixel of row y.
+// The shortest of the four arms of every pixel of row y: the L_min of Eq. 1.
 void shortest_arm_row(const CrossArms& arms, int y, std::uint8_t* out);
 
 }  // namespace dco::stereo

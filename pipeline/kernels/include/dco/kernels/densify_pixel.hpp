@@ -4,6 +4,8 @@
 // kernels (the references the SIMD kernels match) and the GPU passes: the same float operations
 // in the same order, no fused multiply-add, so all of them give the same bits.
 
+#include <limits>
+
 #include "dco/kernels/densify_kernels.hpp"
 #include "dco/kernels/host_device.hpp"
 
@@ -54,6 +56,12 @@ DCO_HD inline double dot_row(const float* a, const float* b, int n) {
   for (; i < n; ++i) sum += static_cast<double>(a[i]) * b[i];
   for (int lane = 0; lane < kDotLanes; ++lane) sum += partial[lane];
   return sum;
+}
+
+// A sparse or previous value that exists: finite and positive (two comparisons, NaN fails both,
+// so loops over it vectorise). Host code: the densifier builds its system on the CPU.
+inline bool known_value(float v) {
+  return v > 0.0f && v < std::numeric_limits<float>::infinity();
 }
 
 // diag = data + the weights of the edges that exist (GridSystem::update_diagonal).
