@@ -1,5 +1,6 @@
 #include "dco/pipeline/densify/conjugate_gradients.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace dco::densify {
@@ -43,13 +44,15 @@ double update_apply_dot(const GridSystem& a, ImageView<const float> z, float bet
   return s;
 }
 
-void precondition(Multigrid* mg, ImageView<const float> r, ImageView<float> z) {
-  if (mg != nullptr) {
-    mg->cycle(r, z);
-    return;
+// z = M^-1 r; returns dot(r, z).
+double precondition(Multigrid* mg, ImageView<const float> r, ImageView<float> z) {
+  if (mg != nullptr) return mg->cycle_dot(r, z);
+  double s = 0;
+  for (int y = 0; y < r.height; ++y) {
+    std::copy(r.row(y), r.row(y) + r.width, z.row(y));
+    s += kernels::dot_row(r.row(y), z.row(y), r.width);
   }
-  for (int y = 0; y < r.height; ++y)
-    for (int x = 0; x < r.width; ++x) z.row(y)[x] = r.row(y)[x];
+  return s;
 }
 
 }  // namespace
@@ -80,16 +83,14 @@ SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<
     report.converged = true;
     return report;
   }
-  residual(a, b, x, s.r.view());
-  double r_norm = std::sqrt(dot(s.r.cview(), s.r.cview()));
+  double r_norm = std::sqrt(residual_dot(a, b, x, s.r.view()));
   report.initial_residual = r_norm / b_norm;
   report.final_residual = report.initial_residual;
   if (report.initial_residual <= tolerance) {
     report.converged = true;
     return report;
   }
-  precondition(mg, s.r.cview(), s.z.view());
-  double rz = dot(s.r.cview(), s.z.cview());
+  double rz = precondition(mg, s.r.cview(), s.z.view());
   bool restart = true;  // the next direction is z itself, else z + beta p
   float beta = 0.0f;
   for (int it = 1; it <= max_iterations; ++it) {
@@ -103,35 +104,36 @@ SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<
     restart = false;
     if (!(pap > 0)) break;  // breakdown: A is not positive definite on p
     const auto alpha = static_cast<float>(rz / pap);
-    r_norm = std::sqrt(step(alpha, s.p.cview(), s.ap.cview(), x, s.r.view()));
     report.iterations = it;
+    if (it == max_iterations) {
+      // The last step ends with the true residual whatever the recursive one says (residual
+      // replacement below, or the report after the loop): it is computed in the step's pass.
+      // Stopping here also spares the V-cycle of a direction that would go unused.
+      r_norm = std::sqrt(step_residual_dot(a, b, alpha, s.p.cview(), x, s.r.view()));
+      report.final_residual = r_norm / b_norm;
+      report.converged = report.final_residual <= tolerance;
+      return report;
+    }
+    r_norm = std::sqrt(step(alpha, s.p.cview(), s.ap.cview(), x, s.r.view()));
     report.final_residual = r_norm / b_norm;
     if (report.final_residual <= tolerance) {
       // The recursive residual drifts from the true one in single precision: check the true
       // residual and, if it is still too large, restart from it (residual replacement).
-      residual(a, b, x, s.r.view());
-      report.final_residual = std::sqrt(dot(s.r.cview(), s.r.cview())) / b_norm;
+      report.final_residual = std::sqrt(residual_dot(a, b, x, s.r.view())) / b_norm;
       if (report.final_residual <= tolerance) {
         report.converged = true;
         return report;
       }
-      if (it == max_iterations) break;
-      precondition(mg, s.r.cview(), s.z.view());
-      rz = dot(s.r.cview(), s.z.cview());
+      rz = precondition(mg, s.r.cview(), s.z.view());
       restart = true;
       continue;
     }
-    // The last iteration's direction would go unused: a V-cycle costs as much as several
-    // passes over the system.
-    if (it == max_iterations) break;
-    precondition(mg, s.r.cview(), s.z.view());
-    const double rz_next = dot(s.r.cview(), s.z.cview());
+    const double rz_next = precondition(mg, s.r.cview(), s.z.view());
     beta = static_cast<float>(rz_next / rz);
     rz = rz_next;
   }
   // Report the true residual: the recursive one drifts from it in single precision.
-  residual(a, b, x, s.r.view());
-  report.final_residual = std::sqrt(dot(s.r.cview(), s.r.cview())) / b_norm;
+  report.final_residual = std::sqrt(residual_dot(a, b, x, s.r.view())) / b_norm;
   report.converged = report.final_residual <= tolerance;
   return report;
 }

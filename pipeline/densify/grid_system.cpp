@@ -71,6 +71,37 @@ void residual(const GridSystem& a, ImageView<const float> b, ImageView<const flo
   for (int y = 0; y < a.height(); ++y) residual_row(a, b, x, y, r.row(y));
 }
 
+double residual_dot(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
+                    ImageView<float> r) {
+  double s = 0;
+  for (int y = 0; y < a.height(); ++y) {
+    residual_row(a, b, x, y, r.row(y));
+    s += kernels::dot_row(r.row(y), r.row(y), a.width());
+  }
+  return s;
+}
+
+double step_residual_dot(const GridSystem& a, ImageView<const float> b, float alpha,
+                         ImageView<const float> p, ImageView<float> x, ImageView<float> r) {
+  const int w = a.width();
+  const int h = a.height();
+  assert(p.same_size(w, h) && x.same_size(w, h) && r.same_size(w, h));
+  const auto update = [&](int y) {
+    const float* pr = p.row(y);
+    float* xr = x.row(y);
+    for (int c = 0; c < w; ++c) xr[c] += alpha * pr[c];
+  };
+  // Row y of the residual reads rows y - 1 .. y + 1 of the new x: the update runs a row ahead.
+  double s = 0;
+  if (h > 0) update(0);
+  for (int y = 0; y < h; ++y) {
+    if (y + 1 < h) update(y + 1);
+    residual_row(a, b, x, y, r.row(y));
+    s += kernels::dot_row(r.row(y), r.row(y), w);
+  }
+  return s;
+}
+
 double dot(ImageView<const float> a, ImageView<const float> b) {
   double s = 0;
   for (int y = 0; y < a.height; ++y) s += kernels::dot_row(a.row(y), b.row(y), a.width);

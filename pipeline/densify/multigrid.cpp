@@ -36,17 +36,6 @@ void from_parents(const float* coarse_row, int width, float* fine_row) {
     fine_row[width - 1] = kAdd ? fine_row[width - 1] + coarse_row[pairs] : coarse_row[pairs];
 }
 
-// coarse = restrict_sum(b - A x), one fine row at a time: the fine residual is never stored.
-void restrict_residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
-                       ImageView<float> coarse, std::vector<float>& row) {
-  assert(row.size() >= static_cast<std::size_t>(a.width()));
-  fill(coarse, 0.0f);
-  for (int y = 0; y < a.height(); ++y) {
-    residual_row(a, b, x, y, row.data());
-    add_to_parents(row.data(), a.width(), coarse.row(y / 2));
-  }
-}
-
 }  // namespace
 
 void restrict_sum(ImageView<const float> fine, ImageView<float> coarse) {
@@ -118,10 +107,12 @@ void scale_edges(const GridSystem& system, GridSystem& scaled, float edge_scale)
 
 namespace {
 
-// gauss_seidel, with prepare(row) called once for every row, in order, before any update reads it.
-template <class Prepare>
+// gauss_seidel, with prepare(row) called once for every row, in order, before any update reads it,
+// and finish(row) once for every row, in order, as soon as neither it nor a row next to it will
+// change again.
+template <class Prepare, class Finish>
 void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
-                       int sweeps, bool red_first, Prepare&& prepare) {
+                       int sweeps, bool red_first, Prepare&& prepare, Finish&& finish) {
   const int h = a.height();
   const auto smooth = [&](int r, int colour) {
     kernels::GridRow row = grid_row(a, r);
@@ -134,7 +125,8 @@ void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<
   // cache). Sweep s updates the first colour of row r - 2s and then the second colour of the row
   // above it: by then the values each update reads (its row and the rows next to it) are exactly
   // those the plain order, colour by colour and sweep by sweep, would give it, so the result is
-  // identical.
+  // identical. Row r - 2 sweeps had its last update one step earlier, and the row below it has
+  // just had its own.
   if (h > 0) prepare(0);
   for (int r = 0; r < h + 2 * sweeps; ++r) {
     if (r + 1 < h) prepare(r + 1);  // row r's first update reads row r + 1
@@ -143,14 +135,17 @@ void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<
       if (row >= 0 && row < h) smooth(row, first);
       if (row >= 1 && row <= h) smooth(row - 1, 1 - first);
     }
+    if (r >= 2 * sweeps) finish(r - 2 * sweeps);
   }
 }
+
+void no_row_work(int) {}
 
 }  // namespace
 
 void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
                   bool red_first) {
-  gauss_seidel_rows(a, b, x, sweeps, red_first, [](int) {});
+  gauss_seidel_rows(a, b, x, sweeps, red_first, no_row_work, no_row_work);
 }
 
 void Multigrid::build(const GridSystem& fine, int coarsest_size) {
@@ -175,25 +170,43 @@ void Multigrid::build(const GridSystem& fine, int coarsest_size) {
 }
 
 void Multigrid::cycle(ImageView<const float> r, ImageView<float> z) {
-  cycle_at(0, r, z);
+  cycle_at(0, r, z, nullptr);
 }
 
-void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x) {
+double Multigrid::cycle_dot(ImageView<const float> r, ImageView<float> z) {
+  double dot = 0;
+  cycle_at(0, r, z, &dot);
+  return dot;
+}
+
+void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x, double* dot) {
   const GridSystem& a = system_at(level);
-  fill(x, 0.0f);
+  const int w = a.width();
+  // The passes over a level's system bound the cycle's time, so the work that needs its rows
+  // rides in the smoothing passes: the zero start, the restriction of the residual and the dot
+  // product with b are done a row at a time, each as soon as its rows are ready.
+  const auto zero_row = [&](int y) { std::fill(x.row(y), x.row(y) + w, 0.0f); };
+  const auto dot_row = [&](int y) {
+    if (dot != nullptr) *dot += kernels::dot_row(b.row(y), x.row(y), w);
+  };
   if (level + 1 == levels()) {
-    gauss_seidel(a, b, x, coarsest_sweeps, true);
-    gauss_seidel(a, b, x, coarsest_sweeps, false);
+    gauss_seidel_rows(a, b, x, coarsest_sweeps, true, zero_row, no_row_work);
+    gauss_seidel_rows(a, b, x, coarsest_sweeps, false, no_row_work, dot_row);
     return;
   }
-  gauss_seidel(a, b, x, smoothing_sweeps, /*red_first=*/true);
+  // coarse b = restrict_sum(b - A x) after the pre-smoothing; the fine residual is never stored.
   Level& next = levels_[static_cast<std::size_t>(level)];
-  restrict_residual(a, b, x, next.b.view(), residual_row_);
-  cycle_at(level + 1, next.b.view(), next.x.view());
+  fill(next.b.view(), 0.0f);
+  const auto restrict_row = [&](int y) {
+    residual_row(a, b, x, y, residual_row_.data());
+    add_to_parents(residual_row_.data(), w, next.b.row(y / 2));
+  };
+  gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/true, zero_row, restrict_row);
+  cycle_at(level + 1, next.b.view(), next.x.view(), nullptr);
   // x += P x_coarse, a row at a time just before the smoother first reads it.
   const ImageView<const float> coarse = next.x.cview();
-  const auto prolong_row = [&](int y) { from_parents<true>(coarse.row(y / 2), x.width, x.row(y)); };
-  gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/false, prolong_row);
+  const auto prolong_row = [&](int y) { from_parents<true>(coarse.row(y / 2), w, x.row(y)); };
+  gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/false, prolong_row, dot_row);
 }
 
 }  // namespace dco::densify

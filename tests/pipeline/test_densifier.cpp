@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -458,6 +459,99 @@ TEST(Multigrid, GaussSeidelMatchesThePlainColourOrder) {
         }
     }
   }
+}
+
+// A V-cycle from x = 0 out of the plain passes: smoothing, the whole residual, restriction,
+// the coarse cycle, prolongation, smoothing.
+void plain_cycle(const Multigrid& mg, const GridSystem& fine, int level, const Image<float>& b,
+                 Image<float>& x) {
+  const GridSystem& a = level == 0 ? fine : mg.coarse_system(level);
+  x.fill(0.0f);
+  if (level + 1 == mg.levels()) {
+    gauss_seidel(a, b.cview(), x.view(), mg.coarsest_sweeps, true);
+    gauss_seidel(a, b.cview(), x.view(), mg.coarsest_sweeps, false);
+    return;
+  }
+  gauss_seidel(a, b.cview(), x.view(), mg.smoothing_sweeps, true);
+  Image<float> r(a.width(), a.height());
+  residual(a, b.cview(), x.cview(), r.view());
+  const GridSystem& coarse = mg.coarse_system(level + 1);
+  Image<float> coarse_b(coarse.width(), coarse.height()), coarse_x(coarse.width(), coarse.height());
+  restrict_sum(r.cview(), coarse_b.view());
+  plain_cycle(mg, fine, level + 1, coarse_b, coarse_x);
+  Image<float> correction(a.width(), a.height());
+  prolong(coarse_x.cview(), correction.view());
+  for (int y = 0; y < a.height(); ++y)
+    for (int c = 0; c < a.width(); ++c) x.at(c, y) += correction.at(c, y);
+  gauss_seidel(a, b.cview(), x.view(), mg.smoothing_sweeps, false);
+}
+
+Image<float> random_vector(int w, int h, unsigned seed, float scale) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  Image<float> v(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int c = 0; c < w; ++c) v.at(c, y) = scale * unit(rng);
+  return v;
+}
+
+TEST(Multigrid, CycleIsThePlainPassesBitForBit) {
+  // Several levels, odd sizes, one level only, and a single row.
+  for (const auto& [w, h] :
+       {std::pair{97, 61}, std::pair{50, 31}, std::pair{20, 9}, std::pair{33, 1}}) {
+    SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
+    const Problem p = random_problem(w, h, 5, 0.3);
+    Densifier d(DensifyParams{});
+    Image<float> dense;
+    d.compute(inputs_of(p), dense);
+    const GridSystem& a = d.last_system();
+    Multigrid mg;
+    mg.build(a);
+    const Image<float> r = random_vector(w, h, 9, 10.0f);
+    Image<float> expected(w, h), z(w, h), z_dot(w, h);
+    plain_cycle(mg, a, 0, r, expected);
+    // Stale values in z must not matter: the cycle starts from 0.
+    z = random_vector(w, h, 4, 100.0f);
+    z_dot = z;
+    mg.cycle(r.cview(), z.view());
+    const double rz = mg.cycle_dot(r.cview(), z_dot.view());
+    EXPECT_EQ(rz, dot(r.cview(), expected.cview()));
+    for (int y = 0; y < h; ++y)
+      for (int c = 0; c < w; ++c) {
+        ASSERT_EQ(z.at(c, y), expected.at(c, y)) << c << "," << y;
+        ASSERT_EQ(z_dot.at(c, y), expected.at(c, y)) << c << "," << y;
+      }
+  }
+}
+
+TEST(GridSystem, FusedResidualPassesAreThePlainOnesBitForBit) {
+  const int w = 45, h = 17;
+  const Problem p = random_problem(w, h, 8, 0.3);
+  Densifier d(DensifyParams{});
+  Image<float> dense;
+  d.compute(inputs_of(p), dense);
+  const GridSystem& a = d.last_system();
+  const Image<float> b = random_vector(w, h, 1, 10.0f), x0 = random_vector(w, h, 2, 30.0f);
+  const Image<float> dir = random_vector(w, h, 3, 1.0f);
+  Image<float> r(w, h), fused_r(w, h);
+  residual(a, b.cview(), x0.cview(), r.view());
+  EXPECT_EQ(residual_dot(a, b.cview(), x0.cview(), fused_r.view()), dot(r.cview(), r.cview()));
+  for (int y = 0; y < h; ++y)
+    for (int c = 0; c < w; ++c) ASSERT_EQ(fused_r.at(c, y), r.at(c, y)) << c << "," << y;
+
+  const float alpha = 0.37f;
+  Image<float> x = x0, fused_x = x0;
+  for (int y = 0; y < h; ++y)
+    for (int c = 0; c < w; ++c) x.at(c, y) += alpha * dir.at(c, y);
+  residual(a, b.cview(), x.cview(), r.view());
+  const double rr =
+      step_residual_dot(a, b.cview(), alpha, dir.cview(), fused_x.view(), fused_r.view());
+  EXPECT_EQ(rr, dot(r.cview(), r.cview()));
+  for (int y = 0; y < h; ++y)
+    for (int c = 0; c < w; ++c) {
+      ASSERT_EQ(fused_x.at(c, y), x.at(c, y)) << c << "," << y;
+      ASSERT_EQ(fused_r.at(c, y), r.at(c, y)) << c << "," << y;
+    }
 }
 
 TEST(Multigrid, TransfersOnOddSizes) {

@@ -42,6 +42,12 @@ double apply_dot(const GridSystem& a, ImageView<const float> x, ImageView<float>
 // r = b - A x.
 void residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
               ImageView<float> r);
+// r = b - A x; returns dot(r, r).
+double residual_dot(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
+                    ImageView<float> r);
+// x += alpha p, then r = b - A x; returns dot(r, r).
+double step_residual_dot(const GridSystem& a, ImageView<const float> b, float alpha,
+                         ImageView<const float> p, ImageView<float> x, ImageView<float> r);
 // out = row r of b - A x.
 void residual_row(const GridSystem& a, ImageView<const float> b, ImageView<const float> x, int r,
                   float* out);

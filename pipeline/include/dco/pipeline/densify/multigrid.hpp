@@ -21,6 +21,8 @@ class Multigrid {
 
   // z ≈ A^{-1} r with one V-cycle from z = 0.
   void cycle(ImageView<const float> r, ImageView<float> z);
+  // The same cycle, returning dot(r, z) (as densify::dot computes it) without a pass of its own.
+  double cycle_dot(ImageView<const float> r, ImageView<float> z);
 
   int levels() const { return static_cast<int>(levels_.size()) + 1; }
   // The system of level 1 .. levels() - 1 (coarsen of the level above it).
@@ -34,7 +36,8 @@ class Multigrid {
     GridSystem system;
     Image<float> b, x;
   };
-  void cycle_at(int level, ImageView<const float> b, ImageView<float> x);
+  // With `dot`, adds dot(b, x) of the result to *dot.
+  void cycle_at(int level, ImageView<const float> b, ImageView<float> x, double* dot);
   const GridSystem& system_at(int level) const {
     return level == 0 ? *fine_ : levels_[static_cast<std::size_t>(level - 1)].system;
   }
