@@ -168,41 +168,10 @@ void Densifier::build_system(const DensifyInputs& in) {
   // Hint of each hole: the nearest known values to its left and right in its row. Holes next to a
   // jump are mostly occlusions, which belong to the farther surface; but when an image edge (a
   // weak smoothness weight) lies between the hole and one of them only, the hole belongs to the
-  // other side's surface.
-  // Whether the path to a value crosses an edge weaker than `crossing` is tracked as a flag (no
-  // path starts weaker: crossing <= edge_scale), a chain of one-cycle operations along the row.
+  // other side's surface. No path starts weaker than edge_scale, so crossing <= edge_scale.
   const float crossing = static_cast<float>(params_.fill_edge_weight) * edge_scale;
-  left_crossed_.resize(static_cast<std::size_t>(w));
-  for (int y = 0; y < h; ++y) {
-    const float* sp = in.sparse.row(y);
-    const float* ex = system_.wx.row(y);  // ex[x]: the edge between x and x + 1
-    float* hint = hint_.row(y);
-    float last = 0.0f;
-    bool crossed = false;
-    for (int x = 0; x < w; ++x) {
-      const bool k = kernels::pixel::known_value(sp[x]);
-      last = k ? sp[x] : last;
-      crossed = !k && crossed;
-      hint[x] = last;
-      left_crossed_[static_cast<std::size_t>(x)] = crossed;
-      crossed = crossed || ex[x] < crossing;
-    }
-    last = 0.0f;
-    crossed = false;
-    for (int x = w - 1; x >= 0; --x) {
-      const bool k = kernels::pixel::known_value(sp[x]);
-      last = k ? sp[x] : last;
-      crossed = !k && crossed;
-      const float left = hint[x];
-      const float right = last;
-      const bool left_crossed = left_crossed_[static_cast<std::size_t>(x)] != 0;
-      const float both = left_crossed == crossed ? std::min(left, right)
-                         : left_crossed          ? right
-                                                 : left;
-      hint[x] = left <= 0.0f ? right : right > 0.0f ? both : left;
-      if (x > 0) crossed = crossed || ex[x - 1] < crossing;
-    }
-  }
+  for (int y = 0; y < h; ++y)
+    kernels::hole_hint_row(in.sparse.row(y), system_.wx.row(y), w, crossing, hint_.row(y));
   float low = std::numeric_limits<float>::infinity(), high = 0.0f;
   const kernels::DataTermRule terms{kRegulariser, ld, lh > 0.0f ? lh : 0.0f, ls2};
   for (int y = 0; y < h; ++y)

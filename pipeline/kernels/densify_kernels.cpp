@@ -130,6 +130,126 @@ void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) 
   detail::edge_range(e, rule, i, n, out);
 }
 
+// Lane i of the result: the maximum (kMax) or minimum of lanes 0..i (kForward) or i..n-1 of v.
+template <bool kForward, class D>
+HWY_INLINE hn::Vec<D> LaneScan(D di, hn::Vec<D> v) {
+  const int n = static_cast<int>(hn::Lanes(di));
+  const auto lane = hn::Iota(di, 0);
+  for (int s = 1; s < n; s *= 2) {
+    // Lanes whose source would fall outside read the end lane, which their range holds anyway.
+    const auto from = kForward ? hn::Max(hn::Sub(lane, hn::Set(di, s)), hn::Zero(di))
+                               : hn::Min(hn::Add(lane, hn::Set(di, s)), hn::Set(di, n - 1));
+    const auto moved = hn::TableLookupLanes(v, hn::IndicesFromVec(di, from));
+    v = kForward ? hn::Max(v, moved) : hn::Min(v, moved);
+  }
+  return v;
+}
+
+template <class D>
+HWY_INLINE hn::Vec<D> BroadcastLane(D di, hn::Vec<D> v, int lane) {
+  return hn::TableLookupLanes(v, hn::IndicesFromVec(di, hn::Set(di, lane)));
+}
+
+// The carried flags of the scalar reference become index scans: a hole's left value is the last
+// known pixel at or before it, and its path crosses a weak edge when the last weak edge before
+// it is not older than that pixel; on the right, the first known pixel at or after it and the
+// first weak edge at or after it. Lanes past the row end are unknown pixels with strong edges.
+void HoleHintRow(const float* sparse, const float* wx, int width, float crossing, float* hint) {
+  const hn::ScalableTag<float> d;
+  const hn::RebindToSigned<decltype(d)> di;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const auto zero = hn::Zero(d);
+  const auto inf = hn::Set(d, std::numeric_limits<float>::infinity());
+  const auto weak_below = hn::Set(d, crossing);
+  const auto lanes = hn::Iota(di, 0);
+  HWY_ALIGN float sparse_pad[HWY_MAX_BYTES / sizeof(float)];
+  HWY_ALIGN float wx_pad[HWY_MAX_BYTES / sizeof(float)];
+  HWY_ALIGN float hint_pad[HWY_MAX_BYTES / sizeof(float)];
+  // The vector at x0 reads its inputs from the row, or from the padded copies at the row end.
+  const auto load = [&](int x0, hn::Vec<decltype(d)>& sp, hn::Vec<decltype(d)>& ex) {
+    if (x0 + n <= width) {
+      sp = hn::LoadU(d, sparse + x0);
+      ex = hn::LoadU(d, wx + x0);
+      return;
+    }
+    const int valid = width - x0;
+    for (int i = 0; i < n; ++i) {
+      sparse_pad[i] = i < valid ? sparse[x0 + i] : std::numeric_limits<float>::infinity();
+      wx_pad[i] = i < valid ? wx[x0 + i] : std::numeric_limits<float>::infinity();
+    }
+    sp = hn::Load(d, sparse_pad);
+    ex = hn::Load(d, wx_pad);
+  };
+  const auto store = [&](int x0, hn::Vec<decltype(d)> v) {
+    if (x0 + n <= width) {
+      hn::StoreU(v, d, hint + x0);
+      return;
+    }
+    hn::Store(v, d, hint_pad);
+    std::memcpy(hint + x0, hint_pad, sizeof(float) * static_cast<std::size_t>(width - x0));
+  };
+  const auto known = [&](hn::Vec<decltype(d)> v) {
+    return hn::RebindMask(di, hn::And(hn::Gt(v, zero), hn::Lt(v, inf)));
+  };
+  // Left to right: the last known index (-1: none) and the last weak edge (-2: none).
+  auto last_known = hn::Set(di, -1), last_weak = hn::Set(di, -2);
+  for (int x0 = 0; x0 < width; x0 += n) {
+    hn::Vec<decltype(d)> sp, ex;
+    load(x0, sp, ex);
+    const auto idx = hn::Add(lanes, hn::Set(di, x0));
+    const auto k = known(sp);
+    const auto weak = hn::RebindMask(di, hn::Lt(ex, weak_below));
+    const auto lk =
+        hn::Max(LaneScan<true>(di, hn::IfThenElse(k, idx, hn::Set(di, -1))), last_known);
+    const auto lw =
+        hn::Max(LaneScan<true>(di, hn::IfThenElse(weak, idx, hn::Set(di, -2))), last_weak);
+    // The last weak edge before the pixel: lw one lane back.
+    const auto back = hn::Max(hn::Sub(lanes, hn::Set(di, 1)), hn::Zero(di));
+    const auto lw_before = hn::IfThenElse(hn::FirstN(di, 1), last_weak,
+                                          hn::TableLookupLanes(lw, hn::IndicesFromVec(di, back)));
+    const auto crossed = hn::AndNot(k, hn::Not(hn::Lt(lw_before, lk)));
+    const auto has_left = hn::RebindMask(d, hn::Gt(lk, hn::Set(di, -1)));
+    const auto left =
+        hn::IfThenElseZero(has_left, hn::GatherIndex(d, sparse, hn::Max(lk, hn::Zero(di))));
+    store(x0, hn::IfThenElse(hn::RebindMask(d, crossed), hn::Neg(left), left));
+    last_known = BroadcastLane(di, lk, n - 1);
+    last_weak = BroadcastLane(di, lw, n - 1);
+  }
+  // Right to left: the first known index (width: none) and the first weak edge that leads to a
+  // pixel of the row (width + 1: none).
+  auto next_known = hn::Set(di, width), next_weak = hn::Set(di, width + 1);
+  const auto past_last_edge = hn::Set(di, width - 1);
+  for (int x0 = (width - 1) / n * n; x0 >= 0; x0 -= n) {
+    hn::Vec<decltype(d)> sp, ex;
+    load(x0, sp, ex);
+    const auto signed_left = x0 + n <= width
+                                 ? hn::LoadU(d, hint + x0)
+                                 : (std::memcpy(hint_pad, hint + x0, sizeof(float) * (width - x0)),
+                                    hn::Load(d, hint_pad));
+    const auto idx = hn::Add(lanes, hn::Set(di, x0));
+    const auto k = known(sp);
+    const auto weak =
+        hn::And(hn::RebindMask(di, hn::Lt(ex, weak_below)), hn::Lt(idx, past_last_edge));
+    const auto rk =
+        hn::Min(LaneScan<false>(di, hn::IfThenElse(k, idx, hn::Set(di, width))), next_known);
+    const auto rw =
+        hn::Min(LaneScan<false>(di, hn::IfThenElse(weak, idx, hn::Set(di, width + 1))), next_weak);
+    const auto right_crossed = hn::RebindMask(d, hn::AndNot(k, hn::Lt(rw, rk)));
+    const auto has_right = hn::RebindMask(d, hn::Lt(rk, hn::Set(di, width)));
+    const auto right = hn::IfThenElseZero(
+        has_right, hn::GatherIndex(d, sparse, hn::Min(rk, hn::Set(di, width - 1))));
+    const auto left_crossed = hn::RebindMask(d, hn::Lt(hn::BitCast(di, signed_left), hn::Zero(di)));
+    const auto left = hn::Abs(signed_left);
+    const auto same = hn::Not(hn::Xor(left_crossed, right_crossed));
+    const auto both =
+        hn::IfThenElse(same, hn::Min(left, right), hn::IfThenElse(left_crossed, right, left));
+    store(x0, hn::IfThenElse(hn::Le(left, zero), right,
+                             hn::IfThenElse(hn::Gt(right, zero), both, left)));
+    next_known = BroadcastLane(di, rk, 0);
+    next_weak = BroadcastLane(di, rw, 0);
+  }
+}
+
 void DataTermsRow(const float* sparse, const float* hint, const float* previous, int width,
                   const DataTermRule& rule, float* data, float* b, float* low, float* high) {
   const hn::ScalableTag<float> d;
@@ -244,6 +364,7 @@ HWY_EXPORT(GridSmoothRow);
 HWY_EXPORT(GridApplyRow);
 HWY_EXPORT(DotRow);
 HWY_EXPORT(EdgeWeightsRow);
+HWY_EXPORT(HoleHintRow);
 HWY_EXPORT(DataTermsRow);
 HWY_EXPORT(DiagonalRow);
 
@@ -261,6 +382,10 @@ double dot_row(const float* a, const float* b, int n) {
 
 void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out) {
   HWY_DYNAMIC_DISPATCH(EdgeWeightsRow)(ends, rule, n, out);
+}
+
+void hole_hint_row(const float* sparse, const float* wx, int width, float crossing, float* hint) {
+  HWY_DYNAMIC_DISPATCH(HoleHintRow)(sparse, wx, width, crossing, hint);
 }
 
 void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,

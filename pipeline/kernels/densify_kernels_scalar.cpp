@@ -4,6 +4,29 @@
 
 namespace dco::kernels::scalar {
 
+void hole_hint_row(const float* sparse, const float* wx, int width, float crossing, float* hint) {
+  // Whether the path to a value crosses a weak edge is a flag carried along the row, reset at
+  // every known pixel; the left pass keeps its flag in the sign of the hint (see the kernel).
+  float last = 0.0f;
+  bool crossed = false;
+  for (int x = 0; x < width; ++x) {
+    const bool k = pixel::known_value(sparse[x]);
+    last = k ? sparse[x] : last;
+    crossed = !k && crossed;
+    hint[x] = crossed ? -last : last;
+    crossed = crossed || (x + 1 < width && wx[x] < crossing);
+  }
+  last = 0.0f;
+  crossed = false;
+  for (int x = width - 1; x >= 0; --x) {
+    const bool k = pixel::known_value(sparse[x]);
+    last = k ? sparse[x] : last;
+    crossed = !k && crossed;
+    hint[x] = pixel::hole_hint(hint[x], last, crossed);
+    if (x > 0) crossed = crossed || wx[x - 1] < crossing;
+  }
+}
+
 void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,
                     const DataTermRule& rule, float* data, float* b, float* low, float* high) {
   detail::data_terms_range(sparse, hint, previous, rule, 0, width, data, b, low, high);

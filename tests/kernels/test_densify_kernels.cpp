@@ -2,6 +2,7 @@
 #include "for_each_target.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -258,6 +259,61 @@ TEST(DensifyKernels, DataTermsRowMatchesScalarAndTheRule) {
           ASSERT_EQ(out_b, b) << "width " << w;
           ASSERT_EQ(out_low, low) << "width " << w;
           ASSERT_EQ(out_high, high) << "width " << w;
+        });
+      }
+}
+
+// The hole hint as hole_hint_row states it, searched out pixel by pixel.
+float hole_hint_by_search(const std::vector<float>& sparse, const std::vector<float>& wx, int x,
+                          float crossing) {
+  const auto known = [&](int i) {
+    return sparse[i] > 0.0f && sparse[i] < std::numeric_limits<float>::infinity();
+  };
+  if (known(x)) return sparse[x];
+  const int w = static_cast<int>(sparse.size());
+  int l = x - 1, r = x + 1;
+  while (l >= 0 && !known(l)) --l;
+  while (r < w && !known(r)) ++r;
+  if (l < 0 && r >= w) return 0.0f;
+  if (l < 0) return sparse[r];
+  if (r >= w) return sparse[l];
+  bool left_crossed = false, right_crossed = false;
+  for (int j = l; j < x; ++j) left_crossed = left_crossed || wx[j] < crossing;
+  for (int j = x; j < r; ++j) right_crossed = right_crossed || wx[j] < crossing;
+  if (left_crossed == right_crossed) return std::min(sparse[l], sparse[r]);
+  return left_crossed ? sparse[r] : sparse[l];
+}
+
+TEST(DensifyKernels, HoleHintRowMatchesScalarAndTheRule) {
+  std::mt19937 rng(17);
+  const float inf = std::numeric_limits<float>::infinity();
+  const float crossing = 0.12f;
+  std::vector<int> widths = kWidths;
+  widths.push_back(1283);
+  for (const int w : widths)
+    for (const double known_share : {0.0, 0.03, 0.3, 0.8})
+      for (const double weak_share : {0.0, 0.1, 0.5}) {
+        std::vector<float> sparse = random_floats(rng, w, 0.5f, 90.0f);
+        std::uniform_real_distribution<double> unit(0.0, 1.0);
+        for (float& e : sparse) {
+          if (unit(rng) < known_share) continue;
+          const unsigned pick = rng() % 4;
+          e = pick == 0 ? inf : pick == 1 ? 0.0f : pick == 2 ? -e : std::nanf("");
+        }
+        std::vector<float> wx = random_floats(rng, w, crossing, 2.4f);
+        for (float& e : wx)
+          if (unit(rng) < weak_share) e = crossing * static_cast<float>(unit(rng));
+        wx.back() = 0.0f;  // the edge past the row end is not an edge
+        std::vector<float> want(static_cast<std::size_t>(w));
+        for (int x = 0; x < w; ++x) want[x] = hole_hint_by_search(sparse, wx, x, crossing);
+        std::vector<float> hint(want.size(), -7.0f);
+        scalar::hole_hint_row(sparse.data(), wx.data(), w, crossing, hint.data());
+        ASSERT_EQ(hint, want) << "width " << w << " known " << known_share;
+        for_each_target([&] {
+          std::vector<float> out(want.size(), -7.0f);
+          hole_hint_row(sparse.data(), wx.data(), w, crossing, out.data());
+          ASSERT_EQ(out, want) << "width " << w << " known " << known_share << " weak "
+                               << weak_share;
         });
       }
 }

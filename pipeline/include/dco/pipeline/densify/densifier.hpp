@@ -97,9 +97,8 @@ class Densifier {
   GridSystem system_;
   Image<float> rhs_, hint_, solution_, smooth_strength_;
   Image<std::uint8_t> barrier_;
-  std::vector<int> fuse_column_;            // column of M_fuse for each input column
-  std::vector<std::uint8_t> left_crossed_;  // a weak edge lies between a hole and its left value
-  std::array<float, 256> color_weight_{};   // exp(-diff / color_sigma) per grey-level difference
+  std::vector<int> fuse_column_;           // column of M_fuse for each input column
+  std::array<float, 256> color_weight_{};  // exp(-diff / color_sigma) per grey-level difference
   // Range of the frame's sparse and previous values: the exact minimiser of Eq. 20 is a
   // weighted mean of them, so the solution is kept inside it.
   float data_low_ = 0.0f, data_high_ = 0.0f;

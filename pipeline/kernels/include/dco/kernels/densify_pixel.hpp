@@ -4,6 +4,7 @@
 // kernels (the references the SIMD kernels match) and the GPU passes: the same float operations
 // in the same order, no fused multiply-add, so all of them give the same bits.
 
+#include <cmath>
 #include <limits>
 
 #include "dco/kernels/densify_kernels.hpp"
@@ -62,6 +63,18 @@ DCO_HD inline double dot_row(const float* a, const float* b, int n) {
 // so loops over it vectorise). Host code: the densifier builds its system on the CPU.
 inline bool known_value(float v) {
   return v > 0.0f && v < std::numeric_limits<float>::infinity();
+}
+
+// The hint of a pixel from its left value (negative when the path to it crosses a weak edge;
+// -0 for "none, crossed") and its right value and flag (hole_hint_row): the farther of the two
+// unless exactly one path crosses a weak edge; the one that exists when the other does not.
+inline float hole_hint(float signed_left, float right, bool right_crossed) {
+  const bool left_crossed = std::signbit(signed_left);
+  const float left = std::fabs(signed_left);
+  const float both = left_crossed == right_crossed ? (right < left ? right : left)
+                     : left_crossed                ? right
+                                                   : left;
+  return left <= 0.0f ? right : right > 0.0f ? both : left;
 }
 
 // diag = data + the weights of the edges that exist (GridSystem::update_diagonal).
