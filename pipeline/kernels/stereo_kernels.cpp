@@ -268,6 +268,21 @@ void MatchingCostRow(const CostRow& row, const CostTableView& t, int d, std::uin
   detail::matched_cost_range(row, t, d, x, w, out);
 }
 
+// Lane i: entry index[i] & (2n - 1) of the 2n-entry table whose first half is `lo` and second
+// half `hi`. AVX-512 has this as one instruction; elsewhere two lookups and a select.
+template <class D>
+HWY_INLINE hn::Vec<D> TwoTableLookup(D du, hn::Vec<D> lo, hn::Vec<D> hi, hn::Vec<D> index) {
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+  if constexpr (hn::MaxLanes(D()) == 16)
+    return hn::Vec<D>{_mm512_permutex2var_epi32(lo.raw, index.raw, hi.raw)};
+#endif
+  const int n = static_cast<int>(hn::Lanes(du));
+  const auto idx =
+      hn::IndicesFromVec(du, hn::And(index, hn::Set(du, static_cast<std::uint32_t>(n - 1))));
+  return hn::IfThenElse(hn::TestBit(index, hn::Set(du, static_cast<std::uint32_t>(n))),
+                        hn::TableLookupLanes(hi, idx), hn::TableLookupLanes(lo, idx));
+}
+
 // Costs of row `row` in the block layout; with kRunning, their running sums along the row instead:
 // out[(x + 1) * count + k] = out[x * count + k] + cost (out[0 .. count) = 0), the prefix sums
 // the horizontal aggregation needs, without a pass of their own.
@@ -288,8 +303,6 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
   // With 16 lanes the census row of one arm (65 entries) is four vectors and one more entry, so
   // lane permutes replace the second gather.
   const bool census_in_registers = n >= 16 && t.census_size == 4 * n + 1;
-  const auto index_mask = hn::Set(du, static_cast<std::uint32_t>(n - 1));
-  const auto quarter_bit = hn::Set(du, static_cast<std::uint32_t>(n));
   const auto half_bit = hn::Set(du, static_cast<std::uint32_t>(2 * n));
   const auto last_entry = hn::Set(du, static_cast<std::uint32_t>(4 * n));
   // Likewise the AD row when it is constant past its first six vectors (grey images: the
@@ -372,14 +385,9 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
       hn::Vec<decltype(du)> ad_cost;
       if (ad_in_registers) {
         const auto clamped = hn::Min(ad, ad_clamp);
-        const auto idx = hn::IndicesFromVec(du, hn::And(clamped, index_mask));
-        const auto odd = hn::TestBit(clamped, quarter_bit);  // vectors 1, 3, 5
-        const auto v01 =
-            hn::IfThenElse(odd, hn::TableLookupLanes(a1, idx), hn::TableLookupLanes(a0, idx));
-        const auto v23 =
-            hn::IfThenElse(odd, hn::TableLookupLanes(a3, idx), hn::TableLookupLanes(a2, idx));
-        const auto v45 =
-            hn::IfThenElse(odd, hn::TableLookupLanes(a5, idx), hn::TableLookupLanes(a4, idx));
+        const auto v01 = TwoTableLookup(du, a0, a1, clamped);
+        const auto v23 = TwoTableLookup(du, a2, a3, clamped);
+        const auto v45 = TwoTableLookup(du, a4, a5, clamped);
         ad_cost = hn::IfThenElse(hn::TestBit(clamped, third_bit), v45,
                                  hn::IfThenElse(hn::TestBit(clamped, half_bit), v23, v01));
       } else {
@@ -388,12 +396,8 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
       }
       hn::Vec<decltype(du)> census_cost;
       if (census_in_registers) {
-        const auto idx = hn::IndicesFromVec(du, hn::And(hd, index_mask));
-        const auto odd_quarter = hn::TestBit(hd, quarter_bit);
-        const auto low = hn::IfThenElse(odd_quarter, hn::TableLookupLanes(c1, idx),
-                                        hn::TableLookupLanes(c0, idx));
-        const auto high = hn::IfThenElse(odd_quarter, hn::TableLookupLanes(c3, idx),
-                                         hn::TableLookupLanes(c2, idx));
+        const auto low = TwoTableLookup(du, c0, c1, hd);
+        const auto high = TwoTableLookup(du, c2, c3, hd);
         census_cost = hn::IfThenElse(hn::Eq(hd, last_entry), c4,
                                      hn::IfThenElse(hn::TestBit(hd, half_bit), high, low));
       } else {
