@@ -227,6 +227,24 @@ void GreyCrossArmsRow(const std::uint8_t* image, std::ptrdiff_t stride, int widt
   RowArms(d, image, stride, width, height, y, p, lengths, left, right, up, down);
 }
 
+// Per 32-bit lane, the sum of its four bytes. On x86 two multiply-adds with ones do it: bytes to
+// 16-bit pair sums (at most 510), then pairs to 32-bit sums, all exact.
+template <class D>
+HWY_INLINE hn::Vec<D> SumOfBytes(D du, hn::Vec<D> v) {
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+  if constexpr (hn::MaxLanes(D()) == 16)
+    return hn::Vec<D>{_mm512_madd_epi16(_mm512_maddubs_epi16(v.raw, _mm512_set1_epi8(1)),
+                                        _mm512_set1_epi16(1))};
+#elif HWY_TARGET == HWY_AVX2
+  if constexpr (hn::MaxLanes(D()) == 8)
+    return hn::Vec<D>{_mm256_madd_epi16(_mm256_maddubs_epi16(v.raw, _mm256_set1_epi8(1)),
+                                        _mm256_set1_epi16(1))};
+#endif
+  const auto byte_mask = hn::Set(du, 0xffu);
+  return hn::Add(hn::Add(hn::And(v, byte_mask), hn::And(hn::ShiftRight<8>(v), byte_mask)),
+                 hn::Add(hn::And(hn::ShiftRight<16>(v), byte_mask), hn::ShiftRight<24>(v)));
+}
+
 void MatchingCostRow(const CostRow& row, const CostTableView& t, int d, std::uint32_t* out) {
   const hn::ScalableTag<std::uint32_t> du;
   const hn::RebindToSigned<decltype(du)> di;
@@ -240,7 +258,6 @@ void MatchingCostRow(const CostRow& row, const CostTableView& t, int d, std::uin
   std::fill(out, out + first, t.unmatched);
   const auto ad_size = hn::Set(di, t.ad_size);
   const auto census_size = hn::Set(di, t.census_size);
-  const auto byte_mask = hn::Set(du, 0xffu);
   const auto* ad_table = reinterpret_cast<const std::int32_t*>(t.ad);
   const auto* census_table = reinterpret_cast<const std::int32_t*>(t.census);
   int x = first;
@@ -249,9 +266,7 @@ void MatchingCostRow(const CostRow& row, const CostTableView& t, int d, std::uin
     const auto a = hn::BitCast(du8, hn::LoadU(du, row.left + x));
     const auto b = hn::BitCast(du8, hn::LoadU(du, row.right + x - d));
     const auto diff = hn::BitCast(du, hn::Sub(hn::Max(a, b), hn::Min(a, b)));
-    const auto ad =
-        hn::Add(hn::Add(hn::And(diff, byte_mask), hn::And(hn::ShiftRight<8>(diff), byte_mask)),
-                hn::Add(hn::And(hn::ShiftRight<16>(diff), byte_mask), hn::ShiftRight<24>(diff)));
+    const auto ad = SumOfBytes(du, diff);
     // Hamming distances of the 64-bit descriptors, narrowed to one 32-bit lane per pixel.
     const auto lo = hn::PopulationCount(
         hn::Xor(hn::LoadU(du64, row.census_left + x), hn::LoadU(du64, row.census_right + x - d)));
@@ -295,7 +310,6 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
   const int n = static_cast<int>(hn::Lanes(du));
   const int half = static_cast<int>(hn::Lanes(du64));
   const int vector_end = count - count % n;
-  const auto byte_mask = hn::Set(du, 0xffu);
   const auto unmatched = hn::Set(du, t.unmatched);
   const auto lanes = hn::Iota(di, 0);  // hoisted: Iota is not a single instruction everywhere
   const auto* ad_table = reinterpret_cast<const std::int32_t*>(t.ad);
@@ -374,9 +388,7 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
       }
       const auto b = hn::BitCast(du8, hn::Reverse(du, hn::LoadU(du, right)));
       const auto diff = hn::BitCast(du, hn::Sub(hn::Max(a, b), hn::Min(a, b)));
-      const auto ad =
-          hn::Add(hn::Add(hn::And(diff, byte_mask), hn::And(hn::ShiftRight<8>(diff), byte_mask)),
-                  hn::Add(hn::And(hn::ShiftRight<16>(diff), byte_mask), hn::ShiftRight<24>(diff)));
+      const auto ad = SumOfBytes(du, diff);
       const auto lo =
           hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right + half))));
       const auto hi =
