@@ -15,6 +15,17 @@ namespace dco::kernels::detail {
 using pixel::absdiff_sum;
 using pixel::colour_diff;
 
+// Columns [begin, end) of disparity_values_row.
+inline void disparity_values_range(const DisparityRowInputs& in, bool subpixel, float max_value,
+                                   int begin, int end, float* raw, float* sparse) {
+  for (int x = begin; x < end; ++x) {
+    raw[x] =
+        pixel::raw_disparity(in.wta[x], in.below[x], in.best[x], in.above[x], subpixel, max_value);
+    sparse[x] = pixel::sparse_disparity(in.checked[x], in.voted[x] != 0, in.below[x], in.best[x],
+                                        in.above[x], subpixel, max_value);
+  }
+}
+
 inline void census_range(const std::uint8_t* const* rows, int width, int window_w, int window_h,
                          int begin, int end, std::uint64_t* out) {
   const auto row = [rows](int j) { return rows[j]; };

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 
 #include "dco/kernels/stereo_kernels.hpp"
 #include "scalar_ranges.hpp"
@@ -233,12 +234,12 @@ template <class D>
 HWY_INLINE hn::Vec<D> SumOfBytes(D du, hn::Vec<D> v) {
 #if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
   if constexpr (hn::MaxLanes(D()) == 16)
-    return hn::Vec<D>{_mm512_madd_epi16(_mm512_maddubs_epi16(v.raw, _mm512_set1_epi8(1)),
-                                        _mm512_set1_epi16(1))};
+    return hn::Vec<D>{
+        _mm512_madd_epi16(_mm512_maddubs_epi16(v.raw, _mm512_set1_epi8(1)), _mm512_set1_epi16(1))};
 #elif HWY_TARGET == HWY_AVX2
   if constexpr (hn::MaxLanes(D()) == 8)
-    return hn::Vec<D>{_mm256_madd_epi16(_mm256_maddubs_epi16(v.raw, _mm256_set1_epi8(1)),
-                                        _mm256_set1_epi16(1))};
+    return hn::Vec<D>{
+        _mm256_madd_epi16(_mm256_maddubs_epi16(v.raw, _mm256_set1_epi8(1)), _mm256_set1_epi16(1))};
 #endif
   const auto byte_mask = hn::Set(du, 0xffu);
   return hn::Add(hn::Add(hn::And(v, byte_mask), hn::And(hn::ShiftRight<8>(v), byte_mask)),
@@ -672,6 +673,58 @@ void BlockVoteRow(const std::uint32_t* votes, int width, const std::int32_t* can
   }
 }
 
+void DisparityValuesRow(const DisparityRowInputs& in, int width, bool subpixel, float max_value,
+                        float* raw, float* sparse) {
+  const hn::ScalableTag<float> df;
+  const hn::RebindToSigned<decltype(df)> di;
+  const hn::RebindToUnsigned<decltype(df)> du;
+  const hn::Rebind<std::int16_t, decltype(df)> di16;
+  const hn::Rebind<std::uint16_t, decltype(df)> du16;
+  const hn::Rebind<std::uint8_t, decltype(df)> du8;
+  const int n = static_cast<int>(hn::Lanes(df));
+  const auto zero = hn::Zero(df);
+  const auto two = hn::Set(df, 2.0f);
+  const auto top = hn::Set(df, max_value);
+  const auto unknown = hn::Set(df, std::numeric_limits<float>::infinity());
+  const auto no_cost = hn::Set(di, kNoCost);
+  const auto invalid = hn::Set(di, pixel::kInvalid);
+  const auto one = hn::Set(di, 1);
+  const auto cost = [&](const std::uint16_t* p) {
+    return hn::BitCast(di, hn::PromoteTo(du, hn::LoadU(du16, p)));
+  };
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    // pixel::subpixel_offset: (below - above) / (2 rise) where the fit exists, else 0; lanes
+    // without a fit divide by 1 and discard the quotient.
+    const auto b = cost(in.below + x), c = cost(in.best + x), a = cost(in.above + x);
+    const auto rise = hn::Sub(hn::Max(b, a), c);
+    auto fit = hn::And(hn::And(hn::Not(hn::Eq(b, no_cost)), hn::Not(hn::Eq(a, no_cost))),
+                       hn::And(hn::Not(hn::Lt(b, c)), hn::Not(hn::Lt(a, c))));
+    fit = hn::And(fit, hn::Gt(rise, hn::Zero(di)));
+    auto offset = zero;
+    if (subpixel) {
+      const auto quotient =
+          hn::Div(hn::ConvertTo(df, hn::Sub(b, a)),
+                  hn::Mul(two, hn::ConvertTo(df, hn::IfThenElse(fit, rise, one))));
+      offset = hn::IfThenElseZero(hn::RebindMask(df, fit), quotient);
+    }
+    const auto v =
+        hn::Add(hn::ConvertTo(df, hn::PromoteTo(di, hn::LoadU(di16, in.wta + x))), offset);
+    hn::StoreU(hn::IfThenElse(hn::Lt(v, zero), zero, hn::IfThenElse(hn::Gt(v, top), top, v)), df,
+               raw + x);
+    const auto d = hn::PromoteTo(di, hn::LoadU(di16, in.checked + x));
+    const auto voted = hn::RebindMask(
+        df, hn::Not(hn::Eq(hn::BitCast(di, hn::PromoteTo(du, hn::LoadU(du8, in.voted + x))),
+                           hn::Zero(di))));
+    auto s = hn::Add(hn::ConvertTo(df, d), hn::IfThenZeroElse(voted, offset));
+    s = hn::IfThenElse(hn::Gt(s, top), top, s);
+    const auto has_value =
+        hn::And(hn::RebindMask(df, hn::Not(hn::Eq(d, invalid))), hn::Gt(s, zero));
+    hn::StoreU(hn::IfThenElse(has_value, s, unknown), df, sparse + x);
+  }
+  detail::disparity_values_range(in, subpixel, max_value, x, width, raw, sparse);
+}
+
 void WtaUpdateRow(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                   int d, const WtaRow& s) {
   const hn::ScalableTag<std::uint16_t> du;
@@ -758,6 +811,7 @@ HWY_EXPORT(BlocksToRows);
 HWY_EXPORT(BlockIndicatorRow);
 HWY_EXPORT(BlockVoteRow);
 HWY_EXPORT(WtaUpdateRow);
+HWY_EXPORT(DisparityValuesRow);
 
 const char* simd_target() {
   return HWY_DYNAMIC_DISPATCH(TargetName)();
@@ -856,6 +910,11 @@ void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* c
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row) {
   HWY_DYNAMIC_DISPATCH(WtaUpdateRow)(cost, cost_stride, count, width, d, row);
+}
+
+void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel, float max_value,
+                          float* raw, float* sparse) {
+  HWY_DYNAMIC_DISPATCH(DisparityValuesRow)(in, width, subpixel, max_value, raw, sparse);
 }
 
 }  // namespace dco::kernels

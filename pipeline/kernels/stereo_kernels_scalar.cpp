@@ -15,6 +15,11 @@ void pack_pixels(const std::uint8_t* src, int channels, int width, std::uint32_t
 
 namespace scalar {
 
+void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel, float max_value,
+                          float* raw, float* sparse) {
+  detail::disparity_values_range(in, subpixel, max_value, 0, width, raw, sparse);
+}
+
 void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,
                 std::uint64_t* out) {
   detail::census_range(rows, width, window_w, window_h, 0, width, out);

@@ -162,22 +162,16 @@ class CpuStereoMatcher final : public StereoMatcher {
     values_.resize(w_, h_);
     raw_.resize(w_, h_);
     const float max_value = static_cast<float>(params_.max_disparity) / static_cast<float>(scale_);
+    // The fit may lean past the searched range by less than a pixel; values stay inside it.
     for (int y = 0; y < h_; ++y) {
-      const std::int16_t* wta = wta_.left_disparity().row(y);
-      const std::int16_t* d = disp_.row(y);
-      const std::uint16_t* below = wta_.cost_below().row(y);
-      const std::uint16_t* best = wta_.best_cost().row(y);
-      const std::uint16_t* above = wta_.cost_above().row(y);
-      const std::uint8_t* ch = changed_.row(y);
-      float* r = raw_.row(y);
-      float* v = values_.row(y);
-      for (int x = 0; x < w_; ++x) {
-        r[x] = kernels::pixel::raw_disparity(wta[x], below[x], best[x], above[x], params_.subpixel,
-                                             max_value);
-        // The fit may lean past the searched range by less than a pixel; keep values inside it.
-        v[x] = kernels::pixel::sparse_disparity(d[x], ch[x] != 0, below[x], best[x], above[x],
-                                                params_.subpixel, max_value);
-      }
+      const kernels::DisparityRowInputs in{wta_.left_disparity().row(y),
+                                           disp_.row(y),
+                                           changed_.row(y),
+                                           wta_.cost_below().row(y),
+                                           wta_.best_cost().row(y),
+                                           wta_.cost_above().row(y)};
+      kernels::disparity_values_row(in, w_, params_.subpixel, max_value, raw_.row(y),
+                                    values_.row(y));
     }
     // Each internal row once, then copies for the input rows that repeat it.
     const auto scale = static_cast<float>(scale_);

@@ -2,9 +2,11 @@
 #include "for_each_target.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <random>
 #include <string>
 #include <utility>
@@ -697,6 +699,51 @@ TEST(StereoKernels, WinnerTakesAllFindsTheMinimumAndItsNeighbours) {
     // Right pixel xr sees left pixel xr + d: only xr < w - d exist at disparity d.
     for (int xr = 0; xr < w - 5; ++xr) ASSERT_EQ(state.disp_right[xr], 2);
   });
+}
+
+TEST(StereoKernels, DisparityValuesRowMatchesScalarAndThePixelRule) {
+  std::mt19937 rng(23);
+  const float inf = std::numeric_limits<float>::infinity();
+  // Costs near each other, so that ties, a winner above its neighbours and kNoCost all occur.
+  const auto costs = [&](int w) {
+    std::vector<std::uint16_t> v = random_vector<std::uint16_t>(rng, w, 500, 504);
+    for (auto& e : v)
+      if (rng() % 9 == 0) e = kNoCost;
+    return v;
+  };
+  for (const int w : kWidths)
+    for (const bool subpixel : {true, false}) {
+      const float max_value = 40.0f;
+      auto wta = random_vector<std::int16_t>(rng, w, -1, 41);
+      auto checked = wta;
+      for (auto& d : checked)
+        if (rng() % 4 == 0) d = -1;
+      const auto voted = random_vector<std::uint8_t>(rng, w, 0, 1);
+      const auto below = costs(w), best = costs(w), above = costs(w);
+      const DisparityRowInputs in{wta.data(),   checked.data(), voted.data(),
+                                  below.data(), best.data(),    above.data()};
+      std::vector<float> raw(static_cast<std::size_t>(w), -5.0f), sparse(raw.size(), -5.0f);
+      scalar::disparity_values_row(in, w, subpixel, max_value, raw.data(), sparse.data());
+      for (int x = 0; x < w; ++x) {
+        // The rule: an equiangular offset where the winner is strictly below one neighbour and
+        // not above the other; values within [0, max_value]; +inf for no or no positive value.
+        const int b = below[x], c = best[x], a = above[x];
+        const bool fit =
+            subpixel && b != kNoCost && a != kNoCost && b >= c && a >= c && std::max(b, a) > c;
+        const float offset = fit ? float(b - a) / (2.0f * float(std::max(b, a) - c)) : 0.0f;
+        const float v = std::clamp(float(wta[x]) + offset, 0.0f, max_value);
+        ASSERT_EQ(raw[x], v) << x;
+        const float s = std::min(float(checked[x]) + (voted[x] ? 0.0f : offset), max_value);
+        ASSERT_EQ(sparse[x], checked[x] == -1 || !(s > 0.0f) ? inf : s) << x;
+        ASSERT_LE(std::abs(offset), 0.5f);
+      }
+      for_each_target([&] {
+        std::vector<float> out_raw(raw.size(), -5.0f), out_sparse(raw.size(), -5.0f);
+        disparity_values_row(in, w, subpixel, max_value, out_raw.data(), out_sparse.data());
+        ASSERT_EQ(out_raw, raw) << "width " << w << " subpixel " << subpixel;
+        ASSERT_EQ(out_sparse, sparse) << "width " << w << " subpixel " << subpixel;
+      });
+    }
 }
 
 }  // namespace

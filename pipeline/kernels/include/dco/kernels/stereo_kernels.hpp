@@ -161,8 +161,24 @@ inline constexpr std::uint16_t kNoCost = 0xffff;
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row);
 
+// One row of the internal disparity maps from the winner-takes-all state: raw[x] =
+// pixel::raw_disparity(wta[x], ...) and sparse[x] = pixel::sparse_disparity(checked[x],
+// voted[x] != 0, ...), with the costs below, at and above the winner.
+struct DisparityRowInputs {
+  const std::int16_t* wta = nullptr;      // winner of each pixel
+  const std::int16_t* checked = nullptr;  // after the checks and the vote (kInvalid: none)
+  const std::uint8_t* voted = nullptr;    // nonzero where the vote changed the value
+  const std::uint16_t* below = nullptr;
+  const std::uint16_t* best = nullptr;
+  const std::uint16_t* above = nullptr;
+};
+void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel, float max_value,
+                          float* raw, float* sparse);
+
 namespace scalar {
 
+void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel, float max_value,
+                          float* raw, float* sparse);
 void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,
                 std::uint64_t* out);
 void cross_arms_row(const std::uint32_t* image, std::ptrdiff_t stride, int width, int height, int y,
