@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dco/kernels/boundary_kernels.hpp"
+
 namespace dco::stereo {
 
 namespace px = kernels::pixel;
@@ -80,6 +82,7 @@ void BoundaryRefiner::apply(ImageView<const float> sparse, ImageView<const std::
   }
   const auto s = static_cast<float>(scale);
   const px::GreyPair im{left.data, right.data, left.stride, right.stride, left.width, left.height};
+  kernels::BoundaryWindow window;  // the side costs of one pixel share its support weights
   for (int y = 0; y < disparity.height; ++y) {
     const int iy = std::min(y / scale, h - 1);
     const float* far = far_.row(iy);
@@ -90,8 +93,12 @@ void BoundaryRefiner::apply(ImageView<const float> sparse, ImageView<const std::
     for (int ix = 0; ix < w; ++ix) {
       if (!(near[ix] - far[ix] > px::kBoundaryMinStep)) continue;
       const int x_end = ix + 1 == w ? disparity.width : (ix + 1) * scale;
-      for (int x = ix * scale; x < x_end; ++x)
-        out[x] = px::refined_boundary_value(im, x, y, out[x], {far[ix], near[ix]}, s, rule);
+      for (int x = ix * scale; x < x_end; ++x) {
+        kernels::boundary_window(im, x, y, rule, window);
+        out[x] = px::refined_boundary_choice(out[x], {far[ix], near[ix]}, s, rule, [&](int d) {
+          return kernels::boundary_side_cost(im, window, d, rule);
+        });
+      }
     }
   }
 }

@@ -77,26 +77,28 @@ DCO_HD inline std::uint32_t side_cost(const GreyPair& im, int x, int y, int d,
   return sum;
 }
 
-// The refined value of input pixel (x, y): `own` is its value from the half-size map (input px,
-// +inf = none), `range` the sides around its internal pixel, `scale` the internal downscale.
-// Away from a depth edge the value is kept. At one, the far side, the near side and the pixel's
-// own value compete; if a side wins, it must beat the other side by the rule's ratio, else the
-// pixel is left without a value for the densifier to fill.
-DCO_HD inline float refined_boundary_value(const GreyPair& im, int x, int y, float own,
-                                           SideRange range, float scale, const BoundaryRule& rule) {
+// The refined value of an input pixel: `own` is its value from the half-size map (input px,
+// +inf = none), `range` the sides around its internal pixel, `scale` the internal downscale, and
+// cost(d) its side_cost at disparity d. Away from a depth edge the value is kept. At one, the
+// far side, the near side and the pixel's own value compete; if a side wins, it must beat the
+// other side by the rule's ratio, else the pixel is left without a value for the densifier to
+// fill.
+template <class Cost>
+DCO_HD inline float refined_boundary_choice(float own, SideRange range, float scale,
+                                            const BoundaryRule& rule, const Cost& cost) {
   if (!(range.near - range.far > kBoundaryMinStep)) return own;
   const float none = infinity();
   const float far = scale * range.far, near = scale * range.near;
   const int d_far = static_cast<int>(far + 0.5f), d_near = static_cast<int>(near + 0.5f);
-  const std::uint32_t cost_far = side_cost(im, x, y, d_far, rule);
-  const std::uint32_t cost_near = side_cost(im, x, y, d_near, rule);
+  const std::uint32_t cost_far = cost(d_far);
+  const std::uint32_t cost_near = cost(d_near);
   if (own < none) {
     // The pixel's own value passed the checks: it stays unless a side matches strictly better.
     // A side at the same whole disparity costs the same, and then the own value wins.
     const int d_own = static_cast<int>(own + 0.5f);
     const std::uint32_t cost_own = d_own == d_far    ? cost_far
                                    : d_own == d_near ? cost_near
-                                                     : side_cost(im, x, y, d_own, rule);
+                                                     : cost(d_own);
     if (cost_own <= cost_far && cost_own <= cost_near) return own;
   }
   const bool far_wins = cost_far <= cost_near;
@@ -105,6 +107,13 @@ DCO_HD inline float refined_boundary_value(const GreyPair& im, int x, int y, flo
   const bool decided = best < other && static_cast<std::uint64_t>(best) * 256u <=
                                            static_cast<std::uint64_t>(rule.keep) * other;
   return decided ? (far_wins ? far : near) : none;
+}
+
+// refined_boundary_choice of input pixel (x, y) with its side costs computed here.
+DCO_HD inline float refined_boundary_value(const GreyPair& im, int x, int y, float own,
+                                           SideRange range, float scale, const BoundaryRule& rule) {
+  return refined_boundary_choice(own, range, scale, rule,
+                                 [&](int d) { return side_cost(im, x, y, d, rule); });
 }
 
 }  // namespace dco::kernels::pixel
