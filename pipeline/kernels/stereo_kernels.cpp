@@ -22,44 +22,77 @@ namespace hn = hwy::HWY_NAMESPACE;
 
 void CensusRow(const std::uint8_t* const* rows, int width, int window_w, int window_h,
                std::uint64_t* out) {
-  // The descriptor is built as two 32-bit words per pixel (32-bit lanes hold 8-bit pixels with
-  // one widening step): the first neighbours shift into the high word, the last 32 into the low.
-  const hn::ScalableTag<std::int32_t> di;
-  const hn::Rebind<std::uint8_t, decltype(di)> du8n;
-  const hn::Repartition<std::uint64_t, decltype(di)> du64;
-  const hn::Half<decltype(di)> dh;
-  const int n = static_cast<int>(hn::Lanes(di));
+  // Neighbour i of N sets bit N - 1 - i (pixel::census_bits). The comparisons run on byte lanes,
+  // a vector of pixels at a time, each into the byte of the descriptors that holds its bit; the
+  // eight bytes of each pixel are then put together by three rounds of zips, 16 pixels at a time.
+  const hn::ScalableTag<std::uint8_t> d8;
+  const hn::FixedTag<std::uint8_t, 16> b8;
+  const hn::RepartitionToWide<decltype(b8)> b16;
+  const hn::RepartitionToWide<decltype(b16)> b32;
+  const hn::RepartitionToWide<decltype(b32)> b64;
+  const int n = static_cast<int>(hn::Lanes(d8));
   const int rx = window_w / 2;
   const int ry = window_h / 2;
   const int neighbours = window_w * window_h - 1;
-  const int high_count = neighbours > 32 ? neighbours - 32 : 0;
-  const auto one = hn::Set(di, 1);
-  const int begin = std::min(rx, width);
-  int x = begin;
-  for (; x + n + rx <= width; x += n) {
-    const auto centre = hn::PromoteTo(di, hn::LoadU(du8n, rows[ry] + x));
-    auto high = hn::Zero(di);
-    auto low = hn::Zero(di);
-    int i = 0;
+  // pixel::census_bits compares grey levels as ints; the bytes compare as signed once their top
+  // bit is flipped.
+  const auto flip = hn::Set(d8, std::uint8_t{0x80});
+  const hn::RebindToSigned<decltype(d8)> ds8;
+  const auto grey = [&](const std::uint8_t* p) {
+    return hn::BitCast(ds8, hn::Xor(hn::LoadU(d8, p), flip));
+  };
+  HWY_ALIGN std::uint8_t bytes[8][HWY_MAX_BYTES];
+  const auto vector_at = [&](int x) {
+    const auto centre = grey(rows[ry] + x);
+    // The bits come in falling order, so each byte is complete before the next one starts: one
+    // accumulator, stored when its byte is done.
+    for (int k = 0; k < 8; ++k) hn::Store(hn::Zero(d8), d8, bytes[k]);
+    auto acc = hn::Zero(d8);
+    int bit = neighbours - 1;
     for (int j = 0; j < window_h; ++j)
       for (int dx = -rx; dx <= rx; ++dx) {
         if (j == ry && dx == 0) continue;
-        const auto bit = hn::IfThenElseZero(
-            hn::Lt(hn::PromoteTo(di, hn::LoadU(du8n, rows[j] + x + dx)), centre), one);
-        if (i++ < high_count)
-          high = hn::Or(hn::ShiftLeft<1>(high), bit);
-        else
-          low = hn::Or(hn::ShiftLeft<1>(low), bit);
+        const auto below = hn::RebindMask(d8, hn::Lt(grey(rows[j] + x + dx), centre));
+        acc = hn::Or(acc, hn::IfThenElseZero(
+                              below, hn::Set(d8, static_cast<std::uint8_t>(1u << (bit & 7)))));
+        if ((bit & 7) == 0) {
+          hn::Store(acc, d8, bytes[bit >> 3]);
+          acc = hn::Zero(d8);
+        }
+        --bit;
       }
-    const auto hu = hn::BitCast(hn::RebindToUnsigned<decltype(di)>(), high);
-    const auto lu = hn::BitCast(hn::RebindToUnsigned<decltype(di)>(), low);
-    const hn::RebindToUnsigned<decltype(dh)> duh;
-    const auto first = hn::Or(hn::ShiftLeft<32>(hn::PromoteTo(du64, hn::LowerHalf(duh, hu))),
-                              hn::PromoteTo(du64, hn::LowerHalf(duh, lu)));
-    const auto second = hn::Or(hn::ShiftLeft<32>(hn::PromoteTo(du64, hn::UpperHalf(duh, hu))),
-                               hn::PromoteTo(du64, hn::UpperHalf(duh, lu)));
-    hn::StoreU(first, du64, out + x);
-    hn::StoreU(second, du64, out + x + n / 2);
+    for (int p = 0; p < n; p += 16) {
+      hn::Vec<decltype(b8)> v[8];
+      for (int k = 0; k < 8; ++k) v[k] = hn::Load(b8, bytes[k] + p);
+      // Bytes 2k and 2k + 1 of pixels p .. p + 7 and p + 8 .. p + 15.
+      hn::Vec<decltype(b16)> lo16[4], hi16[4];
+      for (int k = 0; k < 4; ++k) {
+        lo16[k] = hn::ZipLower(b16, v[2 * k], v[2 * k + 1]);
+        hi16[k] = hn::ZipUpper(b16, v[2 * k], v[2 * k + 1]);
+      }
+      // Bytes 0-3 and 4-7 of pixels p + 4q .. p + 4q + 3.
+      const hn::Vec<decltype(b32)> low32[4] = {
+          hn::ZipLower(b32, lo16[0], lo16[1]), hn::ZipUpper(b32, lo16[0], lo16[1]),
+          hn::ZipLower(b32, hi16[0], hi16[1]), hn::ZipUpper(b32, hi16[0], hi16[1])};
+      const hn::Vec<decltype(b32)> high32[4] = {
+          hn::ZipLower(b32, lo16[2], lo16[3]), hn::ZipUpper(b32, lo16[2], lo16[3]),
+          hn::ZipLower(b32, hi16[2], hi16[3]), hn::ZipUpper(b32, hi16[2], hi16[3])};
+      for (int q = 0; q < 4; ++q) {
+        hn::StoreU(hn::ZipLower(b64, low32[q], high32[q]), b64, out + x + p + 4 * q);
+        hn::StoreU(hn::ZipUpper(b64, low32[q], high32[q]), b64, out + x + p + 4 * q + 2);
+      }
+    }
+  };
+  const int begin = std::min(rx, width);
+  int x = begin;
+  if (n >= 16) {
+    for (; x + n + rx <= width; x += n) vector_at(x);
+    // The rest but the clamped end: one more vector, overlapping pixels already done (the same
+    // values again), so that few pixels are left to the scalar loop.
+    if (x < width - rx && width - rx - n >= begin) {
+      vector_at(width - rx - n);
+      x = width - rx;
+    }
   }
   // Columns near the ends read clamped neighbours.
   detail::census_range(rows, width, window_w, window_h, 0, begin, out);

@@ -91,10 +91,12 @@ TEST(StereoKernels, PackPixelsPutsChannelsInBytes) {
 
 TEST(StereoKernels, CensusMatchesScalarAndTheDefinition) {
   std::mt19937 rng(8);
-  for (const int w : {1, 4, 9, 16, 31, 64, 100}) {
+  for (const int w : {1, 4, 9, 16, 31, 64, 100, 150, 257}) {
     const int h = 9;
-    // Few grey levels, so equal neighbours (not darker: bit clear) occur often.
-    const auto image = random_vector<std::uint8_t>(rng, static_cast<std::size_t>(w * h), 0, 3);
+    // Few grey levels, so equal neighbours (not darker: bit clear) occur often; on wide rows
+    // the whole range, both sides of 128 included.
+    const auto image =
+        random_vector<std::uint8_t>(rng, static_cast<std::size_t>(w * h), 0, w > 100 ? 255 : 3);
     for (const auto& [ww, wh] : {std::pair{9, 7}, std::pair{3, 3}, std::pair{5, 5}, std::pair{1, 9},
                                  std::pair{7, 9}, std::pair{13, 3}}) {
       if (ww * wh - 1 > 64) continue;
