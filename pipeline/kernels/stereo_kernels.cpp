@@ -62,25 +62,25 @@ void CensusRow(const std::uint8_t* const* rows, int width, int window_w, int win
         --bit;
       }
     for (int p = 0; p < n; p += 16) {
-      hn::Vec<decltype(b8)> v[8];
-      for (int k = 0; k < 8; ++k) v[k] = hn::Load(b8, bytes[k] + p);
-      // Bytes 2k and 2k + 1 of pixels p .. p + 7 and p + 8 .. p + 15.
-      hn::Vec<decltype(b16)> lo16[4], hi16[4];
-      for (int k = 0; k < 4; ++k) {
-        lo16[k] = hn::ZipLower(b16, v[2 * k], v[2 * k + 1]);
-        hi16[k] = hn::ZipUpper(b16, v[2 * k], v[2 * k + 1]);
-      }
-      // Bytes 0-3 and 4-7 of pixels p + 4q .. p + 4q + 3.
-      const hn::Vec<decltype(b32)> low32[4] = {
-          hn::ZipLower(b32, lo16[0], lo16[1]), hn::ZipUpper(b32, lo16[0], lo16[1]),
-          hn::ZipLower(b32, hi16[0], hi16[1]), hn::ZipUpper(b32, hi16[0], hi16[1])};
-      const hn::Vec<decltype(b32)> high32[4] = {
-          hn::ZipLower(b32, lo16[2], lo16[3]), hn::ZipUpper(b32, lo16[2], lo16[3]),
-          hn::ZipLower(b32, hi16[2], hi16[3]), hn::ZipUpper(b32, hi16[2], hi16[3])};
-      for (int q = 0; q < 4; ++q) {
-        hn::StoreU(hn::ZipLower(b64, low32[q], high32[q]), b64, out + x + p + 4 * q);
-        hn::StoreU(hn::ZipUpper(b64, low32[q], high32[q]), b64, out + x + p + 4 * q + 2);
-      }
+      // (No arrays of vectors: SVE vectors are sizeless.)
+      const auto v0 = hn::Load(b8, bytes[0] + p), v1 = hn::Load(b8, bytes[1] + p);
+      const auto v2 = hn::Load(b8, bytes[2] + p), v3 = hn::Load(b8, bytes[3] + p);
+      const auto v4 = hn::Load(b8, bytes[4] + p), v5 = hn::Load(b8, bytes[5] + p);
+      const auto v6 = hn::Load(b8, bytes[6] + p), v7 = hn::Load(b8, bytes[7] + p);
+      // Bytes 2k and 2k + 1 of pixels p .. p + 7 (lo) and p + 8 .. p + 15 (hi).
+      const auto lo01 = hn::ZipLower(b16, v0, v1), hi01 = hn::ZipUpper(b16, v0, v1);
+      const auto lo23 = hn::ZipLower(b16, v2, v3), hi23 = hn::ZipUpper(b16, v2, v3);
+      const auto lo45 = hn::ZipLower(b16, v4, v5), hi45 = hn::ZipUpper(b16, v4, v5);
+      const auto lo67 = hn::ZipLower(b16, v6, v7), hi67 = hn::ZipUpper(b16, v6, v7);
+      // Bytes 0-3 and 4-7 of four pixels, then both halves of two pixels.
+      const auto store = [&](hn::Vec<decltype(b32)> low, hn::Vec<decltype(b32)> high, int first) {
+        hn::StoreU(hn::ZipLower(b64, low, high), b64, out + x + p + first);
+        hn::StoreU(hn::ZipUpper(b64, low, high), b64, out + x + p + first + 2);
+      };
+      store(hn::ZipLower(b32, lo01, lo23), hn::ZipLower(b32, lo45, lo67), 0);
+      store(hn::ZipUpper(b32, lo01, lo23), hn::ZipUpper(b32, lo45, lo67), 4);
+      store(hn::ZipLower(b32, hi01, hi23), hn::ZipLower(b32, hi45, hi67), 8);
+      store(hn::ZipUpper(b32, hi01, hi23), hn::ZipUpper(b32, hi45, hi67), 12);
     }
   };
   const int begin = std::min(rx, width);
