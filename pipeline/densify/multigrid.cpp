@@ -186,12 +186,12 @@ void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x
   // rides in the smoothing passes: the zero start, the restriction of the residual and the dot
   // product with b are done a row at a time, each as soon as its rows are ready.
   const auto zero_row = [&](int y) { std::fill(x.row(y), x.row(y) + w, 0.0f); };
-  const auto dot_row = [&](int y) {
+  const auto add_dot = [&](int y) {
     if (dot != nullptr) *dot += kernels::dot_row(b.row(y), x.row(y), w);
   };
   if (level + 1 == levels()) {
     gauss_seidel_rows(a, b, x, coarsest_sweeps, true, zero_row, no_row_work);
-    gauss_seidel_rows(a, b, x, coarsest_sweeps, false, no_row_work, dot_row);
+    gauss_seidel_rows(a, b, x, coarsest_sweeps, false, no_row_work, add_dot);
     return;
   }
   // coarse b = restrict_sum(b - A x) after the pre-smoothing; the fine residual is never stored.
@@ -206,7 +206,7 @@ void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x
   // x += P x_coarse, a row at a time just before the smoother first reads it.
   const ImageView<const float> coarse = next.x.cview();
   const auto prolong_row = [&](int y) { from_parents<true>(coarse.row(y / 2), w, x.row(y)); };
-  gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/false, prolong_row, dot_row);
+  gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/false, prolong_row, add_dot);
 }
 
 }  // namespace dco::densify
