@@ -216,18 +216,20 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   }
   report_ = solver_->solve(system_, rhs_.cview(), solution_.view());
   // An iterative solve stopped early can overshoot in a small region that contours cut off
-  // (weakly coupled, so it weighs little in the residual); the exact solution cannot.
-  if (data_high_ > 0.0f)
-    for (int y = 0; y < h; ++y) {
-      float* row = solution_.row(y);
-      for (int x = 0; x < w; ++x) row[x] = std::clamp(row[x], data_low_, data_high_);
-    }
+  // (weakly coupled, so it weighs little in the residual); the exact solution cannot. The
+  // clamped values go to the output in the same pass.
+  dense.resize(w, h);
+  for (int y = 0; y < h; ++y) {
+    float* row = solution_.row(y);
+    float* out = dense.row(y);
+    if (data_high_ > 0.0f)
+      for (int x = 0; x < w; ++x) out[x] = row[x] = std::clamp(row[x], data_low_, data_high_);
+    else
+      std::copy(row, row + w, out);
+  }
   has_solution_ = true;
   timings_.solve_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();
-
-  dense.resize(w, h);
-  dense.copy_from(solution_.cview());
 }
 
 }  // namespace dco::densify
