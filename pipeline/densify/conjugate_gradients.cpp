@@ -67,9 +67,9 @@ void CgScratch::resize(int width, int height) {
 double relative_residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
                          CgScratch& s) {
   s.resize(a.width(), a.height());
-  residual(a, b, x, s.r.view());
+  const double r_norm = std::sqrt(residual_dot(a, b, x, s.r.view()));
   const double b_norm = std::sqrt(dot(b, b));
-  return b_norm > 0 ? std::sqrt(dot(s.r.cview(), s.r.cview())) / b_norm : 0.0;
+  return b_norm > 0 ? r_norm / b_norm : 0.0;
 }
 
 SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<float> x,

@@ -155,6 +155,15 @@ DensifyInputs inputs_of(const Problem& p) {
   return in;
 }
 
+// The system the densifier builds for random_problem(w, h, seed, 0.3).
+GridSystem random_system(int w, int h, unsigned seed) {
+  const Problem p = random_problem(w, h, seed, 0.3);
+  Densifier d(DensifyParams{});
+  Image<float> dense;
+  d.compute(inputs_of(p), dense);
+  return d.last_system();
+}
+
 class DensifierVsDirectSolve : public ::testing::TestWithParam<bool> {};
 
 TEST_P(DensifierVsDirectSolve, MatchesEigenOnRandomProblems) {
@@ -432,11 +441,7 @@ void reference_gauss_seidel(const GridSystem& a, const Image<float>& b, Image<fl
 TEST(Multigrid, GaussSeidelMatchesThePlainColourOrder) {
   for (const auto& [w, h] :
        {std::pair{37, 23}, std::pair{2, 5}, std::pair{1, 1}, std::pair{8, 2}}) {
-    const Problem p = random_problem(w, h, 11, 0.3);
-    Densifier d(DensifyParams{});
-    Image<float> dense;
-    d.compute(inputs_of(p), dense);
-    const GridSystem& a = d.last_system();
+    const GridSystem a = random_system(w, h, 11);
     Image<float> b(w, h), x(w, h), expected(w, h), one_at_a_time(w, h);
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
@@ -500,11 +505,7 @@ TEST(Multigrid, CycleIsThePlainPassesBitForBit) {
   for (const auto& [w, h] :
        {std::pair{97, 61}, std::pair{50, 31}, std::pair{20, 9}, std::pair{33, 1}}) {
     SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
-    const Problem p = random_problem(w, h, 5, 0.3);
-    Densifier d(DensifyParams{});
-    Image<float> dense;
-    d.compute(inputs_of(p), dense);
-    const GridSystem& a = d.last_system();
+    const GridSystem a = random_system(w, h, 5);
     Multigrid mg;
     mg.build(a);
     const Image<float> r = random_vector(w, h, 9, 10.0f);
@@ -526,11 +527,7 @@ TEST(Multigrid, CycleIsThePlainPassesBitForBit) {
 
 TEST(GridSystem, FusedResidualPassesAreThePlainOnesBitForBit) {
   const int w = 45, h = 17;
-  const Problem p = random_problem(w, h, 8, 0.3);
-  Densifier d(DensifyParams{});
-  Image<float> dense;
-  d.compute(inputs_of(p), dense);
-  const GridSystem& a = d.last_system();
+  const GridSystem a = random_system(w, h, 8);
   const Image<float> b = random_vector(w, h, 1, 10.0f), x0 = random_vector(w, h, 2, 30.0f);
   const Image<float> dir = random_vector(w, h, 3, 1.0f);
   Image<float> r(w, h), fused_r(w, h);
