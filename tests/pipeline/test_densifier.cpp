@@ -500,6 +500,18 @@ Image<float> random_vector(int w, int h, unsigned seed, float scale) {
   return v;
 }
 
+// Whether two images hold the same floats bit for bit; names the first pixel that differs.
+::testing::AssertionResult same_pixels(const Image<float>& actual, const Image<float>& expected) {
+  if (actual.width() != expected.width() || actual.height() != expected.height())
+    return ::testing::AssertionFailure() << "sizes differ";
+  for (int y = 0; y < expected.height(); ++y)
+    for (int c = 0; c < expected.width(); ++c)
+      if (actual.at(c, y) != expected.at(c, y))
+        return ::testing::AssertionFailure() << "pixel " << c << "," << y << ": " << actual.at(c, y)
+                                             << " vs " << expected.at(c, y);
+  return ::testing::AssertionSuccess();
+}
+
 TEST(Multigrid, CycleIsThePlainPassesBitForBit) {
   // Several levels, odd sizes, one level only, and a single row.
   for (const auto& [w, h] :
@@ -517,11 +529,8 @@ TEST(Multigrid, CycleIsThePlainPassesBitForBit) {
     mg.cycle(r.cview(), z.view());
     const double rz = mg.cycle_dot(r.cview(), z_dot.view());
     EXPECT_EQ(rz, dot(r.cview(), expected.cview()));
-    for (int y = 0; y < h; ++y)
-      for (int c = 0; c < w; ++c) {
-        ASSERT_EQ(z.at(c, y), expected.at(c, y)) << c << "," << y;
-        ASSERT_EQ(z_dot.at(c, y), expected.at(c, y)) << c << "," << y;
-      }
+    ASSERT_TRUE(same_pixels(z, expected));
+    ASSERT_TRUE(same_pixels(z_dot, expected));
   }
 }
 
@@ -533,8 +542,7 @@ TEST(GridSystem, FusedResidualPassesAreThePlainOnesBitForBit) {
   Image<float> r(w, h), fused_r(w, h);
   residual(a, b.cview(), x0.cview(), r.view());
   EXPECT_EQ(residual_dot(a, b.cview(), x0.cview(), fused_r.view()), dot(r.cview(), r.cview()));
-  for (int y = 0; y < h; ++y)
-    for (int c = 0; c < w; ++c) ASSERT_EQ(fused_r.at(c, y), r.at(c, y)) << c << "," << y;
+  ASSERT_TRUE(same_pixels(fused_r, r));
 
   const float alpha = 0.37f;
   Image<float> x = x0, fused_x = x0;
@@ -544,11 +552,8 @@ TEST(GridSystem, FusedResidualPassesAreThePlainOnesBitForBit) {
   const double rr =
       step_residual_dot(a, b.cview(), alpha, dir.cview(), fused_x.view(), fused_r.view());
   EXPECT_EQ(rr, dot(r.cview(), r.cview()));
-  for (int y = 0; y < h; ++y)
-    for (int c = 0; c < w; ++c) {
-      ASSERT_EQ(fused_x.at(c, y), x.at(c, y)) << c << "," << y;
-      ASSERT_EQ(fused_r.at(c, y), r.at(c, y)) << c << "," << y;
-    }
+  ASSERT_TRUE(same_pixels(fused_x, x));
+  ASSERT_TRUE(same_pixels(fused_r, r));
 }
 
 TEST(Multigrid, TransfersOnOddSizes) {
