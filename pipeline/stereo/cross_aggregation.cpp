@@ -83,19 +83,20 @@ void BlockAggregator::prepare(const CrossArms& arms, int max_block) {
   arms_ = &arms;
   const int w = arms.width();
   const int h = arms.height();
-  int reach_up = 0;
+  reach_up_ = 0;
   reach_down_ = 0;
   for (int y = 0; y < h; ++y) {
-    reach_up = std::max(reach_up, int(*std::max_element(arms.up.row(y), arms.up.row(y) + w)));
+    reach_up_ = std::max(reach_up_, int(*std::max_element(arms.up.row(y), arms.up.row(y) + w)));
     reach_down_ =
         std::max(reach_down_, int(*std::max_element(arms.down.row(y), arms.down.row(y) + w)));
   }
   // Rows y - up - 1 .. y + down must be alive when row y is taken.
-  ring_.resize(w * max_block, std::min(h, reach_up + reach_down_ + 2));
+  ring_.resize(w * max_block, std::min(h, reach_up_ + reach_down_ + 2));
   rows_.resize(static_cast<std::size_t>(h));
   const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(max_block);
   input_.resize(n);
   sums_.resize(n);
+  zeros_.assign(n, 0);
   prefix_.resize(n + static_cast<std::size_t>(max_block));
 }
 

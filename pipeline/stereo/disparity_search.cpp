@@ -2,38 +2,71 @@
 
 #include <algorithm>
 
+#include "dco/core/error.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
 
 namespace dco::stereo {
 
 void DisparitySearch::run(const MatchingImages& images, const CostTables& tables,
-                          const SupportRegions& regions, int passes, int max_d,
-                          WinnerTakesAll& wta) {
+                          const SupportRegions& regions, int passes, int max_d, WinnerTakesAll& wta,
+                          const BatchMask* mask) {
+  if (mask != nullptr &&
+      (mask->height() != images.left.height || mask->batches() * kBatch <= max_d))
+    throw Error("disparity search: the batch mask does not cover the image rows and disparities");
   if (passes == 1) {
-    run_fused(images, tables, regions, max_d, wta);
+    run_fused(images, tables, regions, max_d, wta, mask);
     return;
   }
   slice_.resize(images.left.width, images.left.height);
   scratch_.resize(images.left.width, images.left.height);
   for (int d = 0; d <= max_d; ++d) {
+    const int batch = d / kBatch;
+    if (mask != nullptr) {
+      bool any = false;
+      for (int y = 0; y < images.left.height && !any; ++y) any = mask->searches(y, batch);
+      if (!any) {
+        for (int y = 0; y < images.left.height; ++y) wta.skip_row(y, d, 1);
+        continue;
+      }
+    }
     compute_cost_slice_packed(images.left, images.right, images.census_left, images.census_right,
                               images.shortest_arm, tables, d, slice_.view());
     aggregate_costs(slice_.view(), regions, passes, scratch_);
-    wta.update(slice_.cview(), d);
+    if (mask == nullptr) {
+      wta.update(slice_.cview(), d);
+      continue;
+    }
+    for (int y = 0; y < images.left.height; ++y) {
+      if (!mask->searches(y, batch)) {
+        wta.skip_row(y, d, 1);
+        continue;
+      }
+      lines_.resize(images.left.width, 1);
+      const std::uint32_t* row = slice_.row(y);
+      std::copy(row, row + images.left.width, lines_.row(0));
+      wta.update_row(lines_.row(0), 0, 1, y, d);
+    }
   }
 }
 
 void DisparitySearch::run_fused(const MatchingImages& images, const CostTables& tables,
-                                const SupportRegions& regions, int max_d, WinnerTakesAll& wta) {
+                                const SupportRegions& regions, int max_d, WinnerTakesAll& wta,
+                                const BatchMask* mask) {
   const int w = images.left.width;
+  const int h = images.left.height;
   aggregator_.prepare(regions.arms(), kBatch);
   lines_.resize(w, kBatch);
   const kernels::CostTableView wide = tables.wide();
   const ImageView<const std::uint32_t> recip = regions.reciprocals(PassOrder::kHorizontalFirst);
+  // Rows closer than this are searched in one run: the rows between cost no more than the
+  // second run's own start-up rows would.
+  const int join_gap = aggregator_.reach_up() + aggregator_.reach_down();
   for (int d0 = 0; d0 <= max_d; d0 += kBatch) {
     // Always whole batches, so the kernels run on whole vectors; disparities past max_d are
     // aggregated but never reach the winner-takes-all state.
     const int count = std::min(kBatch, max_d - d0 + 1);
+    const int batch = d0 / kBatch;
+    const auto searched = [&](int y) { return mask == nullptr || mask->searches(y, batch); };
     const auto cost_sums = [&](int y, std::uint32_t* prefix) {
       const kernels::CostRow row{images.left.row(y),         images.right.row(y),
                                  images.census_left.row(y),  images.census_right.row(y),
@@ -42,10 +75,37 @@ void DisparitySearch::run_fused(const MatchingImages& images, const CostTables& 
     };
     // Each row's region means go straight into the winner-takes-all state.
     const auto select = [&](int y, std::uint32_t* means) {
+      if (!searched(y)) {
+        wta.skip_row(y, d0, count);
+        return;
+      }
       kernels::blocks_to_rows(means, w, kBatch, count, lines_.data(), lines_.stride());
       wta.update_row(lines_.row(0), lines_.stride(), count, y, d0);
     };
-    aggregator_.run<true>(kBatch, cost_sums, select, recip);
+    if (mask == nullptr) {
+      aggregator_.run<true>(kBatch, cost_sums, select, recip);
+      continue;
+    }
+    // Runs of searched rows, joined across short gaps; rows outside every run skip the batch.
+    int y = 0;
+    while (y < h) {
+      if (!searched(y)) {
+        wta.skip_row(y, d0, count);
+        ++y;
+        continue;
+      }
+      int end = y + 1;
+      for (int gap = 0; end + gap < h && gap <= join_gap;) {
+        if (searched(end + gap)) {
+          end += gap + 1;
+          gap = 0;
+        } else {
+          ++gap;
+        }
+      }
+      aggregator_.run_rows<true>(kBatch, y, end, cost_sums, select, recip);
+      y = end;
+    }
   }
 }
 

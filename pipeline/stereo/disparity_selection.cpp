@@ -48,6 +48,16 @@ void WinnerTakesAll::update_row(const std::uint16_t* costs, std::ptrdiff_t strid
   kernels::wta_update_row(costs, stride, count, w, d, row);
 }
 
+void WinnerTakesAll::skip_row(int y, int d, int count) {
+  std::uint16_t* above = above_.row(y);
+  std::uint16_t* prev1 = prev1_.row(y);
+  std::uint16_t* prev2 = prev2_.row(y);
+  std::uint16_t* runmin = runmin_.row(y);
+  const std::int16_t* disp = disp_.row(y);
+  for (int x = 0; x < best_.width(); ++x)
+    kernels::pixel::wta_skip(d, count, above[x], prev1[x], prev2[x], runmin[x], disp[x]);
+}
+
 struct SpeckleFilter::Buffer {
   cv::Mat mat;
 };

@@ -62,6 +62,7 @@ TEST(GridStages, DepthPipelineWithGridStagesIsTheCpuPipelineBitForBit) {
   const synthetic::SceneRenderer scene(synthetic::preset("hand", 704, 396));
   pipeline::PipelineParams params;
   params.stereo.max_disparity = synthetic::covering_max_disparity(scene.config());
+  params.stereo.search_range = "full";  // what "auto" means on the grid
   pipeline::StageFactories grid;
   grid.stereo = [](const stereo::StereoParams& p) {
     return std::make_unique<GridStereoMatcher<HostGrid>>(p);

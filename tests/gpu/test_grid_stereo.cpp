@@ -47,6 +47,14 @@ TEST(GridStereo, HalfResolutionSyntheticFramesAreTheCpuStageBitForBit) {
   expect_same_as_cpu(testing::synthetic_pair("boxes", 704, 396, /*color=*/false));
 }
 
+TEST(GridStereo, RejectsTheGuidedSearchWhichOnlyTheCpuStageHas) {
+  stereo::StereoParams params;
+  params.search_range = "guided";
+  EXPECT_THROW(GridStereoMatcher<HostGrid>{params}, Error);
+  params.search_range = "auto";
+  EXPECT_NO_THROW(GridStereoMatcher<HostGrid>{params});
+}
+
 TEST(GridStereo, BadInputIsTheCpuStagesError) {
   GridStereoMatcher<HostGrid> grid(stereo::StereoParams{});
   Image<std::uint8_t> a(64, 32), b(63, 32);

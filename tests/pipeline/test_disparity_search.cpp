@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cstdint>
 #include <random>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
 #include "dco/pipeline/stereo/census.hpp"
@@ -141,6 +144,16 @@ void expect_same(ImageView<const T> a, ImageView<const T> b, const char* what) {
       ASSERT_EQ(a.row(y)[x], b.row(y)[x]) << what << " at " << x << "," << y;
 }
 
+// Everything the checks after the search read.
+void expect_same_state(const WinnerTakesAll& wta, const WinnerTakesAll& expected) {
+  expect_same(wta.left_disparity(), expected.left_disparity(), "left disparity");
+  expect_same(wta.right_disparity(), expected.right_disparity(), "right disparity");
+  expect_same(wta.best_cost(), expected.best_cost(), "best cost");
+  expect_same(wta.second_cost(), expected.second_cost(), "second cost");
+  expect_same(wta.cost_below(), expected.cost_below(), "cost below");
+  expect_same(wta.cost_above(), expected.cost_above(), "cost above");
+}
+
 TEST(DisparitySearch, EqualsCostAggregationAndWinnerTakesAllSliceBySlice) {
   for (const int channels : {1, 3}) {
     for (const int passes : {1, 2}) {
@@ -168,15 +181,94 @@ TEST(DisparitySearch, EqualsCostAggregationAndWinnerTakesAllSliceBySlice) {
         search.run(p.images(), p.tables, regions, passes, max_d, wta);
         SCOPED_TRACE(testing::Message()
                      << "channels " << channels << " passes " << passes << " max_d " << max_d);
-        expect_same(wta.left_disparity(), expected.left_disparity(), "left disparity");
-        expect_same(wta.right_disparity(), expected.right_disparity(), "right disparity");
-        expect_same(wta.best_cost(), expected.best_cost(), "best cost");
-        expect_same(wta.second_cost(), expected.second_cost(), "second cost");
-        expect_same(wta.cost_below(), expected.cost_below(), "cost below");
-        expect_same(wta.cost_above(), expected.cost_above(), "cost above");
+        expect_same_state(wta, expected);
       }
     }
   }
+}
+
+// Rows search random runs of batches: runs and gaps both shorter and longer than the arms'
+// reach, so the fused search both joins runs and starts new ones mid-image.
+BatchMask random_mask(int height, int batches, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> length(1, 20), coin(0, 1);
+  BatchMask mask;
+  mask.reset(height, batches, false);
+  for (int b = 0; b < batches; ++b)
+    for (int y = 0; y < height;) {
+      const int n = length(rng);
+      const bool on = coin(rng) != 0;
+      for (int k = 0; k < n && y < height; ++k, ++y)
+        if (on) mask.set(y, b);
+    }
+  return mask;
+}
+
+TEST(DisparitySearch, WithABatchMaskEqualsTheFullSearchWithTheOtherBatchesLeftOut) {
+  for (const int passes : {1, 2}) {
+    const int w = 52, h = 61;
+    const Pair p(w, h, 3, 7, 11u);
+    AggregationScratch scratch;
+    SupportRegions regions;
+    regions.build(p.arms, scratch);
+    const int max_d = 40;  // three batches, the last one partial
+    const int batches = max_d / DisparitySearch::kBatch + 1;
+    BatchMask all, none;
+    all.reset(h, batches, true);
+    none.reset(h, batches, false);
+    for (const auto& [name, mask] : {std::pair{"random 1", random_mask(h, batches, 1)},
+                                     std::pair{"random 2", random_mask(h, batches, 2)},
+                                     std::pair{"all", all}, std::pair{"none", none}}) {
+      WinnerTakesAll expected;
+      expected.reset(w, h);
+      Image<std::uint32_t> slice(w, h);
+      std::vector<std::uint16_t> row(w);
+      for (int d = 0; d <= max_d; ++d) {
+        compute_cost_slice(p.left.cview(), p.right.cview(), p.census_left.cview(),
+                           p.census_right.cview(), p.shortest.cview(), p.tables, d, slice.view());
+        for (int i = 0; i < passes; ++i)
+          brute_force_mean(slice.view(), p.arms,
+                           i % 2 == 0 ? PassOrder::kHorizontalFirst : PassOrder::kVerticalFirst);
+        for (int y = 0; y < h; ++y) {
+          if (!mask.searches(y, d / DisparitySearch::kBatch)) {
+            expected.skip_row(y, d, 1);
+            continue;
+          }
+          std::copy(slice.row(y), slice.row(y) + w, row.begin());
+          expected.update_row(row.data(), 0, 1, y, d);
+        }
+      }
+      WinnerTakesAll wta;
+      wta.reset(w, h);
+      DisparitySearch search;
+      search.run(p.images(), p.tables, regions, passes, max_d, wta, &mask);
+      SCOPED_TRACE(testing::Message() << "passes " << passes << ", mask " << name);
+      expect_same_state(wta, expected);
+      if (std::string_view(name) == "all") {
+        WinnerTakesAll unmasked;
+        unmasked.reset(w, h);
+        search.run(p.images(), p.tables, regions, passes, max_d, unmasked);
+        expect_same(wta.left_disparity(), unmasked.left_disparity(), "all vs no mask");
+        expect_same(wta.cost_above(), unmasked.cost_above(), "all vs no mask");
+      }
+    }
+  }
+}
+
+TEST(DisparitySearch, RejectsAMaskThatDoesNotCoverTheSearch) {
+  const Pair p(20, 9, 1, 5, 3u);
+  AggregationScratch scratch;
+  SupportRegions regions;
+  regions.build(p.arms, scratch);
+  WinnerTakesAll wta;
+  wta.reset(20, 9);
+  DisparitySearch search;
+  BatchMask short_rows, few_batches;
+  short_rows.reset(8, 2, true);
+  few_batches.reset(9, 1, true);
+  EXPECT_THROW(search.run(p.images(), p.tables, regions, 1, 17, wta, &short_rows), Error);
+  EXPECT_THROW(search.run(p.images(), p.tables, regions, 1, 17, wta, &few_batches), Error);
+  EXPECT_NO_THROW(search.run(p.images(), p.tables, regions, 1, 15, wta, &few_batches));
 }
 
 }  // namespace

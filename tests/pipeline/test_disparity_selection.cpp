@@ -1,5 +1,6 @@
 #include "dco/pipeline/stereo/disparity_selection.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <initializer_list>
 #include <random>
@@ -157,6 +158,65 @@ TEST(WinnerTakesAll, MatchesBruteForceOnRandomVolumes) {
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) ASSERT_EQ(wta.left_disparity().at(x, y), first.at(x, y));
   }
+}
+
+// Each row leaves random runs of disparities out (skip_row); the state must be that of a search
+// over the remaining ones: a neighbour left out gives no subpixel cost, and neither can win or
+// be second.
+TEST(WinnerTakesAll, SkippedDisparitiesAreLeftOutOfTheSearch) {
+  std::mt19937 rng(23);
+  const int w = 29, h = 12, disparities = 21;
+  std::uniform_int_distribution<int> cost(0, 40), run(1, 4), coin(0, 2);
+  std::vector<Image<std::uint16_t>> vol;
+  for (int d = 0; d < disparities; ++d) {
+    Image<std::uint16_t> s(w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) s.at(x, y) = static_cast<std::uint16_t>(cost(rng));
+    vol.push_back(std::move(s));
+  }
+  std::vector<std::vector<bool>> searched(h, std::vector<bool>(disparities));
+  WinnerTakesAll wta;
+  wta.reset(w, h);
+  std::vector<std::uint16_t> costs(static_cast<std::size_t>(w) * 4);
+  for (int y = 0; y < h; ++y)
+    for (int d = 0; d < disparities;) {
+      const int count = std::min(run(rng), disparities - d);
+      const bool search = coin(rng) != 0;
+      for (int k = 0; k < count; ++k) searched[y][d + k] = search;
+      if (search) {
+        for (int k = 0; k < count; ++k)
+          for (int x = 0; x < w; ++x) costs[k * w + x] = vol[d + k].at(x, y);
+        wta.update_row(costs.data(), w, count, y, d);
+      } else {
+        wta.skip_row(y, d, count);
+      }
+      d += count;
+    }
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const auto at = [&](int d) -> std::uint32_t {
+        return d >= 0 && d < disparities && searched[y][d] ? vol[d].at(x, y) : kNo;
+      };
+      int best_d = kInv;
+      std::uint32_t best = kNo;
+      for (int d = 0; d < disparities; ++d)
+        if (at(d) < best) best = at(d), best_d = d;
+      std::uint32_t second = kNo;
+      for (int d = 0; d < disparities; ++d)
+        if ((d < best_d - 1 || d > best_d + 1) && at(d) < second) second = at(d);
+      SCOPED_TRACE(testing::Message() << x << "," << y);
+      ASSERT_EQ(wta.left_disparity().at(x, y), best_d);
+      ASSERT_EQ(wta.best_cost().at(x, y), best);
+      ASSERT_EQ(wta.second_cost().at(x, y), second);
+      ASSERT_EQ(wta.cost_below().at(x, y), best_d == kInv ? kNo : at(best_d - 1));
+      ASSERT_EQ(wta.cost_above().at(x, y), best_d == kInv ? kNo : at(best_d + 1));
+      int right_d = kInv;
+      std::uint32_t right_best = kNo;
+      for (int d = 0; d < disparities && x + d < w; ++d)
+        if (searched[y][d] && vol[d].at(x + d, y) < right_best)
+          right_best = vol[d].at(x + d, y), right_d = d;
+      ASSERT_EQ(wta.right_disparity().at(x, y), right_d);
+    }
 }
 
 TEST(WinnerTakesAll, ResetClearsEverything) {

@@ -9,6 +9,7 @@
 #include <limits>
 #include <new>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -540,11 +541,72 @@ TEST(CpuStereoMatcher, RepeatedComputeIsBitIdentical) {
   }
 }
 
+// A wide search (13 batches of 16 at full size, 7 at half) guided by the half-size pass finds
+// what the full search finds, while searching at most half of the (row, batch) pairs: the scene
+// has two disparities.
+TEST(CpuStereoMatcher, GuidedSearchFindsWhatTheFullSearchFinds) {
+  for (const bool hd : {false, true}) {
+    const Scene s = hd ? hd_scene(3) : small_scene(3);
+    StereoParams params;
+    params.max_disparity = 200;
+    params.search_range = "full";
+    const auto full = make_cpu_stereo_matcher(params);
+    params.search_range = "guided";
+    const auto guided = make_cpu_stereo_matcher(params);
+    Image<float> a, b;
+    full->compute(s.left.cview(), s.right.cview(), a);
+    guided->compute(s.left.cview(), s.right.cview(), b);
+    EXPECT_EQ(full->last_timings().searched_fraction, 1.0);
+    EXPECT_GT(guided->last_timings().searched_fraction, 0.0);
+    EXPECT_LT(guided->last_timings().searched_fraction, 0.5);
+    long same = 0;
+    for (int y = 0; y < a.height(); ++y)
+      for (int x = 0; x < a.width(); ++x)
+        same += std::memcmp(&a.at(x, y), &b.at(x, y), sizeof(float)) == 0;
+    EXPECT_GT(same, 0.99 * a.width() * a.height()) << (hd ? "half size" : "full size");
+    const Score r = score(b, s);
+    EXPECT_EQ(r.bad_values, 0);
+    EXPECT_GT(r.accurate, 0.95);
+  }
+}
+
+// "auto" guides only searches of more than four batches; a guide too small to run searches all.
+TEST(CpuStereoMatcher, AutoSearchRangeGuidesOnlyWideSearches) {
+  const Scene s = small_scene(1);
+  Image<float> out;
+  for (const auto& [max_disparity, range, guided] : {std::tuple{63, "auto", false},
+                                                     {64, "auto", true},
+                                                     {200, "auto", true},
+                                                     {200, "full", false},
+                                                     {40, "guided", true}}) {
+    StereoParams params;
+    params.max_disparity = max_disparity;
+    params.search_range = range;
+    const auto matcher = make_cpu_stereo_matcher(params);
+    matcher->compute(s.left.cview(), s.right.cview(), out);
+    EXPECT_EQ(matcher->last_timings().searched_fraction < 1.0, guided)
+        << max_disparity << " " << range;
+  }
+  // 24x12 halves to 12x6, smaller than the 9x7 census window: no guide.
+  Image<std::uint8_t> tiny(24, 12);
+  tiny.fill(100);
+  StereoParams params;
+  params.max_disparity = 20;
+  params.search_range = "guided";
+  const auto matcher = make_cpu_stereo_matcher(params);
+  matcher->compute(tiny.cview(), tiny.cview(), out);
+  EXPECT_EQ(matcher->last_timings().searched_fraction, 1.0);
+}
+
 TEST(CpuStereoMatcher, SecondComputeOnTheSameGeometryDoesNotAllocate) {
   for (int channels : {1, 3})
     for (bool hd : {false, true}) {
       const Scene s = hd ? hd_scene(channels) : small_scene(channels);
-      const auto matcher = make_cpu_stereo_matcher(StereoParams{});
+      // A search wide enough for the guided search of "auto", whose half-size pass must not
+      // allocate either.
+      StereoParams params;
+      params.max_disparity = 150;
+      const auto matcher = make_cpu_stereo_matcher(params);
       Image<float> disp;
       // The first call sizes every buffer, which the counters must see.
       testing::start_counting_allocations();

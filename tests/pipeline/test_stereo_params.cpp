@@ -46,6 +46,7 @@ TEST(StereoParams, ValidateRejectsEachInvalidField) {
        "internal_resolution"},
       {"resolution empty", [](StereoParams& p) { p.internal_resolution = ""; },
        "internal_resolution"},
+      {"search range partial", [](StereoParams& p) { p.search_range = "partial"; }, "search_range"},
       {"lambda_ad 0", [](StereoParams& p) { p.lambda_ad = 0; }, "lambda_ad"},
       {"lambda_census < 0", [](StereoParams& p) { p.lambda_census = -1; }, "lambda_census"},
       {"gamma_l < 0", [](StereoParams& p) { p.gamma_l = -0.1; }, "gamma_l"},

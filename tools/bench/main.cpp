@@ -281,7 +281,10 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
                               const dco::pipeline::StageFactories& cuda) {
   namespace pl = dco::pipeline;
   BackendCheck c;
-  const auto cpu_stage = dco::stereo::make_cpu_stereo_matcher(params.stereo);
+  // The CUDA stage searches every disparity ("auto" is "full" there); so does the CPU one here.
+  dco::stereo::StereoParams full_search = params.stereo;
+  full_search.search_range = "full";
+  const auto cpu_stage = dco::stereo::make_cpu_stereo_matcher(full_search);
   const auto cuda_stage = cuda.stereo(params.stereo);
   const auto cpu_contour = dco::contour::make_cpu_contour_extractor(params.contour);
   const auto cuda_contour = cuda.contour(params.contour);

@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/gpu/grid_transfers.hpp"
@@ -29,6 +30,9 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
   explicit GridStereoMatcher(const stereo::StereoParams& params, GridArgs&&... grid_args)
       : params_(params), grid_(std::forward<GridArgs>(grid_args)...) {
     stereo::validate(params_);
+    // The grid search evaluates the whole cost volume in one pass; "auto" means full here.
+    if (params_.search_range == "guided")
+      throw Error("stereo.search_range = guided is a CPU-backend option; use auto or full here");
     boundary_rule_ = stereo::boundary_rule(params_);
     model_ = {params_.lambda_ad, params_.lambda_census, params_.gamma_l, params_.epsilon};
   }

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cassert>
 #include <cstdint>
 #include <vector>
@@ -90,14 +91,27 @@ class BlockAggregator {
   // values.
   template <bool kFillsPrefix = false, class Fill, class Take>
   void run(int block, Fill&& fill, Take&& take, ImageView<const std::uint32_t> reciprocals = {}) {
+    run_rows<kFillsPrefix>(block, 0, arms_->height(), fill, take, reciprocals);
+  }
+
+  // The same for rows [y_begin, y_end) only: take receives exactly what run gives those rows,
+  // and fill is asked for just the rows their vertical arms reach.
+  template <bool kFillsPrefix = false, class Fill, class Take>
+  void run_rows(int block, int y_begin, int y_end, Fill&& fill, Take&& take,
+                ImageView<const std::uint32_t> reciprocals = {}) {
     const CrossArms& a = *arms_;
     const int w = a.width();
     const int h = a.height();
-    for (int i = 0; i < h; ++i) rows_[i] = ring_.row(i % ring_.height());
-    for (int ya = 0; ya < h + reach_down_; ++ya) {
-      if (ya < h) {
+    const int first = std::max(0, y_begin - reach_up_);
+    const int last = std::min(h, y_end + reach_down_);  // rows filled: [first, last)
+    for (int i = first; i < last; ++i) rows_[i] = ring_.row(i % ring_.height());
+    // The running column sums start at `first`: a region whose top is the row above it
+    // subtracts nothing.
+    if (first > 0) rows_[first - 1] = zeros_.data();
+    for (int ya = first; ya < y_end + reach_down_; ++ya) {
+      if (ya < last) {
         // Horizontal sums plus the row above's running column sums.
-        const std::uint32_t* above = ya > 0 ? rows_[ya - 1] : nullptr;
+        const std::uint32_t* above = ya > first ? rows_[ya - 1] : nullptr;
         if constexpr (kFillsPrefix) {
           fill(ya, prefix_.data());
           kernels::block_window_sums_row(prefix_.data(), a.left.row(ya), a.right.row(ya), w, block,
@@ -110,7 +124,7 @@ class BlockAggregator {
       }
       // Row yb has all of its vertical arms' rows once row yb + reach_down is in.
       const int yb = ya - reach_down_;
-      if (yb < 0) continue;
+      if (yb < y_begin) continue;
       kernels::block_vertical_sums_row(rows_.data(), yb, a.up.row(yb), a.down.row(yb), w, block,
                                        reciprocals.empty() ? nullptr : reciprocals.row(yb),
                                        sums_.data());
@@ -118,12 +132,17 @@ class BlockAggregator {
     }
   }
 
+  // Rows above / below a row that its vertical arms reach, at most.
+  int reach_up() const { return reach_up_; }
+  int reach_down() const { return reach_down_; }
+
  private:
   const CrossArms* arms_ = nullptr;
-  int reach_down_ = 0;
+  int reach_up_ = 0, reach_down_ = 0;
   Image<std::uint32_t> ring_;
   std::vector<std::uint32_t*> rows_;  // image row -> its ring row
   std::vector<std::uint32_t> input_, prefix_, sums_;
+  std::vector<std::uint32_t> zeros_;  // the running sums above a run's first row
 };
 
 }  // namespace dco::stereo

@@ -6,6 +6,7 @@
 #include "dco/pipeline/stereo/cross_aggregation.hpp"
 #include "dco/pipeline/stereo/disparity_selection.hpp"
 #include "dco/pipeline/stereo/matching_cost.hpp"
+#include "dco/pipeline/stereo/search_guide.hpp"
 
 namespace dco::stereo {
 
@@ -21,17 +22,23 @@ struct MatchingImages {
 // per disparity. With one aggregation pass the stages are fused row by row over kBatch
 // disparities at a time, aggregated with the disparities innermost: every disparity of a pixel
 // shares its arms, so the sums are contiguous vector loads instead of per-pixel gathers.
+//
+// With a mask, row y considers only the batches mask.searches(y, b): the winner-takes-all state
+// is that of the full search with every other cost left out (WinnerTakesAll::skip_row), and the
+// fused path computes costs only for the rows a searched batch's regions reach.
 class DisparitySearch {
  public:
-  // `wta` must be reset to the images' size.
+  // `wta` must be reset to the images' size; `mask`, when given, covers the images' rows and
+  // every batch up to max_d.
   void run(const MatchingImages& images, const CostTables& tables, const SupportRegions& regions,
-           int passes, int max_d, WinnerTakesAll& wta);
+           int passes, int max_d, WinnerTakesAll& wta, const BatchMask* mask = nullptr);
 
   static constexpr int kBatch = 16;
 
  private:
   void run_fused(const MatchingImages& images, const CostTables& tables,
-                 const SupportRegions& regions, int max_d, WinnerTakesAll& wta);
+                 const SupportRegions& regions, int max_d, WinnerTakesAll& wta,
+                 const BatchMask* mask);
 
   BlockAggregator aggregator_;
   Image<std::uint16_t> lines_;  // one row per disparity of the batch

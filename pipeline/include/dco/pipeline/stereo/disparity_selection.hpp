@@ -27,6 +27,9 @@ class WinnerTakesAll {
   // Row y of the slices of disparities d .. d + count - 1 at once, that of d + k at
   // costs + k * stride: the same result as `count` calls of update.
   void update_row(const std::uint16_t* costs, std::ptrdiff_t stride, int count, int y, int d);
+  // Row y leaves disparities d .. d + count - 1 out of its search: the same result as
+  // update_row with every cost kNoCost.
+  void skip_row(int y, int d, int count);
 
   ImageView<const std::int16_t> left_disparity() const { return disp_.view(); }
   ImageView<const std::int16_t> right_disparity() const { return disp_right_.view(); }

@@ -18,6 +18,9 @@ struct StereoTimings {
   double sparse_ms = 0;    // subpixel fit and the map at input resolution
   double boundary_ms = 0;  // boundary refinement at input resolution (half-size matching only)
   double total_ms = 0;
+  // Share of the (internal row, 16-disparity batch) pairs searched: 1 for a full search, less
+  // when a quarter-size pass guided it (StereoParams::search_range; its time is in initial_ms).
+  double searched_fraction = 1;
 };
 
 // The sparse stage: a rectified pair in, a disparity map out that carries values only where

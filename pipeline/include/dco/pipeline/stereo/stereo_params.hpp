@@ -17,6 +17,12 @@ struct StereoParams {
   // "auto": half width and height when the input is wider than 640 px, else full; "full"; "half".
   std::string internal_resolution = "auto";
   bool use_color = true;  // AD and arms on colour when the input has three channels
+  // Which disparities each row searches. "full": all of 0..max. "guided": a pass at half the
+  // internal size first, then each internal row searches only the 16-disparity batches that its
+  // map reaches near the row (search_guide.hpp); images too small for that pass search all.
+  // "auto": guided on the CPU backend when the search spans more than four batches, full on
+  // CUDA, whose cost volume is not the bottleneck.
+  std::string search_range = "auto";
 
   // Matching cost, Eq. 1.
   double lambda_ad = 10.0;

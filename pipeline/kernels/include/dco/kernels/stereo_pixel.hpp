@@ -163,6 +163,21 @@ DCO_HD inline void wta_feed(WtaState& s, std::uint16_t c, int d) {
   wta_feed(c, d, s.best, s.second, s.below, s.above, s.prev1, s.prev2, s.runmin, s.disp);
 }
 
+// Disparities d .. d + count - 1 (count >= 1) left out of the search: the state that `count`
+// wta_feed calls with kNoCost leave (no cost there can win, be second, or serve a subpixel fit).
+template <class U16, class I16>
+DCO_HD void wta_skip(int d, int count, U16& above, U16& prev1, U16& prev2, U16& runmin,
+                     const I16& disp) {
+  if (prev2 < runmin) runmin = prev2;
+  if (count >= 2 && prev1 < runmin) runmin = prev1;
+  if (d == disp + 1) above = kNoCost;
+  prev2 = count >= 2 ? kNoCost : prev1;
+  prev1 = kNoCost;
+}
+DCO_HD inline void wta_skip(WtaState& s, int d, int count) {
+  wta_skip(d, count, s.above, s.prev1, s.prev2, s.runmin, s.disp);
+}
+
 // Left-right check: the right image's winner at x - d agrees with d within max_diff.
 DCO_HD inline bool left_right_agree(int x, int d, const std::int16_t* right_row, int max_diff) {
   const int xr = x - d;
