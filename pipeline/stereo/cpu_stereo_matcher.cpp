@@ -104,7 +104,7 @@ class CpuStereoMatcher final : public StereoMatcher {
   // each internal row which disparity batches to search (search_guide.hpp). False: search them all.
   bool guide_search() {
     if (params_.search_range == "full") return false;
-    // Up to four batches the quarter-size pass costs about what it saves (street scenes at
+    // Up to four batches the half-size pass costs about what it saves (street scenes at
     // 96 px search about three quarters of their batches even when guided).
     if (params_.search_range == "auto" && max_d_ + 1 <= 4 * DisparitySearch::kBatch) return false;
     const int cw = w_ / 2, ch = h_ / 2;

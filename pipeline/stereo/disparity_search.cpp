@@ -19,6 +19,7 @@ void DisparitySearch::run(const MatchingImages& images, const CostTables& tables
   }
   slice_.resize(images.left.width, images.left.height);
   scratch_.resize(images.left.width, images.left.height);
+  if (mask != nullptr) lines_.resize(images.left.width, 1);  // one narrowed row at a time
   for (int d = 0; d <= max_d; ++d) {
     const int batch = d / kBatch;
     if (mask != nullptr) {
@@ -41,7 +42,6 @@ void DisparitySearch::run(const MatchingImages& images, const CostTables& tables
         wta.skip_row(y, d, 1);
         continue;
       }
-      lines_.resize(images.left.width, 1);
       const std::uint32_t* row = slice_.row(y);
       std::copy(row, row + images.left.width, lines_.row(0));
       wta.update_row(lines_.row(0), 0, 1, y, d);

@@ -144,6 +144,15 @@ void expect_same(ImageView<const T> a, ImageView<const T> b, const char* what) {
       ASSERT_EQ(a.row(y)[x], b.row(y)[x]) << what << " at " << x << "," << y;
 }
 
+// Disparity d's costs, aggregated over `passes` alternating passes by brute force.
+void reference_slice(const Pair& p, int passes, int d, ImageView<std::uint32_t> slice) {
+  compute_cost_slice(p.left.cview(), p.right.cview(), p.census_left.cview(), p.census_right.cview(),
+                     p.shortest.cview(), p.tables, d, slice);
+  for (int i = 0; i < passes; ++i)
+    brute_force_mean(slice, p.arms,
+                     i % 2 == 0 ? PassOrder::kHorizontalFirst : PassOrder::kVerticalFirst);
+}
+
 // Everything the checks after the search read.
 void expect_same_state(const WinnerTakesAll& wta, const WinnerTakesAll& expected) {
   expect_same(wta.left_disparity(), expected.left_disparity(), "left disparity");
@@ -168,11 +177,7 @@ TEST(DisparitySearch, EqualsCostAggregationAndWinnerTakesAllSliceBySlice) {
         expected.reset(w, h);
         Image<std::uint32_t> slice(w, h);
         for (int d = 0; d <= max_d; ++d) {
-          compute_cost_slice(p.left.cview(), p.right.cview(), p.census_left.cview(),
-                             p.census_right.cview(), p.shortest.cview(), p.tables, d, slice.view());
-          for (int i = 0; i < passes; ++i)
-            brute_force_mean(slice.view(), p.arms,
-                             i % 2 == 0 ? PassOrder::kHorizontalFirst : PassOrder::kVerticalFirst);
+          reference_slice(p, passes, d, slice.view());
           expected.update(slice.cview(), d);
         }
         WinnerTakesAll wta;
@@ -224,11 +229,7 @@ TEST(DisparitySearch, WithABatchMaskEqualsTheFullSearchWithTheOtherBatchesLeftOu
       Image<std::uint32_t> slice(w, h);
       std::vector<std::uint16_t> row(w);
       for (int d = 0; d <= max_d; ++d) {
-        compute_cost_slice(p.left.cview(), p.right.cview(), p.census_left.cview(),
-                           p.census_right.cview(), p.shortest.cview(), p.tables, d, slice.view());
-        for (int i = 0; i < passes; ++i)
-          brute_force_mean(slice.view(), p.arms,
-                           i % 2 == 0 ? PassOrder::kHorizontalFirst : PassOrder::kVerticalFirst);
+        reference_slice(p, passes, d, slice.view());
         for (int y = 0; y < h; ++y) {
           if (!mask.searches(y, d / DisparitySearch::kBatch)) {
             expected.skip_row(y, d, 1);

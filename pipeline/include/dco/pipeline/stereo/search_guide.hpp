@@ -35,16 +35,17 @@ struct GuideRule {
   double min_valid = 0.2;  // fewer coarse values than this share of the rows reached: search all
 };
 
-// From the sparse map of a half-size pass over the internal images (coarse pixels, +inf or NaN
-// where it has no value): each internal row searches the batches holding the disparities 2v ±
-// margin of every coarse value v within `reach` rows of it, or every batch when too few coarse
-// values are there to go by. max_d: the largest internal disparity searched.
-// Working memory of guide_batches, kept across frames.
+// Working memory of guide_batches.
 struct GuideScratch {
   std::vector<int> reached, valid;
   std::vector<std::uint8_t> row_bits;
 };
 
+// From the sparse map of a half-size pass over the internal images (coarse pixels, +inf or NaN
+// where it has no value): each internal row searches the batches holding the disparities 2v ±
+// margin of every coarse value v within `reach` rows of it, or every batch when too few coarse
+// values are there to go by. max_d: the largest internal disparity searched. `scratch` is resized
+// on first use and kept across frames.
 void guide_batches(ImageView<const float> coarse, int height, int max_d, const GuideRule& rule,
                    GuideScratch& scratch, BatchMask& mask);
 

@@ -19,7 +19,7 @@ struct StereoTimings {
   double boundary_ms = 0;  // boundary refinement at input resolution (half-size matching only)
   double total_ms = 0;
   // Share of the (internal row, 16-disparity batch) pairs searched: 1 for a full search, less
-  // when a quarter-size pass guided it (StereoParams::search_range; its time is in initial_ms).
+  // when a half-size pass guided it (StereoParams::search_range; its time is in initial_ms).
   double searched_fraction = 1;
 };
 
