@@ -43,8 +43,8 @@ class CpuSystemSolver final : public SystemSolver {
     prolong(coarse_solution_.cview(), x);
     // The sweeps and iterations at full size put the detail inside each 2x2 block back: a
     // contour through a block, an edge of the image guidance, a single sparse pixel.
-    for (int sweep = 0; sweep < params_.fine_sweeps; ++sweep)
-      gauss_seidel(a, b, x, 1, sweep % 2 == 0);
+    // One pass over the rows does all the sweeps (red then black each time).
+    if (params_.fine_sweeps > 0) gauss_seidel(a, b, x, params_.fine_sweeps, true);
     if (params_.fine_iterations > 0) {
       const SolverReport fine = solve_pcg(a, b, x, params_.multigrid ? &fine_multigrid_ : nullptr,
                                           params_.fine_iterations, params_.tolerance, scratch_);

@@ -144,13 +144,20 @@ TEST(DaemonConfig, ShippedConfigLoads) {
   EXPECT_TRUE(c.config.ring_path.empty()) << "under systemd the ring belongs in RuntimeDirectory";
 }
 
-TEST(DaemonConfig, ReadmeDocumentsEveryKey) {
+TEST(DaemonConfig, ReadmeDocumentsEveryKeyWithItsDefault) {
   std::ifstream in(std::filesystem::path(DCO_SOURCE_DIR) / "README.md");
   std::stringstream readme;
   readme << in.rdbuf();
-  for (const auto& [key, value] : load_config({}).values)
-    EXPECT_NE(readme.str().find("| `" + key + "` |"), std::string::npos)
+  const std::string text = readme.str();
+  for (const auto& [key, value] : load_config({}).values) {
+    const std::string row = "| `" + key + "` | ";
+    const std::size_t at = text.find(row);
+    ASSERT_NE(at, std::string::npos)
         << key << " is missing from the README's configuration reference";
+    const std::size_t end = text.find(" |", at + row.size());
+    EXPECT_EQ(text.substr(at + row.size(), end - at - row.size()), value)
+        << "the README gives another default for " << key;
+  }
 }
 
 TEST(Logger, LevelsParseAndFilter) {

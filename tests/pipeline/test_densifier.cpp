@@ -365,13 +365,24 @@ TEST(Densifier, HalfResolutionSolveKeepsAContourOnAnOddColumn) {
   EXPECT_GT(no_sweeps.last_report().output_residual, d.last_report().output_residual);
   const double without_sweeps = mean_difference(half);
   EXPECT_GT(without_sweeps, with_sweeps);
-  // Conjugate-gradient iterations at full size (the default refinement) get closer still.
+  // Conjugate-gradient iterations at full size get closer still.
   params.fine_iterations = 2;
   Densifier iterated(params);
   iterated.compute(in, half);
   EXPECT_GE(iterated.last_report().fine_iterations, 1);
   EXPECT_LE(iterated.last_report().fine_iterations, 2);
   EXPECT_LT(iterated.last_report().output_residual, d.last_report().output_residual);
+  EXPECT_LT(mean_difference(half), with_sweeps);
+  for (int y = 0; y < h; ++y) EXPECT_GT(half.at(edge - 1, y) - half.at(edge + 1, y), 27.0f) << y;
+  // So do the defaults: the sweeps, then one iteration.
+  DensifyParams defaults;
+  defaults.background_fill = 0;
+  defaults.solve_resolution = "half";
+  ASSERT_GT(defaults.fine_sweeps, 0);
+  ASSERT_EQ(defaults.fine_iterations, 1);
+  Densifier refined(defaults);
+  refined.compute(in, half);
+  EXPECT_EQ(refined.last_report().fine_iterations, 1);
   EXPECT_LT(mean_difference(half), with_sweeps);
   for (int y = 0; y < h; ++y) EXPECT_GT(half.at(edge - 1, y) - half.at(edge + 1, y), 27.0f) << y;
 }

@@ -59,8 +59,7 @@ class GridSystemSolver final : public densify::SystemSolver {
       report =
           pcg(coarse_, coarse_b_.data(), coarse_x_.data(), params_.max_iterations, coarse_space_);
       grid_.launch(w, h, passes::Prolong{coarse_x_.data(), cw, fine_x_.data(), w, false});
-      for (int sweep = 0; sweep < params_.fine_sweeps; ++sweep)
-        gauss_seidel(fine_.view(), fine_b_.data(), fine_x_.data(), 1, sweep % 2 == 0);
+      gauss_seidel(fine_.view(), fine_b_.data(), fine_x_.data(), params_.fine_sweeps, true);
       if (params_.fine_iterations > 0) {
         const densify::SolverReport refined =
             pcg(fine_, fine_b_.data(), fine_x_.data(), params_.fine_iterations, fine_space_);
