@@ -19,7 +19,6 @@ void DisparitySearch::run(const MatchingImages& images, const CostTables& tables
   }
   slice_.resize(images.left.width, images.left.height);
   scratch_.resize(images.left.width, images.left.height);
-  if (mask != nullptr) lines_.resize(images.left.width, 1);  // one narrowed row at a time
   for (int d = 0; d <= max_d; ++d) {
     const int batch = d / kBatch;
     if (mask != nullptr) {
@@ -38,13 +37,10 @@ void DisparitySearch::run(const MatchingImages& images, const CostTables& tables
       continue;
     }
     for (int y = 0; y < images.left.height; ++y) {
-      if (!mask->searches(y, batch)) {
+      if (mask->searches(y, batch))
+        wta.update_slice_row(slice_.row(y), y, d);
+      else
         wta.skip_row(y, d, 1);
-        continue;
-      }
-      const std::uint32_t* row = slice_.row(y);
-      std::copy(row, row + images.left.width, lines_.row(0));
-      wta.update_row(lines_.row(0), 0, 1, y, d);
     }
   }
 }

@@ -26,13 +26,15 @@ void WinnerTakesAll::reset(int width, int height) {
 }
 
 void WinnerTakesAll::update(ImageView<const std::uint32_t> slice, int d) {
-  narrowed_.resize(static_cast<std::size_t>(slice.width));
-  for (int y = 0; y < slice.height; ++y) {
-    const std::uint32_t* row = slice.row(y);
-    assert(std::all_of(row, row + slice.width, [](std::uint32_t c) { return c < kNoCost; }));
-    std::copy(row, row + slice.width, narrowed_.begin());
-    update_row(narrowed_.data(), 0, 1, y, d);
-  }
+  for (int y = 0; y < slice.height; ++y) update_slice_row(slice.row(y), y, d);
+}
+
+void WinnerTakesAll::update_slice_row(const std::uint32_t* costs, int y, int d) {
+  const int w = best_.width();
+  narrowed_.resize(static_cast<std::size_t>(w));
+  assert(std::all_of(costs, costs + w, [](std::uint32_t c) { return c < kNoCost; }));
+  std::copy(costs, costs + w, narrowed_.begin());
+  update_row(narrowed_.data(), 0, 1, y, d);
 }
 
 void WinnerTakesAll::update_row(const std::uint16_t* costs, std::ptrdiff_t stride, int count, int y,

@@ -24,6 +24,8 @@ class WinnerTakesAll {
   void reset(int width, int height);
   // Slice values must be < kNoCost; d must grow by one from 0 between calls.
   void update(ImageView<const std::uint32_t> slice, int d);
+  // Row y of such a slice: what update does for that row.
+  void update_slice_row(const std::uint32_t* costs, int y, int d);
   // Row y of the slices of disparities d .. d + count - 1 at once, that of d + k at
   // costs + k * stride: the same result as `count` calls of update.
   void update_row(const std::uint16_t* costs, std::ptrdiff_t stride, int count, int y, int d);
