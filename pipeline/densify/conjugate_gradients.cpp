@@ -55,35 +55,19 @@ double precondition(Multigrid* mg, ImageView<const float> r, ImageView<float> z)
   return s;
 }
 
-}  // namespace
-
-void CgScratch::resize(int width, int height) {
-  r.resize(width, height);
-  z.resize(width, height);
-  p.resize(width, height);
-  ap.resize(width, height);
-}
-
-double relative_residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
-                         CgScratch& s) {
-  s.resize(a.width(), a.height());
-  const double r_norm = std::sqrt(residual_dot(a, b, x, s.r.view()));
-  const double b_norm = std::sqrt(dot(b, b));
-  return b_norm > 0 ? r_norm / b_norm : 0.0;
-}
-
-SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
-                       Multigrid* mg, int max_iterations, double tolerance, CgScratch& s) {
+// solve_pcg's iterations, from the residual of x in s.r and its norms.
+SolverReport iterate(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
+                     Multigrid* mg, int max_iterations, double tolerance, CgScratch& s,
+                     ResidualNorms start) {
   SolverReport report;
-  s.resize(a.width(), a.height());
-  const double b_norm = std::sqrt(dot(b, b));
+  const double b_norm = std::sqrt(start.bb);
   if (b_norm == 0) {
     for (int y = 0; y < x.height; ++y)
       for (int c = 0; c < x.width; ++c) x.row(y)[c] = 0.0f;
     report.converged = true;
     return report;
   }
-  double r_norm = std::sqrt(residual_dot(a, b, x, s.r.view()));
+  double r_norm = std::sqrt(start.rr);
   report.initial_residual = r_norm / b_norm;
   report.final_residual = report.initial_residual;
   if (report.initial_residual <= tolerance) {
@@ -96,7 +80,7 @@ SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<
   for (int it = 1; it <= max_iterations; ++it) {
     double pap = 0;
     if (restart) {
-      s.p.copy_from(s.z.cview());
+      s.p.swap(s.z);  // p = z; z is written again before it is read
       pap = apply_dot(a, s.p.cview(), s.ap.view());
     } else {
       pap = update_apply_dot(a, s.z.cview(), beta, s.p.view(), s.ap.view());
@@ -136,6 +120,32 @@ SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<
   report.final_residual = std::sqrt(residual_dot(a, b, x, s.r.view())) / b_norm;
   report.converged = report.final_residual <= tolerance;
   return report;
+}
+
+}  // namespace
+
+void CgScratch::resize(int width, int height) {
+  r.resize(width, height);
+  z.resize(width, height);
+  p.resize(width, height);
+  ap.resize(width, height);
+}
+
+SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
+                       Multigrid* mg, int max_iterations, double tolerance, CgScratch& s) {
+  s.resize(a.width(), a.height());
+  const ResidualNorms start = residual_norms(a, b, x, s.r.view());
+  return iterate(a, b, x, mg, max_iterations, tolerance, s, start);
+}
+
+SolverReport solve_pcg_after_sweeps(const GridSystem& a, ImageView<const float> b,
+                                    ImageView<const float> coarse_start, ImageView<float> x,
+                                    int sweeps, Multigrid* mg, int max_iterations, double tolerance,
+                                    CgScratch& s) {
+  s.resize(a.width(), a.height());
+  const ResidualNorms start =
+      gauss_seidel_residual(a, b, x, sweeps, true, s.r.view(), coarse_start);
+  return iterate(a, b, x, mg, max_iterations, tolerance, s, start);
 }
 
 }  // namespace dco::densify

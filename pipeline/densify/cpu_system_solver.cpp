@@ -1,3 +1,5 @@
+#include <cmath>
+
 #include "dco/pipeline/densify/densifier.hpp"
 #include "dco/pipeline/densify/multigrid.hpp"
 #include "dco/pipeline/densify/system_solver.hpp"
@@ -40,18 +42,22 @@ class CpuSystemSolver final : public SystemSolver {
     SolverReport report = solve_pcg(coarse_, coarse_rhs_.cview(), coarse_solution_.view(),
                                     params_.multigrid ? &multigrid_ : nullptr,
                                     params_.max_iterations, params_.tolerance, scratch_);
-    prolong(coarse_solution_.cview(), x);
     // The sweeps and iterations at full size put the detail inside each 2x2 block back: a
     // contour through a block, an edge of the image guidance, a single sparse pixel.
-    // One pass over the rows does all the sweeps (red then black each time).
-    if (params_.fine_sweeps > 0) gauss_seidel(a, b, x, params_.fine_sweeps, true);
+    // One pass over the rows prolongs the half-size solution, does all the sweeps (red then
+    // black each time) and the residual the iterations start from.
     if (params_.fine_iterations > 0) {
-      const SolverReport fine = solve_pcg(a, b, x, params_.multigrid ? &fine_multigrid_ : nullptr,
-                                          params_.fine_iterations, params_.tolerance, scratch_);
+      const SolverReport fine =
+          solve_pcg_after_sweeps(a, b, coarse_solution_.cview(), x, params_.fine_sweeps,
+                                 params_.multigrid ? &fine_multigrid_ : nullptr,
+                                 params_.fine_iterations, params_.tolerance, scratch_);
       report.fine_iterations = fine.iterations;
       report.output_residual = fine.final_residual;
     } else {
-      report.output_residual = relative_residual(a, b, x, scratch_);
+      scratch_.resize(a.width(), a.height());
+      const ResidualNorms n = gauss_seidel_residual(a, b, x, params_.fine_sweeps, true,
+                                                    scratch_.r.view(), coarse_solution_.cview());
+      report.output_residual = n.bb > 0 ? std::sqrt(n.rr) / std::sqrt(n.bb) : 0.0;
     }
     return report;
   }

@@ -148,6 +148,23 @@ void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float
   gauss_seidel_rows(a, b, x, sweeps, red_first, no_row_work, no_row_work);
 }
 
+ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> b,
+                                    ImageView<float> x, int sweeps, bool red_first,
+                                    ImageView<float> r, ImageView<const float> coarse_start) {
+  const int w = a.width();
+  ResidualNorms n;
+  const auto start_row = [&](int y) {
+    if (!coarse_start.empty()) from_parents<false>(coarse_start.row(y / 2), w, x.row(y));
+  };
+  const auto residual_row_norms = [&](int y) {
+    residual_row(a, b, x, y, r.row(y));
+    n.rr += kernels::dot_row(r.row(y), r.row(y), w);
+    n.bb += kernels::dot_row(b.row(y), b.row(y), w);
+  };
+  gauss_seidel_rows(a, b, x, sweeps, red_first, start_row, residual_row_norms);
+  return n;
+}
+
 void Multigrid::build(const GridSystem& fine, int coarsest_size) {
   fine_ = &fine;
   residual_row_.resize(static_cast<std::size_t>(fine.width()));  // the widest level

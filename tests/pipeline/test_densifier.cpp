@@ -567,6 +567,61 @@ TEST(GridSystem, FusedResidualPassesAreThePlainOnesBitForBit) {
   ASSERT_TRUE(same_pixels(fused_r, r));
 }
 
+TEST(Multigrid, StartSweepsAndResidualInOnePassAreThePlainPassesBitForBit) {
+  for (const auto& [w, h] : {std::pair{45, 17}, std::pair{8, 1}, std::pair{3, 2}}) {
+    SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
+    const GridSystem a = random_system(w, h, 6);
+    const Image<float> b = random_vector(w, h, 1, 10.0f);
+    const Image<float> coarse = random_vector((w + 1) / 2, (h + 1) / 2, 2, 30.0f);
+    for (const int sweeps : {0, 1, 4}) {
+      Image<float> x(w, h), r(w, h);
+      prolong(coarse.cview(), x.view());
+      gauss_seidel(a, b.cview(), x.view(), sweeps, true);
+      residual(a, b.cview(), x.cview(), r.view());
+      // Stale values in x must not matter: the pass starts from the prolonged coarse values.
+      Image<float> fused_x = random_vector(w, h, 7, 100.0f), fused_r(w, h);
+      const ResidualNorms n = gauss_seidel_residual(a, b.cview(), fused_x.view(), sweeps, true,
+                                                    fused_r.view(), coarse.cview());
+      EXPECT_EQ(n.rr, dot(r.cview(), r.cview()));
+      EXPECT_EQ(n.bb, dot(b.cview(), b.cview()));
+      ASSERT_TRUE(same_pixels(fused_x, x)) << sweeps << " sweeps";
+      ASSERT_TRUE(same_pixels(fused_r, r)) << sweeps << " sweeps";
+      // Without a coarse start the pass sweeps the x it is given.
+      Image<float> given = x, swept = x;
+      gauss_seidel(a, b.cview(), swept.view(), sweeps, true);
+      gauss_seidel_residual(a, b.cview(), given.view(), sweeps, true, fused_r.view());
+      ASSERT_TRUE(same_pixels(given, swept)) << sweeps << " sweeps";
+    }
+  }
+}
+
+TEST(ConjugateGradients, AfterSweepsIsTheSweepsThenTheSolveBitForBit) {
+  const int w = 61, h = 29;
+  const GridSystem a = random_system(w, h, 12);
+  const Image<float> b = random_vector(w, h, 3, 10.0f);
+  const Image<float> coarse = random_vector((w + 1) / 2, (h + 1) / 2, 4, 5.0f);
+  for (const int iterations : {1, 3}) {
+    Multigrid mg, fused_mg;
+    mg.build(a);
+    fused_mg.build(a);
+    CgScratch scratch, fused_scratch;
+    Image<float> x(w, h);
+    prolong(coarse.cview(), x.view());
+    gauss_seidel(a, b.cview(), x.view(), 4, true);
+    const SolverReport plain = solve_pcg(a, b.cview(), x.view(), &mg, iterations, 1e-9, scratch);
+    Image<float> fused_x(w, h);
+    const SolverReport fused =
+        solve_pcg_after_sweeps(a, b.cview(), coarse.cview(), fused_x.view(), 4, &fused_mg,
+                               iterations, 1e-9, fused_scratch);
+    EXPECT_EQ(fused.iterations, iterations);
+    EXPECT_EQ(fused.iterations, plain.iterations);
+    EXPECT_EQ(fused.initial_residual, plain.initial_residual);
+    EXPECT_EQ(fused.final_residual, plain.final_residual);
+    EXPECT_LT(fused.final_residual, fused.initial_residual);
+    ASSERT_TRUE(same_pixels(fused_x, x)) << iterations << " iterations";
+  }
+}
+
 TEST(Multigrid, TransfersOnOddSizes) {
   Image<float> fine(5, 3), coarse(3, 2), back(5, 3);
   for (int y = 0; y < 3; ++y)

@@ -29,8 +29,11 @@ struct CgScratch {
 SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
                        Multigrid* mg, int max_iterations, double tolerance, CgScratch& scratch);
 
-// ||b - A x|| / ||b|| (0 when b is 0); uses scratch.r and scratch.ap.
-double relative_residual(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
-                         CgScratch& scratch);
+// x = prolong(coarse_start), `sweeps` red-black Gauss-Seidel sweeps (red first), then solve_pcg:
+// the same result, with the start, the sweeps and the first residual in one pass over the rows.
+SolverReport solve_pcg_after_sweeps(const GridSystem& a, ImageView<const float> b,
+                                    ImageView<const float> coarse_start, ImageView<float> x,
+                                    int sweeps, Multigrid* mg, int max_iterations, double tolerance,
+                                    CgScratch& scratch);
 
 }  // namespace dco::densify

@@ -51,6 +51,13 @@ class Multigrid {
 void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
                   bool red_first);
 
+// gauss_seidel, then r = b - A x, in the same pass over the rows (each residual row as soon as
+// its rows are final); returns dot(r, r) and dot(b, b). With `coarse_start`, x starts as
+// prolong(coarse_start), also a row at a time in that pass.
+ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> b,
+                                    ImageView<float> x, int sweeps, bool red_first,
+                                    ImageView<float> r, ImageView<const float> coarse_start = {});
+
 // The Galerkin coarse system of 2x2 piecewise-constant aggregation; coarse size is
 // ceil(w/2) x ceil(h/2). The coarse edge weights are multiplied by `edge_scale` (see
 // kHalfSizeEdgeScale).
