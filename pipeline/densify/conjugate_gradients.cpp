@@ -55,11 +55,28 @@ double precondition(Multigrid* mg, ImageView<const float> r, ImageView<float> z)
   return s;
 }
 
-// solve_pcg's iterations, from the residual of x in s.r and its norms.
-SolverReport iterate(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
-                     Multigrid* mg, int max_iterations, double tolerance, CgScratch& s,
-                     ResidualNorms start) {
+}  // namespace
+
+void CgScratch::resize(int width, int height) {
+  r.resize(width, height);
+  z.resize(width, height);
+  p.resize(width, height);
+  ap.resize(width, height);
+}
+
+SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
+                       Multigrid* mg, int max_iterations, double tolerance, CgScratch& s) {
+  return solve_pcg_after_sweeps(a, b, {}, x, 0, mg, max_iterations, tolerance, s);
+}
+
+SolverReport solve_pcg_after_sweeps(const GridSystem& a, ImageView<const float> b,
+                                    ImageView<const float> coarse_start, ImageView<float> x,
+                                    int sweeps, Multigrid* mg, int max_iterations, double tolerance,
+                                    CgScratch& s) {
   SolverReport report;
+  s.resize(a.width(), a.height());
+  const ResidualNorms start =
+      gauss_seidel_residual(a, b, x, sweeps, true, s.r.view(), coarse_start);
   const double b_norm = std::sqrt(start.bb);
   if (b_norm == 0) {
     for (int y = 0; y < x.height; ++y)
@@ -120,32 +137,6 @@ SolverReport iterate(const GridSystem& a, ImageView<const float> b, ImageView<fl
   report.final_residual = std::sqrt(residual_dot(a, b, x, s.r.view())) / b_norm;
   report.converged = report.final_residual <= tolerance;
   return report;
-}
-
-}  // namespace
-
-void CgScratch::resize(int width, int height) {
-  r.resize(width, height);
-  z.resize(width, height);
-  p.resize(width, height);
-  ap.resize(width, height);
-}
-
-SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
-                       Multigrid* mg, int max_iterations, double tolerance, CgScratch& s) {
-  s.resize(a.width(), a.height());
-  const ResidualNorms start = residual_norms(a, b, x, s.r.view());
-  return iterate(a, b, x, mg, max_iterations, tolerance, s, start);
-}
-
-SolverReport solve_pcg_after_sweeps(const GridSystem& a, ImageView<const float> b,
-                                    ImageView<const float> coarse_start, ImageView<float> x,
-                                    int sweeps, Multigrid* mg, int max_iterations, double tolerance,
-                                    CgScratch& s) {
-  s.resize(a.width(), a.height());
-  const ResidualNorms start =
-      gauss_seidel_residual(a, b, x, sweeps, true, s.r.view(), coarse_start);
-  return iterate(a, b, x, mg, max_iterations, tolerance, s, start);
 }
 
 }  // namespace dco::densify

@@ -1,5 +1,3 @@
-#include <cmath>
-
 #include "dco/pipeline/densify/densifier.hpp"
 #include "dco/pipeline/densify/multigrid.hpp"
 #include "dco/pipeline/densify/system_solver.hpp"
@@ -55,9 +53,9 @@ class CpuSystemSolver final : public SystemSolver {
       report.output_residual = fine.final_residual;
     } else {
       scratch_.resize(a.width(), a.height());
-      const ResidualNorms n = gauss_seidel_residual(a, b, x, params_.fine_sweeps, true,
-                                                    scratch_.r.view(), coarse_solution_.cview());
-      report.output_residual = n.bb > 0 ? std::sqrt(n.rr) / std::sqrt(n.bb) : 0.0;
+      report.output_residual = gauss_seidel_residual(a, b, x, params_.fine_sweeps, true,
+                                                     scratch_.r.view(), coarse_solution_.cview())
+                                   .relative();
     }
     return report;
   }

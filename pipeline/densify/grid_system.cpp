@@ -81,17 +81,6 @@ double residual_dot(const GridSystem& a, ImageView<const float> b, ImageView<con
   return s;
 }
 
-ResidualNorms residual_norms(const GridSystem& a, ImageView<const float> b,
-                             ImageView<const float> x, ImageView<float> r) {
-  ResidualNorms n;
-  for (int y = 0; y < a.height(); ++y) {
-    residual_row(a, b, x, y, r.row(y));
-    n.rr += kernels::dot_row(r.row(y), r.row(y), a.width());
-    n.bb += kernels::dot_row(b.row(y), b.row(y), a.width());
-  }
-  return n;
-}
-
 double step_residual_dot(const GridSystem& a, ImageView<const float> b, float alpha,
                          ImageView<const float> p, ImageView<float> x, ImageView<float> r) {
   const int w = a.width();

@@ -25,7 +25,8 @@ struct CgScratch {
 
 // Preconditioned conjugate gradients on A x = b from the initial guess in x (warm start), with
 // one multigrid V-cycle as the preconditioner (or none when `mg` is null). Stops when the
-// relative residual falls to `tolerance` or after `max_iterations`.
+// relative residual falls to `tolerance` or after `max_iterations`. solve_pcg_after_sweeps with
+// no start and no sweeps.
 SolverReport solve_pcg(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
                        Multigrid* mg, int max_iterations, double tolerance, CgScratch& scratch);
 

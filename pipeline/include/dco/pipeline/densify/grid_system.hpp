@@ -45,13 +45,6 @@ void residual(const GridSystem& a, ImageView<const float> b, ImageView<const flo
 // r = b - A x; returns dot(r, r).
 double residual_dot(const GridSystem& a, ImageView<const float> b, ImageView<const float> x,
                     ImageView<float> r);
-// dot(r, r) and dot(b, b) of a residual r = b - A x.
-struct ResidualNorms {
-  double rr = 0, bb = 0;
-};
-// r = b - A x; returns dot(r, r) and dot(b, b).
-ResidualNorms residual_norms(const GridSystem& a, ImageView<const float> b,
-                             ImageView<const float> x, ImageView<float> r);
 // x += alpha p, then r = b - A x; returns dot(r, r).
 double step_residual_dot(const GridSystem& a, ImageView<const float> b, float alpha,
                          ImageView<const float> p, ImageView<float> x, ImageView<float> r);

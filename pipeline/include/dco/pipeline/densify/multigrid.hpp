@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "dco/core/image.hpp"
@@ -50,6 +51,13 @@ class Multigrid {
 // Red-black Gauss-Seidel sweeps on A x = b; `red_first` picks the colour order.
 void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
                   bool red_first);
+
+// dot(r, r) and dot(b, b) of a residual r = b - A x.
+struct ResidualNorms {
+  double rr = 0, bb = 0;
+  // ||r|| / ||b||, 0 when b is 0.
+  double relative() const { return bb > 0 ? std::sqrt(rr) / std::sqrt(bb) : 0.0; }
+};
 
 // gauss_seidel, then r = b - A x, in the same pass over the rows (each residual row as soon as
 // its rows are final); returns dot(r, r) and dot(b, b). With `coarse_start`, x starts as
