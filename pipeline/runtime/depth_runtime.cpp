@@ -84,6 +84,7 @@ void DepthRuntime::reset_state() {
   for (std::size_t i = 0; i < slots_.size(); ++i) {
     slot_free_[i] = true;
     slots_[i].stereo_done = false;
+    slots_[i].neighbour_only = false;
   }
   stereo_queue_.clear();
   received_ = 0;
@@ -102,7 +103,7 @@ void DepthRuntime::start() {
     stereo_ms_.clear();
     contour_ms_.clear();
     densify_ms_.clear();
-    pushed_ = dropped_ = published_ = 0;
+    pushed_ = dropped_ = late_ = published_ = 0;
     entry_high_water_ = 0;
     // Fresh queues: their high-water marks are statistics too.
     stereo_queue_ = BoundedQueue<int>(stereo_queue_.capacity());
@@ -210,6 +211,7 @@ int DepthRuntime::acquire_slot(std::stop_token stop) {
   if (!changed_.wait(lock, stop, [&] { return (slot = take_free(slot_free_, slot_cursor_)) >= 0; }))
     return -1;
   slots_[static_cast<std::size_t>(slot)].stereo_done = false;
+  slots_[static_cast<std::size_t>(slot)].neighbour_only = false;
   return slot;
 }
 
@@ -219,14 +221,24 @@ void DepthRuntime::release_slot(int slot) {
   changed_.notify_all();
 }
 
+bool DepthRuntime::is_late(const Input& input) const {
+  // Nothing newer comes after the end of a sequence, and a deterministic run drops nothing.
+  if (params_.entry_deadline_ms <= 0 || params_.deterministic || end_requested_) return false;
+  return ms_between(input.entry, Clock::now()) > params_.entry_deadline_ms;
+}
+
 void DepthRuntime::stereo_loop(std::stop_token stop) {
   while (true) {
     int input = -1;
+    bool late = false;
     {
       std::unique_lock lock(mutex_);
       if (!changed_.wait(lock, stop, [&] { return waiting_input_ >= 0 || end_requested_; })) return;
       if (waiting_input_ >= 0) {
         input = std::exchange(waiting_input_, -1);
+        late = is_late(inputs_[static_cast<std::size_t>(input)]);
+        dropped_ += late;
+        late_ += late;
         changed_.notify_all();  // room at the entry
       } else {
         end_requested_ = false;
@@ -250,8 +262,9 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
     entry.times = {};
     entry.times.capture = in.capture;
     entry.times.entry = in.entry;
+    entry.neighbour_only = late;
     try {
-      if (hook_) hook_(Stage::kStereo, in.index);
+      if (hook_ && !late) hook_(Stage::kStereo, in.index);
       entry.times.stereo_start = Clock::now();
       prepare_frame(pipeline_.stereo, in.left.cview(), in.index, entry.slot);
       if (params_.threads > 1) {
@@ -262,7 +275,7 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
         stereo_queue_.push(slot);
         changed_.notify_all();
       }
-      stereo_frame(*stereo_, in.left.cview(), in.right.cview(), entry.slot);
+      if (!late) stereo_frame(*stereo_, in.left.cview(), in.right.cview(), entry.slot);
     } catch (...) {
       fail(std::current_exception());
       return;
@@ -270,7 +283,7 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
     {
       std::lock_guard lock(mutex_);
       entry.times.stereo_end = Clock::now();
-      entry.stereo_done = true;
+      entry.stereo_done = !late;
       input_free_[static_cast<std::size_t>(input)] = true;
       changed_.notify_all();
     }
@@ -298,12 +311,16 @@ int DepthRuntime::window_slot(int frame) const {
   return frame >= 0 ? window_[static_cast<std::size_t>(frame) % window_.size()] : -1;
 }
 
+bool DepthRuntime::has_depth(int frame) const {
+  return frame >= 0 && !slots_[static_cast<std::size_t>(window_slot(frame))].neighbour_only;
+}
+
 void DepthRuntime::contour_receive(std::stop_token stop, int slot) {
   // Frames are numbered in the order they passed the entry, as DepthPipeline numbers its pushes.
   const int t = received_++;
   window_[static_cast<std::size_t>(t) % window_.size()] = slot;
   const ContourWindow w = window_on_arrival(pipeline_.contour.lookahead, t);
-  if (w.centre >= 0)
+  if (has_depth(w.centre))
     run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a),
                 window_slot(w.neighbour_b));
   if (t >= 2) release_slot(window_slot(t - 2));  // in no later window, either lookahead
@@ -312,8 +329,9 @@ void DepthRuntime::contour_receive(std::stop_token stop, int slot) {
 void DepthRuntime::contour_end(std::stop_token stop) {
   if (pipeline_.contour.lookahead == 1 && received_ > 0) {
     const ContourWindow w = window_at_end(received_ - 1);
-    run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a),
-                window_slot(w.neighbour_b));
+    if (has_depth(w.centre))
+      run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a),
+                  window_slot(w.neighbour_b));
   }
   for (int t = std::max(received_ - 2, 0); t < received_; ++t) release_slot(window_slot(t));
   received_ = 0;
@@ -416,6 +434,7 @@ RuntimeStats DepthRuntime::stats() const {
   s.densify = summary(densify_ms_);
   s.pushed = pushed_;
   s.dropped = dropped_;
+  s.late = late_;
   s.published = published_;
   s.entry_high_water = entry_high_water_;
   s.stereo_queue_high_water = stereo_queue_.high_water();

@@ -17,6 +17,9 @@ void register_params(ConfigSchema& s, RuntimeParams& p) {
         "CPUs for the stage threads, e.g. \"0,1\" (thread i on entry i mod n); empty = any");
   s.add("runtime.queue_depth", &p.queue_depth, 1, 8,
         "frames each queue between stage threads holds (each one is a frame of latency)");
+  s.add("runtime.entry_deadline_ms", &p.entry_deadline_ms, 0.0, 1000.0,
+        "a frame that waited longer than this at the entry only lends its image to its "
+        "neighbours' flow, so every depth map starts this soon after its entry; 0 = no deadline");
   s.add("runtime.deterministic", &p.deterministic,
         "never drop frames (push waits): same output as the offline pipeline, for replays");
   s.add("runtime.backend", &p.backend, {"auto", "cpu", "cuda"},
@@ -58,6 +61,9 @@ void validate(const RuntimeParams& p) {
     throw Error("runtime.threads must be 1, 2 or 3, not " + std::to_string(p.threads));
   if (p.queue_depth < 1 || p.queue_depth > 8)
     throw Error("runtime.queue_depth must be in [1, 8], not " + std::to_string(p.queue_depth));
+  if (!(p.entry_deadline_ms >= 0 && p.entry_deadline_ms <= 1000))
+    throw Error("runtime.entry_deadline_ms must be in [0, 1000], not " +
+                std::to_string(p.entry_deadline_ms));
   parse_affinity(p.affinity);
   if (p.backend != "auto" && p.backend != "cpu" && p.backend != "cuda")
     throw Error("runtime.backend must be auto, cpu or cuda, not '" + p.backend + "'");

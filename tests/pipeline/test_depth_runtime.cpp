@@ -210,6 +210,7 @@ TEST(DepthRuntime, WhenTheInputOutrunsItFramesAreDroppedAtTheEntryOnly) {
     RuntimeParams rp;
     rp.threads = threads;
     rp.queue_depth = 2;
+    rp.entry_deadline_ms = 0;  // the newest frame waits however long: no frame is late
     Collector c;
     // A stereo stage far slower than the producer.
     DepthRuntime runtime(s.params, rp, c.callback(), [](Stage stage, int) {
@@ -227,6 +228,7 @@ TEST(DepthRuntime, WhenTheInputOutrunsItFramesAreDroppedAtTheEntryOnly) {
     SCOPED_TRACE(std::to_string(threads) + " thread(s)");
     EXPECT_EQ(st.pushed, kPushed);
     EXPECT_GT(st.dropped, kPushed / 2);
+    EXPECT_EQ(st.late, 0);
     // Every frame that got past the entry came out, newest last.
     EXPECT_EQ(st.published + st.dropped, st.pushed);
     ASSERT_EQ(c.results.size(), static_cast<std::size_t>(st.published));
@@ -236,6 +238,71 @@ TEST(DepthRuntime, WhenTheInputOutrunsItFramesAreDroppedAtTheEntryOnly) {
     EXPECT_LE(st.entry_high_water, 1u);
     EXPECT_LE(st.stereo_queue_high_water, 2u);
     EXPECT_LE(st.densify_queue_high_water, 2u);
+  }
+}
+
+// The contour fields DepthPipeline gives frame `centre` of `s` in the window of the camera
+// frames around it (the flow neighbours centre - 1 and centre + 1).
+DepthResult offline_window(const Sequence& s, int centre) {
+  DepthPipeline pipeline(s.params);
+  DepthResult r;
+  for (int i = centre - 1; i <= centre + 1; ++i) {
+    const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
+    if (pipeline.push(f.left.cview(), f.right.cview(), r) && r.index == 1) return r;
+  }
+  ADD_FAILURE() << "no result for the window's centre";
+  return r;
+}
+
+TEST(DepthRuntime, AFrameLateAtTheEntryGetsNoDepthButStaysItsNeighboursFlowFrame) {
+  Sequence s = make_sequence("hand", 4);
+  for (int threads : {1, 2}) {
+    SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+    RuntimeParams rp;
+    rp.threads = threads;
+    rp.entry_deadline_ms = 5;
+    std::mutex mutex;
+    std::vector<std::pair<int, Clock::time_point>> taken;  // (index, when its stereo began)
+    Collector c;
+    // A stereo stage slower than the producer's 80 ms: the frame after each one waits for it.
+    DepthRuntime runtime(s.params, rp, c.callback(), [&](Stage stage, int index) {
+      if (stage != Stage::kStereo) return;
+      {
+        std::lock_guard lock(mutex);
+        taken.emplace_back(index, Clock::now());
+      }
+      std::this_thread::sleep_for(120ms);
+    });
+    runtime.start();
+    constexpr int kPushed = 12;
+    const auto start = Clock::now();
+    for (int i = 0; i < kPushed; ++i) {
+      std::this_thread::sleep_until(start + i * 80ms);
+      const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
+      runtime.push(f.left.cview(), f.right.cview());
+    }
+    runtime.drain();
+    const RuntimeStats st = runtime.stats();
+    EXPECT_EQ(st.pushed, kPushed);
+    EXPECT_GE(st.late, 3);
+    EXPECT_EQ(st.published + st.dropped, st.pushed);
+    ASSERT_EQ(c.results.size(), static_cast<std::size_t>(st.published));
+    ASSERT_EQ(taken.size(), static_cast<std::size_t>(st.published));
+    for (std::size_t k = 0; k < c.results.size(); ++k) {
+      const DepthResult& r = c.results[k];
+      SCOPED_TRACE("frame " + std::to_string(r.index));
+      ASSERT_EQ(taken[k].first, r.index);
+      // The last frame waits however long: drain() said no newer one comes.
+      if (r.index == kPushed - 1) continue;
+      // Without the deadline the frame after a 120 ms stereo run would wait 40 ms or more.
+      EXPECT_LT(taken[k].second - c.times[k].entry, 15ms);
+      if (r.index == 0) continue;
+      // Its flow neighbours were the camera frames next to it, late or not.
+      EXPECT_TRUE(r.flow_cue);
+      const DepthResult expected = offline_window(s, r.index);
+      EXPECT_TRUE(same_bytes(r.m_fuse, expected.m_fuse));
+      EXPECT_TRUE(same_bytes(r.contours, expected.contours));
+    }
   }
 }
 

@@ -92,12 +92,14 @@ TEST(RuntimeParams, AreSetThroughTheSchema) {
   ConfigSchema schema;
   register_params(schema, p);
   schema.load_string(
-      "[runtime]\nthreads = 3\naffinity = \"0, 1\"\nqueue_depth = 2\ndeterministic = true\n",
+      "[runtime]\nthreads = 3\naffinity = \"0, 1\"\nqueue_depth = 2\ndeterministic = true\n"
+      "entry_deadline_ms = 4.5\n",
       "test");
   EXPECT_EQ(p.threads, 3);
   EXPECT_EQ(p.affinity, "0, 1");
   EXPECT_EQ(p.queue_depth, 2);
   EXPECT_TRUE(p.deterministic);
+  EXPECT_EQ(p.entry_deadline_ms, 4.5);
   EXPECT_NO_THROW(validate(p));
   EXPECT_EQ(parse_affinity(p.affinity), (std::vector<int>{0, 1}));
   EXPECT_THAT(schema.describe(), HasSubstr("runtime.affinity"));
@@ -111,11 +113,16 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   EXPECT_THROW(schema.set("runtime.threads=4"), Error);
   EXPECT_THROW(schema.set("runtime.queue_depth=0"), Error);
   EXPECT_THROW(schema.set("runtime.deterministic=maybe"), Error);
+  EXPECT_THROW(schema.set("runtime.entry_deadline_ms=-1"), Error);
+  EXPECT_THROW(schema.set("runtime.entry_deadline_ms=1001"), Error);
   RuntimeParams direct;
   direct.threads = 7;
   EXPECT_THROW(validate(direct), Error);
   direct = {};
   direct.queue_depth = 100;
+  EXPECT_THROW(validate(direct), Error);
+  direct = {};
+  direct.entry_deadline_ms = -0.5;
   EXPECT_THROW(validate(direct), Error);
 }
 

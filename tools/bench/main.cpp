@@ -50,7 +50,8 @@ OpenCV StereoSGBM (3-way) + WLS. Per sequence:
   throughput  runtime.deterministic on, frames pushed as fast as it takes them: ms per frame,
               frames per second and the mean time of each stage;
   latency     frames pushed at --fps (capture time = the frame's due time), newest wins at the
-              entry: capture-to-result latency p50 / p99 and the frames dropped;
+              entry and a frame that waited past runtime.entry_deadline_ms is late (no depth):
+              capture-to-result latency p50 / p99 and the frames dropped (late ones included);
   peer        SGBM 3-way + WLS ms per frame; ratio = peer / dco.
 With the CUDA backend it also runs the sparse stereo stage, the contour stage and the densify
 solver on the CPU and on the GPU over the same frames: the stage times and how many output
@@ -432,9 +433,9 @@ void print_text(const Result& r) {
       t.densify.p99_ms);
   fmt::print(
       "  latency  p50 {:.1f} ms  p99 {:.1f} ms  (p99 - p50 {:.1f} ms) at {:g} fps input; "
-      "{} of {} frames dropped, {} published\n",
+      "{} of {} frames dropped ({} late), {} published\n",
       l.latency.p50_ms, l.latency.p99_ms, l.latency.p99_ms - l.latency.p50_ms, r.fps, l.dropped,
-      l.pushed, l.published);
+      l.pushed, l.late, l.published);
   fmt::print(
       "  peer     {:8.1f} ms/frame  OpenCV StereoSGBM 3-way + WLS; ratio peer / dco {:.3f}\n",
       r.peer_ms_per_frame, r.peer_ms_per_frame / r.ms_per_frame);
@@ -475,13 +476,13 @@ std::string json_fields(const Result& r) {
              "\"name\": {}, \"width\": {}, \"height\": {}, \"frames\": {}, \"max_disparity\": {}, "
              "\"threads\": {}, \"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
              "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
-             "\"latency_p99_ms\": {}, \"paced_frames\": {}, \"dropped\": {}, \"published\": {}, "
-             "\"peer_ms_per_frame\": {}, \"ratio\": {}",
+             "\"latency_p99_ms\": {}, \"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
+             "\"published\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
              dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity,
              r.threads, json_number(r.ms_per_frame), json_number(1000.0 / r.ms_per_frame),
              json_number(t.stereo.mean_ms), json_number(t.contour.mean_ms),
              json_number(t.densify.mean_ms), json_number(r.fps), json_number(l.latency.p50_ms),
-             json_number(l.latency.p99_ms), l.pushed, l.dropped, l.published,
+             json_number(l.latency.p99_ms), l.pushed, l.dropped, l.late, l.published,
              json_number(r.peer_ms_per_frame), json_number(r.peer_ms_per_frame / r.ms_per_frame)) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
          (r.check ? fmt::format(

@@ -41,8 +41,13 @@ struct DurationSummary {
 struct RuntimeStats {
   DurationSummary latency;  // capture to publication
   DurationSummary stereo, contour, densify;
-  long pushed = 0;     // frames given to push
-  long dropped = 0;    // replaced at the entry by a newer frame before the stereo stage took them
+  long pushed = 0;  // frames given to push
+  // Frames with no depth of their own: replaced at the entry by a newer frame before the stereo
+  // stage took them, or late.
+  long dropped = 0;
+  // Of those, taken after waiting longer than runtime.entry_deadline_ms: their images still
+  // served as their neighbours' flow frames.
+  long late = 0;
   long published = 0;  // results handed to the callback
   // The most frames each queue ever held: the entry (a single waiting frame), stereo -> contour
   // and contour -> densify. None can exceed its capacity, so latency cannot grow.
@@ -56,8 +61,12 @@ struct RuntimeStats {
 // while t+1's stereo does.
 //
 // When the input outruns the pipeline, a frame still waiting at the entry is replaced by the
-// newer one and counted as dropped (newest wins); nothing else ever waits in a queue longer than
-// its capacity, so the latency stays fixed. With runtime.deterministic, push waits instead and
+// newer one and counted as dropped (newest wins). A frame that waited there longer than
+// runtime.entry_deadline_ms is late: the stereo thread only prepares its grey image, the flow
+// neighbour of the frames around it, and takes the next frame as it arrives. So every depth map
+// starts within the deadline of its entry, and its contour window still holds the camera frames
+// next to it. Nothing else ever waits in a queue longer than its capacity, so the latency stays
+// fixed. With runtime.deterministic, push waits instead and
 // the results are bit for bit those of DepthPipeline on the same frames.
 class DepthRuntime {
  public:
@@ -106,6 +115,7 @@ class DepthRuntime {
     StereoSlot slot;
     FrameTimes times;
     bool stereo_done = false;
+    bool neighbour_only = false;  // a late frame: its grey images, no stereo, no depth
   };
   struct ResultEntry {
     DepthResult result;
@@ -115,12 +125,16 @@ class DepthRuntime {
   static constexpr std::size_t kInputs = 3;  // being filled, waiting, in the stereo stage
 
   void stereo_loop(std::stop_token stop);
+  // True when the stereo stage should take `input`, which it has just taken from the entry, as
+  // a flow neighbour only.
+  bool is_late(const Input& input) const;
   void contour_loop(std::stop_token stop);
   void densify_loop(std::stop_token stop);
   // The steps after the stereo stage's hand-over, on whichever thread runs them.
   void contour_receive(std::stop_token stop, int slot);
   void contour_end(std::stop_token stop);
   int window_slot(int frame) const;  // -1 for a frame before the first
+  bool has_depth(int frame) const;   // a received frame of the window that is not late
   void run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b);
   void densify_receive(int result);
   void densify_end();
@@ -172,7 +186,7 @@ class DepthRuntime {
   std::exception_ptr failure_;
 
   Histogram latency_, stereo_ms_, contour_ms_, densify_ms_;
-  long pushed_ = 0, dropped_ = 0, published_ = 0;
+  long pushed_ = 0, dropped_ = 0, late_ = 0, published_ = 0;
 
   std::vector<std::jthread> threads_;
 };

@@ -19,6 +19,11 @@ struct RuntimeParams {
   std::string affinity;
   // Frames each queue between two stage threads holds. Every queued frame is a frame of latency.
   int queue_depth = 1;
+  // A frame that waited at the entry longer than this (ms) gets no depth of its own: its grey
+  // image still serves its neighbours' flow, and the stereo stage waits for the next frame
+  // instead. Every depth map then starts within this of its entry, so the latency does not depend
+  // on when the stage happened to be free. 0 = hold the newest frame however long.
+  double entry_deadline_ms = 2;
   // Never drop: push waits for room, so every frame is processed in order and the output equals
   // the offline DepthPipeline's (for replays and tests).
   bool deterministic = false;
