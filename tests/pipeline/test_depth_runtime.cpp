@@ -264,22 +264,36 @@ TEST(DepthRuntime, AFrameLateAtTheEntryGetsNoDepthButStaysItsNeighboursFlowFrame
     std::mutex mutex;
     std::vector<std::pair<int, Clock::time_point>> taken;  // (index, when its stereo began)
     Collector c;
-    // A stereo stage slower than the producer's 80 ms: the frame after each one waits for it.
     DepthRuntime runtime(s.params, rp, c.callback(), [&](Stage stage, int index) {
       if (stage != Stage::kStereo) return;
       {
         std::lock_guard lock(mutex);
         taken.emplace_back(index, Clock::now());
       }
-      std::this_thread::sleep_for(120ms);
+      std::this_thread::sleep_for(60ms);
     });
+    const auto stereo_took = [&](int index) {
+      std::lock_guard lock(mutex);
+      return !taken.empty() && taken.back().first == index;
+    };
     runtime.start();
     constexpr int kPushed = 12;
-    const auto start = Clock::now();
+    long late = 0;
     for (int i = 0; i < kPushed; ++i) {
-      std::this_thread::sleep_until(start + i * 80ms);
       const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
       runtime.push(f.left.cview(), f.right.cview());
+      if (i + 1 == kPushed) break;
+      // The next frame follows once this one was taken, so none is replaced at the entry and
+      // the frames around each one are its camera neighbours, whatever the machine's speed. It
+      // comes 10 ms into a stereo run of 60 ms, so it waits past the deadline and is late.
+      const auto until = Clock::now() + 20s;
+      while (!stereo_took(i) && runtime.stats().late == late && Clock::now() < until)
+        std::this_thread::sleep_for(1ms);
+      ASSERT_LT(Clock::now(), until) << "frame " << i << " was never taken";
+      if (runtime.stats().late > late)
+        late = runtime.stats().late;
+      else
+        std::this_thread::sleep_for(10ms);
     }
     runtime.drain();
     const RuntimeStats st = runtime.stats();
@@ -294,7 +308,7 @@ TEST(DepthRuntime, AFrameLateAtTheEntryGetsNoDepthButStaysItsNeighboursFlowFrame
       ASSERT_EQ(taken[k].first, r.index);
       // The last frame waits however long: drain() said no newer one comes.
       if (r.index == kPushed - 1) continue;
-      // Without the deadline the frame after a 120 ms stereo run would wait 40 ms or more.
+      // Without the deadline the frame pushed 10 ms into a 60 ms stereo run would wait 50 ms.
       EXPECT_LT(taken[k].second - c.times[k].entry, 15ms);
       if (r.index == 0) continue;
       // Its flow neighbours were the camera frames next to it, late or not.
