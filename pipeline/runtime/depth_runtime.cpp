@@ -84,7 +84,6 @@ void DepthRuntime::reset_state() {
   for (std::size_t i = 0; i < slots_.size(); ++i) {
     slot_free_[i] = true;
     slots_[i].stereo_done = false;
-    slots_[i].neighbour_only = false;
   }
   stereo_queue_.clear();
   received_ = 0;
@@ -205,13 +204,13 @@ void DepthRuntime::drain() {
   next_index_ = 0;
 }
 
-int DepthRuntime::acquire_slot(std::stop_token stop) {
+int DepthRuntime::acquire_slot(std::stop_token stop, bool neighbour_only) {
   std::unique_lock lock(mutex_);
   int slot = -1;
   if (!changed_.wait(lock, stop, [&] { return (slot = take_free(slot_free_, slot_cursor_)) >= 0; }))
     return -1;
   slots_[static_cast<std::size_t>(slot)].stereo_done = false;
-  slots_[static_cast<std::size_t>(slot)].neighbour_only = false;
+  slots_[static_cast<std::size_t>(slot)].neighbour_only = neighbour_only;
   return slot;
 }
 
@@ -255,14 +254,13 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
       changed_.notify_all();
       continue;
     }
-    const int slot = acquire_slot(stop);
+    const int slot = acquire_slot(stop, late);
     if (slot < 0) return;
     const Input& in = inputs_[static_cast<std::size_t>(input)];
     SlotEntry& entry = slots_[static_cast<std::size_t>(slot)];
     entry.times = {};
     entry.times.capture = in.capture;
     entry.times.entry = in.entry;
-    entry.neighbour_only = late;
     try {
       if (hook_ && !late) hook_(Stage::kStereo, in.index);
       entry.times.stereo_start = Clock::now();

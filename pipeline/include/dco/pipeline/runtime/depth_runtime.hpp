@@ -66,8 +66,8 @@ struct RuntimeStats {
 // neighbour of the frames around it, and takes the next frame as it arrives. So every depth map
 // starts within the deadline of its entry, and its contour window still holds the camera frames
 // next to it. Nothing else ever waits in a queue longer than its capacity, so the latency stays
-// fixed. With runtime.deterministic, push waits instead and
-// the results are bit for bit those of DepthPipeline on the same frames.
+// fixed. With runtime.deterministic, push waits instead and the results are bit for bit those of
+// DepthPipeline on the same frames.
 class DepthRuntime {
  public:
   // Called on the last stage's thread for every result, in order; it should return quickly, the
@@ -139,7 +139,7 @@ class DepthRuntime {
   void densify_receive(int result);
   void densify_end();
 
-  int acquire_slot(std::stop_token stop);
+  int acquire_slot(std::stop_token stop, bool neighbour_only);
   void release_slot(int slot);
   void fail(std::exception_ptr error);
   void rethrow_failure();
