@@ -252,9 +252,12 @@ bool Daemon::healthy(std::int64_t now_ns) const {
 std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const {
   return fmt::format(
       "{}: {:.1f} fps in, {:.1f} fps out, {} published, {} dropped ({} late), latency p50 {:.1f} "
-      "ms p99 {:.1f} ms{}",
+      "ms p99 {:.1f} ms{}{}",
       source_->info().description, fps_in_, fps_out_, published_.load(), s.dropped, s.late,
-      s.latency.p50_ms, s.latency.p99_ms, stalled_ ? "; STALLED" : "");
+      s.latency.p50_ms, s.latency.p99_ms,
+      // Only with runtime.release_latency_ms: results ready after their release time.
+      s.overdue > 0 ? fmt::format(" ({} overdue)", s.overdue) : std::string(),
+      stalled_ ? "; STALLED" : "");
 }
 
 void Daemon::tick(std::int64_t now_ns) {

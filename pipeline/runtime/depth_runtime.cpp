@@ -53,6 +53,9 @@ DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& 
     : pipeline_(pipeline),
       params_(runtime),
       cpus_(checked_cpus(runtime)),
+      releasing_(runtime.release_latency_ms > 0 && !runtime.deterministic),
+      release_latency_(std::chrono::duration_cast<Clock::duration>(
+          std::chrono::duration<double, std::milli>(runtime.release_latency_ms))),
       on_result_(std::move(on_result)),
       hook_(std::move(hook)),
       stereo_(stereo::make_stereo_matcher(stages.stereo, pipeline.stereo)),
@@ -63,10 +66,13 @@ DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& 
       slots_(static_cast<std::size_t>(runtime.queue_depth) + 4),
       slot_free_(slots_.size(), true),
       stereo_queue_(static_cast<std::size_t>(runtime.queue_depth)),
-      // One in the contour stage, a full densify queue, one in the densify stage.
-      results_(static_cast<std::size_t>(runtime.queue_depth) + 2),
+      // One in the contour stage, a full densify queue, one in the densify stage, and with a
+      // release latency a full release queue and the one being handed on.
+      results_(static_cast<std::size_t>(runtime.queue_depth) + 2 +
+               (releasing_ ? kReleaseSlots + 1 : 0)),
       result_free_(results_.size(), true),
-      densify_queue_(static_cast<std::size_t>(runtime.queue_depth)) {
+      densify_queue_(static_cast<std::size_t>(runtime.queue_depth)),
+      release_queue_(kReleaseSlots + 1) {  // the results and the end of their sequence
   validate(pipeline_);
   reset_state();
 }
@@ -89,6 +95,9 @@ void DepthRuntime::reset_state() {
   received_ = 0;
   for (std::size_t i = 0; i < results_.size(); ++i) result_free_[i] = true;
   densify_queue_.clear();
+  release_queue_.clear();
+  held_for_release_ = 0;
+  release_wanted_ = false;
   densifier_.reset();
   failure_ = nullptr;
 }
@@ -99,21 +108,23 @@ void DepthRuntime::start() {
     std::lock_guard lock(mutex_);
     reset_state();
     latency_.clear();
+    ready_.clear();
     stereo_ms_.clear();
     contour_ms_.clear();
     densify_ms_.clear();
-    pushed_ = dropped_ = late_ = published_ = 0;
+    pushed_ = dropped_ = late_ = published_ = overdue_ = early_ = 0;
     entry_high_water_ = 0;
     // Fresh queues: their high-water marks are statistics too.
     stereo_queue_ = BoundedQueue<int>(stereo_queue_.capacity());
     densify_queue_ = BoundedQueue<int>(densify_queue_.capacity());
   }
-  threads_.reserve(3);
+  threads_.reserve(4);
   threads_.emplace_back([this](std::stop_token stop) { stereo_loop(stop); });
   if (params_.threads >= 2)
     threads_.emplace_back([this](std::stop_token stop) { contour_loop(stop); });
   if (params_.threads >= 3)
     threads_.emplace_back([this](std::stop_token stop) { densify_loop(stop); });
+  if (releasing_) threads_.emplace_back([this](std::stop_token stop) { release_loop(stop); });
   if (cpus_.empty()) return;
   for (std::size_t i = 0; i < threads_.size(); ++i) {
     const int cpu = cpus_[i % cpus_.size()];
@@ -368,7 +379,7 @@ void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a
     return;
   }
   if (params_.threads < 3) {
-    densify_receive(result);
+    densify_receive(stop, result);
     return;
   }
   std::unique_lock lock(mutex_);
@@ -389,17 +400,78 @@ void DepthRuntime::densify_loop(std::stop_token stop) {
     if (item == kEnd)
       densify_end();
     else
-      densify_receive(item);
+      densify_receive(stop, item);
   }
 }
 
-void DepthRuntime::densify_receive(int result) {
+void DepthRuntime::densify_receive(std::stop_token stop, int result) {
   ResultEntry& r = results_[static_cast<std::size_t>(result)];
   try {
     if (hook_) hook_(Stage::kDensify, r.result.index);
     r.times.densify_start = Clock::now();
     densify_frame(densifier_, r.result);
     r.times.densify_end = Clock::now();
+  } catch (...) {
+    fail(std::current_exception());
+    return;
+  }
+  if (!releasing_) {
+    deliver(result, false);
+    return;
+  }
+  std::unique_lock lock(mutex_);
+  release_wanted_ = true;  // with every release slot taken, the oldest result goes now
+  changed_.notify_all();
+  if (!changed_.wait(lock, stop, [&] { return held_for_release_ < kReleaseSlots; })) return;
+  release_wanted_ = false;
+  release_queue_.push(result);
+  ++held_for_release_;
+  changed_.notify_all();
+}
+
+void DepthRuntime::densify_end() {
+  densifier_.reset();
+  if (!releasing_) {
+    end_sequence();
+    return;
+  }
+  // The end takes no release slot (the queue has room for it), so it sends no result early.
+  std::lock_guard lock(mutex_);
+  release_queue_.push(kEnd);
+  changed_.notify_all();
+}
+
+void DepthRuntime::release_loop(std::stop_token stop) {
+  while (true) {
+    int item = kEnd;
+    bool early = false;
+    {
+      std::unique_lock lock(mutex_);
+      if (!changed_.wait(lock, stop, [&] { return !release_queue_.empty(); })) return;
+      item = release_queue_.front();
+      if (item != kEnd) {
+        const Clock::time_point due =
+            results_[static_cast<std::size_t>(item)].times.capture + release_latency_;
+        changed_.wait_until(lock, stop, due,
+                            [&] { return release_wanted_ && held_for_release_ == kReleaseSlots; });
+        if (stop.stop_requested()) return;
+        early = Clock::now() < due;
+        --held_for_release_;
+      }
+      release_queue_.pop();
+      changed_.notify_all();
+    }
+    if (item == kEnd)
+      end_sequence();
+    else
+      deliver(item, early);
+  }
+}
+
+void DepthRuntime::deliver(int result, bool early) {
+  ResultEntry& r = results_[static_cast<std::size_t>(result)];
+  try {
+    r.times.release = Clock::now();
     if (on_result_) on_result_(r.result, r.times);
   } catch (...) {
     fail(std::current_exception());
@@ -407,17 +479,19 @@ void DepthRuntime::densify_receive(int result) {
   }
   std::lock_guard lock(mutex_);
   const FrameTimes& t = r.times;
-  latency_.record(ms_between(t.capture, t.densify_end));
+  latency_.record(ms_between(t.capture, t.release));
+  ready_.record(ms_between(t.capture, t.densify_end));
   stereo_ms_.record(ms_between(t.stereo_start, t.stereo_end));
   contour_ms_.record(ms_between(t.contour_start, t.contour_end));
   densify_ms_.record(ms_between(t.densify_start, t.densify_end));
   ++published_;
+  if (releasing_ && t.densify_end - t.capture > release_latency_) ++overdue_;
+  early_ += early;
   result_free_[static_cast<std::size_t>(result)] = true;
   changed_.notify_all();
 }
 
-void DepthRuntime::densify_end() {
-  densifier_.reset();
+void DepthRuntime::end_sequence() {
   std::lock_guard lock(mutex_);
   ++drained_;
   changed_.notify_all();
@@ -427,6 +501,7 @@ RuntimeStats DepthRuntime::stats() const {
   std::lock_guard lock(mutex_);
   RuntimeStats s;
   s.latency = summary(latency_);
+  s.ready = summary(ready_);
   s.stereo = summary(stereo_ms_);
   s.contour = summary(contour_ms_);
   s.densify = summary(densify_ms_);
@@ -434,6 +509,8 @@ RuntimeStats DepthRuntime::stats() const {
   s.dropped = dropped_;
   s.late = late_;
   s.published = published_;
+  s.overdue = overdue_;
+  s.early = early_;
   s.entry_high_water = entry_high_water_;
   s.stereo_queue_high_water = stereo_queue_.high_water();
   s.densify_queue_high_water = densify_queue_.high_water();

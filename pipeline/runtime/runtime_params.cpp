@@ -20,6 +20,9 @@ void register_params(ConfigSchema& s, RuntimeParams& p) {
   s.add("runtime.entry_deadline_ms", &p.entry_deadline_ms, 0.0, 1000.0,
         "a frame that waited longer than this at the entry only lends its image to its "
         "neighbours' flow, so every depth map starts this soon after its entry; 0 = no deadline");
+  s.add("runtime.release_latency_ms", &p.release_latency_ms, 0.0, 1000.0,
+        "hand every depth map on this long after its capture, a constant age; one ready later "
+        "goes at once (overdue); 0 = as soon as it is ready");
   s.add("runtime.deterministic", &p.deterministic,
         "never drop frames (push waits): same output as the offline pipeline, for replays");
   s.add("runtime.backend", &p.backend, {"auto", "cpu", "cuda"},
@@ -64,6 +67,9 @@ void validate(const RuntimeParams& p) {
   if (!(p.entry_deadline_ms >= 0 && p.entry_deadline_ms <= 1000))
     throw Error("runtime.entry_deadline_ms must be in [0, 1000], not " +
                 std::to_string(p.entry_deadline_ms));
+  if (!(p.release_latency_ms >= 0 && p.release_latency_ms <= 1000))
+    throw Error("runtime.release_latency_ms must be in [0, 1000], not " +
+                std::to_string(p.release_latency_ms));
   parse_affinity(p.affinity);
   if (p.backend != "auto" && p.backend != "cpu" && p.backend != "cuda")
     throw Error("runtime.backend must be auto, cpu or cuda, not '" + p.backend + "'");

@@ -4,10 +4,12 @@
 
 #include <dirent.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <mutex>
 #include <new>
 #include <string>
@@ -179,6 +181,7 @@ TEST(DepthRuntime, FramesCarryTheirTimesInStageOrder) {
   RuntimeParams rp;
   rp.deterministic = true;
   rp.threads = 3;
+  rp.release_latency_ms = 1000;  // a replay does not wait for release times
   Collector c;
   DepthRuntime runtime(s.params, rp, c.callback());
   runtime.start();
@@ -195,9 +198,12 @@ TEST(DepthRuntime, FramesCarryTheirTimesInStageOrder) {
     EXPECT_LE(t.contour_start, t.contour_end);
     EXPECT_LE(t.contour_end, t.densify_start);
     EXPECT_LE(t.densify_start, t.densify_end);
+    EXPECT_LE(t.densify_end, t.release);
+    EXPECT_LT(t.release - t.capture, 1000ms);
   }
   const RuntimeStats st = runtime.stats();
   EXPECT_EQ(st.stereo.count, 4);
+  EXPECT_EQ(st.overdue, 0);
   EXPECT_GE(st.latency.p50_ms, 5.0);  // at least the 5 ms between capture and push
   EXPECT_GE(st.latency.p99_ms, st.latency.p50_ms);
   EXPECT_GT(st.stereo.mean_ms, 0.0);
@@ -318,6 +324,179 @@ TEST(DepthRuntime, AFrameLateAtTheEntryGetsNoDepthButStaysItsNeighboursFlowFrame
       EXPECT_TRUE(same_bytes(r.contours, expected.contours));
     }
   }
+}
+
+// How long DepthPipeline takes per frame of `s` in this build (sanitised builds are far slower).
+Clock::duration offline_frame_time(const Sequence& s) {
+  const Clock::time_point start = Clock::now();
+  offline(s);
+  return (Clock::now() - start) / static_cast<int>(s.frames.size());
+}
+
+// Pushes frame i of `s` (cycling) once the stereo stage took frame i - 1, so none is replaced at
+// the entry whatever the machine's speed; `took` is what the stereo hook last saw.
+struct PacedProducer {
+  std::mutex mutex;
+  int took = -1;
+  DepthRuntime::StageHook hook(std::function<void(Stage, int)> more = {}) {
+    return [this, more](Stage stage, int index) {
+      if (stage == Stage::kStereo) {
+        std::lock_guard lock(mutex);
+        took = index;
+      }
+      if (more) more(stage, index);
+    };
+  }
+  void push(DepthRuntime& runtime, const Sequence& s, int i) {
+    const auto until = Clock::now() + 60s;
+    while (Clock::now() < until) {
+      {
+        std::lock_guard lock(mutex);
+        if (took == i - 1) break;
+      }
+      std::this_thread::sleep_for(1ms);
+    }
+    const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
+    runtime.push(f.left.cview(), f.right.cview());
+  }
+};
+
+TEST(DepthRuntime, WithAReleaseLatencyEveryResultIsHandedOnAtItsCaptureTimePlusThatLatency) {
+  Sequence s = make_sequence("hand", 4);
+  s.params.contour.use_flow = false;
+  // Above this build's time for a frame, and the hook's 60 ms.
+  const auto latency = std::min<Clock::duration>(150ms + 3 * offline_frame_time(s), 1000ms);
+  for (int threads : {2, 3}) {
+    SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+    RuntimeParams rp;
+    rp.threads = threads;
+    rp.release_latency_ms = std::chrono::duration<double, std::milli>(latency).count();
+    rp.entry_deadline_ms = 0;  // paced: each frame waits for nothing but the stage to be free
+    Collector c;
+    PacedProducer producer;
+    // Every other frame's densify stage takes 60 ms longer, so results are ready at ages 60 ms
+    // apart.
+    DepthRuntime runtime(s.params, rp, c.callback(), producer.hook([](Stage stage, int index) {
+      if (stage == Stage::kDensify && index % 2 == 1) std::this_thread::sleep_for(60ms);
+    }));
+    runtime.start();
+    constexpr int kPushed = 8;
+    for (int i = 0; i < kPushed; ++i) {
+      producer.push(runtime, s, i);
+      // At most three results wait for release at once, under the four release slots.
+      std::this_thread::sleep_for(latency / 3);
+    }
+    runtime.drain();
+    const RuntimeStats st = runtime.stats();
+    EXPECT_EQ(st.dropped, 0);
+    EXPECT_EQ(st.published, kPushed);
+    EXPECT_EQ(st.early, 0);
+    ASSERT_EQ(c.times.size(), static_cast<std::size_t>(st.published));
+    long overdue = 0;
+    std::vector<Clock::duration> ready, age;  // of the results that were ready in time
+    for (std::size_t k = 0; k < c.times.size(); ++k) {
+      SCOPED_TRACE("result " + std::to_string(k));
+      const FrameTimes& t = c.times[k];
+      EXPECT_EQ(c.results[k].index, static_cast<int>(k));
+      if (t.densify_end - t.capture > latency) {  // went at once
+        ++overdue;
+        EXPECT_LT(t.release - t.densify_end, 20ms);
+        continue;
+      }
+      EXPECT_GE(t.release - t.capture, latency);
+      ready.push_back(t.densify_end - t.capture);
+      age.push_back(t.release - t.capture);
+    }
+    EXPECT_EQ(st.overdue, overdue);
+    ASSERT_GE(ready.size(), 4u);
+    const auto [ready_min, ready_max] = std::minmax_element(ready.begin(), ready.end());
+    const auto [age_min, age_max] = std::minmax_element(age.begin(), age.end());
+    EXPECT_GE(*ready_max - *ready_min, 50ms);  // the stages did vary
+    EXPECT_LT(*age_max - *age_min, 20ms);      // what the callback saw did not
+  }
+}
+
+TEST(DepthRuntime, AResultReadyAfterItsReleaseTimeGoesAtOnceAndCountsAsOverdue) {
+  Sequence s = make_sequence("hand", 4);
+  s.params.contour.use_flow = false;
+  RuntimeParams rp;
+  rp.release_latency_ms = 5;
+  rp.entry_deadline_ms = 0;
+  Collector c;
+  PacedProducer producer;
+  DepthRuntime runtime(s.params, rp, c.callback(), producer.hook([](Stage stage, int) {
+    if (stage == Stage::kDensify) std::this_thread::sleep_for(20ms);
+  }));
+  runtime.start();
+  for (int i = 0; i < 4; ++i) producer.push(runtime, s, i);
+  runtime.drain();
+  const RuntimeStats st = runtime.stats();
+  EXPECT_EQ(st.published, 4);
+  EXPECT_EQ(st.overdue, 4);
+  EXPECT_EQ(st.early, 0);
+  for (const FrameTimes& t : c.times) {
+    EXPECT_GT(t.densify_end - t.capture, 5ms);
+    EXPECT_LT(t.release - t.densify_end, 20ms);  // not held any longer
+  }
+}
+
+TEST(DepthRuntime, WithEveryReleaseSlotTakenTheOldestResultGoesEarlyAndNoStageWaits) {
+  Sequence s = make_sequence("hand", 4);
+  s.params.contour.use_flow = false;
+  RuntimeParams rp;
+  rp.release_latency_ms = 1000;
+  rp.entry_deadline_ms = 0;  // no frame is late, however long it waits for the stereo stage
+  Collector c;
+  PacedProducer producer;
+  DepthRuntime runtime(s.params, rp, c.callback(), producer.hook());
+  runtime.start();
+  constexpr int kPushed = 7;
+  const Clock::time_point start = Clock::now();
+  for (int i = 0; i < kPushed; ++i) producer.push(runtime, s, i);
+  runtime.drain();
+  const RuntimeStats st = runtime.stats();
+  EXPECT_EQ(st.dropped, 0);
+  ASSERT_EQ(st.published, kPushed);
+  ASSERT_EQ(c.times.size(), static_cast<std::size_t>(kPushed));
+  long early = 0;
+  for (int k = 0; k < kPushed; ++k) {
+    SCOPED_TRACE("result " + std::to_string(k));
+    const FrameTimes& t = c.times[static_cast<std::size_t>(k)];
+    EXPECT_EQ(c.results[static_cast<std::size_t>(k)].index, k);
+    if (t.release - t.capture >= 1000ms) continue;
+    // Before its time only because a fifth result was ready and four waited.
+    ++early;
+    ASSERT_LT(k + 4, kPushed);
+    EXPECT_GE(t.release, c.times[static_cast<std::size_t>(k) + 4].densify_end);
+  }
+  EXPECT_EQ(st.early, early);
+  // Where no result reached its release time during the run, each of the last three sent one.
+  if (c.times[0].capture + 1000ms > c.times.back().densify_end) {
+    EXPECT_EQ(st.early, kPushed - 4);
+  }
+  EXPECT_GT(Clock::now() - start, 1000ms);  // drain waited for the last results' time
+}
+
+TEST(DepthRuntime, StopDoesNotWaitForResultsHeldForTheirReleaseTime) {
+  Sequence s = make_sequence("hand", 3);
+  s.params.contour.use_flow = false;
+  const int before = thread_count();
+  RuntimeParams rp;
+  rp.threads = 3;
+  rp.release_latency_ms = 1000;
+  Collector c;
+  DepthRuntime runtime(s.params, rp, c.callback());
+  runtime.start();
+  EXPECT_EQ(settled_thread_count(before + 4), before + 4);  // three stages and the release
+  for (const auto& f : s.frames) {
+    runtime.push(f.left.cview(), f.right.cview());
+    std::this_thread::sleep_for(20ms);
+  }
+  const Clock::time_point stopping = Clock::now();
+  runtime.stop();
+  EXPECT_LT(Clock::now() - stopping, 500ms);
+  EXPECT_TRUE(c.results.empty());
+  EXPECT_EQ(settled_thread_count(before), before);
 }
 
 TEST(DepthRuntime, ASlowDensifyStageMakesTheEntryDropWithoutAnyQueueGrowing) {
@@ -512,6 +691,34 @@ TEST(DepthRuntime, WarmFramesDoNotAllocate) {
     runtime.drain();
     EXPECT_EQ(published.load(), 24);
   }
+}
+
+TEST(DepthRuntime, WarmFramesHeldForTheirReleaseTimeDoNotAllocate) {
+  if (!testing::kCountsAlignedAlloc) GTEST_SKIP() << "the sanitizer runtime owns the allocator";
+  Sequence s = make_sequence("hand", 24);
+  s.params.contour.use_flow = false;
+  RuntimeParams rp;
+  rp.release_latency_ms = 30;
+  std::atomic<long> published{0};
+  DepthRuntime runtime(s.params, rp,
+                       [&](const DepthResult&, const FrameTimes&) { published.fetch_add(1); });
+  runtime.start();
+  const auto run = [&](int from, int to) {
+    for (int i = from; i < to; ++i) {
+      const auto& f = s.frames[static_cast<std::size_t>(i)];
+      runtime.push(f.left.cview(), f.right.cview());
+      std::this_thread::sleep_for(10ms);
+    }
+  };
+  run(0, 12);  // sizes every pooled result, the release slots' included
+  std::this_thread::sleep_for(100ms);
+  const long warm = published.load();
+  testing::start_counting_allocations();
+  run(12, 24);
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(testing::stop_counting_allocations().total(), 0);
+  EXPECT_GT(published.load(), warm);
+  runtime.drain();
 }
 
 TEST(AllocationCounter, SeesAllocationsOnOtherThreads) {

@@ -93,13 +93,14 @@ TEST(RuntimeParams, AreSetThroughTheSchema) {
   register_params(schema, p);
   schema.load_string(
       "[runtime]\nthreads = 3\naffinity = \"0, 1\"\nqueue_depth = 2\ndeterministic = true\n"
-      "entry_deadline_ms = 4.5\n",
+      "entry_deadline_ms = 4.5\nrelease_latency_ms = 120\n",
       "test");
   EXPECT_EQ(p.threads, 3);
   EXPECT_EQ(p.affinity, "0, 1");
   EXPECT_EQ(p.queue_depth, 2);
   EXPECT_TRUE(p.deterministic);
   EXPECT_EQ(p.entry_deadline_ms, 4.5);
+  EXPECT_EQ(p.release_latency_ms, 120);
   EXPECT_NO_THROW(validate(p));
   EXPECT_EQ(parse_affinity(p.affinity), (std::vector<int>{0, 1}));
   EXPECT_THAT(schema.describe(), HasSubstr("runtime.affinity"));
@@ -115,6 +116,8 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   EXPECT_THROW(schema.set("runtime.deterministic=maybe"), Error);
   EXPECT_THROW(schema.set("runtime.entry_deadline_ms=-1"), Error);
   EXPECT_THROW(schema.set("runtime.entry_deadline_ms=1001"), Error);
+  EXPECT_THROW(schema.set("runtime.release_latency_ms=-5"), Error);
+  EXPECT_THROW(schema.set("runtime.release_latency_ms=1000.5"), Error);
   RuntimeParams direct;
   direct.threads = 7;
   EXPECT_THROW(validate(direct), Error);
@@ -123,6 +126,9 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   EXPECT_THROW(validate(direct), Error);
   direct = {};
   direct.entry_deadline_ms = -0.5;
+  EXPECT_THROW(validate(direct), Error);
+  direct = {};
+  direct.release_latency_ms = 2000;
   EXPECT_THROW(validate(direct), Error);
 }
 

@@ -52,6 +52,8 @@ OpenCV StereoSGBM (3-way) + WLS. Per sequence:
   latency     frames pushed at --fps (capture time = the frame's due time), newest wins at the
               entry and a frame that waited past runtime.entry_deadline_ms is late (no depth):
               capture-to-result latency p50 / p99 and the frames dropped (late ones included);
+              with runtime.release_latency_ms also the capture-to-ready latency and the
+              results that were overdue or handed on early;
   peer        SGBM 3-way + WLS ms per frame; ratio = peer / dco.
 With the CUDA backend it also runs the sparse stereo stage, the contour stage and the densify
 solver on the CPU and on the GPU over the same frames: the stage times and how many output
@@ -352,6 +354,7 @@ struct Result {
   rt::RuntimeStats throughput;
   double fps = 0;
   int paced_frames = 0;
+  double release_latency_ms = 0;  // runtime.release_latency_ms of the latency run
   rt::RuntimeStats paced;
   double peer_ms_per_frame = 0;
 };
@@ -404,6 +407,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
     }
     pipeline.drain();
     r.fps = opt.fps;
+    r.release_latency_ms = p.runtime.release_latency_ms;
     r.paced_frames = opt.paced_frames;
     r.paced = pipeline.stats();
   }
@@ -436,6 +440,11 @@ void print_text(const Result& r) {
       "{} of {} frames dropped ({} late), {} published\n",
       l.latency.p50_ms, l.latency.p99_ms, l.latency.p99_ms - l.latency.p50_ms, r.fps, l.dropped,
       l.pushed, l.late, l.published);
+  if (r.release_latency_ms > 0)
+    fmt::print(
+        "  release  at capture + {:g} ms; ready p50 {:.1f} ms  p99 {:.1f} ms; {} overdue, {} "
+        "early\n",
+        r.release_latency_ms, l.ready.p50_ms, l.ready.p99_ms, l.overdue, l.early);
   fmt::print(
       "  peer     {:8.1f} ms/frame  OpenCV StereoSGBM 3-way + WLS; ratio peer / dco {:.3f}\n",
       r.peer_ms_per_frame, r.peer_ms_per_frame / r.ms_per_frame);
@@ -476,14 +485,18 @@ std::string json_fields(const Result& r) {
              "\"name\": {}, \"width\": {}, \"height\": {}, \"frames\": {}, \"max_disparity\": {}, "
              "\"threads\": {}, \"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
              "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
-             "\"latency_p99_ms\": {}, \"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
+             "\"latency_p99_ms\": {}, \"ready_p50_ms\": {}, \"ready_p99_ms\": {}, "
+             "\"release_latency_ms\": {}, \"overdue\": {}, \"early\": {}, "
+             "\"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
              "\"published\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
              dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity,
              r.threads, json_number(r.ms_per_frame), json_number(1000.0 / r.ms_per_frame),
              json_number(t.stereo.mean_ms), json_number(t.contour.mean_ms),
              json_number(t.densify.mean_ms), json_number(r.fps), json_number(l.latency.p50_ms),
-             json_number(l.latency.p99_ms), l.pushed, l.dropped, l.late, l.published,
-             json_number(r.peer_ms_per_frame), json_number(r.peer_ms_per_frame / r.ms_per_frame)) +
+             json_number(l.latency.p99_ms), json_number(l.ready.p50_ms),
+             json_number(l.ready.p99_ms), json_number(r.release_latency_ms), l.overdue, l.early,
+             l.pushed, l.dropped, l.late, l.published, json_number(r.peer_ms_per_frame),
+             json_number(r.peer_ms_per_frame / r.ms_per_frame)) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
          (r.check ? fmt::format(
                         ", \"cpu_stereo_ms\": {}, \"cuda_stereo_ms\": {}, "

@@ -27,6 +27,10 @@ class BoundedQueue {
     --size_;
     return item;
   }
+  const T& front() const {
+    assert(size_ > 0);
+    return items_[head_];
+  }
   void clear() { head_ = size_ = 0; }
 
   bool empty() const { return size_ == 0; }

@@ -30,7 +30,8 @@ struct FrameTimes {
   Clock::time_point entry;    // push accepted it
   Clock::time_point stereo_start, stereo_end;
   Clock::time_point contour_start, contour_end;
-  Clock::time_point densify_start, densify_end;  // densify_end: handed to the result callback
+  Clock::time_point densify_start, densify_end;
+  Clock::time_point release;  // handed to the result callback
 };
 
 struct DurationSummary {
@@ -40,6 +41,8 @@ struct DurationSummary {
 
 struct RuntimeStats {
   DurationSummary latency;  // capture to publication
+  // Capture to the end of densify: the latency unless runtime.release_latency_ms holds results.
+  DurationSummary ready;
   DurationSummary stereo, contour, densify;
   long pushed = 0;  // frames given to push
   // Frames with no depth of their own: replaced at the entry by a newer frame before the stereo
@@ -49,6 +52,9 @@ struct RuntimeStats {
   // served as their neighbours' flow frames.
   long late = 0;
   long published = 0;  // results handed to the callback
+  // With runtime.release_latency_ms: results ready after their release time (handed on at once),
+  // and results handed on before it because every release slot was taken.
+  long overdue = 0, early = 0;
   // The most frames each queue ever held: the entry (a single waiting frame), stereo -> contour
   // and contour -> densify. None can exceed its capacity, so latency cannot grow.
   std::size_t entry_high_water = 0, stereo_queue_high_water = 0, densify_queue_high_water = 0;
@@ -66,12 +72,15 @@ struct RuntimeStats {
 // neighbour of the frames around it, and takes the next frame as it arrives. So every depth map
 // starts within the deadline of its entry, and its contour window still holds the camera frames
 // next to it. Nothing else ever waits in a queue longer than its capacity, so the latency stays
-// fixed. With runtime.deterministic, push waits instead and the results are bit for bit those of
-// DepthPipeline on the same frames.
+// fixed. With runtime.release_latency_ms a release thread hands each result on at its capture time
+// plus that latency, so its age no longer depends on how long the stages took. With
+// runtime.deterministic, push waits instead and the results are bit for bit those of DepthPipeline
+// on the same frames.
 class DepthRuntime {
  public:
-  // Called on the last stage's thread for every result, in order; it should return quickly, the
-  // next frame waits for it. The references are valid during the call only.
+  // Called for every result, in order, on the last stage's thread (on the release thread with
+  // runtime.release_latency_ms); it should return quickly, the next frame waits for it. The
+  // references are valid during the call only.
   using ResultCallback = std::function<void(const DepthResult&, const FrameTimes&)>;
   // Called on a stage's thread right before that stage runs on a frame (tests slow stages down).
   using StageHook = std::function<void(Stage, int index)>;
@@ -123,6 +132,9 @@ class DepthRuntime {
   };
   static constexpr int kEnd = -1;            // queue item: the sequence ends here
   static constexpr std::size_t kInputs = 3;  // being filled, waiting, in the stereo stage
+  // Results waiting for their release time. When all are taken, the oldest goes early rather
+  // than the densify stage waiting for it.
+  static constexpr std::size_t kReleaseSlots = 4;
 
   void stereo_loop(std::stop_token stop);
   // True when the stereo stage should take `input`, which it has just taken from the entry, as
@@ -136,8 +148,12 @@ class DepthRuntime {
   int window_slot(int frame) const;  // -1 for a frame before the first
   bool has_depth(int frame) const;   // a received frame of the window that is not late
   void run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b);
-  void densify_receive(int result);
+  void densify_receive(std::stop_token stop, int result);
   void densify_end();
+  void release_loop(std::stop_token stop);
+  // Hands a result to the callback and records it; `early`: before its release time.
+  void deliver(int result, bool early);
+  void end_sequence();  // every result of the sequence was handed on
 
   int acquire_slot(std::stop_token stop, bool neighbour_only);
   void release_slot(int slot);
@@ -148,6 +164,8 @@ class DepthRuntime {
   const PipelineParams pipeline_;
   const RuntimeParams params_;
   const std::vector<int> cpus_;
+  const bool releasing_;  // runtime.release_latency_ms applies
+  const Clock::duration release_latency_;
   ResultCallback on_result_;
   StageHook hook_;
 
@@ -182,11 +200,16 @@ class DepthRuntime {
   std::size_t result_cursor_ = 0;
   BoundedQueue<int> densify_queue_;
 
+  // Densify -> release.
+  BoundedQueue<int> release_queue_;
+  std::size_t held_for_release_ = 0;  // results in release_queue_
+  bool release_wanted_ = false;       // the densify stage waits for a release slot
+
   long drained_ = 0;  // sequences fully published
   std::exception_ptr failure_;
 
-  Histogram latency_, stereo_ms_, contour_ms_, densify_ms_;
-  long pushed_ = 0, dropped_ = 0, late_ = 0, published_ = 0;
+  Histogram latency_, ready_, stereo_ms_, contour_ms_, densify_ms_;
+  long pushed_ = 0, dropped_ = 0, late_ = 0, published_ = 0, overdue_ = 0, early_ = 0;
 
   std::vector<std::jthread> threads_;
 };

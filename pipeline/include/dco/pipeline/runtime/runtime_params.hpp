@@ -24,6 +24,11 @@ struct RuntimeParams {
   // instead. Every depth map then starts within this of its entry, so the latency does not depend
   // on when the stage happened to be free. 0 = hold the newest frame however long.
   double entry_deadline_ms = 2;
+  // Hand each depth map to the result callback this long (ms) after its capture, however early it
+  // is ready, so a renderer gets depth (and the passthrough image it belongs to) at a constant
+  // age. A map ready later than that goes out at once and counts as overdue. 0 = as soon as it
+  // is ready. Deterministic runs ignore it.
+  double release_latency_ms = 0;
   // Never drop: push waits for room, so every frame is processed in order and the output equals
   // the offline DepthPipeline's (for replays and tests).
   bool deterministic = false;
