@@ -2,8 +2,11 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstring>
 #include <string>
 #include <utility>
@@ -44,6 +47,29 @@ int take_free(Flags& free, std::size_t& cursor) {
 std::string size_text(ImageView<const std::uint8_t> v) {
   return std::to_string(v.width) + "x" + std::to_string(v.height) + "x" +
          std::to_string(v.channels);
+}
+
+// The kernel's struct sched_attr up to sched_period (SCHED_ATTR_SIZE_VER0); glibc 2.36 lacks it.
+struct SchedAttr {
+  std::uint32_t size;
+  std::uint32_t sched_policy;
+  std::uint64_t sched_flags;
+  std::int32_t sched_nice;
+  std::uint32_t sched_priority;
+  std::uint64_t sched_runtime, sched_deadline, sched_period;
+};
+static_assert(sizeof(SchedAttr) == 48);
+
+// Asks the scheduler for a 0.1 ms time slice for the calling thread. With the stage threads
+// keeping every CPU busy, a thread woken at a deadline otherwise waits for the running one's
+// slice to end: on a 2-vCPU VM 4 ms at p99, 0.15 ms with this. Linux 6.12 and later honour it
+// for normal threads without privileges; older kernels ignore it, which costs only precision.
+void request_short_time_slice() {
+  SchedAttr attr{};
+  attr.size = sizeof(attr);
+  attr.sched_policy = SCHED_OTHER;
+  attr.sched_runtime = 100'000;  // ns
+  syscall(SYS_sched_setattr, 0, &attr, 0);
 }
 
 }  // namespace
@@ -442,6 +468,7 @@ void DepthRuntime::densify_end() {
 }
 
 void DepthRuntime::release_loop(std::stop_token stop) {
+  request_short_time_slice();
   while (true) {
     int item = kEnd;
     bool early = false;

@@ -442,9 +442,10 @@ void print_text(const Result& r) {
       l.pushed, l.late, l.published);
   if (r.release_latency_ms > 0)
     fmt::print(
-        "  release  at capture + {:g} ms; ready p50 {:.1f} ms  p99 {:.1f} ms; {} overdue, {} "
-        "early\n",
-        r.release_latency_ms, l.ready.p50_ms, l.ready.p99_ms, l.overdue, l.early);
+        "  release  at capture + {:g} ms (the latest {:.2f} ms after); ready p50 {:.1f} ms  p99 "
+        "{:.1f} ms; {} overdue, {} early\n",
+        r.release_latency_ms, l.latency.max_ms - r.release_latency_ms, l.ready.p50_ms,
+        l.ready.p99_ms, l.overdue, l.early);
   fmt::print(
       "  peer     {:8.1f} ms/frame  OpenCV StereoSGBM 3-way + WLS; ratio peer / dco {:.3f}\n",
       r.peer_ms_per_frame, r.peer_ms_per_frame / r.ms_per_frame);
@@ -485,7 +486,8 @@ std::string json_fields(const Result& r) {
              "\"name\": {}, \"width\": {}, \"height\": {}, \"frames\": {}, \"max_disparity\": {}, "
              "\"threads\": {}, \"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
              "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
-             "\"latency_p99_ms\": {}, \"ready_p50_ms\": {}, \"ready_p99_ms\": {}, "
+             "\"latency_p99_ms\": {}, \"latency_max_ms\": {}, \"ready_p50_ms\": {}, "
+             "\"ready_p99_ms\": {}, "
              "\"release_latency_ms\": {}, \"overdue\": {}, \"early\": {}, "
              "\"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
              "\"published\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
@@ -493,9 +495,10 @@ std::string json_fields(const Result& r) {
              r.threads, json_number(r.ms_per_frame), json_number(1000.0 / r.ms_per_frame),
              json_number(t.stereo.mean_ms), json_number(t.contour.mean_ms),
              json_number(t.densify.mean_ms), json_number(r.fps), json_number(l.latency.p50_ms),
-             json_number(l.latency.p99_ms), json_number(l.ready.p50_ms),
-             json_number(l.ready.p99_ms), json_number(r.release_latency_ms), l.overdue, l.early,
-             l.pushed, l.dropped, l.late, l.published, json_number(r.peer_ms_per_frame),
+             json_number(l.latency.p99_ms), json_number(l.latency.max_ms),
+             json_number(l.ready.p50_ms), json_number(l.ready.p99_ms),
+             json_number(r.release_latency_ms), l.overdue, l.early, l.pushed, l.dropped, l.late,
+             l.published, json_number(r.peer_ms_per_frame),
              json_number(r.peer_ms_per_frame / r.ms_per_frame)) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
          (r.check ? fmt::format(
