@@ -327,6 +327,35 @@ TEST(Dcod, ReplayInDeterministicModeIsBitIdenticalToDcoDepth) {
   }
 }
 
+TEST(Dcod, AReleaseLatencyPublishesEveryFrameAtItsCaptureTimePlusThatLatency) {
+  TempDir dir;
+  DcodOptions o;
+  o.args = base_args(dir, "synthetic://hand?width=160&height=96&fps=15&frames=24");
+  o.args.insert(o.args.end(), {"--set", "runtime.release_latency_ms=150"});
+  o.log = dir / "dcod.log";
+  DcodProcess dcod(o);
+  const auto ring = dir / "depth.shm";
+  for (int i = 0; i < 2000 && !std::filesystem::exists(ring); ++i)
+    std::this_thread::sleep_for(10ms);
+  ASSERT_TRUE(std::filesystem::exists(ring)) << dcod.log();
+  dco::client::Options co;
+  co.path = ring.string();
+  dco::client::Client client(co);
+  std::vector<double> age_ms;  // the ring's publish time - the camera's capture time
+  try {
+    while (const auto f = client.wait_next(3s))
+      age_ms.push_back(static_cast<double>(f->info().publish_ns - f->info().capture_ns) * 1e-6);
+  } catch (const dco::client::Error& e) {  // the end of the sequence: dcod exits
+    EXPECT_EQ(e.status(), DCO_E_WRITER_GONE) << e.what();
+  }
+  EXPECT_EQ(dcod.wait(10s), 0) << dcod.log();
+  ASSERT_GE(age_ms.size(), 12u) << dcod.log();
+  const auto [least, most] = std::minmax_element(age_ms.begin(), age_ms.end());
+  // Never before its time, and all at one age: the stages' own times vary far more than this.
+  EXPECT_GE(*least, 150.0);
+  EXPECT_LT(*most - *least, 20.0);
+}
+
 TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
   if (const std::string problem = private_network_problem(); !problem.empty())
     GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
