@@ -371,7 +371,7 @@ void DepthRuntime::contour_end(std::stop_token stop) {
   for (int t = std::max(received_ - 2, 0); t < received_; ++t) release_slot(window_slot(t));
   received_ = 0;
   if (params_.threads < 3) {
-    densify_end();
+    densify_end(stop);
     return;
   }
   std::unique_lock lock(mutex_);
@@ -424,7 +424,7 @@ void DepthRuntime::densify_loop(std::stop_token stop) {
       changed_.notify_all();
     }
     if (item == kEnd)
-      densify_end();
+      densify_end(stop);
     else
       densify_receive(stop, item);
   }
@@ -455,14 +455,15 @@ void DepthRuntime::densify_receive(std::stop_token stop, int result) {
   changed_.notify_all();
 }
 
-void DepthRuntime::densify_end() {
+void DepthRuntime::densify_end(std::stop_token stop) {
   densifier_.reset();
   if (!releasing_) {
     end_sequence();
     return;
   }
-  // The end takes no release slot (the queue has room for it), so it sends no result early.
-  std::lock_guard lock(mutex_);
+  // The end takes no release slot (the queue has one more place), so it sends no result early.
+  std::unique_lock lock(mutex_);
+  if (!changed_.wait(lock, stop, [&] { return !release_queue_.full(); })) return;
   release_queue_.push(kEnd);
   changed_.notify_all();
 }

@@ -149,7 +149,7 @@ class DepthRuntime {
   bool has_depth(int frame) const;   // a received frame of the window that is not late
   void run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b);
   void densify_receive(std::stop_token stop, int result);
-  void densify_end();
+  void densify_end(std::stop_token stop);
   void release_loop(std::stop_token stop);
   // Hands a result to the callback and records it; `early`: before its release time.
   void deliver(int result, bool early);
