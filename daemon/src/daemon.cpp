@@ -255,8 +255,11 @@ std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const 
       "ms p99 {:.1f} ms{}{}",
       source_->info().description, fps_in_, fps_out_, published_.load(), s.dropped, s.late,
       s.latency.p50_ms, s.latency.p99_ms,
-      // Only with runtime.release_latency_ms: results ready after their release time.
-      s.overdue > 0 ? fmt::format(" ({} overdue)", s.overdue) : std::string(),
+      // With runtime.release_latency_ms the latency is fixed: what the stages took and the
+      // results ready too late for it tell whether the setting suits the machine.
+      loaded_.config.runtime.release_latency_ms > 0 && !loaded_.config.runtime.deterministic
+          ? fmt::format(" (ready p99 {:.1f} ms, {} overdue)", s.ready.p99_ms, s.overdue)
+          : std::string(),
       stalled_ ? "; STALLED" : "");
 }
 

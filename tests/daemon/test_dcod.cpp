@@ -333,7 +333,11 @@ TEST(Dcod, AReleaseLatencyPublishesEveryFrameAtItsCaptureTimePlusThatLatency) {
   o.args = base_args(dir, "synthetic://hand?width=160&height=96&fps=15&frames=24");
   o.args.insert(o.args.end(), {"--set", "runtime.release_latency_ms=150"});
   o.log = dir / "dcod.log";
+  NotifySocket notify(dir / "notify");
+  o.notify = &notify;
   DcodProcess dcod(o);
+  // The status line tells what the stages took, which the fixed latency hides.
+  EXPECT_TRUE(notify.wait_for(" overdue)", 10s)) << dcod.log();
   const auto ring = dir / "depth.shm";
   for (int i = 0; i < 2000 && !std::filesystem::exists(ring); ++i)
     std::this_thread::sleep_for(10ms);
