@@ -78,8 +78,10 @@ TEST(BoundedQueue, KeepsOrderAndRefusesToGrow) {
   EXPECT_TRUE(q.full());
   EXPECT_FALSE(q.push(3));
   EXPECT_EQ(q.size(), 2u);
+  EXPECT_EQ(q.front(), 1);  // looks without taking
   EXPECT_EQ(q.pop(), 1);
   EXPECT_TRUE(q.push(4));
+  EXPECT_EQ(q.front(), 2);
   EXPECT_EQ(q.pop(), 2);
   EXPECT_EQ(q.pop(), 4);
   EXPECT_TRUE(q.empty());
