@@ -305,9 +305,11 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
       if (params_.threads > 1) {
         // Hand the frame on before its stereo: the previous frame's contours need only its
         // grey image, and run meanwhile.
+        const Clock::time_point waiting = Clock::now();
         std::unique_lock lock(mutex_);
         if (!changed_.wait(lock, stop, [&] { return !stereo_queue_.full(); })) return;
         stereo_queue_.push(slot);
+        entry.times.stereo_blocked = Clock::now() - waiting;
         changed_.notify_all();
       }
       if (!late) stereo_frame(*stereo_, in.left.cview(), in.right.cview(), entry.slot);
@@ -509,7 +511,7 @@ void DepthRuntime::deliver(int result, bool early) {
   const FrameTimes& t = r.times;
   latency_.record(ms_between(t.capture, t.release));
   ready_.record(ms_between(t.capture, t.densify_end));
-  stereo_ms_.record(ms_between(t.stereo_start, t.stereo_end));
+  stereo_ms_.record(ms_between(t.stereo_start + t.stereo_blocked, t.stereo_end));
   contour_ms_.record(ms_between(t.contour_start, t.contour_end));
   densify_ms_.record(ms_between(t.densify_start, t.densify_end));
   ++published_;

@@ -194,6 +194,7 @@ TEST(DepthRuntime, FramesCarryTheirTimesInStageOrder) {
     EXPECT_LE(t.capture, t.entry);
     EXPECT_LE(t.entry, t.stereo_start);
     EXPECT_LE(t.stereo_start, t.stereo_end);
+    EXPECT_LE(t.stereo_start + t.stereo_blocked, t.stereo_end);
     EXPECT_LE(t.stereo_end, t.contour_start);
     EXPECT_LE(t.contour_start, t.contour_end);
     EXPECT_LE(t.contour_end, t.densify_start);
@@ -208,6 +209,35 @@ TEST(DepthRuntime, FramesCarryTheirTimesInStageOrder) {
   EXPECT_GE(st.latency.p99_ms, st.latency.p50_ms);
   EXPECT_GT(st.stereo.mean_ms, 0.0);
   EXPECT_GT(st.densify.max_ms, 0.0);
+}
+
+TEST(DepthRuntime, TheStereoStagesTimeLeavesOutItsWaitForASlowContourThread) {
+  Sequence s = make_sequence("hand", 8);
+  s.params.contour.use_flow = false;
+  RuntimeParams rp;
+  rp.deterministic = true;
+  rp.threads = 2;
+  Collector c;
+  // A contour thread far slower than the stereo stage: the stereo thread waits to hand frames on.
+  DepthRuntime runtime(s.params, rp, c.callback(), [](Stage stage, int) {
+    if (stage == Stage::kContour) std::this_thread::sleep_for(100ms);
+  });
+  runtime.start();
+  for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+  runtime.drain();
+  ASSERT_EQ(c.times.size(), s.frames.size());
+  double span_ms = 0, blocked_ms = 0;
+  for (const FrameTimes& t : c.times) {
+    EXPECT_GE(t.stereo_blocked, Clock::duration::zero());
+    EXPECT_LE(t.stereo_start + t.stereo_blocked, t.stereo_end);
+    span_ms += std::chrono::duration<double, std::milli>(t.stereo_end - t.stereo_start).count();
+    blocked_ms += std::chrono::duration<double, std::milli>(t.stereo_blocked).count();
+  }
+  const double n = static_cast<double>(c.times.size());
+  EXPECT_GT(blocked_ms / n, 20.0);  // it did wait
+  const RuntimeStats st = runtime.stats();
+  EXPECT_NEAR(st.stereo.mean_ms, (span_ms - blocked_ms) / n, 0.01);
+  EXPECT_LT(st.stereo.mean_ms, span_ms / n - 20.0);
 }
 
 TEST(DepthRuntime, WhenTheInputOutrunsItFramesAreDroppedAtTheEntryOnly) {

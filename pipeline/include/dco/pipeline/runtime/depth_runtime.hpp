@@ -29,6 +29,9 @@ struct FrameTimes {
   Clock::time_point capture;  // given by the producer (the camera's timestamp)
   Clock::time_point entry;    // push accepted it
   Clock::time_point stereo_start, stereo_end;
+  // Of stereo_start..stereo_end, the wait for room in the queue to the contour thread: the stereo
+  // stage's time (RuntimeStats::stereo) leaves it out, it is the contour thread's slowness.
+  Clock::duration stereo_blocked{};
   Clock::time_point contour_start, contour_end;
   Clock::time_point densify_start, densify_end;
   Clock::time_point release;  // handed to the result callback
@@ -43,8 +46,8 @@ struct RuntimeStats {
   DurationSummary latency;  // capture to publication
   // Capture to the end of densify: the latency unless runtime.release_latency_ms holds results.
   DurationSummary ready;
-  DurationSummary stereo, contour, densify;
-  long pushed = 0;  // frames given to push
+  DurationSummary stereo, contour, densify;  // each stage's own work, waits left out
+  long pushed = 0;                           // frames given to push
   // Frames with no depth of their own: replaced at the entry by a newer frame before the stereo
   // stage took them, or late.
   long dropped = 0;
