@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -123,6 +124,36 @@ TEST(DcoDepthCli, BatchModeWritesEveryScene) {
     EXPECT_EQ(coverage(d).bad, 0) << scene.name;
     EXPECT_THAT(r.out, HasSubstr(scene.name));
   }
+}
+
+TEST(DcoDepthCli, DenseBatchModeAlsoWritesTheSparseMapItWasFilledInFrom) {
+  TempDir dir;
+  // One small scene of the shared manifest.
+  const fs::path manifest = dir.path() / "one.tsv";
+  {
+    std::ifstream in(kDataDir / "stereo_scenes.tsv");
+    std::ofstream out(manifest);
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("scene\t", 0) == 0 || line.rfind("middlebury2001/Tsukuba\t", 0) == 0)
+        out << line << '\n';
+  }
+  const fs::path out_dir = dir.path() / "pred";
+  const std::vector<std::string> args = {"--scenes",        manifest.string(), "--data-root",
+                                         kDataDir.string(), "--out-dir",       out_dir.string()};
+  const CliRun dense = run_depth(dir, args);
+  ASSERT_EQ(dense.exit_code, 0) << dense.err;
+  const Image<float> filled = read_pfm(out_dir / "middlebury2001_Tsukuba.pfm");
+  const Image<float> matched = read_pfm(out_dir / "middlebury2001_Tsukuba.sparse.pfm");
+  ASSERT_TRUE(filled.view().same_size(matched.view()));
+  EXPECT_EQ(coverage(filled).bad, 0);
+  EXPECT_EQ(coverage(filled).unknown, 0);
+  EXPECT_EQ(coverage(matched).bad, 0);
+  EXPECT_GT(coverage(matched).unknown, 0);  // the holes the densifier filled
+  // A sparse run into the same folder drops the dense run's sidecar, which no longer fits.
+  std::vector<std::string> sparse_args = args;
+  sparse_args.push_back("--sparse");
+  ASSERT_EQ(run_depth(dir, sparse_args).exit_code, 0);
+  EXPECT_FALSE(fs::exists(out_dir / "middlebury2001_Tsukuba.sparse.pfm"));
 }
 
 TEST(DcoDepthCli, MissingInputFileIsNamed) {

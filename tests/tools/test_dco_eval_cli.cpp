@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -85,6 +86,46 @@ TEST(DcoEvalCli, MissingOrMisSizedPredictionIsARuntimeError) {
   expect_one_error_line(run_eval(dir, eval_args(pred_dir)), 1, "10x10x1");
 
   expect_one_error_line(run_eval(dir, eval_args(dir.path() / "nowhere")), 1, "nowhere");
+}
+
+TEST(DcoEvalCli, ASparseSidecarSplitsTheErrorIntoMatchedAndFilledPixels) {
+  TempDir dir;
+  const auto pred_dir = write_gt_predictions(dir);
+  // Tsukuba's sparse map: its left half matched (with the true values), the rest left empty; the
+  // dense prediction is the truth, 3 px off on the right half.
+  const Scene tsukuba = load_scene_manifest(kManifest, kDataDir)[2];
+  ASSERT_EQ(tsukuba.name, "middlebury2001/Tsukuba");
+  const Image<float> truth = load_ground_truth(tsukuba).disparity;
+  Image<float> dense(truth.width(), truth.height()), sparse(truth.width(), truth.height());
+  for (int y = 0; y < truth.height(); ++y)
+    for (int x = 0; x < truth.width(); ++x) {
+      const bool left_half = x < truth.width() / 2;
+      sparse.at(x, y) = left_half ? truth.at(x, y) : std::numeric_limits<float>::infinity();
+      dense.at(x, y) = left_half ? truth.at(x, y) : truth.at(x, y) + 3.0f;
+    }
+  write_pfm(pred_dir / "middlebury2001_Tsukuba.pfm", dense.view());
+  write_pfm(pred_dir / "middlebury2001_Tsukuba.sparse.pfm", sparse.view());
+  std::vector<std::string> args = eval_args(pred_dir);
+  for (const char* a : {"--only", "Tsukuba", "--json"}) args.push_back(a);
+  const EvalRun json = run_eval(dir, args);
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  // Every error sits in the filled half, none in the matched one.
+  EXPECT_THAT(json.out, HasSubstr(R"("matched": {"pixels": )"));
+  EXPECT_THAT(json.out,
+              HasSubstr(R"("bad1": 0, "bad2": 0, "bad4": 0, "avgerr": 0}, "filled_err")"));
+  EXPECT_THAT(json.out, HasSubstr(R"("bad1": 100, "bad2": 100, "bad4": 0, "avgerr": 3})"));
+  // Scenes without a sidecar have no split.
+  args.pop_back();
+  args[args.size() - 1] = "Teddy";
+  const EvalRun teddy = run_eval(dir, args);
+  ASSERT_EQ(teddy.exit_code, 0) << teddy.err;
+  args.push_back("--json");
+  EXPECT_THAT(run_eval(dir, args).out, HasSubstr(R"("matches": null)"));
+  // A sidecar of another size is refused, naming it.
+  Image<float> small(10, 10);
+  small.fill(1.0f);
+  write_pfm(pred_dir / "middlebury2001_Tsukuba.sparse.pfm", small.view());
+  expect_one_error_line(run_eval(dir, eval_args(pred_dir)), 1, "sparse map is 10x10x1");
 }
 
 TEST(DcoEvalCli, OnlyFilterBaselineAndTimeSidecar) {

@@ -109,6 +109,40 @@ TEST(Metrics, StepEdgeOcclusionErrors) {
   EXPECT_DOUBLE_EQ(m.band_surface, 0.0);
 }
 
+// A dense map filled in where its sparse map had holes: the error splits by where it was made.
+TEST(Metrics, TheSparseMapSplitsTheErrorIntoMatchedAndFilledPixels) {
+  constexpr int w = 20, h = 10;
+  GroundTruth gt;
+  gt.disparity.resize(w, h);
+  Image<float> dense(w, h), sparse(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      gt.disparity.at(x, y) = 10.0f;
+      const bool matched = x < 15;  // the matcher left columns 15..19 empty
+      sparse.at(x, y) = matched ? 10.0f : std::numeric_limits<float>::infinity();
+      // One matched column 3 px off; the fill 5 px off on four of its five columns.
+      dense.at(x, y) = x == 2 ? 13.0f : (x >= 16 ? 15.0f : 10.0f);
+    }
+  const SceneMetrics m = evaluate_disparity("filled", dense.view(), gt, sparse.view());
+  EXPECT_TRUE(m.has_matches);
+  EXPECT_DOUBLE_EQ(m.filled, 25.0);
+  EXPECT_EQ(m.matched.pixels, 150);
+  EXPECT_DOUBLE_EQ(m.matched.bad2, 100.0 * 10 / 150);
+  EXPECT_EQ(m.filled_err.pixels, 50);
+  EXPECT_DOUBLE_EQ(m.filled_err.bad2, 80.0);
+  EXPECT_DOUBLE_EQ(m.all.bad2, 100.0 * 50 / 200);  // the same pixels, counted once
+
+  const SceneMetrics plain = evaluate_disparity("filled", dense.view(), gt);
+  EXPECT_FALSE(plain.has_matches);
+  EXPECT_TRUE(std::isnan(plain.filled));
+  EXPECT_TRUE(std::isnan(plain.filled_err.bad2));
+  const std::vector<SceneMetrics> both = {m, plain};
+  EXPECT_DOUBLE_EQ(mean_metrics(both).filled, 25.0);  // over the scenes that have it
+
+  const Image<float> smaller(w - 1, h);
+  EXPECT_THROW(evaluate_disparity("filled", dense.view(), gt, smaller.view()), Error);
+}
+
 // A ramp (0.2 px of disparity per column: no depth edge) with a foreground block beside it. The
 // prediction is the ramp 1 px too near, so every plane crosses it 5 columns early, and the block
 // fattened by one column onto the ramp.

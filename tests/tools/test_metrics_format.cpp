@@ -29,6 +29,10 @@ std::vector<SceneMetrics> two_scenes() {
   a.occ_err = 4, a.occ_err_pred = 4, a.band_err = 12, a.band_err_pred = 12;
   a.band_front = 9, a.band_behind = 3, a.band_edge = 7, a.band_surface = 5;
   a.time_ms = 30;
+  a.has_matches = true;
+  a.filled = 30;
+  a.matched = {252415, 4, 2, 1, 0.25};
+  a.filled_err = {108178, 24, 12, 6, 1.5};
   b.scene = "odd \"name\"";
   b.width = 4, b.height = 3;
   b.gt_pixels = 12;
@@ -52,6 +56,8 @@ TEST(MetricsFormat, TableHasFixedWidthRowsAndAMeanRow) {
   EXPECT_THAT(rows[0], HasSubstr("bandBh"));
   EXPECT_THAT(rows[0], HasSubstr("bandEdge"));
   EXPECT_THAT(rows[0], HasSubstr("bandSurf"));
+  EXPECT_THAT(rows[0], HasSubstr("fill%"));
+  EXPECT_THAT(rows[0], HasSubstr("bad2F"));
   EXPECT_EQ(rows[1].rfind("middlebury2014/Motorcycle", 0), 0u);
   EXPECT_EQ(rows[3].rfind("mean ", 0), 0u);
   for (int i = 1; i <= 3; ++i) EXPECT_EQ(rows[i].size(), rows[0].size()) << rows[i];
@@ -73,6 +79,9 @@ TEST(MetricsFormat, JsonHoldsEveryScenePlusTheMean) {
   EXPECT_THAT(json, HasSubstr(R"("nocc": null, "nocc_pred": null)"));
   EXPECT_THAT(json, HasSubstr(R"("planes": [20, 25, 30, 35, 40])"));
   EXPECT_THAT(json, HasSubstr(R"("time_ms": null)"));
+  EXPECT_THAT(json, HasSubstr(R"("filled": 30, "matched": {"pixels": 252415, "bad1": 4, "bad2": )"
+                              R"(2, "bad4": 1, "avgerr": 0.25}, "filled_err": {"pixels": 108178)"));
+  EXPECT_THAT(json, HasSubstr(R"("matches": null)"));  // the second scene has no sparse map
   EXPECT_THAT(json, HasSubstr(R"("band_err_pred": 12, "band_front": 9, "band_behind": 3, )"
                               R"("band_edge": 7, "band_surface": 5})"));
   EXPECT_THAT(json, HasSubstr(R"("mean": {"scene": "mean")"));

@@ -53,7 +53,9 @@ One pair:
   --depth-out Z        metric depth: .pfm in metres (+inf unknown) or .png in millimetres
   --overlay-dir DIR    also write disparity colours, contours and an occlusion composite
 Every scene of a manifest:
-  --scenes TSV         writes DIR/<scene with '/' replaced by '_'>.pfm and .time_ms
+  --scenes TSV         writes DIR/<scene with '/' replaced by '_'>.pfm and .time_ms, and for
+                       the dense map also .sparse.pfm (the stereo stage's map it was filled in
+                       from, which dco-eval uses to split the error)
   --data-root DIR      what the manifest's paths are relative to (default: the TSV's folder)
 A sequence (frame_000000.pfm, ... in --out-dir; synthetic scenes add gt_000000.pfm, ...):
   --left-pattern P     numbered left images, e.g. 'images/I1_%06d.png'
@@ -289,6 +291,11 @@ int run_batch(const Options& opt, dco::pipeline::PipelineParams params) {
     const std::string stem = scene.file_stem();
     dco::write_pfm(*opt.out_dir / (stem + ".pfm"),
                    (opt.sparse ? result.sparse : result.dense).view());
+    const fs::path sparse = *opt.out_dir / (stem + ".sparse.pfm");
+    if (opt.sparse)
+      fs::remove(sparse);  // a dense run's, which no longer matches the .pfm
+    else
+      dco::write_pfm(sparse, result.sparse.view());
     std::ofstream(*opt.out_dir / (stem + ".time_ms")) << total_ms(result, opt.sparse) << '\n';
     fmt::print("{:<40} {}x{} max-disp {:3}  {}\n", scene.name, left.width(), left.height(),
                params.stereo.max_disparity, timing_text(result, opt.sparse));

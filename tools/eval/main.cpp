@@ -57,7 +57,9 @@ Scenes:
   --data-root DIR     directory the manifest's paths are relative to (default: the TSV's directory)
   --pred-dir DIR      predictions: DIR/<scene with '/' -> '_'>.pfm, float px at the GT resolution,
                       +inf / NaN / <= 0 = no prediction. An optional DIR/<same>.time_ms holding one
-                      number (milliseconds) supplies the method's run time.
+                      number (milliseconds) supplies the method's run time, and an optional
+                      DIR/<same>.sparse.pfm the sparse map a dense prediction was filled in from
+                      (fill%, bad2M, bad2F: is the error in the matches or in the fill?).
   --baseline sgbm-wls also run OpenCV StereoSGBM + WLS filter on every scene and compare
   --only SUBSTRING    only scenes whose name contains SUBSTRING
   At least one of --pred-dir and --baseline is needed.
@@ -230,7 +232,11 @@ std::vector<SceneMetrics> evaluate_predictions(const std::vector<Scene>& scenes,
                                    pfm.string(), prediction.width(), prediction.height(),
                                    prediction.channels(), scene.name, gt.disparity.width(),
                                    gt.disparity.height()));
-    SceneMetrics m = dco::tools::evaluate_disparity(scene.name, prediction.view(), gt);
+    const fs::path sparse_pfm = pred_dir / (scene.file_stem() + ".sparse.pfm");
+    const dco::Image<float> matches =
+        fs::exists(sparse_pfm) ? dco::read_pfm(sparse_pfm) : dco::Image<float>();
+    SceneMetrics m =
+        dco::tools::evaluate_disparity(scene.name, prediction.view(), gt, matches.view());
     m.time_ms = read_time_ms(pred_dir / (scene.file_stem() + ".time_ms"));
     results.push_back(std::move(m));
   }

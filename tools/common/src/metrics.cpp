@@ -216,7 +216,7 @@ std::array<double, kOcclusionPlaneQuantiles.size()> occlusion_planes(ImageView<c
 }
 
 SceneMetrics evaluate_disparity(std::string scene, ImageView<const float> prediction,
-                                const GroundTruth& gt) {
+                                const GroundTruth& gt, ImageView<const float> matches) {
   const ImageView<const float> truth = gt.disparity.view();
   if (prediction.channels != 1)
     throw Error(fmt::format("scene '{}': the prediction has {} channels, expected 1", scene,
@@ -224,6 +224,11 @@ SceneMetrics evaluate_disparity(std::string scene, ImageView<const float> predic
   if (!prediction.same_size(truth))
     throw Error(fmt::format("scene '{}': the prediction is {}x{} but the ground truth is {}x{}",
                             scene, prediction.width, prediction.height, truth.width, truth.height));
+  const bool has_matches = !matches.empty();
+  if (has_matches && (matches.channels != 1 || !matches.same_size(truth)))
+    throw Error(fmt::format("scene '{}': the sparse map is {}x{}x{}, the ground truth {}x{}x1",
+                            scene, matches.width, matches.height, matches.channels, truth.width,
+                            truth.height));
   const bool has_nocc = !gt.nocc.empty();
   if (has_nocc && !gt.nocc.view().same_size(truth))
     throw Error(
@@ -234,11 +239,12 @@ SceneMetrics evaluate_disparity(std::string scene, ImageView<const float> predic
   m.width = truth.width;
   m.height = truth.height;
   m.has_nocc = has_nocc;
-  ErrorAccumulator all, pred, nocc, nocc_pred;
+  ErrorAccumulator all, pred, nocc, nocc_pred, matched, filled;
   for (int y = 0; y < truth.height; ++y) {
     const float* g = truth.row(y);
     const float* p = prediction.row(y);
     const std::uint8_t* mask = has_nocc ? gt.nocc.row(y) : nullptr;
+    const float* match = has_matches ? matches.row(y) : nullptr;
     for (int x = 0; x < truth.width; ++x) {
       if (!is_valid_disparity(g[x])) continue;
       const bool predicted = is_valid_disparity(p[x]);
@@ -248,6 +254,7 @@ SceneMetrics evaluate_disparity(std::string scene, ImageView<const float> predic
       if (predicted) pred.add(abs_err, g[x]);
       if (non_occluded) nocc.add(abs_err, g[x]);
       if (non_occluded && predicted) nocc_pred.add(abs_err, g[x]);
+      if (match != nullptr) (is_valid_disparity(match[x]) ? matched : filled).add(abs_err, g[x]);
     }
   }
   m.gt_pixels = all.pixels;
@@ -258,6 +265,12 @@ SceneMetrics evaluate_disparity(std::string scene, ImageView<const float> predic
   if (has_nocc) {
     m.nocc = nocc.stats();
     m.nocc_pred = nocc_pred.stats();
+  }
+  m.has_matches = has_matches;
+  if (has_matches) {
+    m.filled = percent(filled.pixels, all.pixels);
+    m.matched = matched.stats();
+    m.filled_err = filled.stats();
   }
   add_occlusion_metrics(prediction, truth, m);
   return m;
@@ -270,6 +283,7 @@ SceneMetrics mean_metrics(std::span<const SceneMetrics> scenes) {
     mean.gt_pixels += s.gt_pixels;
     mean.predicted_pixels += s.predicted_pixels;
     mean.has_nocc = mean.has_nocc || s.has_nocc;
+    mean.has_matches = mean.has_matches || s.has_matches;
   }
   mean.density = mean_field(scenes, &SceneMetrics::density);
   mean.all = mean_stats(scenes, &SceneMetrics::all);
@@ -277,6 +291,11 @@ SceneMetrics mean_metrics(std::span<const SceneMetrics> scenes) {
   if (mean.has_nocc) {
     mean.nocc = mean_stats(scenes, &SceneMetrics::nocc);
     mean.nocc_pred = mean_stats(scenes, &SceneMetrics::nocc_pred);
+  }
+  if (mean.has_matches) {
+    mean.filled = mean_field(scenes, &SceneMetrics::filled);
+    mean.matched = mean_stats(scenes, &SceneMetrics::matched);
+    mean.filled_err = mean_stats(scenes, &SceneMetrics::filled_err);
   }
   mean.planes.fill(kUndefined);
   mean.occ_err = mean_field(scenes, &SceneMetrics::occ_err);

@@ -39,6 +39,9 @@ constexpr Column kColumns[] = {
     {"bandBh",   2, [](const SceneMetrics& m) { return m.band_behind; }},
     {"bandEdge", 2, [](const SceneMetrics& m) { return m.band_edge; }},
     {"bandSurf", 2, [](const SceneMetrics& m) { return m.band_surface; }},
+    {"fill%",    2, [](const SceneMetrics& m) { return m.filled; }},
+    {"bad2M",    2, [](const SceneMetrics& m) { return m.matched.bad2; }},
+    {"bad2F",    2, [](const SceneMetrics& m) { return m.filled_err.bad2; }},
     {"ms",       1, [](const SceneMetrics& m) { return m.time_ms; }},
 };
 // clang-format on
@@ -70,13 +73,18 @@ std::string scene_json(const SceneMetrics& m) {
       R"("density": {}, "all": {}, "pred": {}, "nocc": {}, "nocc_pred": {}, )"
       R"("occlusion": {{"planes": [{}], "occ_err": {}, "occ_err_pred": {}, "band_err": {}, )"
       R"("band_err_pred": {}, "band_front": {}, "band_behind": {}, "band_edge": {}, )"
-      R"("band_surface": {}}}, "time_ms": {}}})",
+      R"("band_surface": {}}}, "matches": {}, "time_ms": {}}})",
       json_string(m.scene), m.width, m.height, m.gt_pixels, m.predicted_pixels,
       json_number(m.density), stats_json(m.all), stats_json(m.pred),
       m.has_nocc ? stats_json(m.nocc) : "null", m.has_nocc ? stats_json(m.nocc_pred) : "null",
       planes, json_number(m.occ_err), json_number(m.occ_err_pred), json_number(m.band_err),
       json_number(m.band_err_pred), json_number(m.band_front), json_number(m.band_behind),
-      json_number(m.band_edge), json_number(m.band_surface), json_number(m.time_ms));
+      json_number(m.band_edge), json_number(m.band_surface),
+      m.has_matches
+          ? fmt::format(R"({{"filled": {}, "matched": {}, "filled_err": {}}})",
+                        json_number(m.filled), stats_json(m.matched), stats_json(m.filled_err))
+          : "null",
+      json_number(m.time_ms));
 }
 
 std::string signed_cell(double value, int precision, int width) {
@@ -101,8 +109,9 @@ std::string format_metrics_table(std::span<const SceneMetrics> scenes) {
       "(% of GT pixels; p = predicted pixels only, nocc = mask 255, avgerr in px; occ/band = wrong "
       "side of virtual planes at 20..80 % GT quantiles, band = within 3 px of the GT occlusion "
       "boundary, bandFr/bandBh = of it, predicted in front/behind, bandEdge/bandSurf = of it, "
-      "within 3 px of a GT depth edge / where a plane crosses a smooth surface; - = not "
-      "defined)\n";
+      "within 3 px of a GT depth edge / where a plane crosses a smooth surface; fill% = left "
+      "empty by the sparse map given with the prediction, bad2M/bad2F = bad-2 on the matched / "
+      "filled pixels; - = not defined)\n";
   return out;
 }
 

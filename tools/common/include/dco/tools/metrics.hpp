@@ -40,6 +40,9 @@
 //                sub-pixel disparity error moves the crossing by pixels); they add up to bandErr;
 //       the "pred" variants count predicted pixels only. Each is the mean over the planes where
 //       it is defined (a plane with nothing in front of it has no boundary and no band).
+//   - Matches: when the sparse map the prediction was densified from comes with it, the GT
+//     pixels that map left empty are "filled" (fill%), and bad-N runs separately over the matched
+//     and the filled ones (bad2M, bad2F): whether the error comes from the matcher or the fill.
 //   - Rates are percentages. A number over zero pixels is NaN ("not defined"); means over scenes
 //     skip NaN entries.
 namespace dco::tools {
@@ -80,6 +83,10 @@ struct SceneMetrics {
   double band_edge = kUndefined;     // of bandErr: near a GT depth edge
   double band_surface = kUndefined;  // of bandErr: elsewhere (planes crossing smooth surfaces)
 
+  bool has_matches = false;        // the sparse map was given
+  double filled = kUndefined;      // % of GT pixels the sparse map left empty
+  ErrorStats matched, filled_err;  // of the prediction, over GT pixels with / without a match
+
   double time_ms = kUndefined;  // filled by whoever timed the method; NaN when unknown
 };
 
@@ -91,10 +98,11 @@ inline bool is_valid_disparity(float d) {
 // The virtual planes' disparities for a GT map (see above); NaN when the map has no GT pixel.
 std::array<double, kOcclusionPlaneQuantiles.size()> occlusion_planes(ImageView<const float> gt);
 
-// Scores one prediction. Throws dco::Error when its size differs from the GT's or it is not a
-// single-channel map.
+// Scores one prediction; `matches`, when not empty, is the sparse map it was filled in from (same
+// size; a value where the matcher kept one). Throws dco::Error when a size differs from the GT's
+// or a map is not single-channel.
 SceneMetrics evaluate_disparity(std::string scene, ImageView<const float> prediction,
-                                const GroundTruth& gt);
+                                const GroundTruth& gt, ImageView<const float> matches = {});
 
 // Unweighted mean over scenes of every number (each scene counts the same, whatever its size);
 // pixel counts are summed. The result's scene is "mean". The mean time is NaN unless every scene
