@@ -19,6 +19,25 @@ void require(bool ok, const std::string& what) {
   if (!ok) throw Error("densify parameters: " + what);
 }
 
+double det3(const std::array<double, 9>& m) {
+  return m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
+         m[2] * (m[3] * m[7] - m[4] * m[6]);
+}
+
+// Solves the 3x3 system m x = b (row-major m) by Cramer's rule; false when it is singular.
+bool solve3(const std::array<double, 9>& m, const std::array<double, 3>& b,
+            std::array<double, 3>& x) {
+  const double d = det3(m);
+  if (!(std::abs(d) > 1e-9 * (std::abs(m[0] * m[4] * m[8]) + 1e-300))) return false;
+  for (int k = 0; k < 3; ++k) {
+    std::array<double, 9> mk = m;
+    for (int r = 0; r < 3; ++r)
+      mk[static_cast<std::size_t>(3 * r + k)] = b[static_cast<std::size_t>(r)];
+    x[static_cast<std::size_t>(k)] = det3(mk) / d;
+  }
+  return true;
+}
+
 }  // namespace
 
 void register_params(ConfigSchema& s, DensifyParams& p) {
@@ -34,6 +53,9 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.fill_edge_weight", &p.fill_edge_weight, 0.0, 1.0,
         "holes take the row neighbour reached without crossing an edge weaker than this "
         "(0 = always the farther one)");
+  s.add("densify.border_plane_rms", &p.border_plane_rms, 0.0, 10.0,
+        "holes at the left border take a plane fitted to the matches next to them when it fits "
+        "within this RMS, px (0 = the row's first match, as other holes)");
   s.add("densify.solve_resolution", &p.solve_resolution, {"auto", "full", "half"},
         "auto = solve at half size, then refine at full size, when wider than 640 px");
   s.add("densify.fine_sweeps", &p.fine_sweeps, 0, 100,
@@ -56,6 +78,7 @@ void validate(const DensifyParams& p) {
   require(p.fine_sweeps >= 0, "fine_sweeps must be >= 0");
   require(p.fine_iterations >= 0, "fine_iterations must be >= 0");
   require(p.tolerance > 0 && p.tolerance < 1, "tolerance must be in (0, 1)");
+  require(p.border_plane_rms >= 0, "border_plane_rms must be >= 0");
 }
 
 void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::uint8_t> closed) {
@@ -172,6 +195,9 @@ void Densifier::build_system(const DensifyInputs& in) {
   const float crossing = static_cast<float>(params_.fill_edge_weight) * edge_scale;
   for (int y = 0; y < h; ++y)
     kernels::hole_hint_row(in.sparse.row(y), system_.wx.row(y), w, crossing, hint_.row(y));
+  border_hint_low_ = std::numeric_limits<float>::infinity();
+  border_hint_high_ = 0.0f;
+  if (params_.border_plane_rms > 0) border_plane_hints(in.sparse);
   float low = std::numeric_limits<float>::infinity(), high = 0.0f;
   const kernels::DataTermRule terms{kRegulariser, ld, lh > 0.0f ? lh : 0.0f, ls2};
   for (int y = 0; y < h; ++y)
@@ -179,8 +205,59 @@ void Densifier::build_system(const DensifyInputs& in) {
                             has_previous ? in.previous.row(y) : nullptr, w, terms,
                             system_.data.row(y), rhs_.row(y), &low, &high);
   system_.update_diagonal();
+  // The border planes' hints are data-term targets too: the minimiser lies within their range.
+  low = std::min(low, border_hint_low_);
+  high = std::max(high, border_hint_high_);
   data_low_ = high > 0.0f ? low : 0.0f;
   data_high_ = high;
+}
+
+void Densifier::border_plane_hints(ImageView<const float> sparse) {
+  const int w = sparse.width;
+  const int h = sparse.height;
+  border_first_.resize(static_cast<std::size_t>(h));
+  border_sums_.resize(static_cast<std::size_t>(h));
+  for (int y = 0; y < h; ++y) {
+    const float* s = sparse.row(y);
+    int first = 0;
+    while (first < w && !kernels::pixel::known_value(s[first])) ++first;
+    std::array<double, 6> sums{};
+    for (int x = first; x < std::min(w, first + kBorderFitColumns); ++x) {
+      if (!kernels::pixel::known_value(s[x])) continue;
+      const double d = s[x];
+      sums[0] += 1, sums[1] += x, sums[2] += double(x) * x;
+      sums[3] += d, sums[4] += x * d, sums[5] += d * d;
+    }
+    border_first_[static_cast<std::size_t>(y)] = first;
+    border_sums_[static_cast<std::size_t>(y)] = sums;
+  }
+  for (int y = 0; y < h; ++y) {
+    const int first = border_first_[static_cast<std::size_t>(y)];
+    if (first == 0 || first == w) continue;  // no hole at the border, or no match at all
+    // Least squares d = a + b x + c (row - y) over the window's fitted pixels.
+    double n = 0, sx = 0, sxx = 0, sr = 0, srr = 0, sxr = 0, sd = 0, sxd = 0, srd = 0, sdd = 0;
+    for (int r = std::max(0, y - kBorderFitRows); r <= std::min(h - 1, y + kBorderFitRows); ++r) {
+      const std::array<double, 6>& t = border_sums_[static_cast<std::size_t>(r)];
+      const double dr = r - y;
+      n += t[0], sx += t[1], sxx += t[2], sd += t[3], sxd += t[4], sdd += t[5];
+      sr += dr * t[0], srr += dr * dr * t[0], sxr += dr * t[1], srd += dr * t[3];
+    }
+    if (n < 3.0 * kBorderFitColumns) continue;  // too few matches to trust a plane
+    const std::array<double, 9> normal = {n, sx, sr, sx, sxx, sxr, sr, sxr, srr};
+    const std::array<double, 3> moments = {sd, sxd, srd};
+    std::array<double, 3> plane{};
+    if (!solve3(normal, moments, plane)) continue;
+    // Residual sum of squares of a least-squares fit: sum d^2 - plane . moments.
+    const double rss = sdd - (plane[0] * sd + plane[1] * sxd + plane[2] * srd);
+    if (!(rss <= params_.border_plane_rms * params_.border_plane_rms * n)) continue;
+    float* hint = hint_.row(y);
+    for (int x = 0; x < first; ++x) {
+      hint[x] = static_cast<float>(std::max(0.0, plane[0] + plane[1] * x));
+      if (hint[x] <= 0.0f) continue;  // no hint
+      border_hint_low_ = std::min(border_hint_low_, hint[x]);
+      border_hint_high_ = std::max(border_hint_high_, hint[x]);
+    }
+  }
 }
 
 bool Densifier::solves_at_half(int width) const {

@@ -4,10 +4,12 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -713,6 +715,45 @@ TEST(Densifier, EmptySparseMapStillGivesAFiniteMap) {
     for (int x = 0; x < 32; ++x) ASSERT_TRUE(std::isfinite(dense.at(x, y)));
 }
 
+// A surface slanting towards the camera runs into the left border, where the right image holds
+// no match: its 40 border columns are holes.
+TEST(Densifier, HolesAtTheLeftBorderContinueTheSlantOfTheSurfaceBesideThem) {
+  const int w = 160, h = 48, border = 40;
+  const auto truth = [](int x, int y) { return 40.0f - 0.25f * x + 0.02f * y; };
+  Image<float> sparse(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) sparse.at(x, y) = x < border ? kUnknown : truth(x, y);
+  const auto border_error = [&](double rms, const Image<float>& map) {
+    DensifyParams params;
+    params.border_plane_rms = rms;
+    Densifier d(params);
+    DensifyInputs in;
+    in.sparse = map.cview();
+    Image<float> dense;
+    d.compute(in, dense);
+    double worst = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < border; ++x)
+        worst = std::max(worst, std::abs(double(dense.at(x, y)) - truth(x, y)));
+    return std::make_pair(worst, dense);
+  };
+  const auto [flat, flat_map] = border_error(0, sparse);
+  const auto [planar, planar_map] = border_error(DensifyParams{}.border_plane_rms, sparse);
+  EXPECT_GT(flat, 5.0);  // the first match of the row, 10 px of disparity short at the border
+  EXPECT_LT(planar, flat / 2);
+
+  // Two surfaces within the fitted columns fit no plane: the border keeps the row's first match,
+  // bit for bit.
+  Image<float> two = sparse;
+  for (int y = 0; y < h; ++y)
+    for (int x = border + 16; x < w; ++x) two.at(x, y) = truth(x, y) - 8.0f;
+  const auto [two_off, two_off_map] = border_error(0, two);
+  const auto [two_on, two_on_map] = border_error(DensifyParams{}.border_plane_rms, two);
+  EXPECT_EQ(two_off, two_on);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) ASSERT_EQ(two_off_map.at(x, y), two_on_map.at(x, y));
+}
+
 TEST(Densifier, RejectsMismatchedInputsAndBadParams) {
   Image<float> sparse(32, 24), other(31, 24);
   sparse.fill(1.0f);
@@ -727,6 +768,9 @@ TEST(Densifier, RejectsMismatchedInputsAndBadParams) {
   EXPECT_THROW(Densifier{bad}, Error);
   bad = DensifyParams{};
   bad.tolerance = 0;
+  EXPECT_THROW(Densifier{bad}, Error);
+  bad = DensifyParams{};
+  bad.border_plane_rms = -1;
   EXPECT_THROW(Densifier{bad}, Error);
 }
 

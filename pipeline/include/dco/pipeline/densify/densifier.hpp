@@ -18,6 +18,11 @@ class ConfigSchema;
 
 namespace dco::densify {
 
+// The border plane (DensifyParams::border_plane_rms) is fitted to this many columns from each
+// row's first match, over the rows within kBorderFitRows of the hole's row.
+inline constexpr int kBorderFitColumns = 32;
+inline constexpr int kBorderFitRows = 8;
+
 // Parameters of the quadratic densification (§6, Eq. 20; defaults from §7.2).
 struct DensifyParams {
   double lambda_d = 0.8;    // data term, Eq. 13–14
@@ -31,6 +36,12 @@ struct DensifyParams {
   // (relative, after contours, Canny strength and image guidance) is below this; then that one.
   // A hole inside an object then keeps the object's depth instead of the background's. 0 = off.
   double fill_edge_weight = 0.05;
+  // Holes at the left border, where the right image holds no match, continue the surface next to
+  // them: their hint is a plane fitted to the first kBorderFitColumns matched pixels of the rows
+  // within kBorderFitRows, used when it fits them within this RMS (px). Else, and with 0, they
+  // take the first match of their row, as other holes. Left alone, a slanted surface that runs
+  // into the border is filled flat.
+  double border_plane_rms = 0.3;
   double color_sigma = 4;  // grey-level scale of exp(-|I_p - I_q| / sigma) on the weights; 0 = off
   // "full" solves Eq. 20 at the input resolution; "half" solves its 2x2-aggregated (Galerkin)
   // system and then runs `fine_sweeps` Gauss-Seidel sweeps and up to `fine_iterations`
@@ -91,13 +102,19 @@ class Densifier {
 
  private:
   void build_system(const DensifyInputs& in);
+  // Overwrites the hints of the holes at the start of each row (see border_plane_rms).
+  void border_plane_hints(ImageView<const float> sparse);
 
   DensifyParams params_;
   std::unique_ptr<SystemSolver> solver_;
   GridSystem system_;
   Image<float> rhs_, hint_, solution_, smooth_strength_;
   Image<std::uint8_t> barrier_;
-  std::vector<int> fuse_column_;           // column of M_fuse for each input column
+  std::vector<int> fuse_column_;  // column of M_fuse for each input column
+  // Per row: its first matched column and the sums of its fitted pixels (n, x, x², d, x·d, d²).
+  std::vector<int> border_first_;
+  std::vector<std::array<double, 6>> border_sums_;
+  float border_hint_low_ = 0.0f, border_hint_high_ = 0.0f;  // range of the hints it set
   std::array<float, 256> color_weight_{};  // exp(-diff / color_sigma) per grey-level difference
   // Range of the frame's sparse and previous values: the exact minimiser of Eq. 20 is a
   // weighted mean of them, so the solution is kept inside it.
