@@ -257,7 +257,7 @@ std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const 
       s.latency.p50_ms, s.latency.p99_ms,
       // With runtime.release_latency_ms the latency is fixed: what the stages took and the
       // results ready too late for it tell whether the setting suits the machine.
-      loaded_.config.runtime.release_latency_ms > 0 && !loaded_.config.runtime.deterministic
+      runtime_->holds_results_for_release()
           ? fmt::format(" (ready p99 {:.1f} ms, {} overdue)", s.ready.p99_ms, s.overdue)
           : std::string(),
       stalled_ ? "; STALLED" : "");

@@ -241,6 +241,14 @@ void DepthRuntime::drain() {
   next_index_ = 0;
 }
 
+bool DepthRuntime::hand_on(std::stop_token stop, BoundedQueue<int>& queue, int item) {
+  std::unique_lock lock(mutex_);
+  if (!changed_.wait(lock, stop, [&] { return !queue.full(); })) return false;
+  queue.push(item);
+  changed_.notify_all();
+  return true;
+}
+
 int DepthRuntime::acquire_slot(std::stop_token stop, bool neighbour_only) {
   std::unique_lock lock(mutex_);
   int slot = -1;
@@ -285,10 +293,7 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
         contour_end(stop);
         continue;
       }
-      std::unique_lock lock(mutex_);
-      if (!changed_.wait(lock, stop, [&] { return !stereo_queue_.full(); })) return;
-      stereo_queue_.push(kEnd);
-      changed_.notify_all();
+      if (!hand_on(stop, stereo_queue_, kEnd)) return;
       continue;
     }
     const int slot = acquire_slot(stop, late);
@@ -306,11 +311,8 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
         // Hand the frame on before its stereo: the previous frame's contours need only its
         // grey image, and run meanwhile.
         const Clock::time_point waiting = Clock::now();
-        std::unique_lock lock(mutex_);
-        if (!changed_.wait(lock, stop, [&] { return !stereo_queue_.full(); })) return;
-        stereo_queue_.push(slot);
+        if (!hand_on(stop, stereo_queue_, slot)) return;
         entry.times.stereo_blocked = Clock::now() - waiting;
-        changed_.notify_all();
       }
       if (!late) stereo_frame(*stereo_, in.left.cview(), in.right.cview(), entry.slot);
     } catch (...) {
@@ -376,10 +378,7 @@ void DepthRuntime::contour_end(std::stop_token stop) {
     densify_end(stop);
     return;
   }
-  std::unique_lock lock(mutex_);
-  if (!changed_.wait(lock, stop, [&] { return !densify_queue_.full(); })) return;
-  densify_queue_.push(kEnd);
-  changed_.notify_all();
+  hand_on(stop, densify_queue_, kEnd);
 }
 
 void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b) {
@@ -410,10 +409,7 @@ void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a
     densify_receive(stop, result);
     return;
   }
-  std::unique_lock lock(mutex_);
-  if (!changed_.wait(lock, stop, [&] { return !densify_queue_.full(); })) return;
-  densify_queue_.push(result);
-  changed_.notify_all();
+  hand_on(stop, densify_queue_, result);
 }
 
 void DepthRuntime::densify_loop(std::stop_token stop) {
@@ -464,10 +460,7 @@ void DepthRuntime::densify_end(std::stop_token stop) {
     return;
   }
   // The end takes no release slot (the queue has one more place), so it sends no result early.
-  std::unique_lock lock(mutex_);
-  if (!changed_.wait(lock, stop, [&] { return !release_queue_.full(); })) return;
-  release_queue_.push(kEnd);
-  changed_.notify_all();
+  hand_on(stop, release_queue_, kEnd);
 }
 
 void DepthRuntime::release_loop(std::stop_token stop) {

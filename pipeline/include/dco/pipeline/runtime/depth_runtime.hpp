@@ -116,6 +116,9 @@ class DepthRuntime {
   RuntimeStats stats() const;  // from any thread
   const PipelineParams& pipeline_params() const { return pipeline_; }
   const RuntimeParams& runtime_params() const { return params_; }
+  // Whether results wait for their capture time + runtime.release_latency_ms (never in a
+  // deterministic run).
+  bool holds_results_for_release() const { return releasing_; }
 
  private:
   struct Input {
@@ -158,6 +161,8 @@ class DepthRuntime {
   void deliver(int result, bool early);
   void end_sequence();  // every result of the sequence was handed on
 
+  // Waits for room in `queue` and pushes `item`; false when stopped first.
+  bool hand_on(std::stop_token stop, BoundedQueue<int>& queue, int item);
   int acquire_slot(std::stop_token stop, bool neighbour_only);
   void release_slot(int slot);
   void fail(std::exception_ptr error);
