@@ -42,7 +42,7 @@ struct DensifyParams {
   // take the first match of their row, as other holes. Left alone, a slanted surface that runs
   // into the border is filled flat.
   double border_plane_rms = 0.3;
-  double color_sigma = 4;  // grey-level scale of exp(-|I_p - I_q| / sigma) on the weights; 0 = off
+  double color_sigma = 1;  // grey-level scale of exp(-|I_p - I_q| / sigma) on the weights; 0 = off
   // "full" solves Eq. 20 at the input resolution; "half" solves its 2x2-aggregated (Galerkin)
   // system and then runs `fine_sweeps` Gauss-Seidel sweeps and up to `fine_iterations`
   // conjugate-gradient iterations of the full system from the result, so contours still act at
