@@ -64,10 +64,13 @@ static_assert(sizeof(SchedAttr) == 48);
 // keeping every CPU busy, a thread woken at a deadline otherwise waits for the running one's
 // slice to end: on a 2-vCPU VM 4 ms at p99, 0.15 ms with this. Linux 6.12 and later honour it
 // for normal threads without privileges; older kernels ignore it, which costs only precision.
+// The thread's policy and nice value stay as they are (dcod may run at a raised priority).
 void request_short_time_slice() {
   SchedAttr attr{};
+  if (syscall(SYS_sched_getattr, 0, &attr, sizeof(attr), 0) != 0) return;
+  if (attr.sched_policy != SCHED_OTHER && attr.sched_policy != SCHED_BATCH) return;
   attr.size = sizeof(attr);
-  attr.sched_policy = SCHED_OTHER;
+  attr.sched_flags = 0;
   attr.sched_runtime = 100'000;  // ns
   syscall(SYS_sched_setattr, 0, &attr, 0);
 }

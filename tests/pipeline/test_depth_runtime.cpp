@@ -3,6 +3,10 @@
 // once warm, errors of a stage thread reported to the producer.
 
 #include <dirent.h>
+#include <sched.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -467,6 +471,62 @@ TEST(DepthRuntime, AResultReadyAfterItsReleaseTimeGoesAtOnceAndCountsAsOverdue) 
   for (const FrameTimes& t : c.times) {
     EXPECT_GT(t.densify_end - t.capture, 5ms);
     EXPECT_LT(t.release - t.densify_end, 20ms);  // not held any longer
+  }
+}
+
+// struct sched_attr of sched_getattr(2).
+struct SchedAttr {
+  std::uint32_t size;
+  std::uint32_t sched_policy;
+  std::uint64_t sched_flags;
+  std::int32_t sched_nice;
+  std::uint32_t sched_priority;
+  std::uint64_t sched_runtime, sched_deadline, sched_period;
+};
+
+bool own_sched_attr(SchedAttr& out) {
+  out = {};
+  return syscall(SYS_sched_getattr, 0, &out, sizeof out, 0) == 0;
+}
+
+TEST(DepthRuntime, TheReleaseThreadAsksForAShortTimeSliceAndKeepsItsNiceValue) {
+  // Whether this kernel keeps a slice that a normal thread asks for (Linux 6.12+).
+  bool kernel_keeps_slices = false;
+  std::thread([&] {
+    SchedAttr a;
+    if (!own_sched_attr(a)) return;
+    a.size = sizeof a;
+    a.sched_flags = 0;
+    a.sched_runtime = 300'000;
+    SchedAttr b;
+    kernel_keeps_slices = syscall(SYS_sched_setattr, 0, &a, 0) == 0 && own_sched_attr(b) &&
+                          b.sched_runtime == 300'000;
+  }).join();
+  if (!kernel_keeps_slices) GTEST_SKIP() << "this kernel does not keep time slices";
+
+  const Sequence s = make_sequence("hand", 2);
+  std::vector<SchedAttr> seen;
+  // The runtime starts from a thread with a nice value of its own, which its threads inherit:
+  // a service run at a raised (or, here, lowered) priority keeps it in every thread.
+  std::thread([&] {
+    ASSERT_EQ(setpriority(PRIO_PROCESS, 0, 4), 0);
+    RuntimeParams rp;
+    rp.release_latency_ms = 50;
+    std::mutex mutex;
+    DepthRuntime runtime(s.params, rp, [&](const DepthResult&, const FrameTimes&) {
+      SchedAttr a;
+      if (!own_sched_attr(a)) return;
+      std::lock_guard lock(mutex);
+      seen.push_back(a);
+    });
+    runtime.start();
+    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+    runtime.drain();
+  }).join();
+  ASSERT_FALSE(seen.empty());
+  for (const SchedAttr& a : seen) {  // the callback runs on the release thread
+    EXPECT_EQ(a.sched_runtime, 100'000u);
+    EXPECT_EQ(a.sched_nice, 4);
   }
 }
 
