@@ -2,7 +2,6 @@
 
 #include <pthread.h>
 #include <sched.h>
-#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,6 +11,7 @@
 #include <utility>
 
 #include "dco/core/error.hpp"
+#include "dco/core/time_slice.hpp"
 
 namespace dco::pipeline::runtime {
 namespace {
@@ -49,31 +49,10 @@ std::string size_text(ImageView<const std::uint8_t> v) {
          std::to_string(v.channels);
 }
 
-// The kernel's struct sched_attr up to sched_period (SCHED_ATTR_SIZE_VER0); glibc 2.36 lacks it.
-struct SchedAttr {
-  std::uint32_t size;
-  std::uint32_t sched_policy;
-  std::uint64_t sched_flags;
-  std::int32_t sched_nice;
-  std::uint32_t sched_priority;
-  std::uint64_t sched_runtime, sched_deadline, sched_period;
-};
-static_assert(sizeof(SchedAttr) == 48);
-
-// Asks the scheduler for a 0.1 ms time slice for the calling thread. With the stage threads
-// keeping every CPU busy, a thread woken at a deadline otherwise waits for the running one's
-// slice to end: on a 2-vCPU VM 4 ms at p99, 0.15 ms with this. Linux 6.12 and later honour it
-// for normal threads without privileges; older kernels ignore it, which costs only precision.
-// The thread's policy and nice value stay as they are (dcod may run at a raised priority).
-void request_short_time_slice() {
-  SchedAttr attr{};
-  if (syscall(SYS_sched_getattr, 0, &attr, sizeof(attr), 0) != 0) return;
-  if (attr.sched_policy != SCHED_OTHER && attr.sched_policy != SCHED_BATCH) return;
-  attr.size = sizeof(attr);
-  attr.sched_flags = 0;
-  attr.sched_runtime = 100'000;  // ns
-  syscall(SYS_sched_setattr, 0, &attr, 0);
-}
+// The release thread asks for a 0.1 ms time slice. With the stage threads keeping every CPU busy,
+// a thread woken at a deadline otherwise waits for the running one's slice to end: on a 2-vCPU VM
+// 4 ms at p99, 0.15 ms with it. Kernels before 6.12 ignore it, which costs only precision.
+constexpr std::uint64_t kReleaseSliceNs = 100'000;
 
 }  // namespace
 
@@ -467,7 +446,7 @@ void DepthRuntime::densify_end(std::stop_token stop) {
 }
 
 void DepthRuntime::release_loop(std::stop_token stop) {
-  request_short_time_slice();
+  request_time_slice(kReleaseSliceNs);
   while (true) {
     int item = kEnd;
     bool early = false;

@@ -4,7 +4,6 @@
 // for.
 
 #include <fcntl.h>
-#include <sched.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
@@ -24,6 +23,7 @@
 #include "dco/client.hpp"
 #include "dco/ipc/ring_layout.hpp"
 #include "ipc_test_support.hpp"
+#include "support/time_slice_probe.hpp"
 
 namespace dco::ipc::testing {
 namespace {
@@ -180,44 +180,9 @@ TEST(RingPolling, AStoppingWriterEndsAPollingWait) {
   stopper.join();
 }
 
-struct SchedAttr {
-  std::uint32_t size;
-  std::uint32_t sched_policy;
-  std::uint64_t sched_flags;
-  std::int32_t sched_nice;
-  std::uint32_t sched_priority;
-  std::uint64_t sched_runtime, sched_deadline, sched_period;
-};
-
-bool sched_attr_of(pid_t tid, SchedAttr& out) {
-  out = {};
-  return syscall(SYS_sched_getattr, tid, &out, sizeof out, 0) == 0;
-}
-
-// The time slice a thread has asked for, as the kernel reports it; 0 when it reports none.
-std::uint64_t slice_of(pid_t tid) {
-  SchedAttr a;
-  return sched_attr_of(tid, a) ? a.sched_runtime : 0;
-}
-
-// Whether this kernel keeps and reports a slice that a normal thread asks for (Linux 6.12+),
-// tried on a thread of its own.
-bool kernel_keeps_slices() {
-  bool kept = false;
-  std::thread probe([&] {
-    SchedAttr a;
-    if (!sched_attr_of(0, a)) return;
-    a.size = sizeof a;
-    a.sched_flags = 0;
-    a.sched_runtime = 300'000;
-    kept = syscall(SYS_sched_setattr, 0, &a, 0) == 0 && slice_of(0) == 300'000;
-  });
-  probe.join();
-  return kept;
-}
-
 TEST(RingPolling, APollingWaitAsksForAShortTimeSliceForItsThreadAndKeepsItsNiceValue) {
-  if (!kernel_keeps_slices()) GTEST_SKIP() << "this kernel does not keep time slices";
+  if (!dco::testing::kernel_keeps_time_slices())
+    GTEST_SKIP() << "this kernel does not keep time slices";
   TempDir dir;
   RingWriter writer(dir.path() / "depth.shm", small_ring());
   for (const std::uint32_t poll_us : {0u, 2000u}) {
@@ -231,21 +196,24 @@ TEST(RingPolling, APollingWaitAsksForAShortTimeSliceForItsThreadAndKeepsItsNiceV
       // A nice value of its own, which the slice must not take away (raising it needs no
       // privilege; lowering it back would).
       setpriority(PRIO_PROCESS, 0, 5);
-      sched_attr_of(0, before);
+      dco::testing::set_time_slice(2'000'000);  // not inherited from an earlier polling wait
+      thread_sched_attr(0, before);
       tid = static_cast<pid_t>(syscall(SYS_gettid));
       waiting = true;
       dco_frame_view v;
       dco_frame_view_init(&v);
       status = dco_client_wait_next(c.handle(), 400, &v);  // nothing is published: times out
-      sched_attr_of(0, after);
+      thread_sched_attr(0, after);
     });
     while (!waiting) std::this_thread::yield();
     std::this_thread::sleep_for(100ms);
     SchedAttr during;
-    ASSERT_TRUE(sched_attr_of(tid, during));
+    const bool read_during = thread_sched_attr(tid, during);
     reader.join();
+    ASSERT_TRUE(read_during);
     EXPECT_EQ(status, DCO_E_TIMEOUT);
     ASSERT_EQ(before.sched_nice, 5);
+    ASSERT_EQ(before.sched_runtime, 2'000'000u);
     EXPECT_EQ(during.sched_nice, 5);
     if (poll_us == 0) {
       EXPECT_EQ(during.sched_runtime, before.sched_runtime) << "a sleeping wait keeps its slice";

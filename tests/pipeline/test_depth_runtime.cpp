@@ -3,10 +3,7 @@
 // once warm, errors of a stage thread reported to the producer.
 
 #include <dirent.h>
-#include <sched.h>
 #include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -29,6 +26,7 @@
 #include "dco/pipeline/runtime/depth_runtime.hpp"
 #include "support/allocation_counter.hpp"
 #include "support/same_bytes.hpp"
+#include "support/time_slice_probe.hpp"
 
 namespace dco::pipeline::runtime {
 namespace {
@@ -474,35 +472,9 @@ TEST(DepthRuntime, AResultReadyAfterItsReleaseTimeGoesAtOnceAndCountsAsOverdue) 
   }
 }
 
-// struct sched_attr of sched_getattr(2).
-struct SchedAttr {
-  std::uint32_t size;
-  std::uint32_t sched_policy;
-  std::uint64_t sched_flags;
-  std::int32_t sched_nice;
-  std::uint32_t sched_priority;
-  std::uint64_t sched_runtime, sched_deadline, sched_period;
-};
-
-bool own_sched_attr(SchedAttr& out) {
-  out = {};
-  return syscall(SYS_sched_getattr, 0, &out, sizeof out, 0) == 0;
-}
-
 TEST(DepthRuntime, TheReleaseThreadAsksForAShortTimeSliceAndKeepsItsNiceValue) {
-  // Whether this kernel keeps a slice that a normal thread asks for (Linux 6.12+).
-  bool kernel_keeps_slices = false;
-  std::thread([&] {
-    SchedAttr a;
-    if (!own_sched_attr(a)) return;
-    a.size = sizeof a;
-    a.sched_flags = 0;
-    a.sched_runtime = 300'000;
-    SchedAttr b;
-    kernel_keeps_slices = syscall(SYS_sched_setattr, 0, &a, 0) == 0 && own_sched_attr(b) &&
-                          b.sched_runtime == 300'000;
-  }).join();
-  if (!kernel_keeps_slices) GTEST_SKIP() << "this kernel does not keep time slices";
+  if (!dco::testing::kernel_keeps_time_slices())
+    GTEST_SKIP() << "this kernel does not keep time slices";
 
   const Sequence s = make_sequence("hand", 2);
   std::vector<SchedAttr> seen;
@@ -510,12 +482,13 @@ TEST(DepthRuntime, TheReleaseThreadAsksForAShortTimeSliceAndKeepsItsNiceValue) {
   // a service run at a raised (or, here, lowered) priority keeps it in every thread.
   std::thread([&] {
     ASSERT_EQ(setpriority(PRIO_PROCESS, 0, 4), 0);
+    ASSERT_TRUE(dco::testing::set_time_slice(2'000'000));  // inherited by the runtime's threads
     RuntimeParams rp;
     rp.release_latency_ms = 50;
     std::mutex mutex;
     DepthRuntime runtime(s.params, rp, [&](const DepthResult&, const FrameTimes&) {
       SchedAttr a;
-      if (!own_sched_attr(a)) return;
+      if (!thread_sched_attr(0, a)) return;
       std::lock_guard lock(mutex);
       seen.push_back(a);
     });

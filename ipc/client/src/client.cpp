@@ -6,7 +6,6 @@
 #include <sys/file.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
-#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <sched.h>
@@ -19,6 +18,7 @@
 #include <new>
 #include <string>
 
+#include "dco/core/time_slice.hpp"
 #include "dco/ipc/ring_layout.hpp"
 #include "dco/ipc/ring_wake.hpp"
 
@@ -176,36 +176,15 @@ bool struct_ok(const void* p, std::uint32_t size, std::uint32_t expected) {
   return p != nullptr && size >= expected;
 }
 
-// struct sched_attr of sched_setattr(2), which glibc does not wrap.
-struct SchedAttr {
-  std::uint32_t size;
-  std::uint32_t sched_policy;
-  std::uint64_t sched_flags;
-  std::int32_t sched_nice;
-  std::uint32_t sched_priority;
-  std::uint64_t sched_runtime, sched_deadline, sched_period;
-};
-static_assert(sizeof(SchedAttr) == 48);
-
-constexpr std::uint64_t kPollingSliceNs = 100'000;
-
 // Asks, once per thread, for a 0.1 ms time slice, which the thread keeps: a polling reader then
 // gets its turn sooner among the others that poll and yield on its CPU (8 clients on 2 vCPUs at
 // 30 Hz: p99 about 107 -> 86 us). Restoring the slice on return would reschedule the thread
-// between the publish and the return. Linux 6.12 and later honour it for normal threads; older
-// kernels ignore it. Policy and nice value stay; real-time threads are left alone.
+// between the publish and the return.
 void request_polling_slice() {
   thread_local bool requested = false;
   if (requested) return;
   requested = true;
-  SchedAttr attr{};
-  if (syscall(SYS_sched_getattr, 0, &attr, sizeof attr, 0) != 0) return;
-  if (attr.sched_policy != SCHED_OTHER && attr.sched_policy != SCHED_BATCH) return;
-  if (attr.sched_runtime != 0 && attr.sched_runtime <= kPollingSliceNs) return;
-  attr.size = sizeof attr;
-  attr.sched_flags = 0;
-  attr.sched_runtime = kPollingSliceNs;
-  syscall(SYS_sched_setattr, 0, &attr, 0);
+  dco::request_time_slice(100'000);
 }
 
 // Polls `word` until it changes or the clock reaches `until_ns`, giving the CPU to anything else

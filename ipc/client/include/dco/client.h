@@ -51,7 +51,8 @@ typedef struct dco_client_options {
    * polling through the writer's copy (about 0.5 ms for 1280x720 depth and image). Then it
    * sleeps again. At most 100000. The first polling wait of a thread also asks the kernel for a
    * 0.1 ms time slice for that thread, which it keeps (Linux 6.12+; policy and nice value
-   * unchanged; real-time threads are left alone): polling readers sharing CPUs take turns sooner. */
+   * unchanged; real-time threads are left alone): polling readers sharing CPUs take turns sooner.
+   */
   uint32_t poll_us;
 } dco_client_options;
 
