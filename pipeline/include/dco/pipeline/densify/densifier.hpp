@@ -48,8 +48,8 @@ struct DensifyParams {
   // conjugate-gradient iterations of the full system from the result, so contours still act at
   // the input resolution; "auto" = half when the input is wider than 640 px.
   std::string solve_resolution = "auto";
-  int fine_sweeps = 4;
-  int fine_iterations = 1;
+  int fine_sweeps = 8;
+  int fine_iterations = 0;
   int max_iterations = 60;
   double tolerance = 1e-4;  // relative residual ||b - Ax|| / ||b||
   bool multigrid = true;    // V-cycle preconditioner (else plain conjugate gradients)
