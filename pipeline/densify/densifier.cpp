@@ -195,24 +195,20 @@ void Densifier::build_system(const DensifyInputs& in) {
   const float crossing = static_cast<float>(params_.fill_edge_weight) * edge_scale;
   for (int y = 0; y < h; ++y)
     kernels::hole_hint_row(in.sparse.row(y), system_.wx.row(y), w, crossing, hint_.row(y));
-  border_hint_low_ = std::numeric_limits<float>::infinity();
-  border_hint_high_ = 0.0f;
-  if (params_.border_plane_rms > 0) border_plane_hints(in.sparse);
+  // The range of the data-term targets: the exact minimiser lies within it.
   float low = std::numeric_limits<float>::infinity(), high = 0.0f;
+  if (params_.border_plane_rms > 0) border_plane_hints(in.sparse, low, high);
   const kernels::DataTermRule terms{kRegulariser, ld, lh > 0.0f ? lh : 0.0f, ls2};
   for (int y = 0; y < h; ++y)
     kernels::data_terms_row(in.sparse.row(y), hint_.row(y),
                             has_previous ? in.previous.row(y) : nullptr, w, terms,
                             system_.data.row(y), rhs_.row(y), &low, &high);
   system_.update_diagonal();
-  // The border planes' hints are data-term targets too: the minimiser lies within their range.
-  low = std::min(low, border_hint_low_);
-  high = std::max(high, border_hint_high_);
   data_low_ = high > 0.0f ? low : 0.0f;
   data_high_ = high;
 }
 
-void Densifier::border_plane_hints(ImageView<const float> sparse) {
+void Densifier::border_plane_hints(ImageView<const float> sparse, float& low, float& high) {
   const int w = sparse.width;
   const int h = sparse.height;
   border_first_.resize(static_cast<std::size_t>(h));
@@ -254,8 +250,8 @@ void Densifier::border_plane_hints(ImageView<const float> sparse) {
     for (int x = 0; x < first; ++x) {
       hint[x] = static_cast<float>(std::max(0.0, plane[0] + plane[1] * x));
       if (hint[x] <= 0.0f) continue;  // no hint
-      border_hint_low_ = std::min(border_hint_low_, hint[x]);
-      border_hint_high_ = std::max(border_hint_high_, hint[x]);
+      low = std::min(low, hint[x]);
+      high = std::max(high, hint[x]);
     }
   }
 }

@@ -1,8 +1,5 @@
 #pragma once
 
-#include <sys/syscall.h>
-#include <unistd.h>
-
 #include <cstdint>
 #include <thread>
 
@@ -11,16 +8,12 @@
 namespace dco::testing {
 
 // Sets the calling thread's time slice to `ns` whatever it was (request_time_slice only ever
-// shortens it), keeping its policy and nice value. A test thread inherits its creator's slice,
-// so a test that checks a request starts its thread from a known, longer one.
+// shortens it), keeping its policy and nice value, and checks that the kernel kept it. A test
+// thread inherits its creator's slice, so a test that checks a request starts its thread from a
+// known, longer one.
 inline bool set_time_slice(std::uint64_t ns) {
-  SchedAttr a;
-  if (!thread_sched_attr(0, a)) return false;
-  a.size = sizeof a;
-  a.sched_flags = 0;
-  a.sched_runtime = ns;
-  SchedAttr b;
-  return syscall(SYS_sched_setattr, 0, &a, 0) == 0 && thread_sched_attr(0, b) &&
+  SchedAttr a, b;
+  return thread_sched_attr(0, a) && dco::set_time_slice(a, ns) && thread_sched_attr(0, b) &&
          b.sched_runtime == ns;
 }
 

@@ -31,6 +31,15 @@ inline bool thread_sched_attr(pid_t tid, SchedAttr& out) {
   return syscall(SYS_sched_getattr, tid, &out, sizeof out, 0) == 0;
 }
 
+// Gives the calling thread, whose attributes are `attr`, a time slice of `ns` and keeps its
+// policy and nice value; true when the kernel accepted it.
+inline bool set_time_slice(SchedAttr attr, std::uint64_t ns) {
+  attr.size = sizeof attr;
+  attr.sched_flags = 0;
+  attr.sched_runtime = ns;
+  return syscall(SYS_sched_setattr, 0, &attr, 0) == 0;
+}
+
 // Asks for a time slice of `ns` for the calling thread, keeping its policy and nice value.
 // Real-time and deadline threads, and threads that already asked for a slice this short, are left
 // alone. True when a request was made and accepted.
@@ -39,10 +48,7 @@ inline bool request_time_slice(std::uint64_t ns) {
   if (!thread_sched_attr(0, attr)) return false;
   if (attr.sched_policy != SCHED_OTHER && attr.sched_policy != SCHED_BATCH) return false;
   if (attr.sched_runtime != 0 && attr.sched_runtime <= ns) return false;
-  attr.size = sizeof attr;
-  attr.sched_flags = 0;
-  attr.sched_runtime = ns;
-  return syscall(SYS_sched_setattr, 0, &attr, 0) == 0;
+  return set_time_slice(attr, ns);
 }
 
 }  // namespace dco

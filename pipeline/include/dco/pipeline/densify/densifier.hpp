@@ -102,8 +102,9 @@ class Densifier {
 
  private:
   void build_system(const DensifyInputs& in);
-  // Overwrites the hints of the holes at the start of each row (see border_plane_rms).
-  void border_plane_hints(ImageView<const float> sparse);
+  // Overwrites the hints of the holes at the start of each row (see border_plane_rms) and widens
+  // [low, high] to the hints it sets.
+  void border_plane_hints(ImageView<const float> sparse, float& low, float& high);
 
   DensifyParams params_;
   std::unique_ptr<SystemSolver> solver_;
@@ -114,7 +115,6 @@ class Densifier {
   // Per row: its first matched column and the sums of its fitted pixels (n, x, x², d, x·d, d²).
   std::vector<int> border_first_;
   std::vector<std::array<double, 6>> border_sums_;
-  float border_hint_low_ = 0.0f, border_hint_high_ = 0.0f;  // range of the hints it set
   std::array<float, 256> color_weight_{};  // exp(-diff / color_sigma) per grey-level difference
   // Range of the frame's sparse and previous values: the exact minimiser of Eq. 20 is a
   // weighted mean of them, so the solution is kept inside it.
