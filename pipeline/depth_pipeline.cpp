@@ -101,6 +101,32 @@ void densify_frame(densify::Densifier& densifier, DepthResult& out) {
   out.solver = densifier.last_report();
 }
 
+namespace {
+
+template <typename T>
+void size_image_like(const Image<T>& model, Image<T>& out) {
+  out.resize(model.width(), model.height(), model.channels());
+}
+
+}  // namespace
+
+void size_like(const StereoSlot& model, StereoSlot& out) {
+  size_image_like(model.image, out.image);
+  size_image_like(model.small, out.small);
+  size_image_like(model.small_colour, out.small_colour);
+  size_image_like(model.raw_disparity, out.raw_disparity);
+  size_image_like(model.sparse, out.sparse);
+}
+
+void size_like(const DepthResult& model, DepthResult& out) {
+  size_image_like(model.image, out.image);
+  size_image_like(model.sparse, out.sparse);
+  size_image_like(model.dense, out.dense);
+  size_image_like(model.m_fuse, out.m_fuse);
+  size_image_like(model.m_intensity, out.m_intensity);
+  size_image_like(model.contours, out.contours);
+}
+
 ContourWindow window_on_arrival(int lookahead, int newest) {
   const auto frame = [](int i) { return i >= 0 ? i : -1; };
   if (lookahead == 0) return {newest, frame(newest - 1), frame(newest - 2)};

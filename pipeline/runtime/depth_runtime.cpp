@@ -241,9 +241,18 @@ int DepthRuntime::acquire_slot(std::stop_token stop, bool neighbour_only) {
   return slot;
 }
 
-void DepthRuntime::release_slot(int slot) {
+void DepthRuntime::release_slot(int slot, int fallback_model) {
   std::lock_guard lock(mutex_);
+  const auto filled = [&](int s) {
+    return s >= 0 && slots_[static_cast<std::size_t>(s)].stereo_done;
+  };
+  const int model = filled(slot) ? slot : filled(fallback_model) ? fallback_model : -1;
   slot_free_[static_cast<std::size_t>(slot)] = true;
+  if (model >= 0) {
+    const StereoSlot& m = slots_[static_cast<std::size_t>(model)].slot;
+    for (std::size_t i = 0; i < slots_.size(); ++i)
+      if (slot_free_[i] && static_cast<int>(i) != model) size_like(m, slots_[i].slot);
+  }
   changed_.notify_all();
 }
 
@@ -344,7 +353,8 @@ void DepthRuntime::contour_receive(std::stop_token stop, int slot) {
   if (has_depth(w.centre))
     run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a),
                 window_slot(w.neighbour_b));
-  if (t >= 2) release_slot(window_slot(t - 2));  // in no later window, either lookahead
+  // In no later window, either lookahead.
+  if (t >= 2) release_slot(window_slot(t - 2), window_slot(w.centre));
 }
 
 void DepthRuntime::contour_end(std::stop_token stop) {
@@ -354,7 +364,8 @@ void DepthRuntime::contour_end(std::stop_token stop) {
       run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a),
                   window_slot(w.neighbour_b));
   }
-  for (int t = std::max(received_ - 2, 0); t < received_; ++t) release_slot(window_slot(t));
+  for (int t = std::max(received_ - 2, 0); t < received_; ++t)
+    release_slot(window_slot(t), window_slot(received_ - 1));
   received_ = 0;
   if (params_.threads < 3) {
     densify_end(stop);
@@ -492,6 +503,10 @@ void DepthRuntime::deliver(int result, bool early) {
   ++published_;
   if (releasing_ && t.densify_end - t.capture > release_latency_) ++overdue_;
   early_ += early;
+  // Every free result gets this one's room, so none allocates when it is first taken, however
+  // late in the sequence that is (frames dropped at the entry leave entries unused).
+  for (std::size_t i = 0; i < results_.size(); ++i)
+    if (result_free_[i]) size_like(r.result, results_[i].result);
   result_free_[static_cast<std::size_t>(result)] = true;
   changed_.notify_all();
 }

@@ -90,7 +90,9 @@ void BlockAggregator::prepare(const CrossArms& arms, int max_block) {
     reach_down_ =
         std::max(reach_down_, int(*std::max_element(arms.down.row(y), arms.down.row(y) + w)));
   }
-  // Rows y - up - 1 .. y + down must be alive when row y is taken.
+  // Rows y - up - 1 .. y + down must be alive when row y is taken. The room is for the longest
+  // arms the rule allows, so a frame whose arms reach further than the last does not allocate.
+  ring_.resize(w * max_block, std::min(h, 2 * arms.arm_max + 2));
   ring_.resize(w * max_block, std::min(h, reach_up_ + reach_down_ + 2));
   rows_.resize(static_cast<std::size_t>(h));
   const auto n = static_cast<std::size_t>(w) * static_cast<std::size_t>(max_block);

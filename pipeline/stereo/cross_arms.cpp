@@ -74,6 +74,7 @@ void compute_cross_arms(ImageView<const std::uint8_t> image, const ArmRule& rule
   const int h = image.height;
   const int ch = image.channels;
   arms.resize(w, h);
+  arms.arm_max = rule.arm_max;
   const std::ptrdiff_t down_step = image.stride;
   for (int y = 0; y < h; ++y) {
     const std::uint8_t* row = image.row(y);
@@ -95,6 +96,7 @@ void compute_cross_arms(ImageView<const std::uint32_t> packed, const ArmRule& ru
                         CrossArms& arms) {
   assert(rule.arm_max >= 0 && rule.arm_max <= 255);
   arms.resize(packed.width, packed.height);
+  arms.arm_max = rule.arm_max;
   const kernels::ArmParams params{rule.arm_max, rule.arm_short, rule.tau1, rule.tau2};
   for (int y = 0; y < packed.height; ++y)
     kernels::cross_arms_row(packed.data, packed.stride, packed.width, packed.height, y, params,
@@ -108,6 +110,7 @@ void compute_grey_cross_arms(ImageView<const std::uint8_t> grey, const ArmRule& 
     throw Error("compute_grey_cross_arms: the image has " + std::to_string(grey.channels) +
                 " channels, not 1");
   arms.resize(grey.width, grey.height);
+  arms.arm_max = rule.arm_max;
   const kernels::ArmParams params{rule.arm_max, rule.arm_short, rule.tau1, rule.tau2};
   for (int y = 0; y < grey.height; ++y)
     kernels::grey_cross_arms_row(grey.data, grey.stride, grey.width, grey.height, y, params,

@@ -74,6 +74,11 @@ densify::DensifyInputs densify_inputs(const DepthResult& r, ImageView<const floa
 //    previous frame's dense map (Eq. 18), so results go through it in order.
 void densify_frame(densify::Densifier& densifier, DepthResult& out);
 
+// Sizes every image of `out` as in `model`, a filled entry, so that a pooled entry has its room
+// before its first frame: the steps above then resize without allocating.
+void size_like(const StereoSlot& model, StereoSlot& out);
+void size_like(const DepthResult& model, DepthResult& out);
+
 // Frame numbers of one contour window; -1 where a frame does not exist.
 struct ContourWindow {
   int centre = -1, neighbour_a = -1, neighbour_b = -1;

@@ -164,7 +164,10 @@ class DepthRuntime {
   // Waits for room in `queue` and pushes `item`; false when stopped first.
   bool hand_on(std::stop_token stop, BoundedQueue<int>& queue, int item);
   int acquire_slot(std::stop_token stop, bool neighbour_only);
-  void release_slot(int slot);
+  // Frees `slot` and gives every free slot the room of a slot the stereo step filled: `slot`
+  // itself, else `fallback_model` (a late frame's slot has no stereo output to copy). So a slot
+  // first taken, or first given a stereo step, late in the sequence does not allocate.
+  void release_slot(int slot, int fallback_model);
   void fail(std::exception_ptr error);
   void rethrow_failure();
   void reset_state();

@@ -10,6 +10,7 @@ namespace dco::stereo {
 // p is built from these: the horizontal arms of every pixel on p's vertical arm (or the reverse).
 struct CrossArms {
   Image<std::uint8_t> left, right, up, down;
+  int arm_max = 255;  // the rule's longest arm, which no arm exceeds
 
   void resize(int width, int height);
   int width() const { return left.width(); }
