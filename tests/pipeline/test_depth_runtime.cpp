@@ -738,14 +738,17 @@ TEST(DepthRuntime, WarmFramesDoNotAllocate) {
     DepthRuntime runtime(s.params, rp,
                          [&](const DepthResult&, const FrameTimes&) { published.fetch_add(1); });
     runtime.start();
-    // The first frames size every pooled buffer (each pool entry is used in turn).
-    for (int i = 0; i < 12; ++i) {
+    // Three frames in, two published: the first result gave every pooled result its room, and
+    // frame 0's slot, freed when frame 2 arrived, gave every free slot its room. Most entries
+    // of both pools have not been used yet.
+    for (int i = 0; i < 3; ++i) {
       const auto& f = s.frames[static_cast<std::size_t>(i)];
       runtime.push(f.left.cview(), f.right.cview());
     }
-    while (published.load() < 11) std::this_thread::sleep_for(1ms);
+    while (published.load() < 2) std::this_thread::sleep_for(1ms);
+    std::this_thread::sleep_for(20ms);  // the slot is freed just after frame 1 is handed on
     testing::start_counting_allocations();
-    for (int i = 12; i < 24; ++i) {
+    for (int i = 3; i < 24; ++i) {
       const auto& f = s.frames[static_cast<std::size_t>(i)];
       runtime.push(f.left.cview(), f.right.cview());
     }
