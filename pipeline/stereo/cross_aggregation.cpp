@@ -90,8 +90,10 @@ void BlockAggregator::prepare(const CrossArms& arms, int max_block) {
     reach_down_ =
         std::max(reach_down_, int(*std::max_element(arms.down.row(y), arms.down.row(y) + w)));
   }
-  // Rows y - up - 1 .. y + down must be alive when row y is taken. The room is for the longest
-  // arms the rule allows, so a frame whose arms reach further than the last does not allocate.
+  // Rows y - up - 1 .. y + down must be alive when row y is taken. The first resize takes room
+  // for the longest arms the rule allows, so a frame whose arms reach further than the last does
+  // not allocate; the second sets the rows in use, since rows wrap at the ring's height and a
+  // shorter ring stays in cache.
   ring_.resize(w * max_block, std::min(h, 2 * arms.arm_max + 2));
   ring_.resize(w * max_block, std::min(h, reach_up_ + reach_down_ + 2));
   rows_.resize(static_cast<std::size_t>(h));
