@@ -76,7 +76,7 @@ SolverReport solve_pcg_after_sweeps(const GridSystem& a, ImageView<const float> 
   SolverReport report;
   s.resize(a.width(), a.height());
   const ResidualNorms start =
-      gauss_seidel_residual(a, b, x, sweeps, true, s.r.view(), coarse_start);
+      gauss_seidel_residual(a, b, x, sweeps, true, s.r.view(), s.rows, coarse_start);
   const double b_norm = std::sqrt(start.bb);
   if (b_norm == 0) {
     for (int y = 0; y < x.height; ++y)

@@ -112,29 +112,43 @@ namespace {
 // change again.
 template <class Prepare, class Finish>
 void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
-                       int sweeps, bool red_first, Prepare&& prepare, Finish&& finish) {
+                       int sweeps, bool red_first, SweepRows& rows, Prepare&& prepare,
+                       Finish&& finish) {
   const int h = a.height();
-  const auto smooth = [&](int r, int colour) {
-    kernels::GridRow row = grid_row(a, r);
-    if (r + 1 < h) row.x_below = x.row(r + 1);
-    if (r > 0) row.x_above = x.row(r - 1);
-    kernels::grid_smooth_row(row, (r + colour) % 2, b.row(r), x.row(r));
+  if (h == 0) return;
+  if (sweeps <= 0) {
+    prepare(0);
+    for (int r = 0; r < h; ++r) {
+      if (r + 1 < h) prepare(r + 1);
+      finish(r);
+    }
+    return;
+  }
+  // The updates work on split copies of the rows: a row is copied in after prepare and back out
+  // right after its last update, before finish reads it. At step r the rows from r - 2 sweeps
+  // (read by the last update of the row below it) to r + 1 are in use.
+  rows.start(a.width(), h, 2 * sweeps + 2);
+  const auto load = [&](int r) {
+    prepare(r);
+    rows.load(a, b, x, r);
   };
   const int first = red_first ? 0 : 1;
   // One pass over the rows does every colour of every sweep (this keeps the few rows involved in
   // cache). Sweep s updates the first colour of row r - 2s and then the second colour of the row
   // above it: by then the values each update reads (its row and the rows next to it) are exactly
   // those the plain order, colour by colour and sweep by sweep, would give it, so the result is
-  // identical. Row r - 2 sweeps had its last update one step earlier, and the row below it has
-  // just had its own.
-  if (h > 0) prepare(0);
+  // identical. Row r - 2 sweeps + 1 has just had its last update, and the rows next to row
+  // r - 2 sweeps theirs.
+  load(0);
   for (int r = 0; r < h + 2 * sweeps; ++r) {
-    if (r + 1 < h) prepare(r + 1);  // row r's first update reads row r + 1
+    if (r + 1 < h) load(r + 1);  // row r's first update reads row r + 1
     for (int s = 0; s < sweeps; ++s) {
       const int row = r - 2 * s;
-      if (row >= 0 && row < h) smooth(row, first);
-      if (row >= 1 && row <= h) smooth(row - 1, 1 - first);
+      if (row >= 0 && row < h) rows.smooth(row, (row + first) % 2);
+      if (row >= 1 && row <= h) rows.smooth(row - 1, (row - 1 + 1 - first) % 2);
     }
+    const int done = r - 2 * sweeps + 1;
+    if (done >= 0 && done < h) rows.store(done, x);
     if (r >= 2 * sweeps) finish(r - 2 * sweeps);
   }
 }
@@ -144,13 +158,14 @@ void no_row_work(int) {}
 }  // namespace
 
 void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
-                  bool red_first) {
-  gauss_seidel_rows(a, b, x, sweeps, red_first, no_row_work, no_row_work);
+                  bool red_first, SweepRows& rows) {
+  gauss_seidel_rows(a, b, x, sweeps, red_first, rows, no_row_work, no_row_work);
 }
 
 ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> b,
                                     ImageView<float> x, int sweeps, bool red_first,
-                                    ImageView<float> r, ImageView<const float> coarse_start) {
+                                    ImageView<float> r, SweepRows& rows,
+                                    ImageView<const float> coarse_start) {
   const int w = a.width();
   ResidualNorms n;
   const auto start_row = [&](int y) {
@@ -161,7 +176,7 @@ ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> 
     n.rr += kernels::dot_row(r.row(y), r.row(y), w);
     n.bb += kernels::dot_row(b.row(y), b.row(y), w);
   };
-  gauss_seidel_rows(a, b, x, sweeps, red_first, start_row, residual_row_norms);
+  gauss_seidel_rows(a, b, x, sweeps, red_first, rows, start_row, residual_row_norms);
   return n;
 }
 
@@ -207,8 +222,8 @@ void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x
     if (dot != nullptr) *dot += kernels::dot_row(b.row(y), x.row(y), w);
   };
   if (level + 1 == levels()) {
-    gauss_seidel_rows(a, b, x, coarsest_sweeps, true, zero_row, no_row_work);
-    gauss_seidel_rows(a, b, x, coarsest_sweeps, false, no_row_work, add_dot);
+    gauss_seidel_rows(a, b, x, coarsest_sweeps, true, rows_, zero_row, no_row_work);
+    gauss_seidel_rows(a, b, x, coarsest_sweeps, false, rows_, no_row_work, add_dot);
     return;
   }
   // coarse b = restrict_sum(b - A x) after the pre-smoothing; the fine residual is never stored.
@@ -218,12 +233,12 @@ void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x
     residual_row(a, b, x, y, residual_row_.data());
     add_to_parents(residual_row_.data(), w, next.b.row(y / 2));
   };
-  gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/true, zero_row, restrict_row);
+  gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/true, rows_, zero_row, restrict_row);
   cycle_at(level + 1, next.b.view(), next.x.view(), nullptr);
   // x += P x_coarse, a row at a time just before the smoother first reads it.
   const ImageView<const float> coarse = next.x.cview();
   const auto prolong_row = [&](int y) { from_parents<true>(coarse.row(y / 2), w, x.row(y)); };
-  gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/false, prolong_row, add_dot);
+  gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/false, rows_, prolong_row, add_dot);
 }
 
 }  // namespace dco::densify

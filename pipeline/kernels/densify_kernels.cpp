@@ -3,6 +3,7 @@
 // to the scalar range functions, so any width is handled and the results equal
 // dco::kernels::scalar bit for bit (the file is built without floating-point contraction).
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -30,55 +31,55 @@ HWY_INLINE hn::Vec<D> Vertical(D d, const GridRow& r, int c) {
   return v;
 }
 
-void GridSmoothRow(const GridRow& r, int start, const float* b, float* x) {
-  // Columns of the colour, c = c0, c0 + 2, ...: de-interleaving loads split every pair of
-  // columns into the colour's lane and the other colour's lane, so each vector holds N pixels of
-  // the colour and their right neighbours; a second load one column to the left gives the left
-  // neighbours. Results go to a small buffer and into x a chunk at a time, so no load overlaps a
-  // store still in flight (that would stall every vector on store forwarding).
+void GridSmoothSplitRow(const SplitSmoothRow& r, float* x) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
-  const int w = r.width;
-  const int c0 = 1 + ((1 - start) & 1);  // first interior column of the colour
-  if (w < 2 || c0 + 2 * n > w - 1) {
-    detail::smooth_range(r, start, b, x, 0, w);
-    return;
+  const int count = parity_count(r.width, r.parity);
+  // Pixels with both row neighbours: column 2 i + p > 0 and 2 i + p + 1 < width.
+  const int begin = 1 - r.parity;
+  const int end = std::max(begin, (r.width - r.parity) / 2);
+  detail::smooth_split_range(r, x, 0, std::min(begin, count));
+  const float* x_right = r.x_other + r.parity;
+  const float* x_left = x_right - 1;
+  const float* w_left = r.wx_other + r.parity - 1;
+  int i = begin;
+  for (; i + n <= end; i += n) {
+    auto v =
+        hn::Add(hn::LoadU(d, r.b + i), hn::Mul(hn::LoadU(d, r.wx + i), hn::LoadU(d, x_right + i)));
+    v = hn::Add(v, hn::Mul(hn::LoadU(d, w_left + i), hn::LoadU(d, x_left + i)));
+    auto vertical = hn::Zero(d);
+    if (r.x_below != nullptr)
+      vertical = hn::Mul(hn::LoadU(d, r.wy + i), hn::LoadU(d, r.x_below + i));
+    if (r.x_above != nullptr)
+      vertical =
+          hn::Add(vertical, hn::Mul(hn::LoadU(d, r.wy_above + i), hn::LoadU(d, r.x_above + i)));
+    hn::StoreU(hn::Mul(hn::Add(v, vertical), hn::LoadU(d, r.inv_diag + i)), d, x + i);
   }
-  detail::smooth_range(r, start, b, x, 0, c0);
-  constexpr int kChunk = 512;
-  HWY_ALIGN float chunk[kChunk];
-  hn::Vec<decltype(d)> own, other, left, unused, w_right, w_left, bv, inv, wy, xb, wa, xa;
-  int c = c0;
-  // The last pair read is (c + 2n - 2, c + 2n - 1); c + 2n - 1 must stay below w - 1 so that
-  // every pixel of the colour in the vector has a right neighbour.
-  while (c + 2 * n <= w - 1) {
-    const int chunk_begin = c;
-    for (; c + 2 * n <= w - 1 && c + 2 * n - chunk_begin <= kChunk; c += 2 * n) {
-      hn::LoadInterleaved2(d, x + c, own, other);
-      hn::LoadInterleaved2(d, x + c - 1, left, unused);
-      hn::LoadInterleaved2(d, r.wx + c, w_right, unused);
-      hn::LoadInterleaved2(d, r.wx + c - 1, w_left, unused);
-      hn::LoadInterleaved2(d, b + c, bv, unused);
-      hn::LoadInterleaved2(d, r.inv_diag + c, inv, unused);
-      auto v = hn::Add(bv, hn::Mul(w_right, other));
-      v = hn::Add(v, hn::Mul(w_left, left));
-      auto vertical = hn::Zero(d);
-      if (r.x_below != nullptr) {
-        hn::LoadInterleaved2(d, r.wy + c, wy, unused);
-        hn::LoadInterleaved2(d, r.x_below + c, xb, unused);
-        vertical = hn::Mul(wy, xb);
-      }
-      if (r.x_above != nullptr) {
-        hn::LoadInterleaved2(d, r.wy_above + c, wa, unused);
-        hn::LoadInterleaved2(d, r.x_above + c, xa, unused);
-        vertical = hn::Add(vertical, hn::Mul(wa, xa));
-      }
-      own = hn::Mul(hn::Add(v, vertical), inv);
-      hn::StoreInterleaved2(own, other, d, chunk + (c - chunk_begin));
-    }
-    std::memcpy(x + chunk_begin, chunk, sizeof(float) * static_cast<std::size_t>(c - chunk_begin));
+  detail::smooth_split_range(r, x, std::min(i, count), count);
+}
+
+void SplitRow(const float* in, int width, float* even, float* odd) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const int pairs = width / 2;
+  int i = 0;
+  for (; i + n <= pairs; i += n) {
+    hn::Vec<decltype(d)> e, o;
+    hn::LoadInterleaved2(d, in + 2 * i, e, o);
+    hn::StoreU(e, d, even + i);
+    hn::StoreU(o, d, odd + i);
   }
-  detail::smooth_range(r, start, b, x, c, w);
+  detail::split_range(in, width, i, parity_count(width, 0), even, odd);
+}
+
+void MergeRow(const float* even, const float* odd, int width, float* out) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const int pairs = width / 2;
+  int i = 0;
+  for (; i + n <= pairs; i += n)
+    hn::StoreInterleaved2(hn::LoadU(d, even + i), hn::LoadU(d, odd + i), d, out + 2 * i);
+  detail::merge_range(even, odd, width, i, parity_count(width, 0), out);
 }
 
 void GridApplyRow(const GridRow& r, const float* x, float* out) {
@@ -360,20 +361,30 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace dco::kernels {
 
-HWY_EXPORT(GridSmoothRow);
 HWY_EXPORT(GridApplyRow);
+HWY_EXPORT(GridSmoothSplitRow);
+HWY_EXPORT(SplitRow);
+HWY_EXPORT(MergeRow);
 HWY_EXPORT(DotRow);
 HWY_EXPORT(EdgeWeightsRow);
 HWY_EXPORT(HoleHintRow);
 HWY_EXPORT(DataTermsRow);
 HWY_EXPORT(DiagonalRow);
 
-void grid_smooth_row(const GridRow& row, int start, const float* b, float* x) {
-  HWY_DYNAMIC_DISPATCH(GridSmoothRow)(row, start, b, x);
-}
-
 void grid_apply_row(const GridRow& row, const float* x, float* out) {
   HWY_DYNAMIC_DISPATCH(GridApplyRow)(row, x, out);
+}
+
+void grid_smooth_split_row(const SplitSmoothRow& row, float* x) {
+  HWY_DYNAMIC_DISPATCH(GridSmoothSplitRow)(row, x);
+}
+
+void split_row(const float* in, int width, float* even, float* odd) {
+  HWY_DYNAMIC_DISPATCH(SplitRow)(in, width, even, odd);
+}
+
+void merge_row(const float* even, const float* odd, int width, float* out) {
+  HWY_DYNAMIC_DISPATCH(MergeRow)(even, odd, width, out);
 }
 
 double dot_row(const float* a, const float* b, int n) {

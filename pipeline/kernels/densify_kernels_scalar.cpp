@@ -49,6 +49,18 @@ void grid_apply_row(const GridRow& row, const float* x, float* out) {
   detail::apply_range(row, x, out, 0, row.width);
 }
 
+void grid_smooth_split_row(const SplitSmoothRow& row, float* x) {
+  detail::smooth_split_range(row, x, 0, parity_count(row.width, row.parity));
+}
+
+void split_row(const float* in, int width, float* even, float* odd) {
+  detail::split_range(in, width, 0, parity_count(width, 0), even, odd);
+}
+
+void merge_row(const float* even, const float* odd, int width, float* out) {
+  detail::merge_range(even, odd, width, 0, parity_count(width, 0), out);
+}
+
 double dot_row(const float* a, const float* b, int n) {
   return pixel::dot_row(a, b, n);
 }

@@ -17,6 +17,25 @@ inline void smooth_range(const GridRow& r, int start, const float* b, float* x, 
   for (; c < end; c += 2) x[c] = pixel::smooth_at(r, b, x, c);
 }
 
+inline void smooth_split_range(const SplitSmoothRow& r, float* x, int begin, int end) {
+  for (int i = begin; i < end; ++i) x[i] = pixel::smooth_split_at(r, i);
+}
+
+inline void split_range(const float* in, int width, int begin, int end, float* even, float* odd) {
+  for (int i = begin; i < end; ++i) {
+    even[i] = in[2 * i];
+    if (2 * i + 1 < width) odd[i] = in[2 * i + 1];
+  }
+}
+
+inline void merge_range(const float* even, const float* odd, int width, int begin, int end,
+                        float* out) {
+  for (int i = begin; i < end; ++i) {
+    out[2 * i] = even[i];
+    if (2 * i + 1 < width) out[2 * i + 1] = odd[i];
+  }
+}
+
 inline void apply_range(const GridRow& r, const float* x, float* out, int begin, int end) {
   for (int c = begin; c < end; ++c) out[c] = pixel::apply_at(r, x, c);
 }

@@ -56,39 +56,100 @@ struct RowData {
   }
 };
 
-TEST(DensifyKernels, SmoothRowMatchesScalar) {
-  std::mt19937 rng(5);
+// A row of RowData split by column parity (split_row's layout).
+struct SplitRowData {
+  std::vector<float> b[2], inv[2], wx[2], wy[2], wy_above[2], x_above[2], x_below[2], x[2];
+
+  explicit SplitRowData(const RowData& d) {
+    const int w = static_cast<int>(d.diag.size());
+    const auto split = [w](const std::vector<float>& in, std::vector<float>(&out)[2]) {
+      for (int p = 0; p < 2; ++p) {
+        out[p].clear();
+        for (int c = p; c < w; c += 2) out[p].push_back(in[static_cast<std::size_t>(c)]);
+      }
+    };
+    split(d.b, b), split(d.inv, inv), split(d.wx, wx), split(d.wy, wy);
+    split(d.wy_above, wy_above), split(d.x_above, x_above), split(d.x_below, x_below);
+    split(d.x, x);
+  }
+
+  SplitSmoothRow row(int width, int parity, bool above, bool below) const {
+    SplitSmoothRow r;
+    r.width = width;
+    r.parity = parity;
+    r.b = b[parity].data();
+    r.inv_diag = inv[parity].data();
+    r.wx = wx[parity].data();
+    r.wx_other = wx[1 - parity].data();
+    r.x_other = x[1 - parity].data();
+    if (below) r.wy = wy[parity].data(), r.x_below = x_below[parity].data();
+    if (above) r.wy_above = wy_above[parity].data(), r.x_above = x_above[parity].data();
+    return r;
+  }
+};
+
+TEST(DensifyKernels, SmoothSplitRowIsTheSmoothRowBitForBit) {
+  // The split layout changes where the operands are, not the arithmetic: every target's update of
+  // a parity equals the scalar update of that colour in the plain layout.
+  std::mt19937 rng(15);
   for_each_target([&] {
     for (const int w : kWidths)
-      for (const int start : {0, 1})
+      for (const int parity : {0, 1})
         for (const bool above : {false, true})
           for (const bool below : {false, true}) {
             const RowData data(rng, w);
-            const GridRow row = data.row(above, below);
-            std::vector<float> expected = data.x, actual = data.x;
-            scalar::grid_smooth_row(row, start, data.b.data(), expected.data());
-            grid_smooth_row(row, start, data.b.data(), actual.data());
-            for (int c = 0; c < w; ++c) {
-              ASSERT_EQ(actual[c], expected[c]) << "w " << w << " start " << start << " above "
-                                                << above << " below " << below << " column " << c;
-              // Only the pixels of the colour move.
-              if ((c - start) % 2 != 0) {
-                ASSERT_EQ(actual[c], data.x[c]);
-              }
+            std::vector<float> expected = data.x;
+            scalar::grid_smooth_row(data.row(above, below), parity, data.b.data(), expected.data());
+            const SplitRowData split(data);
+            const SplitSmoothRow row = split.row(w, parity, above, below);
+            std::vector<float> actual = split.x[parity], reference = split.x[parity];
+            grid_smooth_split_row(row, actual.data());
+            scalar::grid_smooth_split_row(row, reference.data());
+            ASSERT_EQ(static_cast<int>(actual.size()), parity_count(w, parity));
+            for (int i = 0; i < parity_count(w, parity); ++i) {
+              const float want = expected[static_cast<std::size_t>(2 * i + parity)];
+              ASSERT_EQ(actual[i], want) << "w " << w << " parity " << parity << " above " << above
+                                         << " below " << below << " pixel " << i;
+              ASSERT_EQ(reference[i], want) << "scalar, w " << w << " pixel " << i;
             }
           }
   });
 }
 
-TEST(DensifyKernels, SmoothRowSolvesTheRowEquation) {
+TEST(DensifyKernels, SplitAndMergeRowRoundTrip) {
+  std::mt19937 rng(16);
+  for_each_target([&] {
+    for (const int w : kWidths) {
+      const std::vector<float> in = random_floats(rng, w, -5.0f, 5.0f);
+      // One float past each part: a split must not write beyond its parity's pixels.
+      const float guard = 1234.5f;
+      std::vector<float> even(static_cast<std::size_t>(parity_count(w, 0)) + 1, guard);
+      std::vector<float> odd(static_cast<std::size_t>(parity_count(w, 1)) + 1, guard);
+      split_row(in.data(), w, even.data(), odd.data());
+      ASSERT_EQ(even.back(), guard) << "w " << w;
+      ASSERT_EQ(odd.back(), guard) << "w " << w;
+      for (int c = 0; c < w; ++c)
+        ASSERT_EQ((c % 2 == 0 ? even : odd)[static_cast<std::size_t>(c / 2)], in[c]) << c;
+      std::vector<float> out(static_cast<std::size_t>(w) + 1, guard);
+      merge_row(even.data(), odd.data(), w, out.data());
+      ASSERT_EQ(out.back(), guard) << "w " << w;
+      out.pop_back();
+      ASSERT_EQ(out, in) << "w " << w;
+    }
+  });
+}
+
+TEST(DensifyKernels, SmoothSplitRowSolvesTheRowEquation) {
   // After the update, each updated pixel satisfies its own equation of A x = b exactly up to
   // rounding: diag x - Σ w x(neighbours) = b.
   std::mt19937 rng(6);
   const int w = 41;
   const RowData data(rng, w);
   const GridRow row = data.row(true, true);
-  std::vector<float> x = data.x;
-  grid_smooth_row(row, 0, data.b.data(), x.data());
+  SplitRowData split(data);
+  grid_smooth_split_row(split.row(w, 0, true, true), split.x[0].data());
+  std::vector<float> x(static_cast<std::size_t>(w));
+  merge_row(split.x[0].data(), split.x[1].data(), w, x.data());
   std::vector<float> ax(static_cast<std::size_t>(w));
   grid_apply_row(row, x.data(), ax.data());
   for (int c = 0; c < w; c += 2) EXPECT_NEAR(ax[c], data.b[c], 1e-3f) << c;

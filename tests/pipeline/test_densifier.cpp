@@ -453,7 +453,25 @@ void reference_gauss_seidel(const GridSystem& a, const Image<float>& b, Image<fl
     }
 }
 
+// The same sweeps out of the plain-layout row kernel, colour by colour and row by row: the float
+// operations every layout of the rows must reproduce bit for bit.
+void plain_layout_gauss_seidel(const GridSystem& a, const Image<float>& b, Image<float>& x,
+                               int sweeps, bool red_first) {
+  const int h = a.height();
+  for (int s = 0; s < sweeps; ++s)
+    for (int half = 0; half < 2; ++half) {
+      const int colour = (half == 0) == red_first ? 0 : 1;
+      for (int y = 0; y < h; ++y) {
+        kernels::GridRow row = grid_row(a, y);
+        if (y + 1 < h) row.x_below = x.row(y + 1);
+        if (y > 0) row.x_above = x.row(y - 1);
+        kernels::scalar::grid_smooth_row(row, (y + colour) % 2, b.row(y), x.row(y));
+      }
+    }
+}
+
 TEST(Multigrid, GaussSeidelMatchesThePlainColourOrder) {
+  SweepRows rows;
   for (const auto& [w, h] :
        {std::pair{37, 23}, std::pair{2, 5}, std::pair{1, 1}, std::pair{8, 2}}) {
     const GridSystem a = random_system(w, h, 11);
@@ -467,15 +485,20 @@ TEST(Multigrid, GaussSeidelMatchesThePlainColourOrder) {
       one_at_a_time = x;
       Image<float> fused = x;
       reference_gauss_seidel(a, b, expected, 3, red_first);
-      gauss_seidel(a, b.cview(), fused.view(), 3, red_first);
-      for (int s = 0; s < 3; ++s) gauss_seidel(a, b.cview(), one_at_a_time.view(), 1, red_first);
+      Image<float> plain_layout = x;
+      plain_layout_gauss_seidel(a, b, plain_layout, 3, red_first);
+      gauss_seidel(a, b.cview(), fused.view(), 3, red_first, rows);
+      for (int s = 0; s < 3; ++s)
+        gauss_seidel(a, b.cview(), one_at_a_time.view(), 1, red_first, rows);
       for (int y = 0; y < h; ++y)
         for (int c = 0; c < w; ++c) {
           EXPECT_NEAR(fused.at(c, y), expected.at(c, y), 1e-4f * (1 + std::abs(expected.at(c, y))))
               << w << "x" << h << " " << c << "," << y;
-          // Three sweeps in one pass over the rows give bit for bit the three separate sweeps.
+          // Three sweeps in one pass over the rows give bit for bit the three separate sweeps,
+          // and the rows split by column parity the plain layout's arithmetic.
           EXPECT_EQ(fused.at(c, y), one_at_a_time.at(c, y))
               << w << "x" << h << " " << c << "," << y;
+          EXPECT_EQ(fused.at(c, y), plain_layout.at(c, y)) << w << "x" << h << " " << c << "," << y;
         }
     }
   }
@@ -486,13 +509,14 @@ TEST(Multigrid, GaussSeidelMatchesThePlainColourOrder) {
 void plain_cycle(const Multigrid& mg, const GridSystem& fine, int level, const Image<float>& b,
                  Image<float>& x) {
   const GridSystem& a = level == 0 ? fine : mg.coarse_system(level);
+  SweepRows rows;
   x.fill(0.0f);
   if (level + 1 == mg.levels()) {
-    gauss_seidel(a, b.cview(), x.view(), mg.coarsest_sweeps, true);
-    gauss_seidel(a, b.cview(), x.view(), mg.coarsest_sweeps, false);
+    gauss_seidel(a, b.cview(), x.view(), mg.coarsest_sweeps, true, rows);
+    gauss_seidel(a, b.cview(), x.view(), mg.coarsest_sweeps, false, rows);
     return;
   }
-  gauss_seidel(a, b.cview(), x.view(), mg.smoothing_sweeps, true);
+  gauss_seidel(a, b.cview(), x.view(), mg.smoothing_sweeps, true, rows);
   Image<float> r(a.width(), a.height());
   residual(a, b.cview(), x.cview(), r.view());
   const GridSystem& coarse = mg.coarse_system(level + 1);
@@ -503,7 +527,7 @@ void plain_cycle(const Multigrid& mg, const GridSystem& fine, int level, const I
   prolong(coarse_x.cview(), correction.view());
   for (int y = 0; y < a.height(); ++y)
     for (int c = 0; c < a.width(); ++c) x.at(c, y) += correction.at(c, y);
-  gauss_seidel(a, b.cview(), x.view(), mg.smoothing_sweeps, false);
+  gauss_seidel(a, b.cview(), x.view(), mg.smoothing_sweeps, false, rows);
 }
 
 Image<float> random_vector(int w, int h, unsigned seed, float scale) {
@@ -572,6 +596,7 @@ TEST(GridSystem, FusedResidualPassesAreThePlainOnesBitForBit) {
 }
 
 TEST(Multigrid, StartSweepsAndResidualInOnePassAreThePlainPassesBitForBit) {
+  SweepRows rows;
   for (const auto& [w, h] : {std::pair{45, 17}, std::pair{8, 1}, std::pair{3, 2}}) {
     SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
     const GridSystem a = random_system(w, h, 6);
@@ -580,26 +605,27 @@ TEST(Multigrid, StartSweepsAndResidualInOnePassAreThePlainPassesBitForBit) {
     for (const int sweeps : {0, 1, 4}) {
       Image<float> x(w, h), r(w, h);
       prolong(coarse.cview(), x.view());
-      gauss_seidel(a, b.cview(), x.view(), sweeps, true);
+      gauss_seidel(a, b.cview(), x.view(), sweeps, true, rows);
       residual(a, b.cview(), x.cview(), r.view());
       // Stale values in x must not matter: the pass starts from the prolonged coarse values.
       Image<float> fused_x = random_vector(w, h, 7, 100.0f), fused_r(w, h);
       const ResidualNorms n = gauss_seidel_residual(a, b.cview(), fused_x.view(), sweeps, true,
-                                                    fused_r.view(), coarse.cview());
+                                                    fused_r.view(), rows, coarse.cview());
       EXPECT_EQ(n.rr, dot(r.cview(), r.cview()));
       EXPECT_EQ(n.bb, dot(b.cview(), b.cview()));
       ASSERT_TRUE(same_pixels(fused_x, x)) << sweeps << " sweeps";
       ASSERT_TRUE(same_pixels(fused_r, r)) << sweeps << " sweeps";
       // Without a coarse start the pass sweeps the x it is given.
       Image<float> given = x, swept = x;
-      gauss_seidel(a, b.cview(), swept.view(), sweeps, true);
-      gauss_seidel_residual(a, b.cview(), given.view(), sweeps, true, fused_r.view());
+      gauss_seidel(a, b.cview(), swept.view(), sweeps, true, rows);
+      gauss_seidel_residual(a, b.cview(), given.view(), sweeps, true, fused_r.view(), rows);
       ASSERT_TRUE(same_pixels(given, swept)) << sweeps << " sweeps";
     }
   }
 }
 
 TEST(ConjugateGradients, AfterSweepsIsTheSweepsThenTheSolveBitForBit) {
+  SweepRows rows;
   const int w = 61, h = 29;
   const GridSystem a = random_system(w, h, 12);
   const Image<float> b = random_vector(w, h, 3, 10.0f);
@@ -611,7 +637,7 @@ TEST(ConjugateGradients, AfterSweepsIsTheSweepsThenTheSolveBitForBit) {
     CgScratch scratch, fused_scratch;
     Image<float> x(w, h);
     prolong(coarse.cview(), x.view());
-    gauss_seidel(a, b.cview(), x.view(), 4, true);
+    gauss_seidel(a, b.cview(), x.view(), 4, true, rows);
     const SolverReport plain = solve_pcg(a, b.cview(), x.view(), &mg, iterations, 1e-9, scratch);
     Image<float> fused_x(w, h);
     const SolverReport fused =

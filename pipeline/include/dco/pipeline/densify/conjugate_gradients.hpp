@@ -20,6 +20,7 @@ struct SolverReport {
 
 struct CgScratch {
   Image<float> r, z, p, ap;
+  SweepRows rows;
   void resize(int width, int height);
 };
 

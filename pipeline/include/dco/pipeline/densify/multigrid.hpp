@@ -5,6 +5,7 @@
 
 #include "dco/core/image.hpp"
 #include "dco/pipeline/densify/grid_system.hpp"
+#include "dco/pipeline/densify/sweep_rows.hpp"
 
 namespace dco::densify {
 
@@ -46,11 +47,13 @@ class Multigrid {
   const GridSystem* fine_ = nullptr;
   std::vector<Level> levels_;  // coarse levels 1..n
   std::vector<float> residual_row_;
+  SweepRows rows_;
 };
 
-// Red-black Gauss-Seidel sweeps on A x = b; `red_first` picks the colour order.
+// Red-black Gauss-Seidel sweeps on A x = b; `red_first` picks the colour order. `rows` is working
+// memory, kept across calls.
 void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
-                  bool red_first);
+                  bool red_first, SweepRows& rows);
 
 // dot(r, r) and dot(b, b) of a residual r = b - A x.
 struct ResidualNorms {
@@ -64,7 +67,8 @@ struct ResidualNorms {
 // prolong(coarse_start), also a row at a time in that pass.
 ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> b,
                                     ImageView<float> x, int sweeps, bool red_first,
-                                    ImageView<float> r, ImageView<const float> coarse_start = {});
+                                    ImageView<float> r, SweepRows& rows,
+                                    ImageView<const float> coarse_start = {});
 
 // The Galerkin coarse system of 2x2 piecewise-constant aggregation; coarse size is
 // ceil(w/2) x ceil(h/2). The coarse edge weights are multiplied by `edge_scale` (see

@@ -14,7 +14,7 @@ namespace dco::kernels {
 struct GridRow {
   int width = 0;
   const float* diag = nullptr;      // used by grid_apply_row
-  const float* inv_diag = nullptr;  // 1 / diag, 0 where diag is 0; used by grid_smooth_row
+  const float* inv_diag = nullptr;  // 1 / diag, 0 where diag is 0; used by the smoothing
   const float* wx = nullptr;        // wx[c] couples (c, y) and (c + 1, y)
   // The row below and its couplings wy[c] of (c, y) with (c, y + 1); both null on the last row.
   const float* wy = nullptr;
@@ -24,13 +24,42 @@ struct GridRow {
   const float* x_above = nullptr;
 };
 
-// Gauss-Seidel update of the pixels of one colour of row y, columns start, start + 2, ...
-// (start 0 or 1): x[c] = (b[c] + Σ w x(neighbour)) * inv_diag[c]. The pixels of the other
-// colour, which the updates read, are left as they are.
-void grid_smooth_row(const GridRow& row, int start, const float* b, float* x);
-
 // out = (A x) of row y; x is row y of the same vector as row.x_above and row.x_below.
 void grid_apply_row(const GridRow& row, const float* x, float* out);
+
+// One colour of row y of a system whose rows are stored split by column parity: pixel i of
+// parity p is column 2 i + p, so the pixels of one colour of a row are the pixels of one parity.
+// Their left and right neighbours are pixels i + p - 1 and i + p of the other parity. Every
+// pointer is to the row's pixels of `parity` unless it says "other".
+struct SplitSmoothRow {
+  int width = 0;   // of the whole row
+  int parity = 0;  // 0: columns 0, 2, 4, ...; 1: columns 1, 3, ...
+  const float* b = nullptr;
+  const float* inv_diag = nullptr;
+  const float* wx = nullptr;        // couples the pixel with its right neighbour
+  const float* wx_other = nullptr;  // wx of the other parity: [i + p - 1] is the left edge
+  const float* x_other = nullptr;   // x of the other parity: the neighbours in the row
+  const float* wy = nullptr;        // as in GridRow, both null on the last row
+  const float* x_below = nullptr;
+  const float* wy_above = nullptr;  // as in GridRow, both null on the first row
+  const float* x_above = nullptr;
+};
+
+// Pixels of parity p in a row of `width`.
+constexpr int parity_count(int width, int parity) {
+  return (width + 1 - parity) / 2;
+}
+
+// The Gauss-Seidel update of one colour of a row in the split layout (scalar::grid_smooth_row
+// in the plain one): x[i] = (b[i] + Σ w x(neighbour)) * inv_diag[i] for the
+// parity_count(width, parity) pixels of the row's parity; the same operations in the same order
+// as scalar::grid_smooth_row, so the same bits. Every operand is a contiguous run of floats.
+void grid_smooth_split_row(const SplitSmoothRow& row, float* x);
+
+// even[i] = in[2 i], odd[i] = in[2 i + 1]: a row into the split layout.
+void split_row(const float* in, int width, float* even, float* odd);
+// The inverse of split_row.
+void merge_row(const float* even, const float* odd, int width, float* out);
 
 // Σ a[i] b[i] over n values: sixteen float partial sums (lane i % 16), plus the last n % 16
 // products in double, all added up in double.
@@ -86,14 +115,21 @@ void diagonal_row(const float* data, const float* wx, const float* wy, const flo
 void hole_hint_row(const float* sparse, const float* wx, int width, float crossing, float* hint);
 
 namespace scalar {
+// Gauss-Seidel update of the pixels of one colour of row y, columns start, start + 2, ...
+// (start 0 or 1): x[c] = (b[c] + Σ w x(neighbour)) * inv_diag[c]. The pixels of the other
+// colour, which the updates read, are left as they are. The reference of the solver's updates:
+// the sweeps run grid_smooth_split_row, and the GPU passes the same per-pixel math.
+void grid_smooth_row(const GridRow& row, int start, const float* b, float* x);
 void hole_hint_row(const float* sparse, const float* wx, int width, float crossing, float* hint);
 void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,
                     const DataTermRule& rule, float* data, float* b, float* low, float* high);
 void diagonal_row(const float* data, const float* wx, const float* wy, const float* wy_above,
                   int width, float* diag, float* inv_diag);
 void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out);
-void grid_smooth_row(const GridRow& row, int start, const float* b, float* x);
 void grid_apply_row(const GridRow& row, const float* x, float* out);
+void grid_smooth_split_row(const SplitSmoothRow& row, float* x);
+void split_row(const float* in, int width, float* even, float* odd);
+void merge_row(const float* even, const float* odd, int width, float* out);
 double dot_row(const float* a, const float* b, int n);
 }  // namespace scalar
 

@@ -28,6 +28,19 @@ DCO_HD inline float smooth_at(const GridRow& r, const float* b, const float* x, 
   return (v + vertical_term(r, c)) * r.inv_diag[c];
 }
 
+// smooth_at for pixel i of a row in the split layout (SplitSmoothRow): column 2 i + parity.
+DCO_HD inline float smooth_split_at(const SplitSmoothRow& r, int i) {
+  const int c = 2 * i + r.parity;
+  const int right = i + r.parity;  // the neighbours' index among the other parity's pixels
+  float v = r.b[i];
+  if (c + 1 < r.width) v = v + r.wx[i] * r.x_other[right];
+  if (c > 0) v = v + r.wx_other[right - 1] * r.x_other[right - 1];
+  float vertical = 0.0f;
+  if (r.x_below != nullptr) vertical = r.wy[i] * r.x_below[i];
+  if (r.x_above != nullptr) vertical = vertical + r.wy_above[i] * r.x_above[i];
+  return (v + vertical) * r.inv_diag[i];
+}
+
 // (A x)[c].
 DCO_HD inline float apply_at(const GridRow& r, const float* x, int c) {
   float v = r.diag[c] * x[c];

@@ -1,0 +1,38 @@
+#pragma once
+
+#include "dco/core/image.hpp"
+#include "dco/kernels/densify_kernels.hpp"
+#include "dco/pipeline/densify/grid_system.hpp"
+
+namespace dco::densify {
+
+// The rows a pass of red-black Gauss-Seidel sweeps is working on, copied split by column parity
+// (kernels::SplitSmoothRow): one colour of a row is then one parity, and every operand of its
+// update is a contiguous run instead of every other float, so the sweeps need no shuffles to
+// separate the colours. The rows live in a ring of slots: row r in slot r % slots from load(r)
+// until row r + slots is loaded.
+class SweepRows {
+ public:
+  // Starts a pass over a system of `width` x `height` with room for `slots` rows at once
+  // (clamped to [1, height]). The memory only grows: a pass no larger than an earlier one
+  // allocates nothing.
+  void start(int width, int height, int slots);
+
+  // Copies row r of x, b and of a's coefficients into row r's slot.
+  void load(const GridSystem& a, ImageView<const float> b, ImageView<const float> x, int r);
+  // Updates the pixels of one column parity of row r; the rows next to it must be loaded.
+  void smooth(int r, int parity);
+  // Copies row r's x back into x.
+  void store(int r, ImageView<float> x) const;
+
+ private:
+  enum Array { kX, kB, kInvDiag, kWx, kWy, kArrays };
+  float* array(int r, Array a, int parity);
+  const float* array(int r, Array a, int parity) const;
+
+  int width_ = 0, height_ = 0, slots_ = 1;
+  int half_ = 0;       // floats of one parity of one array, padded to whole cache lines
+  Image<float> ring_;  // one slot per row: kArrays arrays, each its even then its odd pixels
+};
+
+}  // namespace dco::densify
