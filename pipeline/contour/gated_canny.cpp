@@ -7,6 +7,7 @@
 
 #include "dco/kernels/canny_kernels.hpp"
 #include "dco/kernels/contour_pixel.hpp"
+#include "dco/kernels/filter_kernels.hpp"
 
 namespace dco::contour {
 namespace {
@@ -26,20 +27,9 @@ void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<floa
   const int h = smoothed.height;
   const float inv = 1.0f / norm;
   for (int y = 0; y < h; ++y) {
-    const float* up = smoothed.row(std::max(y - 1, 0));
-    const float* mid = smoothed.row(y);
-    const float* down = smoothed.row(std::min(y + 1, h - 1));
-    float* m = magnitude.row(y);
-    std::uint8_t* d = direction.row(y);
-    auto at = [&](int l, int x, int r) {
-      const float gx = px::sobel_gx(up, mid, down, l, r);
-      const float gy = px::sobel_gy(up, down, l, x, r);
-      m[x] = px::gradient_magnitude(gx, gy, inv);
-      d[x] = px::gradient_direction(gx, gy);
-    };
-    at(0, 0, std::min(1, w - 1));
-    for (int x = 1; x < w - 1; ++x) at(x - 1, x, x + 1);
-    if (w > 1) at(w - 2, w - 1, w - 1);
+    const kernels::SobelRows rows{smoothed.row(std::max(y - 1, 0)), smoothed.row(y),
+                                  smoothed.row(std::min(y + 1, h - 1)), w};
+    kernels::sobel_row(rows, inv, magnitude.row(y), direction.row(y));
   }
 }
 

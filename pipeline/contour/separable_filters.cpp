@@ -5,12 +5,10 @@
 #include <cassert>
 #include <cmath>
 
-#include "dco/kernels/contour_pixel.hpp"
+#include "dco/kernels/filter_kernels.hpp"
 
 namespace dco::contour {
 namespace {
-
-namespace px = kernels::pixel;
 
 std::array<float, 5> make_gaussian_taps() {
   constexpr double kSigma = 1.4;
@@ -24,23 +22,6 @@ std::array<float, 5> make_gaussian_taps() {
   std::array<float, 5> taps{};
   for (int i = 0; i < 5; ++i) taps[i] = static_cast<float>(w[i] / sum);
   return taps;
-}
-
-// Horizontal pass of a symmetric kernel on one row: the interior runs tap by tap over contiguous
-// memory (vectorises), only the `radius` columns at each end clamp their reads.
-void horizontal_pass(const float* in, int width, const float* taps, int radius, float* out) {
-  const int size = 2 * radius + 1;
-  const int lo = std::min(radius, width);
-  const int hi = std::max(lo, width - radius);
-  for (int x = lo; x < hi; ++x) out[x] = 0.0f;
-  for (int k = 0; k < size; ++k) {
-    const float w = taps[k];
-    const float* src = in + k - radius;
-    for (int x = lo; x < hi; ++x) out[x] += w * src[x];
-  }
-  const auto tap = [taps](int k) { return taps[k]; };
-  for (int x = 0; x < lo; ++x) out[x] = px::clamped_tap_sum(in, width, x, radius, tap);
-  for (int x = hi; x < width; ++x) out[x] = px::clamped_tap_sum(in, width, x, radius, tap);
 }
 
 }  // namespace
@@ -57,16 +38,12 @@ void gaussian_blur_5x5(ImageView<const std::uint8_t> in, ImageView<float> tmp,
   const int w = in.width;
   const int h = in.height;
   for (int y = 0; y < h; ++y) {
-    const std::uint8_t* r0 = in.row(std::max(y - 2, 0));
-    const std::uint8_t* r1 = in.row(std::max(y - 1, 0));
-    const std::uint8_t* r2 = in.row(y);
-    const std::uint8_t* r3 = in.row(std::min(y + 1, h - 1));
-    const std::uint8_t* r4 = in.row(std::min(y + 2, h - 1));
-    float* t = tmp.row(y);
-    for (int x = 0; x < w; ++x)
-      t[x] = px::gaussian5_vertical(r0[x], r1[x], r2[x], r3[x], r4[x], taps.data());
+    const std::uint8_t* const rows[5] = {in.row(std::max(y - 2, 0)), in.row(std::max(y - 1, 0)),
+                                         in.row(y), in.row(std::min(y + 1, h - 1)),
+                                         in.row(std::min(y + 2, h - 1))};
+    kernels::gaussian5_vertical_row(rows, taps.data(), w, tmp.row(y));
   }
-  for (int y = 0; y < h; ++y) horizontal_pass(tmp.row(y), w, taps.data(), 2, out.row(y));
+  for (int y = 0; y < h; ++y) kernels::row_filter(tmp.row(y), w, taps.data(), 2, out.row(y));
 }
 
 void box_filter(ImageView<const float> in, int size, ImageView<float> tmp, ImageView<float> out) {
@@ -78,20 +55,15 @@ void box_filter(ImageView<const float> in, int size, ImageView<float> tmp, Image
   const int w = in.width;
   const int h = in.height;
   const float inv = 1.0f / static_cast<float>(size);
-  // Vertical: every output row sums `size` clamped input rows, each add running along the row.
+  // Vertical: every output row sums `size` clamped input rows.
+  std::array<const float*, kMaxSize> rows{};
   for (int y = 0; y < h; ++y) {
-    float* t = tmp.row(y);
-    const float* first = in.row(std::clamp(y - radius, 0, h - 1));
-    for (int x = 0; x < w; ++x) t[x] = first[x];
-    for (int k = 1; k < size; ++k) {
-      const float* r = in.row(std::clamp(y - radius + k, 0, h - 1));
-      for (int x = 0; x < w; ++x) t[x] += r[x];
-    }
-    for (int x = 0; x < w; ++x) t[x] *= inv;
+    for (int k = 0; k < size; ++k) rows[k] = in.row(std::clamp(y - radius + k, 0, h - 1));
+    kernels::box_vertical_row(rows.data(), size, inv, w, tmp.row(y));
   }
   std::array<float, kMaxSize> taps{};
   for (int k = 0; k < size; ++k) taps[k] = inv;
-  for (int y = 0; y < h; ++y) horizontal_pass(tmp.row(y), w, taps.data(), radius, out.row(y));
+  for (int y = 0; y < h; ++y) kernels::row_filter(tmp.row(y), w, taps.data(), radius, out.row(y));
 }
 
 }  // namespace dco::contour

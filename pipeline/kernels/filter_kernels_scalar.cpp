@@ -1,0 +1,23 @@
+#include "dco/kernels/filter_kernels.hpp"
+#include "filter_ranges.hpp"
+
+namespace dco::kernels::scalar {
+
+void gaussian5_vertical_row(const std::uint8_t* const rows[5], const float* taps, int width,
+                            float* out) {
+  detail::gaussian5_vertical_range(rows, taps, 0, width, out);
+}
+
+void row_filter(const float* in, int width, const float* taps, int radius, float* out) {
+  detail::row_filter_range(in, width, taps, radius, 0, width, out);
+}
+
+void box_vertical_row(const float* const* rows, int count, float inv, int width, float* out) {
+  detail::box_vertical_range(rows, count, inv, 0, width, out);
+}
+
+void sobel_row(const SobelRows& rows, float inv_norm, float* magnitude, std::uint8_t* direction) {
+  detail::sobel_range(rows, inv_norm, 0, rows.width, magnitude, direction);
+}
+
+}  // namespace dco::kernels::scalar

@@ -1,0 +1,47 @@
+#pragma once
+
+// Row kernels of the contour stage's image filters (dco/pipeline/contour/separable_filters.hpp
+// and the Sobel gradient of the gated Canny). Dispatched at run time like the other kernels;
+// dco::kernels::scalar holds the references, whose per-pixel math is kernels::pixel's (shared
+// with the GPU passes). The vector versions do the same float operations in the same order, no
+// fused multiply-add, so all of them give the same bits.
+
+#include <cstdint>
+
+namespace dco::kernels {
+
+// Vertical pass of the 5-tap Gaussian over one output row: out[x] =
+// pixel::gaussian5_vertical(rows[0][x], ..., rows[4][x], taps) for x < width, rows y - 2 .. y + 2
+// (clamped by the caller).
+void gaussian5_vertical_row(const std::uint8_t* const rows[5], const float* taps, int width,
+                            float* out);
+
+// A symmetric filter of `2 radius + 1` taps along one row, the row clamped at its ends:
+// out[x] = Σ_k taps[k] * in[x + k - radius], summed tap by tap from 0 (pixel::clamped_tap_sum).
+// out may not alias in.
+void row_filter(const float* in, int width, const float* taps, int radius, float* out);
+
+// The rows of a box filter's vertical pass: out[x] = (rows[0][x] + rows[1][x] + ... +
+// rows[count - 1][x]) * inv, added in that order (pixel::box_column_mean).
+void box_vertical_row(const float* const* rows, int count, float inv, int width, float* out);
+
+// Sobel gradient of one row from the rows above and below it (the row itself for the image's
+// first and last rows): magnitude[x] = pixel::gradient_magnitude(gx, gy, inv_norm) and
+// direction[x] = pixel::gradient_direction(gx, gy), columns clamped at the ends.
+struct SobelRows {
+  const float* up = nullptr;
+  const float* mid = nullptr;
+  const float* down = nullptr;
+  int width = 0;
+};
+void sobel_row(const SobelRows& rows, float inv_norm, float* magnitude, std::uint8_t* direction);
+
+namespace scalar {
+void gaussian5_vertical_row(const std::uint8_t* const rows[5], const float* taps, int width,
+                            float* out);
+void row_filter(const float* in, int width, const float* taps, int radius, float* out);
+void box_vertical_row(const float* const* rows, int count, float inv, int width, float* out);
+void sobel_row(const SobelRows& rows, float inv_norm, float* magnitude, std::uint8_t* direction);
+}  // namespace scalar
+
+}  // namespace dco::kernels

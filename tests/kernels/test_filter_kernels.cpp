@@ -1,0 +1,146 @@
+#include "dco/kernels/filter_kernels.hpp"
+#include "for_each_target.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "dco/kernels/contour_pixel.hpp"
+
+namespace dco::kernels {
+namespace {
+
+// Widths around the lane counts of every target (4 .. 16 float lanes, SVE up to 64), odd ones,
+// and rows too short for an interior.
+const std::vector<int> kWidths = {1, 2, 3, 4, 5, 8, 15, 16, 17, 18, 31, 33, 64, 65, 66, 130, 257};
+
+std::vector<float> random_floats(std::mt19937& rng, int n, float lo, float hi) {
+  std::uniform_real_distribution<float> dist(lo, hi);
+  std::vector<float> v(static_cast<std::size_t>(n));
+  for (float& e : v) e = dist(rng);
+  return v;
+}
+
+TEST(FilterKernels, GaussianVerticalRowMatchesScalarAndThePixelMath) {
+  std::mt19937 rng(1);
+  std::uniform_int_distribution<int> grey(0, 255);
+  const float taps[3] = {0.1201f, 0.2339f, 0.2920f};
+  for_each_target([&] {
+    for (const int w : kWidths) {
+      std::vector<std::uint8_t> rows[5];
+      const std::uint8_t* pointers[5];
+      for (int k = 0; k < 5; ++k) {
+        rows[k].resize(static_cast<std::size_t>(w));
+        for (auto& e : rows[k]) e = static_cast<std::uint8_t>(grey(rng));
+        pointers[k] = rows[k].data();
+      }
+      std::vector<float> expected(static_cast<std::size_t>(w)), actual(expected.size());
+      scalar::gaussian5_vertical_row(pointers, taps, w, expected.data());
+      gaussian5_vertical_row(pointers, taps, w, actual.data());
+      for (int x = 0; x < w; ++x) {
+        ASSERT_EQ(actual[x], expected[x]) << "w " << w << " x " << x;
+        // Within rounding only: this file may be compiled with fused multiply-add (aarch64).
+        ASSERT_FLOAT_EQ(expected[x], pixel::gaussian5_vertical(rows[0][x], rows[1][x], rows[2][x],
+                                                               rows[3][x], rows[4][x], taps));
+      }
+    }
+  });
+}
+
+TEST(FilterKernels, RowFilterMatchesScalarAndClampsTheEnds) {
+  std::mt19937 rng(2);
+  for_each_target([&] {
+    for (const int w : kWidths)
+      for (const int radius : {0, 1, 2, 4, 9}) {
+        const std::vector<float> in = random_floats(rng, w, -10.0f, 10.0f);
+        const std::vector<float> taps = random_floats(rng, 2 * radius + 1, 0.0f, 1.0f);
+        std::vector<float> expected(static_cast<std::size_t>(w)), actual(expected.size());
+        scalar::row_filter(in.data(), w, taps.data(), radius, expected.data());
+        row_filter(in.data(), w, taps.data(), radius, actual.data());
+        for (int x = 0; x < w; ++x) {
+          ASSERT_EQ(actual[x], expected[x]) << "w " << w << " radius " << radius << " x " << x;
+          // The reference, written out: taps over the row with its ends repeated.
+          float sum = 0.0f;
+          for (int k = 0; k <= 2 * radius; ++k)
+            sum += taps[k] * in[std::clamp(x + k - radius, 0, w - 1)];
+          ASSERT_NEAR(expected[x], sum, 1e-5f * (1.0f + std::abs(sum))) << "w " << w << " x " << x;
+        }
+      }
+  });
+}
+
+TEST(FilterKernels, BoxVerticalRowMatchesScalarAndTheColumnMean) {
+  std::mt19937 rng(3);
+  for_each_target([&] {
+    for (const int w : kWidths)
+      for (const int count : {1, 3, 9}) {
+        std::vector<std::vector<float>> rows;
+        std::vector<const float*> pointers;
+        for (int k = 0; k < count; ++k) rows.push_back(random_floats(rng, w, 0.0f, 1.0f));
+        for (const auto& r : rows) pointers.push_back(r.data());
+        const float inv = 1.0f / static_cast<float>(count);
+        std::vector<float> expected(static_cast<std::size_t>(w)), actual(expected.size());
+        scalar::box_vertical_row(pointers.data(), count, inv, w, expected.data());
+        box_vertical_row(pointers.data(), count, inv, w, actual.data());
+        for (int x = 0; x < w; ++x) {
+          ASSERT_EQ(actual[x], expected[x]) << "w " << w << " count " << count << " x " << x;
+          float t = rows[0][x];
+          for (int k = 1; k < count; ++k) t += rows[k][x];
+          ASSERT_EQ(expected[x], t * inv);
+        }
+      }
+  });
+}
+
+TEST(FilterKernels, SobelRowMatchesScalarAndThePixelMath) {
+  std::mt19937 rng(4);
+  // Few distinct levels: zero and equal gradients (the sector borders' ties) happen often.
+  std::uniform_int_distribution<int> level(0, 4);
+  for_each_target([&] {
+    for (const int w : kWidths) {
+      std::vector<float> rows[3];
+      for (auto& r : rows) {
+        r.resize(static_cast<std::size_t>(w));
+        for (float& e : r) e = 16.0f * static_cast<float>(level(rng));
+      }
+      const SobelRows in{rows[0].data(), rows[1].data(), rows[2].data(), w};
+      std::vector<float> m_expected(static_cast<std::size_t>(w)), m_actual(m_expected.size());
+      std::vector<std::uint8_t> d_expected(m_expected.size()), d_actual(m_expected.size());
+      scalar::sobel_row(in, 1.0f / 1443.0f, m_expected.data(), d_expected.data());
+      sobel_row(in, 1.0f / 1443.0f, m_actual.data(), d_actual.data());
+      for (int x = 0; x < w; ++x) {
+        ASSERT_EQ(m_actual[x], m_expected[x]) << "w " << w << " x " << x;
+        ASSERT_EQ(d_actual[x], d_expected[x]) << "w " << w << " x " << x;
+        const int l = std::max(x - 1, 0), r = std::min(x + 1, w - 1);
+        const float gx = pixel::sobel_gx(in.up, in.mid, in.down, l, r);
+        const float gy = pixel::sobel_gy(in.up, in.down, l, x, r);
+        ASSERT_EQ(m_expected[x], pixel::gradient_magnitude(gx, gy, 1.0f / 1443.0f));
+        ASSERT_EQ(d_expected[x], pixel::gradient_direction(gx, gy));
+      }
+    }
+  });
+}
+
+TEST(FilterKernels, SobelDirectionsFollowTheGradient) {
+  // A horizontal ramp (gradient along x), a vertical one, and the two diagonals.
+  const int w = 40;
+  std::vector<float> up(w), mid(w), down(w);
+  const auto run = [&](auto value) {
+    for (int x = 0; x < w; ++x) up[x] = value(x, -1), mid[x] = value(x, 0), down[x] = value(x, 1);
+    std::vector<float> m(w);
+    std::vector<std::uint8_t> d(w);
+    sobel_row({up.data(), mid.data(), down.data(), w}, 1.0f, m.data(), d.data());
+    return d[w / 2];
+  };
+  EXPECT_EQ(run([](int x, int) { return 3.0f * x; }), 0);
+  EXPECT_EQ(run([](int, int y) { return 3.0f * y; }), 2);
+  EXPECT_EQ(run([](int x, int y) { return 3.0f * (x + y); }), 1);
+  EXPECT_EQ(run([](int x, int y) { return 3.0f * (x - y); }), 3);
+}
+
+}  // namespace
+}  // namespace dco::kernels
