@@ -22,8 +22,9 @@ namespace dco::kernels {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-template <class D>
-HWY_INLINE hn::Vec<D> Vertical(D d, const GridRow& r, int c) {
+// The terms of the rows above and below: a GridRow's or a SplitSmoothRow's (the same members).
+template <class D, class Row>
+HWY_INLINE hn::Vec<D> Vertical(D d, const Row& r, int c) {
   auto v = hn::Zero(d);
   if (r.x_below != nullptr) v = hn::Mul(hn::LoadU(d, r.wy + c), hn::LoadU(d, r.x_below + c));
   if (r.x_above != nullptr)
@@ -39,21 +40,14 @@ void GridSmoothSplitRow(const SplitSmoothRow& r, float* x) {
   const int begin = 1 - r.parity;
   const int end = std::max(begin, (r.width - r.parity) / 2);
   detail::smooth_split_range(r, x, 0, std::min(begin, count));
-  const float* x_right = r.x_other + r.parity;
-  const float* x_left = x_right - 1;
-  const float* w_left = r.wx_other + r.parity - 1;
   int i = begin;
   for (; i + n <= end; i += n) {
-    auto v =
-        hn::Add(hn::LoadU(d, r.b + i), hn::Mul(hn::LoadU(d, r.wx + i), hn::LoadU(d, x_right + i)));
-    v = hn::Add(v, hn::Mul(hn::LoadU(d, w_left + i), hn::LoadU(d, x_left + i)));
-    auto vertical = hn::Zero(d);
-    if (r.x_below != nullptr)
-      vertical = hn::Mul(hn::LoadU(d, r.wy + i), hn::LoadU(d, r.x_below + i));
-    if (r.x_above != nullptr)
-      vertical =
-          hn::Add(vertical, hn::Mul(hn::LoadU(d, r.wy_above + i), hn::LoadU(d, r.x_above + i)));
-    hn::StoreU(hn::Mul(hn::Add(v, vertical), hn::LoadU(d, r.inv_diag + i)), d, x + i);
+    const int right = i + r.parity;  // the right neighbour among the other parity's pixels
+    auto v = hn::Add(hn::LoadU(d, r.b + i),
+                     hn::Mul(hn::LoadU(d, r.wx + i), hn::LoadU(d, r.x_other + right)));
+    v = hn::Add(v,
+                hn::Mul(hn::LoadU(d, r.wx_other + right - 1), hn::LoadU(d, r.x_other + right - 1)));
+    hn::StoreU(hn::Mul(hn::Add(v, Vertical(d, r, i)), hn::LoadU(d, r.inv_diag + i)), d, x + i);
   }
   detail::smooth_split_range(r, x, std::min(i, count), count);
 }

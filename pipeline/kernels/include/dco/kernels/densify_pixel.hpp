@@ -12,8 +12,10 @@
 
 namespace dco::kernels::pixel {
 
-// Σ of the vertical neighbour terms of column c (0 on a row without neighbours).
-DCO_HD inline float vertical_term(const GridRow& r, int c) {
+// Σ of the vertical neighbour terms of column c (0 on a row without neighbours), for a GridRow
+// or a SplitSmoothRow (the same members).
+template <class Row>
+DCO_HD inline float vertical_term(const Row& r, int c) {
   float v = 0.0f;
   if (r.x_below != nullptr) v = r.wy[c] * r.x_below[c];
   if (r.x_above != nullptr) v = v + r.wy_above[c] * r.x_above[c];
@@ -35,10 +37,7 @@ DCO_HD inline float smooth_split_at(const SplitSmoothRow& r, int i) {
   float v = r.b[i];
   if (c + 1 < r.width) v = v + r.wx[i] * r.x_other[right];
   if (c > 0) v = v + r.wx_other[right - 1] * r.x_other[right - 1];
-  float vertical = 0.0f;
-  if (r.x_below != nullptr) vertical = r.wy[i] * r.x_below[i];
-  if (r.x_above != nullptr) vertical = vertical + r.wy_above[i] * r.x_above[i];
-  return (v + vertical) * r.inv_diag[i];
+  return (v + vertical_term(r, i)) * r.inv_diag[i];
 }
 
 // (A x)[c].
