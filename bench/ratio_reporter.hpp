@@ -12,6 +12,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "dco/core/memory_policy.hpp"
+
 namespace dco::bench {
 
 class RatioReporter : public benchmark::ConsoleReporter {
@@ -52,6 +54,9 @@ struct RatioPair {
   const char* peer;
 };
 inline int run_with_ratios(int argc, char** argv, std::initializer_list<RatioPair> pairs) {
+  // Both sides allocate from a heap that keeps freed memory, as in the tools and the daemon: a
+  // peer that allocates its buffers on every call would otherwise also pay their page faults.
+  retain_freed_memory();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   RatioReporter reporter;

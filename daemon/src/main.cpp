@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "dco/core/error.hpp"
+#include "dco/core/memory_policy.hpp"
 #include "dco/daemon/daemon.hpp"
 #include "dco/daemon/daemon_config.hpp"
 #include "dco/daemon/logger.hpp"
@@ -40,6 +41,7 @@ int usage_error(const std::string& message) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  dco::retain_freed_memory();  // before any thread starts: see memory_policy.hpp
   dco::daemon::ConfigSources sources;
   bool print_config = false;
   for (int i = 1; i < argc; ++i) {

@@ -23,6 +23,7 @@
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
+#include "dco/core/memory_policy.hpp"
 #include "dco/core/rectifier.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/gpu/backend.hpp"
@@ -522,6 +523,7 @@ std::string json_fields(const Result& r) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  dco::retain_freed_memory();  // before any thread starts: see memory_policy.hpp
   if (argc > 1 && std::string_view(argv[1]) == "ipc")
     return dco::bench::run_ipc_bench(argc - 1, argv + 1);
   return dco::tools::run_tool("dco-bench", [&] {

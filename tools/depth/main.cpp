@@ -20,6 +20,7 @@
 #include "dco/core/disparity_io.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/image_io.hpp"
+#include "dco/core/memory_policy.hpp"
 #include "dco/core/rectifier.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/tools/command_line.hpp"
@@ -348,6 +349,7 @@ int run_sequence(const Options& opt, dco::pipeline::PipelineParams params) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  dco::retain_freed_memory();  // before any thread starts: see memory_policy.hpp
   return dco::tools::run_tool("dco-depth", [&] {
     const Options opt = parse_args(argc, argv);
     if (opt.help) {
