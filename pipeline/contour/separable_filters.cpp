@@ -55,12 +55,9 @@ void box_filter(ImageView<const float> in, int size, ImageView<float> tmp, Image
   const int w = in.width;
   const int h = in.height;
   const float inv = 1.0f / static_cast<float>(size);
-  // Vertical: every output row sums `size` clamped input rows.
-  std::array<const float*, kMaxSize> rows{};
-  for (int y = 0; y < h; ++y) {
-    for (int k = 0; k < size; ++k) rows[k] = in.row(std::clamp(y - radius + k, 0, h - 1));
-    kernels::box_vertical_row(rows.data(), size, inv, w, tmp.row(y));
-  }
+  // Vertical: every output row is the mean of `size` clamped input rows.
+  for (int y = 0; y < h; ++y)
+    kernels::box_vertical_row(in.data, in.stride, h, y, size, inv, w, tmp.row(y));
   std::array<float, kMaxSize> taps{};
   for (int k = 0; k < size; ++k) taps[k] = inv;
   for (int y = 0; y < h; ++y) kernels::row_filter(tmp.row(y), w, taps.data(), radius, out.row(y));

@@ -4,6 +4,7 @@
 // dco::kernels::scalar bit for bit (the file is built without floating-point contraction).
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 
 #include "dco/kernels/filter_kernels.hpp"
@@ -57,17 +58,21 @@ void RowFilter(const float* in, int width, const float* taps, int radius, float*
   detail::row_filter_range(in, width, taps, radius, x, width, out);
 }
 
-void BoxVerticalRow(const float* const* rows, int count, float inv, int width, float* out) {
+void BoxVerticalRow(const float* in, std::ptrdiff_t stride, int height, int y, int size, float inv,
+                    int width, float* out) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
   const auto scale = hn::Set(d, inv);
+  const int top = y - size / 2;
+  const auto row = [&](int k) { return in + pixel::clamp_to(top + k, 0, height - 1) * stride; };
   int x = 0;
   for (; x + n <= width; x += n) {
-    auto sum = hn::LoadU(d, rows[0] + x);
-    for (int k = 1; k < count; ++k) sum = hn::Add(sum, hn::LoadU(d, rows[k] + x));
+    // The first row, then each further one added in order, then the scale: box_column_mean.
+    auto sum = hn::LoadU(d, row(0) + x);
+    for (int k = 1; k < size; ++k) sum = hn::Add(sum, hn::LoadU(d, row(k) + x));
     hn::StoreU(hn::Mul(sum, scale), d, out + x);
   }
-  detail::box_vertical_range(rows, count, inv, x, width, out);
+  detail::box_vertical_range(in, stride, height, y, size, inv, x, width, out);
 }
 
 void SobelRow(const SobelRows& r, float inv_norm, float* magnitude, std::uint8_t* direction) {
@@ -137,8 +142,9 @@ void row_filter(const float* in, int width, const float* taps, int radius, float
   HWY_DYNAMIC_DISPATCH(RowFilter)(in, width, taps, radius, out);
 }
 
-void box_vertical_row(const float* const* rows, int count, float inv, int width, float* out) {
-  HWY_DYNAMIC_DISPATCH(BoxVerticalRow)(rows, count, inv, width, out);
+void box_vertical_row(const float* in, std::ptrdiff_t stride, int height, int y, int size,
+                      float inv, int width, float* out) {
+  HWY_DYNAMIC_DISPATCH(BoxVerticalRow)(in, stride, height, y, size, inv, width, out);
 }
 
 void sobel_row(const SobelRows& rows, float inv_norm, float* magnitude, std::uint8_t* direction) {

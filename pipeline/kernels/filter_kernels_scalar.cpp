@@ -12,8 +12,9 @@ void row_filter(const float* in, int width, const float* taps, int radius, float
   detail::row_filter_range(in, width, taps, radius, 0, width, out);
 }
 
-void box_vertical_row(const float* const* rows, int count, float inv, int width, float* out) {
-  detail::box_vertical_range(rows, count, inv, 0, width, out);
+void box_vertical_row(const float* in, std::ptrdiff_t stride, int height, int y, int size,
+                      float inv, int width, float* out) {
+  detail::box_vertical_range(in, stride, height, y, size, inv, 0, width, out);
 }
 
 void sobel_row(const SobelRows& rows, float inv_norm, float* magnitude, std::uint8_t* direction) {

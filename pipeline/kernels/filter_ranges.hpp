@@ -24,13 +24,10 @@ inline void row_filter_range(const float* in, int width, const float* taps, int 
   for (int x = begin; x < end; ++x) out[x] = pixel::clamped_tap_sum(in, width, x, radius, tap);
 }
 
-inline void box_vertical_range(const float* const* rows, int count, float inv, int begin, int end,
-                               float* out) {
-  for (int x = begin; x < end; ++x) {
-    float t = rows[0][x];
-    for (int k = 1; k < count; ++k) t += rows[k][x];
-    out[x] = t * inv;
-  }
+inline void box_vertical_range(const float* in, std::ptrdiff_t stride, int height, int y, int size,
+                               float inv, int begin, int end, float* out) {
+  for (int x = begin; x < end; ++x)
+    out[x] = pixel::box_column_mean(in + x, stride, height, y, size, inv);
 }
 
 inline void sobel_range(const SobelRows& r, float inv_norm, int begin, int end, float* magnitude,

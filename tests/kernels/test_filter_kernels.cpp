@@ -77,22 +77,28 @@ TEST(FilterKernels, BoxVerticalRowMatchesScalarAndTheColumnMean) {
   std::mt19937 rng(3);
   for_each_target([&] {
     for (const int w : kWidths)
-      for (const int count : {1, 3, 9}) {
-        std::vector<std::vector<float>> rows;
-        std::vector<const float*> pointers;
-        for (int k = 0; k < count; ++k) rows.push_back(random_floats(rng, w, 0.0f, 1.0f));
-        for (const auto& r : rows) pointers.push_back(r.data());
-        const float inv = 1.0f / static_cast<float>(count);
-        std::vector<float> expected(static_cast<std::size_t>(w)), actual(expected.size());
-        scalar::box_vertical_row(pointers.data(), count, inv, w, expected.data());
-        box_vertical_row(pointers.data(), count, inv, w, actual.data());
-        for (int x = 0; x < w; ++x) {
-          ASSERT_EQ(actual[x], expected[x]) << "w " << w << " count " << count << " x " << x;
-          float t = rows[0][x];
-          for (int k = 1; k < count; ++k) t += rows[k][x];
-          ASSERT_EQ(expected[x], t * inv);
+      for (const int size : {1, 3, 9})
+        for (const int h : {1, 4, 12}) {
+          // Rows padded to a stride longer than the width, as an image's are.
+          const int stride = w + 5;
+          const std::vector<float> image = random_floats(rng, stride * h, 0.0f, 1.0f);
+          const float inv = 1.0f / static_cast<float>(size);
+          for (int y = 0; y < h; ++y) {
+            std::vector<float> expected(static_cast<std::size_t>(w)), actual(expected.size());
+            scalar::box_vertical_row(image.data(), stride, h, y, size, inv, w, expected.data());
+            box_vertical_row(image.data(), stride, h, y, size, inv, w, actual.data());
+            for (int x = 0; x < w; ++x) {
+              ASSERT_EQ(actual[x], expected[x])
+                  << "w " << w << " h " << h << " size " << size << " y " << y << " x " << x;
+              // The mean written out: the rows of the window, clamped to the image, in order.
+              float t = 0.0f;
+              for (int k = 0; k < size; ++k)
+                t = (k == 0 ? 0.0f : t) +
+                    image[std::clamp(y - size / 2 + k, 0, h - 1) * stride + x];
+              ASSERT_EQ(expected[x], t * inv);
+            }
+          }
         }
-      }
   });
 }
 

@@ -6,6 +6,7 @@
 // with the GPU passes). The vector versions do the same float operations in the same order, no
 // fused multiply-add, so all of them give the same bits.
 
+#include <cstddef>
 #include <cstdint>
 
 namespace dco::kernels {
@@ -21,9 +22,11 @@ void gaussian5_vertical_row(const std::uint8_t* const rows[5], const float* taps
 // out may not alias in.
 void row_filter(const float* in, int width, const float* taps, int radius, float* out);
 
-// The rows of a box filter's vertical pass: out[x] = (rows[0][x] + rows[1][x] + ... +
-// rows[count - 1][x]) * inv, added in that order (pixel::box_column_mean).
-void box_vertical_row(const float* const* rows, int count, float inv, int width, float* out);
+// Row y of a box filter's vertical pass over an image of `height` rows `stride` floats apart:
+// out[x] = pixel::box_column_mean(in + x, stride, height, y, size, inv) for x < width, the mean
+// of rows y - size / 2 .. y + size / 2 (clamped to the image) added in that order.
+void box_vertical_row(const float* in, std::ptrdiff_t stride, int height, int y, int size,
+                      float inv, int width, float* out);
 
 // Sobel gradient of one row from the rows above and below it (the row itself for the image's
 // first and last rows): magnitude[x] = pixel::gradient_magnitude(gx, gy, inv_norm) and
@@ -40,7 +43,8 @@ namespace scalar {
 void gaussian5_vertical_row(const std::uint8_t* const rows[5], const float* taps, int width,
                             float* out);
 void row_filter(const float* in, int width, const float* taps, int radius, float* out);
-void box_vertical_row(const float* const* rows, int count, float inv, int width, float* out);
+void box_vertical_row(const float* in, std::ptrdiff_t stride, int height, int y, int size,
+                      float inv, int width, float* out);
 void sobel_row(const SobelRows& rows, float inv_norm, float* magnitude, std::uint8_t* direction);
 }  // namespace scalar
 
