@@ -132,6 +132,7 @@ void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<
     prepare(r);
     rows.load(a, b, x, r);
   };
+  const auto smooth = [&](int r, int colour) { rows.smooth(r, (r + colour) % 2); };
   const int first = red_first ? 0 : 1;
   // One pass over the rows does every colour of every sweep (this keeps the few rows involved in
   // cache). Sweep s updates the first colour of row r - 2s and then the second colour of the row
@@ -144,8 +145,8 @@ void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<
     if (r + 1 < h) load(r + 1);  // row r's first update reads row r + 1
     for (int s = 0; s < sweeps; ++s) {
       const int row = r - 2 * s;
-      if (row >= 0 && row < h) rows.smooth(row, (row + first) % 2);
-      if (row >= 1 && row <= h) rows.smooth(row - 1, (row - 1 + 1 - first) % 2);
+      if (row >= 0 && row < h) smooth(row, first);
+      if (row >= 1 && row <= h) smooth(row - 1, 1 - first);
     }
     const int done = r - 2 * sweeps + 1;
     if (done >= 0 && done < h) rows.store(done, x);

@@ -83,8 +83,8 @@ void SobelRow(const SobelRows& r, float inv_norm, float* magnitude, std::uint8_t
   const int w = r.width;
   const auto two = hn::Set(df, 2.0f);
   const auto inv = hn::Set(df, inv_norm);
-  const auto tan22 = hn::Set(df, 0.41421356f);  // pixel::gradient_direction's sector borders
-  const auto tan67 = hn::Set(df, 2.41421356f);
+  const auto tan22 = hn::Set(df, pixel::kTan22);  // pixel::gradient_direction's sector borders
+  const auto tan67 = hn::Set(df, pixel::kTan67);
   const auto zero = hn::Zero(df);
   const auto sector_h = hn::Set(di, 0), sector_v = hn::Set(di, 2);
   const auto sector_down = hn::Set(di, 1), sector_up = hn::Set(di, 3);

@@ -1,8 +1,8 @@
 #pragma once
 
 // Per-pixel math of the contour stage (dco/pipeline/contour), shared by the CPU functions and the
-// GPU passes. Float operations in one fixed order and no fused multiply-add (x86-64-v2 has none;
-// dco_gpu compiles with --fmad=false), so both sides give the same bits.
+// GPU passes. Float operations in one fixed order and no fused multiply-add (the CPU code is
+// built without contraction; dco_gpu compiles with --fmad=false), so both sides give the same bits.
 
 #include <cmath>
 #include <cstddef>
@@ -54,9 +54,9 @@ DCO_HD inline float gradient_magnitude(float gx, float gy, float inv_norm) {
 // The gradient direction in 4 sectors (dco::contour::GradientDirection): 0 horizontal,
 // 1 diagonal down, 2 vertical, 3 diagonal up. Branch-free: on texture the direction is close to
 // random, and mispredicted branches would cost more than the gradient.
+inline constexpr float kTan22 = 0.41421356f;  // tan(22.5°): the sector borders
+inline constexpr float kTan67 = 2.41421356f;  // tan(67.5°)
 DCO_HD inline std::uint8_t gradient_direction(float gx, float gy) {
-  constexpr float kTan22 = 0.41421356f;  // tan(22.5°): sector borders
-  constexpr float kTan67 = 2.41421356f;  // tan(67.5°)
   const float ax = std::fabs(gx);
   const float ay = std::fabs(gy);
   const int horizontal = ay <= ax * kTan22;
