@@ -60,6 +60,8 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   EXPECT_GE(json_value(r.out, "latency_p99_ms"), p50);
   EXPECT_EQ(json_value(r.out, "width"), 320);
   EXPECT_EQ(json_value(r.out, "frames"), 3);
+  EXPECT_EQ(json_value(r.out, "warmup_frames"), 3) << "the default 4, at most the frames";
+  EXPECT_GT(json_value(r.out, "first_result_ms"), 0);
   EXPECT_EQ(json_value(r.out, "paced_frames"), 8);
   EXPECT_EQ(json_value(r.out, "published") + json_value(r.out, "dropped"), 8);
   EXPECT_GT(json_value(r.out, "stereo_ms"), 0);
@@ -69,11 +71,13 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
 TEST(DcoBenchCli, TextNamesEveryMeasurementOnTheKarlsruheClip) {
   if (!fs::is_directory(kKarlsruhe / "images")) GTEST_SKIP() << "no Karlsruhe clip in the data";
   TempDir dir;
-  const CliRun r = run_bench(dir, {"--sequence", "karlsruhe", "--frames", "2", "--paced-frames",
-                                   "3", "--set", "runtime.threads=3"});
+  const CliRun r = run_bench(dir, {"--sequence", "karlsruhe", "--frames", "2", "--warmup", "1",
+                                   "--paced-frames", "3", "--set", "runtime.threads=3"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("karlsruhe 2010_03_09_drive_0023: 2 frames of 1344x372"));
-  EXPECT_THAT(r.out, HasSubstr("max-disp 96, 3 stage thread(s)"));
+  EXPECT_THAT(r.out, HasSubstr("max-disp 96, 3 stage thread(s), each run after an untimed pass "
+                               "over the first 1"));
+  EXPECT_THAT(r.out, HasSubstr("a new runtime's first result after"));
   EXPECT_THAT(r.out, HasSubstr("ms/frame"));
   EXPECT_THAT(r.out, HasSubstr("stereo"));
   EXPECT_THAT(r.out, HasSubstr("latency  p50"));
@@ -92,6 +96,7 @@ TEST(DcoBenchCli, BadCommandLinesExitWithTwo) {
   expect_usage({"--fps", "fast"}, "--fps");
   expect_usage({"--sequence", "kitti"}, "'kitti'");
   expect_usage({"--paced-frames", "-1"}, "--paced-frames");
+  expect_usage({"--warmup", "-1"}, "--warmup");
   expect_usage({"--frobnicate"}, "unknown option --frobnicate");
 }
 

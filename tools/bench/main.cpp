@@ -9,7 +9,9 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -29,6 +31,7 @@
 #include "dco/gpu/backend.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/depth_runtime.hpp"
+#include "dco/pipeline/runtime/histogram.hpp"
 #include "dco/tools/command_line.hpp"
 #include "dco/tools/frame_sequence.hpp"
 #include "dco/tools/json.hpp"
@@ -43,19 +46,25 @@ using dco::tools::UsageError;
 
 constexpr std::string_view kUsage =
     R"(usage: dco-bench [--sequence synthetic|karlsruhe|all] [--synthetic NAME] [--size WxH]
-                 [--frames N] [--karlsruhe DIR] [--fps F] [--paced-frames N] [--json]
+                 [--frames N] [--warmup N] [--karlsruhe DIR] [--fps F] [--paced-frames N]
+                 [--json]
                  [--backend auto|cpu|cuda] [--config FILE] [--set KEY=VALUE]
 
 Runs the depth pipeline in the real-time runtime and, on the same frames in the same run,
 OpenCV StereoSGBM (3-way) + WLS. Per sequence:
-  throughput  runtime.deterministic on, frames pushed as fast as it takes them: ms per frame,
-              frames per second and the mean time of each stage;
+  throughput  runtime.deterministic on, frames pushed as fast as it takes them: ms per frame
+              (first push to last result / frames), frames per second and the mean time of
+              each stage; also how long a new runtime took to its first result;
   latency     frames pushed at --fps (capture time = the frame's due time), newest wins at the
               entry and a frame that waited past runtime.entry_deadline_ms is late (no depth):
               capture-to-result latency p50 / p99 and the frames dropped (late ones included);
               with runtime.release_latency_ms also the capture-to-ready latency and the
               results that were overdue or handed on early;
   peer        SGBM 3-way + WLS ms per frame; ratio = peer / dco.
+Each run (and the peer) first takes the sequence's first --warmup frames, untimed, so that what
+starting up costs once (buffers touched for the first time, the flow's set-up) is not counted as
+the frames' work. The timed pass is a new sequence: it still fills the pipeline and solves its
+first frame with no previous one.
 With the CUDA backend it also runs the sparse stereo stage, the contour stage and the densify
 solver on the CPU and on the GPU over the same frames: the stage times and how many output
 pixels differ (the tolerance is zero: the GPU computes the same integer costs, float operations
@@ -64,7 +73,9 @@ and decisions).
   --sequence S        synthetic, karlsruhe or all (default all)
   --synthetic NAME    hand | boxes | static (default hand)
   --size WxH          synthetic resolution (default 1280x720)
-  --frames N          frames of each sequence (default 10; the Karlsruhe clip has 20)
+  --frames N          frames of each sequence (default 20; the Karlsruhe clip has 10)
+  --warmup N          frames of the untimed pass before each run (default 4, at most the
+                      frames)
   --karlsruhe DIR     the clip (default: the shared data's 2010_03_09_drive_0023), max-disp 96
   --fps F             input rate of the latency run (default 30)
   --paced-frames N    frames pushed in the latency run, the sequence played back and forth
@@ -86,7 +97,8 @@ Exit status: 0 success, 1 bad data (missing frames, bad parameter), 2 bad comman
 struct Options {
   std::string sequence = "all";
   std::string synthetic = "hand";
-  int width = 1280, height = 720, frames = 10;
+  int width = 1280, height = 720, frames = 20;
+  int warmup = 4;
   fs::path karlsruhe = fs::path(DCO_DATA_DIR) / "karlsruhe_sequences" / "2010_03_09_drive_0023";
   double fps = 30;
   int paced_frames = 90;
@@ -123,6 +135,8 @@ Options parse_args(int argc, char** argv) {
       opt.height = size.height;
     } else if (arg == "--frames")
       opt.frames = args.int_value();
+    else if (arg == "--warmup")
+      opt.warmup = args.int_value();
     else if (arg == "--karlsruhe")
       opt.karlsruhe = args.value();
     else if (arg == "--fps")
@@ -148,6 +162,8 @@ Options parse_args(int argc, char** argv) {
         fmt::format("--sequence must be synthetic, karlsruhe or all, not '{}'", opt.sequence));
   if (opt.frames < 1) throw UsageError("--frames must be >= 1");
   if (opt.paced_frames < 1) throw UsageError("--paced-frames must be >= 1");
+  if (opt.warmup < 0) throw UsageError("--warmup must be >= 0");
+
   return opt;
 }
 
@@ -346,24 +362,80 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
   return c;
 }
 
+// Every result's times, in the order the runtime hands them on (on its own thread).
+class ResultTimes {
+ public:
+  explicit ResultTimes(std::size_t capacity) { times_.reserve(capacity); }
+  rt::DepthRuntime::ResultCallback callback() {
+    return [this](const dco::pipeline::DepthResult&, const rt::FrameTimes& t) {
+      const std::lock_guard lock(mutex_);
+      times_.push_back(t);
+    };
+  }
+  std::vector<rt::FrameTimes> take() {
+    const std::lock_guard lock(mutex_);
+    return std::move(times_);
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<rt::FrameTimes> times_;
+};
+
+double ms_between(rt::Clock::time_point from, rt::Clock::time_point to) {
+  return std::chrono::duration<double, std::milli>(to - from).count();
+}
+
+// The runtime's figures (RuntimeStats) over the results of the timed pass, measured the way the
+// runtime measures them.
+struct PassFigures {
+  rt::DurationSummary latency, ready, stereo, contour, densify;
+};
+
+rt::DurationSummary summary_of(const rt::Histogram& h) {
+  return {h.count(), h.percentile(50), h.percentile(99), h.mean_ms(), h.max_ms()};
+}
+
+PassFigures figures_of(const std::vector<rt::FrameTimes>& times) {
+  rt::Histogram latency, ready, stereo, contour, densify;
+  for (const rt::FrameTimes& t : times) {
+    latency.record(ms_between(t.capture, t.release));
+    ready.record(ms_between(t.capture, t.densify_end));
+    stereo.record(ms_between(t.stereo_start + t.stereo_blocked, t.stereo_end));
+    contour.record(ms_between(t.contour_start, t.contour_end));
+    densify.record(ms_between(t.densify_start, t.densify_end));
+  }
+  return {summary_of(latency), summary_of(ready), summary_of(stereo), summary_of(contour),
+          summary_of(densify)};
+}
+
+// The counts of `after` less those of `before`: what one pass of a runtime added.
+rt::RuntimeStats counts_since(const rt::RuntimeStats& before, const rt::RuntimeStats& after) {
+  rt::RuntimeStats d = after;
+  d.pushed -= before.pushed;
+  d.dropped -= before.dropped;
+  d.late -= before.late;
+  d.published -= before.published;
+  d.overdue -= before.overdue;
+  d.early -= before.early;
+  return d;
+}
+
 struct Result {
   std::string name;
   std::string backend, backend_message;
   std::optional<BackendCheck> check;
-  int width = 0, height = 0, frames = 0, max_disparity = 0, threads = 0;
+  int width = 0, height = 0, frames = 0, max_disparity = 0, threads = 0, warmup = 0;
   double ms_per_frame = 0;
-  rt::RuntimeStats throughput;
+  double first_result_ms = 0;  // a new runtime: first push to first result (the warm-up pass)
+  PassFigures throughput;
   double fps = 0;
   int paced_frames = 0;
   double release_latency_ms = 0;  // runtime.release_latency_ms of the latency run
-  rt::RuntimeStats paced;
+  rt::RuntimeStats paced;         // the counts of its timed pass: pushed, dropped, late, ...
+  PassFigures paced_figures;
   double peer_ms_per_frame = 0;
 };
-
-double ms_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
-}
 
 Result run(const Options& opt, const Params& base, const Frames& frames) {
   Params p = base;
@@ -373,6 +445,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
   r.width = frames.pairs[0].left.width();
   r.height = frames.pairs[0].left.height();
   r.frames = static_cast<int>(frames.pairs.size());
+  r.warmup = std::min(opt.warmup, r.frames);
   r.max_disparity = frames.max_disparity;
   r.threads = p.runtime.threads;
   const dco::gpu::BackendChoice backend =
@@ -380,38 +453,63 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
   r.backend = backend.backend;
   r.backend_message = backend.message;
 
+  // Each run first passes the sequence's first --warmup frames through the same runtime
+  // untimed, and the peer likewise, so that starting up is not counted as a frame's work.
+  const auto warmup_frames = std::span(frames.pairs).first(static_cast<std::size_t>(r.warmup));
   {  // Throughput: every frame, as fast as the runtime takes them.
     rt::RuntimeParams runtime = p.runtime;
     runtime.deterministic = true;
-    rt::DepthRuntime pipeline(p.pipeline, runtime, {}, {}, backend.stages);
+    ResultTimes results(frames.pairs.size());
+    rt::DepthRuntime pipeline(p.pipeline, runtime, results.callback(), {}, backend.stages);
     pipeline.start();
-    const auto start = std::chrono::steady_clock::now();
+    auto start = rt::Clock::now();
+    if (!warmup_frames.empty()) {
+      for (const auto& f : warmup_frames) pipeline.push(f.left.cview(), f.right.cview());
+      pipeline.drain();
+      r.first_result_ms = ms_between(start, results.take().front().release);
+      start = rt::Clock::now();
+    }
     for (const auto& f : frames.pairs) pipeline.push(f.left.cview(), f.right.cview());
     pipeline.drain();
-    r.ms_per_frame = ms_since(start) / r.frames;
-    r.throughput = pipeline.stats();
+    const std::vector<rt::FrameTimes> times = results.take();
+    if (static_cast<int>(times.size()) != r.frames)
+      throw dco::Error(fmt::format("{}: the deterministic run published {} of {} frames",
+                                   frames.name, times.size(), r.frames));
+    if (warmup_frames.empty()) r.first_result_ms = ms_between(start, times.front().release);
+    r.ms_per_frame = ms_between(start, times.back().release) / r.frames;
+    r.throughput = figures_of(times);
   }
   {  // Latency: a camera's pace; the sequence is played back and forth so motion stays smooth.
-    rt::DepthRuntime pipeline(p.pipeline, p.runtime, {}, {}, backend.stages);
+    ResultTimes results(static_cast<std::size_t>(r.warmup + opt.paced_frames));
+    rt::DepthRuntime pipeline(p.pipeline, p.runtime, results.callback(), {}, backend.stages);
     pipeline.start();
     const auto period = std::chrono::duration_cast<rt::Clock::duration>(
         std::chrono::duration<double>(1.0 / opt.fps));
     const int n = r.frames;
-    const auto start = rt::Clock::now();
-    for (int i = 0; i < opt.paced_frames; ++i) {
-      const int cycle = std::max(1, 2 * n - 2);
-      const int k = n == 1 ? 0 : (i % cycle < n ? i % cycle : cycle - i % cycle);
-      const auto due = start + i * period;
-      std::this_thread::sleep_until(due);
-      const auto& f = frames.pairs[static_cast<std::size_t>(k)];
-      pipeline.push(f.left.cview(), f.right.cview(), due);
-    }
-    pipeline.drain();
+    const auto play = [&](int count) {
+      const auto start = rt::Clock::now();
+      for (int i = 0; i < count; ++i) {
+        const int cycle = std::max(1, 2 * n - 2);
+        const int k = n == 1 ? 0 : (i % cycle < n ? i % cycle : cycle - i % cycle);
+        const auto due = start + i * period;
+        std::this_thread::sleep_until(due);
+        const auto& f = frames.pairs[static_cast<std::size_t>(k)];
+        pipeline.push(f.left.cview(), f.right.cview(), due);
+      }
+      pipeline.drain();
+    };
+    play(r.warmup);
+    const rt::RuntimeStats before = pipeline.stats();
+    results.take();
+    play(opt.paced_frames);
     r.fps = opt.fps;
     r.release_latency_ms = p.runtime.release_latency_ms;
     r.paced_frames = opt.paced_frames;
-    r.paced = pipeline.stats();
+    r.paced = counts_since(before, pipeline.stats());
+    r.paced_figures = figures_of(results.take());
   }
+  for (const auto& f : warmup_frames)
+    dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity);
   double peer_ms = 0;
   for (const auto& f : frames.pairs)
     peer_ms +=
@@ -425,12 +523,16 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
 }
 
 void print_text(const Result& r) {
-  const rt::RuntimeStats& t = r.throughput;
+  const PassFigures& t = r.throughput;
   const rt::RuntimeStats& l = r.paced;
-  fmt::print("{}: {} frames of {}x{}, max-disp {}, {} stage thread(s)\n", r.name, r.frames, r.width,
-             r.height, r.max_disparity, r.threads);
-  fmt::print("  dco      {:8.1f} ms/frame  ({:.2f} fps)\n", r.ms_per_frame,
-             1000.0 / r.ms_per_frame);
+  const PassFigures& ls = r.paced_figures;
+  fmt::print(
+      "{}: {} frames of {}x{}, max-disp {}, {} stage thread(s), each run after an untimed pass "
+      "over the first {}\n",
+      r.name, r.frames, r.width, r.height, r.max_disparity, r.threads, r.warmup);
+  fmt::print(
+      "  dco      {:8.1f} ms/frame  ({:.2f} fps); a new runtime's first result after {:.0f} ms\n",
+      r.ms_per_frame, 1000.0 / r.ms_per_frame, r.first_result_ms);
   fmt::print(
       "  stages   stereo {:.1f}  contour {:.1f}  densify {:.1f} ms  (mean; p99 {:.1f} / {:.1f} / "
       "{:.1f})\n",
@@ -439,14 +541,14 @@ void print_text(const Result& r) {
   fmt::print(
       "  latency  p50 {:.1f} ms  p99 {:.1f} ms  (p99 - p50 {:.1f} ms) at {:g} fps input; "
       "{} of {} frames dropped ({} late), {} published\n",
-      l.latency.p50_ms, l.latency.p99_ms, l.latency.p99_ms - l.latency.p50_ms, r.fps, l.dropped,
+      ls.latency.p50_ms, ls.latency.p99_ms, ls.latency.p99_ms - ls.latency.p50_ms, r.fps, l.dropped,
       l.pushed, l.late, l.published);
   if (r.release_latency_ms > 0)
     fmt::print(
         "  release  at capture + {:g} ms (the latest {:.2f} ms after); ready p50 {:.1f} ms  p99 "
         "{:.1f} ms; {} overdue, {} early\n",
-        r.release_latency_ms, l.latency.max_ms - r.release_latency_ms, l.ready.p50_ms,
-        l.ready.p99_ms, l.overdue, l.early);
+        r.release_latency_ms, ls.latency.max_ms - r.release_latency_ms, ls.ready.p50_ms,
+        ls.ready.p99_ms, l.overdue, l.early);
   fmt::print(
       "  peer     {:8.1f} ms/frame  OpenCV StereoSGBM 3-way + WLS; ratio peer / dco {:.3f}\n",
       r.peer_ms_per_frame, r.peer_ms_per_frame / r.ms_per_frame);
@@ -481,11 +583,13 @@ void print_text(const Result& r) {
 // The fields of one sequence, without braces.
 std::string json_fields(const Result& r) {
   using dco::tools::json_number;
-  const rt::RuntimeStats& t = r.throughput;
+  const PassFigures& t = r.throughput;
   const rt::RuntimeStats& l = r.paced;
+  const PassFigures& ls = r.paced_figures;
   return fmt::format(
              "\"name\": {}, \"width\": {}, \"height\": {}, \"frames\": {}, \"max_disparity\": {}, "
-             "\"threads\": {}, \"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
+             "\"threads\": {}, \"warmup_frames\": {}, \"first_result_ms\": {}, "
+             "\"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
              "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
              "\"latency_p99_ms\": {}, \"latency_max_ms\": {}, \"ready_p50_ms\": {}, "
              "\"ready_p99_ms\": {}, "
@@ -493,13 +597,13 @@ std::string json_fields(const Result& r) {
              "\"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
              "\"published\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
              dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity,
-             r.threads, json_number(r.ms_per_frame), json_number(1000.0 / r.ms_per_frame),
-             json_number(t.stereo.mean_ms), json_number(t.contour.mean_ms),
-             json_number(t.densify.mean_ms), json_number(r.fps), json_number(l.latency.p50_ms),
-             json_number(l.latency.p99_ms), json_number(l.latency.max_ms),
-             json_number(l.ready.p50_ms), json_number(l.ready.p99_ms),
-             json_number(r.release_latency_ms), l.overdue, l.early, l.pushed, l.dropped, l.late,
-             l.published, json_number(r.peer_ms_per_frame),
+             r.threads, r.warmup, json_number(r.first_result_ms), json_number(r.ms_per_frame),
+             json_number(1000.0 / r.ms_per_frame), json_number(t.stereo.mean_ms),
+             json_number(t.contour.mean_ms), json_number(t.densify.mean_ms), json_number(r.fps),
+             json_number(ls.latency.p50_ms), json_number(ls.latency.p99_ms),
+             json_number(ls.latency.max_ms), json_number(ls.ready.p50_ms),
+             json_number(ls.ready.p99_ms), json_number(r.release_latency_ms), l.overdue, l.early,
+             l.pushed, l.dropped, l.late, l.published, json_number(r.peer_ms_per_frame),
              json_number(r.peer_ms_per_frame / r.ms_per_frame)) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
          (r.check ? fmt::format(
