@@ -332,6 +332,84 @@ HWY_INLINE hn::Vec<D> TwoTableLookup(D du, hn::Vec<D> lo, hn::Vec<D> hi, hn::Vec
                         hn::TableLookupLanes(hi, idx), hn::TableLookupLanes(lo, idx));
 }
 
+// BlockCosts for pixels from..width - 1 when a batch is one vector of 16 lanes and every right
+// pixel a lane reads lies inside the row (from >= d0 + 15): the same operations as its general
+// loop, with the table rows of the census term (and, with kAdInRegisters, of the AD term) in
+// registers, the row's pointers in locals and, with kRunning, the running sum carried in a
+// register rather than read back from the row just stored.
+template <bool kRunning, bool kAdInRegisters>
+HWY_NOINLINE void BlockCostsOneVector(const CostRow& row, const CostTableView& t, int d0, int from,
+                                      std::uint32_t* HWY_RESTRICT out) {
+  const hn::ScalableTag<std::uint32_t> du;
+  const hn::RebindToSigned<decltype(du)> di;
+  const hn::Repartition<std::uint8_t, decltype(du)> du8;
+  const hn::Repartition<std::uint64_t, decltype(du)> du64;
+  constexpr int n = 16;
+  const int half = static_cast<int>(hn::Lanes(du64));
+  const std::uint32_t* HWY_RESTRICT left = row.left;
+  const std::uint32_t* HWY_RESTRICT right = row.right;
+  const std::uint64_t* HWY_RESTRICT census_left = row.census_left;
+  const std::uint64_t* HWY_RESTRICT census_right = row.census_right;
+  const std::uint8_t* HWY_RESTRICT shortest_arm = row.shortest_arm;
+  const int width = row.width;
+  const std::uint32_t* HWY_RESTRICT census_table = t.census;
+  const int census_size = t.census_size;
+  const std::uint32_t* HWY_RESTRICT ad_table = t.ad;
+  const int ad_size = t.ad_size;
+  const auto half_bit = hn::Set(du, static_cast<std::uint32_t>(2 * n));
+  const auto last_entry = hn::Set(du, static_cast<std::uint32_t>(4 * n));
+  const auto ad_clamp = hn::Set(du, static_cast<std::uint32_t>(t.ad_flat_from));
+  const auto third_bit = hn::Set(du, static_cast<std::uint32_t>(4 * n));
+  auto sum = hn::Zero(du);
+  if constexpr (kRunning) sum = hn::LoadU(du, out + from * n);
+  for (int x = from; x < width; ++x) {
+    const int arm = shortest_arm[x];
+    const std::uint32_t* HWY_RESTRICT census_row = census_table + arm * census_size;
+    const int xr = x - d0;
+    const auto a = hn::BitCast(du8, hn::Set(du, left[x]));
+    const auto b = hn::BitCast(du8, hn::Reverse(du, hn::LoadU(du, right + xr - (n - 1))));
+    const auto diff = hn::BitCast(du, hn::Sub(hn::Max(a, b), hn::Min(a, b)));
+    const auto ad = SumOfBytes(du, diff);
+    const auto cl = hn::Set(du64, census_left[x]);
+    const std::uint64_t* census_right_run = census_right + xr - (n - 1);
+    const auto lo = hn::PopulationCount(
+        hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right_run + half))));
+    const auto hi =
+        hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right_run))));
+    const auto hd = hn::ConcatEven(du, hn::BitCast(du, hi), hn::BitCast(du, lo));
+    hn::Vec<decltype(du)> ad_cost;
+    if constexpr (kAdInRegisters) {
+      const std::uint32_t* HWY_RESTRICT ad_row = ad_table + arm * ad_size;
+      const auto clamped = hn::Min(ad, ad_clamp);
+      const auto v01 =
+          TwoTableLookup(du, hn::LoadU(du, ad_row), hn::LoadU(du, ad_row + n), clamped);
+      const auto v23 =
+          TwoTableLookup(du, hn::LoadU(du, ad_row + 2 * n), hn::LoadU(du, ad_row + 3 * n), clamped);
+      const auto v45 =
+          TwoTableLookup(du, hn::LoadU(du, ad_row + 4 * n), hn::LoadU(du, ad_row + 5 * n), clamped);
+      ad_cost = hn::IfThenElse(hn::TestBit(clamped, third_bit), v45,
+                               hn::IfThenElse(hn::TestBit(clamped, half_bit), v23, v01));
+    } else {
+      ad_cost = hn::BitCast(
+          du, hn::GatherIndex(di, reinterpret_cast<const std::int32_t*>(ad_table),
+                              hn::Add(hn::Set(di, arm * ad_size), hn::BitCast(di, ad))));
+    }
+    const auto low =
+        TwoTableLookup(du, hn::LoadU(du, census_row), hn::LoadU(du, census_row + n), hd);
+    const auto high = TwoTableLookup(du, hn::LoadU(du, census_row + 2 * n),
+                                     hn::LoadU(du, census_row + 3 * n), hd);
+    const auto census_cost = hn::IfThenElse(hn::Eq(hd, last_entry), hn::Set(du, census_row[4 * n]),
+                                            hn::IfThenElse(hn::TestBit(hd, half_bit), high, low));
+    const auto cost = hn::Add(ad_cost, census_cost);
+    if constexpr (kRunning) {
+      sum = hn::Add(sum, cost);
+      hn::StoreU(sum, du, out + (x + 1) * n);
+    } else {
+      hn::StoreU(cost, du, out + x * n);
+    }
+  }
+}
+
 // Costs of row `row` in the block layout; with kRunning, their running sums along the row instead:
 // out[(x + 1) * count + k] = out[x * count + k] + cost (out[0 .. count) = 0), the prefix sums
 // the horizontal aggregation needs, without a pass of their own.
@@ -363,7 +441,10 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
   HWY_ALIGN std::uint32_t right_pad[HWY_MAX_BYTES / 4];
   HWY_ALIGN std::uint64_t census_pad[HWY_MAX_BYTES / 4];
   if constexpr (kRunning) std::fill(out, out + count, 0u);
-  for (int x = 0; x < row.width; ++x) {
+  // Past the row's first d0 + n - 1 pixels, a batch of one vector takes the fast loop.
+  const bool one_vector = n == 16 && count == n && census_in_registers;
+  const int general_end = one_vector ? std::min(row.width, d0 + n - 1) : row.width;
+  for (int x = 0; x < general_end; ++x) {
     std::uint32_t* dst = out + (kRunning ? x + 1 : x) * count;
     const std::uint32_t* before = out + x * count;  // kRunning: the sums up to x - 1
     const auto emit = [&](hn::Vec<decltype(du)> cost, int k) {
@@ -461,6 +542,12 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
     } else {
       detail::block_cost_range(row, t, x, d0, count, vector_end, count, out);
     }
+  }
+  if (general_end < row.width) {
+    if (ad_in_registers)
+      BlockCostsOneVector<kRunning, true>(row, t, d0, general_end, out);
+    else
+      BlockCostsOneVector<kRunning, false>(row, t, d0, general_end, out);
   }
 }
 

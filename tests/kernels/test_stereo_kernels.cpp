@@ -319,10 +319,15 @@ TEST(StereoKernels, BlockMatchingCostLooksUpShortAdRowsInRegisters) {
     for (const int d0 : {0, 16, 32}) {
       std::vector<std::uint32_t> expected(static_cast<std::size_t>(w * 16));
       scalar::block_matching_cost_row(row, tables.view, d0, 16, expected.data());
+      std::vector<std::uint32_t> expected_sums(static_cast<std::size_t>((w + 1) * 16));
+      scalar::block_matching_cost_sums_row(row, tables.view, d0, 16, expected_sums.data());
       for_each_target([&] {
         std::vector<std::uint32_t> out(expected.size(), 1);
         block_matching_cost_row(row, tables.view, d0, 16, out.data());
         ASSERT_EQ(out, expected) << "flat from " << flat_from << " d0 " << d0;
+        std::vector<std::uint32_t> sums(expected_sums.size(), 1);
+        block_matching_cost_sums_row(row, tables.view, d0, 16, sums.data());
+        ASSERT_EQ(sums, expected_sums) << "flat from " << flat_from << " d0 " << d0;
       });
     }
   }
