@@ -452,7 +452,8 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
       hn::StoreU(cost, du, dst + k);
     };
     if (x < d0) {
-      for (int k = 0; k < count; ++k) dst[k] = t.unmatched + (kRunning ? before[k] : 0u);
+      for (int k = 0; k < vector_end; k += n) emit(unmatched, k);
+      for (int k = vector_end; k < count; ++k) dst[k] = t.unmatched + (kRunning ? before[k] : 0u);
       continue;
     }
     const auto a = hn::BitCast(du8, hn::Set(du, row.left[x]));
@@ -906,6 +907,27 @@ void WtaUpdateRow(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int cou
   }
 }
 
+void WtaSkipRow(int count, int width, int d, const WtaRow& s) {
+  const hn::ScalableTag<std::uint16_t> du;
+  const hn::RebindToSigned<decltype(du)> di;
+  const int n = static_cast<int>(hn::Lanes(du));
+  const auto no_cost = hn::Set(du, kNoCost);
+  const auto winner_below = hn::Set(di, static_cast<std::int16_t>(d - 1));  // d == disp + 1
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    const auto prev1 = hn::LoadU(du, s.prev1 + x);
+    auto runmin = hn::Min(hn::LoadU(du, s.runmin + x), hn::LoadU(du, s.prev2 + x));
+    if (count >= 2) runmin = hn::Min(runmin, prev1);
+    hn::StoreU(runmin, du, s.runmin + x);
+    const auto next = hn::RebindMask(du, hn::Eq(hn::LoadU(di, s.disp + x), winner_below));
+    hn::StoreU(hn::IfThenElse(next, no_cost, hn::LoadU(du, s.above + x)), du, s.above + x);
+    hn::StoreU(count >= 2 ? no_cost : prev1, du, s.prev2 + x);
+    hn::StoreU(no_cost, du, s.prev1 + x);
+  }
+  for (; x < width; ++x)
+    pixel::wta_skip(d, count, s.above[x], s.prev1[x], s.prev2[x], s.runmin[x], s.disp[x]);
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace dco::kernels
 HWY_AFTER_NAMESPACE();
@@ -931,6 +953,7 @@ HWY_EXPORT(BlocksToRows);
 HWY_EXPORT(BlockIndicatorRow);
 HWY_EXPORT(BlockVoteRow);
 HWY_EXPORT(WtaUpdateRow);
+HWY_EXPORT(WtaSkipRow);
 HWY_EXPORT(DisparityValuesRow);
 
 const char* simd_target() {
@@ -1030,6 +1053,10 @@ void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* c
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row) {
   HWY_DYNAMIC_DISPATCH(WtaUpdateRow)(cost, cost_stride, count, width, d, row);
+}
+
+void wta_skip_row(int count, int width, int d, const WtaRow& row) {
+  HWY_DYNAMIC_DISPATCH(WtaSkipRow)(count, width, d, row);
 }
 
 void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel, float max_value,

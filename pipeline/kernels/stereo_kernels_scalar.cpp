@@ -126,5 +126,10 @@ void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int c
   }
 }
 
+void wta_skip_row(int count, int width, int d, const WtaRow& row) {
+  for (int x = 0; x < width; ++x)
+    pixel::wta_skip(d, count, row.above[x], row.prev1[x], row.prev2[x], row.runmin[x], row.disp[x]);
+}
+
 }  // namespace scalar
 }  // namespace dco::kernels

@@ -51,13 +51,10 @@ void WinnerTakesAll::update_row(const std::uint16_t* costs, std::ptrdiff_t strid
 }
 
 void WinnerTakesAll::skip_row(int y, int d, int count) {
-  std::uint16_t* above = above_.row(y);
-  std::uint16_t* prev1 = prev1_.row(y);
-  std::uint16_t* prev2 = prev2_.row(y);
-  std::uint16_t* runmin = runmin_.row(y);
-  const std::int16_t* disp = disp_.row(y);
-  for (int x = 0; x < best_.width(); ++x)
-    kernels::pixel::wta_skip(d, count, above[x], prev1[x], prev2[x], runmin[x], disp[x]);
+  const kernels::WtaRow row{best_.row(y),       second_.row(y),    below_.row(y),  above_.row(y),
+                            prev1_.row(y),      prev2_.row(y),     runmin_.row(y), disp_.row(y),
+                            best_right_.row(y), disp_right_.row(y)};
+  kernels::wta_skip_row(count, best_.width(), d, row);
 }
 
 struct SpeckleFilter::Buffer {

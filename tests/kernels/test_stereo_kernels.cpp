@@ -687,6 +687,50 @@ TEST(StereoKernels, WinnerTakesAllMatchesScalar) {
   }
 }
 
+// Rows that skip some batches (a guided search) end in the same state, vector or scalar, and the
+// skipped disparities never win, never count as the second cost and never become a neighbour.
+TEST(StereoKernels, WinnerTakesAllSkippingBatchesMatchesScalar) {
+  std::mt19937 rng(31);
+  for (const int w : kWidths) {
+    const int disparities = 40;
+    const std::ptrdiff_t stride = w;
+    std::vector<std::uint16_t> volume(static_cast<std::size_t>(stride * disparities));
+    for (int d = 0; d < disparities; ++d)
+      for (int x = 0; x < w; ++x)
+        volume[d * stride + x] = static_cast<std::uint16_t>(rng() % (d % 3 == 0 ? 9 : 50));
+    for (const int batch : {1, 2, 5}) {
+      // Batches 1, 3 and 4 skipped: a skip of one disparity and runs of skips both occur.
+      const auto searched = [&](int d) {
+        const int b = d / batch;
+        return b != 1 && b != 3 && b != 4;
+      };
+      WtaState expected(w);
+      for (int d = 0; d < disparities; d += batch) {
+        const int count = std::min(batch, disparities - d);
+        if (searched(d))
+          scalar::wta_update_row(volume.data() + d * stride, stride, count, w, d, expected.row());
+        else
+          scalar::wta_skip_row(count, w, d, expected.row());
+      }
+      for (int x = 0; x < w; ++x) {
+        const int winner = expected.disp[x];
+        ASSERT_TRUE(winner >= 0 && searched(winner)) << "x " << x << " winner " << winner;
+      }
+      for_each_target([&] {
+        WtaState state(w);
+        for (int d = 0; d < disparities; d += batch) {
+          const int count = std::min(batch, disparities - d);
+          if (searched(d))
+            wta_update_row(volume.data() + d * stride, stride, count, w, d, state.row());
+          else
+            wta_skip_row(count, w, d, state.row());
+        }
+        ASSERT_TRUE(state == expected) << "width " << w << " batch " << batch;
+      });
+    }
+  }
+}
+
 TEST(StereoKernels, WinnerTakesAllFindsTheMinimumAndItsNeighbours) {
   const int w = 21;
   const std::vector<std::uint16_t> costs = {50, 40, 10, 30, 20, 60};

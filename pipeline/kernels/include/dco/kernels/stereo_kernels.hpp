@@ -160,6 +160,9 @@ inline constexpr std::uint16_t kNoCost = 0xffff;
 // call keep the state in registers in between.
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row);
+// Passes over disparities d .. d + count - 1 of a row that does not search them
+// (pixel::wta_skip): the state's neighbours and running minima take them as costless.
+void wta_skip_row(int count, int width, int d, const WtaRow& row);
 
 // One row of the internal disparity maps from the winner-takes-all state: raw[x] =
 // pixel::raw_disparity(wta[x], ...) and sparse[x] = pixel::sparse_disparity(checked[x],
@@ -219,6 +222,7 @@ void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* c
                     std::int16_t* best_value);
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row);
+void wta_skip_row(int count, int width, int d, const WtaRow& row);
 
 }  // namespace scalar
 }  // namespace dco::kernels
