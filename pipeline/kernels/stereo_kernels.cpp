@@ -641,11 +641,35 @@ void RegionMeanRow(std::uint32_t* row, const std::uint32_t* reciprocal, int widt
   detail::mean_range(row, reciprocal, x, width);
 }
 
+// BlockWindowSumsRow for blocks of one vector: the same sums without the loop over vectors.
+template <bool kAbove>
+HWY_NOINLINE void BlockWindowSumsOneVector(const std::uint32_t* HWY_RESTRICT prefix,
+                                           const std::uint8_t* HWY_RESTRICT left,
+                                           const std::uint8_t* HWY_RESTRICT right, int width,
+                                           const std::uint32_t* HWY_RESTRICT above,
+                                           std::uint32_t* HWY_RESTRICT out) {
+  const hn::ScalableTag<std::uint32_t> du;
+  constexpr int n = 16;
+  for (int x = 0; x < width; ++x) {
+    auto sum = hn::Sub(hn::LoadU(du, prefix + (x + right[x] + 1) * n),
+                       hn::LoadU(du, prefix + (x - left[x]) * n));
+    if constexpr (kAbove) sum = hn::Add(sum, hn::LoadU(du, above + x * n));
+    hn::StoreU(sum, du, out + x * n);
+  }
+}
+
 void BlockWindowSumsRow(const std::uint32_t* prefix, const std::uint8_t* left,
                         const std::uint8_t* right, int width, int block, const std::uint32_t* above,
                         std::uint32_t* out) {
   const hn::ScalableTag<std::uint32_t> du;
   const int n = static_cast<int>(hn::Lanes(du));
+  if (n == 16 && block == n) {
+    if (above != nullptr)
+      BlockWindowSumsOneVector<true>(prefix, left, right, width, above, out);
+    else
+      BlockWindowSumsOneVector<false>(prefix, left, right, width, above, out);
+    return;
+  }
   const int vector_end = block - block % n;
   for (int x = 0; x < width; ++x) {
     const std::uint32_t* hi = prefix + (x + right[x] + 1) * block;
@@ -696,11 +720,32 @@ HWY_INLINE hn::Vec<D> RegionMean(D du, hn::Vec<D> v, hn::Vec<D> r) {
   return hn::OddEven(hn::BitCast(du, hn::ShiftLeft<32>(odd)), hn::BitCast(du, even));
 }
 
+// BlockVerticalSumsRow for blocks of one vector, region means taken: the same means without the
+// loop over vectors.
+HWY_NOINLINE void BlockVerticalMeansOneVector(const std::uint32_t* const* column_rows, int y,
+                                              const std::uint8_t* HWY_RESTRICT up,
+                                              const std::uint8_t* HWY_RESTRICT down, int width,
+                                              const std::uint32_t* HWY_RESTRICT reciprocal,
+                                              std::uint32_t* HWY_RESTRICT out) {
+  const hn::ScalableTag<std::uint32_t> du;
+  constexpr int n = 16;
+  for (int x = 0; x < width; ++x) {
+    const int top = y - up[x] - 1;
+    auto sum = hn::LoadU(du, column_rows[y + down[x]] + x * n);
+    if (top >= 0) sum = hn::Sub(sum, hn::LoadU(du, column_rows[top] + x * n));
+    hn::StoreU(RegionMean(du, sum, hn::Set(du, reciprocal[x])), du, out + x * n);
+  }
+}
+
 void BlockVerticalSumsRow(const std::uint32_t* const* column_rows, int y, const std::uint8_t* up,
                           const std::uint8_t* down, int width, int block,
                           const std::uint32_t* reciprocal, std::uint32_t* out) {
   const hn::ScalableTag<std::uint32_t> du;
   const int n = static_cast<int>(hn::Lanes(du));
+  if (n == 16 && block == n && reciprocal != nullptr) {
+    BlockVerticalMeansOneVector(column_rows, y, up, down, width, reciprocal, out);
+    return;
+  }
   const int vector_end = block - block % n;
   const auto finish = [&](hn::Vec<decltype(du)> sum, int x) {
     return reciprocal != nullptr ? RegionMean(du, sum, hn::Set(du, reciprocal[x])) : sum;
