@@ -78,29 +78,42 @@ void canny_hysteresis(ImageView<std::uint8_t> edges, CannyScratch& scratch) {
   std::size_t top = 0;
   std::uint8_t* base = edges.data;
   const std::ptrdiff_t stride = edges.stride;
-  // Strong pixels are few: eight at a time, a word without one is skipped whole.
+  // The border rows and columns are 0, so the neighbours of an inner pixel are always inside.
+  const std::ptrdiff_t offsets[8] = {-stride - 1, -stride,    -stride + 1, -1,
+                                     1,           stride - 1, stride,      stride + 1};
+  // The result is every strong pixel and every weak one joined to a strong one through weak ones.
+  // Strong pixels far outnumber the weak ones a frame links up, so the search starts from the weak
+  // pixels next to a strong one (marked strong at once) rather than from every strong pixel. Weak
+  // pixels are few in a row: eight at a time, a word without one is skipped whole.
   constexpr std::uint64_t kOnes = 0x0101010101010101u;
   constexpr std::uint64_t kHighs = 0x8080808080808080u;
+  const auto seed = [&](std::ptrdiff_t i) {
+    for (const std::ptrdiff_t o : offsets) {
+      if (base[i + o] == kEdge) {
+        base[i] = kEdge;
+        stack[top++] = static_cast<std::int32_t>(i);
+        return;
+      }
+    }
+  };
   for (int y = 1; y < h - 1; ++y) {
     const std::uint8_t* e = edges.row(y);
+    const std::ptrdiff_t row = y * stride;
     int x = 1;
     for (; x + 8 <= w - 1; x += 8) {
       std::uint64_t word;
       std::memcpy(&word, e + x, sizeof word);
-      const std::uint64_t diff = word ^ (kOnes * kEdge);  // a zero byte where e == kEdge
+      const std::uint64_t diff = word ^ (kOnes * kWeak);  // a zero byte where e == kWeak
       if (((diff - kOnes) & ~diff & kHighs) == 0) continue;
       for (int i = x; i < x + 8; ++i)
-        if (e[i] == kEdge) stack[top++] = static_cast<std::int32_t>(y * stride + i);
+        if (e[i] == kWeak) seed(row + i);
     }
     for (; x < w - 1; ++x)
-      if (e[x] == kEdge) stack[top++] = static_cast<std::int32_t>(y * stride + x);
+      if (e[x] == kWeak) seed(row + x);
   }
 
-  // Grow every strong pixel through 8-connected weak ones. Each pixel is marked before it is
-  // pushed, so the stack never holds more than one entry per pixel; the border rows and columns
-  // are 0, so neighbours of a pushed pixel are always inside the image.
-  const std::ptrdiff_t offsets[8] = {-stride - 1, -stride,    -stride + 1, -1,
-                                     1,           stride - 1, stride,      stride + 1};
+  // Grow the seeds through 8-connected weak pixels. Each pixel is marked before it is pushed, so
+  // the stack never holds more than one entry per pixel.
   while (top > 0) {
     const std::ptrdiff_t i = stack[--top];
     for (const std::ptrdiff_t o : offsets) {
