@@ -52,11 +52,9 @@ class CpuSystemSolver final : public SystemSolver {
       report.fine_iterations = fine.iterations;
       report.output_residual = fine.final_residual;
     } else {
-      scratch_.resize(a.width(), a.height());
-      report.output_residual =
-          gauss_seidel_residual(a, b, x, params_.fine_sweeps, true, scratch_.r.view(),
-                                scratch_.rows, coarse_solution_.cview())
-              .relative();
+      report.output_residual = gauss_seidel_residual(a, b, x, params_.fine_sweeps, true, {},
+                                                     scratch_.rows, coarse_solution_.cview())
+                                   .relative();
     }
     return report;
   }

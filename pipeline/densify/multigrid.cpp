@@ -116,6 +116,9 @@ void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<
                        Finish&& finish) {
   const int h = a.height();
   if (h == 0) return;
+  // At step r the rows from r - 2 sweeps (read by the last update of the row below it) to r + 1
+  // are in use.
+  rows.start(a.width(), h, 2 * std::max(sweeps, 0) + 2);
   if (sweeps <= 0) {
     prepare(0);
     for (int r = 0; r < h; ++r) {
@@ -125,9 +128,7 @@ void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<
     return;
   }
   // The updates work on split copies of the rows: a row is copied in after prepare and back out
-  // right after its last update, before finish reads it. At step r the rows from r - 2 sweeps
-  // (read by the last update of the row below it) to r + 1 are in use.
-  rows.start(a.width(), h, 2 * sweeps + 2);
+  // right after its last update, before finish reads it.
   const auto load = [&](int r) {
     prepare(r);
     rows.load(a, b, x, r);
@@ -173,8 +174,9 @@ ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> 
     if (!coarse_start.empty()) from_parents<false>(coarse_start.row(y / 2), w, x.row(y));
   };
   const auto residual_row_norms = [&](int y) {
-    residual_row(a, b, x, y, r.row(y));
-    n.rr += kernels::dot_row(r.row(y), r.row(y), w);
+    float* out = r.empty() ? rows.spare_row() : r.row(y);
+    residual_row(a, b, x, y, out);
+    n.rr += kernels::dot_row(out, out, w);
     n.bb += kernels::dot_row(b.row(y), b.row(y), w);
   };
   gauss_seidel_rows(a, b, x, sweeps, red_first, rows, start_row, residual_row_norms);

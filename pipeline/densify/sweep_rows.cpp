@@ -12,6 +12,7 @@ void SweepRows::start(int width, int height, int slots) {
   constexpr int kLineFloats = static_cast<int>(Image<float>::kAlignment / sizeof(float));
   half_ = (kernels::parity_count(width, 0) + kLineFloats - 1) / kLineFloats * kLineFloats;
   ring_.resize(2 * kArrays * half_, slots_);
+  spare_.resize(width, 1);
 }
 
 float* SweepRows::array(int r, Array a, int parity) {

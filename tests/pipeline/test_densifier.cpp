@@ -615,6 +615,14 @@ TEST(Multigrid, StartSweepsAndResidualInOnePassAreThePlainPassesBitForBit) {
       EXPECT_EQ(n.bb, dot(b.cview(), b.cview()));
       ASSERT_TRUE(same_pixels(fused_x, x)) << sweeps << " sweeps";
       ASSERT_TRUE(same_pixels(fused_r, r)) << sweeps << " sweeps";
+      // Without an image for r, the same norms and the same x.
+      Image<float> norms_x = random_vector(w, h, 8, 100.0f);
+      SweepRows fresh;  // its spare row sized by this pass alone
+      const ResidualNorms m = gauss_seidel_residual(a, b.cview(), norms_x.view(), sweeps, true, {},
+                                                    fresh, coarse.cview());
+      EXPECT_EQ(m.rr, n.rr) << sweeps << " sweeps";
+      EXPECT_EQ(m.bb, n.bb) << sweeps << " sweeps";
+      ASSERT_TRUE(same_pixels(norms_x, x)) << sweeps << " sweeps";
       // Without a coarse start the pass sweeps the x it is given.
       Image<float> given = x, swept = x;
       gauss_seidel(a, b.cview(), swept.view(), sweeps, true, rows);

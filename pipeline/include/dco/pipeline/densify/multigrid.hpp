@@ -63,7 +63,8 @@ struct ResidualNorms {
 };
 
 // gauss_seidel, then r = b - A x, in the same pass over the rows (each residual row as soon as
-// its rows are final); returns dot(r, r) and dot(b, b). With `coarse_start`, x starts as
+// its rows are final); returns dot(r, r) and dot(b, b). An empty `r`: only the norms, each
+// residual row in a row of `rows` instead of an image. With `coarse_start`, x starts as
 // prolong(coarse_start), also a row at a time in that pass.
 ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> b,
                                     ImageView<float> x, int sweeps, bool red_first,

@@ -24,6 +24,8 @@ class SweepRows {
   void smooth(int r, int parity);
   // Copies row r's x back into x.
   void store(int r, ImageView<float> x) const;
+  // A row of `width` floats of the caller's own, kept with the ring.
+  float* spare_row() { return spare_.data(); }
 
  private:
   enum Array { kX, kB, kInvDiag, kWx, kWy, kArrays };
@@ -33,6 +35,7 @@ class SweepRows {
   int width_ = 0, height_ = 0, slots_ = 1;
   int half_ = 0;       // floats of one parity of one array, padded to whole cache lines
   Image<float> ring_;  // one slot per row: kArrays arrays, each its even then its odd pixels
+  Image<float> spare_;
 };
 
 }  // namespace dco::densify
