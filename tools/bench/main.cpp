@@ -47,8 +47,7 @@ using dco::tools::UsageError;
 constexpr std::string_view kUsage =
     R"(usage: dco-bench [--sequence synthetic|karlsruhe|all] [--synthetic NAME] [--size WxH]
                  [--frames N] [--warmup N] [--karlsruhe DIR] [--fps F] [--paced-frames N]
-                 [--json]
-                 [--backend auto|cpu|cuda] [--config FILE] [--set KEY=VALUE]
+                 [--json] [--backend auto|cpu|cuda] [--config FILE] [--set KEY=VALUE]
 
 Runs the depth pipeline in the real-time runtime and, on the same frames in the same run,
 OpenCV StereoSGBM (3-way) + WLS. Per sequence:
@@ -63,8 +62,9 @@ OpenCV StereoSGBM (3-way) + WLS. Per sequence:
   peer        SGBM 3-way + WLS ms per frame; ratio = peer / dco.
 Each run (and the peer) first takes the sequence's first --warmup frames, untimed, so that what
 starting up costs once (buffers touched for the first time, the flow's set-up) is not counted as
-the frames' work. The timed pass is a new sequence: it still fills the pipeline and solves its
-first frame with no previous one.
+the frames' work. The timed pass is a new sequence: its ms per frame still pays for filling the
+pipeline and for a first solve with no previous frame; the latency run leaves that sequence's
+first --warmup frames out of its figures as well (a camera's first frames, once per start).
 With the CUDA backend it also runs the sparse stereo stage, the contour stage and the densify
 solver on the CPU and on the GPU over the same frames: the stage times and how many output
 pixels differ (the tolerance is zero: the GPU computes the same integer costs, float operations
@@ -486,27 +486,39 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
     const auto period = std::chrono::duration_cast<rt::Clock::duration>(
         std::chrono::duration<double>(1.0 / opt.fps));
     const int n = r.frames;
-    const auto play = [&](int count) {
+    const auto play = [&](int count, int timed_after, rt::RuntimeStats& before) {
       const auto start = rt::Clock::now();
       for (int i = 0; i < count; ++i) {
         const int cycle = std::max(1, 2 * n - 2);
         const int k = n == 1 ? 0 : (i % cycle < n ? i % cycle : cycle - i % cycle);
         const auto due = start + i * period;
         std::this_thread::sleep_until(due);
+        if (i == timed_after) before = pipeline.stats();
         const auto& f = frames.pairs[static_cast<std::size_t>(k)];
         pipeline.push(f.left.cview(), f.right.cview(), due);
       }
       pipeline.drain();
+      return start + timed_after * period;
     };
-    play(r.warmup);
-    const rt::RuntimeStats before = pipeline.stats();
+    // The warm-up frames, then a new sequence whose first --warmup frames are not counted either:
+    // they wait for their lookahead and solve with no previous frame, as a camera's first frames
+    // do once, and would otherwise stand in the timed frames' tail.
+    rt::RuntimeStats before;
+    play(r.warmup, 0, before);
     results.take();
-    play(opt.paced_frames);
+    const auto timed_from = play(r.warmup + opt.paced_frames, r.warmup, before);
+    std::vector<rt::FrameTimes> timed = results.take();
+    std::erase_if(timed, [&](const rt::FrameTimes& t) { return t.capture < timed_from; });
     r.fps = opt.fps;
     r.release_latency_ms = p.runtime.release_latency_ms;
     r.paced_frames = opt.paced_frames;
+    // Late, overdue and early count from the first timed push (a warm-up frame still in flight
+    // then may fall on either side); every timed frame is either published or dropped.
     r.paced = counts_since(before, pipeline.stats());
-    r.paced_figures = figures_of(results.take());
+    r.paced.pushed = opt.paced_frames;
+    r.paced.published = static_cast<long>(timed.size());
+    r.paced.dropped = r.paced.pushed - r.paced.published;
+    r.paced_figures = figures_of(timed);
   }
   for (const auto& f : warmup_frames)
     dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity);
