@@ -280,12 +280,10 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   timings_.build_ms = t.lap_ms();
 
   if (!has_solution_ || !solution_.view().same_size(w, h)) {
-    // Cold start: the sparse values where they exist, 0 elsewhere; multigrid fills the rest fast.
+    // Cold start: each pixel's hint (its sparse value, or for a hole the value of the row's
+    // surface it is filled towards; 0 where a row has none), which is already near the solution.
     solution_.resize(w, h);
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x)
-        solution_.at(x, y) =
-            kernels::pixel::known_value(in.sparse.row(y)[x]) ? in.sparse.row(y)[x] : 0.0f;
+    solution_.copy_from(hint_.cview());
   }
   report_ = solver_->solve(system_, rhs_.cview(), solution_.view());
   // An iterative solve stopped early can overshoot in a small region that contours cut off
