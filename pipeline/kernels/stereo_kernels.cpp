@@ -332,20 +332,70 @@ HWY_INLINE hn::Vec<D> TwoTableLookup(D du, hn::Vec<D> lo, hn::Vec<D> hi, hn::Vec
                         hn::TableLookupLanes(hi, idx), hn::TableLookupLanes(lo, idx));
 }
 
+// One vector of matching distances of left pixel x: lane j pairs it with right pixel
+// right[n - 1 - j] (the lanes run over the disparities, so the right image is read backwards).
+// `a` is the left pixel's packed channels in every lane, `cl` its census descriptor; `ad` gets the
+// sums of absolute channel differences, `hd` the Hamming distances of the descriptors.
+template <class D>
+HWY_INLINE void MatchDistances(D du, hn::Vec<D> a, hn::Vec<hn::Repartition<std::uint64_t, D>> cl,
+                               const std::uint32_t* right, const std::uint64_t* census_right,
+                               hn::Vec<D>& ad, hn::Vec<D>& hd) {
+  const hn::Repartition<std::uint8_t, D> du8;
+  const hn::Repartition<std::uint64_t, D> du64;
+  const int half = static_cast<int>(hn::Lanes(du64));
+  const auto a8 = hn::BitCast(du8, a);
+  const auto b8 = hn::BitCast(du8, hn::Reverse(du, hn::LoadU(du, right)));
+  ad = SumOfBytes(du, hn::BitCast(du, hn::Sub(hn::Max(a8, b8), hn::Min(a8, b8))));
+  const auto lo =
+      hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right + half))));
+  const auto hi =
+      hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right))));
+  hd = hn::ConcatEven(du, hn::BitCast(du, hi), hn::BitCast(du, lo));
+}
+
+// The AD term from its arm's table row in registers (16 lanes): the row is constant from
+// `flat_from` (< 96) on, so its first six vectors hold every value once the index is clamped.
+template <class D>
+HWY_INLINE hn::Vec<D> AdCostFromRegisters(D du, const std::uint32_t* ad_row, hn::Vec<D> ad,
+                                          hn::Vec<D> flat_from) {
+  const int n = static_cast<int>(hn::Lanes(du));
+  const auto clamped = hn::Min(ad, flat_from);
+  const auto v01 = TwoTableLookup(du, hn::LoadU(du, ad_row), hn::LoadU(du, ad_row + n), clamped);
+  const auto v23 =
+      TwoTableLookup(du, hn::LoadU(du, ad_row + 2 * n), hn::LoadU(du, ad_row + 3 * n), clamped);
+  const auto v45 =
+      TwoTableLookup(du, hn::LoadU(du, ad_row + 4 * n), hn::LoadU(du, ad_row + 5 * n), clamped);
+  return hn::IfThenElse(
+      hn::TestBit(clamped, hn::Set(du, static_cast<std::uint32_t>(4 * n))), v45,
+      hn::IfThenElse(hn::TestBit(clamped, hn::Set(du, static_cast<std::uint32_t>(2 * n))), v23,
+                     v01));
+}
+
+// The census term from its arm's table row in registers (16 lanes: 65 entries are four vectors
+// and one more entry).
+template <class D>
+HWY_INLINE hn::Vec<D> CensusCostFromRegisters(D du, const std::uint32_t* census_row,
+                                              hn::Vec<D> hd) {
+  const int n = static_cast<int>(hn::Lanes(du));
+  const auto low = TwoTableLookup(du, hn::LoadU(du, census_row), hn::LoadU(du, census_row + n), hd);
+  const auto high =
+      TwoTableLookup(du, hn::LoadU(du, census_row + 2 * n), hn::LoadU(du, census_row + 3 * n), hd);
+  return hn::IfThenElse(
+      hn::Eq(hd, hn::Set(du, static_cast<std::uint32_t>(4 * n))), hn::Set(du, census_row[4 * n]),
+      hn::IfThenElse(hn::TestBit(hd, hn::Set(du, static_cast<std::uint32_t>(2 * n))), high, low));
+}
+
 // BlockCosts for pixels from..width - 1 when a batch is one vector of 16 lanes and every right
 // pixel a lane reads lies inside the row (from >= d0 + 15): the same operations as its general
-// loop, with the table rows of the census term (and, with kAdInRegisters, of the AD term) in
-// registers, the row's pointers in locals and, with kRunning, the running sum carried in a
+// loop, with the row's pointers in locals and, with kRunning, the running sum carried in a
 // register rather than read back from the row just stored.
 template <bool kRunning, bool kAdInRegisters>
 HWY_NOINLINE void BlockCostsOneVector(const CostRow& row, const CostTableView& t, int d0, int from,
                                       std::uint32_t* HWY_RESTRICT out) {
   const hn::ScalableTag<std::uint32_t> du;
   const hn::RebindToSigned<decltype(du)> di;
-  const hn::Repartition<std::uint8_t, decltype(du)> du8;
   const hn::Repartition<std::uint64_t, decltype(du)> du64;
   constexpr int n = 16;
-  const int half = static_cast<int>(hn::Lanes(du64));
   const std::uint32_t* HWY_RESTRICT left = row.left;
   const std::uint32_t* HWY_RESTRICT right = row.right;
   const std::uint64_t* HWY_RESTRICT census_left = row.census_left;
@@ -356,51 +406,25 @@ HWY_NOINLINE void BlockCostsOneVector(const CostRow& row, const CostTableView& t
   const int census_size = t.census_size;
   const std::uint32_t* HWY_RESTRICT ad_table = t.ad;
   const int ad_size = t.ad_size;
-  const auto half_bit = hn::Set(du, static_cast<std::uint32_t>(2 * n));
-  const auto last_entry = hn::Set(du, static_cast<std::uint32_t>(4 * n));
-  const auto ad_clamp = hn::Set(du, static_cast<std::uint32_t>(t.ad_flat_from));
-  const auto third_bit = hn::Set(du, static_cast<std::uint32_t>(4 * n));
+  const auto flat_from = hn::Set(du, static_cast<std::uint32_t>(t.ad_flat_from));
   auto sum = hn::Zero(du);
   if constexpr (kRunning) sum = hn::LoadU(du, out + from * n);
   for (int x = from; x < width; ++x) {
     const int arm = shortest_arm[x];
-    const std::uint32_t* HWY_RESTRICT census_row = census_table + arm * census_size;
-    const int xr = x - d0;
-    const auto a = hn::BitCast(du8, hn::Set(du, left[x]));
-    const auto b = hn::BitCast(du8, hn::Reverse(du, hn::LoadU(du, right + xr - (n - 1))));
-    const auto diff = hn::BitCast(du, hn::Sub(hn::Max(a, b), hn::Min(a, b)));
-    const auto ad = SumOfBytes(du, diff);
-    const auto cl = hn::Set(du64, census_left[x]);
-    const std::uint64_t* census_right_run = census_right + xr - (n - 1);
-    const auto lo = hn::PopulationCount(
-        hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right_run + half))));
-    const auto hi =
-        hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right_run))));
-    const auto hd = hn::ConcatEven(du, hn::BitCast(du, hi), hn::BitCast(du, lo));
+    const int first = x - d0 - (n - 1);  // the right pixel of the batch's last disparity
+    hn::Vec<decltype(du)> ad, hd;
+    MatchDistances(du, hn::Set(du, left[x]), hn::Set(du64, census_left[x]), right + first,
+                   census_right + first, ad, hd);
     hn::Vec<decltype(du)> ad_cost;
     if constexpr (kAdInRegisters) {
-      const std::uint32_t* HWY_RESTRICT ad_row = ad_table + arm * ad_size;
-      const auto clamped = hn::Min(ad, ad_clamp);
-      const auto v01 =
-          TwoTableLookup(du, hn::LoadU(du, ad_row), hn::LoadU(du, ad_row + n), clamped);
-      const auto v23 =
-          TwoTableLookup(du, hn::LoadU(du, ad_row + 2 * n), hn::LoadU(du, ad_row + 3 * n), clamped);
-      const auto v45 =
-          TwoTableLookup(du, hn::LoadU(du, ad_row + 4 * n), hn::LoadU(du, ad_row + 5 * n), clamped);
-      ad_cost = hn::IfThenElse(hn::TestBit(clamped, third_bit), v45,
-                               hn::IfThenElse(hn::TestBit(clamped, half_bit), v23, v01));
+      ad_cost = AdCostFromRegisters(du, ad_table + arm * ad_size, ad, flat_from);
     } else {
       ad_cost = hn::BitCast(
           du, hn::GatherIndex(di, reinterpret_cast<const std::int32_t*>(ad_table),
                               hn::Add(hn::Set(di, arm * ad_size), hn::BitCast(di, ad))));
     }
-    const auto low =
-        TwoTableLookup(du, hn::LoadU(du, census_row), hn::LoadU(du, census_row + n), hd);
-    const auto high = TwoTableLookup(du, hn::LoadU(du, census_row + 2 * n),
-                                     hn::LoadU(du, census_row + 3 * n), hd);
-    const auto census_cost = hn::IfThenElse(hn::Eq(hd, last_entry), hn::Set(du, census_row[4 * n]),
-                                            hn::IfThenElse(hn::TestBit(hd, half_bit), high, low));
-    const auto cost = hn::Add(ad_cost, census_cost);
+    const auto cost =
+        hn::Add(ad_cost, CensusCostFromRegisters(du, census_table + arm * census_size, hd));
     if constexpr (kRunning) {
       sum = hn::Add(sum, cost);
       hn::StoreU(sum, du, out + (x + 1) * n);
@@ -417,10 +441,8 @@ template <bool kRunning>
 void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, std::uint32_t* out) {
   const hn::ScalableTag<std::uint32_t> du;
   const hn::RebindToSigned<decltype(du)> di;
-  const hn::Repartition<std::uint8_t, decltype(du)> du8;
   const hn::Repartition<std::uint64_t, decltype(du)> du64;
   const int n = static_cast<int>(hn::Lanes(du));
-  const int half = static_cast<int>(hn::Lanes(du64));
   const int vector_end = count - count % n;
   const auto unmatched = hn::Set(du, t.unmatched);
   const auto lanes = hn::Iota(di, 0);  // hoisted: Iota is not a single instruction everywhere
@@ -429,14 +451,11 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
   // With 16 lanes the census row of one arm (65 entries) is four vectors and one more entry, so
   // lane permutes replace the second gather.
   const bool census_in_registers = n >= 16 && t.census_size == 4 * n + 1;
-  const auto half_bit = hn::Set(du, static_cast<std::uint32_t>(2 * n));
-  const auto last_entry = hn::Set(du, static_cast<std::uint32_t>(4 * n));
   // Likewise the AD row when it is constant past its first six vectors (grey images: the
   // exponential saturates near 80 grey levels): the index is clamped to where it turns constant.
   const bool ad_in_registers =
       n >= 16 && t.ad_flat_from > 0 && t.ad_flat_from < 6 * n && t.ad_size >= 6 * n;
-  const auto ad_clamp = hn::Set(du, static_cast<std::uint32_t>(t.ad_flat_from));
-  const auto third_bit = hn::Set(du, static_cast<std::uint32_t>(4 * n));
+  const auto flat_from = hn::Set(du, static_cast<std::uint32_t>(t.ad_flat_from));
   // Right pixels before the row start read as zero from here; their lanes become `unmatched`.
   HWY_ALIGN std::uint32_t right_pad[HWY_MAX_BYTES / 4];
   HWY_ALIGN std::uint64_t census_pad[HWY_MAX_BYTES / 4];
@@ -456,33 +475,13 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
       for (int k = vector_end; k < count; ++k) dst[k] = t.unmatched + (kRunning ? before[k] : 0u);
       continue;
     }
-    const auto a = hn::BitCast(du8, hn::Set(du, row.left[x]));
+    const auto a = hn::Set(du, row.left[x]);
     const auto cl = hn::Set(du64, row.census_left[x]);
     const int arm = row.shortest_arm[x];
-    const auto ad_base = hn::Set(di, arm * t.ad_size);
-    const auto census_base = hn::Set(di, arm * t.census_size);
-    const std::uint32_t* census_row = t.census + arm * t.census_size;
-    auto c0 = hn::Zero(du), c1 = c0, c2 = c0, c3 = c0, c4 = c0;
-    if (census_in_registers) {
-      c0 = hn::LoadU(du, census_row);
-      c1 = hn::LoadU(du, census_row + n);
-      c2 = hn::LoadU(du, census_row + 2 * n);
-      c3 = hn::LoadU(du, census_row + 3 * n);
-      c4 = hn::Set(du, census_row[4 * n]);
-    }
     const std::uint32_t* ad_row = t.ad + arm * t.ad_size;
-    auto a0 = hn::Zero(du), a1 = a0, a2 = a0, a3 = a0, a4 = a0, a5 = a0;
-    if (ad_in_registers) {
-      a0 = hn::LoadU(du, ad_row);
-      a1 = hn::LoadU(du, ad_row + n);
-      a2 = hn::LoadU(du, ad_row + 2 * n);
-      a3 = hn::LoadU(du, ad_row + 3 * n);
-      a4 = hn::LoadU(du, ad_row + 4 * n);
-      a5 = hn::LoadU(du, ad_row + 5 * n);
-    }
+    const std::uint32_t* census_row = t.census + arm * t.census_size;
     for (int k = 0; k < vector_end; k += n) {
-      // Lanes run over the disparities, so the right image is read backwards: lane j of this
-      // vector is disparity d0 + k + j and right pixel xr - j.
+      // Lane j of this vector is disparity d0 + k + j and right pixel xr - j.
       const int xr = x - d0 - k;
       if (xr < 0) {
         emit(unmatched, k);
@@ -502,36 +501,19 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
         right = row.right + xr - (n - 1);
         census_right = row.census_right + xr - (n - 1);
       }
-      const auto b = hn::BitCast(du8, hn::Reverse(du, hn::LoadU(du, right)));
-      const auto diff = hn::BitCast(du, hn::Sub(hn::Max(a, b), hn::Min(a, b)));
-      const auto ad = SumOfBytes(du, diff);
-      const auto lo =
-          hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right + half))));
-      const auto hi =
-          hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right))));
-      const auto hd = hn::ConcatEven(du, hn::BitCast(du, hi), hn::BitCast(du, lo));
-      hn::Vec<decltype(du)> ad_cost;
-      if (ad_in_registers) {
-        const auto clamped = hn::Min(ad, ad_clamp);
-        const auto v01 = TwoTableLookup(du, a0, a1, clamped);
-        const auto v23 = TwoTableLookup(du, a2, a3, clamped);
-        const auto v45 = TwoTableLookup(du, a4, a5, clamped);
-        ad_cost = hn::IfThenElse(hn::TestBit(clamped, third_bit), v45,
-                                 hn::IfThenElse(hn::TestBit(clamped, half_bit), v23, v01));
-      } else {
-        ad_cost =
-            hn::BitCast(du, hn::GatherIndex(di, ad_table, hn::Add(ad_base, hn::BitCast(di, ad))));
-      }
-      hn::Vec<decltype(du)> census_cost;
-      if (census_in_registers) {
-        const auto low = TwoTableLookup(du, c0, c1, hd);
-        const auto high = TwoTableLookup(du, c2, c3, hd);
-        census_cost = hn::IfThenElse(hn::Eq(hd, last_entry), c4,
-                                     hn::IfThenElse(hn::TestBit(hd, half_bit), high, low));
-      } else {
-        census_cost = hn::BitCast(
-            du, hn::GatherIndex(di, census_table, hn::Add(census_base, hn::BitCast(di, hd))));
-      }
+      hn::Vec<decltype(du)> ad, hd;
+      MatchDistances(du, a, cl, right, census_right, ad, hd);
+      const auto ad_cost =
+          ad_in_registers ? AdCostFromRegisters(du, ad_row, ad, flat_from)
+                          : hn::BitCast(du, hn::GatherIndex(di, ad_table,
+                                                            hn::Add(hn::Set(di, arm * t.ad_size),
+                                                                    hn::BitCast(di, ad))));
+      const auto census_cost =
+          census_in_registers
+              ? CensusCostFromRegisters(du, census_row, hd)
+              : hn::BitCast(du, hn::GatherIndex(di, census_table,
+                                                hn::Add(hn::Set(di, arm * t.census_size),
+                                                        hn::BitCast(di, hd))));
       auto cost = hn::Add(ad_cost, census_cost);
       if (partial)
         cost = hn::IfThenElse(hn::RebindMask(du, hn::Gt(lanes, hn::Set(di, xr))), unmatched, cost);
