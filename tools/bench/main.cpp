@@ -362,7 +362,9 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
   return c;
 }
 
-// Every result's times, in the order the runtime hands them on (on its own thread).
+// Every result's times, in the order the runtime hands them on (on its own thread). Room for
+// `capacity` results is made up front and kept by take(), so recording never allocates on the
+// runtime's thread while it is being timed.
 class ResultTimes {
  public:
   explicit ResultTimes(std::size_t capacity) { times_.reserve(capacity); }
@@ -374,7 +376,9 @@ class ResultTimes {
   }
   std::vector<rt::FrameTimes> take() {
     const std::lock_guard lock(mutex_);
-    return std::move(times_);
+    std::vector<rt::FrameTimes> taken(times_.begin(), times_.end());
+    times_.clear();
+    return taken;
   }
 
  private:
