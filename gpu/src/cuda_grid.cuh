@@ -24,8 +24,21 @@ __global__ void grid_kernel(F f, int nx, int ny) {
   if (x < nx && y < ny) f(x, y);
 }
 
+template <class F>
+__global__ void steps_kernel(F f, int steps) {
+  const int x = static_cast<int>(threadIdx.x);
+  const int y = static_cast<int>(threadIdx.y);
+  for (int s = 0; s < steps; ++s) {
+    f(x, y, s);
+    __syncthreads();  // also makes the step's global writes visible to the whole block
+  }
+}
+
 class CudaGrid {
  public:
+  // The most grid points launch_steps takes: one thread block.
+  static constexpr int kMaxStepPoints = 1024;
+
   template <class T, bool kPinned>
   class Memory {
    public:
@@ -85,6 +98,16 @@ class CudaGrid {
     const dim3 grid((static_cast<unsigned>(nx) + block.x - 1) / block.x,
                     (static_cast<unsigned>(ny) + block.y - 1) / block.y);
     grid_kernel<<<grid, block, 0, stream_>>>(f, nx, ny);
+    cuda_check(cudaGetLastError(), "kernel launch");
+  }
+  // `steps` passes over a grid of at most kMaxStepPoints points in one launch, f(x, y, step):
+  // every point's step s sees every point's step s - 1 (one block, a barrier between steps).
+  template <class F>
+  void launch_steps(int nx, int ny, int steps, const F& f) {
+    if (nx <= 0 || ny <= 0 || steps <= 0) return;
+    if (nx * ny > kMaxStepPoints) throw Error("cuda: launch_steps over more than one block");
+    steps_kernel<<<1, dim3(static_cast<unsigned>(nx), static_cast<unsigned>(ny)), 0, stream_>>>(
+        f, steps);
     cuda_check(cudaGetLastError(), "kernel launch");
   }
   void upload(void* device, const void* host, std::size_t bytes) {

@@ -59,6 +59,17 @@ struct SmoothColour {
   }
 };
 
+// Red-black sweeps as launch_steps steps: step s updates colour (first_colour + s) % 2.
+struct SmoothColours {
+  SystemView a;
+  const float* b;
+  float* x;
+  int first_colour;
+  DCO_HD void operator()(int c, int y, int step) const {
+    SmoothColour{a, b, x, (first_colour + step) % 2}(c, y);
+  }
+};
+
 // out = b - ax (out may be ax).
 struct Residual {
   const float* b;

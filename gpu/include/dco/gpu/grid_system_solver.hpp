@@ -15,8 +15,9 @@
 
 namespace dco::gpu {
 
-// The densifier's solver (dco::densify::SystemSolver) on a Grid: the system the CPU built is
-// uploaded once per frame, then the half-size aggregation, the multigrid hierarchy, the
+// The densifier's solver (dco::densify::SystemSolver) on a Grid: the data term and edge weights
+// of the system the CPU built are uploaded once per frame (the diagonal is recomputed from them
+// on the grid, as the CPU did), then the half-size aggregation, the multigrid hierarchy, the
 // preconditioned conjugate gradients and the full-size sweeps all run as passes
 // (densify_passes.hpp), the CPU solver's steps in its order; only the dot products come back
 // (one double per row, added up on the host in row order, as densify::dot does). Same solution
@@ -40,10 +41,11 @@ class GridSystemSolver final : public densify::SystemSolver {
     upload_rows(grid_, a.data.cview(), upload_staging_[0], fine_.data);
     upload_rows(grid_, a.wx.cview(), upload_staging_[1], fine_.wx);
     upload_rows(grid_, a.wy.cview(), upload_staging_[2], fine_.wy);
-    upload_rows(grid_, a.diag.cview(), upload_staging_[3], fine_.diag);
-    upload_rows(grid_, a.inv_diag.cview(), upload_staging_[4], fine_.inv_diag);
-    upload_rows(grid_, b, upload_staging_[5], fine_b_);
-    upload_rows(grid_, ImageView<const float>(x), upload_staging_[6], fine_x_);
+    upload_rows(grid_, b, upload_staging_[3], fine_b_);
+    upload_rows(grid_, ImageView<const float>(x), upload_staging_[4], fine_x_);
+    // The diagonal and its inverse follow from the three images with the arithmetic the CPU
+    // used (GridSystem::update_diagonal): computing them here moves two fifths less.
+    grid_.launch(w, h, passes::Diagonal{fine_.view()});
 
     densify::SolverReport report;
     if (densify::solves_at_half(params_, w)) {
@@ -74,7 +76,7 @@ class GridSystemSolver final : public densify::SystemSolver {
       report.output_residual = report.final_residual;
     }
     // The warm start's staging buffer is free again once the solve has synchronized.
-    Staging<float>& solution = upload_staging_[6];
+    Staging<float>& solution = upload_staging_[4];
     download_values(grid_, static_cast<const float*>(fine_x_.data()),
                     static_cast<std::size_t>(w) * h, solution);
     grid_.synchronize();
@@ -123,8 +125,12 @@ class GridSystemSolver final : public densify::SystemSolver {
 
   // densify::dot: each row's dot_row, added up in row order.
   double dot(const float* a, const float* b, int w, int h) {
-    row_dots_.resize(static_cast<std::size_t>(h));
-    dots_staging_.resize(static_cast<std::size_t>(h));
+    // Sized for the tallest level seen: the half-size and full-size solves alternate within a
+    // frame, and a resize would reallocate (and synchronize the device) at every switch.
+    if (row_dots_.size() < static_cast<std::size_t>(h)) {
+      row_dots_.resize(static_cast<std::size_t>(h));
+      dots_staging_.resize(static_cast<std::size_t>(h));
+    }
     grid_.launch(1, h, passes::RowDots{a, b, row_dots_.data(), w});
     grid_.download(dots_staging_.data(), row_dots_.data(), h * sizeof(double));
     grid_.synchronize();
@@ -188,8 +194,17 @@ class GridSystemSolver final : public densify::SystemSolver {
     const passes::SystemView a = system_at(space, level).view();
     grid_.launch(a.width, a.height, passes::FillZero{x, a.width});
     if (level == space.level_count) {
-      gauss_seidel(a, b, x, kCoarsestSweeps, true);
-      gauss_seidel(a, b, x, kCoarsestSweeps, false);
+      // 160 half-sweeps of a few hundred points: two launches instead of 160 where the level
+      // fits one launch_steps block.
+      if (a.width * a.height <= Grid::kMaxStepPoints) {
+        grid_.launch_steps(a.width, a.height, 2 * kCoarsestSweeps,
+                           passes::SmoothColours{a, b, x, 0});
+        grid_.launch_steps(a.width, a.height, 2 * kCoarsestSweeps,
+                           passes::SmoothColours{a, b, x, 1});
+      } else {
+        gauss_seidel(a, b, x, kCoarsestSweeps, true);
+        gauss_seidel(a, b, x, kCoarsestSweeps, false);
+      }
       return;
     }
     gauss_seidel(a, b, x, kSmoothingSweeps, true);
@@ -282,7 +297,7 @@ class GridSystemSolver final : public densify::SystemSolver {
   Buffer<float> fine_b_, fine_x_, coarse_b_, coarse_x_;
   Buffer<double> row_dots_;
   Staging<double> dots_staging_;
-  Staging<float> upload_staging_[7];  // the system's five images, b and the warm start
+  Staging<float> upload_staging_[5];  // data, wx, wy, b and the warm start
   Workspace coarse_space_, fine_space_;
 };
 

@@ -29,10 +29,18 @@ class HostGrid {
 
   static const char* name() { return "host grid"; }
 
+  // CudaGrid's one-block limit, kept so both take the same path.
+  static constexpr int kMaxStepPoints = 1024;
+
   template <class F>
   void launch(int nx, int ny, const F& f) {
     for (int y = 0; y < ny; ++y)
       for (int x = 0; x < nx; ++x) f(x, y);
+  }
+  // `steps` passes over the grid, f(x, y, step), each after the whole previous one.
+  template <class F>
+  void launch_steps(int nx, int ny, int steps, const F& f) {
+    for (int s = 0; s < steps; ++s) launch(nx, ny, [&](int x, int y) { f(x, y, s); });
   }
   void upload(void* device, const void* host, std::size_t bytes) {
     if (bytes > 0) std::memcpy(device, host, bytes);
