@@ -98,6 +98,7 @@ BackendChoice choose_backend(const std::string& requested, const stereo::StereoP
       c.stages.densify_solver = [](const densify::DensifyParams& p) {
         return make_cuda_densify_solver(p);
       };
+      c.stages.on_gpu = true;
       c.remapper = [](const Rectifier& r) { return make_cuda_pair_remapper(r); };
       return c;
     } catch (const std::exception& e) {

@@ -17,6 +17,9 @@ void register_params(ConfigSchema& s, ContourParams& p) {
   s.add("contour.use_flow", &p.use_flow, "optical-flow cue from the neighbouring frames (§5.1)");
   s.add("contour.dis_preset", &p.dis_preset, {"ultrafast", "fast", "medium"},
         "cv::DISOpticalFlow preset");
+  s.add("contour.parallel_flow", &p.parallel_flow, {"auto", "on", "off"},
+        "the two flow fields on two threads at once (same output); auto = on with 4 or more "
+        "CPUs online");
   s.add("contour.projection_distance", &p.projection_distance, 1, 64,
         "|p p0| = |p p1| of the projection test (Eq. 9), internal px");
   s.add("contour.box_size", &p.box_size, 1, 255,
@@ -37,6 +40,8 @@ void register_params(ConfigSchema& s, ContourParams& p) {
 void validate(const ContourParams& p) {
   require(p.dis_preset == "ultrafast" || p.dis_preset == "fast" || p.dis_preset == "medium",
           "dis_preset must be ultrafast, fast or medium, not '" + p.dis_preset + "'");
+  require(p.parallel_flow == "auto" || p.parallel_flow == "on" || p.parallel_flow == "off",
+          "parallel_flow must be auto, on or off, not '" + p.parallel_flow + "'");
   require(p.projection_distance >= 1 && p.projection_distance <= 64,
           "projection_distance must be in 1..64, not " + std::to_string(p.projection_distance));
   require(p.box_size >= 1 && p.box_size <= 255 && p.box_size % 2 == 1,

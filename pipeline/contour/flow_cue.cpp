@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <string>
+#include <thread>
 
 #include <opencv2/video/tracking.hpp>
 
@@ -11,6 +13,7 @@
 #include "dco/core/error.hpp"
 #include "dco/pipeline/contour/flow_fusion.hpp"
 #include "dco/pipeline/contour/separable_filters.hpp"
+#include "flow_field_worker.hpp"
 
 namespace dco::contour {
 namespace {
@@ -81,13 +84,19 @@ struct FlowCue::State {
   ContourParams params;
   cv::Ptr<cv::DISOpticalFlow> dis;
   cv::Mat flow_a, flow_b;  // CV_32FC2, kept so DIS writes into the same memory every frame
-  cv::Mat centre_copy, neighbour_copy;  // continuous copies of padded input views
+  cv::Mat centre_copy, neighbour_copy, neighbour_b_copy;  // continuous copies of padded views
+  std::unique_ptr<FlowFieldWorker> field_b;  // with parallel_flow: computes flow_b meanwhile
   Image<float> speed, amplitude_a, amplitude_b, contrast_a, contrast_b, fused, tmp;
 };
 
 FlowCue::FlowCue(const ContourParams& params) : s_(std::make_unique<State>()) {
   s_->params = params;
   s_->dis = cv::DISOpticalFlow::create(dis_preset(params.dis_preset));
+  const bool parallel = params.parallel_flow == "on" || (params.parallel_flow == "auto" &&
+                                                         std::thread::hardware_concurrency() >= 4);
+  if (parallel)
+    s_->field_b = std::make_unique<FlowFieldWorker>(
+        cv::DISOpticalFlow::create(dis_preset(params.dis_preset)));
 }
 
 FlowCue::~FlowCue() = default;
@@ -114,8 +123,24 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
   // frame t's result depends on its window only, not on the previous call.
   zero(s.flow_a);
   zero(s.flow_b);
-  s.dis->calc(centre, continuous(in.neighbour_a, s.neighbour_copy), s.flow_a);
-  s.dis->calc(centre, continuous(in.neighbour_b, s.neighbour_copy), s.flow_b);
+  if (s.field_b) {
+    const cv::Mat neighbour_a = continuous(in.neighbour_a, s.neighbour_copy);
+    const cv::Mat neighbour_b = continuous(in.neighbour_b, s.neighbour_b_copy);
+    s.field_b->start(centre, neighbour_b, s.flow_b);
+    try {
+      s.dis->calc(centre, neighbour_a, s.flow_a);
+    } catch (...) {
+      try {
+        s.field_b->wait();  // it reads the locals above
+      } catch (...) {       // the first error is the one reported
+      }
+      throw;
+    }
+    s.field_b->wait();
+  } else {
+    s.dis->calc(centre, continuous(in.neighbour_a, s.neighbour_copy), s.flow_a);
+    s.dis->calc(centre, continuous(in.neighbour_b, s.neighbour_copy), s.flow_b);
+  }
   timings.flow_ms = t.lap_ms();
 
   const ImageView<const float> fa = as_view<float>(static_cast<const cv::Mat&>(s.flow_a));

@@ -54,12 +54,17 @@ std::string size_text(ImageView<const std::uint8_t> v) {
 // 4 ms at p99, 0.15 ms with it. Kernels before 6.12 ignore it, which costs only precision.
 constexpr std::uint64_t kReleaseSliceNs = 100'000;
 
+RuntimeParams with_stage_threads(RuntimeParams params, const StageFactories& stages) {
+  params.threads = stage_threads(params, stages.on_gpu);
+  return params;
+}
+
 }  // namespace
 
 DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
                            ResultCallback on_result, StageHook hook, const StageFactories& stages)
     : pipeline_(pipeline),
-      params_(runtime),
+      params_(with_stage_threads(runtime, stages)),
       cpus_(checked_cpus(runtime)),
       releasing_(runtime.release_latency_ms > 0 && !runtime.deterministic),
       release_latency_(std::chrono::duration_cast<Clock::duration>(

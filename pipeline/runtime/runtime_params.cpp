@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <string_view>
+#include <thread>
 
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
@@ -11,8 +12,9 @@
 namespace dco::pipeline::runtime {
 
 void register_params(ConfigSchema& s, RuntimeParams& p) {
-  s.add("runtime.threads", &p.threads, 1, 3,
-        "stage threads: 1 all in one, 2 stereo | contour+densify, 3 stereo | contour | densify");
+  s.add("runtime.threads", &p.threads, 0, 3,
+        "stage threads: 1 all in one, 2 stereo | contour+densify, 3 stereo | contour | densify; "
+        "0 = 3 when the stages run on a GPU and 4 or more CPUs are online, else 2");
   s.add("runtime.affinity", &p.affinity, {},
         "CPUs for the stage threads, e.g. \"0,1\" (thread i on entry i mod n); empty = any");
   s.add("runtime.queue_depth", &p.queue_depth, 1, 8,
@@ -60,8 +62,9 @@ std::vector<int> parse_affinity(const std::string& text) {
 }
 
 void validate(const RuntimeParams& p) {
-  if (p.threads < 1 || p.threads > 3)
-    throw Error("runtime.threads must be 1, 2 or 3, not " + std::to_string(p.threads));
+  if (p.threads < 0 || p.threads > 3)
+    throw Error("runtime.threads must be 0 (chosen with the stages), 1, 2 or 3, not " +
+                std::to_string(p.threads));
   if (p.queue_depth < 1 || p.queue_depth > 8)
     throw Error("runtime.queue_depth must be in [1, 8], not " + std::to_string(p.queue_depth));
   if (!(p.entry_deadline_ms >= 0 && p.entry_deadline_ms <= 1000))
@@ -73,6 +76,11 @@ void validate(const RuntimeParams& p) {
   parse_affinity(p.affinity);
   if (p.backend != "auto" && p.backend != "cpu" && p.backend != "cuda")
     throw Error("runtime.backend must be auto, cpu or cuda, not '" + p.backend + "'");
+}
+
+int stage_threads(const RuntimeParams& p, bool stages_on_gpu) {
+  if (p.threads != 0) return p.threads;
+  return stages_on_gpu && std::thread::hardware_concurrency() >= 4 ? 3 : 2;
 }
 
 }  // namespace dco::pipeline::runtime

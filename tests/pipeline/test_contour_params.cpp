@@ -43,6 +43,7 @@ TEST(ContourParams, ValidateRejectsEachInvalidField) {
   const std::vector<Case> cases = {
       {"preset", [](ContourParams& p) { p.dis_preset = "slow"; }, "dis_preset"},
       {"preset case", [](ContourParams& p) { p.dis_preset = "Fast"; }, "dis_preset"},
+      {"parallel flow", [](ContourParams& p) { p.parallel_flow = "yes"; }, "parallel_flow"},
       {"projection 0", [](ContourParams& p) { p.projection_distance = 0; }, "projection_distance"},
       {"projection 65", [](ContourParams& p) { p.projection_distance = 65; },
        "projection_distance"},
@@ -78,7 +79,7 @@ TEST(ContourParams, RegisteredUnderContourKeys) {
   for (const char* key :
        {"contour.use_flow", "contour.dis_preset", "contour.projection_distance", "contour.box_size",
         "contour.flow_floor", "contour.use_stereo", "contour.stereo_jump", "contour.lookahead",
-        "contour.t_high", "contour.t_low", "contour.t_depth"})
+        "contour.t_high", "contour.t_low", "contour.t_depth", "contour.parallel_flow"})
     EXPECT_TRUE(schema.has(key)) << key;
   schema.load_string("[contour]\nt_high = 0.1\ndis_preset = \"medium\"\nuse_flow = false\n",
                      "test");
@@ -88,6 +89,7 @@ TEST(ContourParams, RegisteredUnderContourKeys) {
   EXPECT_FALSE(p.use_flow);
   EXPECT_EQ(p.box_size, 5);
   EXPECT_THROW(schema.set("contour.dis_preset=slow"), Error);
+  EXPECT_THROW(schema.set("contour.parallel_flow=2"), Error);
   EXPECT_THROW(schema.set("contour.t_depth=2"), Error);
   EXPECT_THROW(schema.set("contour.lookahead=3"), Error);
 }

@@ -124,14 +124,18 @@ TEST(DepthRuntime, DeterministicModeEqualsTheOfflinePipelineBitForBit) {
   for (int lookahead : {1, 0}) {
     Sequence s = make_sequence("hand", 6);
     s.params.contour.lookahead = lookahead;
+    s.params.contour.parallel_flow = "off";
     const std::vector<DepthResult> expected = offline(s);
     ASSERT_EQ(expected.size(), 6u);
+    // The runtime computes the two flow fields on two threads: the same output.
+    PipelineParams parallel = s.params;
+    parallel.contour.parallel_flow = "on";
     for (int threads : {1, 2, 3}) {
       RuntimeParams rp;
       rp.deterministic = true;
       rp.threads = threads;
       Collector c;
-      DepthRuntime runtime(s.params, rp, c.callback());
+      DepthRuntime runtime(parallel, rp, c.callback());
       runtime.start();
       // Twice: drain ends a sequence and the next one starts afresh (no stability term from the
       // first one's last frame).
@@ -613,6 +617,28 @@ TEST(DepthRuntime, StartStopAndRestartLeaveNoThreadBehind) {
   }
 }
 
+TEST(DepthRuntime, ZeroThreadsRunTheCountItsStagesCallFor) {
+  Sequence s = make_sequence("static", 3);
+  s.params.contour.use_flow = false;  // keep OpenCV's own worker threads out of the count
+  const int before = thread_count();
+  for (bool on_gpu : {false, true}) {
+    RuntimeParams rp;  // threads = 0
+    rp.deterministic = true;
+    StageFactories stages;  // the CPU stages, marked as a GPU's to see the choice
+    stages.on_gpu = on_gpu;
+    const int expected = on_gpu && std::thread::hardware_concurrency() >= 4 ? 3 : 2;
+    Collector c;
+    DepthRuntime runtime(s.params, rp, c.callback(), {}, stages);
+    EXPECT_EQ(runtime.runtime_params().threads, expected);
+    runtime.start();
+    EXPECT_EQ(settled_thread_count(before + expected), before + expected);
+    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+    runtime.drain();
+    runtime.stop();
+    EXPECT_EQ(c.results.size(), 3u);
+  }
+}
+
 TEST(DepthRuntime, StopDiscardsFramesInFlightAndTheNextStartBeginsAfresh) {
   Sequence s = make_sequence("hand", 4);
   s.params.contour.use_flow = false;
@@ -689,7 +715,9 @@ TEST(DepthRuntime, BadInputIsRejectedAtTheEntry) {
 TEST(DepthRuntime, BadParamsAndUnavailableCpusAreRejected) {
   const Sequence s = make_sequence("static", 1);
   RuntimeParams rp;
-  rp.threads = 0;
+  rp.threads = -1;
+  EXPECT_THROW(DepthRuntime(s.params, rp, {}), Error);
+  rp.threads = 4;
   EXPECT_THROW(DepthRuntime(s.params, rp, {}), Error);
   rp = {};
   rp.affinity = "0,zero";

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <thread>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -112,7 +113,7 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   RuntimeParams p;
   ConfigSchema schema;
   register_params(schema, p);
-  EXPECT_THROW(schema.set("runtime.threads=0"), Error);
+  EXPECT_THROW(schema.set("runtime.threads=-1"), Error);
   EXPECT_THROW(schema.set("runtime.threads=4"), Error);
   EXPECT_THROW(schema.set("runtime.queue_depth=0"), Error);
   EXPECT_THROW(schema.set("runtime.deterministic=maybe"), Error);
@@ -132,6 +133,19 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   direct = {};
   direct.release_latency_ms = 2000;
   EXPECT_THROW(validate(direct), Error);
+}
+
+TEST(RuntimeParams, ZeroThreadsGiveGpuStagesAThirdThreadWhereCpusAreFree) {
+  RuntimeParams p;
+  EXPECT_EQ(p.threads, 0);
+  EXPECT_NO_THROW(validate(p));
+  EXPECT_EQ(stage_threads(p, false), 2);
+  EXPECT_EQ(stage_threads(p, true), std::thread::hardware_concurrency() >= 4 ? 3 : 2);
+  for (int n : {1, 2, 3}) {
+    p.threads = n;
+    EXPECT_EQ(stage_threads(p, false), n);
+    EXPECT_EQ(stage_threads(p, true), n);  // an explicit count is kept
+  }
 }
 
 TEST(RuntimeParams, BadAffinityListsNameTheEntry) {

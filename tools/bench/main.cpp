@@ -451,9 +451,9 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
   r.frames = static_cast<int>(frames.pairs.size());
   r.warmup = std::min(opt.warmup, r.frames);
   r.max_disparity = frames.max_disparity;
-  r.threads = p.runtime.threads;
   const dco::gpu::BackendChoice backend =
       dco::gpu::choose_backend(p.runtime.backend, p.pipeline.stereo);
+  r.threads = rt::stage_threads(p.runtime, backend.stages.on_gpu);
   r.backend = backend.backend;
   r.backend_message = backend.message;
 

@@ -94,6 +94,7 @@ struct StageFactories {
   stereo::StereoMatcherFactory stereo;
   contour::ContourExtractorFactory contour;
   densify::SystemSolverFactory densify_solver;  // the densifier builds its system on the CPU
+  bool on_gpu = false;  // these stages compute on a GPU (runtime::stage_threads)
 };
 
 // Stereo -> contour -> densify, one frame after the other, on the calling thread (the offline

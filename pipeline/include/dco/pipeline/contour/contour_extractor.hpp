@@ -20,6 +20,9 @@ struct ContourParams {
   std::string dis_preset = "fast";  // ultrafast | fast | medium (cv::DISOpticalFlow presets)
   int projection_distance = 2;      // |p p0| = |p p1| of Eq. 9, internal pixels
   int box_size = 9;                 // box filter that widens M_fuse (§5.2), internal pixels
+  // The two flow fields (t -> t-1, t -> t+1) on two threads at once: "on", "off", or "auto" = on
+  // where at least four CPUs are online. Same output either way.
+  std::string parallel_flow = "auto";
   // The flow cue is divided by max(its maximum, flow_floor) (the normalisation of §5.3.2). With
   // the paper's plain maximum a still scene's flow noise (|flow| of a few hundredths of a pixel)
   // is stretched to full strength and opens the gate everywhere; motion of about 1 internal px

@@ -115,6 +115,7 @@ class DepthRuntime {
 
   RuntimeStats stats() const;  // from any thread
   const PipelineParams& pipeline_params() const { return pipeline_; }
+  // As it runs: runtime.threads = 0 resolved by stage_threads.
   const RuntimeParams& runtime_params() const { return params_; }
   // Whether results wait for their capture time + runtime.release_latency_ms (never in a
   // deterministic run).

@@ -12,8 +12,8 @@ namespace dco::pipeline::runtime {
 // How the real-time runtime runs the stages ("runtime.*").
 struct RuntimeParams {
   // Stage threads: 1 = one worker runs every stage; 2 = stereo | contour + densify;
-  // 3 = stereo | contour | densify.
-  int threads = 2;
+  // 3 = stereo | contour | densify; 0 = chosen with the stages (stage_threads).
+  int threads = 0;
   // CPUs the stage threads are pinned to, e.g. "0,1": thread i runs on the (i mod n)-th entry;
   // empty = wherever the scheduler puts them.
   std::string affinity;
@@ -39,6 +39,11 @@ struct RuntimeParams {
 
 void register_params(ConfigSchema& schema, RuntimeParams& params);
 void validate(const RuntimeParams& params);  // throws dco::Error
+
+// runtime.threads as it will run: an explicit count as it is; 0 gives 3 when the stages run on a
+// GPU and at least four CPUs are online (the stereo thread then mostly waits, so the contour
+// stage's optical flow and the densify system, both on the CPU, each get a thread), else 2.
+int stage_threads(const RuntimeParams& params, bool stages_on_gpu);
 
 // Parses runtime.affinity ("0,2,3"); throws dco::Error naming the bad entry.
 std::vector<int> parse_affinity(const std::string& text);
