@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -156,6 +157,11 @@ void Daemon::start_pipeline() {
       },
       pipeline::runtime::DepthRuntime::StageHook{}, backend.stages);
   runtime_->start();
+  const int threads = runtime_->runtime_params().threads;
+  log_.info(loaded_.config.runtime.threads == 0
+                ? fmt::format("{} stage threads (runtime.threads = 0, {} CPUs online)", threads,
+                              std::thread::hardware_concurrency())
+                : fmt::format("{} stage thread(s)", threads));
   pipeline_start_ns_ = monotonic_ns();
 }
 

@@ -47,6 +47,9 @@ TEST(Dcod, ReadyWatchdogPingsAndACleanStopOnSigterm) {
   ASSERT_TRUE(ready) << dcod.log();
   EXPECT_TRUE(std::filesystem::exists(dir / "depth.shm"));
   EXPECT_TRUE(notify.wait_for("STATUS=synthetic hand 160x96", 3s));
+  // The stage threads runtime.threads = 0 chose, and why.
+  EXPECT_NE(dcod.log().find(" stage threads (runtime.threads = 0, "), std::string::npos)
+      << dcod.log();
   // Pings at a quarter of the period while frames flow.
   const std::size_t before = notify.messages().size();
   std::this_thread::sleep_for(1000ms);
