@@ -11,9 +11,9 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
+#include "dco/pipeline/contour/flow_field_worker.hpp"
 #include "dco/pipeline/contour/flow_fusion.hpp"
 #include "dco/pipeline/contour/separable_filters.hpp"
-#include "flow_field_worker.hpp"
 
 namespace dco::contour {
 namespace {
