@@ -17,6 +17,7 @@
 #include "dco/core/depth_conversion.hpp"
 #include "dco/core/error.hpp"
 #include "dco/gpu/backend.hpp"
+#include "dco/pipeline/contour/contour_extractor.hpp"
 #include "raw_recorder.hpp"
 #include "replay_check.hpp"
 
@@ -158,10 +159,14 @@ void Daemon::start_pipeline() {
       pipeline::runtime::DepthRuntime::StageHook{}, backend.stages);
   runtime_->start();
   const int threads = runtime_->runtime_params().threads;
-  log_.info(loaded_.config.runtime.threads == 0
-                ? fmt::format("{} stage threads (runtime.threads = 0, {} CPUs online)", threads,
-                              std::thread::hardware_concurrency())
-                : fmt::format("{} stage thread(s)", threads));
+  const contour::ContourParams& flow = loaded_.config.pipeline.contour;
+  log_.info(fmt::format(
+      "{} stage thread(s){}{}", threads,
+      loaded_.config.runtime.threads == 0 ? fmt::format(" (runtime.threads = 0, {} CPUs online)",
+                                                        std::thread::hardware_concurrency())
+                                          : "",
+      flow.use_flow && contour::parallel_flow_fields(flow) ? ", the two flow fields on two threads"
+                                                           : ""));
   pipeline_start_ns_ = monotonic_ns();
 }
 

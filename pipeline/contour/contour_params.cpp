@@ -1,4 +1,5 @@
 #include <string>
+#include <thread>
 
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
@@ -35,6 +36,11 @@ void register_params(ConfigSchema& s, ContourParams& p) {
   s.add("contour.t_low", &p.t_low, 0.0, 1.0, "T_low of the dual threshold (§5.3.1)");
   s.add("contour.t_depth", &p.t_depth, 0.0, 1.0,
         "T_depth: pixels whose depth-contour filter is below it are no contour (§5.3.2)");
+}
+
+bool parallel_flow_fields(const ContourParams& p) {
+  return p.parallel_flow == "on" ||
+         (p.parallel_flow == "auto" && std::thread::hardware_concurrency() >= 4);
 }
 
 void validate(const ContourParams& p) {

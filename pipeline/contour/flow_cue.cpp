@@ -5,7 +5,6 @@
 #include <cstring>
 #include <memory>
 #include <string>
-#include <thread>
 
 #include <opencv2/video/tracking.hpp>
 
@@ -92,9 +91,7 @@ struct FlowCue::State {
 FlowCue::FlowCue(const ContourParams& params) : s_(std::make_unique<State>()) {
   s_->params = params;
   s_->dis = cv::DISOpticalFlow::create(dis_preset(params.dis_preset));
-  const bool parallel = params.parallel_flow == "on" || (params.parallel_flow == "auto" &&
-                                                         std::thread::hardware_concurrency() >= 4);
-  if (parallel)
+  if (parallel_flow_fields(params))
     s_->field_b = std::make_unique<FlowFieldWorker>(
         cv::DISOpticalFlow::create(dis_preset(params.dis_preset)));
 }

@@ -48,7 +48,7 @@ TEST(Dcod, ReadyWatchdogPingsAndACleanStopOnSigterm) {
   EXPECT_TRUE(std::filesystem::exists(dir / "depth.shm"));
   EXPECT_TRUE(notify.wait_for("STATUS=synthetic hand 160x96", 3s));
   // The stage threads runtime.threads = 0 chose, and why.
-  EXPECT_NE(dcod.log().find(" stage threads (runtime.threads = 0, "), std::string::npos)
+  EXPECT_NE(dcod.log().find(" stage thread(s) (runtime.threads = 0, "), std::string::npos)
       << dcod.log();
   // Pings at a quarter of the period while frames flow.
   const std::size_t before = notify.messages().size();

@@ -45,8 +45,9 @@ double json_value(const std::string& json, const std::string& key) {
 
 TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   TempDir dir;
-  const CliRun r = run_bench(dir, {"--sequence", "synthetic", "--size", "320x180", "--frames", "3",
-                                   "--paced-frames", "8", "--fps", "60", "--json"});
+  const CliRun r = run_bench(
+      dir, {"--sequence", "synthetic", "--size", "320x180", "--frames", "3", "--paced-frames", "8",
+            "--fps", "60", "--json", "--set", "contour.parallel_flow=off"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, ::testing::StartsWith("{"));
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one object on one line";
@@ -70,17 +71,19 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   EXPECT_EQ(published + json_value(r.out, "dropped"), 8);
   EXPECT_GT(json_value(r.out, "stereo_ms"), 0);
   EXPECT_THAT(r.out, HasSubstr("\"sequences\": [{\"name\": \"synthetic hand 320x180\""));
+  EXPECT_THAT(r.out, HasSubstr("\"parallel_flow\": false"));
 }
 
 TEST(DcoBenchCli, TextNamesEveryMeasurementOnTheKarlsruheClip) {
   if (!fs::is_directory(kKarlsruhe / "images")) GTEST_SKIP() << "no Karlsruhe clip in the data";
   TempDir dir;
-  const CliRun r = run_bench(dir, {"--sequence", "karlsruhe", "--frames", "2", "--warmup", "1",
-                                   "--paced-frames", "3", "--set", "runtime.threads=3"});
+  const CliRun r =
+      run_bench(dir, {"--sequence", "karlsruhe", "--frames", "2", "--warmup", "1", "--paced-frames",
+                      "3", "--set", "runtime.threads=3", "--set", "contour.parallel_flow=on"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("karlsruhe 2010_03_09_drive_0023: 2 frames of 1344x372"));
-  EXPECT_THAT(r.out, HasSubstr("max-disp 96, 3 stage thread(s), each run after an untimed pass "
-                               "over the first 1"));
+  EXPECT_THAT(r.out, HasSubstr("max-disp 96, 3 stage thread(s) (+ a flow worker), each run after "
+                               "an untimed pass over the first 1"));
   EXPECT_THAT(r.out, HasSubstr("a new runtime's first result after"));
   EXPECT_THAT(r.out, HasSubstr("ms/frame"));
   EXPECT_THAT(r.out, HasSubstr("stereo"));

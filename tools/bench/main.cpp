@@ -29,6 +29,7 @@
 #include "dco/core/rectifier.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/gpu/backend.hpp"
+#include "dco/pipeline/contour/contour_extractor.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/depth_runtime.hpp"
 #include "dco/pipeline/runtime/histogram.hpp"
@@ -430,6 +431,7 @@ struct Result {
   std::string backend, backend_message;
   std::optional<BackendCheck> check;
   int width = 0, height = 0, frames = 0, max_disparity = 0, threads = 0, warmup = 0;
+  bool parallel_flow = false;  // the flow cue's two fields on two threads
   double ms_per_frame = 0;
   double first_result_ms = 0;  // a new runtime: first push to first result (the warm-up pass)
   PassFigures throughput;
@@ -454,6 +456,8 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
   const dco::gpu::BackendChoice backend =
       dco::gpu::choose_backend(p.runtime.backend, p.pipeline.stereo);
   r.threads = rt::stage_threads(p.runtime, backend.stages.on_gpu);
+  r.parallel_flow =
+      p.pipeline.contour.use_flow && dco::contour::parallel_flow_fields(p.pipeline.contour);
   r.backend = backend.backend;
   r.backend_message = backend.message;
 
@@ -543,9 +547,10 @@ void print_text(const Result& r) {
   const rt::RuntimeStats& l = r.paced;
   const PassFigures& ls = r.paced_figures;
   fmt::print(
-      "{}: {} frames of {}x{}, max-disp {}, {} stage thread(s), each run after an untimed pass "
+      "{}: {} frames of {}x{}, max-disp {}, {} stage thread(s){}, each run after an untimed pass "
       "over the first {}\n",
-      r.name, r.frames, r.width, r.height, r.max_disparity, r.threads, r.warmup);
+      r.name, r.frames, r.width, r.height, r.max_disparity, r.threads,
+      r.parallel_flow ? " (+ a flow worker)" : "", r.warmup);
   fmt::print(
       "  dco      {:8.1f} ms/frame  ({:.2f} fps); a new runtime's first result after {:.0f} ms\n",
       r.ms_per_frame, 1000.0 / r.ms_per_frame, r.first_result_ms);
@@ -604,7 +609,8 @@ std::string json_fields(const Result& r) {
   const PassFigures& ls = r.paced_figures;
   return fmt::format(
              "\"name\": {}, \"width\": {}, \"height\": {}, \"frames\": {}, \"max_disparity\": {}, "
-             "\"threads\": {}, \"warmup_frames\": {}, \"first_result_ms\": {}, "
+             "\"threads\": {}, \"parallel_flow\": {}, \"warmup_frames\": {}, "
+             "\"first_result_ms\": {}, "
              "\"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
              "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
              "\"latency_p99_ms\": {}, \"latency_max_ms\": {}, \"ready_p50_ms\": {}, "
@@ -613,7 +619,8 @@ std::string json_fields(const Result& r) {
              "\"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
              "\"published\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
              dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity,
-             r.threads, r.warmup, json_number(r.first_result_ms), json_number(r.ms_per_frame),
+             r.threads, r.parallel_flow ? "true" : "false", r.warmup,
+             json_number(r.first_result_ms), json_number(r.ms_per_frame),
              json_number(1000.0 / r.ms_per_frame), json_number(t.stereo.mean_ms),
              json_number(t.contour.mean_ms), json_number(t.densify.mean_ms), json_number(r.fps),
              json_number(ls.latency.p50_ms), json_number(ls.latency.p99_ms),

@@ -43,6 +43,10 @@ struct ContourParams {
 void register_params(ConfigSchema& schema, ContourParams& params);
 void validate(const ContourParams& params);  // throws dco::Error
 
+// contour.parallel_flow on this machine: true when the flow cue computes its two fields on two
+// threads ("on", or "auto" with at least four CPUs online).
+bool parallel_flow_fields(const ContourParams& params);
+
 // Inputs for frame t. Neighbour images may be empty (a single frame, a window not yet full):
 // without both of them the flow cue is zero and only the stereo cue remains. compute() throws
 // dco::Error on inconsistent sizes and on internal frames too small for the DIS preset.
