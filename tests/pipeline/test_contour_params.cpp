@@ -1,6 +1,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -70,6 +71,16 @@ TEST(ContourParams, ValidateRejectsEachInvalidField) {
     EXPECT_THAT(error, HasSubstr(c.message)) << c.name;
     EXPECT_THROW(make_cpu_contour_extractor(p), Error) << c.name;
   }
+}
+
+TEST(ContourParams, ParallelFlowFollowsTheSettingAndTheCpus) {
+  ContourParams p;
+  p.parallel_flow = "on";
+  EXPECT_TRUE(parallel_flow_fields(p));
+  p.parallel_flow = "off";
+  EXPECT_FALSE(parallel_flow_fields(p));
+  p.parallel_flow = "auto";
+  EXPECT_EQ(parallel_flow_fields(p), std::thread::hardware_concurrency() >= 4);
 }
 
 TEST(ContourParams, RegisteredUnderContourKeys) {
