@@ -10,12 +10,12 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
-#include <thread>
 
 #include <fmt/format.h>
 
 #include "dco/core/depth_conversion.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/usable_cpus.hpp"
 #include "dco/gpu/backend.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 #include "raw_recorder.hpp"
@@ -160,13 +160,13 @@ void Daemon::start_pipeline() {
   runtime_->start();
   const int threads = runtime_->runtime_params().threads;
   const contour::ContourParams& flow = loaded_.config.pipeline.contour;
-  log_.info(fmt::format(
-      "{} stage thread(s){}{}", threads,
-      loaded_.config.runtime.threads == 0 ? fmt::format(" (runtime.threads = 0, {} CPUs online)",
-                                                        std::thread::hardware_concurrency())
-                                          : "",
-      flow.use_flow && contour::parallel_flow_fields(flow) ? ", the two flow fields on two threads"
-                                                           : ""));
+  log_.info(fmt::format("{} stage thread(s){}{}", threads,
+                        loaded_.config.runtime.threads == 0
+                            ? fmt::format(" (runtime.threads = 0, {} usable CPUs)", usable_cpus())
+                            : "",
+                        flow.use_flow && contour::parallel_flow_fields(flow)
+                            ? ", the two flow fields on two threads"
+                            : ""));
   pipeline_start_ns_ = monotonic_ns();
 }
 

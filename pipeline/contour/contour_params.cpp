@@ -1,8 +1,8 @@
 #include <string>
-#include <thread>
 
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/usable_cpus.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 
 namespace dco::contour {
@@ -20,7 +20,7 @@ void register_params(ConfigSchema& s, ContourParams& p) {
         "cv::DISOpticalFlow preset");
   s.add("contour.parallel_flow", &p.parallel_flow, {"auto", "on", "off"},
         "the two flow fields on two threads at once (same output); auto = on with 4 or more "
-        "CPUs online");
+        "usable CPUs");
   s.add("contour.projection_distance", &p.projection_distance, 1, 64,
         "|p p0| = |p p1| of the projection test (Eq. 9), internal px");
   s.add("contour.box_size", &p.box_size, 1, 255,
@@ -39,8 +39,7 @@ void register_params(ConfigSchema& s, ContourParams& p) {
 }
 
 bool parallel_flow_fields(const ContourParams& p) {
-  return p.parallel_flow == "on" ||
-         (p.parallel_flow == "auto" && std::thread::hardware_concurrency() >= 4);
+  return p.parallel_flow == "on" || (p.parallel_flow == "auto" && usable_cpus() >= 4);
 }
 
 void validate(const ContourParams& p) {

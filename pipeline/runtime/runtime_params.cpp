@@ -4,17 +4,17 @@
 
 #include <algorithm>
 #include <string_view>
-#include <thread>
 
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/usable_cpus.hpp"
 
 namespace dco::pipeline::runtime {
 
 void register_params(ConfigSchema& s, RuntimeParams& p) {
   s.add("runtime.threads", &p.threads, 0, 3,
         "stage threads: 1 all in one, 2 stereo | contour+densify, 3 stereo | contour | densify; "
-        "0 = 3 when the stages run on a GPU and 4 or more CPUs are online, else 2");
+        "0 = 3 when the stages run on a GPU and 4 or more CPUs are usable, else 2");
   s.add("runtime.affinity", &p.affinity, {},
         "CPUs for the stage threads, e.g. \"0,1\" (thread i on entry i mod n); empty = any");
   s.add("runtime.queue_depth", &p.queue_depth, 1, 8,
@@ -80,7 +80,7 @@ void validate(const RuntimeParams& p) {
 
 int stage_threads(const RuntimeParams& p, bool stages_on_gpu) {
   if (p.threads != 0) return p.threads;
-  return stages_on_gpu && std::thread::hardware_concurrency() >= 4 ? 3 : 2;
+  return stages_on_gpu && usable_cpus() >= 4 ? 3 : 2;
 }
 
 }  // namespace dco::pipeline::runtime

@@ -21,6 +21,7 @@
 #include <gtest/gtest.h>
 
 #include "dco/core/error.hpp"
+#include "dco/core/usable_cpus.hpp"
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/depth_runtime.hpp"
@@ -626,7 +627,7 @@ TEST(DepthRuntime, ZeroThreadsRunTheCountItsStagesCallFor) {
     rp.deterministic = true;
     StageFactories stages;  // the CPU stages, marked as a GPU's to see the choice
     stages.on_gpu = on_gpu;
-    const int expected = on_gpu && std::thread::hardware_concurrency() >= 4 ? 3 : 2;
+    const int expected = on_gpu && usable_cpus() >= 4 ? 3 : 2;
     Collector c;
     DepthRuntime runtime(s.params, rp, c.callback(), {}, stages);
     EXPECT_EQ(runtime.runtime_params().threads, expected);

@@ -3,16 +3,17 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
-#include <thread>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/usable_cpus.hpp"
 #include "dco/pipeline/runtime/bounded_queue.hpp"
 #include "dco/pipeline/runtime/histogram.hpp"
 #include "dco/pipeline/runtime/runtime_params.hpp"
+#include "support/one_cpu.hpp"
 
 namespace dco::pipeline::runtime {
 namespace {
@@ -140,12 +141,17 @@ TEST(RuntimeParams, ZeroThreadsGiveGpuStagesAThirdThreadWhereCpusAreFree) {
   EXPECT_EQ(p.threads, 0);
   EXPECT_NO_THROW(validate(p));
   EXPECT_EQ(stage_threads(p, false), 2);
-  EXPECT_EQ(stage_threads(p, true), std::thread::hardware_concurrency() >= 4 ? 3 : 2);
+  EXPECT_EQ(stage_threads(p, true), usable_cpus() >= 4 ? 3 : 2);
   for (int n : {1, 2, 3}) {
     p.threads = n;
     EXPECT_EQ(stage_threads(p, false), n);
     EXPECT_EQ(stage_threads(p, true), n);  // an explicit count is kept
   }
+  // The CPUs this thread may use count, not the machine's: kept to one, GPU stages get 2.
+  p.threads = 0;
+  const testing::OneCpu one;
+  ASSERT_TRUE(one.ok());
+  EXPECT_EQ(stage_threads(p, true), 2);
 }
 
 TEST(RuntimeParams, BadAffinityListsNameTheEntry) {

@@ -21,7 +21,7 @@ struct ContourParams {
   int projection_distance = 2;      // |p p0| = |p p1| of Eq. 9, internal pixels
   int box_size = 9;                 // box filter that widens M_fuse (§5.2), internal pixels
   // The two flow fields (t -> t-1, t -> t+1) on two threads at once: "on", "off", or "auto" = on
-  // where at least four CPUs are online. Same output either way.
+  // where at least four CPUs are usable. Same output either way.
   std::string parallel_flow = "auto";
   // The flow cue is divided by max(its maximum, flow_floor) (the normalisation of §5.3.2). With
   // the paper's plain maximum a still scene's flow noise (|flow| of a few hundredths of a pixel)
@@ -44,7 +44,7 @@ void register_params(ConfigSchema& schema, ContourParams& params);
 void validate(const ContourParams& params);  // throws dco::Error
 
 // contour.parallel_flow on this machine: true when the flow cue computes its two fields on two
-// threads ("on", or "auto" with at least four CPUs online).
+// threads ("on", or "auto" with at least four usable CPUs).
 bool parallel_flow_fields(const ContourParams& params);
 
 // Inputs for frame t. Neighbour images may be empty (a single frame, a window not yet full):

@@ -41,7 +41,7 @@ void register_params(ConfigSchema& schema, RuntimeParams& params);
 void validate(const RuntimeParams& params);  // throws dco::Error
 
 // runtime.threads as it will run: an explicit count as it is; 0 gives 3 when the stages run on a
-// GPU and at least four CPUs are online (the stereo thread then mostly waits, so the contour
+// GPU and at least four CPUs are usable (the stereo thread then mostly waits, so the contour
 // stage's optical flow and the densify system, both on the CPU, each get a thread), else 2.
 int stage_threads(const RuntimeParams& params, bool stages_on_gpu);
 
