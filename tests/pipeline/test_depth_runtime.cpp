@@ -21,8 +21,8 @@
 #include <gtest/gtest.h>
 
 #include "dco/core/error.hpp"
-#include "dco/core/usable_cpus.hpp"
 #include "dco/core/synthetic_scene.hpp"
+#include "dco/core/usable_cpus.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/depth_runtime.hpp"
 #include "support/allocation_counter.hpp"
