@@ -159,12 +159,11 @@ void Daemon::start_pipeline() {
       pipeline::runtime::DepthRuntime::StageHook{}, backend.stages);
   runtime_->start();
   const int threads = runtime_->runtime_params().threads;
-  const contour::ContourParams& flow = loaded_.config.pipeline.contour;
   log_.info(fmt::format("{} stage thread(s){}{}", threads,
                         loaded_.config.runtime.threads == 0
                             ? fmt::format(" (runtime.threads = 0, {} usable CPUs)", usable_cpus())
                             : "",
-                        flow.use_flow && contour::parallel_flow_fields(flow)
+                        contour::parallel_flow_fields(loaded_.config.pipeline.contour)
                             ? ", the two flow fields on two threads"
                             : ""));
   pipeline_start_ns_ = monotonic_ns();

@@ -39,7 +39,8 @@ void register_params(ConfigSchema& s, ContourParams& p) {
 }
 
 bool parallel_flow_fields(const ContourParams& p) {
-  return p.parallel_flow == "on" || (p.parallel_flow == "auto" && usable_cpus() >= 4);
+  return p.use_flow &&
+         (p.parallel_flow == "on" || (p.parallel_flow == "auto" && usable_cpus() >= 4));
 }
 
 void validate(const ContourParams& p) {

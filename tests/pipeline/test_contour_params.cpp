@@ -82,6 +82,11 @@ TEST(ContourParams, ParallelFlowFollowsTheSettingAndTheCpus) {
   EXPECT_FALSE(parallel_flow_fields(p));
   p.parallel_flow = "auto";
   EXPECT_EQ(parallel_flow_fields(p), usable_cpus() >= 4);
+  p.parallel_flow = "on";
+  p.use_flow = false;  // no flow, no worker
+  EXPECT_FALSE(parallel_flow_fields(p));
+  p.use_flow = true;
+  p.parallel_flow = "auto";
   const testing::OneCpu one;  // auto counts the CPUs this thread may use
   ASSERT_TRUE(one.ok());
   EXPECT_FALSE(parallel_flow_fields(p));

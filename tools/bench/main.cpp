@@ -456,8 +456,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
   const dco::gpu::BackendChoice backend =
       dco::gpu::choose_backend(p.runtime.backend, p.pipeline.stereo);
   r.threads = rt::stage_threads(p.runtime, backend.stages.on_gpu);
-  r.parallel_flow =
-      p.pipeline.contour.use_flow && dco::contour::parallel_flow_fields(p.pipeline.contour);
+  r.parallel_flow = dco::contour::parallel_flow_fields(p.pipeline.contour);
   r.backend = backend.backend;
   r.backend_message = backend.message;
 

@@ -44,7 +44,8 @@ void register_params(ConfigSchema& schema, ContourParams& params);
 void validate(const ContourParams& params);  // throws dco::Error
 
 // contour.parallel_flow on this machine: true when the flow cue computes its two fields on two
-// threads ("on", or "auto" with at least four usable CPUs).
+// threads (with use_flow, "on", or "auto" with at least four usable CPUs). Without the flow no
+// worker thread is started.
 bool parallel_flow_fields(const ContourParams& params);
 
 // Inputs for frame t. Neighbour images may be empty (a single frame, a window not yet full):
