@@ -61,6 +61,11 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "matching at half size, input px (0 = off)");
   s.add("stereo.boundary_ratio", &p.boundary_ratio, 0.01, 1.0,
         "the side picked must cost at most this fraction of the other side");
+  s.add("stereo.boundary_hole_reach", &p.boundary_hole_reach, 0, 16,
+        "how far along its row a pixel without a value and no depth edge within 2 internal px "
+        "looks for the two sides, internal px (2 or less = not at all)");
+  s.add("stereo.boundary_hole_ratio", &p.boundary_hole_ratio, 0.01, 1.0,
+        "the side picked for such a pixel must cost at most this fraction of the other side");
 }
 
 void validate(const StereoParams& p) {
@@ -93,6 +98,10 @@ void validate(const StereoParams& p) {
   require(p.vote_min_ratio >= 0 && p.vote_min_ratio <= 1, "vote_min_ratio must be in [0, 1]");
   require(p.boundary_radius >= 0 && p.boundary_radius <= 15, "boundary_radius must be in 0..15");
   require(p.boundary_ratio > 0 && p.boundary_ratio <= 1, "boundary_ratio must be in (0, 1]");
+  require(p.boundary_hole_reach >= 0 && p.boundary_hole_reach <= 16,
+          "boundary_hole_reach must be in 0..16");
+  require(p.boundary_hole_ratio > 0 && p.boundary_hole_ratio <= 1,
+          "boundary_hole_ratio must be in (0, 1]");
 }
 
 }  // namespace dco::stereo

@@ -109,6 +109,78 @@ TEST(BoundaryRefinement, KeepsAFingerThreePixelsWide) {
     for (int x = 43; x <= 45; ++x) EXPECT_EQ(d.row(y)[x], kNear) << x << "," << y;
 }
 
+// The bar's right rim and the wall beside it lost by the matcher: internal columns 27..33 have
+// no value, so no depth edge lies within 2 internal px of columns 29..31. Internal column 30 (input
+// 60, 61, the bar's last columns) has the bar 4 columns to its left and the wall 4 to its right.
+void erase_right_rim(BarScene& s) {
+  for (int y = 0; y < kHeight / 2; ++y)
+    for (int x = 27; x <= 33; ++x) s.internal.row(y)[x] = kNone;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) s.expanded.row(y)[x] = 2.0f * s.internal.row(y / 2)[x / 2];
+}
+
+// Input pixels right of column 49 (away from the bar's left edge) with a wrong value.
+int wrong_right_of_the_bar_middle(const BarScene& s, ImageView<const float> d) {
+  int n = 0;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 50; x < kWidth; ++x)
+      if (d.row(y)[x] < kNone && std::abs(d.row(y)[x] - s.truth.row(y)[x]) > 1.0f) ++n;
+  return n;
+}
+
+TEST(BoundaryRefinement, HolesAFewPixelsFromAnEdgeFindBothSidesAlongTheRow) {
+  BarScene s(41, 61);  // the bar covers internal columns 20..30
+  erase_right_rim(s);
+  const auto refine = [&](const StereoParams& p) {
+    Image<float> d(kWidth, kHeight);
+    d.copy_from(s.expanded.cview());
+    BoundaryRefiner refiner;
+    refiner.apply(s.internal.cview(), s.left.cview(), s.right.cview(), 2, boundary_rule(p),
+                  d.view());
+    return d;
+  };
+  // With the row search (default) the bar's last columns get its value, and no hole gets a
+  // wrong one.
+  const Image<float> with = refine(StereoParams{});
+  EXPECT_EQ(wrong_right_of_the_bar_middle(s, with.cview()), 0);
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 60; x <= 61; ++x) EXPECT_EQ(with.row(y)[x], kNear) << x << "," << y;
+  // Without it they stay holes for the densifier: the edge is out of the 2 px reach.
+  StereoParams off;
+  off.boundary_hole_reach = 0;
+  const Image<float> without = refine(off);
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 54; x <= 67; ++x) EXPECT_EQ(without.row(y)[x], kNone) << x << "," << y;
+}
+
+TEST(BoundaryRefinement, HolesFoundAlongTheRowAreDecidedByTheirOwnRatio) {
+  // Sensor noise in the right image: no side matches perfectly, so the ratio decides.
+  BarScene s(41, 61);
+  erase_right_rim(s);
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> noise(-12, 12);
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x)
+      s.right.row(y)[x] =
+          static_cast<std::uint8_t>(std::clamp(s.right.row(y)[x] + noise(rng), 0, 255));
+  const auto decided_rim = [&](double ratio, double hole_ratio) {
+    StereoParams p;
+    p.boundary_ratio = ratio;
+    p.boundary_hole_ratio = hole_ratio;
+    Image<float> d(kWidth, kHeight);
+    d.copy_from(s.expanded.cview());
+    BoundaryRefiner refiner;
+    refiner.apply(s.internal.cview(), s.left.cview(), s.right.cview(), 2, boundary_rule(p),
+                  d.view());
+    int n = 0;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 54; x <= 67; ++x) n += d.row(y)[x] < kNone ? 1 : 0;
+    return n;
+  };
+  EXPECT_GE(decided_rim(0.01, 1.0), kHeight);
+  EXPECT_EQ(decided_rim(1.0, 0.01), 0);
+}
+
 TEST(BoundaryRefinement, AnUndecidableSideGetsNoGuess) {
   // Without texture both sides match equally well: values that passed the checks stay, holes
   // stay holes.
@@ -122,16 +194,23 @@ TEST(BoundaryRefinement, AnUndecidableSideGetsNoGuess) {
     for (int x = 0; x < kWidth; ++x) EXPECT_EQ(d.row(y)[x], s.expanded.row(y)[x]) << x << "," << y;
 }
 
-TEST(BoundaryRefinement, IsThePerPixelFunctionsEverywhere) {
-  // The CPU stage finds the sides separably; it must give what the shared per-pixel functions
-  // (the GPU passes) give, on a map with holes and many small jumps.
+// Refines a random half-size map (a hole where hole_draw(rng) == 0 out of 0..4) with random
+// images by the CPU stage and by the shared per-pixel functions (the GPU passes) and expects the
+// same output; returns how many pixels the functions changed, and of those how many only the row
+// search for holes reached.
+struct PerPixelCheck {
+  int changed = 0, by_row_search = 0;
+};
+
+PerPixelCheck expect_the_per_pixel_functions(int holes_of_five, const StereoParams& params) {
   std::mt19937 rng(3);
   std::uniform_int_distribution<int> grey(0, 255), value(0, 40), hole(0, 4);
   constexpr int w = 37, h = 23;
   Image<float> internal(w, h);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
-      internal.row(y)[x] = hole(rng) == 0 ? kNone : static_cast<float>(value(rng)) / 4.0f + 1.0f;
+      internal.row(y)[x] =
+          hole(rng) < holes_of_five ? kNone : static_cast<float>(value(rng)) / 4.0f + 1.0f;
   Image<std::uint8_t> left(2 * w + 1, 2 * h + 1), right(2 * w + 1, 2 * h + 1);
   for (int y = 0; y < left.height(); ++y)
     for (int x = 0; x < left.width(); ++x) {
@@ -142,20 +221,25 @@ TEST(BoundaryRefinement, IsThePerPixelFunctionsEverywhere) {
   for (int y = 0; y < d.height(); ++y)
     for (int x = 0; x < d.width(); ++x)
       d.row(y)[x] = 2.0f * internal.row(std::min(y / 2, h - 1))[std::min(x / 2, w - 1)];
-  const px::BoundaryRule rule = boundary_rule(StereoParams{});
+  const px::BoundaryRule rule = boundary_rule(params);
   const px::GreyPair im{left.data(),         right.data(), left.view().stride,
                         right.view().stride, left.width(), left.height()};
-  int changed = 0;
+  PerPixelCheck check;
   for (int y = 0; y < d.height(); ++y)
     for (int x = 0; x < d.width(); ++x) {
-      const px::SideRange r = px::side_range(internal.data(), internal.view().stride, w, h,
-                                             std::min(x / 2, w - 1), std::min(y / 2, h - 1));
-      expected.row(y)[x] = px::refined_boundary_value(im, x, y, d.row(y)[x], r, 2.0f, rule);
+      const int ix = std::min(x / 2, w - 1), iy = std::min(y / 2, h - 1);
+      const px::SideRange narrow =
+          px::side_range(internal.data(), internal.view().stride, w, h, ix, iy);
+      const px::SideRange wide =
+          px::side_range(internal.data(), internal.view().stride, w, h, ix, iy, rule.hole_reach);
+      expected.row(y)[x] =
+          px::refined_boundary_value(im, x, y, d.row(y)[x], narrow, wide, 2.0f, rule);
       const float before = d.row(y)[x];
       const float after = expected.row(y)[x];
-      changed += (before == after || (std::isinf(before) && std::isinf(after))) ? 0 : 1;
+      const bool changed = !(before == after || (std::isinf(before) && std::isinf(after)));
+      check.changed += changed ? 1 : 0;
+      check.by_row_search += changed && !px::spans_depth_edge(narrow) ? 1 : 0;
     }
-  ASSERT_GT(changed, 50);  // the case exercises the refinement
   BoundaryRefiner refiner;
   refiner.apply(internal.cview(), left.cview(), right.cview(), 2, rule, d.view());
   for (int y = 0; y < d.height(); ++y)
@@ -163,6 +247,17 @@ TEST(BoundaryRefinement, IsThePerPixelFunctionsEverywhere) {
       const float a = d.row(y)[x], b = expected.row(y)[x];
       EXPECT_TRUE(a == b || (std::isinf(a) && std::isinf(b))) << x << "," << y;
     }
+  return check;
+}
+
+TEST(BoundaryRefinement, IsThePerPixelFunctionsEverywhere) {
+  // The CPU stage finds the sides separably; it must give what the shared per-pixel functions
+  // (the GPU passes) give: on a map with holes and many small jumps, and on one mostly of holes,
+  // where the row search decides pixels (with a ratio that lets random images decide some).
+  EXPECT_GT(expect_the_per_pixel_functions(1, StereoParams{}).changed, 50);
+  StereoParams lax;
+  lax.boundary_hole_ratio = 0.95;
+  EXPECT_GT(expect_the_per_pixel_functions(4, lax).by_row_search, 20);
 }
 
 TEST(BoundaryRefinement, RunsOnlyForHalfSizeMatchingWithAWindow) {
@@ -182,6 +277,16 @@ TEST(BoundaryRefinement, RejectsAWindowOrRatioOutOfRange) {
   EXPECT_THROW(validate(p), Error);
   p.boundary_ratio = 1.5;
   EXPECT_THROW(validate(p), Error);
+  p = StereoParams{};
+  p.boundary_hole_reach = 17;
+  EXPECT_THROW(validate(p), Error);
+  p.boundary_hole_reach = -1;
+  EXPECT_THROW(validate(p), Error);
+  p = StereoParams{};
+  p.boundary_hole_ratio = 0.0;
+  EXPECT_THROW(validate(p), Error);
+  p.boundary_hole_ratio = 1.01;
+  EXPECT_THROW(validate(p), Error);
 }
 
 TEST(BoundaryRefinement, RuleHoldsTheRatioAndFallingWeights) {
@@ -191,6 +296,8 @@ TEST(BoundaryRefinement, RuleHoldsTheRatioAndFallingWeights) {
   const px::BoundaryRule rule = boundary_rule(p);
   EXPECT_EQ(rule.radius, 5);
   EXPECT_EQ(rule.keep, 128u);
+  EXPECT_EQ(rule.hole_reach, p.boundary_hole_reach);
+  EXPECT_EQ(rule.hole_keep, static_cast<std::uint32_t>(std::lround(p.boundary_hole_ratio * 256)));
   EXPECT_EQ(rule.weight[0], px::kBoundaryWeightOne);
   for (int i = 1; i < 256; ++i) EXPECT_LE(rule.weight[i], rule.weight[i - 1]);
   EXPECT_LT(rule.weight[30], rule.weight[0] / 10);

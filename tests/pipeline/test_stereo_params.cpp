@@ -88,6 +88,10 @@ TEST(StereoParams, ValidateRejectsEachInvalidField) {
       {"vote_min_ratio < 0", [](StereoParams& p) { p.vote_min_ratio = -0.1; }, "vote_min_ratio"},
       {"max_neighbour_jump -2", [](StereoParams& p) { p.max_neighbour_jump = -2; },
        "max_neighbour_jump"},
+      {"boundary_hole_reach 17", [](StereoParams& p) { p.boundary_hole_reach = 17; },
+       "boundary_hole_reach"},
+      {"boundary_hole_ratio 0", [](StereoParams& p) { p.boundary_hole_ratio = 0; },
+       "boundary_hole_ratio"},
   };
   for (const Case& c : cases) {
     StereoParams p;
@@ -138,6 +142,9 @@ TEST(StereoParams, ValidateAcceptsTheEdgesOfEachRange) {
       [](StereoParams& p) { p.vote_tolerance = 0; },
       [](StereoParams& p) { p.max_neighbour_jump = -1; },
       [](StereoParams& p) { p.max_neighbour_jump = 0; },
+      [](StereoParams& p) { p.boundary_hole_reach = 0; },
+      [](StereoParams& p) { p.boundary_hole_reach = 16; },
+      [](StereoParams& p) { p.boundary_hole_ratio = 1; },
   };
   for (std::size_t i = 0; i < edges.size(); ++i) {
     StereoParams p;

@@ -275,13 +275,22 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
     const std::size_t n = pixels();
     side_far_.resize(n);
     side_near_.resize(n);
-    grid_.launch(
-        w_, h_, passes::BoundarySides{sparse_.data(), side_far_.data(), side_near_.data(), w_, h_});
+    const bool holes = boundary_rule_.hole_reach > kernels::pixel::kBoundaryReach;
+    if (holes) {
+      hole_far_.resize(n);
+      hole_near_.resize(n);
+    }
+    float* hole_far = holes ? hole_far_.data() : side_far_.data();
+    float* hole_near = holes ? hole_near_.data() : side_near_.data();
+    grid_.launch(w_, h_,
+                 passes::BoundarySides{sparse_.data(), side_far_.data(), side_near_.data(),
+                                       hole_far, hole_near, w_, h_, boundary_rule_.hole_reach});
     const auto [l, r] = grey_pair(input_left_.data(), input_right_.data(), width, height, channels,
                                   full_grey_left_, full_grey_right_);
-    grid_.launch(width, height,
-                 passes::RefineBoundary{l, r, side_far_.data(), side_near_.data(), full_.data(), w_,
-                                        h_, width, height, scale_, boundary_rule_});
+    grid_.launch(
+        width, height,
+        passes::RefineBoundary{l, r, side_far_.data(), side_near_.data(), hole_far, hole_near,
+                               full_.data(), w_, h_, width, height, scale_, boundary_rule_});
   }
 
   void download_output(int width, int height, Image<float>& disparity) {
@@ -321,7 +330,7 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
   std::int16_t* result_ = nullptr;  // the checked map: disp_ or, after the jump check, jumped_
   Buffer<std::uint16_t> best_, second_, below_, above_;
   Buffer<std::uint8_t> changed_;
-  Buffer<float> raw_, sparse_, full_, side_far_, side_near_;
+  Buffer<float> raw_, sparse_, full_, side_far_, side_near_, hole_far_, hole_near_;
   stereo::SpeckleFilter speckles_;
   Image<std::uint8_t> grey_out_;
   Image<float> raw_out_, sparse_out_;

@@ -384,36 +384,48 @@ struct ExpandToInput {
   }
 };
 
-// Grid (w, h) of the internal map: the far and near side around each pixel (px::side_range).
+// Grid (w, h) of the internal map: the far and near side around each pixel (px::side_range),
+// within kBoundaryReach and, for pixels without a value, within the rule's hole reach along the
+// row (hole_far / hole_near; not written when the rule has no hole reach).
 struct BoundarySides {
   const float* sparse;
   float* far;
   float* near;
-  int width, height;
+  float* hole_far;
+  float* hole_near;
+  int width, height, hole_reach;
   DCO_HD void operator()(int x, int y) const {
     const px::SideRange r = px::side_range(sparse, width, width, height, x, y);
     far[at(x, y, width)] = r.far;
     near[at(x, y, width)] = r.near;
+    if (hole_reach <= px::kBoundaryReach) return;
+    const px::SideRange wide = px::side_range(sparse, width, width, height, x, y, hole_reach);
+    hole_far[at(x, y, width)] = wide.far;
+    hole_near[at(x, y, width)] = wide.near;
   }
 };
 
 // Grid (out_width, out_height) of the input: the boundary refinement, in place on `out` (each
-// point reads and writes its own value only). The rule (with its weight table) travels by value.
+// point reads and writes its own value only). The rule (with its weight table) travels by value;
+// without a hole reach, hole_far / hole_near may be the narrow sides.
 struct RefineBoundary {
   const std::uint8_t* left;
   const std::uint8_t* right;
   const float* far;
   const float* near;
+  const float* hole_far;
+  const float* hole_near;
   float* out;
   int width, height, out_width, out_height, scale;
   px::BoundaryRule rule;
   DCO_HD void operator()(int x, int y) const {
     const std::size_t i =
         at(px::min_of(x / scale, width - 1), px::min_of(y / scale, height - 1), width);
-    if (!(near[i] - far[i] > px::kBoundaryMinStep)) return;
+    const px::SideRange narrow{far[i], near[i]}, wide{hole_far[i], hole_near[i]};
+    if (!px::spans_depth_edge(narrow) && !px::spans_depth_edge(wide)) return;
     const px::GreyPair im{left, right, out_width, out_width, out_width, out_height};
     float& v = out[at(x, y, out_width)];
-    v = px::refined_boundary_value(im, x, y, v, {far[i], near[i]}, static_cast<float>(scale), rule);
+    v = px::refined_boundary_value(im, x, y, v, narrow, wide, static_cast<float>(scale), rule);
   }
 };
 

@@ -15,10 +15,11 @@ kernels::pixel::BoundaryRule boundary_rule(const StereoParams& params);
 // Whether the refinement runs: the stage matches below the input resolution and a window is set.
 bool refines_boundaries(const StereoParams& params, int scale);
 
-// Re-decides the side of every input pixel next to a depth edge of the half-size map, in place
-// on `disparity` (input size, input px, +inf = none). `sparse` is the internal map (internal px),
-// `left` and `right` the grey input images; the sides found around each internal pixel are kept
-// between frames so that a frame of the same geometry allocates nothing.
+// Re-decides the side of every input pixel next to a depth edge of the half-size map (and of
+// pixels without a value within the rule's hole reach of one), in place on `disparity` (input
+// size, input px, +inf = none). `sparse` is the internal map (internal px), `left` and `right`
+// the grey input images; the sides found around each internal pixel are kept between frames so
+// that a frame of the same geometry allocates nothing.
 class BoundaryRefiner {
  public:
   void apply(ImageView<const float> sparse, ImageView<const std::uint8_t> left,
@@ -26,7 +27,7 @@ class BoundaryRefiner {
              const kernels::pixel::BoundaryRule& rule, ImageView<float> disparity);
 
  private:
-  Image<float> row_far_, row_near_, far_, near_;
+  Image<float> row_far_, row_near_, far_, near_, hole_far_, hole_near_;
 };
 
 }  // namespace dco::stereo

@@ -70,6 +70,11 @@ struct StereoParams {
   // side's cost must be at most boundary_ratio of the other's, else the pixel gets no value.
   int boundary_radius = 3;
   double boundary_ratio = 0.4;
+  // Input pixels without a value and no depth edge within 2 internal px look for the two sides
+  // up to boundary_hole_reach internal px along their row, and a side must then cost at most
+  // boundary_hole_ratio of the other's (2 or less = no such search).
+  int boundary_hole_reach = 4;
+  double boundary_hole_ratio = 0.3;
 };
 
 // Registers every field under "stereo.<name>" with its valid range.
