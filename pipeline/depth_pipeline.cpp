@@ -47,6 +47,7 @@ void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> 
                   ImageView<const std::uint8_t> right, StereoSlot& slot) {
   matcher.compute(left, right, slot.sparse);
   slot.stereo_timings = matcher.last_timings();
+  slot.stereo_scale = matcher.last_scale();
   const ImageView<const float> raw = matcher.internal_raw_disparity();
   slot.raw_disparity.resize(raw.width, raw.height);
   slot.raw_disparity.copy_from(raw);
@@ -77,6 +78,7 @@ void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centr
   out.sparse.resize(centre.sparse.width(), centre.sparse.height());
   out.sparse.copy_from(centre.sparse.cview());
   out.stereo_timings = centre.stereo_timings;
+  out.stereo_scale = centre.stereo_scale;
   out.flow_cue = flow;
 }
 
@@ -88,6 +90,7 @@ densify::DensifyInputs densify_inputs(const DepthResult& r, ImageView<const floa
   d.contours = r.contours.cview();
   d.image = r.image.cview();
   d.previous = previous;
+  d.match_step = r.stereo_scale;
   return d;
 }
 

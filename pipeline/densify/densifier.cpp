@@ -56,6 +56,11 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.border_plane_rms", &p.border_plane_rms, 0.0, 10.0,
         "holes at the left border take a plane fitted to the matches next to them when it fits "
         "within this RMS, px (0 = the row's first match, as other holes)");
+  s.add("densify.plane_window", &p.plane_window, 0, 31,
+        "matches first take the value of the plane through the matches of this window around "
+        "them, on the matcher's grid, odd (0 = off)");
+  s.add("densify.plane_rms", &p.plane_rms, 0.01, 10.0,
+        "... where those matches lie within this RMS of their plane, px");
   s.add("densify.solve_resolution", &p.solve_resolution, {"auto", "full", "half"},
         "auto = solve at half size, then refine at full size, when wider than 640 px");
   s.add("densify.fine_sweeps", &p.fine_sweeps, 0, 100,
@@ -79,6 +84,10 @@ void validate(const DensifyParams& p) {
   require(p.fine_iterations >= 0, "fine_iterations must be >= 0");
   require(p.tolerance > 0 && p.tolerance < 1, "tolerance must be in (0, 1)");
   require(p.border_plane_rms >= 0, "border_plane_rms must be >= 0");
+  require(p.plane_window == 0 ||
+              (p.plane_window >= 3 && p.plane_window <= 31 && p.plane_window % 2 == 1),
+          "plane_window must be 0 or odd in 3..31");
+  require(p.plane_rms > 0, "plane_rms must be positive");
 }
 
 void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::uint8_t> closed) {
@@ -275,8 +284,19 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   check(in.contours, "the contour mask");
   check(in.previous, "the previous frame");
 
+  if (in.match_step < 1)
+    throw Error("densify: match_step is " + std::to_string(in.match_step) + ", not >= 1");
+
   Stopwatch t;
-  build_system(in);
+  DensifyInputs inputs = in;
+  if (params_.plane_window > 0) {
+    smoothed_.resize(w, h);
+    planes_.apply(in.sparse, in.match_step, params_.plane_window / 2,
+                  static_cast<float>(params_.plane_rms), smoothed_.view());
+    inputs.sparse = smoothed_.cview();
+  }
+  timings_.planes_ms = t.lap_ms();
+  build_system(inputs);
   timings_.build_ms = t.lap_ms();
 
   if (!has_solution_ || !solution_.view().same_size(w, h)) {

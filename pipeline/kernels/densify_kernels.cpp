@@ -313,6 +313,123 @@ void DiagonalRow(const float* data, const float* wx, const float* wy, const floa
   detail::diagonal_range(data, wx, wy, wy_above, width, x, width, diag, inv_diag);
 }
 
+void MatchPlaneRow(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
+                   float* plane) {
+  const hn::ScalableTag<float> d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const auto one = hn::Set(d, 1.0f), zero = hn::Zero(d);
+  const auto inf = hn::Set(d, std::numeric_limits<float>::infinity());
+  const auto nan = hn::Set(d, std::numeric_limits<float>::quiet_NaN());
+  const auto min_count = hn::Set(d, rule.min_count), max_square = hn::Set(d, rule.max_square);
+  const auto offset = hn::Set(d, rule.offset), flat = hn::Set(d, 1e-3f);
+  int i = 0;
+  for (; i + lanes <= n; i += lanes) {
+    const auto at = [&](int k) {
+      return hn::LoadU(d, sums + static_cast<std::ptrdiff_t>(k) * n + i);
+    };
+    const auto count = at(0);
+    const auto inv = hn::Div(one, hn::IfThenElse(hn::Gt(count, one), count, one));
+    const auto mu = hn::Mul(at(1), inv), mv = hn::Mul(at(2), inv), md = hn::Mul(at(6), inv);
+    const auto cuu = hn::Sub(at(3), hn::Mul(hn::Mul(count, mu), mu));
+    const auto cuv = hn::Sub(at(4), hn::Mul(hn::Mul(count, mu), mv));
+    const auto cvv = hn::Sub(at(5), hn::Mul(hn::Mul(count, mv), mv));
+    const auto cud = hn::Sub(at(7), hn::Mul(hn::Mul(count, mu), md));
+    const auto cvd = hn::Sub(at(8), hn::Mul(hn::Mul(count, mv), md));
+    const auto cdd = hn::Sub(at(9), hn::Mul(hn::Mul(count, md), md));
+    const auto det = hn::Sub(hn::Mul(cuu, cvv), hn::Mul(cuv, cuv));
+    const auto a_det = hn::Sub(hn::Mul(cvv, cud), hn::Mul(cuv, cvd));
+    const auto b_det = hn::Sub(hn::Mul(cuu, cvd), hn::Mul(cuv, cud));
+    const auto v = hn::LoadU(d, own + i);
+    auto fits = hn::And(hn::Gt(v, zero), hn::Lt(v, inf));
+    fits = hn::And(fits, hn::Ge(count, min_count));
+    fits = hn::And(fits, hn::Gt(det, hn::Mul(hn::Mul(flat, count), count)));
+    fits = hn::And(fits, hn::Le(hn::Mul(hn::Sub(cdd, hn::Mul(max_square, count)), det),
+                                hn::Add(hn::Mul(a_det, cud), hn::Mul(b_det, cvd))));
+    const auto slope = hn::Div(hn::Add(hn::Mul(a_det, mu), hn::Mul(b_det, mv)), det);
+    const auto value = hn::Add(offset, hn::Sub(md, slope));
+    hn::StoreU(hn::IfThenElse(fits, value, nan), d, plane + i);
+  }
+  for (; i < n; ++i) {
+    const auto at = [&](int k) { return sums[static_cast<std::ptrdiff_t>(k) * n + i]; };
+    plane[i] = pixel::match_plane(at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7), at(8),
+                                  at(9), own[i], rule);
+  }
+}
+
+void MatchPlaneRowSums(const float* match, const float* dv, const float* dd, int n, int radius,
+                       float* sums) {
+  const hn::ScalableTag<float> d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  std::fill(sums, sums + 6 * static_cast<std::ptrdiff_t>(n), 0.0f);
+  float* s0 = sums;
+  float* s1 = s0 + n;
+  float* s2 = s1 + n;
+  float* s3 = s2 + n;
+  float* s4 = s3 + n;
+  float* s5 = s4 + n;
+  for (int k = -radius; k <= radius; ++k) {
+    const auto fk = static_cast<float>(k);
+    const float fk2 = fk * fk;
+    const auto one = hn::Set(d, 1.0f), vk = hn::Set(d, fk), vk2 = hn::Set(d, fk2);
+    const int x0 = std::max(0, -k), x1 = std::min(n, n - k);
+    int x = x0;
+    for (; x + lanes <= x1; x += lanes) {
+      const auto m = hn::LoadU(d, match + x + k), v = hn::LoadU(d, dv + x + k);
+      const auto vv = hn::LoadU(d, dd + x + k);
+      hn::StoreU(hn::Add(hn::LoadU(d, s0 + x), hn::Mul(one, m)), d, s0 + x);
+      hn::StoreU(hn::Add(hn::LoadU(d, s1 + x), hn::Mul(vk, m)), d, s1 + x);
+      hn::StoreU(hn::Add(hn::LoadU(d, s2 + x), hn::Mul(vk2, m)), d, s2 + x);
+      hn::StoreU(hn::Add(hn::LoadU(d, s3 + x), hn::Mul(one, v)), d, s3 + x);
+      hn::StoreU(hn::Add(hn::LoadU(d, s4 + x), hn::Mul(vk, v)), d, s4 + x);
+      hn::StoreU(hn::Add(hn::LoadU(d, s5 + x), hn::Mul(one, vv)), d, s5 + x);
+    }
+    for (; x < x1; ++x)
+      pixel::match_plane_row_step(match[x + k], dv[x + k], dd[x + k], fk, fk2, sums + x, n);
+  }
+}
+
+void MatchPlaneWindowSums(const float* const* rows, int radius, int n, float* s) {
+  const hn::ScalableTag<float> d;
+  using V = hn::Vec<decltype(d)>;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const auto one = hn::Set(d, 1.0f);
+  int x = 0;
+  // Each vector of columns: the ten sums in registers over the window's rows, stored once.
+  for (; x + lanes <= n; x += lanes) {
+    V acc[10];
+    for (V& a : acc) a = hn::Zero(d);
+    for (int j = -radius; j <= radius; ++j) {
+      const float* r = rows[j + radius];
+      if (r == nullptr) continue;
+      const auto fv = static_cast<float>(j);
+      const auto v = hn::Set(d, fv), v2 = hn::Set(d, fv * fv);
+      const auto r0 = hn::LoadU(d, r + x), r1 = hn::LoadU(d, r + n + x);
+      const auto r2 = hn::LoadU(d, r + 2 * n + x), rd = hn::LoadU(d, r + 3 * n + x);
+      const auto rud = hn::LoadU(d, r + 4 * n + x), rdd = hn::LoadU(d, r + 5 * n + x);
+      acc[0] = hn::Add(acc[0], hn::Mul(one, r0));
+      acc[1] = hn::Add(acc[1], hn::Mul(one, r1));
+      acc[2] = hn::Add(acc[2], hn::Mul(v, r0));
+      acc[3] = hn::Add(acc[3], hn::Mul(one, r2));
+      acc[4] = hn::Add(acc[4], hn::Mul(v, r1));
+      acc[5] = hn::Add(acc[5], hn::Mul(v2, r0));
+      acc[6] = hn::Add(acc[6], hn::Mul(one, rd));
+      acc[7] = hn::Add(acc[7], hn::Mul(one, rud));
+      acc[8] = hn::Add(acc[8], hn::Mul(v, rd));
+      acc[9] = hn::Add(acc[9], hn::Mul(one, rdd));
+    }
+    for (int k = 0; k < 10; ++k) hn::StoreU(acc[k], d, s + static_cast<std::ptrdiff_t>(k) * n + x);
+  }
+  for (int k = 0; k < 10; ++k)
+    std::fill(s + static_cast<std::ptrdiff_t>(k) * n + x,
+              s + static_cast<std::ptrdiff_t>(k + 1) * n, 0.0f);
+  for (int j = -radius; j <= radius; ++j) {
+    const float* r = rows[j + radius];
+    if (r == nullptr) continue;
+    const auto v = static_cast<float>(j);
+    for (int i = x; i < n; ++i) pixel::match_plane_window_step(r + i, v, v * v, n, s + i);
+  }
+}
+
 double DotRow(const float* a, const float* b, int n) {
   // At most 16 lanes, so a vector is a whole number of the reference's partial sums: vector k of
   // a block holds partial sums k * lanes .. (k + 1) * lanes - 1.
@@ -360,6 +477,9 @@ HWY_EXPORT(GridSmoothSplitRow);
 HWY_EXPORT(SplitRow);
 HWY_EXPORT(MergeRow);
 HWY_EXPORT(DotRow);
+HWY_EXPORT(MatchPlaneRowSums);
+HWY_EXPORT(MatchPlaneWindowSums);
+HWY_EXPORT(MatchPlaneRow);
 HWY_EXPORT(EdgeWeightsRow);
 HWY_EXPORT(HoleHintRow);
 HWY_EXPORT(DataTermsRow);
@@ -383,6 +503,20 @@ void merge_row(const float* even, const float* odd, int width, float* out) {
 
 double dot_row(const float* a, const float* b, int n) {
   return HWY_DYNAMIC_DISPATCH(DotRow)(a, b, n);
+}
+
+void match_plane_row_sums(const float* match, const float* d, const float* dd, int n, int radius,
+                          float* sums) {
+  HWY_DYNAMIC_DISPATCH(MatchPlaneRowSums)(match, d, dd, n, radius, sums);
+}
+
+void match_plane_window_sums(const float* const* rows, int radius, int n, float* sums) {
+  HWY_DYNAMIC_DISPATCH(MatchPlaneWindowSums)(rows, radius, n, sums);
+}
+
+void match_plane_row(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
+                     float* plane) {
+  HWY_DYNAMIC_DISPATCH(MatchPlaneRow)(sums, own, n, rule, plane);
 }
 
 void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out) {

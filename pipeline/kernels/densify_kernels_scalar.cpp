@@ -1,4 +1,7 @@
 #include "dco/kernels/densify_kernels.hpp"
+
+#include <algorithm>
+#include <cstddef>
 #include "dco/kernels/densify_pixel.hpp"
 #include "densify_ranges.hpp"
 
@@ -63,6 +66,35 @@ void merge_row(const float* even, const float* odd, int width, float* out) {
 
 double dot_row(const float* a, const float* b, int n) {
   return pixel::dot_row(a, b, n);
+}
+
+void match_plane_row(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
+                     float* plane) {
+  const auto at = [&](int k, int i) { return sums[static_cast<std::ptrdiff_t>(k) * n + i]; };
+  for (int i = 0; i < n; ++i)
+    plane[i] = pixel::match_plane(at(0, i), at(1, i), at(2, i), at(3, i), at(4, i), at(5, i),
+                                  at(6, i), at(7, i), at(8, i), at(9, i), own[i], rule);
+}
+
+void match_plane_row_sums(const float* match, const float* d, const float* dd, int n, int radius,
+                          float* sums) {
+  std::fill(sums, sums + 6 * static_cast<std::ptrdiff_t>(n), 0.0f);
+  for (int k = -radius; k <= radius; ++k) {
+    const auto fk = static_cast<float>(k);
+    const float fk2 = fk * fk;
+    for (int x = std::max(0, -k); x < std::min(n, n - k); ++x)
+      pixel::match_plane_row_step(match[x + k], d[x + k], dd[x + k], fk, fk2, sums + x, n);
+  }
+}
+
+void match_plane_window_sums(const float* const* rows, int radius, int n, float* sums) {
+  std::fill(sums, sums + 10 * static_cast<std::ptrdiff_t>(n), 0.0f);
+  for (int j = -radius; j <= radius; ++j) {
+    const float* r = rows[j + radius];
+    if (r == nullptr) continue;
+    const auto v = static_cast<float>(j);
+    for (int x = 0; x < n; ++x) pixel::match_plane_window_step(r + x, v, v * v, n, sums + x);
+  }
 }
 
 }  // namespace dco::kernels::scalar

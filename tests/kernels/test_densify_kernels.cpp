@@ -204,6 +204,117 @@ TEST(DensifyKernels, DotRowMatchesScalarAndDouble) {
   });
 }
 
+// A row of match flags (about a third missing), offset disparities on a noisy slope and their
+// squares, as the densifier's match planes feed the sums.
+struct MatchRow {
+  std::vector<float> match, d, dd;
+  MatchRow(std::mt19937& rng, int n)
+      : match(static_cast<std::size_t>(n)), d(match.size()), dd(match.size()) {
+    std::uniform_real_distribution<float> noise(-0.3f, 0.3f);
+    for (std::size_t i = 0; i < match.size(); ++i) {
+      match[i] = rng() % 3 == 0 ? 0.0f : 1.0f;
+      d[i] = match[i] * (0.37f * static_cast<float>(i) - 40.0f + noise(rng));
+      dd[i] = d[i] * d[i];
+    }
+  }
+};
+
+TEST(DensifyKernels, MatchPlaneSumsMatchScalarBitForBit) {
+  std::mt19937 rng(12);
+  for_each_target([&] {
+    for (const int n : kWidths) {
+      for (const int radius : {1, 3, 7}) {
+        const MatchRow row(rng, n);
+        std::vector<float> expected(6 * static_cast<std::size_t>(n), -1.0f), out(expected);
+        scalar::match_plane_row_sums(row.match.data(), row.d.data(), row.dd.data(), n, radius,
+                                     expected.data());
+        match_plane_row_sums(row.match.data(), row.d.data(), row.dd.data(), n, radius, out.data());
+        ASSERT_EQ(out, expected) << n << " " << radius;
+        // Against a plain count at one pixel: Σ1 and Σu over the window.
+        const int x = n / 2;
+        float count = 0, su = 0;
+        for (int k = -radius; k <= radius; ++k)
+          if (x + k >= 0 && x + k < n)
+            count += row.match[static_cast<std::size_t>(x + k)],
+                su += static_cast<float>(k) * row.match[static_cast<std::size_t>(x + k)];
+        EXPECT_EQ(expected[static_cast<std::size_t>(x)], count);
+        EXPECT_EQ(expected[static_cast<std::size_t>(n + x)], su);
+        // Ten window sums from the same row at offsets -1, 0, 1 (and none beyond, radius 2).
+        std::vector<float> window(10 * static_cast<std::size_t>(n), -1.0f), window_ref(window);
+        const float* rows[5] = {nullptr, expected.data(), expected.data(), expected.data(),
+                                nullptr};
+        scalar::match_plane_window_sums(rows, 2, n, window_ref.data());
+        match_plane_window_sums(rows, 2, n, window.data());
+        ASSERT_EQ(window, window_ref) << n << " " << radius;
+        EXPECT_EQ(window_ref[static_cast<std::size_t>(x)], 3 * count);  // Σ1
+        EXPECT_EQ(window_ref[2 * static_cast<std::size_t>(n) + static_cast<std::size_t>(x)],
+                  0.0f);  // Σv
+      }
+    }
+  });
+}
+
+TEST(DensifyKernels, MatchPlaneIsTheLeastSquaresPlaneAndMatchesScalar) {
+  std::mt19937 rng(13);
+  // Windows of 7x7 on planes d = c + a u + b v with some matches missing, some noisy: the sums
+  // built directly, the plane's value at the centre against a fit in double.
+  constexpr int n = 37;
+  std::vector<float> sums(10 * static_cast<std::size_t>(n)), own(n);
+  std::vector<double> expected(n);
+  std::uniform_real_distribution<double> coef(-2.0, 2.0), noise(-0.2, 0.2);
+  for (int i = 0; i < n; ++i) {
+    const double c = 20 * coef(rng), a = coef(rng), b = coef(rng);
+    const double amp = i % 5 == 0 ? 8.0 : 1.0;  // every fifth window far off any plane
+    double s[10] = {};
+    for (int v = -3; v <= 3; ++v)
+      for (int u = -3; u <= 3; ++u) {
+        if (rng() % 4 == 0) continue;
+        const double d = c + a * u + b * v + amp * noise(rng);
+        const double t[10] = {1, double(u), double(v), double(u * u), double(u * v), double(v * v),
+                              d, u * d,     v * d,     d * d};
+        for (int k = 0; k < 10; ++k) s[k] += t[k];
+      }
+    for (int k = 0; k < 10; ++k)
+      sums[static_cast<std::size_t>(k * n + i)] = static_cast<float>(s[k]);
+    own[static_cast<std::size_t>(i)] = i % 7 == 3 ? std::numeric_limits<float>::infinity() : 50.0f;
+    // Least squares in double: normal equations centred at the mean.
+    const double N = s[0], mu = s[1] / N, mv = s[2] / N, md = s[6] / N;
+    const double cuu = s[3] - N * mu * mu, cuv = s[4] - N * mu * mv, cvv = s[5] - N * mv * mv;
+    const double cud = s[7] - N * mu * md, cvd = s[8] - N * mv * md, cdd = s[9] - N * md * md;
+    const double det = cuu * cvv - cuv * cuv;
+    const double pa = (cvv * cud - cuv * cvd) / det, pb = (cuu * cvd - cuv * cud) / det;
+    const double rms2 = (cdd - pa * cud - pb * cvd) / N;
+    expected[static_cast<std::size_t>(i)] =
+        own[static_cast<std::size_t>(i)] < 1e30f && rms2 <= 0.6 * 0.6
+            ? 100.0 + md - pa * mu - pb * mv
+            : std::nan("");
+  }
+  const MatchPlaneRule rule{100.0f, 49.0f / 4.0f, 0.36f};
+  std::vector<float> reference(n);
+  scalar::match_plane_row(sums.data(), own.data(), n, rule, reference.data());
+  int kept = 0;
+  for (int i = 0; i < n; ++i) {
+    const double e = expected[static_cast<std::size_t>(i)];
+    const float r = reference[static_cast<std::size_t>(i)];
+    if (std::isnan(e)) {
+      EXPECT_TRUE(std::isnan(r)) << i;
+    } else {
+      EXPECT_NEAR(r, e, 1e-3) << i;
+      ++kept;
+    }
+  }
+  EXPECT_GT(kept, n / 2);
+  EXPECT_LT(kept, n);
+  for_each_target([&] {
+    std::vector<float> out(n, 0.0f);
+    match_plane_row(sums.data(), own.data(), n, rule, out.data());
+    for (int i = 0; i < n; ++i) {
+      const float a = out[static_cast<std::size_t>(i)], b = reference[static_cast<std::size_t>(i)];
+      ASSERT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << i;
+    }
+  });
+}
+
 TEST(DensifyKernels, EdgeWeightsMatchScalar) {
   std::mt19937 rng(9);
   std::vector<float> colour(256);

@@ -35,6 +35,7 @@ struct DepthResult {
   Image<float> m_intensity;      // input resolution, [0, 1]
   Image<std::uint8_t> contours;  // input resolution, 255 on depth contours
   stereo::StereoTimings stereo_timings;
+  int stereo_scale = 1;  // the stereo stage's internal downscale (its matches' grid)
   contour::ContourTimings contour_timings;
   densify::DensifyTimings densify_timings;
   densify::SolverReport solver;
@@ -50,6 +51,7 @@ struct StereoSlot {
   Image<float> raw_disparity;        // internal px, every pixel
   Image<float> sparse;               // input px
   stereo::StereoTimings stereo_timings;
+  int stereo_scale = 1;  // internal downscale of the stage
 };
 
 // The steps of one frame, shared by DepthPipeline and the real-time runtime (pipeline/runtime),

@@ -9,6 +9,7 @@
 #include "dco/core/image.hpp"
 #include "dco/pipeline/densify/conjugate_gradients.hpp"
 #include "dco/pipeline/densify/grid_system.hpp"
+#include "dco/pipeline/densify/match_planes.hpp"
 #include "dco/pipeline/densify/multigrid.hpp"
 #include "dco/pipeline/densify/system_solver.hpp"
 
@@ -43,6 +44,11 @@ struct DensifyParams {
   // into the border is filled flat.
   double border_plane_rms = 0.3;
   double color_sigma = 1;  // grey-level scale of exp(-|I_p - I_q| / sigma) on the weights; 0 = off
+  // Matches first smoothed along local planes (MatchPlaneSmoother): the window side on the
+  // matcher's grid (DensifyInputs::match_step; odd, 0 = off) and the largest RMS distance (px)
+  // of its matches to their plane.
+  int plane_window = 7;
+  double plane_rms = 0.6;
   // "full" solves Eq. 20 at the input resolution; "half" solves its 2x2-aggregated (Galerkin)
   // system and then runs `fine_sweeps` Gauss-Seidel sweeps and up to `fine_iterations`
   // conjugate-gradient iterations of the full system from the result, so contours still act at
@@ -67,10 +73,13 @@ struct DensifyInputs {
   ImageView<const std::uint8_t> contours;  // B_dp, non-zero on a depth contour, optional
   ImageView<const float> previous;         // last frame's dense disparity, optional
   ImageView<const std::uint8_t> image;     // grey input image, optional (colour guidance)
+  // The matcher's grid: sparse values come in match_step x match_step blocks (the stereo
+  // stage's internal downscale).
+  int match_step = 1;
 };
 
 struct DensifyTimings {
-  double build_ms = 0, solve_ms = 0, total_ms = 0;
+  double planes_ms = 0, build_ms = 0, solve_ms = 0, total_ms = 0;
 };
 
 // Solves Eq. 20 in disparity (a plane in the scene is affine in disparity, so smoothness in
@@ -109,6 +118,8 @@ class Densifier {
   DensifyParams params_;
   std::unique_ptr<SystemSolver> solver_;
   GridSystem system_;
+  MatchPlaneSmoother planes_;
+  Image<float> smoothed_;  // the sparse map after planes_
   Image<float> rhs_, hint_, solution_, smooth_strength_;
   Image<std::uint8_t> barrier_;
   std::vector<int> fuse_column_;  // column of M_fuse for each input column

@@ -65,6 +65,34 @@ void merge_row(const float* even, const float* odd, int width, float* out);
 // products in double, all added up in double.
 double dot_row(const float* a, const float* b, int n);
 
+// The sums of the densifier's match planes (dco/pipeline/densify/match_planes.hpp), one pass per
+// window row or column offset so that each loaded value updates every sum at once. Each sum
+// adds products in offset order (a product, then a sum: no fused multiply-add), so every target
+// gives the scalar reference's bits.
+//
+// Row sums of a grid row of n pixels: sums = six arrays of n floats (Σ1, Σu, Σu², Σd, Σud, Σd²
+// over the matches within `radius` columns, u the column offset k), from the row's match flags
+// (1 or 0), offset disparities and their squares. sums[j][x] = Σ_k f_j(k) in_j[x + k] for the
+// k in -radius..radius with x + k inside the row, added in that order from 0.
+void match_plane_row_sums(const float* match, const float* d, const float* dd, int n, int radius,
+                          float* sums);
+// The ten window sums (Σ1, Σu, Σv, Σu², Σuv, Σv², Σd, Σud, Σvd, Σd², each n floats) from the six
+// row sums of the window's rows at offsets v = -radius..radius (rows[v + radius]; nullptr for a
+// row outside the image), each sum added up from 0 in that order.
+void match_plane_window_sums(const float* const* rows, int radius, int n, float* sums);
+
+// The densifier's match planes (dco/pipeline/densify/match_planes.hpp): from the ten window sums
+// of each of n grid pixels (`sums`: Σ1, Σu, Σv, Σu², Σuv, Σv², Σd, Σud, Σvd, Σd², each n floats,
+// one array after the other; d offset by rule.offset) and the pixel's own value, plane[i] =
+// pixel::match_plane(...): the plane's value at the pixel, or NaN where no plane is kept.
+struct MatchPlaneRule {
+  float offset = 0;      // added back to the plane's offset disparity
+  float min_count = 0;   // matches the window must hold
+  float max_square = 0;  // largest mean squared distance of the matches to their plane
+};
+void match_plane_row(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
+                     float* plane);
+
 // The pixels at both ends of a run of smoothness edges: edge i joins pixel i of the "a" rows with
 // pixel i of the "b" rows (for the edges within a row, b is a one column further on).
 struct EdgeEnds {
@@ -131,6 +159,11 @@ void grid_smooth_split_row(const SplitSmoothRow& row, float* x);
 void split_row(const float* in, int width, float* even, float* odd);
 void merge_row(const float* even, const float* odd, int width, float* out);
 double dot_row(const float* a, const float* b, int n);
+void match_plane_row_sums(const float* match, const float* d, const float* dd, int n, int radius,
+                          float* sums);
+void match_plane_window_sums(const float* const* rows, int radius, int n, float* sums);
+void match_plane_row(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
+                     float* plane);
 }  // namespace scalar
 
 }  // namespace dco::kernels

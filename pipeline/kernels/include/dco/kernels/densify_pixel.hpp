@@ -103,4 +103,57 @@ DCO_HD inline float inverse_diagonal(float diag) {
   return diag > 0 ? 1.0f / diag : 0.0f;
 }
 
+// One window offset k of match_plane_row_sums at one pixel: sums[j * stride] += f_j(k) in_j.
+inline void match_plane_row_step(float match, float d, float dd, float k, float k2, float* sums,
+                                 int stride) {
+  sums[0] += 1.0f * match;
+  sums[stride] += k * match;
+  sums[2 * stride] += k2 * match;
+  sums[3 * stride] += 1.0f * d;
+  sums[4 * stride] += k * d;
+  sums[5 * stride] += 1.0f * dd;
+}
+
+// One window row at offset v of match_plane_window_add at one pixel (row sums r, window sums s,
+// `stride` floats between arrays).
+inline void match_plane_window_step(const float* r, float v, float v2, int stride, float* s) {
+  const float r0 = r[0], r1 = r[stride], r2 = r[2 * stride];
+  const float rd = r[3 * stride], rud = r[4 * stride], rdd = r[5 * stride];
+  s[0] += 1.0f * r0;
+  s[stride] += 1.0f * r1;
+  s[2 * stride] += v * r0;
+  s[3 * stride] += 1.0f * r2;
+  s[4 * stride] += v * r1;
+  s[5 * stride] += v2 * r0;
+  s[6 * stride] += 1.0f * rd;
+  s[7 * stride] += 1.0f * rud;
+  s[8 * stride] += v * rd;
+  s[9 * stride] += 1.0f * rdd;
+}
+
+// The least-squares plane d = md + a (u - mu) + b (v - mv) through a window's matches, from its
+// sums (see match_plane_row), centred about the matches' mean position and value. Its value at
+// the window's centre (u = v = 0) when the pixel is a match, the window holds rule.min_count
+// matches not all on one line, and their residual sum of squares cdd - a cud - b cvd is at most
+// rule.max_square per match (compared without dividing by the determinant); else NaN. Every
+// operation is a float product, sum or quotient in this order (the vector kernels repeat it).
+inline float match_plane(float count, float su, float sv, float suu, float suv, float svv, float sd,
+                         float sud, float svd, float sdd, float own, const MatchPlaneRule& rule) {
+  const float inv = 1.0f / (count > 1.0f ? count : 1.0f);
+  const float mu = su * inv, mv = sv * inv, md = sd * inv;
+  const float cuu = suu - count * mu * mu;
+  const float cuv = suv - count * mu * mv;
+  const float cvv = svv - count * mv * mv;
+  const float cud = sud - count * mu * md;
+  const float cvd = svd - count * mv * md;
+  const float cdd = sdd - count * md * md;
+  const float det = cuu * cvv - cuv * cuv;
+  const float a_det = cvv * cud - cuv * cvd;
+  const float b_det = cuu * cvd - cuv * cud;
+  const bool fits = known_value(own) && count >= rule.min_count && det > 1e-3f * count * count &&
+                    (cdd - rule.max_square * count) * det <= a_det * cud + b_det * cvd;
+  return fits ? rule.offset + (md - (a_det * mu + b_det * mv) / det)
+              : std::numeric_limits<float>::quiet_NaN();
+}
+
 }  // namespace dco::kernels::pixel
