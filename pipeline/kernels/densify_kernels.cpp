@@ -394,10 +394,11 @@ void MatchPlaneWindowSums(const float* const* rows, int radius, int n, float* s)
   const int lanes = static_cast<int>(hn::Lanes(d));
   const auto one = hn::Set(d, 1.0f);
   int x = 0;
-  // Each vector of columns: the ten sums in registers over the window's rows, stored once.
+  // Each vector of columns: the ten sums in registers over the window's rows, stored once
+  // (named vectors: SVE vectors cannot form an array).
   for (; x + lanes <= n; x += lanes) {
-    V acc[10];
-    for (V& a : acc) a = hn::Zero(d);
+    V a0 = hn::Zero(d), a1 = a0, a2 = a0, a3 = a0, a4 = a0, a5 = a0, a6 = a0, a7 = a0, a8 = a0,
+      a9 = a0;
     for (int j = -radius; j <= radius; ++j) {
       const float* r = rows[j + radius];
       if (r == nullptr) continue;
@@ -406,18 +407,28 @@ void MatchPlaneWindowSums(const float* const* rows, int radius, int n, float* s)
       const auto r0 = hn::LoadU(d, r + x), r1 = hn::LoadU(d, r + n + x);
       const auto r2 = hn::LoadU(d, r + 2 * n + x), rd = hn::LoadU(d, r + 3 * n + x);
       const auto rud = hn::LoadU(d, r + 4 * n + x), rdd = hn::LoadU(d, r + 5 * n + x);
-      acc[0] = hn::Add(acc[0], hn::Mul(one, r0));
-      acc[1] = hn::Add(acc[1], hn::Mul(one, r1));
-      acc[2] = hn::Add(acc[2], hn::Mul(v, r0));
-      acc[3] = hn::Add(acc[3], hn::Mul(one, r2));
-      acc[4] = hn::Add(acc[4], hn::Mul(v, r1));
-      acc[5] = hn::Add(acc[5], hn::Mul(v2, r0));
-      acc[6] = hn::Add(acc[6], hn::Mul(one, rd));
-      acc[7] = hn::Add(acc[7], hn::Mul(one, rud));
-      acc[8] = hn::Add(acc[8], hn::Mul(v, rd));
-      acc[9] = hn::Add(acc[9], hn::Mul(one, rdd));
+      a0 = hn::Add(a0, hn::Mul(one, r0));
+      a1 = hn::Add(a1, hn::Mul(one, r1));
+      a2 = hn::Add(a2, hn::Mul(v, r0));
+      a3 = hn::Add(a3, hn::Mul(one, r2));
+      a4 = hn::Add(a4, hn::Mul(v, r1));
+      a5 = hn::Add(a5, hn::Mul(v2, r0));
+      a6 = hn::Add(a6, hn::Mul(one, rd));
+      a7 = hn::Add(a7, hn::Mul(one, rud));
+      a8 = hn::Add(a8, hn::Mul(v, rd));
+      a9 = hn::Add(a9, hn::Mul(one, rdd));
     }
-    for (int k = 0; k < 10; ++k) hn::StoreU(acc[k], d, s + static_cast<std::ptrdiff_t>(k) * n + x);
+    const auto at = [&](int k) { return s + static_cast<std::ptrdiff_t>(k) * n + x; };
+    hn::StoreU(a0, d, at(0));
+    hn::StoreU(a1, d, at(1));
+    hn::StoreU(a2, d, at(2));
+    hn::StoreU(a3, d, at(3));
+    hn::StoreU(a4, d, at(4));
+    hn::StoreU(a5, d, at(5));
+    hn::StoreU(a6, d, at(6));
+    hn::StoreU(a7, d, at(7));
+    hn::StoreU(a8, d, at(8));
+    hn::StoreU(a9, d, at(9));
   }
   for (int k = 0; k < 10; ++k)
     std::fill(s + static_cast<std::ptrdiff_t>(k) * n + x,
