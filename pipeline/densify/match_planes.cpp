@@ -60,14 +60,18 @@ void MatchPlaneSmoother::apply(ImageView<const float> sparse, int step, int radi
   for (int x = 0; x < w; ++x) column_[static_cast<std::size_t>(x)] = std::min(x / step, n - 1);
 
   // Disparities relative to the middle of the range keep Σd² small enough for floats; every
-  // eighth grid row tells the range closely enough for that.
+  // eighth grid row tells the range closely enough for that, every row where those have no match.
   float low = std::numeric_limits<float>::infinity(), high = -low;
-  for (int y = 0; y < h; y += 8 * step) {
-    const float* s = sparse.row(y);
-    for (int x = 0; x < w; x += step)
-      if (kernels::pixel::known_value(s[x])) low = std::min(low, s[x]), high = std::max(high, s[x]);
+  for (const int stride : {8 * step, step}) {
+    for (int y = 0; y < h; y += stride) {
+      const float* s = sparse.row(y);
+      for (int x = 0; x < w; x += step)
+        if (kernels::pixel::known_value(s[x]))
+          low = std::min(low, s[x]), high = std::max(high, s[x]);
+    }
+    if (high >= low) break;
   }
-  if (!(high >= low)) {  // no match in those rows: a map to leave as it is
+  if (!(high >= low)) {  // no match on the grid: nothing to smooth
     for (int y = 0; y < h; ++y) std::copy(sparse.row(y), sparse.row(y) + w, out.row(y));
     return;
   }

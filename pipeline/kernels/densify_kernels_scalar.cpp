@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstddef>
+
 #include "dco/kernels/densify_pixel.hpp"
 #include "densify_ranges.hpp"
 

@@ -61,6 +61,18 @@ TEST(MatchPlanes, SmoothTheNoiseOfASlantedSurfaceAndKeepTheHoles) {
       EXPECT_EQ(out.row(y)[x] < kNone, p.sparse.row(y)[x] < kNone) << x << "," << y;
 }
 
+TEST(MatchPlanes, FindTheRangeWhereOnlyRowsBetweenTheSampledOnesHaveMatches) {
+  // The disparity range is read from every eighth row first; here those rows have no match.
+  NoisyPlane p(0.3f);
+  for (int y = 0; y < 48; y += 8)
+    for (int x = 0; x < 64; ++x) p.sparse.row(y)[x] = kNone;
+  Image<float> out(64, 48);
+  MatchPlaneSmoother smoother;
+  smoother.apply(p.sparse.cview(), 1, 3, 0.6f, out.view());
+  EXPECT_LT(rms_error(out.cview(), p.truth.cview(), 3),
+            rms_error(p.sparse.cview(), p.truth.cview(), 3) / 3);
+}
+
 TEST(MatchPlanes, LeaveDepthEdgesAndRoughWindowsAlone) {
   // Two slanted surfaces 6 px apart, left and right of column 32: no window across the edge fits
   // one plane within 0.6 px, so every match within 3 columns of it keeps its value exactly.
