@@ -53,6 +53,9 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.fill_edge_weight", &p.fill_edge_weight, 0.0, 1.0,
         "holes take the row neighbour reached without crossing an edge weaker than this "
         "(0 = always the farther one)");
+  s.add("densify.occlusion_fill", &p.occlusion_fill, 0.0, 100.0,
+        "weight (times lambda_d) pulling hole runs as wide as the disparity jump across them, "
+        "the farther match on their left, towards that match (0 = off)");
   s.add("densify.border_plane_rms", &p.border_plane_rms, 0.0, 10.0,
         "holes at the left border take a plane fitted to the matches next to them when it fits "
         "within this RMS, px (0 = the row's first match, as other holes)");
@@ -84,6 +87,7 @@ void validate(const DensifyParams& p) {
   require(p.fine_iterations >= 0, "fine_iterations must be >= 0");
   require(p.tolerance > 0 && p.tolerance < 1, "tolerance must be in (0, 1)");
   require(p.border_plane_rms >= 0, "border_plane_rms must be >= 0");
+  require(p.occlusion_fill >= 0, "occlusion_fill must be >= 0");
   require(p.plane_window == 0 ||
               (p.plane_window >= 3 && p.plane_window <= 31 && p.plane_window % 2 == 1),
           "plane_window must be 0 or odd in 3..31");
@@ -212,6 +216,12 @@ void Densifier::build_system(const DensifyInputs& in) {
     kernels::data_terms_row(in.sparse.row(y), hint_.row(y),
                             has_previous ? in.previous.row(y) : nullptr, w, terms,
                             system_.data.row(y), rhs_.row(y), &low, &high);
+  // The strips a near surface hides from the right camera take the farther side's value.
+  if (params_.occlusion_fill > 0) {
+    const auto lo = static_cast<float>(params_.lambda_d * params_.occlusion_fill);
+    for (int y = 0; y < h; ++y)
+      kernels::occlusion_fill_row(in.sparse.row(y), w, lo, system_.data.row(y), rhs_.row(y));
+  }
   system_.update_diagonal();
   data_low_ = high > 0.0f ? low : 0.0f;
   data_high_ = high;

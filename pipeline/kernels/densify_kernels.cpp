@@ -245,6 +245,66 @@ void HoleHintRow(const float* sparse, const float* wx, int width, float crossing
   }
 }
 
+// The known pixels as bit masks, 64 at a time, and the runs between them from the masks' changes:
+// a branch per run rather than per pixel (rows alternate between short runs of matches and
+// holes). Runs and weights as the scalar reference's.
+void KnownBits(const float* values, int count, std::uint64_t& bits) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));  // a power of two, at most 64
+  const auto zero = hn::Zero(d);
+  const auto inf = hn::Set(d, std::numeric_limits<float>::infinity());
+  HWY_ALIGN float pad[HWY_MAX_BYTES / sizeof(float)];
+  bits = 0;
+  for (int j = 0; j < count; j += n) {
+    hn::Vec<decltype(d)> v;
+    if (j + n <= count) {
+      v = hn::LoadU(d, values + j);
+    } else {
+      for (int i = 0; i < n; ++i) pad[i] = j + i < count ? values[j + i] : 0.0f;  // 0: unknown
+      v = hn::Load(d, pad);
+    }
+    std::uint8_t bytes[8] = {};  // StoreMaskBits writes ceil(n / 8) bytes, unused bits zero
+    hn::StoreMaskBits(d, hn::And(hn::Gt(v, zero), hn::Lt(v, inf)), bytes);
+    std::uint64_t lane_bits = 0;
+    std::memcpy(&lane_bits, bytes, sizeof(lane_bits));
+    bits |= lane_bits << j;
+  }
+}
+
+int OcclusionFillRow(const float* sparse, int width, float weight, float* data, float* b) {
+  int weighted = 0;
+  bool open = true;    // the pixel before holds no value; the row starts inside a border run
+  int run_start = -1;  // first hole of the open run; -1: the run touches the row start
+  for (int word = 0; word < width; word += 64) {
+    const int count = std::min(64, width - word);
+    std::uint64_t known = 0;
+    KnownBits(sparse + word, count, known);
+    const std::uint64_t valid = count == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << count) - 1;
+    // Bits of the pixels whose state differs from the pixel before them.
+    std::uint64_t changes = (known ^ ((known << 1) | (open ? 0u : 1u))) & valid;
+    while (changes != 0) {
+      const int i = static_cast<int>(hwy::Num0BitsBelowLS1Bit_Nonzero64(changes));
+      changes &= changes - 1;
+      const int x = word + i;
+      open = ((known >> i) & 1u) == 0;
+      if (open) {  // a run starts
+        run_start = x;
+        continue;
+      }
+      if (run_start >= 0 && pixel::occlusion_run(sparse[run_start - 1], sparse[x], x - run_start)) {
+        const float far = sparse[run_start - 1];
+        for (int p = run_start; p < x; ++p) {
+          data[p] += weight;
+          b[p] += weight * far;
+        }
+        weighted += x - run_start;
+      }
+      run_start = -1;
+    }
+  }
+  return weighted;  // a run still open at the row end is left alone
+}
+
 void DataTermsRow(const float* sparse, const float* hint, const float* previous, int width,
                   const DataTermRule& rule, float* data, float* b, float* low, float* high) {
   const hn::ScalableTag<float> d;
@@ -493,6 +553,7 @@ HWY_EXPORT(MatchPlaneWindowSums);
 HWY_EXPORT(MatchPlaneRow);
 HWY_EXPORT(EdgeWeightsRow);
 HWY_EXPORT(HoleHintRow);
+HWY_EXPORT(OcclusionFillRow);
 HWY_EXPORT(DataTermsRow);
 HWY_EXPORT(DiagonalRow);
 
@@ -536,6 +597,10 @@ void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* 
 
 void hole_hint_row(const float* sparse, const float* wx, int width, float crossing, float* hint) {
   HWY_DYNAMIC_DISPATCH(HoleHintRow)(sparse, wx, width, crossing, hint);
+}
+
+int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b) {
+  return HWY_DYNAMIC_DISPATCH(OcclusionFillRow)(sparse, width, weight, data, b);
 }
 
 void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,

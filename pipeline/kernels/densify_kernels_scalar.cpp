@@ -31,6 +31,26 @@ void hole_hint_row(const float* sparse, const float* wx, int width, float crossi
   }
 }
 
+int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b) {
+  int weighted = 0;
+  int x = 0;
+  while (x < width && !pixel::known_value(sparse[x])) ++x;  // a run at the row start
+  while (x < width) {
+    while (x < width && pixel::known_value(sparse[x])) ++x;
+    const int start = x;
+    while (x < width && !pixel::known_value(sparse[x])) ++x;
+    if (x == width) break;  // a run at the row end
+    const float far = sparse[start - 1];
+    if (!pixel::occlusion_run(far, sparse[x], x - start)) continue;
+    for (int i = start; i < x; ++i) {
+      data[i] += weight;
+      b[i] += weight * far;
+    }
+    weighted += x - start;
+  }
+  return weighted;
+}
+
 void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,
                     const DataTermRule& rule, float* data, float* b, float* low, float* high) {
   detail::data_terms_range(sparse, hint, previous, rule, 0, width, data, b, low, high);

@@ -490,6 +490,74 @@ TEST(DensifyKernels, HoleHintRowMatchesScalarAndTheRule) {
       }
 }
 
+// The occlusion rule by search from the pixel: the run's ends, then the rule written out.
+bool in_occlusion_run(const std::vector<float>& sparse, int x, float& far) {
+  const auto known = [&](int i) {
+    return sparse[i] > 0.0f && sparse[i] < std::numeric_limits<float>::infinity();
+  };
+  const int w = static_cast<int>(sparse.size());
+  if (known(x)) return false;
+  int l = x, r = x;
+  while (l >= 0 && !known(l)) --l;
+  while (r < w && !known(r)) ++r;
+  if (l < 0 || r == w) return false;
+  const float jump = sparse[r] - sparse[l];
+  const auto width = static_cast<float>(r - l - 1);
+  far = sparse[l];
+  return jump >= 2.0f && std::fabs(width - jump) <= std::max(2.0f, 0.25f * jump);
+}
+
+TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
+  std::mt19937 rng(23);
+  const float inf = std::numeric_limits<float>::infinity();
+  const float weight = 1.6f;
+  std::vector<int> widths = kWidths;
+  widths.push_back(1283);
+  int weighted_rows = 0;
+  for (const int w : widths)
+    for (int trial = 0; trial < 12; ++trial) {
+      // Alternating runs of matches (a few levels, so that jumps repeat) and holes of any width
+      // from 0 to 40, the holes in every encoding of "unknown".
+      std::vector<float> sparse;
+      const float levels[] = {8.0f, 12.5f, 20.0f, 31.0f, 45.25f};
+      while (static_cast<int>(sparse.size()) < w) {
+        const float level = levels[rng() % 5];
+        for (int i = 1 + static_cast<int>(rng() % 4); i > 0; --i) sparse.push_back(level);
+        for (int i = static_cast<int>(rng() % 41) * static_cast<int>(rng() % 2); i > 0; --i) {
+          const unsigned pick = rng() % 4;
+          sparse.push_back(pick == 0 ? inf : pick == 1 ? 0.0f : pick == 2 ? -3.0f : std::nanf(""));
+        }
+      }
+      sparse.resize(static_cast<std::size_t>(w));
+      if (trial % 3 == 0) sparse[0] = inf;  // a run at the row start
+      const std::vector<float> data0 = random_floats(rng, w, 0.0f, 1.0f);
+      const std::vector<float> b0 = random_floats(rng, w, 0.0f, 40.0f);
+      std::vector<float> want_data = data0, want_b = b0;
+      int want_count = 0;
+      for (int x = 0; x < w; ++x) {
+        float far = 0;
+        if (!in_occlusion_run(sparse, x, far)) continue;
+        want_data[x] += weight;
+        want_b[x] += weight * far;
+        ++want_count;
+      }
+      weighted_rows += want_count > 0;
+      std::vector<float> data = data0, b = b0;
+      ASSERT_EQ(scalar::occlusion_fill_row(sparse.data(), w, weight, data.data(), b.data()),
+                want_count);
+      ASSERT_EQ(data, want_data) << "width " << w;
+      ASSERT_EQ(b, want_b) << "width " << w;
+      for_each_target([&] {
+        std::vector<float> out_data = data0, out_b = b0;
+        ASSERT_EQ(occlusion_fill_row(sparse.data(), w, weight, out_data.data(), out_b.data()),
+                  want_count);
+        ASSERT_EQ(out_data, want_data) << "width " << w << " trial " << trial;
+        ASSERT_EQ(out_b, want_b) << "width " << w << " trial " << trial;
+      });
+    }
+  EXPECT_GT(weighted_rows, 20);  // the rows do hold occlusion runs
+}
+
 TEST(DensifyKernels, DiagonalRowMatchesScalar) {
   std::mt19937 rng(22);
   for (const int w : kWidths)

@@ -79,7 +79,8 @@ TwoSurfaces two_surfaces(int w, int h, int edge, float near, float far, Known kn
 // Eq. 20 assembled from its definition: E = λd Σ w_sparse (D - Ds)^2
 //   + λs Σ_p Σ_{q∈N4(p)} w_pq (D_p - D_q)^2 + λs2 Σ w_stable (D - Dpre)^2,
 // with dco's two additions: w_pq scaled by exp(-|I_p - I_q| / color_sigma), and holes pulled
-// with weight background_fill * λd towards the smaller of the nearest known values on their row.
+// with weight background_fill * λd towards the smaller of the nearest known values on their row,
+// and occlusion strips (occlusion_far) also with weight occlusion_fill * λd to their far side.
 float row_hint(const Image<float>& sparse, int x, int y) {
   float left = 0, right = 0;
   for (int i = x; i >= 0; --i)
@@ -95,6 +96,21 @@ float row_hint(const Image<float>& sparse, int x, int y) {
   if (left <= 0) return right;
   if (right <= 0) return left;
   return std::min(left, right);
+}
+
+// A hole in a run between known values on its row, the smaller (far) one on the left, whose
+// width is within max(2, jump / 4) of the jump between them (at least 2 px): the strip a near
+// surface hides from the right camera, pulled with weight occlusion_fill * λd to the far value.
+// Returns that value, or 0 for any other pixel.
+float occlusion_far(const Image<float>& sparse, int x, int y) {
+  const auto known = [&](int i) { return std::isfinite(sparse.at(i, y)) && sparse.at(i, y) > 0; };
+  int l = x, r = x;
+  while (l >= 0 && !known(l)) --l;
+  while (r < sparse.width() && !known(r)) ++r;
+  if (l < 0 || r == sparse.width()) return 0;
+  const double jump = double(sparse.at(r, y)) - sparse.at(l, y);
+  const double width = r - l - 1;
+  return jump >= 2 && std::abs(width - jump) <= std::max(2.0, jump / 4) ? sparse.at(l, y) : 0;
 }
 
 Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) {
@@ -115,6 +131,10 @@ Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) 
       } else if (const float hint = row_hint(pr.sparse, x, y); hint > 0) {
         diag += params.lambda_d * params.background_fill;
         b[idx(x, y)] += params.lambda_d * params.background_fill * hint;
+        if (const float far = occlusion_far(pr.sparse, x, y); far > 0) {
+          diag += params.lambda_d * params.occlusion_fill;
+          b[idx(x, y)] += params.lambda_d * params.occlusion_fill * far;
+        }
       }
       const float prev = pr.previous.at(x, y);
       if (prev > 0) {
@@ -223,6 +243,7 @@ TEST(Densifier, FillsEveryPixelAndKeepsAPlaneWhereDataIsExact) {
                             : kUnknown;
   DensifyParams params;
   params.background_fill = 0;  // the paper's model: holes follow the smoothness term alone
+  params.occlusion_fill = 0;
   params.tolerance = 1e-6;
   params.max_iterations = 500;
   Densifier d(params);
@@ -279,6 +300,37 @@ TEST(Densifier, HolesBesideAJumpLeanTowardsTheFartherSurface) {
   Densifier(params).compute(in, without);
   EXPECT_LT(with_pull.at(25, 5), without.at(25, 5) - 5.0f);
   EXPECT_NEAR(without.at(25, 5), 25.0f, 2.0f);
+}
+
+TEST(Densifier, OcclusionStripsStepAtTheNearSurfacesEdge) {
+  // Left of a near surface (30) the left camera sees a strip of the far one (10) that the right
+  // camera does not: 20 px wide for a jump of 20 px. The weak hole hint alone lets the smoothness
+  // ramp the strip up to the near value; as an occlusion strip it stays on the far surface.
+  const int w = 80, h = 10, strip = 30, edge = 50;
+  Image<float> sparse(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      sparse.at(x, y) = x < strip ? 10.0f : (x >= edge ? 30.0f : kUnknown);
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  Image<float> dense, ramp;
+  DensifyParams params;
+  ASSERT_GT(params.occlusion_fill, 0.0);
+  Densifier(params).compute(in, dense);
+  params.occlusion_fill = 0;
+  Densifier(params).compute(in, ramp);
+  // Without image guidance the step still softens over the last pixels before the edge.
+  for (int x = strip; x < edge - 3; ++x) EXPECT_NEAR(dense.at(x, h / 2), 10.0f, 0.5f) << "x " << x;
+  EXPECT_LT(dense.at(edge - 1, h / 2), 16.0f);
+  EXPECT_GT(ramp.at(strip + 10, h / 2), 12.0f);
+  EXPECT_GT(ramp.at(edge - 1, h / 2), 22.0f);
+
+  // A strip much narrower than the jump is no occlusion of this pair: it keeps the ramp.
+  for (int y = 0; y < h; ++y)
+    for (int x = strip; x < edge - 8; ++x) sparse.at(x, y) = 10.0f;
+  params.occlusion_fill = 2;
+  Densifier(params).compute(in, dense);
+  EXPECT_GT(dense.at(edge - 1, h / 2), 20.0f);
 }
 
 TEST(Densifier, ImageEdgesWeakenSmoothing) {
@@ -655,7 +707,10 @@ TEST(ConjugateGradients, AfterSweepsIsTheSweepsThenTheSolveBitForBit) {
     EXPECT_EQ(fused.iterations, plain.iterations);
     EXPECT_EQ(fused.initial_residual, plain.initial_residual);
     EXPECT_EQ(fused.final_residual, plain.final_residual);
-    EXPECT_LT(fused.final_residual, fused.initial_residual);
+    // PCG lowers the error's energy norm each iteration, not always the residual's 2-norm.
+    if (iterations > 1) {
+      EXPECT_LT(fused.final_residual, fused.initial_residual);
+    }
     ASSERT_TRUE(same_pixels(fused_x, x)) << iterations << " iterations";
   }
 }

@@ -142,6 +142,17 @@ void diagonal_row(const float* data, const float* wx, const float* wy, const flo
 // wx[width - 1] is not read.
 void hole_hint_row(const float* sparse, const float* wx, int width, float crossing, float* hint);
 
+// Where a near surface hides a far one from the right camera, the left image shows the far
+// surface in a strip just left of the near surface's edge, about as wide as the disparity jump
+// between the two; the stereo stage leaves it without matches. The weak hole hint lets the
+// smoothness term ramp such a strip towards the near side, so a virtual plane between the two
+// surfaces would cut the ramp anywhere in the strip rather than at the near surface's edge.
+// For one row: every hole run with a known value on either side, the smaller (farther) one on
+// its left, whose width fits the jump between them (pixel::occlusion_run) gets
+// data[x] += weight and b[x] += weight * far for each of its pixels x (far: the value left of
+// the run). Runs that touch the row's ends are left alone. Returns the pixels weighted.
+int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b);
+
 namespace scalar {
 // Gauss-Seidel update of the pixels of one colour of row y, columns start, start + 2, ...
 // (start 0 or 1): x[c] = (b[c] + Σ w x(neighbour)) * inv_diag[c]. The pixels of the other
@@ -149,6 +160,7 @@ namespace scalar {
 // the sweeps run grid_smooth_split_row, and the GPU passes the same per-pixel math.
 void grid_smooth_row(const GridRow& row, int start, const float* b, float* x);
 void hole_hint_row(const float* sparse, const float* wx, int width, float crossing, float* hint);
+int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b);
 void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,
                     const DataTermRule& rule, float* data, float* b, float* low, float* high);
 void diagonal_row(const float* data, const float* wx, const float* wy, const float* wy_above,

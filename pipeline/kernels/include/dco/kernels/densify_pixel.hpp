@@ -77,6 +77,19 @@ inline bool known_value(float v) {
   return v > 0.0f && v < std::numeric_limits<float>::infinity();
 }
 
+// Whether a hole run `width` pixels wide between the known values `far` (on its left) and
+// `near` (on its right) is what the near surface hides from the right camera
+// (occlusion_fill_row): a jump of at least 2 px, and a width within max(2 px, a quarter of the
+// jump) of it.
+inline bool occlusion_run(float far, float near, int width) {
+  constexpr float kMinJump = 2.0f;
+  constexpr float kWidthSlack = 2.0f;
+  constexpr float kWidthShare = 0.25f;
+  const float jump = near - far;
+  return jump >= kMinJump &&
+         std::fabs(static_cast<float>(width) - jump) <= std::fmax(kWidthSlack, kWidthShare * jump);
+}
+
 // The hint of a pixel from its left value (negative when the path to it crosses a weak edge;
 // -0 for "none, crossed") and its right value and flag (hole_hint_row): the farther of the two
 // unless exactly one path crosses a weak edge; the one that exists when the other does not.
