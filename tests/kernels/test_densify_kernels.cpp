@@ -538,7 +538,10 @@ TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
         float far = 0;
         if (!in_occlusion_run(sparse, x, far)) continue;
         want_data[x] += weight;
-        want_b[x] += weight * far;
+        // Rounded before the sum, as in the kernels (built without contraction); this file may
+        // fuse a * b + c otherwise (aarch64 does).
+        const volatile float pull = weight * far;
+        want_b[x] += pull;
         ++want_count;
       }
       weighted_rows += want_count > 0;
