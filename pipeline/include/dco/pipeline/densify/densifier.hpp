@@ -38,8 +38,8 @@ struct DensifyParams {
   // A hole inside an object then keeps the object's depth instead of the background's. 0 = off.
   double fill_edge_weight = 0.05;
   // Hole runs as wide as the disparity jump across them, the farther match on their left, are
-  // what the near surface hides from the right camera (occlusion_runs.hpp): their pixels are
-  // pulled towards that farther match with this weight (times lambda_d). 0 = off.
+  // what the near surface hides from the right camera (kernels::occlusion_fill_row): their pixels
+  // are pulled towards that farther match with this weight (times lambda_d). 0 = off.
   double occlusion_fill = 2;
   // Holes at the left border, where the right image holds no match, continue the surface next to
   // them: their hint is a plane fitted to the first kBorderFitColumns matched pixels of the rows
