@@ -54,8 +54,8 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
         "holes take the row neighbour reached without crossing an edge weaker than this "
         "(0 = always the farther one)");
   s.add("densify.occlusion_fill", &p.occlusion_fill, 0.0, 100.0,
-        "weight (times lambda_d) pulling hole runs as wide as the disparity jump across them, "
-        "the farther match on their left, towards that match (0 = off)");
+        "weight (times lambda_d) pulling the occlusion strip of a hole run about as wide as the "
+        "disparity jump across it, the farther match on its left, towards that match (0 = off)");
   s.add("densify.border_plane_rms", &p.border_plane_rms, 0.0, 10.0,
         "holes at the left border take a plane fitted to the matches next to them when it fits "
         "within this RMS, px (0 = the row's first match, as other holes)");

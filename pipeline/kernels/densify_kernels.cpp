@@ -291,13 +291,14 @@ int OcclusionFillRow(const float* sparse, int width, float weight, float* data, 
         run_start = x;
         continue;
       }
-      if (run_start >= 0 && pixel::occlusion_run(sparse[run_start - 1], sparse[x], x - run_start)) {
+      if (run_start >= 0) {
         const float far = sparse[run_start - 1];
-        for (int p = run_start; p < x; ++p) {
+        const int strip = pixel::occlusion_strip(far, sparse[x], x - run_start);
+        for (int p = run_start; p < run_start + strip; ++p) {
           data[p] += weight;
           b[p] += weight * far;
         }
-        weighted += x - run_start;
+        weighted += strip;
       }
       run_start = -1;
     }

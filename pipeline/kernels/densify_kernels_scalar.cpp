@@ -41,12 +41,12 @@ int occlusion_fill_row(const float* sparse, int width, float weight, float* data
     while (x < width && !pixel::known_value(sparse[x])) ++x;
     if (x == width) break;  // a run at the row end
     const float far = sparse[start - 1];
-    if (!pixel::occlusion_run(far, sparse[x], x - start)) continue;
-    for (int i = start; i < x; ++i) {
+    const int strip = pixel::occlusion_strip(far, sparse[x], x - start);
+    for (int i = start; i < start + strip; ++i) {
       data[i] += weight;
       b[i] += weight * far;
     }
-    weighted += x - start;
+    weighted += strip;
   }
   return weighted;
 }

@@ -490,8 +490,10 @@ TEST(DensifyKernels, HoleHintRowMatchesScalarAndTheRule) {
       }
 }
 
-// The occlusion rule by search from the pixel: the run's ends, then the rule written out.
-bool in_occlusion_run(const std::vector<float>& sparse, int x, float& far) {
+// The occlusion rule by search from the pixel: the run's ends, then the rule written out. The
+// pixel is in the strip when its run fits the jump (a width from jump - a to jump + 2 a,
+// a = max(2, jump / 4), jump >= 2) and it is one of the run's first `jump` (rounded) pixels.
+bool in_occlusion_strip(const std::vector<float>& sparse, int x, float& far) {
   const auto known = [&](int i) {
     return sparse[i] > 0.0f && sparse[i] < std::numeric_limits<float>::infinity();
   };
@@ -502,9 +504,11 @@ bool in_occlusion_run(const std::vector<float>& sparse, int x, float& far) {
   while (r < w && !known(r)) ++r;
   if (l < 0 || r == w) return false;
   const float jump = sparse[r] - sparse[l];
+  const float a = std::max(2.0f, 0.25f * jump);
   const auto width = static_cast<float>(r - l - 1);
   far = sparse[l];
-  return jump >= 2.0f && std::fabs(width - jump) <= std::max(2.0f, 0.25f * jump);
+  return jump >= 2.0f && width >= jump - a && width <= jump + 2.0f * a &&
+         x - l <= std::lround(jump);
 }
 
 TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
@@ -536,7 +540,7 @@ TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
       int want_count = 0;
       for (int x = 0; x < w; ++x) {
         float far = 0;
-        if (!in_occlusion_run(sparse, x, far)) continue;
+        if (!in_occlusion_strip(sparse, x, far)) continue;
         want_data[x] += weight;
         // Rounded before the sum, as in the kernels (built without contraction); this file may
         // fuse a * b + c otherwise (aarch64 does).

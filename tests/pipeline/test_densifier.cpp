@@ -99,9 +99,10 @@ float row_hint(const Image<float>& sparse, int x, int y) {
 }
 
 // A hole in a run between known values on its row, the smaller (far) one on the left, whose
-// width is within max(2, jump / 4) of the jump between them (at least 2 px): the strip a near
-// surface hides from the right camera, pulled with weight occlusion_fill * λd to the far value.
-// Returns that value, or 0 for any other pixel.
+// width is from jump - a to jump + 2 a, a = max(2, jump / 4), for a jump of at least 2 px, and
+// among the run's first `jump` (rounded) pixels: the strip a near surface hides from the right
+// camera, pulled with weight occlusion_fill * λd to the far value. Returns that value, or 0 for
+// any other pixel.
 float occlusion_far(const Image<float>& sparse, int x, int y) {
   const auto known = [&](int i) { return std::isfinite(sparse.at(i, y)) && sparse.at(i, y) > 0; };
   int l = x, r = x;
@@ -109,8 +110,11 @@ float occlusion_far(const Image<float>& sparse, int x, int y) {
   while (r < sparse.width() && !known(r)) ++r;
   if (l < 0 || r == sparse.width()) return 0;
   const double jump = double(sparse.at(r, y)) - sparse.at(l, y);
+  const double a = std::max(2.0, jump / 4);
   const double width = r - l - 1;
-  return jump >= 2 && std::abs(width - jump) <= std::max(2.0, jump / 4) ? sparse.at(l, y) : 0;
+  const bool strip =
+      jump >= 2 && width >= jump - a && width <= jump + 2 * a && x - l <= std::lround(jump);
+  return strip ? sparse.at(l, y) : 0;
 }
 
 Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) {
@@ -325,10 +329,19 @@ TEST(Densifier, OcclusionStripsStepAtTheNearSurfacesEdge) {
   EXPECT_GT(ramp.at(strip + 10, h / 2), 12.0f);
   EXPECT_GT(ramp.at(edge - 1, h / 2), 22.0f);
 
+  // A run 4 px wider than the jump: its first 20 px are the strip, the last 4 the near surface's
+  // unmatched rim, which keeps the weak hint and the pull of the near side.
+  for (int y = 0; y < h; ++y)
+    for (int x = strip - 4; x < strip; ++x) sparse.at(x, y) = kUnknown;
+  params.occlusion_fill = 2;
+  Densifier(params).compute(in, dense);
+  for (int x = strip - 4; x < edge - 8; ++x)
+    EXPECT_NEAR(dense.at(x, h / 2), 10.0f, 0.5f) << "x " << x;
+  EXPECT_GT(dense.at(edge - 1, h / 2), 20.0f);
+
   // A strip much narrower than the jump is no occlusion of this pair: it keeps the ramp.
   for (int y = 0; y < h; ++y)
-    for (int x = strip; x < edge - 8; ++x) sparse.at(x, y) = 10.0f;
-  params.occlusion_fill = 2;
+    for (int x = strip - 4; x < edge - 8; ++x) sparse.at(x, y) = 10.0f;
   Densifier(params).compute(in, dense);
   EXPECT_GT(dense.at(edge - 1, h / 2), 20.0f);
 }

@@ -37,9 +37,10 @@ struct DensifyParams {
   // (relative, after contours, Canny strength and image guidance) is below this; then that one.
   // A hole inside an object then keeps the object's depth instead of the background's. 0 = off.
   double fill_edge_weight = 0.05;
-  // Hole runs as wide as the disparity jump across them, the farther match on their left, are
-  // what the near surface hides from the right camera (kernels::occlusion_fill_row): their pixels
-  // are pulled towards that farther match with this weight (times lambda_d). 0 = off.
+  // A hole run about as wide as the disparity jump across it, the farther match on its left,
+  // holds the strip the near surface hides from the right camera (kernels::occlusion_fill_row):
+  // the strip's pixels are pulled towards that farther match with this weight (times lambda_d).
+  // 0 = off.
   double occlusion_fill = 2;
   // Holes at the left border, where the right image holds no match, continue the surface next to
   // them: their hint is a plane fitted to the first kBorderFitColumns matched pixels of the rows

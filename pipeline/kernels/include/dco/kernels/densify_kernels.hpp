@@ -143,14 +143,15 @@ void diagonal_row(const float* data, const float* wx, const float* wy, const flo
 void hole_hint_row(const float* sparse, const float* wx, int width, float crossing, float* hint);
 
 // Where a near surface hides a far one from the right camera, the left image shows the far
-// surface in a strip just left of the near surface's edge, about as wide as the disparity jump
-// between the two; the stereo stage leaves it without matches. The weak hole hint lets the
-// smoothness term ramp such a strip towards the near side, so a virtual plane between the two
-// surfaces would cut the ramp anywhere in the strip rather than at the near surface's edge.
+// surface in a strip just left of the near surface's edge, as wide as the disparity jump between
+// the two; the stereo stage leaves it without matches. The weak hole hint lets the smoothness
+// term ramp such a strip towards the near side, so a virtual plane between the two surfaces
+// would cut the ramp anywhere in the strip rather than at the near surface's edge.
 // For one row: every hole run with a known value on either side, the smaller (farther) one on
-// its left, whose width fits the jump between them (pixel::occlusion_run) gets
-// data[x] += weight and b[x] += weight * far for each of its pixels x (far: the value left of
-// the run). Runs that touch the row's ends are left alone. Returns the pixels weighted.
+// its left, whose width fits the jump between them, gets data[x] += weight and
+// b[x] += weight * far for each pixel x of its strip (pixel::occlusion_strip: the run's first
+// pixels, as many as the jump; far: the value left of the run). Runs that touch the row's ends
+// are left alone. Returns the pixels weighted.
 int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b);
 
 namespace scalar {

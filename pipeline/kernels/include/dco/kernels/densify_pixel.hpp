@@ -4,6 +4,7 @@
 // kernels (the references the SIMD kernels match) and the GPU passes: the same float operations
 // in the same order, no fused multiply-add, so all of them give the same bits.
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -77,17 +78,19 @@ inline bool known_value(float v) {
   return v > 0.0f && v < std::numeric_limits<float>::infinity();
 }
 
-// Whether a hole run `width` pixels wide between the known values `far` (on its left) and
-// `near` (on its right) is what the near surface hides from the right camera
-// (occlusion_fill_row): a jump of at least 2 px, and a width within max(2 px, a quarter of the
-// jump) of it.
-inline bool occlusion_run(float far, float near, int width) {
+// The occlusion strip of a hole run `width` pixels wide between the known values `far` (on its
+// left) and `near` (on its right) (occlusion_fill_row): with a jump of at least 2 px and a width
+// from jump - a to jump + 2 a, a = max(2 px, jump / 4), its first min(width, jump rounded)
+// pixels; else none (0). Pixels past the strip are the near surface's unmatched rim.
+inline int occlusion_strip(float far, float near, int width) {
   constexpr float kMinJump = 2.0f;
   constexpr float kWidthSlack = 2.0f;
   constexpr float kWidthShare = 0.25f;
   const float jump = near - far;
-  return jump >= kMinJump &&
-         std::fabs(static_cast<float>(width) - jump) <= std::fmax(kWidthSlack, kWidthShare * jump);
+  const float allowance = std::fmax(kWidthSlack, kWidthShare * jump);
+  const auto w = static_cast<float>(width);
+  if (!(jump >= kMinJump) || w < jump - allowance || w > jump + 2.0f * allowance) return 0;
+  return std::min(width, static_cast<int>(std::lround(jump)));
 }
 
 // The hint of a pixel from its left value (negative when the path to it crosses a weak edge;
