@@ -275,11 +275,12 @@ int OcclusionFillRow(const float* sparse, int width, float weight, float* data, 
   int weighted = 0;
   bool open = true;    // the pixel before holds no value; the row starts inside a border run
   int run_start = -1;  // first hole of the open run; -1: the run touches the row start
+  int prev_start = -1, prev_end = -1;  // the previous run: known left neighbour, no strip
   for (int word = 0; word < width; word += 64) {
-    const int count = std::min(64, width - word);
+    const int lanes = std::min(64, width - word);
     std::uint64_t known = 0;
-    KnownBits(sparse + word, count, known);
-    const std::uint64_t valid = count == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << count) - 1;
+    KnownBits(sparse + word, lanes, known);
+    const std::uint64_t valid = lanes == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << lanes) - 1;
     // Bits of the pixels whose state differs from the pixel before them.
     std::uint64_t changes = (known ^ ((known << 1) | (open ? 0u : 1u))) & valid;
     while (changes != 0) {
@@ -292,14 +293,19 @@ int OcclusionFillRow(const float* sparse, int width, float weight, float* data, 
         continue;
       }
       if (run_start >= 0) {
-        const float far = sparse[run_start - 1];
-        const int strip = pixel::occlusion_strip(far, sparse[x], x - run_start);
-        for (int p = run_start; p < run_start + strip; ++p) {
+        int from = 0, strip = 0;
+        pixel::occlusion_span(sparse, prev_start, prev_end, run_start, x, from, strip);
+        const float far = strip > 0 ? sparse[from - 1] : 0.0f;
+        for (int p = from; p < from + strip; ++p) {
           data[p] += weight;
           b[p] += weight * far;
         }
         weighted += strip;
+        prev_start = strip > 0 ? -1 : run_start;  // a strip is not merged into the next run
+      } else {
+        prev_start = -1;
       }
+      prev_end = x;
       run_start = -1;
     }
   }

@@ -33,6 +33,7 @@ void hole_hint_row(const float* sparse, const float* wx, int width, float crossi
 
 int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b) {
   int weighted = 0;
+  int prev_start = -1, prev_end = -1;  // the previous run: known left neighbour, no strip
   int x = 0;
   while (x < width && !pixel::known_value(sparse[x])) ++x;  // a run at the row start
   while (x < width) {
@@ -40,13 +41,16 @@ int occlusion_fill_row(const float* sparse, int width, float weight, float* data
     const int start = x;
     while (x < width && !pixel::known_value(sparse[x])) ++x;
     if (x == width) break;  // a run at the row end
-    const float far = sparse[start - 1];
-    const int strip = pixel::occlusion_strip(far, sparse[x], x - start);
-    for (int i = start; i < start + strip; ++i) {
+    int from = 0, count = 0;
+    pixel::occlusion_span(sparse, prev_start, prev_end, start, x, from, count);
+    const float far = count > 0 ? sparse[from - 1] : 0.0f;
+    for (int i = from; i < from + count; ++i) {
       data[i] += weight;
       b[i] += weight * far;
     }
-    weighted += strip;
+    weighted += count;
+    prev_start = count > 0 ? -1 : start;  // a strip is not merged into the next run
+    prev_end = x;
   }
   return weighted;
 }

@@ -1,5 +1,6 @@
 #include "dco/kernels/densify_kernels.hpp"
 #include "for_each_target.hpp"
+#include "occlusion_reference.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -490,34 +492,13 @@ TEST(DensifyKernels, HoleHintRowMatchesScalarAndTheRule) {
       }
 }
 
-// The occlusion rule by search from the pixel: the run's ends, then the rule written out. The
-// pixel is in the strip when its run fits the jump (a width from jump - a to jump + 2 a,
-// a = max(2, jump / 4), jump >= 2) and it is one of the run's first `jump` (rounded) pixels.
-bool in_occlusion_strip(const std::vector<float>& sparse, int x, float& far) {
-  const auto known = [&](int i) {
-    return sparse[i] > 0.0f && sparse[i] < std::numeric_limits<float>::infinity();
-  };
-  const int w = static_cast<int>(sparse.size());
-  if (known(x)) return false;
-  int l = x, r = x;
-  while (l >= 0 && !known(l)) --l;
-  while (r < w && !known(r)) ++r;
-  if (l < 0 || r == w) return false;
-  const float jump = sparse[r] - sparse[l];
-  const float a = std::max(2.0f, 0.25f * jump);
-  const auto width = static_cast<float>(r - l - 1);
-  far = sparse[l];
-  return jump >= 2.0f && width >= jump - a && width <= jump + 2.0f * a &&
-         x - l <= std::lround(jump);
-}
-
 TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
   std::mt19937 rng(23);
   const float inf = std::numeric_limits<float>::infinity();
   const float weight = 1.6f;
   std::vector<int> widths = kWidths;
   widths.push_back(1283);
-  int weighted_rows = 0;
+  int weighted_rows = 0, merged_runs = 0;
   for (const int w : widths)
     for (int trial = 0; trial < 12; ++trial) {
       // Alternating runs of matches (a few levels, so that jumps repeat) and holes of any width
@@ -538,9 +519,10 @@ TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
       const std::vector<float> b0 = random_floats(rng, w, 0.0f, 40.0f);
       std::vector<float> want_data = data0, want_b = b0;
       int want_count = 0;
+      const std::vector<float> targets = occlusion_targets(sparse, &merged_runs);
       for (int x = 0; x < w; ++x) {
-        float far = 0;
-        if (!in_occlusion_strip(sparse, x, far)) continue;
+        const float far = targets[x];
+        if (far == 0.0f) continue;
         want_data[x] += weight;
         // Rounded before the sum, as in the kernels (built without contraction); this file may
         // fuse a * b + c otherwise (aarch64 does).
@@ -563,6 +545,7 @@ TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
       });
     }
   EXPECT_GT(weighted_rows, 20);  // the rows do hold occlusion runs
+  EXPECT_GT(merged_runs, 5);     // ... and runs split by a few matches
 }
 
 TEST(DensifyKernels, DiagonalRowMatchesScalar) {

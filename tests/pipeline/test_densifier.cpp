@@ -18,6 +18,7 @@
 #include "dco/pipeline/densify/conjugate_gradients.hpp"
 #include "dco/pipeline/densify/densifier.hpp"
 #include "dco/pipeline/densify/multigrid.hpp"
+#include "kernels/occlusion_reference.hpp"
 
 namespace dco::densify {
 namespace {
@@ -80,7 +81,8 @@ TwoSurfaces two_surfaces(int w, int h, int edge, float near, float far, Known kn
 //   + λs Σ_p Σ_{q∈N4(p)} w_pq (D_p - D_q)^2 + λs2 Σ w_stable (D - Dpre)^2,
 // with dco's two additions: w_pq scaled by exp(-|I_p - I_q| / color_sigma), and holes pulled
 // with weight background_fill * λd towards the smaller of the nearest known values on their row,
-// and occlusion strips (occlusion_far) also with weight occlusion_fill * λd to their far side.
+// and occlusion strips (occlusion_far, the few matches inside one included) also with weight
+// occlusion_fill * λd to their far side.
 float row_hint(const Image<float>& sparse, int x, int y) {
   float left = 0, right = 0;
   for (int i = x; i >= 0; --i)
@@ -98,23 +100,12 @@ float row_hint(const Image<float>& sparse, int x, int y) {
   return std::min(left, right);
 }
 
-// A hole in a run between known values on its row, the smaller (far) one on the left, whose
-// width is from jump - a to jump + 2 a, a = max(2, jump / 4), for a jump of at least 2 px, and
-// among the run's first `jump` (rounded) pixels: the strip a near surface hides from the right
-// camera, pulled with weight occlusion_fill * λd to the far value. Returns that value, or 0 for
-// any other pixel.
+// The occlusion strips' pull of one pixel (kernels::occlusion_fill_row, its rule restated in
+// kernels/occlusion_reference.hpp): the far value it is pulled to with weight occlusion_fill * λd,
+// or 0.
 float occlusion_far(const Image<float>& sparse, int x, int y) {
-  const auto known = [&](int i) { return std::isfinite(sparse.at(i, y)) && sparse.at(i, y) > 0; };
-  int l = x, r = x;
-  while (l >= 0 && !known(l)) --l;
-  while (r < sparse.width() && !known(r)) ++r;
-  if (l < 0 || r == sparse.width()) return 0;
-  const double jump = double(sparse.at(r, y)) - sparse.at(l, y);
-  const double a = std::max(2.0, jump / 4);
-  const double width = r - l - 1;
-  const bool strip =
-      jump >= 2 && width >= jump - a && width <= jump + 2 * a && x - l <= std::lround(jump);
-  return strip ? sparse.at(l, y) : 0;
+  const std::vector<float> row(sparse.row(y), sparse.row(y) + sparse.width());
+  return kernels::occlusion_targets(row)[static_cast<std::size_t>(x)];
 }
 
 Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) {
@@ -135,10 +126,10 @@ Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) 
       } else if (const float hint = row_hint(pr.sparse, x, y); hint > 0) {
         diag += params.lambda_d * params.background_fill;
         b[idx(x, y)] += params.lambda_d * params.background_fill * hint;
-        if (const float far = occlusion_far(pr.sparse, x, y); far > 0) {
-          diag += params.lambda_d * params.occlusion_fill;
-          b[idx(x, y)] += params.lambda_d * params.occlusion_fill * far;
-        }
+      }
+      if (const float far = occlusion_far(pr.sparse, x, y); far > 0) {
+        diag += params.lambda_d * params.occlusion_fill;
+        b[idx(x, y)] += params.lambda_d * params.occlusion_fill * far;
       }
       const float prev = pr.previous.at(x, y);
       if (prev > 0) {

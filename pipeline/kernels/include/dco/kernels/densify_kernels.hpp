@@ -150,7 +150,10 @@ void hole_hint_row(const float* sparse, const float* wx, int width, float crossi
 // For one row: every hole run with a known value on either side, the smaller (farther) one on
 // its left, whose width fits the jump between them, gets data[x] += weight and
 // b[x] += weight * far for each pixel x of its strip (pixel::occlusion_strip: the run's first
-// pixels, as many as the jump; far: the value left of the run). Runs that touch the row's ends
+// pixels, as many as the jump; far: the value left of the run). A run that holds no strip alone
+// is tried together with the previous run, when that holds none and at most 4 matches lie
+// between them
+// (pixel::occlusion_span); those matches are then pulled too. Runs that touch the row's ends
 // are left alone. Returns the pixels weighted.
 int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b);
 

@@ -93,6 +93,23 @@ inline int occlusion_strip(float far, float near, int width) {
   return std::min(width, static_cast<int>(std::lround(jump)));
 }
 
+// The occlusion strip (occlusion_fill_row) of the hole run [start, end) of a row, the previous
+// run of the row being [prev_start, prev_end) (prev_start <= 0: none with a known left
+// neighbour, or it holds a strip itself): `count` pixels from `from`, pulled to
+// sparse[from - 1]. When the run alone holds
+// none and at most kMaxSpeck matches lie between it and the previous run, the span from the
+// previous run's start is tried: a match inside a strip cannot be right, since the right camera
+// does not see the strip, and a stray one would otherwise split the strip into runs too narrow.
+inline void occlusion_span(const float* sparse, int prev_start, int prev_end, int start, int end,
+                           int& from, int& count) {
+  constexpr int kMaxSpeck = 4;
+  from = start;
+  count = occlusion_strip(sparse[start - 1], sparse[end], end - start);
+  if (count > 0 || prev_start <= 0 || start - prev_end > kMaxSpeck) return;
+  from = prev_start;
+  count = occlusion_strip(sparse[prev_start - 1], sparse[end], end - prev_start);
+}
+
 // The hint of a pixel from its left value (negative when the path to it crosses a weak edge;
 // -0 for "none, crossed") and its right value and flag (hole_hint_row): the farther of the two
 // unless exactly one path crosses a weak edge; the one that exists when the other does not.

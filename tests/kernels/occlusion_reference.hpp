@@ -1,0 +1,56 @@
+#pragma once
+
+// A reference of kernels::occlusion_fill_row written from its rule, for the kernel tests and the
+// densifier's direct-solve check.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+#include <vector>
+
+namespace dco::kernels {
+
+// The occlusion rule from the list of the row's hole runs: a run fits when the jump between
+// its neighbours (far on the left) is at least 2 px and its width is from jump - a to
+// jump + 2 a, a = max(2, jump / 4); its strip is its first `jump` (rounded) pixels. A run that
+// does not fit alone is tried from the previous run's start when that run has no strip and at
+// most 4 matches separate them. Returns, per pixel, the far value it is pulled to (0: none); counts
+// the merged runs.
+inline std::vector<float> occlusion_targets(const std::vector<float>& sparse,
+                                            int* merged = nullptr) {
+  const auto known = [&](int i) {
+    return sparse[i] > 0.0f && sparse[i] < std::numeric_limits<float>::infinity();
+  };
+  const int w = static_cast<int>(sparse.size());
+  std::vector<std::pair<int, int>> runs;  // [start, end), both neighbours known
+  for (int x = 1; x < w; ++x) {
+    if (known(x) || !known(x - 1)) continue;
+    int end = x;
+    while (end < w && !known(end)) ++end;
+    if (end < w) runs.emplace_back(x, end);
+  }
+  const auto strip = [&](int start, int end) {
+    const float jump = sparse[end] - sparse[start - 1];
+    const float a = std::max(2.0f, 0.25f * jump);
+    const auto width = static_cast<float>(end - start);
+    if (!(jump >= 2.0f) || width < jump - a || width > jump + 2.0f * a) return 0;
+    return std::min(end - start, static_cast<int>(std::lround(jump)));
+  };
+  std::vector<float> target(sparse.size(), 0.0f);
+  std::vector<int> counts(runs.size(), 0);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    auto [start, end] = runs[i];
+    int count = strip(start, end);
+    if (count == 0 && i > 0 && counts[i - 1] == 0 && start - runs[i - 1].second <= 4) {
+      start = runs[i - 1].first;
+      count = strip(start, end);
+      if (merged != nullptr && count > 0) ++*merged;
+    }
+    counts[i] = count;
+    for (int x = start; x < start + count; ++x) target[x] = sparse[start - 1];
+  }
+  return target;
+}
+
+}  // namespace dco::kernels
