@@ -274,7 +274,7 @@ void KnownBits(const float* values, int count, std::uint64_t& bits) {
 int OcclusionFillRow(const float* sparse, int width, float weight, float* data, float* b) {
   int weighted = 0;
   bool open = true;    // the pixel before holds no value; the row starts inside a border run
-  int run_start = -1;  // first hole of the open run; -1: the run touches the row start
+  int run_start = -1;  // first hole of the open run; -1: the run touching the row start
   int prev_start = -1, prev_end = -1;  // the previous run: known left neighbour, no strip
   for (int word = 0; word < width; word += 64) {
     const int lanes = std::min(64, width - word);
@@ -292,21 +292,9 @@ int OcclusionFillRow(const float* sparse, int width, float weight, float* data, 
         run_start = x;
         continue;
       }
-      if (run_start >= 0) {
-        int from = 0, strip = 0;
-        pixel::occlusion_span(sparse, prev_start, prev_end, run_start, x, from, strip);
-        const float far = strip > 0 ? sparse[from - 1] : 0.0f;
-        for (int p = from; p < from + strip; ++p) {
-          data[p] += weight;
-          b[p] += weight * far;
-        }
-        weighted += strip;
-        prev_start = strip > 0 ? -1 : run_start;  // a strip is not merged into the next run
-      } else {
-        prev_start = -1;
-      }
-      prev_end = x;
-      run_start = -1;
+      if (run_start >= 0)
+        weighted +=
+            pixel::fill_occlusion_run(sparse, run_start, x, weight, data, b, prev_start, prev_end);
     }
   }
   return weighted;  // a run still open at the row end is left alone

@@ -41,16 +41,7 @@ int occlusion_fill_row(const float* sparse, int width, float weight, float* data
     const int start = x;
     while (x < width && !pixel::known_value(sparse[x])) ++x;
     if (x == width) break;  // a run at the row end
-    int from = 0, count = 0;
-    pixel::occlusion_span(sparse, prev_start, prev_end, start, x, from, count);
-    const float far = count > 0 ? sparse[from - 1] : 0.0f;
-    for (int i = from; i < from + count; ++i) {
-      data[i] += weight;
-      b[i] += weight * far;
-    }
-    weighted += count;
-    prev_start = count > 0 ? -1 : start;  // a strip is not merged into the next run
-    prev_end = x;
+    weighted += pixel::fill_occlusion_run(sparse, start, x, weight, data, b, prev_start, prev_end);
   }
   return weighted;
 }

@@ -153,7 +153,7 @@ void hole_hint_row(const float* sparse, const float* wx, int width, float crossi
 // pixels, as many as the jump; far: the value left of the run). A run that holds no strip alone
 // is tried together with the previous run, when that holds none and at most 4 matches lie
 // between them
-// (pixel::occlusion_span); those matches are then pulled too. Runs that touch the row's ends
+// (pixel::fill_occlusion_run); those matches are then pulled too. Runs that touch the row's ends
 // are left alone. Returns the pixels weighted.
 int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b);
 

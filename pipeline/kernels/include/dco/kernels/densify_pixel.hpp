@@ -93,21 +93,32 @@ inline int occlusion_strip(float far, float near, int width) {
   return std::min(width, static_cast<int>(std::lround(jump)));
 }
 
-// The occlusion strip (occlusion_fill_row) of the hole run [start, end) of a row, the previous
-// run of the row being [prev_start, prev_end) (prev_start <= 0: none with a known left
-// neighbour, or it holds a strip itself): `count` pixels from `from`, pulled to
-// sparse[from - 1]. When the run alone holds
-// none and at most kMaxSpeck matches lie between it and the previous run, the span from the
-// previous run's start is tried: a match inside a strip cannot be right, since the right camera
-// does not see the strip, and a stray one would otherwise split the strip into runs too narrow.
-inline void occlusion_span(const float* sparse, int prev_start, int prev_end, int start, int end,
-                           int& from, int& count) {
+// Pulls the occlusion strip of the hole run [start, end) of a row to the value left of it
+// (data[x] += weight, b[x] += weight * far; occlusion_fill_row) and returns its pixels. The
+// previous run of the row, [prev_start, prev_end), is one with a known left neighbour that held
+// no strip (prev_start <= 0: none); both become this run's for the next call (prev_start -1 when
+// it held a strip, which is not merged again). When the run alone holds no strip and at most
+// kMaxSpeck matches lie between it and the previous run, the span from the previous run's start
+// is tried: a match inside a strip cannot be right, since the right camera does not see the
+// strip, and a stray one would otherwise split the strip into runs too narrow. Shared by the
+// scalar and SIMD row walks, so both weight the same pixels in the same order.
+inline int fill_occlusion_run(const float* sparse, int start, int end, float weight, float* data,
+                              float* b, int& prev_start, int& prev_end) {
   constexpr int kMaxSpeck = 4;
-  from = start;
-  count = occlusion_strip(sparse[start - 1], sparse[end], end - start);
-  if (count > 0 || prev_start <= 0 || start - prev_end > kMaxSpeck) return;
-  from = prev_start;
-  count = occlusion_strip(sparse[prev_start - 1], sparse[end], end - prev_start);
+  int from = start;
+  int count = occlusion_strip(sparse[start - 1], sparse[end], end - start);
+  if (count == 0 && prev_start > 0 && start - prev_end <= kMaxSpeck) {
+    from = prev_start;
+    count = occlusion_strip(sparse[prev_start - 1], sparse[end], end - prev_start);
+  }
+  const float far = sparse[from - 1];
+  for (int x = from; x < from + count; ++x) {
+    data[x] += weight;
+    b[x] += weight * far;
+  }
+  prev_start = count > 0 ? -1 : start;
+  prev_end = end;
+  return count;
 }
 
 // The hint of a pixel from its left value (negative when the path to it crosses a weak edge;
