@@ -213,13 +213,15 @@ void Densifier::build_system(const DensifyInputs& in) {
   if (params_.border_plane_rms > 0) border_plane_hints(in.sparse, low, high);
   const kernels::DataTermRule terms{kRegulariser, ld, lh > 0.0f ? lh : 0.0f, ls2};
   // The strips a near surface hides from the right camera take the farther side's value.
-  const auto lo = static_cast<float>(params_.lambda_d * params_.occlusion_fill);
+  const kernels::OcclusionRule occlusion{
+      static_cast<float>(params_.lambda_d * params_.occlusion_fill), terms.hint_weight};
   for (int y = 0; y < h; ++y) {
     kernels::data_terms_row(in.sparse.row(y), hint_.row(y),
                             has_previous ? in.previous.row(y) : nullptr, w, terms,
                             system_.data.row(y), rhs_.row(y), &low, &high);
-    if (lo > 0.0f)
-      kernels::occlusion_fill_row(in.sparse.row(y), w, lo, system_.data.row(y), rhs_.row(y));
+    if (occlusion.weight > 0.0f)
+      kernels::occlusion_fill_row(in.sparse.row(y), hint_.row(y), w, occlusion, system_.data.row(y),
+                                  rhs_.row(y));
   }
   system_.update_diagonal();
   data_low_ = high > 0.0f ? low : 0.0f;

@@ -271,7 +271,8 @@ void KnownBits(const float* values, int count, std::uint64_t& bits) {
   }
 }
 
-int OcclusionFillRow(const float* sparse, int width, float weight, float* data, float* b) {
+int OcclusionFillRow(const float* sparse, const float* hint, int width, const OcclusionRule& rule,
+                     float* data, float* b) {
   int weighted = 0;
   bool open = true;    // the pixel before holds no value; the row starts inside a border run
   int run_start = -1;  // first hole of the open run; -1: the run touching the row start
@@ -293,8 +294,8 @@ int OcclusionFillRow(const float* sparse, int width, float weight, float* data, 
         continue;
       }
       if (run_start >= 0)
-        weighted +=
-            pixel::fill_occlusion_run(sparse, run_start, x, weight, data, b, prev_start, prev_end);
+        weighted += pixel::fill_occlusion_run(sparse, hint, run_start, x, rule, data, b, prev_start,
+                                              prev_end);
     }
   }
   return weighted;  // a run still open at the row end is left alone
@@ -594,8 +595,9 @@ void hole_hint_row(const float* sparse, const float* wx, int width, float crossi
   HWY_DYNAMIC_DISPATCH(HoleHintRow)(sparse, wx, width, crossing, hint);
 }
 
-int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b) {
-  return HWY_DYNAMIC_DISPATCH(OcclusionFillRow)(sparse, width, weight, data, b);
+int occlusion_fill_row(const float* sparse, const float* hint, int width, const OcclusionRule& rule,
+                       float* data, float* b) {
+  return HWY_DYNAMIC_DISPATCH(OcclusionFillRow)(sparse, hint, width, rule, data, b);
 }
 
 void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,

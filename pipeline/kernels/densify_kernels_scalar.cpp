@@ -31,7 +31,8 @@ void hole_hint_row(const float* sparse, const float* wx, int width, float crossi
   }
 }
 
-int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b) {
+int occlusion_fill_row(const float* sparse, const float* hint, int width, const OcclusionRule& rule,
+                       float* data, float* b) {
   int weighted = 0;
   int prev_start = -1, prev_end = -1;  // the previous run: known left neighbour, no strip
   int x = 0;
@@ -41,7 +42,8 @@ int occlusion_fill_row(const float* sparse, int width, float weight, float* data
     const int start = x;
     while (x < width && !pixel::known_value(sparse[x])) ++x;
     if (x == width) break;  // a run at the row end
-    weighted += pixel::fill_occlusion_run(sparse, start, x, weight, data, b, prev_start, prev_end);
+    weighted +=
+        pixel::fill_occlusion_run(sparse, hint, start, x, rule, data, b, prev_start, prev_end);
   }
   return weighted;
 }

@@ -13,10 +13,12 @@ namespace dco::kernels {
 
 // The occlusion rule from the list of the row's hole runs: a run fits when the jump between
 // its neighbours (far on the left) is at least 2 px and its width is from jump - a to
-// jump + 2 a, a = max(2, jump / 4); its strip is its first `jump` (rounded) pixels. A run that
+// jump + 4 a, a = max(2, jump / 4); its strip is its first `jump` (rounded) pixels. A run that
 // does not fit alone is tried from the previous run's start when that run has no strip and at
-// most 4 matches separate them. Returns, per pixel, the far value it is pulled to (0: none); counts
-// the merged runs.
+// most 4 matches separate them. Returns, per pixel, the far value it is pulled to, kRimWithoutHint
+// for a hole of the rim that gives back its hole hint (a run's pixels from 2 past its strip on),
+// else 0; counts the merged runs.
+inline constexpr float kRimWithoutHint = -1.0f;
 inline std::vector<float> occlusion_targets(const std::vector<float>& sparse,
                                             int* merged = nullptr) {
   const auto known = [&](int i) {
@@ -34,7 +36,7 @@ inline std::vector<float> occlusion_targets(const std::vector<float>& sparse,
     const float jump = sparse[end] - sparse[start - 1];
     const float a = std::max(2.0f, 0.25f * jump);
     const auto width = static_cast<float>(end - start);
-    if (!(jump >= 2.0f) || width < jump - a || width > jump + 2.0f * a) return 0;
+    if (!(jump >= 2.0f) || width < jump - a || width > jump + 4.0f * a) return 0;
     return std::min(end - start, static_cast<int>(std::lround(jump)));
   };
   std::vector<float> target(sparse.size(), 0.0f);
@@ -49,6 +51,9 @@ inline std::vector<float> occlusion_targets(const std::vector<float>& sparse,
     }
     counts[i] = count;
     for (int x = start; x < start + count; ++x) target[x] = sparse[start - 1];
+    if (count > 0)
+      for (int x = start + count + 2; x < end; ++x)
+        if (!known(x)) target[x] = kRimWithoutHint;
   }
   return target;
 }

@@ -495,10 +495,10 @@ TEST(DensifyKernels, HoleHintRowMatchesScalarAndTheRule) {
 TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
   std::mt19937 rng(23);
   const float inf = std::numeric_limits<float>::infinity();
-  const float weight = 1.6f;
+  const OcclusionRule rule{1.6f, 0.04f};
   std::vector<int> widths = kWidths;
   widths.push_back(1283);
-  int weighted_rows = 0, merged_runs = 0;
+  int weighted_rows = 0, merged_runs = 0, rim_pixels = 0;
   for (const int w : widths)
     for (int trial = 0; trial < 12; ++trial) {
       // Alternating runs of matches (a few levels, so that jumps repeat) and holes of any width
@@ -517,35 +517,51 @@ TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
       if (trial % 3 == 0) sparse[0] = inf;  // a run at the row start
       const std::vector<float> data0 = random_floats(rng, w, 0.0f, 1.0f);
       const std::vector<float> b0 = random_floats(rng, w, 0.0f, 40.0f);
+      // Hints as hole_hint_row gives them, a quarter of them none (0).
+      std::vector<float> hint = random_floats(rng, w, 1.0f, 50.0f);
+      for (float& v : hint)
+        if (rng() % 4 == 0) v = 0.0f;
       std::vector<float> want_data = data0, want_b = b0;
       int want_count = 0;
       const std::vector<float> targets = occlusion_targets(sparse, &merged_runs);
       for (int x = 0; x < w; ++x) {
         const float far = targets[x];
+        if (far == kRimWithoutHint) {
+          if (hint[x] > 0.0f) {
+            want_data[x] -= rule.hint_weight;
+            const volatile float hint_pull = rule.hint_weight * hint[x];
+            want_b[x] -= hint_pull;
+            ++rim_pixels;
+          }
+          continue;
+        }
         if (far == 0.0f) continue;
-        want_data[x] += weight;
+        want_data[x] += rule.weight;
         // Rounded before the sum, as in the kernels (built without contraction); this file may
         // fuse a * b + c otherwise (aarch64 does).
-        const volatile float pull = weight * far;
+        const volatile float pull = rule.weight * far;
         want_b[x] += pull;
         ++want_count;
       }
       weighted_rows += want_count > 0;
       std::vector<float> data = data0, b = b0;
-      ASSERT_EQ(scalar::occlusion_fill_row(sparse.data(), w, weight, data.data(), b.data()),
-                want_count);
+      ASSERT_EQ(
+          scalar::occlusion_fill_row(sparse.data(), hint.data(), w, rule, data.data(), b.data()),
+          want_count);
       ASSERT_EQ(data, want_data) << "width " << w;
       ASSERT_EQ(b, want_b) << "width " << w;
       for_each_target([&] {
         std::vector<float> out_data = data0, out_b = b0;
-        ASSERT_EQ(occlusion_fill_row(sparse.data(), w, weight, out_data.data(), out_b.data()),
-                  want_count);
+        ASSERT_EQ(
+            occlusion_fill_row(sparse.data(), hint.data(), w, rule, out_data.data(), out_b.data()),
+            want_count);
         ASSERT_EQ(out_data, want_data) << "width " << w << " trial " << trial;
         ASSERT_EQ(out_b, want_b) << "width " << w << " trial " << trial;
       });
     }
   EXPECT_GT(weighted_rows, 20);  // the rows do hold occlusion runs
   EXPECT_GT(merged_runs, 5);     // ... and runs split by a few matches
+  EXPECT_GT(rim_pixels, 20);     // ... and rims past their strips
 }
 
 TEST(DensifyKernels, DiagonalRowMatchesScalar) {

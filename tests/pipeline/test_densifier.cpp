@@ -102,7 +102,7 @@ float row_hint(const Image<float>& sparse, int x, int y) {
 
 // The occlusion strips' pull of one pixel (kernels::occlusion_fill_row, its rule restated in
 // kernels/occlusion_reference.hpp): the far value it is pulled to with weight occlusion_fill * λd,
-// or 0.
+// kernels::kRimWithoutHint for a rim hole without its hole hint, or 0.
 float occlusion_far(const Image<float>& sparse, int x, int y) {
   const std::vector<float> row(sparse.row(y), sparse.row(y) + sparse.width());
   return kernels::occlusion_targets(row)[static_cast<std::size_t>(x)];
@@ -123,11 +123,13 @@ Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) 
       if (std::isfinite(s) && s > 0) {
         diag += params.lambda_d;
         b[idx(x, y)] += params.lambda_d * s;
-      } else if (const float hint = row_hint(pr.sparse, x, y); hint > 0) {
+      } else if (const float hint = row_hint(pr.sparse, x, y);
+                 hint > 0 && (params.occlusion_fill <= 0 ||
+                              occlusion_far(pr.sparse, x, y) != kernels::kRimWithoutHint)) {
         diag += params.lambda_d * params.background_fill;
         b[idx(x, y)] += params.lambda_d * params.background_fill * hint;
       }
-      if (const float far = occlusion_far(pr.sparse, x, y); far > 0) {
+      if (const float far = occlusion_far(pr.sparse, x, y); far > 0 && params.occlusion_fill > 0) {
         diag += params.lambda_d * params.occlusion_fill;
         b[idx(x, y)] += params.lambda_d * params.occlusion_fill * far;
       }
@@ -335,6 +337,41 @@ TEST(Densifier, OcclusionStripsStepAtTheNearSurfacesEdge) {
     for (int x = strip - 4; x < edge - 8; ++x) sparse.at(x, y) = 10.0f;
   Densifier(params).compute(in, dense);
   EXPECT_GT(dense.at(edge - 1, h / 2), 20.0f);
+}
+
+TEST(Densifier, TheRimPastAnOcclusionStripJoinsTheNearSurface) {
+  // The strip left of a near surface (30, from x = 50) is 20 px wide (far surface 10); on every
+  // second row the stereo stage also missed the near surface's first 8 px, so the run is 28 px
+  // wide there. A checkerboard image puts every smoothness weight at its floor, below the hole
+  // hint's weight: with the hint, those 8 px would follow it to the far side. Past the strip's
+  // first 2 px they take no hint, and their matched neighbours above and below decide.
+  const int w = 90, h = 12, strip = 30, edge = 50, rim = 8;
+  Image<float> sparse(w, h);
+  Image<std::uint8_t> image(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int near_from = y % 2 == 0 ? edge + rim : edge;
+      sparse.at(x, y) = x < strip ? 10.0f : (x >= near_from ? 30.0f : kUnknown);
+      image.at(x, y) = static_cast<std::uint8_t>((x + y) % 2 * 255);
+    }
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  in.image = image.cview();
+  DensifyParams params;
+  Image<float> dense, rim_hinted;
+  Densifier(params).compute(in, dense);
+  for (int y = 2; y < h - 2; y += 2) {
+    for (int x = strip; x < edge - 1; ++x)
+      EXPECT_NEAR(dense.at(x, y), 10.0f, 1.0f) << "strip x " << x << " y " << y;
+    for (int x = edge + 2; x < edge + rim; ++x)
+      EXPECT_GT(dense.at(x, y), 25.0f) << "rim x " << x << " y " << y;
+  }
+  // The same rim with the hint, as a hole run that holds no strip keeps it: a strip 20 px wider
+  // than the jump is none.
+  for (int y = 0; y < h; ++y)
+    for (int x = strip - 20; x < strip; ++x) sparse.at(x, y) = kUnknown;
+  Densifier(params).compute(in, rim_hinted);
+  EXPECT_LT(rim_hinted.at(edge + 4, h / 2), 20.0f);
 }
 
 TEST(Densifier, ImageEdgesWeakenSmoothing) {

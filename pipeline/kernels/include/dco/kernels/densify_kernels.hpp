@@ -148,14 +148,21 @@ void hole_hint_row(const float* sparse, const float* wx, int width, float crossi
 // term ramp such a strip towards the near side, so a virtual plane between the two surfaces
 // would cut the ramp anywhere in the strip rather than at the near surface's edge.
 // For one row: every hole run with a known value on either side, the smaller (farther) one on
-// its left, whose width fits the jump between them, gets data[x] += weight and
-// b[x] += weight * far for each pixel x of its strip (pixel::occlusion_strip: the run's first
-// pixels, as many as the jump; far: the value left of the run). A run that holds no strip alone
-// is tried together with the previous run, when that holds none and at most 4 matches lie
-// between them
-// (pixel::fill_occlusion_run); those matches are then pulled too. Runs that touch the row's ends
-// are left alone. Returns the pixels weighted.
-int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b);
+// its left, whose width fits the jump between them, gets data[x] += rule.weight and
+// b[x] += rule.weight * far for each pixel x of its strip (pixel::occlusion_strip: the run's first
+// pixels, as many as the jump; far: the value left of the run). The holes of the run past the
+// strip and past pixel::kRimHintPixels more are the near surface's rim: they give back the hole
+// hint data_terms_row gave them (data[x] -= rule.hint_weight, b[x] -= rule.hint_weight * hint[x]
+// where hint[x] > 0), so call it after data_terms_row on the same row. A run that holds no strip
+// alone is tried together with the previous run, when that holds none and at most 4 matches lie
+// between them (pixel::fill_occlusion_run); those matches are then pulled too. Runs that touch
+// the row's ends are left alone. Returns the pixels pulled.
+struct OcclusionRule {
+  float weight;       // of the pull of a strip towards the far value
+  float hint_weight;  // data_terms_row's rule.hint_weight
+};
+int occlusion_fill_row(const float* sparse, const float* hint, int width, const OcclusionRule& rule,
+                       float* data, float* b);
 
 namespace scalar {
 // Gauss-Seidel update of the pixels of one colour of row y, columns start, start + 2, ...
@@ -164,7 +171,8 @@ namespace scalar {
 // the sweeps run grid_smooth_split_row, and the GPU passes the same per-pixel math.
 void grid_smooth_row(const GridRow& row, int start, const float* b, float* x);
 void hole_hint_row(const float* sparse, const float* wx, int width, float crossing, float* hint);
-int occlusion_fill_row(const float* sparse, int width, float weight, float* data, float* b);
+int occlusion_fill_row(const float* sparse, const float* hint, int width, const OcclusionRule& rule,
+                       float* data, float* b);
 void data_terms_row(const float* sparse, const float* hint, const float* previous, int width,
                     const DataTermRule& rule, float* data, float* b, float* low, float* high);
 void diagonal_row(const float* data, const float* wx, const float* wy, const float* wy_above,

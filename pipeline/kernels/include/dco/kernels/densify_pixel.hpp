@@ -80,30 +80,41 @@ inline bool known_value(float v) {
 
 // The occlusion strip of a hole run `width` pixels wide between the known values `far` (on its
 // left) and `near` (on its right) (occlusion_fill_row): with a jump of at least 2 px and a width
-// from jump - a to jump + 2 a, a = max(2 px, jump / 4), its first min(width, jump rounded)
+// from jump - a to jump + 4 a, a = max(2 px, jump / 4), its first min(width, jump rounded)
 // pixels; else none (0). Pixels past the strip are the near surface's unmatched rim.
 inline int occlusion_strip(float far, float near, int width) {
   constexpr float kMinJump = 2.0f;
   constexpr float kWidthSlack = 2.0f;
   constexpr float kWidthShare = 0.25f;
+  constexpr float kRimAllowances = 4.0f;
   const float jump = near - far;
   const float allowance = std::fmax(kWidthSlack, kWidthShare * jump);
   const auto w = static_cast<float>(width);
-  if (!(jump >= kMinJump) || w < jump - allowance || w > jump + 2.0f * allowance) return 0;
+  if (!(jump >= kMinJump) || w < jump - allowance || w > jump + kRimAllowances * allowance)
+    return 0;
   return std::min(width, static_cast<int>(std::lround(jump)));
 }
 
-// Pulls the occlusion strip of the hole run [start, end) of a row to the value left of it
-// (data[x] += weight, b[x] += weight * far; occlusion_fill_row) and returns its pixels. The
-// previous run of the row, [prev_start, prev_end), is one with a known left neighbour that held
-// no strip (prev_start <= 0: none); both become this run's for the next call (prev_start -1 when
-// it held a strip, which is not merged again). When the run alone holds no strip and at most
-// kMaxSpeck matches lie between it and the previous run, the span from the previous run's start
-// is tried: a match inside a strip cannot be right, since the right camera does not see the
-// strip, and a stray one would otherwise split the strip into runs too narrow. Shared by the
-// scalar and SIMD row walks, so both weight the same pixels in the same order.
-inline int fill_occlusion_run(const float* sparse, int start, int end, float weight, float* data,
-                              float* b, int& prev_start, int& prev_end) {
+// The rim pixels of a run with a strip that keep the hole hint: the strip's edge is known only
+// to a pixel or two (the jump comes from two noisy matches).
+inline constexpr int kRimHintPixels = 2;
+
+// Applies the occlusion rule to the hole run [start, end) of a row (occlusion_fill_row) and
+// returns the pixels of its strip. The strip is pulled to the value left of it (data[x] +=
+// rule.weight, b[x] += rule.weight * far). The rim past the strip belongs to the near surface:
+// beyond its first kRimHintPixels, its holes give back the hint that data_terms_row gave them
+// (the weak pull towards the farther row neighbour, rule.hint_weight towards hint[x] where
+// hint[x] > 0), so the smoothness with the near surface decides them. The previous run of the
+// row, [prev_start, prev_end), is one with a known left neighbour that held no strip
+// (prev_start <= 0: none); both become this run's for the next call (prev_start -1 when it held
+// a strip, which is not merged again). When the run alone holds no strip and at most kMaxSpeck
+// matches lie between it and the previous run, the span from the previous run's start is tried:
+// a match inside a strip cannot be right, since the right camera does not see the strip, and a
+// stray one would otherwise split the strip into runs too narrow. Shared by the scalar and SIMD
+// row walks, so both weight the same pixels in the same order.
+inline int fill_occlusion_run(const float* sparse, const float* hint, int start, int end,
+                              const OcclusionRule& rule, float* data, float* b, int& prev_start,
+                              int& prev_end) {
   constexpr int kMaxSpeck = 4;
   int from = start;
   int count = occlusion_strip(sparse[start - 1], sparse[end], end - start);
@@ -113,9 +124,15 @@ inline int fill_occlusion_run(const float* sparse, int start, int end, float wei
   }
   const float far = sparse[from - 1];
   for (int x = from; x < from + count; ++x) {
-    data[x] += weight;
-    b[x] += weight * far;
+    data[x] += rule.weight;
+    b[x] += rule.weight * far;
   }
+  if (count > 0)
+    for (int x = from + count + kRimHintPixels; x < end; ++x) {
+      if (known_value(sparse[x]) || !(hint[x] > 0.0f)) continue;
+      data[x] -= rule.hint_weight;
+      b[x] -= rule.hint_weight * hint[x];
+    }
   prev_start = count > 0 ? -1 : start;
   prev_end = end;
   return count;
