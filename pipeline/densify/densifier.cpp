@@ -49,13 +49,15 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.color_sigma", &p.color_sigma, 0.0, 255.0,
         "grey-level scale of the image guidance on smoothness weights (0 = off)");
   s.add("densify.background_fill", &p.background_fill, 0.0, 1.0,
-        "weight (times lambda_d) pulling holes towards the farther of their row neighbours");
+        "weight (times lambda_d) pulling holes towards the farther of their row neighbours "
+        "(not a run whose left neighbour is the nearer by 2 px or more)");
   s.add("densify.fill_edge_weight", &p.fill_edge_weight, 0.0, 1.0,
         "holes take the row neighbour reached without crossing an edge weaker than this "
         "(0 = always the farther one)");
   s.add("densify.occlusion_fill", &p.occlusion_fill, 0.0, 100.0,
         "weight (times lambda_d) pulling the occlusion strip of a hole run about as wide as the "
-        "disparity jump across it, the farther match on its left, towards that match (0 = off)");
+        "disparity jump across it, the farther match on its left, towards that match; the "
+        "run's rim past the strip then takes no hole hint (0 = off)");
   s.add("densify.border_plane_rms", &p.border_plane_rms, 0.0, 10.0,
         "holes at the left border take a plane fitted to the matches next to them when it fits "
         "within this RMS, px (0 = the row's first match, as other holes)");
@@ -212,14 +214,16 @@ void Densifier::build_system(const DensifyInputs& in) {
   float low = std::numeric_limits<float>::infinity(), high = 0.0f;
   if (params_.border_plane_rms > 0) border_plane_hints(in.sparse, low, high);
   const kernels::DataTermRule terms{kRegulariser, ld, lh > 0.0f ? lh : 0.0f, ls2};
-  // The strips a near surface hides from the right camera take the farther side's value.
+  // The strips a near surface hides from the right camera take the farther side's value; holes
+  // where the hint has no ground (the near surface's rim past a strip, and right of a near
+  // surface, where no occlusion lies) drop it.
   const kernels::OcclusionRule occlusion{
       static_cast<float>(params_.lambda_d * params_.occlusion_fill), terms.hint_weight};
   for (int y = 0; y < h; ++y) {
     kernels::data_terms_row(in.sparse.row(y), hint_.row(y),
                             has_previous ? in.previous.row(y) : nullptr, w, terms,
                             system_.data.row(y), rhs_.row(y), &low, &high);
-    if (occlusion.weight > 0.0f)
+    if (occlusion.weight > 0.0f || occlusion.hint_weight > 0.0f)
       kernels::occlusion_fill_row(in.sparse.row(y), hint_.row(y), w, occlusion, system_.data.row(y),
                                   rhs_.row(y));
   }

@@ -15,12 +15,13 @@ namespace dco::kernels {
 // its neighbours (far on the left) is at least 2 px and its width is from jump - a to
 // jump + 4 a, a = max(2, jump / 4); its strip is its first `jump` (rounded) pixels. A run that
 // does not fit alone is tried from the previous run's start when that run has no strip and at
-// most 4 matches separate them. Returns, per pixel, the far value it is pulled to, kRimWithoutHint
-// for a hole of the rim that gives back its hole hint (a run's pixels from 2 past its strip on),
-// else 0; counts the merged runs.
-inline constexpr float kRimWithoutHint = -1.0f;
-inline std::vector<float> occlusion_targets(const std::vector<float>& sparse,
-                                            int* merged = nullptr) {
+// most 4 matches separate them (and it dropped no hints). Without `strips` no run holds one.
+// Returns, per pixel, the far value it is pulled to; kNoHint for a hole that drops its hole hint: a
+// run's holes from 2 past its strip on, and every hole of a run without a strip whose left
+// neighbour is the nearer by 2 px or more; else 0. Counts the merged runs.
+inline constexpr float kNoHint = -1.0f;
+inline std::vector<float> occlusion_targets(const std::vector<float>& sparse, int* merged = nullptr,
+                                            bool strips = true) {
   const auto known = [&](int i) {
     return sparse[i] > 0.0f && sparse[i] < std::numeric_limits<float>::infinity();
   };
@@ -40,20 +41,25 @@ inline std::vector<float> occlusion_targets(const std::vector<float>& sparse,
     return std::min(end - start, static_cast<int>(std::lround(jump)));
   };
   std::vector<float> target(sparse.size(), 0.0f);
-  std::vector<int> counts(runs.size(), 0);
+  std::vector<bool> mergeable(runs.size(), false);  // no strip, no dropped hints
   for (std::size_t i = 0; i < runs.size(); ++i) {
     auto [start, end] = runs[i];
-    int count = strip(start, end);
-    if (count == 0 && i > 0 && counts[i - 1] == 0 && start - runs[i - 1].second <= 4) {
+    const int own_start = start;
+    int count = strips ? strip(start, end) : 0;
+    if (strips && count == 0 && i > 0 && mergeable[i - 1] && start - runs[i - 1].second <= 4) {
       start = runs[i - 1].first;
       count = strip(start, end);
       if (merged != nullptr && count > 0) ++*merged;
     }
-    counts[i] = count;
     for (int x = start; x < start + count; ++x) target[x] = sparse[start - 1];
-    if (count > 0)
+    if (count > 0) {
       for (int x = start + count + 2; x < end; ++x)
-        if (!known(x)) target[x] = kRimWithoutHint;
+        if (!known(x)) target[x] = kNoHint;
+    } else if (sparse[own_start - 1] - sparse[end] >= 2.0f) {
+      for (int x = own_start; x < end; ++x) target[x] = kNoHint;
+    } else {
+      mergeable[i] = true;
+    }
   }
   return target;
 }

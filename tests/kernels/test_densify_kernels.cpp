@@ -495,10 +495,10 @@ TEST(DensifyKernels, HoleHintRowMatchesScalarAndTheRule) {
 TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
   std::mt19937 rng(23);
   const float inf = std::numeric_limits<float>::infinity();
-  const OcclusionRule rule{1.6f, 0.04f};
+  const OcclusionRule with_strips{1.6f, 0.04f}, without_strips{0.0f, 0.04f};
   std::vector<int> widths = kWidths;
   widths.push_back(1283);
-  int weighted_rows = 0, merged_runs = 0, rim_pixels = 0;
+  int weighted_rows = 0, merged_runs = 0, dropped_hints = 0;
   for (const int w : widths)
     for (int trial = 0; trial < 12; ++trial) {
       // Alternating runs of matches (a few levels, so that jumps repeat) and holes of any width
@@ -521,17 +521,20 @@ TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
       std::vector<float> hint = random_floats(rng, w, 1.0f, 50.0f);
       for (float& v : hint)
         if (rng() % 4 == 0) v = 0.0f;
+      // Every fourth row without strips (densify.occlusion_fill 0): only the hints drop.
+      const OcclusionRule& rule = trial % 4 == 3 ? without_strips : with_strips;
       std::vector<float> want_data = data0, want_b = b0;
       int want_count = 0;
-      const std::vector<float> targets = occlusion_targets(sparse, &merged_runs);
+      const std::vector<float> targets =
+          occlusion_targets(sparse, &merged_runs, rule.weight > 0.0f);
       for (int x = 0; x < w; ++x) {
         const float far = targets[x];
-        if (far == kRimWithoutHint) {
+        if (far == kNoHint) {
           if (hint[x] > 0.0f) {
             want_data[x] -= rule.hint_weight;
             const volatile float hint_pull = rule.hint_weight * hint[x];
             want_b[x] -= hint_pull;
-            ++rim_pixels;
+            ++dropped_hints;
           }
           continue;
         }
@@ -561,7 +564,7 @@ TEST(DensifyKernels, OcclusionFillRowMatchesScalarAndTheRule) {
     }
   EXPECT_GT(weighted_rows, 20);  // the rows do hold occlusion runs
   EXPECT_GT(merged_runs, 5);     // ... and runs split by a few matches
-  EXPECT_GT(rim_pixels, 20);     // ... and rims past their strips
+  EXPECT_GT(dropped_hints, 20);  // ... and holes that drop their hints
 }
 
 TEST(DensifyKernels, DiagonalRowMatchesScalar) {

@@ -80,9 +80,9 @@ TwoSurfaces two_surfaces(int w, int h, int edge, float near, float far, Known kn
 // Eq. 20 assembled from its definition: E = λd Σ w_sparse (D - Ds)^2
 //   + λs Σ_p Σ_{q∈N4(p)} w_pq (D_p - D_q)^2 + λs2 Σ w_stable (D - Dpre)^2,
 // with dco's two additions: w_pq scaled by exp(-|I_p - I_q| / color_sigma), and holes pulled
-// with weight background_fill * λd towards the smaller of the nearest known values on their row,
-// and occlusion strips (occlusion_far, the few matches inside one included) also with weight
-// occlusion_fill * λd to their far side.
+// with weight background_fill * λd towards the smaller of the nearest known values on their row
+// (but for the holes occlusion_far says drop it), and occlusion strips (occlusion_far, the few
+// matches inside one included) also with weight occlusion_fill * λd to their far side.
 float row_hint(const Image<float>& sparse, int x, int y) {
   float left = 0, right = 0;
   for (int i = x; i >= 0; --i)
@@ -102,10 +102,11 @@ float row_hint(const Image<float>& sparse, int x, int y) {
 
 // The occlusion strips' pull of one pixel (kernels::occlusion_fill_row, its rule restated in
 // kernels/occlusion_reference.hpp): the far value it is pulled to with weight occlusion_fill * λd,
-// kernels::kRimWithoutHint for a rim hole without its hole hint, or 0.
-float occlusion_far(const Image<float>& sparse, int x, int y) {
+// kernels::kNoHint for a hole that drops its hole hint, or 0.
+float occlusion_far(const Image<float>& sparse, int x, int y, const DensifyParams& params) {
   const std::vector<float> row(sparse.row(y), sparse.row(y) + sparse.width());
-  return kernels::occlusion_targets(row)[static_cast<std::size_t>(x)];
+  return kernels::occlusion_targets(row, nullptr,
+                                    params.occlusion_fill > 0)[static_cast<std::size_t>(x)];
 }
 
 Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) {
@@ -124,12 +125,11 @@ Eigen::VectorXd direct_solution(const Problem& pr, const DensifyParams& params) 
         diag += params.lambda_d;
         b[idx(x, y)] += params.lambda_d * s;
       } else if (const float hint = row_hint(pr.sparse, x, y);
-                 hint > 0 && (params.occlusion_fill <= 0 ||
-                              occlusion_far(pr.sparse, x, y) != kernels::kRimWithoutHint)) {
+                 hint > 0 && occlusion_far(pr.sparse, x, y, params) != kernels::kNoHint) {
         diag += params.lambda_d * params.background_fill;
         b[idx(x, y)] += params.lambda_d * params.background_fill * hint;
       }
-      if (const float far = occlusion_far(pr.sparse, x, y); far > 0 && params.occlusion_fill > 0) {
+      if (const float far = occlusion_far(pr.sparse, x, y, params); far > 0) {
         diag += params.lambda_d * params.occlusion_fill;
         b[idx(x, y)] += params.lambda_d * params.occlusion_fill * far;
       }
@@ -281,15 +281,16 @@ TEST(Densifier, ContourKeepsTwoSurfacesApart) {
 }
 
 TEST(Densifier, HolesBesideAJumpLeanTowardsTheFartherSurface) {
-  // A hole between a near surface (40) and a far one (10), as left by an occlusion: with the
-  // background pull the hole takes mostly the far value; without it, the midpoint.
+  // A hole between a far surface (10) and a near one (40) on its right, where the left image
+  // holds occlusions (too narrow for the near surface's strip): with the background pull the
+  // hole takes mostly the far value; without it, the midpoint.
   const int w = 60, h = 10;
   Image<float> sparse(w, h);
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) sparse.at(x, y) = x < 20 ? 40.0f : (x >= 30 ? 10.0f : kUnknown);
+    for (int x = 0; x < w; ++x) sparse.at(x, y) = x < 20 ? 10.0f : (x >= 30 ? 40.0f : kUnknown);
   DensifyInputs in;
   in.sparse = sparse.cview();
-  Image<float> with_pull, without;
+  Image<float> with_pull, without, mirrored;
   DensifyParams params;
   params.background_fill = 0.2;
   Densifier(params).compute(in, with_pull);
@@ -297,6 +298,14 @@ TEST(Densifier, HolesBesideAJumpLeanTowardsTheFartherSurface) {
   Densifier(params).compute(in, without);
   EXPECT_LT(with_pull.at(25, 5), without.at(25, 5) - 5.0f);
   EXPECT_NEAR(without.at(25, 5), 25.0f, 2.0f);
+
+  // Mirrored, the near surface on the left: no occlusion lies right of a near surface, so the
+  // hole is a matching failure of either side and takes no pull: the midpoint again.
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) sparse.at(x, y) = x < 20 ? 40.0f : (x >= 30 ? 10.0f : kUnknown);
+  params.background_fill = 0.2;
+  Densifier(params).compute(in, mirrored);
+  EXPECT_NEAR(mirrored.at(25, 5), 25.0f, 2.0f);
 }
 
 TEST(Densifier, OcclusionStripsStepAtTheNearSurfacesEdge) {
@@ -396,16 +405,17 @@ TEST(Densifier, ImageEdgesWeakenSmoothing) {
 }
 
 TEST(Densifier, HoleInsideAnObjectKeepsTheObjectsDepthNotTheBackgrounds) {
-  // The object (grey 50, disparity 40) ends at the image edge between x = 24 and 25; the
-  // background (grey 200, disparity 10) starts there. The hole x = 10..34 straddles the edge:
-  // its object part must take the object's value, although the farther neighbour is background.
+  // The background (grey 200, disparity 10) ends at the image edge between x = 14 and 15; the
+  // object (grey 50, disparity 40) starts there. The hole x = 10..19 straddles the edge (too
+  // narrow for the strip the object hides): its object part must take the object's value,
+  // although the farther neighbour is background.
   const int w = 60, h = 10;
   Image<float> sparse(w, h);
   Image<std::uint8_t> image(w, h);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      sparse.at(x, y) = x < 10 ? 40.0f : (x >= 35 ? 10.0f : kUnknown);
-      image.at(x, y) = x < 25 ? 50 : 200;
+      sparse.at(x, y) = x < 10 ? 10.0f : (x >= 20 ? 40.0f : kUnknown);
+      image.at(x, y) = x < 15 ? 200 : 50;
     }
   DensifyInputs in;
   in.sparse = sparse.cview();
@@ -414,12 +424,12 @@ TEST(Densifier, HoleInsideAnObjectKeepsTheObjectsDepthNotTheBackgrounds) {
   ASSERT_GT(params.fill_edge_weight, 0.0);
   Image<float> aware, farther;
   Densifier(params).compute(in, aware);
-  for (int x = 10; x < 25; ++x) EXPECT_GT(aware.at(x, 5), 39.0f) << x;
-  for (int x = 25; x < 35; ++x) EXPECT_LT(aware.at(x, 5), 11.0f) << x;
+  for (int x = 10; x < 15; ++x) EXPECT_LT(aware.at(x, 5), 11.0f) << x;
+  for (int x = 15; x < 20; ++x) EXPECT_GT(aware.at(x, 5), 39.0f) << x;
   // With the plain "farther neighbour" rule the object's part of the hole sinks towards 10.
   params.fill_edge_weight = 0;
   Densifier(params).compute(in, farther);
-  EXPECT_LT(farther.at(24, 5), aware.at(24, 5) - 2.0f);
+  EXPECT_LT(farther.at(15, 5), aware.at(15, 5) - 2.0f);
 }
 
 TEST(Densifier, HalfResolutionSolveKeepsAContourOnAnOddColumn) {

@@ -150,13 +150,15 @@ void hole_hint_row(const float* sparse, const float* wx, int width, float crossi
 // For one row: every hole run with a known value on either side, the smaller (farther) one on
 // its left, whose width fits the jump between them, gets data[x] += rule.weight and
 // b[x] += rule.weight * far for each pixel x of its strip (pixel::occlusion_strip: the run's first
-// pixels, as many as the jump; far: the value left of the run). The holes of the run past the
-// strip and past pixel::kRimHintPixels more are the near surface's rim: they give back the hole
-// hint data_terms_row gave them (data[x] -= rule.hint_weight, b[x] -= rule.hint_weight * hint[x]
-// where hint[x] > 0), so call it after data_terms_row on the same row. A run that holds no strip
-// alone is tried together with the previous run, when that holds none and at most 4 matches lie
-// between them (pixel::fill_occlusion_run); those matches are then pulled too. Runs that touch
-// the row's ends are left alone. Returns the pixels pulled.
+// pixels, as many as the jump; far: the value left of the run). A run that holds no strip alone
+// is tried together with the previous run, when that holds none and at most 4 matches lie
+// between them (pixel::fill_occlusion_run); those matches are then pulled too. Two kinds of
+// holes drop the hole hint data_terms_row gave them (data[x] -= rule.hint_weight,
+// b[x] -= rule.hint_weight * hint[x] where hint[x] > 0; so call it after data_terms_row on the
+// same row): the near surface's rim past a strip, beyond pixel::kRimHintPixels, and the holes
+// of a run without a strip whose left neighbour is the nearer by pixel::kMinOcclusionJump or
+// more (right of a near surface no occlusion lies). rule.weight 0: no strips, only the latter.
+// Runs that touch the row's ends are left alone. Returns the pixels pulled.
 struct OcclusionRule {
   float weight;       // of the pull of a strip towards the far value
   float hint_weight;  // data_terms_row's rule.hint_weight

@@ -78,19 +78,22 @@ inline bool known_value(float v) {
   return v > 0.0f && v < std::numeric_limits<float>::infinity();
 }
 
+// The least disparity jump across a hole run that the occlusion rule reads as a jump, px.
+inline constexpr float kMinOcclusionJump = 2.0f;
+
 // The occlusion strip of a hole run `width` pixels wide between the known values `far` (on its
-// left) and `near` (on its right) (occlusion_fill_row): with a jump of at least 2 px and a width
-// from jump - a to jump + 4 a, a = max(2 px, jump / 4), its first min(width, jump rounded)
-// pixels; else none (0). Pixels past the strip are the near surface's unmatched rim.
+// left) and `near` (on its right) (occlusion_fill_row): with a jump of at least
+// kMinOcclusionJump and a width from jump - a to jump + 4 a, a = max(2 px, jump / 4), its first
+// min(width, jump rounded) pixels; else none (0). Pixels past the strip are the near surface's
+// unmatched rim.
 inline int occlusion_strip(float far, float near, int width) {
-  constexpr float kMinJump = 2.0f;
   constexpr float kWidthSlack = 2.0f;
   constexpr float kWidthShare = 0.25f;
   constexpr float kRimAllowances = 4.0f;
   const float jump = near - far;
   const float allowance = std::fmax(kWidthSlack, kWidthShare * jump);
   const auto w = static_cast<float>(width);
-  if (!(jump >= kMinJump) || w < jump - allowance || w > jump + kRimAllowances * allowance)
+  if (!(jump >= kMinOcclusionJump) || w < jump - allowance || w > jump + kRimAllowances * allowance)
     return 0;
   return std::min(width, static_cast<int>(std::lround(jump)));
 }
@@ -99,41 +102,58 @@ inline int occlusion_strip(float far, float near, int width) {
 // to a pixel or two (the jump comes from two noisy matches).
 inline constexpr int kRimHintPixels = 2;
 
+// Takes back from the holes of [from, end) the hole hint that data_terms_row gave them (weight
+// hint_weight towards hint[x] where hint[x] > 0); matches are left alone.
+inline void drop_hole_hints(const float* sparse, const float* hint, int from, int end,
+                            float hint_weight, float* data, float* b) {
+  for (int x = from; x < end; ++x) {
+    if (known_value(sparse[x]) || !(hint[x] > 0.0f)) continue;
+    data[x] -= hint_weight;
+    b[x] -= hint_weight * hint[x];
+  }
+}
+
 // Applies the occlusion rule to the hole run [start, end) of a row (occlusion_fill_row) and
-// returns the pixels of its strip. The strip is pulled to the value left of it (data[x] +=
-// rule.weight, b[x] += rule.weight * far). The rim past the strip belongs to the near surface:
-// beyond its first kRimHintPixels, its holes give back the hint that data_terms_row gave them
-// (the weak pull towards the farther row neighbour, rule.hint_weight towards hint[x] where
-// hint[x] > 0), so the smoothness with the near surface decides them. The previous run of the
-// row, [prev_start, prev_end), is one with a known left neighbour that held no strip
-// (prev_start <= 0: none); both become this run's for the next call (prev_start -1 when it held
-// a strip, which is not merged again). When the run alone holds no strip and at most kMaxSpeck
-// matches lie between it and the previous run, the span from the previous run's start is tried:
-// a match inside a strip cannot be right, since the right camera does not see the strip, and a
-// stray one would otherwise split the strip into runs too narrow. Shared by the scalar and SIMD
-// row walks, so both weight the same pixels in the same order.
+// returns the pixels of its strip (none when rule.weight is 0).
+// - The strip is pulled to the value left of it (data[x] += rule.weight, b[x] += rule.weight *
+//   far). The rim past it belongs to the near surface: beyond its first kRimHintPixels, its holes
+//   drop the hole hint (the weak pull towards the farther row neighbour), so the smoothness with
+//   the near surface decides them.
+// - A run without a strip whose left neighbour is the nearer one by kMinOcclusionJump or more
+//   lies right of a near surface, where the left image holds no occlusion: its holes are
+//   matching failures of either surface, and drop the hint too.
+// - The previous run of the row, [prev_start, prev_end), is one with a known left neighbour that
+//   held no strip (prev_start <= 0: none); both become this run's for the next call (prev_start
+//   -1 when it held a strip or dropped its hints, so it is not merged again). When the run alone
+//   holds no strip and at most kMaxSpeck matches lie between it and the previous run, the span from
+//   the previous run's start is tried: a match inside a strip cannot be right, since the right
+//   camera does not see the strip, and a stray one would otherwise split the strip into runs too
+//   narrow.
+// Shared by the scalar and SIMD row walks, so both weight the same pixels in the same order.
 inline int fill_occlusion_run(const float* sparse, const float* hint, int start, int end,
                               const OcclusionRule& rule, float* data, float* b, int& prev_start,
                               int& prev_end) {
   constexpr int kMaxSpeck = 4;
   int from = start;
-  int count = occlusion_strip(sparse[start - 1], sparse[end], end - start);
-  if (count == 0 && prev_start > 0 && start - prev_end <= kMaxSpeck) {
-    from = prev_start;
-    count = occlusion_strip(sparse[prev_start - 1], sparse[end], end - prev_start);
+  int count = 0;
+  if (rule.weight > 0.0f) {
+    count = occlusion_strip(sparse[start - 1], sparse[end], end - start);
+    if (count == 0 && prev_start > 0 && start - prev_end <= kMaxSpeck) {
+      from = prev_start;
+      count = occlusion_strip(sparse[prev_start - 1], sparse[end], end - prev_start);
+    }
   }
   const float far = sparse[from - 1];
   for (int x = from; x < from + count; ++x) {
     data[x] += rule.weight;
     b[x] += rule.weight * far;
   }
+  const bool right_of_near = count == 0 && sparse[start - 1] - sparse[end] >= kMinOcclusionJump;
   if (count > 0)
-    for (int x = from + count + kRimHintPixels; x < end; ++x) {
-      if (known_value(sparse[x]) || !(hint[x] > 0.0f)) continue;
-      data[x] -= rule.hint_weight;
-      b[x] -= rule.hint_weight * hint[x];
-    }
-  prev_start = count > 0 ? -1 : start;
+    drop_hole_hints(sparse, hint, from + count + kRimHintPixels, end, rule.hint_weight, data, b);
+  else if (right_of_near)
+    drop_hole_hints(sparse, hint, start, end, rule.hint_weight, data, b);
+  prev_start = count > 0 || right_of_near ? -1 : start;
   prev_end = end;
   return count;
 }
