@@ -63,9 +63,9 @@ TEST(DenseDepthAccuracy, SharedScenesMeetTheOcclusionTargetAndBeatSgbmWls) {
   EXPECT_LT(m.band_err, p.band_err_pred + 3.0);
 }
 
-// Mean silhouette recall / precision over the first frames of the hand at 1280x720.
-tools::BoundaryAccuracy hand_silhouettes(pipeline::PipelineParams params) {
-  const synthetic::SceneConfig config = synthetic::preset("hand", 1280, 720);
+// Mean silhouette recall / precision over the first frames of a synthetic scene at 1280x720.
+tools::BoundaryAccuracy silhouettes_of(const char* scene, pipeline::PipelineParams params) {
+  const synthetic::SceneConfig config = synthetic::preset(scene, 1280, 720);
   const synthetic::SceneRenderer renderer(config);
   params.stereo.max_disparity = synthetic::covering_max_disparity(config);
   pipeline::DepthPipeline depth(params);
@@ -88,6 +88,10 @@ tools::BoundaryAccuracy hand_silhouettes(pipeline::PipelineParams params) {
   return tools::mean_boundary_accuracy(silhouettes);
 }
 
+tools::BoundaryAccuracy hand_silhouettes(pipeline::PipelineParams params) {
+  return silhouettes_of("hand", std::move(params));
+}
+
 TEST(DenseDepthAccuracy, HandSilhouettesAtFullHeadsetSize) {
   const tools::BoundaryAccuracy mean = hand_silhouettes({});
   std::printf("hand silhouettes within %d px: recall %.2f %%, precision %.2f %%\n",
@@ -96,6 +100,18 @@ TEST(DenseDepthAccuracy, HandSilhouettesAtFullHeadsetSize) {
   // without the boundary refinement at input resolution the half-size matching leaves it at 93 %.
   EXPECT_GE(mean.recall, 95.0);
   EXPECT_GE(mean.precision, 90.0);
+}
+
+TEST(DenseDepthAccuracy, BoxOutlinesStepWhereTheBoxesBegin) {
+  // Left of each box the stereo stage leaves the strip the box hides from the right camera and
+  // often the box's first pixels: the strip goes to the background, the rim past it to the box.
+  // With the rim left to the hole hint, which draws it to the background, these frames scored
+  // 92.4 % precision (95.5 % now).
+  const tools::BoundaryAccuracy mean = silhouettes_of("boxes", {});
+  std::printf("boxes silhouettes within %d px: recall %.2f %%, precision %.2f %%\n",
+              tools::kBoundaryTolerance, mean.recall, mean.precision);
+  EXPECT_GE(mean.recall, 97.5);
+  EXPECT_GE(mean.precision, 94.5);
 }
 
 TEST(DenseDepthAccuracy, FingerRimsLostByTheChecksGetTheFingersValue) {
