@@ -332,7 +332,7 @@ TEST(Densifier, OcclusionStripsStepAtTheNearSurfacesEdge) {
   EXPECT_GT(ramp.at(edge - 1, h / 2), 22.0f);
 
   // A run 4 px wider than the jump: its first 20 px are the strip, the last 4 the near surface's
-  // unmatched rim, which keeps the weak hint and the pull of the near side.
+  // unmatched rim, whose first 2 px keep the weak hint and whose last 2 the near side decides.
   for (int y = 0; y < h; ++y)
     for (int x = strip - 4; x < strip; ++x) sparse.at(x, y) = kUnknown;
   params.occlusion_fill = 2;

@@ -32,13 +32,14 @@ struct DensifyParams {
   // Floor of every smoothness weight: keeps each pixel connected to the rest, so regions a
   // contour encloses without any sparse value still get one, and the system stays definite.
   double min_edge_weight = 0.001;
-  // Weak data term for holes: the farther of the row neighbours. Not for a hole run whose left
-  // neighbour is the nearer by 2 px or more: occlusions lie only left of a near surface
-  // (kernels::occlusion_fill_row).
+  // Weak data term for holes: the farther of the row neighbours (but see fill_edge_weight). Not
+  // for a hole run whose left neighbour is the nearer by 2 px or more: occlusions lie only left
+  // of a near surface (kernels::occlusion_fill_row).
   double background_fill = 0.05;
-  // ... unless only one of the two is reached without crossing an edge whose smoothness weight
-  // (relative, after contours, Canny strength and image guidance) is below this; then that one.
-  // A hole inside an object then keeps the object's depth instead of the background's. 0 = off.
+  // A hole takes the other row neighbour when only that one is reached without crossing an edge
+  // whose smoothness weight (relative, after contours, Canny strength and image guidance) is
+  // below this. A hole inside an object then keeps the object's depth instead of the
+  // background's. 0 = off.
   double fill_edge_weight = 0.05;
   // A hole run about as wide as the disparity jump across it, the farther match on its left,
   // holds the strip the near surface hides from the right camera (kernels::occlusion_fill_row):
