@@ -6,7 +6,10 @@
 #include <limits>
 #include <string>
 
+#include <opencv2/imgproc.hpp>
+
 #include "dco/core/config.hpp"
+#include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/kernels/densify_kernels.hpp"
@@ -75,6 +78,9 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.max_iterations", &p.max_iterations, 1, 10000, "conjugate-gradient iterations");
   s.add("densify.tolerance", &p.tolerance, 1e-9, 0.1, "relative residual to stop at");
   s.add("densify.multigrid", &p.multigrid, "multigrid V-cycle preconditioner");
+  s.add("densify.median_size", &p.median_size, 0, 5,
+        "median filter of the dense output, px: 0 (off), 3 or 5; removes one-pixel specks "
+        "between two surfaces");
 }
 
 void validate(const DensifyParams& p) {
@@ -94,6 +100,8 @@ void validate(const DensifyParams& p) {
               (p.plane_window >= 3 && p.plane_window <= 31 && p.plane_window % 2 == 1),
           "plane_window must be 0 or odd in 3..31");
   require(p.plane_rms > 0, "plane_rms must be positive");
+  require(p.median_size == 0 || p.median_size == 3 || p.median_size == 5,
+          "median_size must be 0, 3 or 5, not " + std::to_string(p.median_size));
 }
 
 void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::uint8_t> closed) {
@@ -322,19 +330,20 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   }
   report_ = solver_->solve(system_, rhs_.cview(), solution_.view());
   // An iterative solve stopped early can overshoot in a small region that contours cut off
-  // (weakly coupled, so it weighs little in the residual); the exact solution cannot. The
-  // clamped values go to the output in the same pass.
-  dense.resize(w, h);
-  for (int y = 0; y < h; ++y) {
-    float* row = solution_.row(y);
-    float* out = dense.row(y);
-    if (data_high_ > 0.0f)
-      for (int x = 0; x < w; ++x) out[x] = row[x] = std::clamp(row[x], data_low_, data_high_);
-    else
-      std::copy(row, row + w, out);
-  }
+  // (weakly coupled, so it weighs little in the residual); the exact solution cannot.
+  if (data_high_ > 0.0f)
+    for (int y = 0; y < h; ++y) {
+      float* row = solution_.row(y);
+      for (int x = 0; x < w; ++x) row[x] = std::clamp(row[x], data_low_, data_high_);
+    }
   has_solution_ = true;
   timings_.solve_ms = t.lap_ms();
+  dense.resize(w, h);
+  if (params_.median_size > 0)
+    cv::medianBlur(as_mat(solution_.cview()), as_mat(dense.view()), params_.median_size);
+  else
+    dense.copy_from(solution_.cview());
+  timings_.median_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();
 }
 

@@ -98,20 +98,36 @@ TEST(DenseDepthAccuracy, HandSilhouettesAtFullHeadsetSize) {
               tools::kBoundaryTolerance, mean.recall, mean.precision);
   // Dropping both sides of every disparity jump erased the thinnest fingers (86 % recall);
   // without the boundary refinement at input resolution the half-size matching leaves it at 93 %.
+  // Precision: 95.9 % on these frames, 94.2 % without the output median.
   EXPECT_GE(mean.recall, 95.0);
-  EXPECT_GE(mean.precision, 90.0);
+  EXPECT_GE(mean.precision, 95.0);
+}
+
+TEST(DenseDepthAccuracy, OutputMedianClearsSpecksOffTheHandsSilhouettes) {
+  // Where a hole of the 2x2 matcher grid meets a depth edge the solve leaves single pixels
+  // between the two surfaces: each is a speck of wrong occlusion against some virtual plane.
+  pipeline::PipelineParams without;
+  without.densify.median_size = 0;
+  const tools::BoundaryAccuracy off = hand_silhouettes(without);
+  const tools::BoundaryAccuracy on = hand_silhouettes({});
+  std::printf(
+      "hand silhouettes with the output median: recall %.2f %%, precision %.2f %%; without: "
+      "%.2f %%, %.2f %%\n",
+      on.recall, on.precision, off.recall, off.precision);
+  EXPECT_GT(on.precision, off.precision + 1.0);
+  EXPECT_GE(on.recall, off.recall - 0.6);
 }
 
 TEST(DenseDepthAccuracy, BoxOutlinesStepWhereTheBoxesBegin) {
   // Left of each box the stereo stage leaves the strip the box hides from the right camera and
   // often the box's first pixels: the strip goes to the background, the rim past it to the box.
   // With the rim left to the hole hint, which draws it to the background, these frames scored
-  // 92.4 % precision (95.5 % now).
+  // 92.4 % precision (95.5 % with the rule, both before the output median; 96.6 % with it).
   const tools::BoundaryAccuracy mean = silhouettes_of("boxes", {});
   std::printf("boxes silhouettes within %d px: recall %.2f %%, precision %.2f %%\n",
               tools::kBoundaryTolerance, mean.recall, mean.precision);
-  EXPECT_GE(mean.recall, 97.5);
-  EXPECT_GE(mean.precision, 94.5);
+  EXPECT_GE(mean.recall, 97.0);
+  EXPECT_GE(mean.precision, 95.5);
 }
 
 TEST(DenseDepthAccuracy, FingerRimsLostByTheChecksGetTheFingersValue) {

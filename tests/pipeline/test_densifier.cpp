@@ -200,10 +200,12 @@ TEST_P(DensifierVsDirectSolve, MatchesEigenOnRandomProblems) {
     d.compute(inputs_of(p), dense);
     EXPECT_TRUE(d.last_report().converged) << d.last_report().final_residual;
     const Eigen::VectorXd ref = direct_solution(p, params);
+    // The solution itself; the output is its median (median_size).
+    const ImageView<const float> solution = d.last_solution();
     double worst = 0;
     for (int y = 0; y < 29; ++y)
       for (int x = 0; x < 37; ++x)
-        worst = std::max(worst, std::abs(dense.at(x, y) - ref[y * 37 + x]));
+        worst = std::max(worst, std::abs(solution.row(y)[x] - ref[y * 37 + x]));
     EXPECT_LT(worst, 1e-3) << "seed " << seed;
   }
 }
@@ -367,6 +369,8 @@ TEST(Densifier, TheRimPastAnOcclusionStripJoinsTheNearSurface) {
   in.sparse = sparse.cview();
   in.image = image.cview();
   DensifyParams params;
+  // Rims on every second row only: the output's median would remove the hinted ones below too.
+  params.median_size = 0;
   Image<float> dense, rim_hinted;
   Densifier(params).compute(in, dense);
   for (int y = 2; y < h - 2; y += 2) {
@@ -381,6 +385,45 @@ TEST(Densifier, TheRimPastAnOcclusionStripJoinsTheNearSurface) {
     for (int x = strip - 20; x < strip; ++x) sparse.at(x, y) = kUnknown;
   Densifier(params).compute(in, rim_hinted);
   EXPECT_LT(rim_hinted.at(edge + 4, h / 2), 20.0f);
+}
+
+TEST(Densifier, OutputMedianRemovesSpecksAndKeepsEdgesWhereTheyAre) {
+  // Every pixel matched: 10 left of x = 20 and 30 from it, with a single 30 at (8, 4), a column
+  // of 30 one pixel wide at x = 12 (rows 2-7) and a bar of 30 two pixels wide at x = 15-16. A
+  // checkerboard image puts every smoothness weight at its floor, so the solution follows the
+  // data, specks included.
+  const int w = 32, h = 10;
+  Image<float> sparse(w, h);
+  Image<std::uint8_t> image(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool near =
+          x >= 20 || x == 15 || x == 16 || (x == 12 && y >= 2 && y <= 7) || (x == 8 && y == 4);
+      sparse.at(x, y) = near ? 30.0f : 10.0f;
+      image.at(x, y) = static_cast<std::uint8_t>((x + y) % 2 * 255);
+    }
+  DensifyInputs in;
+  in.sparse = sparse.cview();
+  in.image = image.cview();
+  DensifyParams params;
+  ASSERT_EQ(params.median_size, 3);
+  Densifier d(params);
+  Image<float> dense;
+  d.compute(in, dense);
+  EXPECT_NEAR(dense.at(8, 4), 10.0f, 1.0f) << "speck";
+  for (int y = 2; y <= 7; ++y) EXPECT_NEAR(dense.at(12, y), 10.0f, 1.0f) << "column y " << y;
+  for (int y = 0; y < h; ++y) {
+    EXPECT_GT(dense.at(15, y), 29.0f) << "bar y " << y;
+    EXPECT_GT(dense.at(16, y), 29.0f) << "bar y " << y;
+    EXPECT_LT(dense.at(19, y), 11.0f) << "step y " << y;
+    EXPECT_GT(dense.at(20, y), 29.0f) << "step y " << y;
+  }
+  // The solution, the next frame's start and previous frame, keeps them.
+  EXPECT_GT(d.last_solution().row(4)[8], 29.0f);
+  params.median_size = 0;
+  Densifier(params).compute(in, dense);
+  EXPECT_GT(dense.at(8, 4), 29.0f);
+  EXPECT_GT(dense.at(12, 4), 29.0f);
 }
 
 TEST(Densifier, ImageEdgesWeakenSmoothing) {
@@ -941,6 +984,11 @@ TEST(Densifier, RejectsMismatchedInputsAndBadParams) {
   bad = DensifyParams{};
   bad.border_plane_rms = -1;
   EXPECT_THROW(Densifier{bad}, Error);
+  for (int size : {1, 4, 7}) {
+    bad = DensifyParams{};
+    bad.median_size = size;
+    EXPECT_THROW(Densifier{bad}, Error) << size;
+  }
 }
 
 TEST(Multigrid, CoarseningPreservesTheEnergyOfPiecewiseConstantVectors) {

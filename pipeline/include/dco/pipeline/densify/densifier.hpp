@@ -68,6 +68,12 @@ struct DensifyParams {
   int max_iterations = 60;
   double tolerance = 1e-4;  // relative residual ||b - Ax|| / ||b||
   bool multigrid = true;    // V-cycle preconditioner (else plain conjugate gradients)
+  // Side of the median filter on the dense output (0 = off, 3 or 5). The solve leaves single
+  // pixels and one-pixel slivers between two surfaces where a hole of the 2x2 matcher grid met
+  // a depth edge; against a virtual plane each is a speck of wrong occlusion. A median removes
+  // them and keeps a straight step where it is. The solver's own solution stays unfiltered:
+  // it is the next frame's warm start and previous frame (Eq. 18).
+  int median_size = 3;
 };
 
 void register_params(ConfigSchema& schema, DensifyParams& params);
@@ -88,7 +94,7 @@ struct DensifyInputs {
 };
 
 struct DensifyTimings {
-  double planes_ms = 0, build_ms = 0, solve_ms = 0, total_ms = 0;
+  double planes_ms = 0, build_ms = 0, solve_ms = 0, median_ms = 0, total_ms = 0;
 };
 
 // Solves Eq. 20 in disparity (a plane in the scene is affine in disparity, so smoothness in
