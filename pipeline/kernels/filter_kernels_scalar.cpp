@@ -3,6 +3,10 @@
 
 namespace dco::kernels::scalar {
 
+void median5_row(const float* const rows[5], int width, float* out) {
+  detail::median5_range(rows, width, 0, width, out);
+}
+
 void gaussian5_vertical_row(const std::uint8_t* const rows[5], const float* taps, int width,
                             float* out) {
   detail::gaussian5_vertical_range(rows, taps, 0, width, out);

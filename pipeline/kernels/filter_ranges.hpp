@@ -11,6 +11,17 @@
 
 namespace dco::kernels::detail {
 
+// The 13th smallest of the 25 values around column x (columns clamped to the row).
+inline void median5_range(const float* const rows[5], int width, int begin, int end, float* out) {
+  for (int x = begin; x < end; ++x) {
+    float window[25];
+    for (int i = 0; i < 5; ++i)
+      for (int j = 0; j < 5; ++j) window[5 * i + j] = rows[i][std::clamp(x + j - 2, 0, width - 1)];
+    std::nth_element(window, window + 12, window + 25);
+    out[x] = window[12];
+  }
+}
+
 inline void gaussian5_vertical_range(const std::uint8_t* const rows[5], const float* taps,
                                      int begin, int end, float* out) {
   for (int x = begin; x < end; ++x)

@@ -25,6 +25,36 @@ std::vector<float> random_floats(std::mt19937& rng, int n, float lo, float hi) {
   return v;
 }
 
+TEST(FilterKernels, Median5RowMatchesScalarAndTheSortedWindow) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> few(0, 3);
+  for_each_target([&] {
+    for (const int w : kWidths)
+      for (const bool ties : {false, true}) {
+        std::vector<float> rows[5];
+        const float* pointers[5];
+        for (int k = 0; k < 5; ++k) {
+          rows[k] = random_floats(rng, w, 0.0f, 200.0f);
+          if (ties)
+            for (float& e : rows[k]) e = static_cast<float>(few(rng));
+          pointers[k] = rows[k].data();
+        }
+        std::vector<float> columns(static_cast<std::size_t>(median5_columns(w)));
+        std::vector<float> expected(static_cast<std::size_t>(w)), actual(expected.size());
+        scalar::median5_row(pointers, w, expected.data());
+        median5_row(pointers, w, columns.data(), actual.data());
+        for (int x = 0; x < w; ++x) {
+          ASSERT_EQ(actual[x], expected[x]) << "w " << w << " x " << x << " ties " << ties;
+          std::vector<float> window;
+          for (int k = 0; k < 5; ++k)
+            for (int j = -2; j <= 2; ++j) window.push_back(rows[k][std::clamp(x + j, 0, w - 1)]);
+          std::sort(window.begin(), window.end());
+          ASSERT_EQ(expected[x], window[12]) << "w " << w << " x " << x;
+        }
+      }
+  });
+}
+
 TEST(FilterKernels, GaussianVerticalRowMatchesScalarAndThePixelMath) {
   std::mt19937 rng(1);
   std::uniform_int_distribution<int> grey(0, 255);

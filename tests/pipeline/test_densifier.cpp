@@ -13,7 +13,9 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
+#include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "dco/pipeline/densify/conjugate_gradients.hpp"
 #include "dco/pipeline/densify/densifier.hpp"
@@ -424,6 +426,25 @@ TEST(Densifier, OutputMedianRemovesSpecksAndKeepsEdgesWhereTheyAre) {
   Densifier(params).compute(in, dense);
   EXPECT_GT(dense.at(8, 4), 29.0f);
   EXPECT_GT(dense.at(12, 4), 29.0f);
+}
+
+TEST(Densifier, OutputMedianOfFiveIsOpenCvsMedianBlurOfTheSolution) {
+  // The 5x5 median is a kernel of ours (OpenCV's takes three times as long): the same values
+  // as cv::medianBlur, border columns and rows included, on widths that are not whole vectors.
+  for (const int w : {5, 37, 70}) {
+    const Problem p = random_problem(w, 23, static_cast<unsigned>(w), 0.3);
+    DensifyParams params;
+    params.median_size = 5;
+    Densifier d(params);
+    Image<float> dense;
+    d.compute(inputs_of(p), dense);
+    cv::Mat expected;
+    cv::medianBlur(as_mat(d.last_solution()), expected, 5);
+    for (int y = 0; y < 23; ++y)
+      for (int x = 0; x < w; ++x)
+        ASSERT_EQ(dense.at(x, y), expected.at<float>(y, x))
+            << "w " << w << " x " << x << " y " << y;
+  }
 }
 
 TEST(Densifier, ImageEdgesWeakenSmoothing) {

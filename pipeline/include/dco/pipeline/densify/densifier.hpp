@@ -137,7 +137,8 @@ class Densifier {
   Image<float> smoothed_;  // the sparse map after planes_
   Image<float> rhs_, hint_, solution_, smooth_strength_;
   Image<std::uint8_t> barrier_;
-  std::vector<int> fuse_column_;  // column of M_fuse for each input column
+  std::vector<int> fuse_column_;       // column of M_fuse for each input column
+  std::vector<float> median_columns_;  // the 5x5 median's sorted columns of one row
   // Per row: its first matched column and the sums of its fitted pixels (n, x, x², d, x·d, d²).
   std::vector<int> border_first_;
   std::vector<std::array<double, 6>> border_sums_;

@@ -1,10 +1,11 @@
 #pragma once
 
 // Row kernels of the contour stage's image filters (dco/pipeline/contour/separable_filters.hpp
-// and the Sobel gradient of the gated Canny). Dispatched at run time like the other kernels;
-// dco::kernels::scalar holds the references, whose per-pixel math is kernels::pixel's (shared
-// with the GPU passes). The vector versions do the same float operations in the same order, no
-// fused multiply-add, so all of them give the same bits.
+// and the Sobel gradient of the gated Canny) and of the 5x5 median of the densifier's output
+// (an order statistic: min and max only, so every target gives the same values). Dispatched at run
+// time like the other kernels; dco::kernels::scalar holds the references, whose per-pixel math is
+// kernels::pixel's (shared with the GPU passes). The vector versions do the same float operations
+// in the same order, no fused multiply-add, so all of them give the same bits.
 
 #include <cstddef>
 #include <cstdint>
@@ -39,7 +40,17 @@ struct SobelRows {
 };
 void sobel_row(const SobelRows& rows, float inv_norm, float* magnitude, std::uint8_t* direction);
 
+// Row y of the 5x5 median of a float image, its borders replicated: out[x] = the 13th smallest
+// of rows[i][clamp(x + j - 2, 0, width - 1)], i and j in 0..4, with rows y - 2 .. y + 2 (clamped
+// by the caller). Finite values only (min and max decide the order). `columns` is scratch of
+// median5_columns(width) floats.
+inline constexpr int median5_columns(int width) {
+  return 5 * (width + 4);
+}
+void median5_row(const float* const rows[5], int width, float* columns, float* out);
+
 namespace scalar {
+void median5_row(const float* const rows[5], int width, float* out);
 void gaussian5_vertical_row(const std::uint8_t* const rows[5], const float* taps, int width,
                             float* out);
 void row_filter(const float* in, int width, const float* taps, int radius, float* out);
