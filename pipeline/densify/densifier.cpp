@@ -80,8 +80,8 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.tolerance", &p.tolerance, 1e-9, 0.1, "relative residual to stop at");
   s.add("densify.multigrid", &p.multigrid, "multigrid V-cycle preconditioner");
   s.add("densify.median_size", &p.median_size, 0, 5,
-        "median filter of the dense output, px: 0 (off), 3 or 5; removes one-pixel specks "
-        "between two surfaces");
+        "median filter of the dense output, px: 0 (off), 3 or 5; removes one- and two-pixel "
+        "specks between two surfaces");
 }
 
 void validate(const DensifyParams& p) {

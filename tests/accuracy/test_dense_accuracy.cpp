@@ -111,7 +111,7 @@ TEST(DenseDepthAccuracy, HandSilhouettesAtFullHeadsetSize) {
               tools::kBoundaryTolerance, mean.recall, mean.precision);
   // Dropping both sides of every disparity jump erased the thinnest fingers (86 % recall);
   // without the boundary refinement at input resolution the half-size matching leaves it at 93 %.
-  // Precision: 95.9 % on these frames, 94.2 % without the output median.
+  // Precision: 97.2 % on these frames, 94.2 % without the output median.
   EXPECT_GE(mean.recall, 95.0);
   EXPECT_GE(mean.precision, 95.0);
 }
@@ -122,20 +122,22 @@ TEST(DenseDepthAccuracy, OutputMedianClearsSpecksOffTheHandsSilhouettes) {
   pipeline::PipelineParams without;
   without.densify.median_size = 0;
   const auto [on, off] = hand_silhouettes_with_and_without("the output median", without);
-  EXPECT_GT(on.precision, off.precision + 1.0);
-  EXPECT_GE(on.recall, off.recall - 0.6);
+  // The 5x5 median: precision 94.2 -> 97.2 %, recall 98.4 -> 97.9 % (it rounds the fingertips).
+  EXPECT_GT(on.precision, off.precision + 2.0);
+  EXPECT_GE(on.recall, off.recall - 0.8);
 }
 
 TEST(DenseDepthAccuracy, BoxOutlinesStepWhereTheBoxesBegin) {
   // Left of each box the stereo stage leaves the strip the box hides from the right camera and
   // often the box's first pixels: the strip goes to the background, the rim past it to the box.
   // With the rim left to the hole hint, which draws it to the background, these frames scored
-  // 92.4 % precision (95.5 % with the rule, both before the output median; 96.6 % with it).
+  // 92.4 % precision (95.5 % with the rule, both before the output median; 97.3 % with the
+  // 5x5 one).
   const tools::BoundaryAccuracy mean = silhouettes_of("boxes", {});
   std::printf("boxes silhouettes within %d px: recall %.2f %%, precision %.2f %%\n",
               tools::kBoundaryTolerance, mean.recall, mean.precision);
   EXPECT_GE(mean.recall, 97.0);
-  EXPECT_GE(mean.precision, 95.5);
+  EXPECT_GE(mean.precision, 96.5);
 }
 
 TEST(DenseDepthAccuracy, FingerRimsLostByTheChecksGetTheFingersValue) {
@@ -144,8 +146,10 @@ TEST(DenseDepthAccuracy, FingerRimsLostByTheChecksGetTheFingersValue) {
   pipeline::PipelineParams without;
   without.stereo.boundary_hole_reach = 0;
   const auto [on, off] = hand_silhouettes_with_and_without("the row search", without);
-  EXPECT_GT(on.precision, off.precision + 1.0);  // 1.9 points on these frames
-  EXPECT_GE(on.recall, off.recall - 0.2);
+  // 0.4 point on these frames (1.9 with a 3x3 output median: the 5x5 one clears part of the
+  // islands too); 1.2 points over 30 frames.
+  EXPECT_GT(on.precision, off.precision + 0.25);
+  EXPECT_GE(on.recall, off.recall);
 }
 
 // % of pixels that change side of the virtual planes between consecutive frames over the first

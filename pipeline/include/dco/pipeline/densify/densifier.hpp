@@ -63,7 +63,7 @@ struct DensifyParams {
   // conjugate-gradient iterations of the full system from the result, so contours still act at
   // the input resolution; "auto" = half when the input is wider than 640 px.
   std::string solve_resolution = "auto";
-  int fine_sweeps = 8;
+  int fine_sweeps = 4;
   int fine_iterations = 0;
   int max_iterations = 60;
   double tolerance = 1e-4;  // relative residual ||b - Ax|| / ||b||
@@ -71,9 +71,10 @@ struct DensifyParams {
   // Side of the median filter on the dense output (0 = off, 3 or 5). The solve leaves single
   // pixels and one-pixel slivers between two surfaces where a hole of the 2x2 matcher grid met
   // a depth edge; against a virtual plane each is a speck of wrong occlusion. A median removes
-  // them and keeps a straight step where it is. The solver's own solution stays unfiltered:
-  // it is the next frame's warm start and previous frame (Eq. 18).
-  int median_size = 3;
+  // them and keeps a straight step where it is; the 5x5 one also two-pixel slivers. The
+  // solver's own solution stays unfiltered: it is the next frame's warm start and previous
+  // frame (Eq. 18).
+  int median_size = 5;
 };
 
 void register_params(ConfigSchema& schema, DensifyParams& params);
