@@ -36,6 +36,7 @@
 #include "dco/ipc/ring_writer.hpp"
 #include "dco/tools/command_line.hpp"
 #include "dco/tools/json.hpp"
+#include "median.hpp"
 
 extern char** environ;
 
@@ -445,12 +446,6 @@ Frame make_frame(const Options& opt) {
         f.image.at(x, y) = static_cast<std::uint8_t>((x ^ y) & 0xff);
   }
   return f;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
 }
 
 struct Run {

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <opencv2/calib3d.hpp>
 
 #include "dco/core/calibration.hpp"
@@ -38,6 +39,7 @@
 #include "dco/tools/json.hpp"
 #include "dco/tools/sgbm_wls.hpp"
 #include "ipc_bench.hpp"
+#include "median.hpp"
 
 namespace {
 
@@ -47,8 +49,9 @@ using dco::tools::UsageError;
 
 constexpr std::string_view kUsage =
     R"(usage: dco-bench [--sequence synthetic|karlsruhe|all] [--synthetic NAME] [--size WxH]
-                 [--frames N] [--warmup N] [--karlsruhe DIR] [--fps F] [--paced-frames N]
-                 [--json] [--backend auto|cpu|cuda] [--config FILE] [--set KEY=VALUE]
+                 [--frames N] [--warmup N] [--rounds N] [--karlsruhe DIR] [--fps F]
+                 [--paced-frames N] [--json] [--backend auto|cpu|cuda] [--config FILE]
+                 [--set KEY=VALUE]
 
 Runs the depth pipeline in the real-time runtime and, on the same frames in the same run,
 OpenCV StereoSGBM (3-way) + WLS. Per sequence:
@@ -61,6 +64,9 @@ OpenCV StereoSGBM (3-way) + WLS. Per sequence:
               with runtime.release_latency_ms also the capture-to-ready latency and the
               results that were overdue or handed on early;
   peer        SGBM 3-way + WLS ms per frame; ratio = peer / dco.
+The throughput run and the peer take turns, --rounds times, so that both meet the machine in
+the same state; each round's figures are printed, and the headline figures are the medians over
+the rounds (the ratio: the median of the rounds' ratios).
 Each run (and the peer) first takes the sequence's first --warmup frames, untimed, so that what
 starting up costs once (buffers touched for the first time, the flow's set-up) is not counted as
 the frames' work. The timed pass is a new sequence: its ms per frame still pays for filling the
@@ -77,6 +83,7 @@ and decisions).
   --frames N          frames of each sequence (default 20; the Karlsruhe clip has 10)
   --warmup N          frames of the untimed pass before each run (default 4, at most the
                       frames)
+  --rounds N          turns of the throughput run and the peer (default 3)
   --karlsruhe DIR     the clip (default: the shared data's 2010_03_09_drive_0023), max-disp 96
   --fps F             input rate of the latency run (default 30)
   --paced-frames N    frames pushed in the latency run, the sequence played back and forth
@@ -100,6 +107,7 @@ struct Options {
   std::string synthetic = "hand";
   int width = 1280, height = 720, frames = 20;
   int warmup = 4;
+  int rounds = 3;
   fs::path karlsruhe = fs::path(DCO_DATA_DIR) / "karlsruhe_sequences" / "2010_03_09_drive_0023";
   double fps = 30;
   int paced_frames = 90;
@@ -138,6 +146,8 @@ Options parse_args(int argc, char** argv) {
       opt.frames = args.int_value();
     else if (arg == "--warmup")
       opt.warmup = args.int_value();
+    else if (arg == "--rounds")
+      opt.rounds = args.int_value();
     else if (arg == "--karlsruhe")
       opt.karlsruhe = args.value();
     else if (arg == "--fps")
@@ -164,6 +174,7 @@ Options parse_args(int argc, char** argv) {
   if (opt.frames < 1) throw UsageError("--frames must be >= 1");
   if (opt.paced_frames < 1) throw UsageError("--paced-frames must be >= 1");
   if (opt.warmup < 0) throw UsageError("--warmup must be >= 0");
+  if (opt.rounds < 1) throw UsageError("--rounds must be >= 1");
 
   return opt;
 }
@@ -426,21 +437,29 @@ rt::RuntimeStats counts_since(const rt::RuntimeStats& before, const rt::RuntimeS
   return d;
 }
 
+// One turn of the throughput run and the peer.
+struct Round {
+  double ms_per_frame = 0, peer_ms_per_frame = 0;
+  double ratio() const { return peer_ms_per_frame / ms_per_frame; }
+};
+
 struct Result {
   std::string name;
   std::string backend, backend_message;
   std::optional<BackendCheck> check;
   int width = 0, height = 0, frames = 0, max_disparity = 0, threads = 0, warmup = 0;
   bool parallel_flow = false;  // the flow cue's two fields on two threads
-  double ms_per_frame = 0;
+  std::vector<Round> rounds;
+  double ms_per_frame = 0;  // the medians over the rounds
+  double peer_ms_per_frame = 0;
+  double ratio = 0;            // the median of the rounds' ratios
   double first_result_ms = 0;  // a new runtime: first push to first result (the warm-up pass)
-  PassFigures throughput;
+  PassFigures throughput;      // every round's frames
   double fps = 0;
   int paced_frames = 0;
   double release_latency_ms = 0;  // runtime.release_latency_ms of the latency run
   rt::RuntimeStats paced;         // the counts of its timed pass: pushed, dropped, late, ...
   PassFigures paced_figures;
-  double peer_ms_per_frame = 0;
 };
 
 Result run(const Options& opt, const Params& base, const Frames& frames) {
@@ -463,29 +482,54 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
   // Each run first passes the sequence's first --warmup frames through the same runtime
   // untimed, and the peer likewise, so that starting up is not counted as a frame's work.
   const auto warmup_frames = std::span(frames.pairs).first(static_cast<std::size_t>(r.warmup));
-  {  // Throughput: every frame, as fast as the runtime takes them.
-    rt::RuntimeParams runtime = p.runtime;
-    runtime.deterministic = true;
-    ResultTimes results(frames.pairs.size());
-    rt::DepthRuntime pipeline(p.pipeline, runtime, results.callback(), {}, backend.stages);
-    pipeline.start();
-    auto start = rt::Clock::now();
-    if (!warmup_frames.empty()) {
-      for (const auto& f : warmup_frames) pipeline.push(f.left.cview(), f.right.cview());
+  // Throughput: every frame, as fast as the runtime takes them; then the peer on the same frames.
+  // The two take turns so that a drift of the machine's speed meets both alike.
+  std::vector<rt::FrameTimes> all_times;
+  std::vector<double> first_results;
+  for (int round = 0; round < opt.rounds; ++round) {
+    Round turn;
+    {
+      rt::RuntimeParams runtime = p.runtime;
+      runtime.deterministic = true;
+      ResultTimes results(frames.pairs.size());
+      rt::DepthRuntime pipeline(p.pipeline, runtime, results.callback(), {}, backend.stages);
+      pipeline.start();
+      auto start = rt::Clock::now();
+      if (!warmup_frames.empty()) {
+        for (const auto& f : warmup_frames) pipeline.push(f.left.cview(), f.right.cview());
+        pipeline.drain();
+        first_results.push_back(ms_between(start, results.take().front().release));
+        start = rt::Clock::now();
+      }
+      for (const auto& f : frames.pairs) pipeline.push(f.left.cview(), f.right.cview());
       pipeline.drain();
-      r.first_result_ms = ms_between(start, results.take().front().release);
-      start = rt::Clock::now();
+      const std::vector<rt::FrameTimes> times = results.take();
+      if (static_cast<int>(times.size()) != r.frames)
+        throw dco::Error(fmt::format("{}: the deterministic run published {} of {} frames",
+                                     frames.name, times.size(), r.frames));
+      if (warmup_frames.empty()) first_results.push_back(ms_between(start, times.front().release));
+      turn.ms_per_frame = ms_between(start, times.back().release) / r.frames;
+      all_times.insert(all_times.end(), times.begin(), times.end());
     }
-    for (const auto& f : frames.pairs) pipeline.push(f.left.cview(), f.right.cview());
-    pipeline.drain();
-    const std::vector<rt::FrameTimes> times = results.take();
-    if (static_cast<int>(times.size()) != r.frames)
-      throw dco::Error(fmt::format("{}: the deterministic run published {} of {} frames",
-                                   frames.name, times.size(), r.frames));
-    if (warmup_frames.empty()) r.first_result_ms = ms_between(start, times.front().release);
-    r.ms_per_frame = ms_between(start, times.back().release) / r.frames;
-    r.throughput = figures_of(times);
+    for (const auto& f : warmup_frames)
+      dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity);
+    double peer_ms = 0;
+    for (const auto& f : frames.pairs)
+      peer_ms +=
+          dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity).time_ms;
+    turn.peer_ms_per_frame = peer_ms / r.frames;
+    r.rounds.push_back(turn);
   }
+  const auto median_of = [&](auto figure) {
+    std::vector<double> v;
+    for (const Round& turn : r.rounds) v.push_back(figure(turn));
+    return dco::bench::median(std::move(v));
+  };
+  r.ms_per_frame = median_of([](const Round& t) { return t.ms_per_frame; });
+  r.peer_ms_per_frame = median_of([](const Round& t) { return t.peer_ms_per_frame; });
+  r.ratio = median_of([](const Round& t) { return t.ratio(); });
+  r.first_result_ms = dco::bench::median(first_results);
+  r.throughput = figures_of(all_times);
   {  // Latency: a camera's pace; the sequence is played back and forth so motion stays smooth.
     ResultTimes results(static_cast<std::size_t>(r.warmup + opt.paced_frames));
     rt::DepthRuntime pipeline(p.pipeline, p.runtime, results.callback(), {}, backend.stages);
@@ -527,13 +571,6 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
     r.paced.dropped = r.paced.pushed - r.paced.published;
     r.paced_figures = figures_of(timed);
   }
-  for (const auto& f : warmup_frames)
-    dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity);
-  double peer_ms = 0;
-  for (const auto& f : frames.pairs)
-    peer_ms +=
-        dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity).time_ms;
-  r.peer_ms_per_frame = peer_ms / r.frames;
   if (backend.stages.stereo) {
     r.check = compare_with_cpu(p.pipeline, frames, backend.stages);
     compare_rectification(frames, backend, *r.check);
@@ -551,8 +588,10 @@ void print_text(const Result& r) {
       r.name, r.frames, r.width, r.height, r.max_disparity, r.threads,
       r.parallel_flow ? " (+ a flow worker)" : "", r.warmup);
   fmt::print(
-      "  dco      {:8.1f} ms/frame  ({:.2f} fps); a new runtime's first result after {:.0f} ms\n",
-      r.ms_per_frame, 1000.0 / r.ms_per_frame, r.first_result_ms);
+      "  dco      {:8.1f} ms/frame  ({:.2f} fps, median of {} rounds); a new runtime's first "
+      "result "
+      "after {:.0f} ms\n",
+      r.ms_per_frame, 1000.0 / r.ms_per_frame, r.rounds.size(), r.first_result_ms);
   fmt::print(
       "  stages   stereo {:.1f}  contour {:.1f}  densify {:.1f} ms  (mean; p99 {:.1f} / {:.1f} / "
       "{:.1f})\n",
@@ -570,8 +609,12 @@ void print_text(const Result& r) {
         r.release_latency_ms, ls.latency.max_ms - r.release_latency_ms, ls.ready.p50_ms,
         ls.ready.p99_ms, l.overdue, l.early);
   fmt::print(
-      "  peer     {:8.1f} ms/frame  OpenCV StereoSGBM 3-way + WLS; ratio peer / dco {:.3f}\n",
-      r.peer_ms_per_frame, r.peer_ms_per_frame / r.ms_per_frame);
+      "  peer     {:8.1f} ms/frame  OpenCV StereoSGBM 3-way + WLS; ratio peer / dco {:.3f} (the "
+      "median of the rounds' ratios)\n",
+      r.peer_ms_per_frame, r.ratio);
+  for (std::size_t i = 0; i < r.rounds.size(); ++i)
+    fmt::print("  round {}  dco {:.1f}, peer {:.1f} ms/frame, ratio {:.3f}\n", i + 1,
+               r.rounds[i].ms_per_frame, r.rounds[i].peer_ms_per_frame, r.rounds[i].ratio());
   fmt::print("  {}\n", r.backend_message);
   if (r.check)
     fmt::print(
@@ -600,6 +643,17 @@ void print_text(const Result& r) {
         r.check->cpu_rectify_ms / r.check->cuda_rectify_ms, r.check->differing_rectified_bytes);
 }
 
+// {"ms_per_frame": ..., "peer_ms_per_frame": ..., "ratio": ...} of each round.
+std::vector<std::string> round_objects(const Result& r) {
+  using dco::tools::json_number;
+  std::vector<std::string> out;
+  for (const Round& turn : r.rounds)
+    out.push_back(fmt::format("{{\"ms_per_frame\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}}}",
+                              json_number(turn.ms_per_frame), json_number(turn.peer_ms_per_frame),
+                              json_number(turn.ratio())));
+  return out;
+}
+
 // The fields of one sequence, without braces.
 std::string json_fields(const Result& r) {
   using dco::tools::json_number;
@@ -626,7 +680,8 @@ std::string json_fields(const Result& r) {
              json_number(ls.latency.max_ms), json_number(ls.ready.p50_ms),
              json_number(ls.ready.p99_ms), json_number(r.release_latency_ms), l.overdue, l.early,
              l.pushed, l.dropped, l.late, l.published, json_number(r.peer_ms_per_frame),
-             json_number(r.peer_ms_per_frame / r.ms_per_frame)) +
+             json_number(r.ratio)) +
+         fmt::format(", \"rounds\": [{}]", fmt::join(round_objects(r), ", ")) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
          (r.check ? fmt::format(
                         ", \"cpu_stereo_ms\": {}, \"cuda_stereo_ms\": {}, "
