@@ -553,8 +553,8 @@ TEST(Densifier, HalfResolutionSolveKeepsAContourOnAnOddColumn) {
   EXPECT_LT(iterated.last_report().output_residual, d.last_report().output_residual);
   EXPECT_LT(mean_difference(half), with_sweeps);
   for (int y = 0; y < h; ++y) EXPECT_GT(half.at(edge - 1, y) - half.at(edge + 1, y), 27.0f) << y;
-  // The defaults are the run above: four sweeps, no iteration (each sweep is one pass; an
-  // iteration costs a V-cycle over the full-size system).
+  // The defaults refine as the first run above did: four sweeps, no iteration (each sweep is one
+  // pass; an iteration costs a V-cycle over the full-size system).
   const DensifyParams defaults;
   EXPECT_EQ(defaults.fine_sweeps, 4);
   EXPECT_EQ(defaults.fine_iterations, 0);
