@@ -24,9 +24,11 @@ struct StereoParams {
   // CUDA, whose cost volume is not the bottleneck.
   std::string search_range = "auto";
 
-  // Matching cost, Eq. 1.
+  // Matching cost, Eq. 1. The paper's λ_census is 40; 30 gives a denser and more exact sparse map
+  // and dense map on the shared scenes (bench/RESULTS.md, "Matching cost and support windows
+  // re-measured").
   double lambda_ad = 10.0;
-  double lambda_census = 40.0;
+  double lambda_census = 30.0;
   double gamma_l = 1.0;
   double epsilon = 0.8;
   int census_width = 9;   // odd; census_width * census_height - 1 <= 64
@@ -35,11 +37,12 @@ struct StereoParams {
   // Adaptive cross-support windows (§4.1): arms grow while the colour stays within tau1 of the
   // anchor (and of the previous pixel); beyond arm_short they need the stricter tau2. Lengths are
   // in input pixels (divided by the internal downscale), so a window covers the same part of
-  // the scene at any internal resolution.
+  // the scene at any internal resolution. The stricter part starts at 10 px with tau2 4 (the
+  // AD-census values 17 and 6 let windows run further across faint edges; same section).
   int arm_max = 34;
-  int arm_short = 17;
+  int arm_short = 10;
   int tau1 = 20;
-  int tau2 = 6;
+  int tau2 = 4;
   bool smooth_arms = true;  // 3-tap median of the arm lengths across the arm direction
 
   // Cost aggregation over the support region, Eq. 2: alternating horizontal-first and
