@@ -24,7 +24,8 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "guided on the CPU when over 64 internal disparities, full on CUDA");
   s.add("stereo.use_color", &p.use_color, "AD cost and arms on colour when the input has it");
   s.add("stereo.lambda_ad", &p.lambda_ad, 0.01, 1000.0, "λ_AD of Eq. 1");
-  s.add("stereo.lambda_census", &p.lambda_census, 0.01, 1000.0, "λ_census of Eq. 1");
+  s.add("stereo.lambda_census", &p.lambda_census, 0.01, 1000.0,
+        "λ_census of Eq. 1 (the paper: 40)");
   s.add("stereo.gamma_l", &p.gamma_l, 0.0, 100.0, "γ_L of Eq. 1 (edge control)");
   s.add("stereo.epsilon", &p.epsilon, 0.001, 100.0, "ε of Eq. 1 (correction)");
   s.add("stereo.census_width", &p.census_width, 1, 63, "census window width, odd");
