@@ -17,6 +17,8 @@ struct CrossArms {
   int height() const { return left.height(); }
 };
 
+// AD-census's published values; the stereo stage builds its rule from StereoParams, whose
+// defaults differ (stereo_params.hpp).
 struct ArmRule {
   int arm_max = 34;    // L1
   int arm_short = 17;  // L2: beyond it the colour must stay within tau2

@@ -14,6 +14,8 @@ namespace dco::stereo {
 // integer arithmetic that a SIMD or GPU version can reproduce bit for bit.
 inline constexpr std::uint32_t kCostScale = 4096;
 
+// The paper's values; the stereo stage builds its model from StereoParams, whose λ_census
+// differs (stereo_params.hpp).
 struct CostModel {
   double lambda_ad = 10.0;
   double lambda_census = 40.0;
