@@ -21,6 +21,9 @@ void register_params(ConfigSchema& s, ContourParams& p) {
   s.add("contour.parallel_flow", &p.parallel_flow, {"auto", "on", "off"},
         "the two flow fields on two threads at once (same output); auto = on with 4 or more "
         "usable CPUs");
+  s.add("contour.reuse_flow", &p.reuse_flow,
+        "lookahead 1: the field t -> t-1 is the previous frame's field t-1 -> t inverted, one DIS "
+        "run per frame instead of two");
   s.add("contour.projection_distance", &p.projection_distance, 1, 64,
         "|p p0| = |p p1| of the projection test (Eq. 9), internal px");
   s.add("contour.box_size", &p.box_size, 1, 255,

@@ -57,6 +57,13 @@ void check_optional(ImageView<const T> v, ImageView<const std::uint8_t> centre, 
                 std::to_string(centre.width) + "x" + std::to_string(centre.height) + "x1");
 }
 
+bool same_pixels(ImageView<const std::uint8_t> a, const Image<std::uint8_t>& b) {
+  if (!a.same_size(b.cview())) return false;
+  for (int y = 0; y < a.height; ++y)
+    if (std::memcmp(a.row(y), b.row(y), static_cast<std::size_t>(a.width)) != 0) return false;
+  return true;
+}
+
 // Mat::setTo allocates on every call; a row memset does not.
 void zero(cv::Mat& m) {
   for (int y = 0; y < m.rows; ++y) std::memset(m.ptr(y), 0, m.cols * m.elemSize());
@@ -83,6 +90,10 @@ struct FlowCue::State {
   ContourParams params;
   cv::Ptr<cv::DISOpticalFlow> dis;
   cv::Mat flow_a, flow_b;  // CV_32FC2, kept so DIS writes into the same memory every frame
+  // With reuse_flow: the last call's field centre -> neighbour_b and its two images.
+  cv::Mat last_b;
+  Image<std::uint8_t> last_centre, last_neighbour_b;
+  bool has_last = false;
   cv::Mat centre_copy, neighbour_copy, neighbour_b_copy;  // continuous copies of padded views
   std::unique_ptr<FlowFieldWorker> field_b;  // with parallel_flow: computes flow_b meanwhile
   Image<float> speed, amplitude_a, amplitude_b, contrast_a, contrast_b, fused, tmp;
@@ -120,7 +131,17 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
   // frame t's result depends on its window only, not on the previous call.
   zero(s.flow_a);
   zero(s.flow_b);
-  if (s.field_b) {
+  // The previous frame's field t-1 -> t is this frame's t -> t-1 turned round when it joined the
+  // same two images (lookahead 1); the window's content, not frame numbers, decides.
+  const bool reuse = s.params.reuse_flow && s.has_last &&
+                     same_pixels(in.neighbour_a, s.last_centre) &&
+                     same_pixels(in.centre, s.last_neighbour_b);
+  if (reuse) {
+    s.dis->calc(centre, continuous(in.neighbour_b, s.neighbour_copy), s.flow_b);
+    invert_flow(as_view<float>(static_cast<const cv::Mat&>(s.last_b)), s.speed.view(),
+                as_view<float>(s.flow_a));
+    timings.dis_fields = 1;
+  } else if (s.field_b) {
     const cv::Mat neighbour_a = continuous(in.neighbour_a, s.neighbour_copy);
     const cv::Mat neighbour_b = continuous(in.neighbour_b, s.neighbour_b_copy);
     s.field_b->start(centre, neighbour_b, s.flow_b);
@@ -138,6 +159,7 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
     s.dis->calc(centre, continuous(in.neighbour_a, s.neighbour_copy), s.flow_a);
     s.dis->calc(centre, continuous(in.neighbour_b, s.neighbour_copy), s.flow_b);
   }
+  if (!reuse) timings.dis_fields = 2;
   timings.flow_ms = t.lap_ms();
 
   const ImageView<const float> fa = as_view<float>(static_cast<const cv::Mat&>(s.flow_a));
@@ -153,6 +175,16 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
                   s.contrast_b.cview(), s.fused.view());
   timings.fusion_ms = t.lap_ms();
 
+  if (s.params.reuse_flow && s.params.lookahead == 1) {
+    // Kept for the next frame: the field and the two images it joins (swapped, not copied, so
+    // the next frame's DIS writes into the buffer this one read).
+    std::swap(s.flow_b, s.last_b);
+    s.last_centre.resize(cw, ch);
+    s.last_centre.copy_from(in.centre);
+    s.last_neighbour_b.resize(cw, ch);
+    s.last_neighbour_b.copy_from(in.neighbour_b);
+    s.has_last = true;
+  }
   box_filter(s.fused.cview(), s.params.box_size, s.tmp.view(), dst);
   timings.box_ms = t.lap_ms();
   normalise_by_max(dst, static_cast<float>(s.params.flow_floor));

@@ -49,6 +49,63 @@ void fuse_amplitudes(ImageView<const float> amplitude_a, ImageView<const float> 
   }
 }
 
+void invert_flow(ImageView<const float> forward, ImageView<float> speed,
+                 ImageView<float> backward) {
+  assert(forward.channels == 2 && backward.channels == 2 && speed.channels == 1 &&
+         backward.same_size(forward) && speed.same_size(forward));
+  const int w = forward.width;
+  const int h = forward.height;
+  // speed holds the squared speed of the source that landed on each pixel, -1 where none did.
+  for (int y = 0; y < h; ++y) std::fill(speed.row(y), speed.row(y) + w, -1.0f);
+  for (int y = 0; y < h; ++y) {
+    const float* f = forward.row(y);
+    for (int x = 0; x < w; ++x) {
+      const float u = f[2 * x];
+      const float v = f[2 * x + 1];
+      const float tx = static_cast<float>(x) + u + 0.5f;
+      const float ty = static_cast<float>(y) + v + 0.5f;
+      // Also false for NaN; past these bounds the truncation below is the floor.
+      if (!(tx >= 0.0f && tx < static_cast<float>(w) && ty >= 0.0f && ty < static_cast<float>(h)))
+        continue;
+      const int qx = static_cast<int>(tx);
+      const int qy = static_cast<int>(ty);
+      const float s = u * u + v * v;
+      float& best = speed.row(qy)[qx];
+      if (s > best) {
+        best = s;
+        float* b = backward.row(qy) + 2 * qx;
+        b[0] = -u;
+        b[1] = -v;
+      }
+    }
+  }
+  for (int y = 0; y < h; ++y) {
+    const float* s = speed.row(y);
+    float* b = backward.row(y);
+    int x = 0;
+    while (x < w) {
+      if (s[x] >= 0.0f) {
+        ++x;
+        continue;
+      }
+      const int start = x;
+      while (x < w && s[x] < 0.0f) ++x;
+      const bool has_left = start > 0;
+      const bool has_right = x < w;
+      float u = 0.0f, v = 0.0f;
+      if (has_left || has_right) {
+        const int from = !has_right || (has_left && s[start - 1] <= s[x]) ? start - 1 : x;
+        u = b[2 * from];
+        v = b[2 * from + 1];
+      }
+      for (int i = start; i < x; ++i) {
+        b[2 * i] = u;
+        b[2 * i + 1] = v;
+      }
+    }
+  }
+}
+
 float normalise_by_max(ImageView<float> values, float floor) {
   float largest = 0.0f;
   for (int y = 0; y < values.height; ++y) {

@@ -99,6 +99,51 @@ TEST(ContourFlowFusion, FusionTakesTheAmplitudeOfTheLargerContrast) {
   EXPECT_EQ(out.at(2, 0), 30.0f);  // tie: b
 }
 
+TEST(ContourFlowFusion, InvertedFlowSendsEveryPixelBackWhereItCameFrom) {
+  // The object [10, 20) moves 3 px right: in the neighbour it covers [13, 23), which flows back by
+  // -3 (the object wins over the still background it lands on), and the background it uncovered,
+  // [10, 13), takes the still side of its run rather than the object's motion.
+  const Image<float> forward = object_flow(3.0f);
+  Image<float> speed(kW, kH), backward(kW, kH, 2);
+  backward.fill(std::numeric_limits<float>::quiet_NaN());  // every pixel must be written
+  invert_flow(forward.view(), speed.view(), backward.view());
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const bool object = x >= kObjBegin + 3 && x < kObjEnd + 3;
+      EXPECT_EQ(backward.at(x, y, 0), object ? -3.0f : 0.0f) << x << "," << y;
+      EXPECT_EQ(backward.at(x, y, 1), 0.0f) << x << "," << y;
+    }
+  // Moving left, the uncovered run [17, 20) lies right of the object: the still side again.
+  invert_flow(object_flow(-3.0f).view(), speed.view(), backward.view());
+  for (int x = 0; x < kW; ++x)
+    EXPECT_EQ(backward.at(x, 4, 0), x >= kObjBegin - 3 && x < kObjEnd - 3 ? 3.0f : 0.0f) << x;
+}
+
+TEST(ContourFlowFusion, InvertedFlowRoundsSubPixelMotionAndFillsWhatNothingReaches) {
+  Image<float> forward(kW, kH, 2), speed(kW, kH), backward(kW, kH, 2);
+  forward.fill(0.0f);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      forward.at(x, y, 0) = 2.4f;  // everything 2.4 px right and 0.6 down: lands 2 right, 1 down
+      forward.at(x, y, 1) = 0.6f;
+    }
+  backward.fill(std::numeric_limits<float>::quiet_NaN());
+  invert_flow(forward.view(), speed.view(), backward.view());
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      // The first row and the first two columns receive nothing: the row's run takes its right
+      // end, and the first row, with nothing at all, is still.
+      const bool empty_row = y == 0;
+      EXPECT_EQ(backward.at(x, y, 0), empty_row ? 0.0f : -2.4f) << x << "," << y;
+      EXPECT_EQ(backward.at(x, y, 1), empty_row ? 0.0f : -0.6f) << x << "," << y;
+    }
+  // Flows that are not numbers land nowhere.
+  forward.fill(std::numeric_limits<float>::quiet_NaN());
+  invert_flow(forward.view(), speed.view(), backward.view());
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) ASSERT_EQ(backward.at(x, y, 0), 0.0f);
+}
+
 TEST(ContourFlowFusion, NormaliseDividesByTheMaximumOrTheFloor) {
   Image<float> v(3, 1);
   v.at(0, 0) = 0;

@@ -23,6 +23,10 @@ struct ContourParams {
   // The two flow fields (t -> t-1, t -> t+1) on two threads at once: "on", "off", or "auto" = on
   // where at least four CPUs are usable. Same output either way.
   std::string parallel_flow = "auto";
+  // With lookahead 1 frame t's field t -> t-1 is the previous frame's field t-1 -> t inverted
+  // (invert_flow) when that frame was computed with the same two images, so DIS runs once per
+  // frame instead of twice.
+  bool reuse_flow = true;
   // The flow cue is divided by max(its maximum, flow_floor) (the normalisation of §5.3.2). With
   // the paper's plain maximum a still scene's flow noise (|flow| of a few hundredths of a pixel)
   // is stretched to full strength and opens the gate everywhere; motion of about 1 internal px
@@ -59,13 +63,14 @@ struct ContourInputs {
   ImageView<const float> disparity;           // internal px, dense (e.g. the WTA map); optional
 };
 
-// Milliseconds per step of the last compute(), named after Table 2: flow = both DIS fields,
-// amplitude = Eq. 6-8 on both, fusion = projection test and Eq. 12, box and normalise = the
-// flow cue's, stereo_cue = disparity jumps with their box filter and the max with the flow cue,
+// Milliseconds per step of the last compute(), named after Table 2: flow = both fields (DIS or
+// reused), amplitude = Eq. 6-8 on both, fusion = projection test and Eq. 12, box and normalise =
+// the flow cue's, stereo_cue = disparity jumps with their box filter and the max with the flow cue,
 // gaussian = the 5x5 blur, canny = gradient, suppression, gate and hysteresis.
 struct ContourTimings {
   double flow_ms = 0, amplitude_ms = 0, fusion_ms = 0, box_ms = 0, normalise_ms = 0,
          stereo_cue_ms = 0, gaussian_ms = 0, canny_ms = 0, total_ms = 0;
+  int dis_fields = 0;  // DIS runs of the call: 2, 1 with a reused field, 0 without the flow cue
 };
 
 // Outputs, resized on first use:

@@ -28,6 +28,14 @@ void fuse_amplitudes(ImageView<const float> amplitude_a, ImageView<const float> 
                      ImageView<const float> amplitude_b, ImageView<const float> contrast_b,
                      ImageView<float> fused);
 
+// The field from the neighbour back to the centre, from `forward` (centre -> neighbour): each
+// centre pixel p lands on round(p + forward(p)) in the neighbour, which takes -forward(p); where
+// several land on one pixel the fastest wins (the nearer surface, under a camera's translation),
+// and a run of pixels none lands on (uncovered from behind a moving surface) takes the value at
+// its row end that moves less (the farther surface), or 0 on a row with none. `speed` is scratch
+// of the same size.
+void invert_flow(ImageView<const float> forward, ImageView<float> speed, ImageView<float> backward);
+
 // Divides every value by max(largest value, floor) so the result lies in [0, 1]; returns that
 // divisor. An all-zero image (with floor 0) is left as it is and 0 is returned.
 float normalise_by_max(ImageView<float> values, float floor);
