@@ -955,6 +955,34 @@ void WtaSkipRow(int count, int width, int d, const WtaRow& s) {
     pixel::wta_skip(d, count, s.above[x], s.prev1[x], s.prev2[x], s.runmin[x], s.disp[x]);
 }
 
+void LeftRightCheckRow(std::int16_t* HWY_RESTRICT left, const std::int16_t* HWY_RESTRICT right,
+                       int width, int max_diff, std::int32_t* HWY_RESTRICT scratch) {
+  const hn::ScalableTag<std::int32_t> di;
+  const hn::Rebind<std::int16_t, decltype(di)> d16;
+  const int n = static_cast<int>(hn::Lanes(di));
+  // 32-bit lanes can gather only 32-bit values: the right row widened once.
+  int x = 0;
+  for (; x + n <= width; x += n)
+    hn::StoreU(hn::PromoteTo(di, hn::LoadU(d16, right + x)), di, scratch + x);
+  for (; x < width; ++x) scratch[x] = right[x];
+  const auto invalid = hn::Set(di, pixel::kInvalid);
+  const auto beyond = hn::Set(di, max_diff + 1);
+  const auto lanes = hn::Iota(di, 0);  // hoisted: Iota is not a single instruction everywhere
+  for (x = 0; x + n <= width; x += n) {
+    const auto d = hn::PromoteTo(di, hn::LoadU(d16, left + x));
+    const auto xr = hn::Sub(hn::Add(lanes, hn::Set(di, x)), d);
+    // Invalid lanes (d = -1) and those left of the row look up column 0 and are dropped anyway.
+    const auto inside = hn::And(hn::Ne(d, invalid), hn::Gt(xr, hn::Set(di, -1)));
+    const auto r = hn::GatherIndex(di, scratch, hn::IfThenElseZero(inside, xr));
+    const auto agree =
+        hn::And(inside, hn::And(hn::Ne(r, invalid), hn::Lt(hn::Abs(hn::Sub(r, d)), beyond)));
+    hn::StoreU(hn::DemoteTo(d16, hn::IfThenElse(agree, d, invalid)), d16, left + x);
+  }
+  for (; x < width; ++x)
+    if (left[x] != pixel::kInvalid && !pixel::left_right_agree(x, left[x], right, max_diff))
+      left[x] = pixel::kInvalid;
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace dco::kernels
 HWY_AFTER_NAMESPACE();
@@ -982,6 +1010,7 @@ HWY_EXPORT(BlockVoteRow);
 HWY_EXPORT(WtaUpdateRow);
 HWY_EXPORT(WtaSkipRow);
 HWY_EXPORT(DisparityValuesRow);
+HWY_EXPORT(LeftRightCheckRow);
 
 const char* simd_target() {
   return HWY_DYNAMIC_DISPATCH(TargetName)();
@@ -1089,6 +1118,11 @@ void wta_skip_row(int count, int width, int d, const WtaRow& row) {
 void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel, float max_value,
                           float* raw, float* sparse) {
   HWY_DYNAMIC_DISPATCH(DisparityValuesRow)(in, width, subpixel, max_value, raw, sparse);
+}
+
+void left_right_check_row(std::int16_t* left, const std::int16_t* right, int width, int max_diff,
+                          std::int32_t* scratch) {
+  HWY_DYNAMIC_DISPATCH(LeftRightCheckRow)(left, right, width, max_diff, scratch);
 }
 
 }  // namespace dco::kernels

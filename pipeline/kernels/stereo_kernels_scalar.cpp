@@ -131,5 +131,11 @@ void wta_skip_row(int count, int width, int d, const WtaRow& row) {
     pixel::wta_skip(d, count, row.above[x], row.prev1[x], row.prev2[x], row.runmin[x], row.disp[x]);
 }
 
+void left_right_check_row(std::int16_t* left, const std::int16_t* right, int width, int max_diff) {
+  for (int x = 0; x < width; ++x)
+    if (left[x] != pixel::kInvalid && !pixel::left_right_agree(x, left[x], right, max_diff))
+      left[x] = pixel::kInvalid;
+}
+
 }  // namespace scalar
 }  // namespace dco::kernels

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
@@ -71,7 +72,7 @@ class CpuStereoMatcher final : public StereoMatcher {
 
     disp_.resize(w_, h_);
     disp_.copy_from(wta_.left_disparity());
-    left_right_check(disp_.view(), wta_.right_disparity(), params_.lr_max_diff);
+    left_right_check(disp_.view(), wta_.right_disparity(), params_.lr_max_diff, lr_scratch_);
     if (params_.uniqueness > 0)
       uniqueness_check(disp_.view(), wta_.best_cost(), wta_.second_cost(), params_.uniqueness);
     changed_.resize(w_, h_);
@@ -253,6 +254,7 @@ class CpuStereoMatcher final : public StereoMatcher {
   VoteScratch vote_scratch_;
   Image<float> values_, raw_;
   Image<std::int16_t> jump_scratch_;
+  std::vector<std::int32_t> lr_scratch_;
   SpeckleFilter speckles_;
   Image<std::uint8_t> full_grey_left_, full_grey_right_;
   BoundaryRefiner boundaries_;

@@ -72,14 +72,12 @@ void SpeckleFilter::apply(ImageView<std::int16_t> disparity, int max_size, int m
 }
 
 void left_right_check(ImageView<std::int16_t> left, ImageView<const std::int16_t> right,
-                      int max_diff) {
-  for (int y = 0; y < left.height; ++y) {
-    std::int16_t* l = left.row(y);
-    const std::int16_t* r = right.row(y);
-    for (int x = 0; x < left.width; ++x)
-      if (l[x] != kInvalidDisparity && !kernels::pixel::left_right_agree(x, l[x], r, max_diff))
-        l[x] = kInvalidDisparity;
-  }
+                      int max_diff, std::vector<std::int32_t>& scratch) {
+  assert(right.same_size(left));
+  if (scratch.size() < static_cast<std::size_t>(left.width))
+    scratch.resize(static_cast<std::size_t>(left.width));
+  for (int y = 0; y < left.height; ++y)
+    kernels::left_right_check_row(left.row(y), right.row(y), left.width, max_diff, scratch.data());
 }
 
 void uniqueness_check(ImageView<std::int16_t> disparity, ImageView<const std::uint16_t> best,

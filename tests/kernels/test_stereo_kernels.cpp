@@ -1,4 +1,5 @@
 #include "dco/kernels/stereo_kernels.hpp"
+#include "dco/kernels/stereo_pixel.hpp"
 #include "for_each_target.hpp"
 
 #include <algorithm>
@@ -726,6 +727,39 @@ TEST(StereoKernels, WinnerTakesAllSkippingBatchesMatchesScalar) {
             wta_skip_row(count, w, d, state.row());
         }
         ASSERT_TRUE(state == expected) << "width " << w << " batch " << batch;
+      });
+    }
+  }
+}
+
+TEST(StereoKernels, LeftRightCheckMatchesScalarAndThePixelRule) {
+  std::mt19937 rng(37);
+  for (const int w : kWidths) {
+    for (const int max_diff : {0, 1, 3}) {
+      // Right winners often within a few of the left ones, some invalid; left values invalid,
+      // pointing left of the row (d > x) and plain.
+      std::vector<std::int16_t> right(static_cast<std::size_t>(w)), left(right.size());
+      for (int x = 0; x < w; ++x) {
+        right[x] = static_cast<std::int16_t>(rng() % 8 == 0 ? pixel::kInvalid : rng() % 12);
+        left[x] = static_cast<std::int16_t>(rng() % 8 == 0 ? pixel::kInvalid : rng() % 14);
+      }
+      std::vector<std::int16_t> expected = left;
+      scalar::left_right_check_row(expected.data(), right.data(), w, max_diff);
+      int kept = 0;
+      for (int x = 0; x < w; ++x) {
+        const bool agree = left[x] != pixel::kInvalid &&
+                           pixel::left_right_agree(x, left[x], right.data(), max_diff);
+        ASSERT_EQ(expected[x], agree ? left[x] : pixel::kInvalid) << x;
+        kept += agree;
+      }
+      if (w >= 64) {
+        ASSERT_GT(kept, 0);  // both outcomes occur
+      }
+      for_each_target([&] {
+        std::vector<std::int16_t> actual = left;
+        std::vector<std::int32_t> scratch(static_cast<std::size_t>(w), 12345);
+        left_right_check_row(actual.data(), right.data(), w, max_diff, scratch.data());
+        ASSERT_EQ(actual, expected) << "width " << w << " max_diff " << max_diff;
       });
     }
   }

@@ -250,14 +250,15 @@ TEST(LeftRightCheck, MarksInconsistentAndOutOfImagePixels) {
   const auto left = row16({kInv, 0, 1, 2, 5, 3, 3, 3, 3});
   // x=1 -> xr 1 (1 vs 0); x=2 -> xr 1 (1 vs 1); x=3 -> xr 1 (1 vs 2); x=4 -> xr -1;
   // x=5 -> xr 2 (1 vs 3); x=6 -> xr 3 (9 vs 3); x=7 -> xr 4 (invalid); x=8 -> xr 5 (3 vs 3).
+  std::vector<std::int32_t> scratch;
   auto l1 = left;
-  left_right_check(l1.view(), right.cview(), 1);
+  left_right_check(l1.view(), right.cview(), 1, scratch);
   EXPECT_EQ(values(l1), (std::vector<int>{kInv, 0, 1, 2, kInv, kInv, kInv, kInv, 3}));
   auto l0 = left;
-  left_right_check(l0.view(), right.cview(), 0);
+  left_right_check(l0.view(), right.cview(), 0, scratch);
   EXPECT_EQ(values(l0), (std::vector<int>{kInv, kInv, 1, kInv, kInv, kInv, kInv, kInv, 3}));
   auto l8 = left;
-  left_right_check(l8.view(), right.cview(), 8);
+  left_right_check(l8.view(), right.cview(), 8, scratch);
   EXPECT_EQ(values(l8), (std::vector<int>{kInv, 0, 1, 2, kInv, 3, 3, kInv, 3}));
 }
 
@@ -266,7 +267,8 @@ TEST(LeftRightCheck, ConsistentPlaneSurvivesAndRowsAreIndependent) {
   left.fill(4);
   right.fill(4);
   right.at(6, 1) = 7;  // breaks left pixel 10 of row 1 only
-  left_right_check(left.view(), right.cview(), 1);
+  std::vector<std::int32_t> scratch;
+  left_right_check(left.view(), right.cview(), 1, scratch);
   for (int y = 0; y < 3; ++y)
     for (int x = 0; x < 20; ++x) {
       const bool out = x < 4 || (y == 1 && x == 10);

@@ -48,8 +48,9 @@ class WinnerTakesAll {
 
 // Marks kInvalidDisparity where the right image's winner at x - d(x) differs from d(x) by more
 // than max_diff (occlusions and mismatches), or where x - d(x) falls outside the image.
+// `scratch` is sized on first use and reused.
 void left_right_check(ImageView<std::int16_t> left, ImageView<const std::int16_t> right,
-                      int max_diff);
+                      int max_diff, std::vector<std::int32_t>& scratch);
 
 // Marks kInvalidDisparity where the best cost is not at least `ratio` below the best cost of a
 // non-adjacent disparity (ambiguous matches: repetitive texture, flat regions).

@@ -164,6 +164,12 @@ void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int c
 // (pixel::wta_skip): the state's neighbours and running minima take them as costless.
 void wta_skip_row(int count, int width, int d, const WtaRow& row);
 
+// Left-right check of one row (pixel::left_right_agree): left[x] becomes pixel::kInvalid where
+// the right image's winner at x - left[x] disagrees by more than max_diff or lies outside the row.
+// `scratch` holds `width` values (the right row widened for the lookups).
+void left_right_check_row(std::int16_t* left, const std::int16_t* right, int width, int max_diff,
+                          std::int32_t* scratch);
+
 // One row of the internal disparity maps from the winner-takes-all state: raw[x] =
 // pixel::raw_disparity(wta[x], ...) and sparse[x] = pixel::sparse_disparity(checked[x],
 // voted[x] != 0, ...), with the costs below, at and above the winner.
@@ -223,6 +229,7 @@ void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* c
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row);
 void wta_skip_row(int count, int width, int d, const WtaRow& row);
+void left_right_check_row(std::int16_t* left, const std::int16_t* right, int width, int max_diff);
 
 }  // namespace scalar
 }  // namespace dco::kernels
