@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <initializer_list>
 #include <random>
 #include <tuple>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
 
 #include "dco/kernels/stereo_pixel.hpp"
 
@@ -408,6 +410,44 @@ TEST(DiscontinuityCheck, SmoothSlopeSurvivesUnlessMaxJumpIsZero) {
   discontinuity_check(dropped.view(), 0, scratch);
   for (int y = 0; y < 4; ++y)
     for (int x = 0; x < 10; ++x) EXPECT_EQ(dropped.at(x, y), x == 9 ? 19 : kInv) << x << "," << y;
+}
+
+// The islands of cv::filterSpeckles, removed the same way: maps of small values with many
+// invalid pixels, so that islands of every size and shape occur.
+TEST(SpeckleFilter, RemovesTheIslandsOpenCvRemoves) {
+  std::mt19937 rng(11);
+  SpeckleFilter filter;  // one filter for every size: its work area is reused
+  int removed = 0, kept = 0;
+  for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 40}, std::pair{40, 1}, std::pair{7, 5},
+                             std::pair{64, 48}, std::pair{33, 65}})
+    for (const int max_size : {1, 2, 3, 4, 5, 8, 30})
+      for (const int max_diff : {0, 1, 2})
+        for (const int invalid_share : {2, 4, 8}) {
+          Image<std::int16_t> map(w, h);
+          for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+              map.at(x, y) = static_cast<std::int16_t>(
+                  rng() % invalid_share == 0 ? kInv : static_cast<int>(rng() % 5) + 3 * (x / 9));
+          cv::Mat expected(h, w, CV_16SC1);
+          for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) expected.at<std::int16_t>(y, x) = map.at(x, y);
+          cv::filterSpeckles(expected, kInv, max_size, max_diff);
+          for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+              removed += map.at(x, y) != kInv && expected.at<std::int16_t>(y, x) == kInv;
+          filter.apply(map.view(), max_size, max_diff);
+          for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+              ASSERT_EQ(map.at(x, y), expected.at<std::int16_t>(y, x))
+                  << w << "x" << h << " max_size " << max_size << " max_diff " << max_diff << " at "
+                  << x << "," << y;
+              kept += map.at(x, y) != kInv;
+            }
+        }
+  // Both outcomes occur often.
+  std::printf("%d pixels removed, %d kept\n", removed, kept);
+  EXPECT_GT(removed, 1000);
+  EXPECT_GT(kept, 1000);
 }
 
 TEST(SubpixelOffset, ExactOnASampledV) {

@@ -66,9 +66,9 @@ void uniqueness_check(ImageView<std::int16_t> disparity, ImageView<const std::ui
 void discontinuity_check(ImageView<std::int16_t> disparity, int max_jump,
                          Image<std::int16_t>& scratch);
 
-// Drops islands of fewer than max_size pixels whose neighbours step by at most max_diff
-// (cv::filterSpeckles): wrong matches that survived the checks. Keeps its work area across
-// frames.
+// Drops islands of at most max_size pixels whose 4-neighbours step by at most max_diff (the
+// islands of cv::filterSpeckles, found without flooding the large ones): wrong matches that
+// survived the checks. Keeps its work area across frames.
 class SpeckleFilter {
  public:
   SpeckleFilter();
