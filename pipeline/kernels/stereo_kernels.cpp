@@ -983,6 +983,35 @@ void LeftRightCheckRow(std::int16_t* HWY_RESTRICT left, const std::int16_t* HWY_
       left[x] = pixel::kInvalid;
 }
 
+void UniquenessCheckRow(std::int16_t* HWY_RESTRICT disparity,
+                        const std::uint16_t* HWY_RESTRICT best,
+                        const std::uint16_t* HWY_RESTRICT second, int width, double keep) {
+  // In double lanes, so that the products and comparisons are the pixel rule's own.
+  const hn::ScalableTag<double> df;
+  const hn::Rebind<std::int32_t, decltype(df)> di32;
+  const hn::Rebind<std::uint32_t, decltype(df)> du32;
+  const hn::Rebind<std::uint16_t, decltype(df)> du16;
+  const hn::Rebind<std::int16_t, decltype(df)> di16;
+  const int n = static_cast<int>(hn::Lanes(df));
+  const auto to_double = [&](const std::uint16_t* p) {
+    return hn::PromoteTo(df, hn::BitCast(di32, hn::PromoteTo(du32, hn::LoadU(du16, p))));
+  };
+  const auto factor = hn::Set(df, keep);
+  const auto no_cost = hn::Set(df, static_cast<double>(kNoCost));
+  const auto invalid = hn::Set(df, static_cast<double>(pixel::kInvalid));
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    const auto b = to_double(best + x);
+    const auto s = to_double(second + x);
+    const auto reject = hn::AndNot(hn::Eq(s, no_cost), hn::Gt(b, hn::Mul(factor, s)));
+    const auto d = hn::PromoteTo(df, hn::PromoteTo(di32, hn::LoadU(di16, disparity + x)));
+    hn::StoreU(hn::DemoteTo(di16, hn::DemoteTo(di32, hn::IfThenElse(reject, invalid, d))), di16,
+               disparity + x);
+  }
+  for (; x < width; ++x)
+    if (!pixel::unique_enough(best[x], second[x], keep)) disparity[x] = pixel::kInvalid;
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace dco::kernels
 HWY_AFTER_NAMESPACE();
@@ -1011,6 +1040,7 @@ HWY_EXPORT(WtaUpdateRow);
 HWY_EXPORT(WtaSkipRow);
 HWY_EXPORT(DisparityValuesRow);
 HWY_EXPORT(LeftRightCheckRow);
+HWY_EXPORT(UniquenessCheckRow);
 
 const char* simd_target() {
   return HWY_DYNAMIC_DISPATCH(TargetName)();
@@ -1123,6 +1153,11 @@ void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel
 void left_right_check_row(std::int16_t* left, const std::int16_t* right, int width, int max_diff,
                           std::int32_t* scratch) {
   HWY_DYNAMIC_DISPATCH(LeftRightCheckRow)(left, right, width, max_diff, scratch);
+}
+
+void uniqueness_check_row(std::int16_t* disparity, const std::uint16_t* best,
+                          const std::uint16_t* second, int width, double keep) {
+  HWY_DYNAMIC_DISPATCH(UniquenessCheckRow)(disparity, best, second, width, keep);
 }
 
 }  // namespace dco::kernels

@@ -137,5 +137,11 @@ void left_right_check_row(std::int16_t* left, const std::int16_t* right, int wid
       left[x] = pixel::kInvalid;
 }
 
+void uniqueness_check_row(std::int16_t* disparity, const std::uint16_t* best,
+                          const std::uint16_t* second, int width, double keep) {
+  for (int x = 0; x < width; ++x)
+    if (!pixel::unique_enough(best[x], second[x], keep)) disparity[x] = pixel::kInvalid;
+}
+
 }  // namespace scalar
 }  // namespace dco::kernels

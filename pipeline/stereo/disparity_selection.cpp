@@ -225,14 +225,9 @@ void left_right_check(ImageView<std::int16_t> left, ImageView<const std::int16_t
 void uniqueness_check(ImageView<std::int16_t> disparity, ImageView<const std::uint16_t> best,
                       ImageView<const std::uint16_t> second, double ratio) {
   const double keep = 1.0 - ratio;  // kept when best <= keep * second
-  for (int y = 0; y < disparity.height; ++y) {
-    std::int16_t* d = disparity.row(y);
-    const std::uint16_t* b = best.row(y);
-    const std::uint16_t* s = second.row(y);
-    // Branch-free, so the compiler vectorises it; an invalid pixel stays invalid either way.
-    for (int x = 0; x < disparity.width; ++x)
-      d[x] = kernels::pixel::unique_enough(b[x], s[x], keep) ? d[x] : kInvalidDisparity;
-  }
+  for (int y = 0; y < disparity.height; ++y)
+    kernels::uniqueness_check_row(disparity.row(y), best.row(y), second.row(y), disparity.width,
+                                  keep);
 }
 
 void discontinuity_check(ImageView<std::int16_t> disparity, int max_jump,

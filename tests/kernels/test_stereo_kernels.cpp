@@ -765,6 +765,45 @@ TEST(StereoKernels, LeftRightCheckMatchesScalarAndThePixelRule) {
   }
 }
 
+TEST(StereoKernels, UniquenessCheckMatchesScalarAndThePixelRule) {
+  std::mt19937 rng(41);
+  for (const int w : kWidths) {
+    for (const double keep : {0.85, 0.5, 0.999}) {
+      // Second costs near the best ones (both outcomes), kNoCost, and exact ties (keep 0.5 with
+      // an even second cost).
+      std::vector<std::uint16_t> best(static_cast<std::size_t>(w)), second(best.size());
+      std::vector<std::int16_t> disparity(best.size());
+      for (int x = 0; x < w; ++x) {
+        best[x] = static_cast<std::uint16_t>(rng() % 4000);
+        const int kind = static_cast<int>(rng() % 4);
+        second[x] = kind == 0   ? kNoCost
+                    : kind == 1 ? static_cast<std::uint16_t>(2 * best[x])
+                    : kind == 2 ? static_cast<std::uint16_t>(best[x] + rng() % 4)
+                                : static_cast<std::uint16_t>(best[x] + rng() % 800);
+        disparity[x] = static_cast<std::int16_t>(rng() % 6 == 0 ? pixel::kInvalid : rng() % 300);
+      }
+      std::vector<std::int16_t> expected = disparity;
+      scalar::uniqueness_check_row(expected.data(), best.data(), second.data(), w, keep);
+      int kept = 0, dropped = 0;
+      for (int x = 0; x < w; ++x) {
+        const bool unique = pixel::unique_enough(best[x], second[x], keep);
+        ASSERT_EQ(expected[x], unique ? disparity[x] : pixel::kInvalid) << x;
+        kept += unique && disparity[x] != pixel::kInvalid;
+        dropped += !unique;
+      }
+      if (w >= 64) {
+        ASSERT_GT(kept, 0);
+        ASSERT_GT(dropped, 0);
+      }
+      for_each_target([&] {
+        std::vector<std::int16_t> actual = disparity;
+        uniqueness_check_row(actual.data(), best.data(), second.data(), w, keep);
+        ASSERT_EQ(actual, expected) << "width " << w << " keep " << keep;
+      });
+    }
+  }
+}
+
 TEST(StereoKernels, WinnerTakesAllFindsTheMinimumAndItsNeighbours) {
   const int w = 21;
   const std::vector<std::uint16_t> costs = {50, 40, 10, 30, 20, 60};

@@ -170,6 +170,11 @@ void wta_skip_row(int count, int width, int d, const WtaRow& row);
 void left_right_check_row(std::int16_t* left, const std::int16_t* right, int width, int max_diff,
                           std::int32_t* scratch);
 
+// Uniqueness check of one row (pixel::unique_enough): disparity[x] becomes pixel::kInvalid unless
+// best[x] <= keep * second[x] (in double, as the pixel rule) or second[x] is kNoCost.
+void uniqueness_check_row(std::int16_t* disparity, const std::uint16_t* best,
+                          const std::uint16_t* second, int width, double keep);
+
 // One row of the internal disparity maps from the winner-takes-all state: raw[x] =
 // pixel::raw_disparity(wta[x], ...) and sparse[x] = pixel::sparse_disparity(checked[x],
 // voted[x] != 0, ...), with the costs below, at and above the winner.
@@ -230,6 +235,8 @@ void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int c
                     int d, const WtaRow& row);
 void wta_skip_row(int count, int width, int d, const WtaRow& row);
 void left_right_check_row(std::int16_t* left, const std::int16_t* right, int width, int max_diff);
+void uniqueness_check_row(std::int16_t* disparity, const std::uint16_t* best,
+                          const std::uint16_t* second, int width, double keep);
 
 }  // namespace scalar
 }  // namespace dco::kernels
