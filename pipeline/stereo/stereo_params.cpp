@@ -52,7 +52,7 @@ void register_params(ConfigSchema& s, StereoParams& p) {
   s.add("stereo.max_neighbour_jump", &p.max_neighbour_jump, -1, 64,
         "drop pixels behind a nearer neighbour by more than this (internal px, -1 = off)");
   s.add("stereo.speckle_size", &p.speckle_size, 0, 100000,
-        "drop islands of fewer internal pixels than this after the checks (0 = off)");
+        "drop islands of at most this many internal pixels after the checks (0 = off)");
   s.add("stereo.speckle_range", &p.speckle_range, 0, 64,
         "largest step between neighbours of one island, internal px");
   s.add("stereo.subpixel", &p.subpixel,
