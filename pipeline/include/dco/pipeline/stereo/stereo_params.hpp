@@ -53,7 +53,7 @@ struct StereoParams {
   int lr_max_diff = 1;         // left-right consistency, internal pixels
   double uniqueness = 0.15;    // best cost must beat the best non-adjacent cost by this fraction
   int max_neighbour_jump = 1;  // drop pixels behind a larger jump (internal px; -1 off)
-  // Drop islands of fewer than speckle_size pixels (internal) whose neighbours differ by at most
+  // Drop islands of at most speckle_size pixels (internal) whose neighbours differ by at most
   // speckle_range: isolated wrong matches that survived the checks (0 = off).
   int speckle_size = 4;
   int speckle_range = 1;
