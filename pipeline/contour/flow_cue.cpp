@@ -127,20 +127,20 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
   s.flow_b.create(ch, cw, CV_32FC2);
 
   const cv::Mat centre = continuous(in.centre, s.centre_copy);
-  // A flow Mat of the right size is taken by DIS as a candidate initial flow; zero it so that
-  // frame t's result depends on its window only, not on the previous call.
-  zero(s.flow_a);
-  zero(s.flow_b);
   // The previous frame's field t-1 -> t is this frame's t -> t-1 turned round when it joined the
   // same two images (lookahead 1); the window's content, not frame numbers, decides.
   const bool reuse = s.params.reuse_flow && s.has_last &&
                      same_pixels(in.neighbour_a, s.last_centre) &&
                      same_pixels(in.centre, s.last_neighbour_b);
+  timings.dis_fields = reuse ? 1 : 2;
+  // A flow Mat of the right size is taken by DIS as a candidate initial flow; zero what DIS
+  // writes so that frame t's result depends on its window only, not on the previous call.
+  if (!reuse) zero(s.flow_a);  // otherwise invert_flow writes every pixel
+  zero(s.flow_b);
   if (reuse) {
     s.dis->calc(centre, continuous(in.neighbour_b, s.neighbour_copy), s.flow_b);
     invert_flow(as_view<float>(static_cast<const cv::Mat&>(s.last_b)), s.speed.view(),
                 as_view<float>(s.flow_a));
-    timings.dis_fields = 1;
   } else if (s.field_b) {
     const cv::Mat neighbour_a = continuous(in.neighbour_a, s.neighbour_copy);
     const cv::Mat neighbour_b = continuous(in.neighbour_b, s.neighbour_b_copy);
@@ -159,7 +159,6 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
     s.dis->calc(centre, continuous(in.neighbour_a, s.neighbour_copy), s.flow_a);
     s.dis->calc(centre, continuous(in.neighbour_b, s.neighbour_copy), s.flow_b);
   }
-  if (!reuse) timings.dis_fields = 2;
   timings.flow_ms = t.lap_ms();
 
   const ImageView<const float> fa = as_view<float>(static_cast<const cv::Mat&>(s.flow_a));
