@@ -194,6 +194,15 @@ void HoleHintRow(const float* sparse, const float* wx, int width, float crossing
     const auto idx = hn::Add(lanes, hn::Set(di, x0));
     const auto k = known(sp);
     const auto weak = hn::RebindMask(di, hn::Lt(ex, weak_below));
+    if (hn::AllTrue(di, k)) {
+      // Every pixel known (most vectors of a matched surface): each is its own hint, and only
+      // the carried indices need the vector.
+      store(x0, sp);
+      last_known = hn::Set(di, x0 + n - 1);
+      last_weak =
+          hn::Max(hn::MaxOfLanes(di, hn::IfThenElse(weak, idx, hn::Set(di, -2))), last_weak);
+      continue;
+    }
     const auto lk =
         hn::Max(LaneScan<true>(di, hn::IfThenElse(k, idx, hn::Set(di, -1))), last_known);
     const auto lw =
@@ -217,14 +226,21 @@ void HoleHintRow(const float* sparse, const float* wx, int width, float crossing
   for (int x0 = (width - 1) / n * n; x0 >= 0; x0 -= n) {
     hn::Vec<decltype(d)> sp, ex;
     load(x0, sp, ex);
-    const auto signed_left = x0 + n <= width
-                                 ? hn::LoadU(d, hint + x0)
-                                 : (std::memcpy(hint_pad, hint + x0, sizeof(float) * (width - x0)),
-                                    hn::Load(d, hint_pad));
     const auto idx = hn::Add(lanes, hn::Set(di, x0));
     const auto k = known(sp);
     const auto weak =
         hn::And(hn::RebindMask(di, hn::Lt(ex, weak_below)), hn::Lt(idx, past_last_edge));
+    if (hn::AllTrue(di, k)) {
+      // The left pass stored these pixels' own values, which are their hints.
+      next_known = hn::Set(di, x0);
+      next_weak =
+          hn::Min(hn::MinOfLanes(di, hn::IfThenElse(weak, idx, hn::Set(di, width + 1))), next_weak);
+      continue;
+    }
+    const auto signed_left = x0 + n <= width
+                                 ? hn::LoadU(d, hint + x0)
+                                 : (std::memcpy(hint_pad, hint + x0, sizeof(float) * (width - x0)),
+                                    hn::Load(d, hint_pad));
     const auto rk =
         hn::Min(LaneScan<false>(di, hn::IfThenElse(k, idx, hn::Set(di, width))), next_known);
     const auto rw =

@@ -465,7 +465,7 @@ TEST(DensifyKernels, HoleHintRowMatchesScalarAndTheRule) {
   std::vector<int> widths = kWidths;
   widths.push_back(1283);
   for (const int w : widths)
-    for (const double known_share : {0.0, 0.03, 0.3, 0.8})
+    for (const double known_share : {0.0, 0.03, 0.3, 0.8, 0.97, 1.0})
       for (const double weak_share : {0.0, 0.1, 0.5}) {
         std::vector<float> sparse = random_floats(rng, w, 0.5f, 90.0f);
         std::uniform_real_distribution<double> unit(0.0, 1.0);
