@@ -42,6 +42,16 @@ bool solve3(const std::array<double, 9>& m, const std::array<double, 3>& b,
   return true;
 }
 
+// s[x] = fuse[x / 2] * intensity[x]: M_fuse at half the width (the stereo stage's internal
+// resolution), written per pair of columns so that it vectorises.
+void strength_row_half_width(const float* __restrict fuse, const float* __restrict intensity,
+                             int width, float* __restrict s) {
+  for (int g = 0; g < width / 2; ++g) {
+    s[2 * g] = fuse[g] * intensity[2 * g];
+    s[2 * g + 1] = fuse[g] * intensity[2 * g + 1];
+  }
+}
+
 }  // namespace
 
 void register_params(ConfigSchema& s, DensifyParams& p) {
@@ -176,8 +186,11 @@ void Densifier::build_system(const DensifyInputs& in) {
       float* s = smooth_strength_.row(y);
       const float* fuse = in.m_fuse.row(std::min(y * in.m_fuse.height / h, in.m_fuse.height - 1));
       const float* intensity = in.m_intensity.row(y);
-      for (int x = 0; x < w; ++x)
-        s[x] = fuse[fuse_column_[static_cast<std::size_t>(x)]] * intensity[x];
+      if (in.m_fuse.width * 2 == w)
+        strength_row_half_width(fuse, intensity, w, s);
+      else
+        for (int x = 0; x < w; ++x)
+          s[x] = fuse[fuse_column_[static_cast<std::size_t>(x)]] * intensity[x];
     }
   }
 

@@ -1,8 +1,10 @@
 #include "dco/pipeline/densify/match_planes.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 
 #include "dco/kernels/densify_kernels.hpp"
@@ -19,6 +21,50 @@ constexpr int kRingRows = kRowSums + 1;
 // Window sums: Σ1, Σu, Σv, Σu², Σuv, Σv², Σd, Σud, Σvd, Σd².
 constexpr int kWindowSums = 10;
 
+// out[g] = row[g * step] for g < n; step 2 (half-size matching) written apart so that it
+// vectorises.
+void grid_row(const float* __restrict row, int n, int step, float* __restrict out) {
+  if (step == 2) {
+    for (int g = 0; g < n; ++g) out[g] = row[2 * g];
+  } else {
+    for (int g = 0; g < n; ++g) out[g] = row[g * step];
+  }
+}
+
+// Per match: 1, its disparity less `offset` and that squared; 0, 0, 0 for a hole. A match is a
+// positive finite value, tested on its bits: integer masks let the compiler vectorise the loop,
+// where float comparisons (which may trap on NaN) keep a branch per pixel.
+void offset_matches(const float* __restrict own, int n, float offset, float* __restrict one,
+                    float* __restrict d, float* __restrict dd) {
+  constexpr std::int32_t kInfinityBits = 0x7f800000;
+  constexpr std::int32_t kOneBits = 0x3f800000;
+  for (int x = 0; x < n; ++x) {
+    const float v = own[x];
+    const auto bits = std::bit_cast<std::int32_t>(v);
+    const std::int32_t known = -static_cast<std::int32_t>((bits > 0) & (bits < kInfinityBits));
+    const float offset_v = std::bit_cast<float>(std::bit_cast<std::int32_t>(v - offset) & known);
+    one[x] = std::bit_cast<float>(kOneBits & known);
+    d[x] = offset_v;
+    dd[x] = offset_v * offset_v;
+  }
+}
+
+// out[x] = in[column[x]]: the grid row spread to the input width; step 2 written apart so that
+// it vectorises (every grid value twice, the last one once more when the width is odd).
+void spread_row(const float* __restrict in, const int* __restrict column, int width, int step,
+                float* __restrict out) {
+  if (step == 2) {
+    const int pairs = width / 2;
+    for (int g = 0; g < pairs; ++g) {
+      out[2 * g] = in[g];
+      out[2 * g + 1] = in[g];
+    }
+    if (width % 2 != 0) out[width - 1] = in[pairs];
+  } else {
+    for (int x = 0; x < width; ++x) out[x] = in[column[x]];
+  }
+}
+
 }  // namespace
 
 void MatchPlaneSmoother::row_moments(ImageView<const float> sparse, int grid_y, float offset,
@@ -27,18 +73,9 @@ void MatchPlaneSmoother::row_moments(ImageView<const float> sparse, int grid_y, 
   float* one = row_.data();
   float* d = one + n;
   float* dd = d + n;
-  const float* s = sparse.row(grid_y * step_);
   float* own = sums + kRowSums * n;
-  for (int x = 0; x < n; ++x) own[x] = s[x * step_];
-  constexpr float kInfinity = std::numeric_limits<float>::infinity();
-  for (int x = 0; x < n; ++x) {  // selects, no branches: vectorised
-    const float v = own[x];
-    const bool known = (v > 0.0f) & (v < kInfinity);
-    const float offset_v = known ? v - offset : 0.0f;
-    one[x] = known ? 1.0f : 0.0f;
-    d[x] = offset_v;
-    dd[x] = offset_v * offset_v;
-  }
+  grid_row(sparse.row(grid_y * step_), n, step_, own);
+  offset_matches(own, n, offset, one, d, dd);
   kernels::match_plane_row_sums(one, d, dd, n, radius_, sums);
 }
 
@@ -100,11 +137,8 @@ void MatchPlaneSmoother::apply(ImageView<const float> sparse, int step, int radi
     // written here (the grid's rows cover the image).
     float* plane_wide = row_.data() + n;
     float* own_wide = plane_wide + w;
-    for (int x = 0; x < w; ++x) {
-      const int gx = column_[static_cast<std::size_t>(x)];
-      plane_wide[x] = plane[gx];
-      own_wide[x] = grid[gx];
-    }
+    spread_row(plane, column_.data(), w, step, plane_wide);
+    spread_row(grid, column_.data(), w, step, own_wide);
     for (int y = gy * step; y < std::min(gy * step + step, h); ++y) {
       const float* s = sparse.row(y);
       float* o = out.row(y);

@@ -23,6 +23,12 @@ void add_to_parents(const float* fine_row, int width, float* coarse_row) {
   if (width % 2 != 0) coarse_row[pairs] += fine_row[width - 1];
 }
 
+// coarse_row[c] += fine_row[2 c + 1] for c < count: the edges from each aggregate's right
+// column to the next aggregate (restrict pointers: the compiler vectorises it).
+void add_odd_columns(const float* __restrict fine_row, int count, float* __restrict coarse_row) {
+  for (int c = 0; c < count; ++c) coarse_row[c] += fine_row[2 * c + 1];
+}
+
 // fine_row[x] (+)= coarse_row[x / 2].
 template <bool kAdd>
 void from_parents(const float* coarse_row, int width, float* fine_row) {
@@ -77,7 +83,7 @@ void coarsen(const GridSystem& fine, GridSystem& coarse, float edge_scale) {
     float* cey = coarse.wy.row(y / 2);
     add_to_parents(d, w, cd);
     // Only edges that leave the aggregate survive: odd column -> next aggregate, odd row -> next.
-    for (int x = 1; x + 1 < w; x += 2) cex[x / 2] += ex[x];
+    add_odd_columns(ex, (w - 1) / 2, cex);
     if (y % 2 == 1 && y + 1 < h) add_to_parents(ey, w, cey);
   }
   if (edge_scale != 1.0f) {
