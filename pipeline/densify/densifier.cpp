@@ -198,7 +198,8 @@ void Densifier::build_system(const DensifyInputs& in) {
   const auto edge_scale = static_cast<float>(2.0 * params_.lambda_s);
   const auto floor = static_cast<float>(params_.min_edge_weight);
   const bool has_image = !in.image.empty() && params_.color_sigma > 0;
-  const kernels::EdgeRule rule{edge_scale, floor, has_image ? color_weight_.data() : nullptr};
+  const kernels::EdgeRule rule{edge_scale, floor, has_image ? color_weight_.data() : nullptr,
+                               kernels::colour_floor_from(color_weight_.data(), floor)};
   for (int y = 0; y < h; ++y) {
     const std::uint8_t* bar = barrier_.row(y);
     const float* str = smooth_strength_.row(y);

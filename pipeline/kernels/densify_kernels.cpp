@@ -105,6 +105,12 @@ void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) 
   const auto one = hn::Set(df, 1.0f);
   const auto cut = hn::Mul(scale, floor);
   const auto* colour = rule.colour;
+  // With the floor reached within the first vector of weights, a difference past it clamps to
+  // it (its product with 1 - min(s_a, s_b) <= 1 is below the floor too) and one lane permute
+  // replaces the gather.
+  const bool colour_in_register = colour != nullptr && rule.colour_floor_from < lanes;
+  const auto colour_lanes = colour_in_register ? hn::LoadU(df, colour) : hn::Zero(df);
+  const auto colour_last = hn::Set(di, colour_in_register ? rule.colour_floor_from : 0);
   int i = 0;
   for (; i + lanes <= n; i += lanes) {
     const auto ba = hn::PromoteTo(di, hn::LoadU(du8, e.barrier_a + i));
@@ -117,7 +123,12 @@ void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) 
     if (colour != nullptr) {
       const auto ga = hn::PromoteTo(di, hn::LoadU(du8, e.grey_a + i));
       const auto gb = hn::PromoteTo(di, hn::LoadU(du8, e.grey_b + i));
-      weight = hn::Mul(weight, hn::GatherIndex(df, colour, hn::Abs(hn::Sub(ga, gb))));
+      const auto diff = hn::Abs(hn::Sub(ga, gb));
+      weight = hn::Mul(
+          weight, colour_in_register
+                      ? hn::TableLookupLanes(colour_lanes,
+                                             hn::IndicesFromVec(df, hn::Min(diff, colour_last)))
+                      : hn::GatherIndex(df, colour, diff));
     }
     const auto kept = hn::Mul(scale, hn::IfThenElse(hn::Lt(weight, floor), floor, weight));
     hn::StoreU(hn::IfThenElse(hn::RebindMask(df, hn::Ne(ba, bb)), cut, kept), df, out + i);

@@ -321,6 +321,14 @@ TEST(DensifyKernels, EdgeWeightsMatchScalar) {
   std::mt19937 rng(9);
   std::vector<float> colour(256);
   for (int d = 0; d < 256; ++d) colour[static_cast<std::size_t>(d)] = 1.0f / (1.0f + 0.1f * d);
+  // The densifier's table with color_sigma 1: below the floor from a difference of 7 on, so the
+  // weights of the smaller differences come from registers where a vector has 8 lanes or more.
+  std::vector<float> steep(256);
+  for (int d = 0; d < 256; ++d)
+    steep[static_cast<std::size_t>(d)] = std::exp(-static_cast<float>(d));
+  EXPECT_EQ(colour_floor_from(colour.data(), 0.01f), 256);
+  EXPECT_EQ(colour_floor_from(steep.data(), 0.001f), 7);
+  EXPECT_EQ(colour_floor_from(steep.data(), 2.0f), 0);
   for_each_target([&] {
     for (const int n : kWidths) {
       std::vector<std::uint8_t> bar_a(static_cast<std::size_t>(n)), bar_b(bar_a.size());
@@ -331,24 +339,37 @@ TEST(DensifyKernels, EdgeWeightsMatchScalar) {
         grey_a[i] = static_cast<std::uint8_t>(rng());
         grey_b[i] = static_cast<std::uint8_t>(rng());
       }
-      // Strengths up to 1 (weight 0, so the floor applies) and some equal pairs.
+      // Strengths up to 1 (weight 0, so the floor applies), many near 0 (so that the colour
+      // weight decides) and some equal pairs; grey-level differences of 0 to 12 on most pixels.
       std::vector<float> str_a = random_floats(rng, n, 0.0f, 1.0f);
       std::vector<float> str_b = random_floats(rng, n, 0.0f, 1.0f);
       for (std::size_t i = 0; i < str_a.size(); i += 3) str_b[i] = str_a[i];
+      for (std::size_t i = 1; i < str_a.size(); i += 2) str_a[i] *= 0.01f, str_b[i] *= 0.01f;
+      for (std::size_t i = 0; i < grey_a.size(); ++i) {
+        if (rng() % 4 == 0) continue;
+        const int near = grey_a[i] + static_cast<int>(rng() % 25) - 12;
+        grey_b[i] = static_cast<std::uint8_t>(std::clamp(near, 0, 255));
+      }
       const EdgeEnds ends{bar_a.data(), bar_b.data(),  str_a.data(),
                           str_b.data(), grey_a.data(), grey_b.data()};
-      const float* const tables[] = {nullptr, colour.data()};
-      for (const float* table : tables) {
-        const EdgeRule rule{2.4f, 0.01f, table};
+      struct Case {
+        const float* table;
+        float floor;
+      };
+      const Case cases[] = {{nullptr, 0.01f}, {colour.data(), 0.01f}, {steep.data(), 0.001f}};
+      for (const Case& c : cases) {
+        const EdgeRule rule{2.4f, c.floor, c.table,
+                            c.table ? colour_floor_from(c.table, c.floor) : 256};
         std::vector<float> expected(bar_a.size()), out(bar_a.size(), -1.0f);
         scalar::edge_weights_row(ends, rule, n, expected.data());
         edge_weights_row(ends, rule, n, out.data());
-        ASSERT_EQ(out, expected) << "n " << n << (table ? " with" : " without") << " guidance";
+        ASSERT_EQ(out, expected) << "n " << n << (c.table ? " with" : " without")
+                                 << " guidance, floor " << c.floor;
         for (std::size_t i = 0; i < out.size(); ++i) {
           if (bar_a[i] != bar_b[i]) {
-            ASSERT_EQ(out[i], 2.4f * 0.01f) << "a barrier between the ends cuts the edge";
+            ASSERT_EQ(out[i], 2.4f * c.floor) << "a barrier between the ends cuts the edge";
           } else {
-            ASSERT_GE(out[i], 2.4f * 0.01f);
+            ASSERT_GE(out[i], 2.4f * c.floor);
             ASSERT_LE(out[i], 2.4f);
           }
         }

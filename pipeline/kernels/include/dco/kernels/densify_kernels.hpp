@@ -108,7 +108,19 @@ struct EdgeRule {
   float scale = 0.0f;             // 2 λ_s: each undirected edge appears twice in Eq. 20
   float floor = 0.0f;             // least weight, so the system stays connected
   const float* colour = nullptr;  // 256 weights by grey-level difference; null = no guidance
+  // Every colour weight from this difference on is below `floor` (colour_floor_from gives it;
+  // 256: none), so every such edge gets the floor. The vector kernel then reads the weights of the
+  // smaller differences from registers; for that, strengths must be >= 0 (the densifier's are
+  // products of two maps in [0, 1]).
+  int colour_floor_from = 256;
 };
+
+// The least k such that colour[j] < floor for every j in k .. 255 (256 when colour[255] is not).
+inline int colour_floor_from(const float* colour, float floor) {
+  int k = 256;
+  while (k > 0 && colour[k - 1] < floor) --k;
+  return k;
+}
 
 // out[i] = scale * floor where exactly one end is on a barrier (Eq. 16, first case), else
 // scale * max((1 - min(s_a, s_b)) * colour[|g_a - g_b|], floor), for i < n.
