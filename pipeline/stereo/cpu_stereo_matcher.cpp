@@ -28,6 +28,16 @@ std::string size_text(ImageView<const std::uint8_t> v) {
          std::to_string(v.channels);
 }
 
+// dst[2 x] = dst[2 x + 1] = scale * src[x] for x < count: a half-size row at input size,
+// written per pair so that it vectorises.
+void spread_pairs(const float* __restrict src, int count, float scale, float* __restrict dst) {
+  for (int x = 0; x < count; ++x) {
+    const float v = scale * src[x];
+    dst[2 * x] = v;
+    dst[2 * x + 1] = v;
+  }
+}
+
 class CpuStereoMatcher final : public StereoMatcher {
  public:
   explicit CpuStereoMatcher(const StereoParams& params) : params_(params) {
@@ -224,8 +234,11 @@ class CpuStereoMatcher final : public StereoMatcher {
       }
       const float* src = values_.row(source);
       const int whole = std::min(w_, width / scale_);  // internal columns with all copies inside
-      for (int x = 0; x < whole; ++x)
-        for (int k = 0; k < scale_; ++k) dst[x * scale_ + k] = scale * src[x];
+      if (scale_ == 2)
+        spread_pairs(src, whole, scale, dst);
+      else
+        for (int x = 0; x < whole; ++x)
+          for (int k = 0; k < scale_; ++k) dst[x * scale_ + k] = scale * src[x];
       for (int x = whole * scale_; x < width; ++x)
         dst[x] = scale * src[std::min(x / scale_, w_ - 1)];
     }
