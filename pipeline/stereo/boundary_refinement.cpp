@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include "dco/kernels/boundary_kernels.hpp"
 
@@ -27,77 +29,158 @@ bool refines_boundaries(const StereoParams& params, int scale) {
 
 namespace {
 
-// side_range over a whole map, separably: the window's minimum (+inf, "none", never wins it) and
-// maximum ("none" counted as -inf) over rows first (reach_x columns each way), then over columns
-// (kBoundaryReach rows each way). Min and max are exact, so this gives side_range's values.
-void side_ranges(ImageView<const float> sparse, int reach_x, Image<float>& row_far,
-                 Image<float>& row_near, Image<float>& far, Image<float>& near) {
-  const int w = sparse.width, h = sparse.height;
-  const float none = px::infinity();
-  row_far.resize(w, h);
-  row_near.resize(w, h);
-  far.resize(w, h);
-  near.resize(w, h);
-  // Rows: each offset of the window in turn over the whole row, so that the loop over x
-  // vectorises whatever the reach.
-  for (int y = 0; y < h; ++y) {
-    const float* v = sparse.row(y);
-    float* rf = row_far.row(y);
-    float* rn = row_near.row(y);
-    std::fill(rf, rf + w, none);
-    std::fill(rn, rn + w, -none);
-    for (int k = -reach_x; k <= reach_x; ++k) {
-      const int x0 = std::max(0, -k), x1 = std::min(w, w - k);
-      const float* vk = v + k;
-      for (int x = x0; x < x1; ++x) {
-        const float e = vk[x];
-        const float n = e < none ? e : -none;  // "none" never counts as the near side
-        rf[x] = e < rf[x] ? e : rf[x];
-        rn[x] = n > rn[x] ? n : rn[x];
-      }
-    }
-  }
-  for (int y = 0; y < h; ++y) {
-    float* f = far.row(y);
-    float* n = near.row(y);
-    std::fill(f, f + w, none);
-    std::fill(n, n + w, -none);
-    for (int yy = std::max(0, y - px::kBoundaryReach);
-         yy <= std::min(h - 1, y + px::kBoundaryReach); ++yy) {
-      const float* rf = row_far.row(yy);
-      const float* rn = row_near.row(yy);
-      for (int x = 0; x < w; ++x) {
-        f[x] = std::min(f[x], rf[x]);
-        n[x] = std::max(n[x], rn[x]);
-      }
-    }
-  }
+// a[i] = min(a[i], b[i]) and the like, on restrict pointers so that the compiler vectorises them
+// (`p < q ? p : q` is what minps computes).
+void min_of_pairs(const float* __restrict a, const float* __restrict b, int n,
+                  float* __restrict out) {
+  for (int i = 0; i < n; ++i) out[i] = b[i] < a[i] ? b[i] : a[i];
+}
+void max_of_pairs(const float* __restrict a, const float* __restrict b, int n,
+                  float* __restrict out) {
+  for (int i = 0; i < n; ++i) out[i] = b[i] > a[i] ? b[i] : a[i];
+}
+void min_into(float* __restrict acc, const float* __restrict b, int n) {
+  for (int i = 0; i < n; ++i) acc[i] = b[i] < acc[i] ? b[i] : acc[i];
+}
+void max_into(float* __restrict acc, const float* __restrict b, int n) {
+  for (int i = 0; i < n; ++i) acc[i] = b[i] > acc[i] ? b[i] : acc[i];
+}
+
+// edge[x] = 1 where the narrow or the wide sides of internal pixel x span a depth edge
+// (px::spans_depth_edge of either), else 0.
+void edge_columns(const float* __restrict far, const float* __restrict near,
+                  const float* __restrict wide_far, const float* __restrict wide_near, int n,
+                  std::uint8_t* __restrict edge) {
+  for (int x = 0; x < n; ++x)
+    edge[x] = static_cast<std::uint8_t>((near[x] - far[x] > px::kBoundaryMinStep) |
+                                        (wide_near[x] - wide_far[x] > px::kBoundaryMinStep));
+}
+
+// The least level k with 2^(k+1) > 2 reach + 1: a window of 2 reach + 1 is two blocks of 2^k.
+int block_level(int reach) {
+  int k = 0;
+  while ((2 << k) <= 2 * reach + 1) ++k;
+  return k;
 }
 
 }  // namespace
+
+void BoundaryRefiner::row_windows(const float* v, int w, int reach, int narrow_reach, float* far,
+                                  float* near, float* narrow_far, float* narrow_near) {
+  // The row padded by `reach` on each side ("none" outside: +inf for the far side, -inf for the
+  // near side, where "none" never counts). Block level k holds at i the minimum (maximum) of the
+  // 2^k padded values from i on, built by doubling; the window of input column x is the two
+  // blocks that start at x - r and end at x + r (their overlap does not change a min or max).
+  const float none = px::infinity();
+  const int padded = w + 2 * reach;
+  for (std::vector<float>* b : {&lo_, &hi_, &lo_next_, &hi_next_})
+    b->resize(static_cast<std::size_t>(padded));
+  float* lo = lo_.data();
+  float* hi = hi_.data();
+  std::fill(lo, lo + reach, none);
+  std::fill(hi, hi + reach, -none);
+  for (int x = 0; x < w; ++x) {
+    lo[reach + x] = v[x];
+    hi[reach + x] = v[x] < none ? v[x] : -none;
+  }
+  std::fill(lo + reach + w, lo + padded, none);
+  std::fill(hi + reach + w, hi + padded, -none);
+  const auto window = [&](int r, int k, float* out_far, float* out_near) {
+    const int second = 2 * r + 1 - (1 << k);  // offset of the block that ends at x + r
+    min_of_pairs(lo + reach - r, lo + reach - r + second, w, out_far);
+    max_of_pairs(hi + reach - r, hi + reach - r + second, w, out_near);
+  };
+  const int narrow_level = narrow_far != nullptr ? block_level(narrow_reach) : -1;
+  const int level = block_level(reach);
+  for (int k = 0;; ++k) {
+    if (k == narrow_level) window(narrow_reach, k, narrow_far, narrow_near);
+    if (k == level) {
+      window(reach, k, far, near);
+      return;
+    }
+    const int step = 1 << k, count = padded - 2 * step + 1;  // blocks of 2^(k+1) that fit
+    min_of_pairs(lo, lo + step, count, lo_next_.data());
+    max_of_pairs(hi, hi + step, count, hi_next_.data());
+    lo_.swap(lo_next_);
+    hi_.swap(hi_next_);
+    lo = lo_.data();
+    hi = hi_.data();
+  }
+}
+
+void BoundaryRefiner::side_ranges(ImageView<const float> sparse, int hole_reach) {
+  const int w = sparse.width, h = sparse.height;
+  const bool holes = hole_reach > px::kBoundaryReach;
+  for (Image<float>* img : {&row_far_, &row_near_, &far_, &near_}) img->resize(w, h);
+  if (holes)
+    for (Image<float>* img : {&row_hole_far_, &row_hole_near_, &hole_far_, &hole_near_})
+      img->resize(w, h);
+  // Rows first (reach_x columns each way), then columns (kBoundaryReach rows each way): min and
+  // max are exact, so this gives side_range's values.
+  for (int y = 0; y < h; ++y) {
+    if (holes)
+      row_windows(sparse.row(y), w, hole_reach, px::kBoundaryReach, row_hole_far_.row(y),
+                  row_hole_near_.row(y), row_far_.row(y), row_near_.row(y));
+    else
+      row_windows(sparse.row(y), w, px::kBoundaryReach, 0, row_far_.row(y), row_near_.row(y),
+                  nullptr, nullptr);
+  }
+  const auto columns = [&](const Image<float>& row_far, const Image<float>& row_near,
+                           Image<float>& far, Image<float>& near) {
+    for (int y = 0; y < h; ++y) {
+      const int top = std::max(0, y - px::kBoundaryReach);
+      const int bottom = std::min(h - 1, y + px::kBoundaryReach);
+      float* f = far.row(y);
+      float* n = near.row(y);
+      std::copy(row_far.row(top), row_far.row(top) + w, f);
+      std::copy(row_near.row(top), row_near.row(top) + w, n);
+      for (int yy = top + 1; yy <= bottom; ++yy) {
+        min_into(f, row_far.row(yy), w);
+        max_into(n, row_near.row(yy), w);
+      }
+    }
+  };
+  columns(row_far_, row_near_, far_, near_);
+  if (holes) columns(row_hole_far_, row_hole_near_, hole_far_, hole_near_);
+}
 
 void BoundaryRefiner::apply(ImageView<const float> sparse, ImageView<const std::uint8_t> left,
                             ImageView<const std::uint8_t> right, int scale,
                             const px::BoundaryRule& rule, ImageView<float> disparity) {
   const int w = sparse.width, h = sparse.height;
-  side_ranges(sparse, px::kBoundaryReach, row_far_, row_near_, far_, near_);
   const bool holes = rule.hole_reach > px::kBoundaryReach;
-  if (holes) side_ranges(sparse, rule.hole_reach, row_far_, row_near_, hole_far_, hole_near_);
+  side_ranges(sparse, rule.hole_reach);
   const auto s = static_cast<float>(scale);
   const px::GreyPair im{left.data, right.data, left.stride, right.stride, left.width, left.height};
   kernels::BoundaryWindow window;  // the side costs of one pixel share its support weights
+  // Most internal pixels are away from any edge: the ones that are, once per internal row, then
+  // a word of eight at a time skipped where none is.
+  edge_.resize(static_cast<std::size_t>(w) + 8);
+  std::fill(edge_.begin() + w, edge_.end(), std::uint8_t{0});
+  int edge_row = -1;
   for (int y = 0; y < disparity.height; ++y) {
     const int iy = std::min(y / scale, h - 1);
     const float* far = far_.row(iy);
     const float* near = near_.row(iy);
     const float* hole_far = holes ? hole_far_.row(iy) : far;
     const float* hole_near = holes ? hole_near_.row(iy) : near;
+    if (iy != edge_row) {
+      edge_columns(far, near, hole_far, hole_near, w, edge_.data());
+      edge_row = iy;
+    }
     float* out = disparity.row(y);
-    // Most pixels are away from any edge: skip them an internal pixel at a time. Input column x
-    // belongs to internal column min(x / scale, w - 1).
+    // Input column x belongs to internal column min(x / scale, w - 1).
     for (int ix = 0; ix < w; ++ix) {
+      if (ix % 8 == 0) {
+        std::uint64_t word;
+        std::memcpy(&word, edge_.data() + ix, sizeof word);
+        if (word == 0) {
+          ix += 7;
+          continue;
+        }
+      }
+      if (edge_[static_cast<std::size_t>(ix)] == 0) continue;
       const px::SideRange narrow{far[ix], near[ix]}, wide{hole_far[ix], hole_near[ix]};
-      if (!px::spans_depth_edge(narrow) && !px::spans_depth_edge(wide)) continue;
       const int x_end = ix + 1 == w ? disparity.width : (ix + 1) * scale;
       for (int x = ix * scale; x < x_end; ++x) {
         const px::BoundarySides sides = px::boundary_sides(out[x], narrow, wide, rule);

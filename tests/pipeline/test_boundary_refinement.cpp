@@ -258,6 +258,17 @@ TEST(BoundaryRefinement, IsThePerPixelFunctionsEverywhere) {
   StereoParams lax;
   lax.boundary_hole_ratio = 0.95;
   EXPECT_GT(expect_the_per_pixel_functions(4, lax).by_row_search, 20);
+  // The row windows are built from blocks of 2^k columns: reaches whose window is one block
+  // level with the narrow one's (3), two levels above it (7), the widest (16), and no row
+  // search (2).
+  for (const int reach : {2, 3, 7, 16}) {
+    lax.boundary_hole_reach = reach;
+    const PerPixelCheck check = expect_the_per_pixel_functions(4, lax);
+    EXPECT_GT(check.changed, 20) << "hole reach " << reach << ": " << check.by_row_search;
+    if (reach > 2) {
+      EXPECT_GT(check.by_row_search, 5) << "hole reach " << reach;
+    }
+  }
 }
 
 TEST(BoundaryRefinement, RunsOnlyForHalfSizeMatchingWithAWindow) {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "dco/core/image.hpp"
 #include "dco/kernels/boundary_pixel.hpp"
@@ -27,7 +28,18 @@ class BoundaryRefiner {
              const kernels::pixel::BoundaryRule& rule, ImageView<float> disparity);
 
  private:
-  Image<float> row_far_, row_near_, far_, near_, hole_far_, hole_near_;
+  // The sides around every internal pixel: within kBoundaryReach (far_, near_) and, when the
+  // rule searches holes along the row, within its hole reach (hole_far_, hole_near_).
+  void side_ranges(ImageView<const float> sparse, int hole_reach);
+  // One row's minimum (far) and maximum (near, "none" left out) over +-reach columns, and over
+  // +-narrow_reach columns too where narrow_far is not null (narrow_reach <= reach).
+  void row_windows(const float* v, int w, int reach, int narrow_reach, float* far, float* near,
+                   float* narrow_far, float* narrow_near);
+
+  Image<float> row_far_, row_near_, far_, near_;
+  Image<float> row_hole_far_, row_hole_near_, hole_far_, hole_near_;
+  std::vector<float> lo_, hi_, lo_next_, hi_next_;  // a row's blocks, padded
+  std::vector<std::uint8_t> edge_;                  // internal columns at a depth edge, one row
 };
 
 }  // namespace dco::stereo
