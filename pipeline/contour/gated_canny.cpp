@@ -18,6 +18,15 @@ constexpr std::uint8_t kWeak =
     kernels::kCannyWeak;  // passed T_low, not yet linked to a strong pixel
 constexpr std::uint8_t kEdge = kernels::kCannyStrong;
 
+// out[2 i] = out[2 i + 1] = in[i] for i < count: the gate at half the width (gate_sample's
+// column i * count / (2 count) = i / 2), written per pair so that it vectorises.
+void spread_pairs(const float* __restrict in, int count, float* __restrict out) {
+  for (int i = 0; i < count; ++i) {
+    out[2 * i] = in[i];
+    out[2 * i + 1] = in[i];
+  }
+}
+
 }  // namespace
 
 void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<float> magnitude,
@@ -60,7 +69,10 @@ void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t>
     row.width = w;
     if (gated) {
       const float* g = gate.row(px::gate_sample(y, h, gate.height));
-      for (int x = 0; x < w; ++x) scratch.gate_row[x] = g[scratch.gate_x[x]];
+      if (2 * gate.width == w)
+        spread_pairs(g, gate.width, scratch.gate_row.data());
+      else
+        for (int x = 0; x < w; ++x) scratch.gate_row[x] = g[scratch.gate_x[x]];
       row.gate = scratch.gate_row.data();
     }
     kernels::canny_classify_row(row, levels, edges.row(y));

@@ -132,9 +132,14 @@ void BoundaryRefiner::side_ranges(ImageView<const float> sparse, int hole_reach)
       const int bottom = std::min(h - 1, y + px::kBoundaryReach);
       float* f = far.row(y);
       float* n = near.row(y);
-      std::copy(row_far.row(top), row_far.row(top) + w, f);
-      std::copy(row_near.row(top), row_near.row(top) + w, n);
-      for (int yy = top + 1; yy <= bottom; ++yy) {
+      if (bottom == top) {
+        std::copy(row_far.row(top), row_far.row(top) + w, f);
+        std::copy(row_near.row(top), row_near.row(top) + w, n);
+        continue;
+      }
+      min_of_pairs(row_far.row(top), row_far.row(top + 1), w, f);
+      max_of_pairs(row_near.row(top), row_near.row(top + 1), w, n);
+      for (int yy = top + 2; yy <= bottom; ++yy) {
         min_into(f, row_far.row(yy), w);
         max_into(n, row_near.row(yy), w);
       }
