@@ -5,7 +5,20 @@
 
 namespace dco::kernels {
 
+namespace {
+
+// One channel (the headset's grey images): each byte widened, a loop the compiler vectorises.
+void widen_bytes(const std::uint8_t* __restrict src, int width, std::uint32_t* __restrict out) {
+  for (int x = 0; x < width; ++x) out[x] = src[x];
+}
+
+}  // namespace
+
 void pack_pixels(const std::uint8_t* src, int channels, int width, std::uint32_t* out) {
+  if (channels == 1) {
+    widen_bytes(src, width, out);
+    return;
+  }
   for (int x = 0; x < width; ++x) {
     std::uint32_t word = 0;
     for (int c = 0; c < channels; ++c) word |= std::uint32_t{src[x * channels + c]} << (8 * c);

@@ -88,6 +88,12 @@ TEST(StereoKernels, PackPixelsPutsChannelsInBytes) {
   pack_pixels(bgr, 1, 2, out);
   EXPECT_EQ(out[0], 1u);
   EXPECT_EQ(out[1], 2u);
+  // A grey row long enough for the vectorised loop, with its tail.
+  std::uint8_t grey[37];
+  for (int x = 0; x < 37; ++x) grey[x] = static_cast<std::uint8_t>(255 - 7 * x);
+  std::uint32_t wide[37];
+  pack_pixels(grey, 1, 37, wide);
+  for (int x = 0; x < 37; ++x) EXPECT_EQ(wide[x], grey[x]) << x;
 }
 
 TEST(StereoKernels, CensusMatchesScalarAndTheDefinition) {
