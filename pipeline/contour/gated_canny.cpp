@@ -18,6 +18,21 @@ constexpr std::uint8_t kWeak =
     kernels::kCannyWeak;  // passed T_low, not yet linked to a strong pixel
 constexpr std::uint8_t kEdge = kernels::kCannyStrong;
 
+// seeds[x] = 1 where pixel x of `row` is weak and one of its eight neighbours strong, for
+// 0 < x < w - 1, and 0 at both ends: byte compares the compiler vectorises.
+void weak_beside_strong(const std::uint8_t* __restrict above, const std::uint8_t* __restrict row,
+                        const std::uint8_t* __restrict below, int w,
+                        std::uint8_t* __restrict seeds) {
+  seeds[0] = 0;
+  seeds[w - 1] = 0;
+  for (int x = 1; x < w - 1; ++x) {
+    const bool strong = (above[x - 1] == kEdge) | (above[x] == kEdge) | (above[x + 1] == kEdge) |
+                        (row[x - 1] == kEdge) | (row[x + 1] == kEdge) | (below[x - 1] == kEdge) |
+                        (below[x] == kEdge) | (below[x + 1] == kEdge);
+    seeds[x] = static_cast<std::uint8_t>((row[x] == kWeak) & strong);
+  }
+}
+
 // out[2 i] = out[2 i + 1] = in[i] for i < count: the gate at half the width (gate_sample's
 // column i * count / (2 count) = i / 2), written per pair so that it vectorises.
 void spread_pairs(const float* __restrict in, int count, float* __restrict out) {
@@ -95,33 +110,26 @@ void canny_hysteresis(ImageView<std::uint8_t> edges, CannyScratch& scratch) {
                                      1,           stride - 1, stride,      stride + 1};
   // The result is every strong pixel and every weak one joined to a strong one through weak ones.
   // Strong pixels far outnumber the weak ones a frame links up, so the search starts from the weak
-  // pixels next to a strong one (marked strong at once) rather than from every strong pixel. Weak
-  // pixels are few in a row: eight at a time, a word without one is skipped whole.
-  constexpr std::uint64_t kOnes = 0x0101010101010101u;
-  constexpr std::uint64_t kHighs = 0x8080808080808080u;
-  const auto seed = [&](std::ptrdiff_t i) {
-    for (const std::ptrdiff_t o : offsets) {
-      if (base[i + o] == kEdge) {
-        base[i] = kEdge;
-        stack[top++] = static_cast<std::int32_t>(i);
-        return;
+  // pixels next to a strong one (marked strong at once) rather than from every strong pixel. A
+  // row's seeds are found by byte compares over the whole row first; a weak pixel whose strong
+  // neighbour was itself seeded in the same row is reached by the growth below instead, so the
+  // result is the same. Seeds are few in a row: eight at a time, a word without one is skipped.
+  scratch.seeds.resize(static_cast<std::size_t>(w) + 8);
+  std::uint8_t* seeds = scratch.seeds.data();
+  std::fill(seeds + w, seeds + w + 8, std::uint8_t{0});
+  for (int y = 1; y < h - 1; ++y) {
+    weak_beside_strong(edges.row(y - 1), edges.row(y), edges.row(y + 1), w, seeds);
+    const std::ptrdiff_t row = y * stride;
+    for (int x = 0; x < w; x += 8) {
+      std::uint64_t word;
+      std::memcpy(&word, seeds + x, sizeof word);
+      if (word == 0) continue;
+      for (int i = x; i < std::min(x + 8, w); ++i) {
+        if (seeds[i] == 0) continue;
+        base[row + i] = kEdge;
+        stack[top++] = static_cast<std::int32_t>(row + i);
       }
     }
-  };
-  for (int y = 1; y < h - 1; ++y) {
-    const std::uint8_t* e = edges.row(y);
-    const std::ptrdiff_t row = y * stride;
-    int x = 1;
-    for (; x + 8 <= w - 1; x += 8) {
-      std::uint64_t word;
-      std::memcpy(&word, e + x, sizeof word);
-      const std::uint64_t diff = word ^ (kOnes * kWeak);  // a zero byte where e == kWeak
-      if (((diff - kOnes) & ~diff & kHighs) == 0) continue;
-      for (int i = x; i < x + 8; ++i)
-        if (e[i] == kWeak) seed(row + i);
-    }
-    for (; x < w - 1; ++x)
-      if (e[x] == kWeak) seed(row + x);
   }
 
   // Grow the seeds through 8-connected weak pixels. Each pixel is marked before it is pushed, so

@@ -40,6 +40,7 @@ struct CannyScratch {
   std::vector<std::int32_t> stack;   // hysteresis work list, one slot per pixel at most
   std::vector<std::int32_t> gate_x;  // column of the gate image for each image column
   std::vector<float> gate_row;       // the gate of one image row, per image column
+  std::vector<std::uint8_t> seeds;   // hysteresis seeds of one row, and eight zero bytes
 };
 
 // Writes 255 on edge pixels of `edges` and 0 elsewhere. `gate` (may be empty: no gating) can be
