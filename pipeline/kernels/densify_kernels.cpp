@@ -136,142 +136,6 @@ void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) 
   detail::edge_range(e, rule, i, n, out);
 }
 
-// Lane i of the result: the maximum (kMax) or minimum of lanes 0..i (kForward) or i..n-1 of v.
-template <bool kForward, class D>
-HWY_INLINE hn::Vec<D> LaneScan(D di, hn::Vec<D> v) {
-  const int n = static_cast<int>(hn::Lanes(di));
-  const auto lane = hn::Iota(di, 0);
-  for (int s = 1; s < n; s *= 2) {
-    // Lanes whose source would fall outside read the end lane, which their range holds anyway.
-    const auto from = kForward ? hn::Max(hn::Sub(lane, hn::Set(di, s)), hn::Zero(di))
-                               : hn::Min(hn::Add(lane, hn::Set(di, s)), hn::Set(di, n - 1));
-    const auto moved = hn::TableLookupLanes(v, hn::IndicesFromVec(di, from));
-    v = kForward ? hn::Max(v, moved) : hn::Min(v, moved);
-  }
-  return v;
-}
-
-template <class D>
-HWY_INLINE hn::Vec<D> BroadcastLane(D di, hn::Vec<D> v, int lane) {
-  return hn::TableLookupLanes(v, hn::IndicesFromVec(di, hn::Set(di, lane)));
-}
-
-// The carried flags of the scalar reference become index scans: a hole's left value is the last
-// known pixel at or before it, and its path crosses a weak edge when the last weak edge before
-// it is not older than that pixel; on the right, the first known pixel at or after it and the
-// first weak edge at or after it. Lanes past the row end are unknown pixels with strong edges.
-void HoleHintRow(const float* sparse, const float* wx, int width, float crossing, float* hint) {
-  const hn::ScalableTag<float> d;
-  const hn::RebindToSigned<decltype(d)> di;
-  const int n = static_cast<int>(hn::Lanes(d));
-  const auto zero = hn::Zero(d);
-  const auto inf = hn::Set(d, std::numeric_limits<float>::infinity());
-  const auto weak_below = hn::Set(d, crossing);
-  const auto lanes = hn::Iota(di, 0);
-  HWY_ALIGN float sparse_pad[HWY_MAX_BYTES / sizeof(float)];
-  HWY_ALIGN float wx_pad[HWY_MAX_BYTES / sizeof(float)];
-  HWY_ALIGN float hint_pad[HWY_MAX_BYTES / sizeof(float)];
-  // The vector at x0 reads its inputs from the row, or from the padded copies at the row end.
-  const auto load = [&](int x0, hn::Vec<decltype(d)>& sp, hn::Vec<decltype(d)>& ex) {
-    if (x0 + n <= width) {
-      sp = hn::LoadU(d, sparse + x0);
-      ex = hn::LoadU(d, wx + x0);
-      return;
-    }
-    const int valid = width - x0;
-    for (int i = 0; i < n; ++i) {
-      sparse_pad[i] = i < valid ? sparse[x0 + i] : std::numeric_limits<float>::infinity();
-      wx_pad[i] = i < valid ? wx[x0 + i] : std::numeric_limits<float>::infinity();
-    }
-    sp = hn::Load(d, sparse_pad);
-    ex = hn::Load(d, wx_pad);
-  };
-  const auto store = [&](int x0, hn::Vec<decltype(d)> v) {
-    if (x0 + n <= width) {
-      hn::StoreU(v, d, hint + x0);
-      return;
-    }
-    hn::Store(v, d, hint_pad);
-    std::memcpy(hint + x0, hint_pad, sizeof(float) * static_cast<std::size_t>(width - x0));
-  };
-  const auto known = [&](hn::Vec<decltype(d)> v) {
-    return hn::RebindMask(di, hn::And(hn::Gt(v, zero), hn::Lt(v, inf)));
-  };
-  // Left to right: the last known index (-1: none) and the last weak edge (-2: none).
-  auto last_known = hn::Set(di, -1), last_weak = hn::Set(di, -2);
-  for (int x0 = 0; x0 < width; x0 += n) {
-    hn::Vec<decltype(d)> sp, ex;
-    load(x0, sp, ex);
-    const auto idx = hn::Add(lanes, hn::Set(di, x0));
-    const auto k = known(sp);
-    const auto weak = hn::RebindMask(di, hn::Lt(ex, weak_below));
-    if (hn::AllTrue(di, k)) {
-      // Every pixel known (most vectors of a matched surface): each is its own hint, and only
-      // the carried indices need the vector.
-      store(x0, sp);
-      last_known = hn::Set(di, x0 + n - 1);
-      last_weak =
-          hn::Max(hn::MaxOfLanes(di, hn::IfThenElse(weak, idx, hn::Set(di, -2))), last_weak);
-      continue;
-    }
-    const auto lk =
-        hn::Max(LaneScan<true>(di, hn::IfThenElse(k, idx, hn::Set(di, -1))), last_known);
-    const auto lw =
-        hn::Max(LaneScan<true>(di, hn::IfThenElse(weak, idx, hn::Set(di, -2))), last_weak);
-    // The last weak edge before the pixel: lw one lane back.
-    const auto back = hn::Max(hn::Sub(lanes, hn::Set(di, 1)), hn::Zero(di));
-    const auto lw_before = hn::IfThenElse(hn::FirstN(di, 1), last_weak,
-                                          hn::TableLookupLanes(lw, hn::IndicesFromVec(di, back)));
-    const auto crossed = hn::AndNot(k, hn::Not(hn::Lt(lw_before, lk)));
-    const auto has_left = hn::RebindMask(d, hn::Gt(lk, hn::Set(di, -1)));
-    const auto left =
-        hn::IfThenElseZero(has_left, hn::GatherIndex(d, sparse, hn::Max(lk, hn::Zero(di))));
-    store(x0, hn::IfThenElse(hn::RebindMask(d, crossed), hn::Neg(left), left));
-    last_known = BroadcastLane(di, lk, n - 1);
-    last_weak = BroadcastLane(di, lw, n - 1);
-  }
-  // Right to left: the first known index (width: none) and the first weak edge that leads to a
-  // pixel of the row (width + 1: none).
-  auto next_known = hn::Set(di, width), next_weak = hn::Set(di, width + 1);
-  const auto past_last_edge = hn::Set(di, width - 1);
-  for (int x0 = (width - 1) / n * n; x0 >= 0; x0 -= n) {
-    hn::Vec<decltype(d)> sp, ex;
-    load(x0, sp, ex);
-    const auto idx = hn::Add(lanes, hn::Set(di, x0));
-    const auto k = known(sp);
-    const auto weak =
-        hn::And(hn::RebindMask(di, hn::Lt(ex, weak_below)), hn::Lt(idx, past_last_edge));
-    if (hn::AllTrue(di, k)) {
-      // The left pass stored these pixels' own values, which are their hints.
-      next_known = hn::Set(di, x0);
-      next_weak =
-          hn::Min(hn::MinOfLanes(di, hn::IfThenElse(weak, idx, hn::Set(di, width + 1))), next_weak);
-      continue;
-    }
-    const auto signed_left = x0 + n <= width
-                                 ? hn::LoadU(d, hint + x0)
-                                 : (std::memcpy(hint_pad, hint + x0, sizeof(float) * (width - x0)),
-                                    hn::Load(d, hint_pad));
-    const auto rk =
-        hn::Min(LaneScan<false>(di, hn::IfThenElse(k, idx, hn::Set(di, width))), next_known);
-    const auto rw =
-        hn::Min(LaneScan<false>(di, hn::IfThenElse(weak, idx, hn::Set(di, width + 1))), next_weak);
-    const auto right_crossed = hn::RebindMask(d, hn::AndNot(k, hn::Lt(rw, rk)));
-    const auto has_right = hn::RebindMask(d, hn::Lt(rk, hn::Set(di, width)));
-    const auto right = hn::IfThenElseZero(
-        has_right, hn::GatherIndex(d, sparse, hn::Min(rk, hn::Set(di, width - 1))));
-    const auto left_crossed = hn::RebindMask(d, hn::Lt(hn::BitCast(di, signed_left), hn::Zero(di)));
-    const auto left = hn::Abs(signed_left);
-    const auto same = hn::Not(hn::Xor(left_crossed, right_crossed));
-    const auto both =
-        hn::IfThenElse(same, hn::Min(left, right), hn::IfThenElse(left_crossed, right, left));
-    store(x0, hn::IfThenElse(hn::Le(left, zero), right,
-                             hn::IfThenElse(hn::Gt(right, zero), both, left)));
-    next_known = BroadcastLane(di, rk, 0);
-    next_weak = BroadcastLane(di, rw, 0);
-  }
-}
-
 // The known pixels as bit masks, 64 at a time, and the runs between them from the masks' changes:
 // a branch per run rather than per pixel (rows alternate between short runs of matches and
 // holes). Runs and weights as the scalar reference's.
@@ -296,6 +160,70 @@ void KnownBits(const float* values, int count, std::uint64_t& bits) {
     std::memcpy(&lane_bits, bytes, sizeof(lane_bits));
     bits |= lane_bits << j;
   }
+}
+
+// The hints of the hole run [start, end) of a row, whose known neighbours are start - 1 and end
+// where they lie inside the row, as hole_hint_row defines them. The left path to a hole x crosses
+// a weak edge when one lies in [start - 1, x - 1], so every hole after the run's first weak edge
+// has a crossed left path; the right path crosses one in [x, end - 1] (the row's last pixel has
+// no edge), so every hole up to the last weak edge has a crossed right path. The run takes at
+// most three values, one per stretch.
+void HoleRunHints(const float* sparse, const float* wx, int width, float crossing, int start,
+                  int end, float* hint) {
+  const float left = start > 0 ? sparse[start - 1] : 0.0f;
+  const float right = end < width ? sparse[end] : 0.0f;
+  int first_weak = end;
+  for (int j = std::max(start - 1, 0); j < end - 1; ++j)
+    if (wx[j] < crossing) {
+      first_weak = j;
+      break;
+    }
+  int last_weak = start - 1;
+  for (int j = std::min(end, width - 1) - 1; j >= start; --j)
+    if (wx[j] < crossing) {
+      last_weak = j;
+      break;
+    }
+  // Left crossed from a on, right crossed before b.
+  const int a = std::min(first_weak + 1, end);
+  const int b = std::max(last_weak + 1, start);
+  const auto fill = [&](int from, int to, bool left_crossed, bool right_crossed) {
+    if (from < to)
+      std::fill(hint + from, hint + to,
+                pixel::hole_hint(left_crossed ? -left : left, right, right_crossed));
+  };
+  fill(start, std::min(a, b), false, true);
+  if (a <= b)
+    fill(a, b, true, true);
+  else
+    fill(b, a, false, false);
+  fill(std::max(a, b), end, true, false);
+}
+
+// Every matched pixel is its own hint; the runs of holes between them are found from bit masks
+// of the matched pixels, 64 at a time (see OcclusionFillRow), and filled a stretch at a time.
+void HoleHintRow(const float* sparse, const float* wx, int width, float crossing, float* hint) {
+  std::copy(sparse, sparse + width, hint);
+  bool open = true;  // the pixel before holds no value; the row starts inside a run
+  int run_start = 0;
+  for (int word = 0; word < width; word += 64) {
+    const int lanes = std::min(64, width - word);
+    std::uint64_t known = 0;
+    KnownBits(sparse + word, lanes, known);
+    const std::uint64_t valid = lanes == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << lanes) - 1;
+    std::uint64_t changes = (known ^ ((known << 1) | (open ? 0u : 1u))) & valid;
+    while (changes != 0) {
+      const int i = static_cast<int>(hwy::Num0BitsBelowLS1Bit_Nonzero64(changes));
+      changes &= changes - 1;
+      const int x = word + i;
+      open = ((known >> i) & 1u) == 0;
+      if (open)
+        run_start = x;
+      else if (run_start < x)
+        HoleRunHints(sparse, wx, width, crossing, run_start, x, hint);
+    }
+  }
+  if (open && run_start < width) HoleRunHints(sparse, wx, width, crossing, run_start, width, hint);
 }
 
 int OcclusionFillRow(const float* sparse, const float* hint, int width, const OcclusionRule& rule,
