@@ -136,9 +136,7 @@ void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) 
   detail::edge_range(e, rule, i, n, out);
 }
 
-// The known pixels as bit masks, 64 at a time, and the runs between them from the masks' changes:
-// a branch per run rather than per pixel (rows alternate between short runs of matches and
-// holes). Runs and weights as the scalar reference's.
+// Bit i of `bits`: values[i] is known (positive and finite), for i < count <= 64.
 void KnownBits(const float* values, int count, std::uint64_t& bits) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));  // a power of two, at most 64
@@ -200,38 +198,14 @@ void HoleRunHints(const float* sparse, const float* wx, int width, float crossin
   fill(std::max(a, b), end, true, false);
 }
 
-// Every matched pixel is its own hint; the runs of holes between them are found from bit masks
-// of the matched pixels, 64 at a time (see OcclusionFillRow), and filled a stretch at a time.
-void HoleHintRow(const float* sparse, const float* wx, int width, float crossing, float* hint) {
-  std::copy(sparse, sparse + width, hint);
+// Calls run(start, end) for every maximal run of holes [start, end) of a row, in order, those
+// touching the row's ends included. The runs come from bit masks of the matched pixels, 64 at a
+// time: a branch per run rather than per pixel (rows alternate between short runs of matches and
+// holes).
+template <class Run>
+void ForEachHoleRun(const float* sparse, int width, Run&& run) {
   bool open = true;  // the pixel before holds no value; the row starts inside a run
   int run_start = 0;
-  for (int word = 0; word < width; word += 64) {
-    const int lanes = std::min(64, width - word);
-    std::uint64_t known = 0;
-    KnownBits(sparse + word, lanes, known);
-    const std::uint64_t valid = lanes == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << lanes) - 1;
-    std::uint64_t changes = (known ^ ((known << 1) | (open ? 0u : 1u))) & valid;
-    while (changes != 0) {
-      const int i = static_cast<int>(hwy::Num0BitsBelowLS1Bit_Nonzero64(changes));
-      changes &= changes - 1;
-      const int x = word + i;
-      open = ((known >> i) & 1u) == 0;
-      if (open)
-        run_start = x;
-      else if (run_start < x)
-        HoleRunHints(sparse, wx, width, crossing, run_start, x, hint);
-    }
-  }
-  if (open && run_start < width) HoleRunHints(sparse, wx, width, crossing, run_start, width, hint);
-}
-
-int OcclusionFillRow(const float* sparse, const float* hint, int width, const OcclusionRule& rule,
-                     float* data, float* b) {
-  int weighted = 0;
-  bool open = true;    // the pixel before holds no value; the row starts inside a border run
-  int run_start = -1;  // first hole of the open run; -1: the run touching the row start
-  int prev_start = -1, prev_end = -1;  // the previous run: known left neighbour, no strip
   for (int word = 0; word < width; word += 64) {
     const int lanes = std::min(64, width - word);
     std::uint64_t known = 0;
@@ -244,16 +218,35 @@ int OcclusionFillRow(const float* sparse, const float* hint, int width, const Oc
       changes &= changes - 1;
       const int x = word + i;
       open = ((known >> i) & 1u) == 0;
-      if (open) {  // a run starts
+      if (open)
         run_start = x;
-        continue;
-      }
-      if (run_start >= 0)
-        weighted += pixel::fill_occlusion_run(sparse, hint, run_start, x, rule, data, b, prev_start,
-                                              prev_end);
+      else if (run_start < x)
+        run(run_start, x);
     }
   }
-  return weighted;  // a run still open at the row end is left alone
+  if (open && run_start < width) run(run_start, width);
+}
+
+// Every matched pixel is its own hint; the runs of holes between them are filled a stretch at a
+// time.
+void HoleHintRow(const float* sparse, const float* wx, int width, float crossing, float* hint) {
+  std::copy(sparse, sparse + width, hint);
+  ForEachHoleRun(sparse, width, [&](int start, int end) {
+    HoleRunHints(sparse, wx, width, crossing, start, end, hint);
+  });
+}
+
+// Runs as the scalar reference weights them: only those with a known pixel on both sides.
+int OcclusionFillRow(const float* sparse, const float* hint, int width, const OcclusionRule& rule,
+                     float* data, float* b) {
+  int weighted = 0;
+  int prev_start = -1, prev_end = -1;  // the previous run: known left neighbour, no strip
+  ForEachHoleRun(sparse, width, [&](int start, int end) {
+    if (start > 0 && end < width)
+      weighted +=
+          pixel::fill_occlusion_run(sparse, hint, start, end, rule, data, b, prev_start, prev_end);
+  });
+  return weighted;
 }
 
 void DataTermsRow(const float* sparse, const float* hint, const float* previous, int width,
