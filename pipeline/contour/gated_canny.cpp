@@ -33,15 +33,6 @@ void weak_beside_strong(const std::uint8_t* __restrict above, const std::uint8_t
   }
 }
 
-// out[2 i] = out[2 i + 1] = in[i] for i < count: the gate at half the width (gate_sample's
-// column i * count / (2 count) = i / 2), written per pair so that it vectorises.
-void spread_pairs(const float* __restrict in, int count, float* __restrict out) {
-  for (int i = 0; i < count; ++i) {
-    out[2 * i] = in[i];
-    out[2 * i + 1] = in[i];
-  }
-}
-
 }  // namespace
 
 void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<float> magnitude,
@@ -84,8 +75,8 @@ void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t>
     row.width = w;
     if (gated) {
       const float* g = gate.row(px::gate_sample(y, h, gate.height));
-      if (2 * gate.width == w)
-        spread_pairs(g, gate.width, scratch.gate_row.data());
+      if (2 * gate.width == w)  // gate_sample's column x * (w / 2) / w is x / 2
+        kernels::repeat_pairs(g, w, scratch.gate_row.data());
       else
         for (int x = 0; x < w; ++x) scratch.gate_row[x] = g[scratch.gate_x[x]];
       row.gate = scratch.gate_row.data();

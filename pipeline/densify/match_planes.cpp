@@ -9,6 +9,7 @@
 
 #include "dco/kernels/densify_kernels.hpp"
 #include "dco/kernels/densify_pixel.hpp"
+#include "dco/kernels/filter_kernels.hpp"
 
 namespace dco::densify {
 namespace {
@@ -49,20 +50,13 @@ void offset_matches(const float* __restrict own, int n, float offset, float* __r
   }
 }
 
-// out[x] = in[column[x]]: the grid row spread to the input width; step 2 written apart so that
-// it vectorises (every grid value twice, the last one once more when the width is odd).
-void spread_row(const float* __restrict in, const int* __restrict column, int width, int step,
-                float* __restrict out) {
-  if (step == 2) {
-    const int pairs = width / 2;
-    for (int g = 0; g < pairs; ++g) {
-      out[2 * g] = in[g];
-      out[2 * g + 1] = in[g];
-    }
-    if (width % 2 != 0) out[width - 1] = in[pairs];
-  } else {
+// out[x] = in[column[x]]: the grid row spread to the input width; step 2 (column[x] = x / 2)
+// by the vectorised kernels::repeat_pairs.
+void spread_row(const float* in, const int* column, int width, int step, float* out) {
+  if (step == 2)
+    kernels::repeat_pairs(in, width, out);
+  else
     for (int x = 0; x < width; ++x) out[x] = in[column[x]];
-  }
 }
 
 }  // namespace

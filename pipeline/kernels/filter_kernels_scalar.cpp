@@ -1,6 +1,19 @@
 #include "dco/kernels/filter_kernels.hpp"
 #include "filter_ranges.hpp"
 
+namespace dco::kernels {
+
+void repeat_pairs(const float* __restrict in, int width, float* __restrict out) {
+  const int pairs = width / 2;
+  for (int i = 0; i < pairs; ++i) {
+    out[2 * i] = in[i];
+    out[2 * i + 1] = in[i];
+  }
+  if (width % 2 != 0) out[width - 1] = in[pairs];
+}
+
+}  // namespace dco::kernels
+
 namespace dco::kernels::scalar {
 
 void median5_row(const float* const rows[5], int width, float* out) {

@@ -73,8 +73,6 @@ void BoundaryRefiner::row_windows(const float* v, int w, int reach, int narrow_r
   // blocks that start at x - r and end at x + r (their overlap does not change a min or max).
   const float none = px::infinity();
   const int padded = w + 2 * reach;
-  for (std::vector<float>* b : {&lo_, &hi_, &lo_next_, &hi_next_})
-    b->resize(static_cast<std::size_t>(padded));
   float* lo = lo_.data();
   float* hi = hi_.data();
   std::fill(lo, lo + reach, none);
@@ -115,6 +113,10 @@ void BoundaryRefiner::side_ranges(ImageView<const float> sparse, int hole_reach)
   if (holes)
     for (Image<float>* img : {&row_hole_far_, &row_hole_near_, &hole_far_, &hole_near_})
       img->resize(w, h);
+  // A row padded by the widest reach, for row_windows' blocks.
+  const int widest = holes ? hole_reach : px::kBoundaryReach;
+  for (std::vector<float>* b : {&lo_, &hi_, &lo_next_, &hi_next_})
+    b->resize(static_cast<std::size_t>(w + 2 * widest));
   // Rows first (reach_x columns each way), then columns (kBoundaryReach rows each way): min and
   // max are exact, so this gives side_range's values.
   for (int y = 0; y < h; ++y) {

@@ -25,6 +25,17 @@ std::vector<float> random_floats(std::mt19937& rng, int n, float lo, float hi) {
   return v;
 }
 
+TEST(FilterKernels, RepeatPairsPutsEveryValueTwice) {
+  for (const int width : {0, 1, 2, 7, 8, 33, 64, 1281}) {
+    std::vector<float> in(static_cast<std::size_t>((width + 1) / 2));
+    for (std::size_t i = 0; i < in.size(); ++i) in[i] = 0.5f * static_cast<float>(i) - 3.0f;
+    std::vector<float> out(static_cast<std::size_t>(width) + 1, -99.0f);
+    repeat_pairs(in.data(), width, out.data());
+    for (int x = 0; x < width; ++x) ASSERT_EQ(out[x], in[x / 2]) << "width " << width << " x " << x;
+    EXPECT_EQ(out[width], -99.0f) << "nothing past the row";
+  }
+}
+
 TEST(FilterKernels, Median5RowMatchesScalarAndTheSortedWindow) {
   std::mt19937 rng(7);
   std::uniform_int_distribution<int> few(0, 3);

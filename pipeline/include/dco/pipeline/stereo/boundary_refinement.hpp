@@ -32,7 +32,8 @@ class BoundaryRefiner {
   // rule searches holes along the row, within its hole reach (hole_far_, hole_near_).
   void side_ranges(ImageView<const float> sparse, int hole_reach);
   // One row's minimum (far) and maximum (near, "none" left out) over +-reach columns, and over
-  // +-narrow_reach columns too where narrow_far is not null (narrow_reach <= reach).
+  // +-narrow_reach columns too where narrow_far is not null (narrow_reach <= reach). The block
+  // buffers must hold w + 2 reach values (side_ranges sizes them).
   void row_windows(const float* v, int w, int reach, int narrow_reach, float* far, float* near,
                    float* narrow_far, float* narrow_near);
 

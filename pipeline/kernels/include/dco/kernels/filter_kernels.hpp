@@ -40,6 +40,10 @@ struct SobelRows {
 };
 void sobel_row(const SobelRows& rows, float inv_norm, float* magnitude, std::uint8_t* direction);
 
+// out[x] = in[x / 2] for x < width: a row at half the width (the stereo stage's internal
+// resolution) repeated to the full width. A plain loop the compiler vectorises, not dispatched.
+void repeat_pairs(const float* in, int width, float* out);
+
 // Row y of the 5x5 median of a float image, its borders replicated: out[x] = the 13th smallest
 // of rows[i][clamp(x + j - 2, 0, width - 1)], i and j in 0..4, with rows y - 2 .. y + 2 (clamped
 // by the caller). Finite values only (min and max decide the order). `columns` is scratch of
