@@ -151,6 +151,44 @@ TEST(DcoEvalCli, OnlyFilterBaselineAndTimeSidecar) {
   EXPECT_THAT(json.out, HasSubstr(R"("time_ms": {"prediction": 12.5, "sgbm-wls": )"));
 }
 
+// The offset each scene's GT needs to match its own images. art's GT is known to sit about
+// 0.85 px below what its images show (it scores every matcher worse); Teddy's lines up.
+TEST(DcoEvalCli, GroundTruthAlignmentFindsEachScenesOffsetAndScoresAgainstTheMovedGt) {
+  TempDir dir;
+  const auto pred_dir = write_gt_predictions(dir);
+  std::vector<std::string> args = eval_args(pred_dir);
+  for (const char* a : {"--only", "middlebury200", "--gt-alignment"}) args.push_back(a);
+  const EvalRun text = run_eval(dir, args);
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_THAT(text.out, HasSubstr("ground-truth alignment"));
+
+  args.push_back("--json");
+  const EvalRun json = run_eval(dir, args);
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const std::string aligned = json.out.substr(json.out.find(R"("gt_alignment")"));
+  // The number after `key` that follows `anchor` in the alignment's JSON.
+  const auto number_after = [&](const std::string& anchor, const std::string& key) {
+    const std::size_t at = aligned.find(anchor);
+    const std::size_t value = at == std::string::npos ? at : aligned.find(key, at);
+    EXPECT_NE(value, std::string::npos) << anchor << " " << key;
+    return value == std::string::npos ? 99.0 : std::stod(aligned.substr(value + key.size()));
+  };
+  EXPECT_NEAR(number_after(R"({"scene": "middlebury2005/art", "offset_px")", R"("offset_px": )"),
+              0.85, 0.2);
+  EXPECT_NEAR(number_after(R"({"scene": "middlebury2003/Teddy", "offset_px")", R"("offset_px": )"),
+              0.0, 0.1);
+  // The GT itself as the prediction scores 0 against the GT as given; against art's moved GT
+  // every pixel is its offset away.
+  const double art_offset =
+      number_after(R"({"scene": "middlebury2005/art", "offset_px")", R"("offset_px": )");
+  EXPECT_NEAR(number_after(R"({"scene": "middlebury2005/art", "width")", R"("avgerr": )"),
+              art_offset, 0.01);
+  EXPECT_GT(number_after(R"("mean": {"scene": "mean")", R"("band_err": )"), 0.0);
+
+  expect_one_error_line(run_eval(dir, {"--sequence", dir.path().string(), "--gt-alignment"}), 2,
+                        "--gt-alignment goes with --scenes");
+}
+
 TEST(DcoEvalCli, UsageErrorsExitWithTwo) {
   TempDir dir;
   const std::string scenes = kManifest.string();

@@ -25,6 +25,7 @@
 #include "dco/core/image_io.hpp"
 #include "dco/tools/command_line.hpp"
 #include "dco/tools/flow_eval.hpp"
+#include "dco/tools/gt_alignment.hpp"
 #include "dco/tools/json.hpp"
 #include "dco/tools/metrics.hpp"
 #include "dco/tools/scene_manifest.hpp"
@@ -44,7 +45,7 @@ using dco::tools::UsageError;
 
 constexpr std::string_view kUsage =
     R"(usage: dco-eval --scenes TSV [--data-root DIR] [--pred-dir DIR]
-                [--baseline sgbm-wls] [--only SUBSTRING] [--json]
+                [--baseline sgbm-wls] [--only SUBSTRING] [--gt-alignment] [--json]
        dco-eval --sequence DIR [--gt-dir DIR] [--json]
        dco-eval --flow-sintel DIR [--dis-preset NAME] [--json]
 
@@ -62,6 +63,10 @@ Scenes:
                       (fill%, bad2M, bad2F: is the error in the matches or in the fill?).
   --baseline sgbm-wls also run OpenCV StereoSGBM + WLS filter on every scene and compare
   --only SUBSTRING    only scenes whose name contains SUBSTRING
+  --gt-alignment      also find each scene's GT offset: the d (within +-2 px, 0.05 px steps) for
+                      which the right image sampled at x - (GT + d) matches the left image best on
+                      textured pixels (from the images and the GT alone), and score the prediction
+                      and the baseline once more against GT + d
   At least one of --pred-dir and --baseline is needed.
 
 Sequence:
@@ -115,6 +120,7 @@ struct Options {
   std::optional<fs::path> data_root;
   std::optional<fs::path> pred_dir;
   bool baseline = false;
+  bool gt_alignment = false;
   std::string only;
   // --sequence
   fs::path sequence;
@@ -156,6 +162,8 @@ Options parse_args(int argc, char** argv) {
       belongs_to(Mode::kScenes), opt.pred_dir = value();
     else if (arg == "--only")
       belongs_to(Mode::kScenes), opt.only = value();
+    else if (arg == "--gt-alignment")
+      belongs_to(Mode::kScenes), opt.gt_alignment = flag();
     else if (arg == "--baseline") {
       belongs_to(Mode::kScenes);
       const std::string name = value();
@@ -215,8 +223,38 @@ double read_time_ms(const fs::path& path) {
   return ms;
 }
 
+// --gt-alignment: each scene's photometric GT offset, and the scores against the GT moved by it.
+struct Alignment {
+  std::vector<dco::tools::GtAlignment> offsets;  // one per scene
+  std::vector<SceneMetrics> predicted, baseline;
+};
+
+std::vector<dco::tools::GtAlignment> align_scenes(const std::vector<Scene>& scenes) {
+  std::vector<dco::tools::GtAlignment> offsets;
+  for (const Scene& scene : scenes) {
+    const dco::Image<std::uint8_t> left = dco::load_image(scene.left, dco::ImageColor::kGray);
+    const dco::Image<std::uint8_t> right = dco::load_image(scene.right, dco::ImageColor::kGray);
+    try {
+      offsets.push_back(dco::tools::photometric_gt_alignment(
+          left.view(), right.view(), dco::tools::load_ground_truth(scene).disparity.view()));
+    } catch (const dco::Error& e) {
+      throw dco::Error(fmt::format("scene '{}': {}", scene.name, e.what()));
+    }
+  }
+  return offsets;
+}
+
+dco::tools::GroundTruth moved_ground_truth(const Scene& scene, double offset_px) {
+  dco::tools::GroundTruth gt = dco::tools::load_ground_truth(scene);
+  gt.disparity = dco::tools::shifted_ground_truth(gt.disparity.view(), offset_px);
+  return gt;
+}
+
+// With `alignment`, each scene is scored once more against its moved GT, into `moved`.
 std::vector<SceneMetrics> evaluate_predictions(const std::vector<Scene>& scenes,
-                                               const fs::path& pred_dir) {
+                                               const fs::path& pred_dir,
+                                               const Alignment* alignment = nullptr,
+                                               std::vector<SceneMetrics>* moved = nullptr) {
   if (!fs::is_directory(pred_dir))
     throw dco::Error(fmt::format("prediction directory '{}' does not exist", pred_dir.string()));
   std::vector<SceneMetrics> results;
@@ -239,11 +277,18 @@ std::vector<SceneMetrics> evaluate_predictions(const std::vector<Scene>& scenes,
         dco::tools::evaluate_disparity(scene.name, prediction.view(), gt, matches.view());
     m.time_ms = read_time_ms(pred_dir / (scene.file_stem() + ".time_ms"));
     results.push_back(std::move(m));
+    if (alignment != nullptr)
+      moved->push_back(dco::tools::evaluate_disparity(
+          scene.name, prediction.view(),
+          moved_ground_truth(scene, alignment->offsets[results.size() - 1].offset_px),
+          matches.view()));
   }
   return results;
 }
 
-std::vector<SceneMetrics> evaluate_baseline(const std::vector<Scene>& scenes) {
+std::vector<SceneMetrics> evaluate_baseline(const std::vector<Scene>& scenes,
+                                            const Alignment* alignment = nullptr,
+                                            std::vector<SceneMetrics>* moved = nullptr) {
   std::vector<SceneMetrics> results;
   for (const Scene& scene : scenes) {
     const dco::Image<std::uint8_t> left = dco::load_image(scene.left);
@@ -254,8 +299,71 @@ std::vector<SceneMetrics> evaluate_baseline(const std::vector<Scene>& scenes) {
                                                     dco::tools::load_ground_truth(scene));
     m.time_ms = baseline.time_ms;
     results.push_back(std::move(m));
+    if (alignment != nullptr)
+      moved->push_back(dco::tools::evaluate_disparity(
+          scene.name, baseline.disparity.view(),
+          moved_ground_truth(scene, alignment->offsets[results.size() - 1].offset_px)));
   }
   return results;
+}
+
+// One method's bad-2, occErr and bandErr against the GT as given and moved by its offset.
+std::string given_and_moved(const SceneMetrics& given, const SceneMetrics& moved) {
+  return fmt::format("{:>8.2f}{:>8.2f}{:>8.2f}{:>8.2f}{:>8.2f}{:>8.2f}", given.all.bad2,
+                     moved.all.bad2, given.occ_err, moved.occ_err, given.band_err, moved.band_err);
+}
+
+void print_alignment_text(const Options& opt, const std::vector<Scene>& scenes,
+                          const std::vector<SceneMetrics>& predicted,
+                          const std::vector<SceneMetrics>& baseline, const Alignment& a) {
+  fmt::print(
+      "\nground-truth alignment: GT + d matches the images best (photometric error in grey "
+      "levels, at d = 0 and at d); the scores against GT and GT + d\n");
+  std::string header = fmt::format("{:<40}{:>9}{:>9}{:>9}", "scene", "d px", "photo0", "photoD");
+  const auto method_header = [&](std::string_view name) {
+    header += fmt::format("  {:>8}{:>8}{:>8}{:>8}{:>8}{:>8}", fmt::format("{}bad2", name), "+d",
+                          "occErr", "+d", "bandErr", "+d");
+  };
+  if (opt.pred_dir) method_header("");
+  if (opt.baseline) method_header("bl ");
+  fmt::print("{}\n", header);
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const dco::tools::GtAlignment& o = a.offsets[i];
+    std::string line = fmt::format("{:<40}{:>+9.2f}{:>9.2f}{:>9.2f}", scenes[i].name, o.offset_px,
+                                   o.error_at_zero, o.error_at_offset);
+    if (opt.pred_dir) line += "  " + given_and_moved(predicted[i], a.predicted[i]);
+    if (opt.baseline) line += "  " + given_and_moved(baseline[i], a.baseline[i]);
+    fmt::print("{}\n", line);
+  }
+  std::string mean = fmt::format("{:<40}{:>9}{:>9}{:>9}", "mean", "-", "-", "-");
+  if (opt.pred_dir)
+    mean += "  " + given_and_moved(dco::tools::mean_metrics(predicted),
+                                   dco::tools::mean_metrics(a.predicted));
+  if (opt.baseline)
+    mean += "  " + given_and_moved(dco::tools::mean_metrics(baseline),
+                                   dco::tools::mean_metrics(a.baseline));
+  fmt::print(
+      "{}\n(bl = baseline {}; +d = against GT + d; the tables above score against the GT "
+      "as given)\n",
+      mean, kBaselineName);
+}
+
+std::string alignment_json(const Options& opt, const std::vector<Scene>& scenes,
+                           const Alignment& a) {
+  std::vector<std::string> offsets;
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const dco::tools::GtAlignment& o = a.offsets[i];
+    offsets.push_back(fmt::format(
+        R"({{"scene": {}, "offset_px": {}, "error_at_zero": {}, "error_at_offset": {}, "pixels": {}}})",
+        json_string(scenes[i].name), json_number(o.offset_px), json_number(o.error_at_zero),
+        json_number(o.error_at_offset), o.pixels));
+  }
+  std::string out = fmt::format(R"("gt_alignment": {{"offsets": [{}])", fmt::join(offsets, ", "));
+  if (opt.pred_dir)
+    out += fmt::format(R"(, "prediction": {})", dco::tools::format_metrics_json(a.predicted));
+  if (opt.baseline)
+    out += fmt::format(R"(, "baseline": {})", dco::tools::format_metrics_json(a.baseline));
+  return out + "}";
 }
 
 void print_scenes_text(const Options& opt, const std::vector<SceneMetrics>& predicted,
@@ -276,8 +384,9 @@ void print_scenes_text(const Options& opt, const std::vector<SceneMetrics>& pred
   }
 }
 
-void print_scenes_json(const Options& opt, const std::vector<SceneMetrics>& predicted,
-                       const std::vector<SceneMetrics>& baseline) {
+void print_scenes_json(const Options& opt, const std::vector<Scene>& scenes,
+                       const std::vector<SceneMetrics>& predicted,
+                       const std::vector<SceneMetrics>& baseline, const Alignment* alignment) {
   std::vector<std::string> members;
   if (opt.pred_dir) {
     members.push_back(fmt::format(R"("prediction": {{"pred_dir": {}, "metrics": {}}})",
@@ -295,18 +404,25 @@ void print_scenes_json(const Options& opt, const std::vector<SceneMetrics>& pred
     members.push_back(fmt::format(R"("comparison": {})", dco::tools::format_comparison_json(
                                                              rows, "prediction", kBaselineName)));
   }
+  if (alignment != nullptr) members.push_back(alignment_json(opt, scenes, *alignment));
   fmt::print("{{\n{}\n}}\n", fmt::join(members, ",\n"));
 }
 
 int run_scenes(const Options& opt) {
   const std::vector<Scene> scenes = select_scenes(opt);
   std::vector<SceneMetrics> predicted, baseline;
-  if (opt.pred_dir) predicted = evaluate_predictions(scenes, *opt.pred_dir);
-  if (opt.baseline) baseline = evaluate_baseline(scenes);
-  if (opt.json)
-    print_scenes_json(opt, predicted, baseline);
-  else
+  std::optional<Alignment> alignment;
+  if (opt.gt_alignment) alignment = Alignment{align_scenes(scenes), {}, {}};
+  Alignment* a = alignment ? &*alignment : nullptr;
+  if (opt.pred_dir)
+    predicted = evaluate_predictions(scenes, *opt.pred_dir, a, a ? &a->predicted : nullptr);
+  if (opt.baseline) baseline = evaluate_baseline(scenes, a, a ? &a->baseline : nullptr);
+  if (opt.json) {
+    print_scenes_json(opt, scenes, predicted, baseline, a);
+  } else {
     print_scenes_text(opt, predicted, baseline);
+    if (a != nullptr) print_alignment_text(opt, scenes, predicted, baseline, *a);
+  }
   return 0;
 }
 
