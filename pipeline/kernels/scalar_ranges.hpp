@@ -100,6 +100,10 @@ inline void mean_range(std::uint32_t* row, const std::uint32_t* reciprocal, int 
   for (int x = begin; x < end; ++x) row[x] = pixel::region_mean(row[x], reciprocal[x]);
 }
 
+inline void reciprocal_range(const std::uint32_t* size, int begin, int end, std::uint32_t* out) {
+  for (int x = begin; x < end; ++x) out[x] = pixel::reciprocal(size[x]);
+}
+
 // Block layout: elements [begin, end) of every block.
 inline void block_prefix_range(const std::uint32_t* in, int width, int block, int begin, int end,
                                std::uint32_t* prefix) {

@@ -623,6 +623,29 @@ void RegionMeanRow(std::uint32_t* row, const std::uint32_t* reciprocal, int widt
   detail::mean_range(row, reciprocal, x, width);
 }
 
+void RegionReciprocalRow(const std::uint32_t* size, int width, std::uint32_t* out) {
+  // A 32-bit division per pixel costs more than the rest of building the support regions; in
+  // double precision it vectorises. The numerator is below 2^32 + 2^31 and exact, as is n; a
+  // quotient that is not whole lies at least 1 / n < 2^-21 below the next integer, more than half
+  // a unit in the last place of a double below 2^33, so the rounded quotient truncates to the
+  // exact one.
+  const hn::ScalableTag<double> dd;
+  const hn::RebindToSigned<decltype(dd)> di64;
+  const hn::RebindToUnsigned<decltype(dd)> du64;
+  const hn::Rebind<std::uint32_t, decltype(dd)> du32;
+  const int n = static_cast<int>(hn::Lanes(dd));
+  const auto base = hn::Set(du64, std::uint64_t{1} << 31);
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    const auto s = hn::PromoteTo(du64, hn::LoadU(du32, size + x));
+    const auto numerator = hn::Add(base, hn::ShiftRight<1>(s));
+    const auto q = hn::Div(hn::ConvertTo(dd, hn::BitCast(di64, numerator)),
+                           hn::ConvertTo(dd, hn::BitCast(di64, s)));
+    hn::StoreU(hn::TruncateTo(du32, hn::BitCast(du64, hn::ConvertTo(di64, q))), du32, out + x);
+  }
+  detail::reciprocal_range(size, x, width, out);
+}
+
 // BlockWindowSumsRow for blocks of one vector: the same sums without the loop over vectors.
 template <bool kAbove>
 HWY_NOINLINE void BlockWindowSumsOneVector(const std::uint32_t* HWY_RESTRICT prefix,
@@ -1030,6 +1053,7 @@ HWY_EXPORT(HorizontalSumsRow);
 HWY_EXPORT(AccumulateRow);
 HWY_EXPORT(VerticalSumsRow);
 HWY_EXPORT(RegionMeanRow);
+HWY_EXPORT(RegionReciprocalRow);
 HWY_EXPORT(BlockHorizontalSumsRow);
 HWY_EXPORT(BlockWindowSumsRow);
 HWY_EXPORT(BlockVerticalSumsRow);
@@ -1103,6 +1127,10 @@ void vertical_sums_row(const std::uint32_t* column_sums, std::ptrdiff_t stride, 
 
 void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width) {
   HWY_DYNAMIC_DISPATCH(RegionMeanRow)(row, reciprocal, width);
+}
+
+void region_reciprocal_row(const std::uint32_t* size, int width, std::uint32_t* out) {
+  HWY_DYNAMIC_DISPATCH(RegionReciprocalRow)(size, width, out);
 }
 
 void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,

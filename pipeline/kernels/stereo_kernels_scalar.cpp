@@ -99,6 +99,10 @@ void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int wi
   detail::mean_range(row, reciprocal, 0, width);
 }
 
+void region_reciprocal_row(const std::uint32_t* size, int width, std::uint32_t* out) {
+  detail::reciprocal_range(size, 0, width, out);
+}
+
 void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
                                const std::uint8_t* right, int width, int block,
                                std::uint32_t* prefix, const std::uint32_t* above,

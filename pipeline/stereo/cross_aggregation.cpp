@@ -46,13 +46,8 @@ void SupportRegions::build(const CrossArms& arms, AggregationScratch& scratch, i
     Image<std::uint32_t>& recip = order == PassOrder::kHorizontalFirst ? recip_hv_ : recip_vh_;
     size.fill(1);
     sum(size.view(), order, scratch);
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        // 2^31 + n / 2 fits 32 bits (n <= 511 * 511), and a 32-bit division is several times
-        // faster than a 64-bit one.
-        const std::uint32_t n = size.at(x, y);
-        recip.at(x, y) = ((std::uint32_t{1} << kReciprocalShift) + n / 2) / n;
-      }
+    static_assert(kReciprocalShift == 31, "pixel::reciprocal rounds 2^31 / n");
+    for (int y = 0; y < h; ++y) kernels::region_reciprocal_row(size.row(y), w, recip.row(y));
   }
 }
 

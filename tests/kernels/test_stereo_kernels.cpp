@@ -449,6 +449,36 @@ TEST(StereoKernels, RegionMeanMatchesScalar) {
   }
 }
 
+TEST(StereoKernels, RegionReciprocalMatchesScalarAndIsExact) {
+  std::mt19937 rng(5);
+  for (const int w : kWidths) {
+    auto sizes = random_vector<std::uint32_t>(rng, static_cast<std::size_t>(w), 1, 511 * 511);
+    // The smallest and largest regions, and divisors whose quotient is whole or just below it.
+    const std::uint32_t edge[] = {1, 2, 3, 511 * 511, 1u << 16, 65537, 4761, (1u << 21) - 1};
+    for (int x = 0; x < w && x < 8; ++x) sizes[static_cast<std::size_t>(x)] = edge[x];
+    std::vector<std::uint32_t> expected(sizes.size());
+    scalar::region_reciprocal_row(sizes.data(), w, expected.data());
+    for (int x = 0; x < w; ++x) {
+      const std::uint64_t n = sizes[static_cast<std::size_t>(x)];
+      ASSERT_EQ(expected[static_cast<std::size_t>(x)], ((std::uint64_t{1} << 31) + n / 2) / n);
+    }
+    for_each_target([&] {
+      std::vector<std::uint32_t> out(sizes.size(), 7u);
+      region_reciprocal_row(sizes.data(), w, out.data());
+      ASSERT_EQ(out, expected) << "width " << w;
+    });
+  }
+  // Every size the kernel takes, against the 64-bit integer division.
+  std::vector<std::uint32_t> all((1u << 21) - 1);
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<std::uint32_t>(i + 1);
+  std::vector<std::uint32_t> out(all.size());
+  for_each_target([&] {
+    region_reciprocal_row(all.data(), static_cast<int>(all.size()), out.data());
+    for (std::size_t i = 0; i < all.size(); ++i)
+      ASSERT_EQ(out[i], ((std::uint64_t{1} << 31) + all[i] / 2) / all[i]) << "size " << all[i];
+  });
+}
+
 TEST(StereoKernels, BlockHorizontalSumsMatchScalarAndBruteForce) {
   std::mt19937 rng(12);
   for (const int w : {1, 7, 16, 33}) {

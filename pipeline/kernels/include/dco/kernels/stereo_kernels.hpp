@@ -98,6 +98,9 @@ void vertical_sums_row(const std::uint32_t* column_sums, std::ptrdiff_t stride, 
 // row[x] = (row[x] * reciprocal[x] + 2^30) >> 31 in 64-bit arithmetic: the region mean when
 // reciprocal = round(2^31 / region size).
 void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width);
+// out[x] = pixel::reciprocal(size[x]) = round(2^31 / size[x]), for sizes in [1, 2^21) (a region
+// of 511 x 511 pixels at most is far inside).
+void region_reciprocal_row(const std::uint32_t* size, int width, std::uint32_t* out);
 
 // The same sums over rows of blocks: element k of block x sits at [x * block + k] (one block per
 // pixel, e.g. one element per disparity), and every element of a block shares the pixel's arms
@@ -214,6 +217,7 @@ void vertical_sums_row(const std::uint32_t* column_sums, std::ptrdiff_t stride, 
                        const std::uint8_t* up, const std::uint8_t* down, int width,
                        std::uint32_t* out);
 void region_mean_row(std::uint32_t* row, const std::uint32_t* reciprocal, int width);
+void region_reciprocal_row(const std::uint32_t* size, int width, std::uint32_t* out);
 void block_horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
                                const std::uint8_t* right, int width, int block,
                                std::uint32_t* prefix, const std::uint32_t* above,
