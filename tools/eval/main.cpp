@@ -244,21 +244,32 @@ std::vector<dco::tools::GtAlignment> align_scenes(const std::vector<Scene>& scen
   return offsets;
 }
 
-dco::tools::GroundTruth moved_ground_truth(const Scene& scene, double offset_px) {
-  dco::tools::GroundTruth gt = dco::tools::load_ground_truth(scene);
-  gt.disparity = dco::tools::shifted_ground_truth(gt.disparity.view(), offset_px);
-  return gt;
-}
+// The scores against the GT as given, and with `offsets` (one per scene) also against the GT
+// moved by each scene's offset, into `moved`.
+struct Scorer {
+  const std::vector<dco::tools::GtAlignment>* offsets = nullptr;
+  std::vector<SceneMetrics>* moved = nullptr;
 
-// With `alignment`, each scene is scored once more against its moved GT, into `moved`.
+  SceneMetrics operator()(std::size_t scene_index, const Scene& scene,
+                          dco::ImageView<const float> prediction, const dco::tools::GroundTruth& gt,
+                          dco::ImageView<const float> matches = {}) const {
+    if (offsets != nullptr) {
+      dco::tools::GroundTruth shifted{
+          dco::tools::shifted_ground_truth(gt.disparity.view(), (*offsets)[scene_index].offset_px),
+          gt.nocc};
+      moved->push_back(dco::tools::evaluate_disparity(scene.name, prediction, shifted, matches));
+    }
+    return dco::tools::evaluate_disparity(scene.name, prediction, gt, matches);
+  }
+};
+
 std::vector<SceneMetrics> evaluate_predictions(const std::vector<Scene>& scenes,
-                                               const fs::path& pred_dir,
-                                               const Alignment* alignment = nullptr,
-                                               std::vector<SceneMetrics>* moved = nullptr) {
+                                               const fs::path& pred_dir, const Scorer& score) {
   if (!fs::is_directory(pred_dir))
     throw dco::Error(fmt::format("prediction directory '{}' does not exist", pred_dir.string()));
   std::vector<SceneMetrics> results;
-  for (const Scene& scene : scenes) {
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const Scene& scene = scenes[i];
     const fs::path pfm = pred_dir / (scene.file_stem() + ".pfm");
     if (!fs::exists(pfm))
       throw dco::Error(fmt::format("no prediction '{}' for scene '{}'", pfm.string(), scene.name));
@@ -273,36 +284,25 @@ std::vector<SceneMetrics> evaluate_predictions(const std::vector<Scene>& scenes,
     const fs::path sparse_pfm = pred_dir / (scene.file_stem() + ".sparse.pfm");
     const dco::Image<float> matches =
         fs::exists(sparse_pfm) ? dco::read_pfm(sparse_pfm) : dco::Image<float>();
-    SceneMetrics m =
-        dco::tools::evaluate_disparity(scene.name, prediction.view(), gt, matches.view());
+    SceneMetrics m = score(i, scene, prediction.view(), gt, matches.view());
     m.time_ms = read_time_ms(pred_dir / (scene.file_stem() + ".time_ms"));
     results.push_back(std::move(m));
-    if (alignment != nullptr)
-      moved->push_back(dco::tools::evaluate_disparity(
-          scene.name, prediction.view(),
-          moved_ground_truth(scene, alignment->offsets[results.size() - 1].offset_px),
-          matches.view()));
   }
   return results;
 }
 
-std::vector<SceneMetrics> evaluate_baseline(const std::vector<Scene>& scenes,
-                                            const Alignment* alignment = nullptr,
-                                            std::vector<SceneMetrics>* moved = nullptr) {
+std::vector<SceneMetrics> evaluate_baseline(const std::vector<Scene>& scenes, const Scorer& score) {
   std::vector<SceneMetrics> results;
-  for (const Scene& scene : scenes) {
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const Scene& scene = scenes[i];
     const dco::Image<std::uint8_t> left = dco::load_image(scene.left);
     const dco::Image<std::uint8_t> right = dco::load_image(scene.right);
     const dco::tools::BaselineResult baseline =
         dco::tools::run_sgbm_wls(left.view(), right.view(), scene.max_disp);
-    SceneMetrics m = dco::tools::evaluate_disparity(scene.name, baseline.disparity.view(),
-                                                    dco::tools::load_ground_truth(scene));
+    SceneMetrics m =
+        score(i, scene, baseline.disparity.view(), dco::tools::load_ground_truth(scene));
     m.time_ms = baseline.time_ms;
     results.push_back(std::move(m));
-    if (alignment != nullptr)
-      moved->push_back(dco::tools::evaluate_disparity(
-          scene.name, baseline.disparity.view(),
-          moved_ground_truth(scene, alignment->offsets[results.size() - 1].offset_px)));
   }
   return results;
 }
@@ -415,8 +415,10 @@ int run_scenes(const Options& opt) {
   if (opt.gt_alignment) alignment = Alignment{align_scenes(scenes), {}, {}};
   Alignment* a = alignment ? &*alignment : nullptr;
   if (opt.pred_dir)
-    predicted = evaluate_predictions(scenes, *opt.pred_dir, a, a ? &a->predicted : nullptr);
-  if (opt.baseline) baseline = evaluate_baseline(scenes, a, a ? &a->baseline : nullptr);
+    predicted = evaluate_predictions(scenes, *opt.pred_dir,
+                                     a ? Scorer{&a->offsets, &a->predicted} : Scorer{});
+  if (opt.baseline)
+    baseline = evaluate_baseline(scenes, a ? Scorer{&a->offsets, &a->baseline} : Scorer{});
   if (opt.json) {
     print_scenes_json(opt, scenes, predicted, baseline, a);
   } else {
