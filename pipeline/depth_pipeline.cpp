@@ -2,6 +2,7 @@
 
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/stopwatch.hpp"
 #include "dco/pipeline/stereo/image_ops.hpp"
 
 namespace dco::pipeline {
@@ -53,6 +54,22 @@ void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> 
   slot.raw_disparity.copy_from(raw);
 }
 
+void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmoother& planes,
+                 StereoSlot& slot, bool here) {
+  Stopwatch t;
+  slot.planar.resize(slot.sparse.width(), slot.sparse.height());
+  slot.planes_done = here;
+  slot.planes_ms = 0;
+  if (!here) {
+    if (params.plane_window > 0)
+      planes.reserve(slot.sparse.width(), slot.stereo_scale, params.plane_window / 2);
+    return;
+  }
+  densify::smooth_matches(params, planes, slot.sparse.cview(), slot.stereo_scale,
+                          slot.planar.view());
+  slot.planes_ms = t.lap_ms();
+}
+
 void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centre,
                    const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out) {
   const bool flow = neighbour_a != nullptr && neighbour_b != nullptr;
@@ -77,6 +94,10 @@ void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centr
   out.image.copy_from(centre.image.cview());
   out.sparse.resize(centre.sparse.width(), centre.sparse.height());
   out.sparse.copy_from(centre.sparse.cview());
+  out.planar.resize(centre.planar.width(), centre.planar.height());
+  if (centre.planes_done) out.planar.copy_from(centre.planar.cview());
+  out.planes_done = centre.planes_done;
+  out.densify_timings.planes_ms = centre.planes_ms;
   out.stereo_timings = centre.stereo_timings;
   out.stereo_scale = centre.stereo_scale;
   out.flow_cue = flow;
@@ -91,6 +112,7 @@ densify::DensifyInputs densify_inputs(const DepthResult& r, ImageView<const floa
   d.image = r.image.cview();
   d.previous = previous;
   d.match_step = r.stereo_scale;
+  if (r.planes_done) d.planar = r.planar.cview();
   return d;
 }
 
@@ -100,7 +122,10 @@ void densify_frame(densify::Densifier& densifier, DepthResult& out) {
   densifier.compute(
       densify_inputs(out, last.same_size(out.sparse.view()) ? last : ImageView<const float>{}),
       out.dense);
+  // The planes were the stereo thread's (plane_frame): their time came with the result.
+  const double planes_ms = out.densify_timings.planes_ms;
   out.densify_timings = densifier.last_timings();
+  if (out.planes_done) out.densify_timings.planes_ms = planes_ms;
   out.solver = densifier.last_report();
 }
 
@@ -119,11 +144,13 @@ void size_like(const StereoSlot& model, StereoSlot& out) {
   size_image_like(model.small_colour, out.small_colour);
   size_image_like(model.raw_disparity, out.raw_disparity);
   size_image_like(model.sparse, out.sparse);
+  size_image_like(model.planar, out.planar);
 }
 
 void size_like(const DepthResult& model, DepthResult& out) {
   size_image_like(model.image, out.image);
   size_image_like(model.sparse, out.sparse);
+  size_image_like(model.planar, out.planar);
   size_image_like(model.dense, out.dense);
   size_image_like(model.m_fuse, out.m_fuse);
   size_image_like(model.m_intensity, out.m_intensity);
@@ -170,6 +197,7 @@ bool DepthPipeline::push(ImageView<const std::uint8_t> left, ImageView<const std
   const int t = next_index_;
   StereoSlot& slot = slot_of(t);
   stereo_frame(*stereo_, left, right, slot);  // first: it rejects bad input
+  plane_frame(params_.densify, planes_, slot);
   prepare_frame(params_.stereo, left, t, slot);
   ++next_index_;
   const ContourWindow window = window_on_arrival(params_.contour.lookahead, t);

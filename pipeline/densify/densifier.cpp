@@ -303,6 +303,17 @@ void Densifier::border_plane_hints(ImageView<const float> sparse, float& low, fl
   }
 }
 
+void smooth_matches(const DensifyParams& params, MatchPlaneSmoother& planes,
+                    ImageView<const float> sparse, int match_step, ImageView<float> out) {
+  if (params.plane_window > 0) {
+    planes.apply(sparse, match_step, params.plane_window / 2, static_cast<float>(params.plane_rms),
+                 out);
+    return;
+  }
+  for (int y = 0; y < sparse.height; ++y)
+    std::copy(sparse.row(y), sparse.row(y) + sparse.width, out.row(y));
+}
+
 bool Densifier::solves_at_half(int width) const {
   return densify::solves_at_half(params_, width);
 }
@@ -319,6 +330,7 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
                   std::to_string(h));
   };
   check(in.m_intensity, "m_intensity");
+  check(in.planar, "the planar sparse map");
   check(in.contours, "the contour mask");
   check(in.previous, "the previous frame");
 
@@ -327,10 +339,12 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
 
   Stopwatch t;
   DensifyInputs inputs = in;
-  if (params_.plane_window > 0) {
-    smoothed_.resize(w, h);
-    planes_.apply(in.sparse, in.match_step, params_.plane_window / 2,
-                  static_cast<float>(params_.plane_rms), smoothed_.view());
+  if (params_.plane_window > 0) smoothed_.resize(w, h);  // ready whenever the step comes back
+  if (!in.planar.empty()) {
+    inputs.sparse = in.planar;
+    if (params_.plane_window > 0) planes_.reserve(w, in.match_step, params_.plane_window / 2);
+  } else if (params_.plane_window > 0) {
+    smooth_matches(params_, planes_, in.sparse, in.match_step, smoothed_.view());
     inputs.sparse = smoothed_.cview();
   }
   timings_.planes_ms = t.lap_ms();

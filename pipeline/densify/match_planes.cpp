@@ -73,22 +73,30 @@ void MatchPlaneSmoother::row_moments(ImageView<const float> sparse, int grid_y, 
   kernels::match_plane_row_sums(one, d, dd, n, radius_, sums);
 }
 
+void MatchPlaneSmoother::reserve(int width, int step, int radius) {
+  assert(width >= 1 && step >= 1 && radius >= 1);
+  step_ = step;
+  radius_ = radius;
+  grid_width_ = (width + step - 1) / step;
+  const auto n = static_cast<std::size_t>(grid_width_);
+  const auto span = static_cast<std::size_t>(2 * radius + 1);
+  ring_.resize(static_cast<std::size_t>(kRingRows) * n * span);
+  window_.resize(static_cast<std::size_t>(kWindowSums) * n);
+  row_.resize(3 * n + 2 * static_cast<std::size_t>(width));
+  window_rows_.resize(span);
+  column_.resize(static_cast<std::size_t>(width));
+  for (int x = 0; x < width; ++x)
+    column_[static_cast<std::size_t>(x)] = std::min(x / step, grid_width_ - 1);
+}
+
 void MatchPlaneSmoother::apply(ImageView<const float> sparse, int step, int radius, float max_rms,
                                ImageView<float> out) {
   assert(step >= 1 && radius >= 1 && out.same_size(sparse) && sparse.channels == 1);
   const int w = sparse.width, h = sparse.height;
-  step_ = step;
-  radius_ = radius;
-  grid_width_ = (w + step - 1) / step;
+  reserve(w, step, radius);
   const int n = grid_width_, grid_height = (h + step - 1) / step;
   const int span = 2 * radius + 1;
   const auto row_size = static_cast<std::size_t>(kRingRows) * static_cast<std::size_t>(n);
-  ring_.resize(row_size * static_cast<std::size_t>(span));
-  window_.resize(static_cast<std::size_t>(kWindowSums) * static_cast<std::size_t>(n));
-  row_.resize(3 * static_cast<std::size_t>(n) + 2 * static_cast<std::size_t>(w));
-  window_rows_.resize(static_cast<std::size_t>(span));
-  column_.resize(static_cast<std::size_t>(w));
-  for (int x = 0; x < w; ++x) column_[static_cast<std::size_t>(x)] = std::min(x / step, n - 1);
 
   // Disparities relative to the middle of the range keep Σd² small enough for floats; every
   // eighth grid row tells the range closely enough for that, every row where those have no match.

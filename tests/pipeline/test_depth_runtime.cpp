@@ -157,6 +157,41 @@ TEST(DepthRuntime, DeterministicModeEqualsTheOfflinePipelineBitForBit) {
   }
 }
 
+TEST(DepthRuntime, TheMatchPlanesRunOnTheThreadWithLessOtherWorkAndNoByteChanges) {
+  for (const bool heavy_densify : {true, false}) {
+    Sequence s = make_sequence("hand", 16);
+    s.params.contour.use_flow = false;
+    if (heavy_densify) {  // a solve many times the stereo stage's time
+      s.params.densify.tolerance = 1e-9;
+      s.params.densify.max_iterations = 400;
+      s.params.densify.multigrid = false;
+    } else {  // a stereo stage many times the rest
+      s.params.stereo.aggregation_passes = 8;
+      s.params.stereo.search_range = "full";
+      s.params.densify.max_iterations = 1;
+    }
+    const std::vector<DepthResult> expected = offline(s);
+    RuntimeParams rp;
+    rp.deterministic = true;
+    rp.threads = 2;
+    Collector c;
+    DepthRuntime runtime(s.params, rp, c.callback());
+    runtime.start();
+    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+    runtime.drain();
+    expect_identical(expected, c.results, heavy_densify ? "heavy densify" : "heavy stereo");
+    const long on_stereo = runtime.stats().planes_on_stereo_thread;
+    // Decided from the published frames' times: the first frames go before any is known.
+    if (heavy_densify)
+      EXPECT_EQ(on_stereo, 16);
+    else
+      EXPECT_LE(on_stereo, 4);
+    long carried = 0;
+    for (const DepthResult& r : c.results) carried += r.planes_done;
+    EXPECT_EQ(carried, on_stereo);
+  }
+}
+
 TEST(DepthRuntime, ColourInputAtHalfResolutionEqualsTheOfflinePipeline) {
   Sequence s = make_sequence("boxes", 3);
   for (auto& f : s.frames) {  // a colour pair: the grey replicated with a tint

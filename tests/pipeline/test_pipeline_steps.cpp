@@ -3,8 +3,10 @@
 
 #include <cstring>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "dco/core/error.hpp"
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
@@ -38,6 +40,72 @@ TEST(PrepareFrame, InternalGreyEqualsTheStereoStagesOwn) {
       EXPECT_EQ(slot.raw_disparity.width(), slot.small.width());
       EXPECT_EQ(slot.sparse.width(), 175);
     }
+}
+
+TEST(PlaneFrame, TheStereoThreadsPlanesAreTheDensifiersOwnFirstStep) {
+  const synthetic::SceneConfig config = synthetic::preset("boxes", 640, 360);
+  const synthetic::SceneRenderer scene(config);
+  synthetic::StereoSample s;
+  scene.render(2, s);
+  PipelineParams params;
+  params.stereo.max_disparity = synthetic::covering_max_disparity(config);
+  params.stereo.internal_resolution = "half";
+  const auto matcher = stereo::make_cpu_stereo_matcher(params.stereo);
+  StereoSlot slot;
+  prepare_frame(params.stereo, s.left.cview(), 0, slot);
+  stereo_frame(*matcher, s.left.cview(), s.right.cview(), slot);
+  densify::MatchPlaneSmoother planes;
+  plane_frame(params.densify, planes, slot);
+  ASSERT_TRUE(slot.planar.view().same_size(slot.sparse.view()));
+  EXPECT_FALSE(same_bytes(slot.planar.cview(), slot.sparse.cview()));  // the planes moved matches
+
+  // The result carries the planar map to the densify step, which then skips its own planes.
+  const auto extractor = contour::make_cpu_contour_extractor(params.contour);
+  DepthResult with, without;
+  contour_frame(*extractor, slot, nullptr, nullptr, with);
+  EXPECT_TRUE(same_bytes(with.planar.cview(), slot.planar.cview()));
+  contour_frame(*extractor, slot, nullptr, nullptr, without);
+  without.planes_done = false;
+  densify::Densifier carried(params.densify), own(params.densify);
+  densify_frame(carried, with);
+  densify_frame(own, without);
+  EXPECT_TRUE(same_bytes(with.dense.cview(), without.dense.cview()));
+  EXPECT_GT(without.densify_timings.planes_ms, 0.0);
+  EXPECT_EQ(with.densify_timings.planes_ms, slot.planes_ms);
+  // ... and reads the map it is given: the unsmoothed matches give another dense map.
+  DepthResult unsmoothed;
+  contour_frame(*extractor, slot, nullptr, nullptr, unsmoothed);
+  unsmoothed.planar.copy_from(slot.sparse.cview());
+  densify::Densifier reads(params.densify);
+  densify_frame(reads, unsmoothed);
+  EXPECT_FALSE(same_bytes(unsmoothed.dense.cview(), without.dense.cview()));
+
+  // Left to the densify step, the slot carries no planar map, and the densifier makes its own.
+  plane_frame(params.densify, planes, slot, false);
+  EXPECT_FALSE(slot.planes_done);
+  DepthResult left_over;
+  contour_frame(*extractor, slot, nullptr, nullptr, left_over);
+  EXPECT_FALSE(left_over.planes_done);
+  densify::Densifier later(params.densify);
+  densify_frame(later, left_over);
+  EXPECT_TRUE(same_bytes(left_over.dense.cview(), without.dense.cview()));
+
+  // Without planes the step is a copy.
+  params.densify.plane_window = 0;
+  plane_frame(params.densify, planes, slot);
+  EXPECT_TRUE(same_bytes(slot.planar.cview(), slot.sparse.cview()));
+
+  // A planar map of another size is refused.
+  Image<float> small(320, 180);
+  densify::DensifyInputs in = densify_inputs(with, {});
+  in.planar = small.cview();
+  Image<float> dense;
+  try {
+    own.compute(in, dense);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("planar"));
+  }
 }
 
 TEST(ContourWindows, CentredWindowTrailsByOneAndCausalWindowLooksBack) {

@@ -455,6 +455,11 @@ struct Result {
   double ratio = 0;            // the median of the rounds' ratios
   double first_result_ms = 0;  // a new runtime: first push to first result (the warm-up pass)
   PassFigures throughput;      // every round's frames
+  // Of every round's frames (warm-up included), those whose match planes the stereo thread ran.
+  long planes_on_stereo = 0, planes_frames = 0;
+  double planes_share() const {
+    return planes_frames > 0 ? static_cast<double>(planes_on_stereo) / planes_frames : 0.0;
+  }
   double fps = 0;
   int paced_frames = 0;
   double release_latency_ms = 0;  // runtime.release_latency_ms of the latency run
@@ -509,6 +514,9 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
                                      frames.name, times.size(), r.frames));
       if (warmup_frames.empty()) first_results.push_back(ms_between(start, times.front().release));
       turn.ms_per_frame = ms_between(start, times.back().release) / r.frames;
+      const rt::RuntimeStats st = pipeline.stats();
+      r.planes_on_stereo += st.planes_on_stereo_thread;
+      r.planes_frames += st.published;
       all_times.insert(all_times.end(), times.begin(), times.end());
     }
     for (const auto& f : warmup_frames)
@@ -598,6 +606,10 @@ void print_text(const Result& r) {
       t.stereo.mean_ms, t.contour.mean_ms, t.densify.mean_ms, t.stereo.p99_ms, t.contour.p99_ms,
       t.densify.p99_ms);
   fmt::print(
+      "  planes   the densify stage's match planes on the stereo thread for {} of {} frames (the "
+      "thread with less other work)\n",
+      r.planes_on_stereo, r.planes_frames);
+  fmt::print(
       "  latency  p50 {:.1f} ms  p99 {:.1f} ms  (p99 - p50 {:.1f} ms) at {:g} fps input; "
       "{} of {} frames dropped ({} late), {} published\n",
       ls.latency.p50_ms, ls.latency.p99_ms, ls.latency.p99_ms - ls.latency.p50_ms, r.fps, l.dropped,
@@ -670,7 +682,8 @@ std::string json_fields(const Result& r) {
              "\"ready_p99_ms\": {}, "
              "\"release_latency_ms\": {}, \"overdue\": {}, \"early\": {}, "
              "\"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
-             "\"published\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
+             "\"published\": {}, \"planes_on_stereo_thread\": {}, \"peer_ms_per_frame\": {}, "
+             "\"ratio\": {}",
              dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity,
              r.threads, r.parallel_flow ? "true" : "false", r.warmup,
              json_number(r.first_result_ms), json_number(r.ms_per_frame),
@@ -679,8 +692,8 @@ std::string json_fields(const Result& r) {
              json_number(ls.latency.p50_ms), json_number(ls.latency.p99_ms),
              json_number(ls.latency.max_ms), json_number(ls.ready.p50_ms),
              json_number(ls.ready.p99_ms), json_number(r.release_latency_ms), l.overdue, l.early,
-             l.pushed, l.dropped, l.late, l.published, json_number(r.peer_ms_per_frame),
-             json_number(r.ratio)) +
+             l.pushed, l.dropped, l.late, l.published, json_number(r.planes_share()),
+             json_number(r.peer_ms_per_frame), json_number(r.ratio)) +
          fmt::format(", \"rounds\": [{}]", fmt::join(round_objects(r), ", ")) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
          (r.check ? fmt::format(

@@ -30,6 +30,8 @@ struct DepthResult {
   int index = -1;
   Image<std::uint8_t> image;     // grey left image, input resolution
   Image<float> sparse;           // input px, +inf where the stereo checks left no value
+  Image<float> planar;           // sparse after densify::smooth_matches, when planes_done
+  bool planes_done = false;      // the stereo thread ran smooth_matches (else the densify step)
   Image<float> dense;            // input px, every pixel set
   Image<float> m_fuse;           // internal resolution, [0, 1]
   Image<float> m_intensity;      // input resolution, [0, 1]
@@ -50,8 +52,11 @@ struct StereoSlot {
   Image<std::uint8_t> small_colour;  // scratch: the colour image downscaled before its grey
   Image<float> raw_disparity;        // internal px, every pixel
   Image<float> sparse;               // input px
+  Image<float> planar;               // sparse after densify::smooth_matches, when planes_done
   stereo::StereoTimings stereo_timings;
   int stereo_scale = 1;  // internal downscale of the stage
+  bool planes_done = false;
+  double planes_ms = 0;  // the time smooth_matches took
 };
 
 // The steps of one frame, shared by DepthPipeline and the real-time runtime (pipeline/runtime),
@@ -64,9 +69,16 @@ void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint
 //    dco::Error on bad input.
 void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> left,
                   ImageView<const std::uint8_t> right, StereoSlot& slot);
+// 2b. The densify stage's first step, which needs only the sparse map: its matches along local
+//    planes (densify::smooth_matches), run after step 2 when `here`, so that the stereo thread
+//    can carry it when the contour and densify steps take longer. Without `here` the densify
+//    step runs it; the slot's planar map and `planes` are still sized, so that neither allocates
+//    when the step moves. The output is the same bytes either way.
+void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmoother& planes,
+                 StereoSlot& slot, bool here = true);
 // 3. Contours of `centre` given its flow neighbours (the flow cue needs both; nullptr when
-//    missing). Fills the contour fields of `out` and copies the centre's index, image, sparse map
-//    and stereo timings into it.
+//    missing). Fills the contour fields of `out` and copies the centre's index, image, sparse and
+//    planar maps and stereo timings into it.
 void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centre,
                    const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out);
 // What the densifier reads of a result the contour step filled; `previous` is the stability
@@ -128,6 +140,7 @@ class DepthPipeline {
   std::unique_ptr<stereo::StereoMatcher> stereo_;
   std::unique_ptr<contour::ContourExtractor> contour_;
   densify::Densifier densifier_;
+  densify::MatchPlaneSmoother planes_;
   std::array<StereoSlot, 3> slots_;
   int next_index_ = 0;   // index of the next pushed frame
   int next_output_ = 0;  // index of the next frame to finish

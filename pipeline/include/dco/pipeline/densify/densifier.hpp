@@ -89,6 +89,9 @@ struct DensifyInputs {
   ImageView<const std::uint8_t> contours;  // B_dp, non-zero on a depth contour, optional
   ImageView<const float> previous;         // last frame's dense disparity, optional
   ImageView<const std::uint8_t> image;     // grey input image, optional (colour guidance)
+  // The sparse map after smooth_matches with these params, optional: compute then skips that
+  // step (it needs only the sparse map, so the stereo thread runs it).
+  ImageView<const float> planar;
   // The matcher's grid: sparse values come in match_step x match_step blocks (the stereo
   // stage's internal downscale).
   int match_step = 1;
@@ -101,6 +104,12 @@ struct DensifyTimings {
 // Solves Eq. 20 in disparity (a plane in the scene is affine in disparity, so smoothness in
 // disparity keeps slanted surfaces straight) and writes a dense disparity map: every pixel set.
 // The solution of the previous call is the starting point of the next (warm start).
+// The densifier's first step: `sparse` with its matches along local planes (plane_window,
+// plane_rms; MatchPlaneSmoother) into `out`, or copied when plane_window is 0. `out` has sparse's
+// size and does not share its memory.
+void smooth_matches(const DensifyParams& params, MatchPlaneSmoother& planes,
+                    ImageView<const float> sparse, int match_step, ImageView<float> out);
+
 class Densifier {
  public:
   // `solver` makes the solver of the system (empty: the CPU one).

@@ -29,6 +29,9 @@ class MatchPlaneSmoother {
   // `out` must have sparse's size and not share its memory.
   void apply(ImageView<const float> sparse, int step, int radius, float max_rms,
              ImageView<float> out);
+  // Sizes the buffers apply needs for rows `width` pixels wide, so that a smoother kept ready
+  // but not used every frame allocates nothing when it is.
+  void reserve(int width, int step, int radius);
 
  private:
   void row_moments(ImageView<const float> sparse, int grid_y, float offset, float* sums);

@@ -61,6 +61,9 @@ struct RuntimeStats {
   // The most frames each queue ever held: the entry (a single waiting frame), stereo -> contour
   // and contour -> densify. None can exceed its capacity, so latency cannot grow.
   std::size_t entry_high_water = 0, stereo_queue_high_water = 0, densify_queue_high_water = 0;
+  // Frames whose match planes (the densify stage's first step) the stereo thread ran, because
+  // its other work was the shorter (see plane_frame); the others' ran in the densify step.
+  long planes_on_stereo_thread = 0;
 };
 
 // The depth pipeline in real time: the stereo, contour and densify steps of DepthPipeline on their
@@ -184,6 +187,9 @@ class DepthRuntime {
   std::unique_ptr<stereo::StereoMatcher> stereo_;
   std::unique_ptr<contour::ContourExtractor> contour_;
   densify::Densifier densifier_;
+  densify::MatchPlaneSmoother planes_;  // the stereo thread's (plane_frame)
+  // Whether the stereo thread runs the match planes of the frame it takes next (under mutex_).
+  bool planes_on_stereo_thread() const;
 
   mutable std::mutex mutex_;
   std::condition_variable_any changed_;  // any state below changed
@@ -222,6 +228,10 @@ class DepthRuntime {
 
   Histogram latency_, ready_, stereo_ms_, contour_ms_, densify_ms_;
   long pushed_ = 0, dropped_ = 0, late_ = 0, published_ = 0, overdue_ = 0, early_ = 0;
+  // Running means of each thread's work per frame, the match planes left out: the stereo thread's,
+  // and the contour + densify steps' (the densify thread's alone with three threads).
+  double stereo_work_ms_ = 0, other_work_ms_ = 0, planes_work_ms_ = 0;
+  long work_samples_ = 0, planes_on_stereo_ = 0;
 
   std::vector<std::jthread> threads_;
 };
