@@ -710,7 +710,7 @@ TEST(StereoKernels, WinnerTakesAllMatchesScalar) {
         scalar::wta_update_row(volume.data() + d * stride, stride, std::min(3, disparities - d), w,
                                d, batched.row());
       ASSERT_TRUE(batched == expected);
-      for (const int batch : {1, 4, 7}) {
+      for (const int batch : {1, 4, 7, 16}) {
         for_each_target([&] {
           WtaState state(w);
           for (int d = 0; d < disparities; d += batch)
@@ -735,7 +735,7 @@ TEST(StereoKernels, WinnerTakesAllSkippingBatchesMatchesScalar) {
     for (int d = 0; d < disparities; ++d)
       for (int x = 0; x < w; ++x)
         volume[d * stride + x] = static_cast<std::uint16_t>(rng() % (d % 3 == 0 ? 9 : 50));
-    for (const int batch : {1, 2, 5}) {
+    for (const int batch : {1, 2, 5, 16}) {
       // Batches 1, 3 and 4 skipped: a skip of one disparity and runs of skips both occur.
       const auto searched = [&](int d) {
         const int b = d / batch;

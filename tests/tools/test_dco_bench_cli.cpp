@@ -83,6 +83,9 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   EXPECT_EQ(json_value(r.out, "frames"), 3);
   EXPECT_EQ(json_value(r.out, "warmup_frames"), 3) << "the default 4, at most the frames";
   EXPECT_GT(json_value(r.out, "first_result_ms"), 0);
+  const double planes_share = json_value(r.out, "planes_on_stereo_thread");
+  EXPECT_GE(planes_share, 0.0);
+  EXPECT_LE(planes_share, 1.0);
   EXPECT_EQ(json_value(r.out, "paced_frames"), 8);
   // Only the timed frames' results count, not those of the warm-up frames before them.
   const double published = json_value(r.out, "published");
@@ -108,6 +111,9 @@ TEST(DcoBenchCli, TextNamesEveryMeasurementOnTheKarlsruheClip) {
   EXPECT_THAT(r.out, HasSubstr("ms/frame"));
   EXPECT_THAT(r.out, HasSubstr("stereo"));
   EXPECT_THAT(r.out, HasSubstr("latency  p50"));
+  // Every round's warm-up and timed frames: 3 rounds of 1 + 2.
+  EXPECT_THAT(r.out, ::testing::MatchesRegex(
+                         ".*match planes ran on the stereo thread for [0-9] of 9 frames.*"));
   EXPECT_THAT(r.out, HasSubstr("of 3 frames dropped"));
   EXPECT_THAT(r.out, HasSubstr("OpenCV StereoSGBM 3-way + WLS"));
   EXPECT_THAT(r.out, HasSubstr("median of 3 rounds"));

@@ -606,8 +606,7 @@ void print_text(const Result& r) {
       t.stereo.mean_ms, t.contour.mean_ms, t.densify.mean_ms, t.stereo.p99_ms, t.contour.p99_ms,
       t.densify.p99_ms);
   fmt::print(
-      "  planes   the densify stage's match planes on the stereo thread for {} of {} frames (the "
-      "thread with less other work)\n",
+      "  planes   the densify stage's match planes ran on the stereo thread for {} of {} frames\n",
       r.planes_on_stereo, r.planes_frames);
   fmt::print(
       "  latency  p50 {:.1f} ms  p99 {:.1f} ms  (p99 - p50 {:.1f} ms) at {:g} fps input; "
