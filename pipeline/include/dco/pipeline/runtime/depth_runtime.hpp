@@ -61,8 +61,9 @@ struct RuntimeStats {
   // The most frames each queue ever held: the entry (a single waiting frame), stereo -> contour
   // and contour -> densify. None can exceed its capacity, so latency cannot grow.
   std::size_t entry_high_water = 0, stereo_queue_high_water = 0, densify_queue_high_water = 0;
-  // Frames whose match planes (the densify stage's first step) the stereo thread ran, because
-  // its other work was the shorter (see plane_frame); the others' ran in the densify step.
+  // Frames whose match planes (the densify stage's first step, plane_frame) the stereo thread
+  // ran: while its own work was not longer than the other thread's with the planes. The others'
+  // ran in the densify step.
   long planes_on_stereo_thread = 0;
 };
 
