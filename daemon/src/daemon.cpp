@@ -18,6 +18,8 @@
 #include "dco/core/usable_cpus.hpp"
 #include "dco/gpu/backend.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
+#include "dco/pipeline/densify/densifier.hpp"
+#include "dco/pipeline/row_team.hpp"
 #include "raw_recorder.hpp"
 #include "replay_check.hpp"
 
@@ -159,13 +161,22 @@ void Daemon::start_pipeline() {
       pipeline::runtime::DepthRuntime::StageHook{}, backend.stages);
   runtime_->start();
   const int threads = runtime_->runtime_params().threads;
-  log_.info(fmt::format("{} stage thread(s){}{}", threads,
-                        loaded_.config.runtime.threads == 0
-                            ? fmt::format(" (runtime.threads = 0, {} usable CPUs)", usable_cpus())
-                            : "",
-                        contour::parallel_flow_fields(loaded_.config.pipeline.contour)
-                            ? ", the two flow fields on two threads"
-                            : ""));
+  const pipeline::PipelineParams& stages = loaded_.config.pipeline;
+  const int stereo_rows = pipeline::RowTeam::threads_for(stages.stereo.row_threads);
+  const int contour_rows = pipeline::RowTeam::threads_for(stages.contour.row_threads);
+  const int densify_rows = pipeline::RowTeam::threads_for(stages.densify.row_threads);
+  log_.info(
+      fmt::format("{} stage thread(s){}{}{}", threads,
+                  loaded_.config.runtime.threads == 0
+                      ? fmt::format(" (runtime.threads = 0, {} usable CPUs)", usable_cpus())
+                      : "",
+                  contour::parallel_flow_fields(loaded_.config.pipeline.contour)
+                      ? ", the two flow fields on two threads"
+                      : "",
+                  std::max({stereo_rows, contour_rows, densify_rows}) > 1
+                      ? fmt::format(", rows on {} / {} / {} threads in stereo / contour / densify",
+                                    stereo_rows, contour_rows, densify_rows)
+                      : ""));
   pipeline_start_ns_ = monotonic_ns();
 }
 

@@ -24,6 +24,9 @@ void register_params(ConfigSchema& s, ContourParams& p) {
   s.add("contour.reuse_flow", &p.reuse_flow,
         "lookahead 1: the field t -> t-1 is the previous frame's field t-1 -> t inverted, one DIS "
         "run per frame instead of two");
+  s.add("contour.row_threads", &p.row_threads, 0, 16,
+        "threads sharing the flow cue's row-wise steps after DIS, the stage's own included (0 = "
+        "auto: 1 below 4 usable CPUs, else half of them, at most 4)");
   s.add("contour.projection_distance", &p.projection_distance, 1, 64,
         "|p p0| = |p p1| of the projection test (Eq. 9), internal px");
   s.add("contour.box_size", &p.box_size, 1, 255,
@@ -51,6 +54,8 @@ void validate(const ContourParams& p) {
           "dis_preset must be ultrafast, fast or medium, not '" + p.dis_preset + "'");
   require(p.parallel_flow == "auto" || p.parallel_flow == "on" || p.parallel_flow == "off",
           "parallel_flow must be auto, on or off, not '" + p.parallel_flow + "'");
+  require(p.row_threads >= 0 && p.row_threads <= 16,
+          "row_threads must be in 0..16 (0 = auto), not " + std::to_string(p.row_threads));
   require(p.projection_distance >= 1 && p.projection_distance <= 64,
           "projection_distance must be in 1..64, not " + std::to_string(p.projection_distance));
   require(p.box_size >= 1 && p.box_size <= 255 && p.box_size % 2 == 1,

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <opencv2/video/tracking.hpp>
 
@@ -13,6 +14,7 @@
 #include "dco/pipeline/contour/flow_field_worker.hpp"
 #include "dco/pipeline/contour/flow_fusion.hpp"
 #include "dco/pipeline/contour/separable_filters.hpp"
+#include "dco/pipeline/row_team.hpp"
 
 namespace dco::contour {
 namespace {
@@ -87,7 +89,11 @@ void check_contour_input(const ContourInputs& in) {
 }
 
 struct FlowCue::State {
+  explicit State(const ContourParams& p)
+      : params(p), rows(pipeline::RowTeam::threads_for(p.row_threads)) {}
   ContourParams params;
+  pipeline::RowTeam rows;           // shares the steps after DIS
+  std::vector<float> part_largest;  // per thread of `rows`: the largest value of its rows
   cv::Ptr<cv::DISOpticalFlow> dis;
   cv::Mat flow_a, flow_b;  // CV_32FC2, kept so DIS writes into the same memory every frame
   // With reuse_flow: the last call's field centre -> neighbour_b and its two images.
@@ -96,11 +102,11 @@ struct FlowCue::State {
   bool has_last = false;
   cv::Mat centre_copy, neighbour_copy, neighbour_b_copy;  // continuous copies of padded views
   std::unique_ptr<FlowFieldWorker> field_b;  // with parallel_flow: computes flow_b meanwhile
-  Image<float> speed, amplitude_a, amplitude_b, contrast_a, contrast_b, fused, tmp;
+  Image<float> speed, speed_b, amplitude_a, amplitude_b, contrast_a, contrast_b, fused, tmp;
 };
 
-FlowCue::FlowCue(const ContourParams& params) : s_(std::make_unique<State>()) {
-  s_->params = params;
+FlowCue::FlowCue(const ContourParams& params) : s_(std::make_unique<State>(params)) {
+  s_->part_largest.resize(static_cast<std::size_t>(s_->rows.threads()));
   s_->dis = cv::DISOpticalFlow::create(dis_preset(params.dis_preset));
   if (parallel_flow_fields(params))
     s_->field_b = std::make_unique<FlowFieldWorker>(
@@ -120,8 +126,8 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
                       Stopwatch& t) {
   State& s = *s_;
   const int cw = in.centre.width, ch = in.centre.height;
-  for (Image<float>* img :
-       {&s.speed, &s.amplitude_a, &s.amplitude_b, &s.contrast_a, &s.contrast_b, &s.fused, &s.tmp})
+  for (Image<float>* img : {&s.speed, &s.speed_b, &s.amplitude_a, &s.amplitude_b, &s.contrast_a,
+                            &s.contrast_b, &s.fused, &s.tmp})
     img->resize(cw, ch);
   s.flow_a.create(ch, cw, CV_32FC2);
   s.flow_b.create(ch, cw, CV_32FC2);
@@ -161,17 +167,28 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
   }
   timings.flow_ms = t.lap_ms();
 
+  // The steps after DIS work row by row; a step that reads a neighbouring row of an earlier one
+  // (the amplitude, the box filter's two passes, the division by the largest value) waits for it
+  // on every block of rows.
   const ImageView<const float> fa = as_view<float>(static_cast<const cv::Mat&>(s.flow_a));
   const ImageView<const float> fb = as_view<float>(static_cast<const cv::Mat&>(s.flow_b));
-  flow_amplitude(fa, s.speed.view(), s.amplitude_a.view());
-  flow_amplitude(fb, s.speed.view(), s.amplitude_b.view());
+  s.rows.run(ch, [&](int, int begin, int end) {
+    flow_speed_rows(fa, begin, end, s.speed.view());
+    flow_speed_rows(fb, begin, end, s.speed_b.view());
+  });
+  s.rows.run(ch, [&](int, int begin, int end) {
+    flow_amplitude_rows(s.speed.cview(), begin, end, s.amplitude_a.view());
+    flow_amplitude_rows(s.speed_b.cview(), begin, end, s.amplitude_b.view());
+  });
   timings.amplitude_ms = t.lap_ms();
 
   const auto distance = static_cast<float>(s.params.projection_distance);
-  projection_contrast(fa, distance, s.contrast_a.view());
-  projection_contrast(fb, distance, s.contrast_b.view());
-  fuse_amplitudes(s.amplitude_a.cview(), s.contrast_a.cview(), s.amplitude_b.cview(),
-                  s.contrast_b.cview(), s.fused.view());
+  s.rows.run(ch, [&](int, int begin, int end) {
+    projection_contrast_rows(fa, distance, begin, end, s.contrast_a.view());
+    projection_contrast_rows(fb, distance, begin, end, s.contrast_b.view());
+    fuse_amplitude_rows(s.amplitude_a.cview(), s.contrast_a.cview(), s.amplitude_b.cview(),
+                        s.contrast_b.cview(), begin, end, s.fused.view());
+  });
   timings.fusion_ms = t.lap_ms();
 
   if (s.params.reuse_flow && s.params.lookahead == 1) {
@@ -184,9 +201,23 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
     s.last_neighbour_b.copy_from(in.neighbour_b);
     s.has_last = true;
   }
-  box_filter(s.fused.cview(), s.params.box_size, s.tmp.view(), dst);
+  const int box = s.params.box_size;
+  std::fill(s.part_largest.begin(), s.part_largest.end(), 0.0f);  // parts left without rows
+  s.rows.run(ch, [&](int, int begin, int end) {
+    box_vertical_rows(s.fused.cview(), box, begin, end, s.tmp.view());
+  });
+  s.rows.run(ch, [&](int part, int begin, int end) {
+    box_horizontal_rows(s.tmp.cview(), box, begin, end, dst);
+    s.part_largest[static_cast<std::size_t>(part)] = largest_value(dst, begin, end);
+  });
   timings.box_ms = t.lap_ms();
-  normalise_by_max(dst, static_cast<float>(s.params.flow_floor));
+  // normalise_by_max, its largest value taken from the blocks' own.
+  float largest = 0.0f;
+  for (int part = 0; part < s.rows.threads(); ++part)
+    largest = std::max(largest, s.part_largest[static_cast<std::size_t>(part)]);
+  const float divisor = std::max(largest, static_cast<float>(s.params.flow_floor));
+  if (divisor > 0.0f)
+    s.rows.run(ch, [&](int, int begin, int end) { divide_rows(dst, divisor, begin, end); });
   timings.normalise_ms = t.lap_ms();
 }
 

@@ -10,14 +10,26 @@ namespace dco::contour {
 void flow_amplitude(ImageView<const float> flow, ImageView<float> speed,
                     ImageView<float> amplitude) {
   assert(flow.channels == 2 && speed.same_size(flow) && amplitude.same_size(flow));
+  flow_speed_rows(flow, 0, flow.height, speed);
+  flow_amplitude_rows(speed, 0, flow.height, amplitude);
+}
+
+void flow_speed_rows(ImageView<const float> flow, int y_begin, int y_end, ImageView<float> speed) {
+  assert(flow.channels == 2 && speed.same_size(flow));
   const int w = flow.width;
-  const int h = flow.height;
-  for (int y = 0; y < h; ++y) {
+  for (int y = y_begin; y < y_end; ++y) {
     const float* f = flow.row(y);
     float* r = speed.row(y);
     for (int x = 0; x < w; ++x) r[x] = std::sqrt(f[2 * x] * f[2 * x] + f[2 * x + 1] * f[2 * x + 1]);
   }
-  for (int y = 0; y < h; ++y) {
+}
+
+void flow_amplitude_rows(ImageView<const float> speed, int y_begin, int y_end,
+                         ImageView<float> amplitude) {
+  assert(amplitude.same_size(speed));
+  const int w = speed.width;
+  const int h = speed.height;
+  for (int y = y_begin; y < y_end; ++y) {
     const float* r = speed.row(y);
     const float* below = speed.row(std::min(y + 1, h - 1));  // the last row differs from itself: 0
     float* m = amplitude.row(y);
@@ -28,18 +40,29 @@ void flow_amplitude(ImageView<const float> flow, ImageView<float> speed,
 }
 
 void projection_contrast(ImageView<const float> flow, float distance, ImageView<float> contrast) {
+  projection_contrast_rows(flow, distance, 0, flow.height, contrast);
+}
+
+void projection_contrast_rows(ImageView<const float> flow, float distance, int y_begin, int y_end,
+                              ImageView<float> contrast) {
   assert(flow.channels == 2 && contrast.same_size(flow));
   const kernels::FlowField field{flow.data, flow.stride, flow.width, flow.height};
-  for (int y = 0; y < flow.height; ++y)
+  for (int y = y_begin; y < y_end; ++y)
     kernels::projection_contrast_row(field, y, distance, kMinFlowForDirection, contrast.row(y));
 }
 
 void fuse_amplitudes(ImageView<const float> amplitude_a, ImageView<const float> contrast_a,
                      ImageView<const float> amplitude_b, ImageView<const float> contrast_b,
                      ImageView<float> fused) {
+  fuse_amplitude_rows(amplitude_a, contrast_a, amplitude_b, contrast_b, 0, fused.height, fused);
+}
+
+void fuse_amplitude_rows(ImageView<const float> amplitude_a, ImageView<const float> contrast_a,
+                         ImageView<const float> amplitude_b, ImageView<const float> contrast_b,
+                         int y_begin, int y_end, ImageView<float> fused) {
   assert(contrast_a.same_size(amplitude_a) && amplitude_b.same_size(amplitude_a) &&
          contrast_b.same_size(amplitude_a) && fused.same_size(amplitude_a));
-  for (int y = 0; y < fused.height; ++y) {
+  for (int y = y_begin; y < y_end; ++y) {
     const float* ma = amplitude_a.row(y);
     const float* ca = contrast_a.row(y);
     const float* mb = amplitude_b.row(y);
@@ -107,19 +130,27 @@ void invert_flow(ImageView<const float> forward, ImageView<float> speed,
 }
 
 float normalise_by_max(ImageView<float> values, float floor) {
+  const float divisor = std::max(largest_value(values, 0, values.height), floor);
+  if (divisor <= 0.0f) return 0.0f;
+  divide_rows(values, divisor, 0, values.height);
+  return divisor;
+}
+
+float largest_value(ImageView<const float> values, int y_begin, int y_end) {
   float largest = 0.0f;
-  for (int y = 0; y < values.height; ++y) {
+  for (int y = y_begin; y < y_end; ++y) {
     const float* r = values.row(y);
     for (int x = 0; x < values.width; ++x) largest = std::max(largest, r[x]);
   }
-  const float divisor = std::max(largest, floor);
-  if (divisor <= 0.0f) return 0.0f;
+  return largest;
+}
+
+void divide_rows(ImageView<float> values, float divisor, int y_begin, int y_end) {
   const float inv = 1.0f / divisor;
-  for (int y = 0; y < values.height; ++y) {
+  for (int y = y_begin; y < y_end; ++y) {
     float* r = values.row(y);
     for (int x = 0; x < values.width; ++x) r[x] = std::min(r[x] * inv, 1.0f);
   }
-  return divisor;
 }
 
 }  // namespace dco::contour

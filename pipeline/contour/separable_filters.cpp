@@ -46,21 +46,34 @@ void gaussian_blur_5x5(ImageView<const std::uint8_t> in, ImageView<float> tmp,
   for (int y = 0; y < h; ++y) kernels::row_filter(tmp.row(y), w, taps.data(), 2, out.row(y));
 }
 
+namespace {
+constexpr int kMaxBoxSize = 255;
+}  // namespace
+
 void box_filter(ImageView<const float> in, int size, ImageView<float> tmp, ImageView<float> out) {
-  assert(size >= 1 && size % 2 == 1 && in.channels == 1);
-  assert(tmp.same_size(in) && out.same_size(in));
-  constexpr int kMaxSize = 255;
-  assert(size <= kMaxSize);
-  const int radius = size / 2;
-  const int w = in.width;
-  const int h = in.height;
+  box_vertical_rows(in, size, 0, in.height, tmp);
+  box_horizontal_rows(tmp, size, 0, in.height, out);
+}
+
+void box_vertical_rows(ImageView<const float> in, int size, int y_begin, int y_end,
+                       ImageView<float> tmp) {
+  assert(size >= 1 && size % 2 == 1 && size <= kMaxBoxSize && in.channels == 1);
+  assert(tmp.same_size(in));
   const float inv = 1.0f / static_cast<float>(size);
-  // Vertical: every output row is the mean of `size` clamped input rows.
-  for (int y = 0; y < h; ++y)
-    kernels::box_vertical_row(in.data, in.stride, h, y, size, inv, w, tmp.row(y));
-  std::array<float, kMaxSize> taps{};
+  // Every output row is the mean of `size` clamped input rows.
+  for (int y = y_begin; y < y_end; ++y)
+    kernels::box_vertical_row(in.data, in.stride, in.height, y, size, inv, in.width, tmp.row(y));
+}
+
+void box_horizontal_rows(ImageView<const float> tmp, int size, int y_begin, int y_end,
+                         ImageView<float> out) {
+  assert(size >= 1 && size % 2 == 1 && size <= kMaxBoxSize && tmp.channels == 1);
+  assert(out.same_size(tmp));
+  const float inv = 1.0f / static_cast<float>(size);
+  std::array<float, kMaxBoxSize> taps{};
   for (int k = 0; k < size; ++k) taps[k] = inv;
-  for (int y = 0; y < h; ++y) kernels::row_filter(tmp.row(y), w, taps.data(), radius, out.row(y));
+  for (int y = y_begin; y < y_end; ++y)
+    kernels::row_filter(tmp.row(y), tmp.width, taps.data(), size / 2, out.row(y));
 }
 
 }  // namespace dco::contour

@@ -92,6 +92,9 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.median_size", &p.median_size, 0, 5,
         "median filter of the dense output, px: 0 (off), 3 or 5; removes one- and two-pixel "
         "specks between two surfaces");
+  s.add("densify.row_threads", &p.row_threads, 0, 16,
+        "threads sharing the row-wise steps (building the system, the clamp and the median), the "
+        "stage's own included (0 = auto: 1 below 4 usable CPUs, else half of them, at most 4)");
 }
 
 void validate(const DensifyParams& p) {
@@ -113,9 +116,16 @@ void validate(const DensifyParams& p) {
   require(p.plane_rms > 0, "plane_rms must be positive");
   require(p.median_size == 0 || p.median_size == 3 || p.median_size == 5,
           "median_size must be 0, 3 or 5, not " + std::to_string(p.median_size));
+  require(p.row_threads >= 0 && p.row_threads <= 16,
+          "row_threads must be in 0..16 (0 = auto), not " + std::to_string(p.row_threads));
 }
 
 void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::uint8_t> closed) {
+  close_diagonal_gap_rows(contours, 0, contours.height, closed);
+}
+
+void close_diagonal_gap_rows(ImageView<const std::uint8_t> contours, int begin, int end,
+                             ImageView<std::uint8_t> closed) {
   const int w = contours.width;
   const int h = contours.height;
   // A 2x2 block whose contour pixels touch only at a corner gets the upper pixel of the other
@@ -123,7 +133,7 @@ void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::
   // top-left. Each row is a function of its own and the next row of the input alone (a filled
   // pixel never makes or breaks another block's case), so the rows are independent and the
   // loops plain enough to vectorise.
-  for (int y = 0; y < h; ++y) {
+  for (int y = begin; y < end; ++y) {
     const std::uint8_t* top = contours.row(y);
     std::uint8_t* out = closed.row(y);
     if (y + 1 == h || w < 2) {
@@ -146,8 +156,10 @@ void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::
 }
 
 Densifier::Densifier(const DensifyParams& params, const SystemSolverFactory& solver)
-    : params_(params) {
-  validate(params_);
+    : params_((validate(params), params)),
+      rows_(pipeline::RowTeam::threads_for(params_.row_threads)) {
+  median_columns_.resize(static_cast<std::size_t>(rows_.threads()));
+  part_range_.resize(static_cast<std::size_t>(rows_.threads()));
   solver_ = make_system_solver(solver, params_);
   // Grey-level differences are integers: one table instead of two exp() per pixel.
   for (std::size_t diff = 0; diff < color_weight_.size(); ++diff)
@@ -166,24 +178,29 @@ void Densifier::build_system(const DensifyInputs& in) {
   smooth_strength_.resize(w, h);
   barrier_.resize(w, h);
 
+  // Every step below works row by row, each row from its own inputs and the rows next to it, so
+  // the rows are shared among rows_' threads in blocks; a step that reads a neighbouring row of an
+  // earlier step waits for that step on every block.
   const bool has_contours = !in.contours.empty();
-  if (has_contours)
-    close_diagonal_gaps(in.contours, barrier_.view());
-  else
-    barrier_.fill(0);
-
   // s_p = M_fuse(p) * M_I(p), Eq. 17; M_fuse may come at the internal resolution.
-  const bool has_fuse = !in.m_fuse.empty();
-  const bool has_intensity = !in.m_intensity.empty();
-  if (!has_fuse || !has_intensity) {
-    smooth_strength_.fill(0.0f);
-  } else {
+  const bool has_strength = !in.m_fuse.empty() && !in.m_intensity.empty();
+  if (has_strength && !(in.m_fuse.width * 2 == w)) {
     fuse_column_.resize(static_cast<std::size_t>(w));
     for (int x = 0; x < w; ++x)
       fuse_column_[static_cast<std::size_t>(x)] =
           std::min(x * in.m_fuse.width / w, in.m_fuse.width - 1);
-    for (int y = 0; y < h; ++y) {
+  }
+  rows_.run(h, [&](int, int begin, int end) {
+    if (has_contours)
+      close_diagonal_gap_rows(in.contours, begin, end, barrier_.view());
+    else
+      for (int y = begin; y < end; ++y) std::fill(barrier_.row(y), barrier_.row(y) + w, 0);
+    for (int y = begin; y < end; ++y) {
       float* s = smooth_strength_.row(y);
+      if (!has_strength) {
+        std::fill(s, s + w, 0.0f);
+        continue;
+      }
       const float* fuse = in.m_fuse.row(std::min(y * in.m_fuse.height / h, in.m_fuse.height - 1));
       const float* intensity = in.m_intensity.row(y);
       if (in.m_fuse.width * 2 == w)
@@ -192,7 +209,7 @@ void Densifier::build_system(const DensifyInputs& in) {
         for (int x = 0; x < w; ++x)
           s[x] = fuse[fuse_column_[static_cast<std::size_t>(x)]] * intensity[x];
     }
-  }
+  });
 
   // Each undirected edge appears twice in Σ_p Σ_{q∈N4(p)} of Eq. 20, hence 2 λ_s.
   const auto edge_scale = static_cast<float>(2.0 * params_.lambda_s);
@@ -200,25 +217,36 @@ void Densifier::build_system(const DensifyInputs& in) {
   const bool has_image = !in.image.empty() && params_.color_sigma > 0;
   const kernels::EdgeRule rule{edge_scale, floor, has_image ? color_weight_.data() : nullptr,
                                kernels::colour_floor_from(color_weight_.data(), floor)};
-  for (int y = 0; y < h; ++y) {
-    const std::uint8_t* bar = barrier_.row(y);
-    const float* str = smooth_strength_.row(y);
-    const std::uint8_t* grey = has_image ? in.image.row(y) : nullptr;
-    float* ex = system_.wx.row(y);
-    kernels::edge_weights_row({bar, bar + 1, str, str + 1, grey, grey ? grey + 1 : nullptr}, rule,
-                              w - 1, ex);
-    ex[w - 1] = 0.0f;
-    float* ey = system_.wy.row(y);
-    if (y + 1 == h) {
-      std::fill(ey, ey + w, 0.0f);
-      continue;
+  // Hint of each hole: the nearest known values to its left and right in its row. Holes next to a
+  // jump are mostly occlusions, which belong to the farther surface; but when an image edge (a
+  // weak smoothness weight) lies between the hole and one of them only, the hole belongs to the
+  // other side's surface. No path starts weaker than edge_scale, so crossing <= edge_scale.
+  const float crossing = static_cast<float>(params_.fill_edge_weight) * edge_scale;
+  rows_.run(h, [&](int, int begin, int end) {
+    for (int y = begin; y < end; ++y) {
+      const std::uint8_t* bar = barrier_.row(y);
+      const float* str = smooth_strength_.row(y);
+      const std::uint8_t* grey = has_image ? in.image.row(y) : nullptr;
+      float* ex = system_.wx.row(y);
+      kernels::edge_weights_row({bar, bar + 1, str, str + 1, grey, grey ? grey + 1 : nullptr}, rule,
+                                w - 1, ex);
+      ex[w - 1] = 0.0f;
+      float* ey = system_.wy.row(y);
+      if (y + 1 == h) {
+        std::fill(ey, ey + w, 0.0f);
+      } else {
+        const std::uint8_t* grey_below = has_image ? in.image.row(y + 1) : nullptr;
+        kernels::edge_weights_row(
+            {bar, barrier_.row(y + 1), str, smooth_strength_.row(y + 1), grey, grey_below}, rule, w,
+            ey);
+      }
+      kernels::hole_hint_row(in.sparse.row(y), ex, w, crossing, hint_.row(y));
     }
-    const std::uint8_t* grey_below = has_image ? in.image.row(y + 1) : nullptr;
-    kernels::edge_weights_row(
-        {bar, barrier_.row(y + 1), str, smooth_strength_.row(y + 1), grey, grey_below}, rule, w,
-        ey);
-  }
+  });
 
+  // The range of the data-term targets: the exact minimiser lies within it.
+  float low = std::numeric_limits<float>::infinity(), high = 0.0f;
+  if (params_.border_plane_rms > 0) border_plane_hints(in.sparse, low, high);
   // Data (Eq. 13–14) and stability (Eq. 18–19) terms; a tiny pull towards 0 keeps the system
   // definite even for a frame without a single sparse value.
   const auto ld = static_cast<float>(params_.lambda_d);
@@ -226,31 +254,29 @@ void Densifier::build_system(const DensifyInputs& in) {
   const bool has_previous = !in.previous.empty() && in.previous.same_size(w, h);
   constexpr float kRegulariser = 1e-6f;
   const auto lh = static_cast<float>(params_.lambda_d * params_.background_fill);
-  // Hint of each hole: the nearest known values to its left and right in its row. Holes next to a
-  // jump are mostly occlusions, which belong to the farther surface; but when an image edge (a
-  // weak smoothness weight) lies between the hole and one of them only, the hole belongs to the
-  // other side's surface. No path starts weaker than edge_scale, so crossing <= edge_scale.
-  const float crossing = static_cast<float>(params_.fill_edge_weight) * edge_scale;
-  for (int y = 0; y < h; ++y)
-    kernels::hole_hint_row(in.sparse.row(y), system_.wx.row(y), w, crossing, hint_.row(y));
-  // The range of the data-term targets: the exact minimiser lies within it.
-  float low = std::numeric_limits<float>::infinity(), high = 0.0f;
-  if (params_.border_plane_rms > 0) border_plane_hints(in.sparse, low, high);
   const kernels::DataTermRule terms{kRegulariser, ld, lh > 0.0f ? lh : 0.0f, ls2};
   // The strips a near surface hides from the right camera take the farther side's value; holes
   // where the hint has no ground (the near surface's rim past a strip, and right of a near
   // surface, where no occlusion lies) drop it.
   const kernels::OcclusionRule occlusion{
       static_cast<float>(params_.lambda_d * params_.occlusion_fill), terms.hint_weight};
-  for (int y = 0; y < h; ++y) {
-    kernels::data_terms_row(in.sparse.row(y), hint_.row(y),
-                            has_previous ? in.previous.row(y) : nullptr, w, terms,
-                            system_.data.row(y), rhs_.row(y), &low, &high);
-    if (occlusion.weight > 0.0f || occlusion.hint_weight > 0.0f)
-      kernels::occlusion_fill_row(in.sparse.row(y), hint_.row(y), w, occlusion, system_.data.row(y),
-                                  rhs_.row(y));
+  std::fill(part_range_.begin(), part_range_.end(), std::array<float, 2>{low, high});
+  rows_.run(h, [&](int part, int begin, int end) {
+    std::array<float, 2>& range = part_range_[static_cast<std::size_t>(part)];
+    for (int y = begin; y < end; ++y) {
+      kernels::data_terms_row(in.sparse.row(y), hint_.row(y),
+                              has_previous ? in.previous.row(y) : nullptr, w, terms,
+                              system_.data.row(y), rhs_.row(y), &range[0], &range[1]);
+      if (occlusion.weight > 0.0f || occlusion.hint_weight > 0.0f)
+        kernels::occlusion_fill_row(in.sparse.row(y), hint_.row(y), w, occlusion,
+                                    system_.data.row(y), rhs_.row(y));
+    }
+    system_.update_diagonal_rows(begin, end);
+  });
+  for (int part = 0; part < rows_.threads(); ++part) {
+    low = std::min(low, part_range_[static_cast<std::size_t>(part)][0]);
+    high = std::max(high, part_range_[static_cast<std::size_t>(part)][1]);
   }
-  system_.update_diagonal();
   data_low_ = high > 0.0f ? low : 0.0f;
   data_high_ = high;
 }
@@ -318,6 +344,41 @@ bool Densifier::solves_at_half(int width) const {
   return densify::solves_at_half(params_, width);
 }
 
+void Densifier::finish(Image<float>& dense) {
+  const int w = solution_.width();
+  const int h = solution_.height();
+  dense.resize(w, h);
+  // An iterative solve stopped early can overshoot in a small region that contours cut off
+  // (weakly coupled, so it weighs little in the residual); the exact solution cannot.
+  const bool clamps = data_high_ > 0.0f;
+  const auto clamp_rows = [&](int begin, int end) {
+    for (int y = begin; y < end; ++y) {
+      float* row = solution_.row(y);
+      for (int x = 0; x < w; ++x) row[x] = std::clamp(row[x], data_low_, data_high_);
+    }
+  };
+  if (params_.median_size != 5) {
+    if (clamps) rows_.run(h, [&](int, int begin, int end) { clamp_rows(begin, end); });
+    if (params_.median_size == 3)
+      cv::medianBlur(as_mat(solution_.cview()), as_mat(dense.view()), 3);
+    else
+      dense.copy_from(solution_.cview());
+    return;
+  }
+  // The 5x5 median reads two rows on each side: every block is clamped before any is filtered.
+  // OpenCV's 5x5 median of floats takes 4 ms per 1280x720 map; the kernel about 1.3.
+  if (clamps) rows_.run(h, [&](int, int begin, int end) { clamp_rows(begin, end); });
+  rows_.run(h, [&](int part, int begin, int end) {
+    std::vector<float>& columns = median_columns_[static_cast<std::size_t>(part)];
+    columns.resize(static_cast<std::size_t>(kernels::median5_columns(w)));
+    for (int y = begin; y < end; ++y) {
+      const float* rows[5];
+      for (int i = 0; i < 5; ++i) rows[i] = solution_.row(std::clamp(y + i - 2, 0, h - 1));
+      kernels::median5_row(rows, w, columns.data(), dense.row(y));
+    }
+  });
+}
+
 void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   const int w = in.sparse.width;
   const int h = in.sparse.height;
@@ -358,29 +419,9 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
     solution_.copy_from(hint_.cview());
   }
   report_ = solver_->solve(system_, rhs_.cview(), solution_.view());
-  // An iterative solve stopped early can overshoot in a small region that contours cut off
-  // (weakly coupled, so it weighs little in the residual); the exact solution cannot.
-  if (data_high_ > 0.0f)
-    for (int y = 0; y < h; ++y) {
-      float* row = solution_.row(y);
-      for (int x = 0; x < w; ++x) row[x] = std::clamp(row[x], data_low_, data_high_);
-    }
   has_solution_ = true;
   timings_.solve_ms = t.lap_ms();
-  dense.resize(w, h);
-  if (params_.median_size == 3) {
-    cv::medianBlur(as_mat(solution_.cview()), as_mat(dense.view()), 3);
-  } else if (params_.median_size == 5) {
-    // OpenCV's 5x5 median of floats takes 4 ms per 1280x720 map; the kernel about 1.3.
-    median_columns_.resize(static_cast<std::size_t>(kernels::median5_columns(w)));
-    for (int y = 0; y < h; ++y) {
-      const float* rows[5];
-      for (int i = 0; i < 5; ++i) rows[i] = solution_.row(std::clamp(y + i - 2, 0, h - 1));
-      kernels::median5_row(rows, w, median_columns_.data(), dense.row(y));
-    }
-  } else {
-    dense.copy_from(solution_.cview());
-  }
+  finish(dense);
   timings_.median_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();
 }

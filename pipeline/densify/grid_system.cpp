@@ -15,10 +15,10 @@ void GridSystem::resize(int width, int height) {
   inv_diag.resize(width, height);
 }
 
-void GridSystem::update_diagonal() {
+void GridSystem::update_diagonal_rows(int begin, int end) {
   const int w = width();
   const int h = height();
-  for (int y = 0; y < h; ++y)
+  for (int y = begin; y < end; ++y)
     kernels::diagonal_row(data.row(y), wx.row(y), y + 1 < h ? wy.row(y) : nullptr,
                           y > 0 ? wy.row(y - 1) : nullptr, w, diag.row(y), inv_diag.row(y));
 }

@@ -8,6 +8,7 @@
 #include "dco/core/stopwatch.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
 #include "dco/kernels/stereo_pixel.hpp"
+#include "dco/pipeline/row_team.hpp"
 #include "dco/pipeline/stereo/boundary_refinement.hpp"
 #include "dco/pipeline/stereo/census.hpp"
 #include "dco/pipeline/stereo/cross_aggregation.hpp"
@@ -40,8 +41,16 @@ void spread_pairs(const float* __restrict src, int count, float scale, float* __
 
 class CpuStereoMatcher final : public StereoMatcher {
  public:
-  explicit CpuStereoMatcher(const StereoParams& params) : params_(params) {
+  // `team` shares the disparity search's rows (a stage's guide pass uses the stage's); without
+  // one the matcher starts its own, of stereo.row_threads threads.
+  explicit CpuStereoMatcher(const StereoParams& params, pipeline::RowTeam* team = nullptr)
+      : params_(params), team_(team) {
     validate(params_);
+    if (team_ == nullptr) {
+      own_team_ =
+          std::make_unique<pipeline::RowTeam>(pipeline::RowTeam::threads_for(params_.row_threads));
+      team_ = own_team_.get();
+    }
     boundary_rule_ = boundary_rule(params_);
     model_ = {params_.lambda_ad, params_.lambda_census, params_.gamma_l, params_.epsilon};
     vote_ = {params_.vote_iterations, params_.vote_min_count, params_.vote_min_ratio,
@@ -77,7 +86,7 @@ class CpuStereoMatcher final : public StereoMatcher {
     const MatchingImages images{packed_left_.cview(), packed_right_.cview(), census_left_.cview(),
                                 census_right_.cview(), shortest_arm_.cview()};
     search_.run(images, tables_, regions_, params_.aggregation_passes, max_d_, wta_,
-                guided ? &mask_ : nullptr);
+                guided ? &mask_ : nullptr, team_);
     timings_.initial_ms = t.lap_ms();
 
     disp_.resize(w_, h_);
@@ -131,7 +140,7 @@ class CpuStereoMatcher final : public StereoMatcher {
       p.max_disparity = coarse_max;
       p.arm_max = std::max(2, params_.arm_max / (2 * scale_));
       p.arm_short = std::min(p.arm_max, params_.arm_short / (2 * scale_));
-      coarse_ = make_cpu_stereo_matcher(p);
+      coarse_ = std::make_unique<CpuStereoMatcher>(p, team_);
       coarse_scale_ = scale_;
     }
     coarse_left_.resize(cw, ch, internal_left_.channels);
@@ -245,6 +254,8 @@ class CpuStereoMatcher final : public StereoMatcher {
   }
 
   StereoParams params_;
+  std::unique_ptr<pipeline::RowTeam> own_team_;
+  pipeline::RowTeam* team_;
   CostModel model_;
   VoteRule vote_;
   kernels::pixel::BoundaryRule boundary_rule_;

@@ -4,28 +4,40 @@
 
 #include "dco/core/error.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
+#include "dco/pipeline/row_team.hpp"
 
 namespace dco::stereo {
 
 void DisparitySearch::run(const MatchingImages& images, const CostTables& tables,
                           const SupportRegions& regions, int passes, int max_d, WinnerTakesAll& wta,
-                          const BatchMask* mask) {
+                          const BatchMask* mask, pipeline::RowTeam* team) {
   if (mask != nullptr &&
       (mask->height() != images.left.height || mask->batches() * kBatch <= max_d))
     throw Error("disparity search: the batch mask does not cover the image rows and disparities");
+  const int h = images.left.height;
   if (passes == 1) {
-    run_fused(images, tables, regions, max_d, wta, mask);
+    const int parts = team != nullptr ? team->threads() : 1;
+    if (bands_.size() < static_cast<std::size_t>(parts))
+      bands_.resize(static_cast<std::size_t>(parts));
+    const auto band = [&](int part, int begin, int end) {
+      search_band(images, tables, regions, max_d, wta, mask, bands_[static_cast<std::size_t>(part)],
+                  begin, end);
+    };
+    if (team != nullptr)
+      team->run(h, band);
+    else
+      band(0, 0, h);
     return;
   }
-  slice_.resize(images.left.width, images.left.height);
-  scratch_.resize(images.left.width, images.left.height);
+  slice_.resize(images.left.width, h);
+  scratch_.resize(images.left.width, h);
   for (int d = 0; d <= max_d; ++d) {
     const int batch = d / kBatch;
     if (mask != nullptr) {
       bool any = false;
-      for (int y = 0; y < images.left.height && !any; ++y) any = mask->searches(y, batch);
+      for (int y = 0; y < h && !any; ++y) any = mask->searches(y, batch);
       if (!any) {
-        for (int y = 0; y < images.left.height; ++y) wta.skip_row(y, d, 1);
+        for (int y = 0; y < h; ++y) wta.skip_row(y, d, 1);
         continue;
       }
     }
@@ -36,7 +48,7 @@ void DisparitySearch::run(const MatchingImages& images, const CostTables& tables
       wta.update(slice_.cview(), d);
       continue;
     }
-    for (int y = 0; y < images.left.height; ++y) {
+    for (int y = 0; y < h; ++y) {
       if (mask->searches(y, batch))
         wta.update_slice_row(slice_.row(y), y, d);
       else
@@ -45,18 +57,19 @@ void DisparitySearch::run(const MatchingImages& images, const CostTables& tables
   }
 }
 
-void DisparitySearch::run_fused(const MatchingImages& images, const CostTables& tables,
-                                const SupportRegions& regions, int max_d, WinnerTakesAll& wta,
-                                const BatchMask* mask) {
+void DisparitySearch::search_band(const MatchingImages& images, const CostTables& tables,
+                                  const SupportRegions& regions, int max_d, WinnerTakesAll& wta,
+                                  const BatchMask* mask, Band& band, int y_begin, int y_end) {
+  if (y_begin >= y_end) return;
   const int w = images.left.width;
-  const int h = images.left.height;
-  aggregator_.prepare(regions.arms(), kBatch);
-  lines_.resize(w, kBatch);
+  BlockAggregator& aggregator = band.aggregator;
+  aggregator.prepare(regions.arms(), kBatch);
+  band.lines.resize(w, kBatch);
   const kernels::CostTableView wide = tables.wide();
   const ImageView<const std::uint32_t> recip = regions.reciprocals(PassOrder::kHorizontalFirst);
   // Rows closer than this are searched in one run: the rows between cost no more than the
   // second run's own start-up rows would.
-  const int join_gap = aggregator_.reach_up() + aggregator_.reach_down();
+  const int join_gap = aggregator.reach_up() + aggregator.reach_down();
   for (int d0 = 0; d0 <= max_d; d0 += kBatch) {
     // Always whole batches, so the kernels run on whole vectors; disparities past max_d are
     // aggregated but never reach the winner-takes-all state.
@@ -75,23 +88,23 @@ void DisparitySearch::run_fused(const MatchingImages& images, const CostTables& 
         wta.skip_row(y, d0, count);
         return;
       }
-      kernels::blocks_to_rows(means, w, kBatch, count, lines_.data(), lines_.stride());
-      wta.update_row(lines_.row(0), lines_.stride(), count, y, d0);
+      kernels::blocks_to_rows(means, w, kBatch, count, band.lines.data(), band.lines.stride());
+      wta.update_row(band.lines.row(0), band.lines.stride(), count, y, d0);
     };
     if (mask == nullptr) {
-      aggregator_.run<true>(kBatch, cost_sums, select, recip);
+      aggregator.run_rows<true>(kBatch, y_begin, y_end, cost_sums, select, recip);
       continue;
     }
     // Runs of searched rows, joined across short gaps; rows outside every run skip the batch.
-    int y = 0;
-    while (y < h) {
+    int y = y_begin;
+    while (y < y_end) {
       if (!searched(y)) {
         wta.skip_row(y, d0, count);
         ++y;
         continue;
       }
       int end = y + 1;
-      for (int gap = 0; end + gap < h && gap <= join_gap;) {
+      for (int gap = 0; end + gap < y_end && gap <= join_gap;) {
         if (searched(end + gap)) {
           end += gap + 1;
           gap = 0;
@@ -99,7 +112,7 @@ void DisparitySearch::run_fused(const MatchingImages& images, const CostTables& 
           ++gap;
         }
       }
-      aggregator_.run_rows<true>(kBatch, y, end, cost_sums, select, recip);
+      aggregator.run_rows<true>(kBatch, y, end, cost_sums, select, recip);
       y = end;
     }
   }

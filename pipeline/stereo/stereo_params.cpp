@@ -22,6 +22,9 @@ void register_params(ConfigSchema& s, StereoParams& p) {
   s.add("stereo.search_range", &p.search_range, {"auto", "full", "guided"},
         "guided = each row searches only the disparities a half-size pass finds near it; auto = "
         "guided on the CPU when over 64 internal disparities, full on CUDA");
+  s.add("stereo.row_threads", &p.row_threads, 0, 16,
+        "threads sharing the CPU disparity search by bands of rows, the stage's own included "
+        "(0 = auto: 1 below 4 usable CPUs, else half of them, at most 4)");
   s.add("stereo.use_color", &p.use_color, "AD cost and arms on colour when the input has it");
   s.add("stereo.lambda_ad", &p.lambda_ad, 0.01, 1000.0, "λ_AD of Eq. 1");
   s.add("stereo.lambda_census", &p.lambda_census, 0.01, 1000.0,
@@ -77,6 +80,8 @@ void validate(const StereoParams& p) {
           "internal_resolution must be auto, full or half, not '" + p.internal_resolution + "'");
   require(p.search_range == "auto" || p.search_range == "full" || p.search_range == "guided",
           "search_range must be auto, full or guided, not '" + p.search_range + "'");
+  require(p.row_threads >= 0 && p.row_threads <= 16,
+          "row_threads must be in 0..16 (0 = auto), not " + std::to_string(p.row_threads));
   require(p.lambda_ad > 0 && p.lambda_census > 0, "lambda_ad and lambda_census must be positive");
   require(p.gamma_l >= 0 && p.epsilon > 0, "gamma_l must be >= 0 and epsilon > 0");
   require(p.census_width % 2 == 1 && p.census_height % 2 == 1 && p.census_width > 0 &&

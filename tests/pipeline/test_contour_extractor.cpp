@@ -411,6 +411,35 @@ TEST(ContourExtractor, FlowFieldsOnTwoThreadsGiveTheSameOutputs) {
   EXPECT_GT(top, 0.5f);
 }
 
+// contour.row_threads shares the flow cue's steps after DIS among threads: the same outputs,
+// frame after frame, whether the blocks of rows are many or fewer than the threads.
+TEST(ContourExtractor, RowThreadsGiveTheOutputsOfOneThread) {
+  const MovingSquare scene;
+  ContourParams one_params;
+  one_params.row_threads = 1;
+  const auto one = make_cpu_contour_extractor(one_params);
+  ContourOutputs expected, actual;
+  one->compute(scene.inputs(), expected);
+  for (const int threads : {2, 3, 16}) {
+    ContourParams params;
+    params.row_threads = threads;
+    const auto many = make_cpu_contour_extractor(params);
+    for (int round = 0; round < 2; ++round) {
+      many->compute(scene.inputs(), actual);
+      for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x)
+          ASSERT_EQ(actual.m_fuse.at(x, y), expected.m_fuse.at(x, y)) << threads << " threads";
+      for (int y = 0; y < kInH; ++y)
+        for (int x = 0; x < kInW; ++x)
+          ASSERT_EQ(actual.contours.at(x, y), expected.contours.at(x, y)) << threads << " threads";
+    }
+  }
+  float top = 0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) top = std::max(top, expected.m_fuse.at(x, y));
+  EXPECT_GT(top, 0.5f);
+}
+
 // With lookahead 1 the window (t-1, t, t+1) follows (t-2, t-1, t): the field t -> t-1 is the last
 // call's t-1 -> t turned round, and the cue stays what two DIS runs give.
 TEST(ContourExtractor, ReusesTheLastFieldWhenTheWindowMovesOn) {

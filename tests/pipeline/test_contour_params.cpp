@@ -46,6 +46,8 @@ TEST(ContourParams, ValidateRejectsEachInvalidField) {
       {"preset", [](ContourParams& p) { p.dis_preset = "slow"; }, "dis_preset"},
       {"preset case", [](ContourParams& p) { p.dis_preset = "Fast"; }, "dis_preset"},
       {"parallel flow", [](ContourParams& p) { p.parallel_flow = "yes"; }, "parallel_flow"},
+      {"row threads -1", [](ContourParams& p) { p.row_threads = -1; }, "row_threads"},
+      {"row threads 17", [](ContourParams& p) { p.row_threads = 17; }, "row_threads"},
       {"projection 0", [](ContourParams& p) { p.projection_distance = 0; }, "projection_distance"},
       {"projection 65", [](ContourParams& p) { p.projection_distance = 65; },
        "projection_distance"},

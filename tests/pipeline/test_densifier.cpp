@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "../support/same_bytes.hpp"
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "dco/pipeline/densify/conjugate_gradients.hpp"
@@ -454,6 +455,64 @@ TEST(Densifier, OutputMedianOfFiveIsOpenCvsMedianBlurOfTheSolution) {
       for (int x = 0; x < w; ++x)
         ASSERT_EQ(dense.at(x, y), expected.at<float>(y, x))
             << "w " << w << " x " << x << " y " << y;
+  }
+}
+
+// The row-wise steps shared among threads (densify.row_threads) give the bytes of one thread:
+// the system, the solve and the output, over two warm-started frames, with each median, with the
+// match planes and the border planes, on sizes that do not split evenly.
+TEST(Densifier, RowThreadsGiveTheBytesOfOneThread) {
+  for (const int median : {0, 3, 5}) {
+    for (const auto& [w, h] : {std::pair{97, 61}, std::pair{160, 7}}) {
+      Problem first = random_problem(w, h, 11, 0.3);
+      Problem second = random_problem(w, h, 12, 0.3);
+      DensifyParams params;
+      params.median_size = median;
+      params.solve_resolution = median == 3 ? "half" : "full";
+      params.row_threads = 1;
+      Densifier one(params);
+      for (const int threads : {2, 3, 4}) {
+        params.row_threads = threads;
+        Densifier many(params);
+        Image<float> expected, actual;
+        one.reset();
+        for (const Problem* frame : {&first, &second}) {
+          DensifyInputs in = inputs_of(*frame);
+          in.previous = one.last_solution();
+          one.compute(in, expected);
+          in.previous = many.last_solution();
+          many.compute(in, actual);
+          const std::string what = "median " + std::to_string(median) + ", " +
+                                   params.solve_resolution + " solve, " + std::to_string(w) + "x" +
+                                   std::to_string(h) + ", " + std::to_string(threads) + " threads";
+          ASSERT_TRUE(testing::same_bytes(expected, actual)) << what;
+          ASSERT_TRUE(testing::same_bytes(one.last_system().data, many.last_system().data)) << what;
+          ASSERT_TRUE(testing::same_bytes(one.last_system().wx, many.last_system().wx)) << what;
+          ASSERT_TRUE(testing::same_bytes(one.last_system().wy, many.last_system().wy)) << what;
+          ASSERT_TRUE(testing::same_bytes(one.last_system().inv_diag, many.last_system().inv_diag))
+              << what;
+          ASSERT_TRUE(testing::same_bytes(one.last_rhs(), many.last_rhs())) << what;
+          EXPECT_EQ(one.last_report().iterations, many.last_report().iterations) << what;
+          EXPECT_EQ(one.last_report().final_residual, many.last_report().final_residual) << what;
+        }
+      }
+    }
+  }
+  // A frame of fewer rows than threads after one of many: the rows all go to the caller, and
+  // nothing of the parts that had rows before is left over.
+  {
+    DensifyParams params;
+    params.row_threads = 1;
+    Densifier one(params);
+    params.row_threads = 8;
+    Densifier eight(params);
+    Image<float> expected, actual;
+    for (const int h : {61, 5}) {
+      const Problem p = random_problem(97, h, 20 + static_cast<unsigned>(h), 0.3);
+      one.compute(inputs_of(p), expected);
+      eight.compute(inputs_of(p), actual);
+      EXPECT_TRUE(testing::same_bytes(expected, actual)) << h << " rows";
+    }
   }
 }
 
@@ -1012,6 +1071,11 @@ TEST(Densifier, RejectsMismatchedInputsAndBadParams) {
     bad = DensifyParams{};
     bad.median_size = size;
     EXPECT_THROW(Densifier{bad}, Error) << size;
+  }
+  for (int threads : {-1, 17}) {
+    bad = DensifyParams{};
+    bad.row_threads = threads;
+    EXPECT_THROW(Densifier{bad}, Error) << threads;
   }
 }
 

@@ -12,6 +12,7 @@
 #include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
+#include "dco/pipeline/row_team.hpp"
 #include "dco/pipeline/stereo/census.hpp"
 #include "dco/pipeline/stereo/cross_aggregation.hpp"
 #include "dco/pipeline/stereo/cross_arms.hpp"
@@ -248,6 +249,37 @@ TEST(DisparitySearch, WithABatchMaskEqualsTheFullSearchWithTheOtherBatchesLeftOu
         search.run(p.images(), p.tables, regions, passes, max_d, unmasked);
         expect_same(wta.left_disparity(), unmasked.left_disparity(), "all vs no mask");
         expect_same(wta.cost_above(), unmasked.cost_above(), "all vs no mask");
+      }
+    }
+  }
+}
+
+// A team's threads each search a band of rows; every row's state is that of one thread's
+// search, with and without a mask, for bands shorter and longer than the arms' reach.
+TEST(DisparitySearch, BandsOfATeamGiveTheSearchOfOneThread) {
+  const int w = 52, h = 61;
+  const Pair p(w, h, 3, 7, 13u);
+  AggregationScratch scratch;
+  SupportRegions regions;
+  regions.build(p.arms, scratch);
+  const int max_d = 40;
+  const int batches = max_d / DisparitySearch::kBatch + 1;
+  const BatchMask mask = random_mask(h, batches, 3);
+  for (const BatchMask* m : {static_cast<const BatchMask*>(nullptr), &mask}) {
+    WinnerTakesAll expected;
+    expected.reset(w, h);
+    DisparitySearch one;
+    one.run(p.images(), p.tables, regions, 1, max_d, expected, m);
+    for (const int threads : {2, 3, 4, 16}) {
+      pipeline::RowTeam team(threads);
+      DisparitySearch search;
+      for (int frame = 0; frame < 2; ++frame) {
+        WinnerTakesAll wta;
+        wta.reset(w, h);
+        search.run(p.images(), p.tables, regions, 1, max_d, wta, m, &team);
+        SCOPED_TRACE(testing::Message()
+                     << threads << " threads, frame " << frame << (m != nullptr ? ", masked" : ""));
+        expect_same_state(wta, expected);
       }
     }
   }

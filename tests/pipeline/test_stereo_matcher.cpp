@@ -570,6 +570,30 @@ TEST(CpuStereoMatcher, GuidedSearchFindsWhatTheFullSearchFinds) {
   }
 }
 
+// stereo.row_threads shares the search's rows among threads: the same map, guided (whose
+// half-size pass shares the same threads) or full, grey or colour.
+TEST(CpuStereoMatcher, RowThreadsGiveTheMapOfOneThread) {
+  for (const bool hd : {false, true}) {
+    const Scene s = hd ? hd_scene(3) : small_scene(3);
+    for (const char* range : {"guided", "full"}) {
+      StereoParams params;
+      params.max_disparity = 200;
+      params.search_range = range;
+      params.row_threads = 1;
+      const auto one = make_cpu_stereo_matcher(params);
+      params.row_threads = 3;
+      const auto three = make_cpu_stereo_matcher(params);
+      Image<float> a, b;
+      one->compute(s.left.cview(), s.right.cview(), a);
+      three->compute(s.left.cview(), s.right.cview(), b);
+      EXPECT_TRUE(testing::same_bytes(a, b)) << range << (hd ? ", half size" : ", full size");
+      EXPECT_TRUE(testing::same_bytes(one->internal_sparse_disparity(),
+                                      three->internal_sparse_disparity()));
+    }
+  }
+  EXPECT_EQ(StereoParams{}.row_threads, 0) << "auto";
+}
+
 // "auto" guides only searches of more than four batches; a guide too small to run searches all.
 TEST(CpuStereoMatcher, AutoSearchRangeGuidesOnlyWideSearches) {
   const Scene s = small_scene(1);

@@ -47,6 +47,8 @@ TEST(StereoParams, ValidateRejectsEachInvalidField) {
       {"resolution empty", [](StereoParams& p) { p.internal_resolution = ""; },
        "internal_resolution"},
       {"search range partial", [](StereoParams& p) { p.search_range = "partial"; }, "search_range"},
+      {"row_threads -1", [](StereoParams& p) { p.row_threads = -1; }, "row_threads"},
+      {"row_threads 17", [](StereoParams& p) { p.row_threads = 17; }, "row_threads"},
       {"lambda_ad 0", [](StereoParams& p) { p.lambda_ad = 0; }, "lambda_ad"},
       {"lambda_census < 0", [](StereoParams& p) { p.lambda_census = -1; }, "lambda_census"},
       {"gamma_l < 0", [](StereoParams& p) { p.gamma_l = -0.1; }, "gamma_l"},

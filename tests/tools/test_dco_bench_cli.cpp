@@ -45,9 +45,27 @@ double json_value(const std::string& json, const std::string& key) {
 
 TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   TempDir dir;
-  const CliRun r = run_bench(
-      dir, {"--sequence", "synthetic", "--size", "320x180", "--frames", "3", "--paced-frames", "8",
-            "--fps", "60", "--rounds", "3", "--json", "--set", "contour.parallel_flow=off"});
+  const CliRun r = run_bench(dir, {"--sequence",
+                                   "synthetic",
+                                   "--size",
+                                   "320x180",
+                                   "--frames",
+                                   "3",
+                                   "--paced-frames",
+                                   "8",
+                                   "--fps",
+                                   "60",
+                                   "--rounds",
+                                   "3",
+                                   "--json",
+                                   "--set",
+                                   "contour.parallel_flow=off",
+                                   "--set",
+                                   "stereo.row_threads=1",
+                                   "--set",
+                                   "contour.row_threads=1",
+                                   "--set",
+                                   "densify.row_threads=1"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, ::testing::StartsWith("{"));
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one object on one line";
@@ -95,6 +113,9 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   EXPECT_GT(json_value(r.out, "stereo_ms"), 0);
   EXPECT_THAT(r.out, HasSubstr("\"sequences\": [{\"name\": \"synthetic hand 320x180\""));
   EXPECT_THAT(r.out, HasSubstr("\"parallel_flow\": false"));
+  EXPECT_EQ(json_value(r.out, "stereo_row_threads"), 1);
+  EXPECT_EQ(json_value(r.out, "contour_row_threads"), 1);
+  EXPECT_EQ(json_value(r.out, "densify_row_threads"), 1);
 }
 
 TEST(DcoBenchCli, TextNamesEveryMeasurementOnTheKarlsruheClip) {
@@ -102,11 +123,15 @@ TEST(DcoBenchCli, TextNamesEveryMeasurementOnTheKarlsruheClip) {
   TempDir dir;
   const CliRun r =
       run_bench(dir, {"--sequence", "karlsruhe", "--frames", "2", "--warmup", "1", "--paced-frames",
-                      "3", "--set", "runtime.threads=3", "--set", "contour.parallel_flow=on"});
+                      "3", "--set", "runtime.threads=3", "--set", "contour.parallel_flow=on",
+                      "--set", "stereo.row_threads=3", "--set", "contour.row_threads=1", "--set",
+                      "densify.row_threads=2"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("karlsruhe 2010_03_09_drive_0023: 2 frames of 1344x372"));
-  EXPECT_THAT(r.out, HasSubstr("max-disp 96, 3 stage thread(s) (+ a flow worker), each run after "
-                               "an untimed pass over the first 1"));
+  EXPECT_THAT(r.out,
+              HasSubstr("max-disp 96, 3 stage thread(s) (+ a flow worker) (rows on 3 / 1 / 2 "
+                        "threads in stereo / contour / densify), each run after an untimed "
+                        "pass over the first 1"));
   EXPECT_THAT(r.out, HasSubstr("a new runtime's first result after"));
   EXPECT_THAT(r.out, HasSubstr("ms/frame"));
   EXPECT_THAT(r.out, HasSubstr("stereo"));

@@ -31,7 +31,9 @@
 #include "dco/core/stopwatch.hpp"
 #include "dco/gpu/backend.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
+#include "dco/pipeline/densify/densifier.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
+#include "dco/pipeline/row_team.hpp"
 #include "dco/pipeline/runtime/depth_runtime.hpp"
 #include "dco/pipeline/runtime/histogram.hpp"
 #include "dco/tools/command_line.hpp"
@@ -449,6 +451,11 @@ struct Result {
   std::optional<BackendCheck> check;
   int width = 0, height = 0, frames = 0, max_disparity = 0, threads = 0, warmup = 0;
   bool parallel_flow = false;  // the flow cue's two fields on two threads
+  // Threads sharing each stage's row-wise steps (stereo.row_threads, ... resolved).
+  int stereo_row_threads = 1, contour_row_threads = 1, densify_row_threads = 1;
+  bool shares_rows() const {
+    return stereo_row_threads > 1 || contour_row_threads > 1 || densify_row_threads > 1;
+  }
   std::vector<Round> rounds;
   double ms_per_frame = 0;  // the medians over the rounds
   double peer_ms_per_frame = 0;
@@ -481,6 +488,9 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
       dco::gpu::choose_backend(p.runtime.backend, p.pipeline.stereo);
   r.threads = rt::stage_threads(p.runtime, backend.stages.on_gpu);
   r.parallel_flow = dco::contour::parallel_flow_fields(p.pipeline.contour);
+  r.stereo_row_threads = dco::pipeline::RowTeam::threads_for(p.pipeline.stereo.row_threads);
+  r.contour_row_threads = dco::pipeline::RowTeam::threads_for(p.pipeline.contour.row_threads);
+  r.densify_row_threads = dco::pipeline::RowTeam::threads_for(p.pipeline.densify.row_threads);
   r.backend = backend.backend;
   r.backend_message = backend.message;
 
@@ -591,10 +601,15 @@ void print_text(const Result& r) {
   const rt::RuntimeStats& l = r.paced;
   const PassFigures& ls = r.paced_figures;
   fmt::print(
-      "{}: {} frames of {}x{}, max-disp {}, {} stage thread(s){}, each run after an untimed pass "
-      "over the first {}\n",
+      "{}: {} frames of {}x{}, max-disp {}, {} stage thread(s){}{}, each run after an untimed "
+      "pass over the first {}\n",
       r.name, r.frames, r.width, r.height, r.max_disparity, r.threads,
-      r.parallel_flow ? " (+ a flow worker)" : "", r.warmup);
+      r.parallel_flow ? " (+ a flow worker)" : "",
+      r.shares_rows()
+          ? fmt::format(" (rows on {} / {} / {} threads in stereo / contour / densify)",
+                        r.stereo_row_threads, r.contour_row_threads, r.densify_row_threads)
+          : "",
+      r.warmup);
   fmt::print(
       "  dco      {:8.1f} ms/frame  ({:.2f} fps, median of {} rounds); a new runtime's first "
       "result "
@@ -673,7 +688,9 @@ std::string json_fields(const Result& r) {
   const PassFigures& ls = r.paced_figures;
   return fmt::format(
              "\"name\": {}, \"width\": {}, \"height\": {}, \"frames\": {}, \"max_disparity\": {}, "
-             "\"threads\": {}, \"parallel_flow\": {}, \"warmup_frames\": {}, "
+             "\"threads\": {}, \"parallel_flow\": {}, \"stereo_row_threads\": {}, "
+             "\"contour_row_threads\": {}, \"densify_row_threads\": {}, "
+             "\"warmup_frames\": {}, "
              "\"first_result_ms\": {}, "
              "\"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
              "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
@@ -684,15 +701,16 @@ std::string json_fields(const Result& r) {
              "\"published\": {}, \"planes_on_stereo_thread\": {}, \"peer_ms_per_frame\": {}, "
              "\"ratio\": {}",
              dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity,
-             r.threads, r.parallel_flow ? "true" : "false", r.warmup,
-             json_number(r.first_result_ms), json_number(r.ms_per_frame),
-             json_number(1000.0 / r.ms_per_frame), json_number(t.stereo.mean_ms),
-             json_number(t.contour.mean_ms), json_number(t.densify.mean_ms), json_number(r.fps),
-             json_number(ls.latency.p50_ms), json_number(ls.latency.p99_ms),
-             json_number(ls.latency.max_ms), json_number(ls.ready.p50_ms),
-             json_number(ls.ready.p99_ms), json_number(r.release_latency_ms), l.overdue, l.early,
-             l.pushed, l.dropped, l.late, l.published, json_number(r.planes_share()),
-             json_number(r.peer_ms_per_frame), json_number(r.ratio)) +
+             r.threads, r.parallel_flow ? "true" : "false", r.stereo_row_threads,
+             r.contour_row_threads, r.densify_row_threads, r.warmup, json_number(r.first_result_ms),
+             json_number(r.ms_per_frame), json_number(1000.0 / r.ms_per_frame),
+             json_number(t.stereo.mean_ms), json_number(t.contour.mean_ms),
+             json_number(t.densify.mean_ms), json_number(r.fps), json_number(ls.latency.p50_ms),
+             json_number(ls.latency.p99_ms), json_number(ls.latency.max_ms),
+             json_number(ls.ready.p50_ms), json_number(ls.ready.p99_ms),
+             json_number(r.release_latency_ms), l.overdue, l.early, l.pushed, l.dropped, l.late,
+             l.published, json_number(r.planes_share()), json_number(r.peer_ms_per_frame),
+             json_number(r.ratio)) +
          fmt::format(", \"rounds\": [{}]", fmt::join(round_objects(r), ", ")) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
          (r.check ? fmt::format(

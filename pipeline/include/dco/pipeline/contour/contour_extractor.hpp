@@ -27,6 +27,10 @@ struct ContourParams {
   // (invert_flow) when that frame was computed with the same two images, so DIS runs once per
   // frame instead of twice.
   bool reuse_flow = true;
+  // Threads that share the flow cue's row-wise steps after DIS (amplitudes, projection test,
+  // fusion, box filter, normalisation), the stage's own included (RowTeam::threads_for: 0 =
+  // auto, 1 below 4 usable CPUs). Same output however many.
+  int row_threads = 0;
   // The flow cue is divided by max(its maximum, flow_floor) (the normalisation of §5.3.2). With
   // the paper's plain maximum a still scene's flow noise (|flow| of a few hundredths of a pixel)
   // is stretched to full strength and opens the gate everywhere; motion of about 1 internal px

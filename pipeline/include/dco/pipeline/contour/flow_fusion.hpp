@@ -14,6 +14,11 @@ inline constexpr float kMinFlowForDirection = 1e-2f;
 // reach past the last column or row counts as 0, so the image border is not an edge.
 void flow_amplitude(ImageView<const float> flow, ImageView<float> speed,
                     ImageView<float> amplitude);
+// Its two steps for rows [y_begin, y_end) of the output: the speed rows, then the amplitude rows
+// (each reads the speed of its row and the next).
+void flow_speed_rows(ImageView<const float> flow, int y_begin, int y_end, ImageView<float> speed);
+void flow_amplitude_rows(ImageView<const float> speed, int y_begin, int y_end,
+                         ImageView<float> amplitude);
 
 // Eq. 9–11: with e the unit flow direction at p, p0 = p - distance·e and p1 = p + distance·e
 // (bilinear samples, clamped to the image), contrast = flow(p1)·e - flow(p0)·e. It is positive
@@ -21,12 +26,19 @@ void flow_amplitude(ImageView<const float> flow, ImageView<float> speed,
 // negative where p runs into the region ahead (p is covered there). 0 where |flow| is below
 // kMinFlowForDirection.
 void projection_contrast(ImageView<const float> flow, float distance, ImageView<float> contrast);
+// The same for rows [y_begin, y_end) of `contrast`.
+void projection_contrast_rows(ImageView<const float> flow, float distance, int y_begin, int y_end,
+                              ImageView<float> contrast);
 
 // Eq. 12: per pixel, the amplitude of the field whose contrast is larger (the more reliable of the
 // two directions); on a tie, field b.
 void fuse_amplitudes(ImageView<const float> amplitude_a, ImageView<const float> contrast_a,
                      ImageView<const float> amplitude_b, ImageView<const float> contrast_b,
                      ImageView<float> fused);
+// The same for rows [y_begin, y_end).
+void fuse_amplitude_rows(ImageView<const float> amplitude_a, ImageView<const float> contrast_a,
+                         ImageView<const float> amplitude_b, ImageView<const float> contrast_b,
+                         int y_begin, int y_end, ImageView<float> fused);
 
 // The field from the neighbour back to the centre, from `forward` (centre -> neighbour): each
 // centre pixel p lands on round(p + forward(p)) in the neighbour, which takes -forward(p); where
@@ -39,5 +51,9 @@ void invert_flow(ImageView<const float> forward, ImageView<float> speed, ImageVi
 // Divides every value by max(largest value, floor) so the result lies in [0, 1]; returns that
 // divisor. An all-zero image (with floor 0) is left as it is and 0 is returned.
 float normalise_by_max(ImageView<float> values, float floor);
+// Its two steps on rows [y_begin, y_end): the largest value (at least 0), and the division by a
+// divisor (> 0) with the result capped at 1.
+float largest_value(ImageView<const float> values, int y_begin, int y_end);
+void divide_rows(ImageView<float> values, float divisor, int y_begin, int y_end);
 
 }  // namespace dco::contour

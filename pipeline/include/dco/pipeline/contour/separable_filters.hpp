@@ -21,5 +21,11 @@ void gaussian_blur_5x5(ImageView<const std::uint8_t> in, ImageView<float> tmp,
 // Normalised (mean) box filter of odd `size`. `tmp` and `out` have the size of `in`; `out` may not
 // alias `in`.
 void box_filter(ImageView<const float> in, int size, ImageView<float> tmp, ImageView<float> out);
+// Its two passes for rows [y_begin, y_end): the vertical means into `tmp` (reading the rows
+// within size / 2), then the horizontal means of `tmp` into `out`.
+void box_vertical_rows(ImageView<const float> in, int size, int y_begin, int y_end,
+                       ImageView<float> tmp);
+void box_horizontal_rows(ImageView<const float> tmp, int size, int y_begin, int y_end,
+                         ImageView<float> out);
 
 }  // namespace dco::contour

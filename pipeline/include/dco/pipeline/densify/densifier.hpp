@@ -12,6 +12,7 @@
 #include "dco/pipeline/densify/match_planes.hpp"
 #include "dco/pipeline/densify/multigrid.hpp"
 #include "dco/pipeline/densify/system_solver.hpp"
+#include "dco/pipeline/row_team.hpp"
 
 namespace dco {
 class ConfigSchema;
@@ -75,6 +76,10 @@ struct DensifyParams {
   // solver's own solution stays unfiltered: it is the next frame's warm start and previous
   // frame (Eq. 18).
   int median_size = 5;
+  // Threads that share the stage's row-wise steps (building the system, the clamp and the
+  // median), the stage's own included: 0 = auto, 1 where fewer than 4 CPUs are usable (the two
+  // stage threads have them), else half of them, at most 4. Same output however many.
+  int row_threads = 0;
 };
 
 void register_params(ConfigSchema& schema, DensifyParams& params);
@@ -98,6 +103,7 @@ struct DensifyInputs {
 };
 
 struct DensifyTimings {
+  // median_ms: the clamp of the solution to the data range and the median filter.
   double planes_ms = 0, build_ms = 0, solve_ms = 0, median_ms = 0, total_ms = 0;
 };
 
@@ -136,6 +142,8 @@ class Densifier {
 
  private:
   void build_system(const DensifyInputs& in);
+  // The output: the clamped solution through the median filter (median_size).
+  void finish(Image<float>& dense);
   // Overwrites the hints of the holes at the start of each row (see border_plane_rms) and widens
   // [low, high] to the hints it sets.
   void border_plane_hints(ImageView<const float> sparse, float& low, float& high);
@@ -147,8 +155,11 @@ class Densifier {
   Image<float> smoothed_;  // the sparse map after planes_
   Image<float> rhs_, hint_, solution_, smooth_strength_;
   Image<std::uint8_t> barrier_;
-  std::vector<int> fuse_column_;       // column of M_fuse for each input column
-  std::vector<float> median_columns_;  // the 5x5 median's sorted columns of one row
+  std::vector<int> fuse_column_;  // column of M_fuse for each input column
+  pipeline::RowTeam rows_;
+  // Per thread of rows_: the 5x5 median's sorted columns of one row, and the data range.
+  std::vector<std::vector<float>> median_columns_;
+  std::vector<std::array<float, 2>> part_range_;
   // Per row: its first matched column and the sums of its fitted pixels (n, x, x², d, x·d, d²).
   std::vector<int> border_first_;
   std::vector<std::array<double, 6>> border_sums_;
@@ -164,5 +175,8 @@ class Densifier {
 // Closes diagonal gaps of a contour mask so that it separates regions under 4-connectivity
 // (two contour pixels touching only at a corner would let the smoothness term leak across).
 void close_diagonal_gaps(ImageView<const std::uint8_t> contours, ImageView<std::uint8_t> closed);
+// The same for rows [begin, end) of `closed` (row y reads rows y and y + 1 of `contours`).
+void close_diagonal_gap_rows(ImageView<const std::uint8_t> contours, int begin, int end,
+                             ImageView<std::uint8_t> closed);
 
 }  // namespace dco::densify

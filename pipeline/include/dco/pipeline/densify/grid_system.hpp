@@ -18,7 +18,9 @@ struct GridSystem {
   int width() const { return data.width(); }
   int height() const { return data.height(); }
   // Recomputes diag and inv_diag from data and the edge weights.
-  void update_diagonal();
+  void update_diagonal() { update_diagonal_rows(0, height()); }
+  // The same for rows [begin, end) (reads the wy row above each).
+  void update_diagonal_rows(int begin, int end);
 };
 
 // Row r of `a` as the row kernels take it (the x rows left null).

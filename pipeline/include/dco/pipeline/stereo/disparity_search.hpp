@@ -1,12 +1,17 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "dco/core/image.hpp"
 #include "dco/pipeline/stereo/cross_aggregation.hpp"
 #include "dco/pipeline/stereo/disparity_selection.hpp"
 #include "dco/pipeline/stereo/matching_cost.hpp"
 #include "dco/pipeline/stereo/search_guide.hpp"
+
+namespace dco::pipeline {
+class RowTeam;
+}
 
 namespace dco::stereo {
 
@@ -26,22 +31,31 @@ struct MatchingImages {
 // With a mask, row y considers only the batches mask.searches(y, b): the winner-takes-all state
 // is that of the full search with every other cost left out (WinnerTakesAll::skip_row), and the
 // fused path computes costs only for the rows a searched batch's regions reach.
+//
+// With a team the fused path gives each of its threads a band of rows: a band aggregates from
+// the rows its vertical arms reach above it (those rows' costs are computed twice), and every
+// row's winner-takes-all state sees the same costs in the same order, so the result is the same.
 class DisparitySearch {
  public:
   // `wta` must be reset to the images' size; `mask`, when given, covers the images' rows and
   // every batch up to max_d.
   void run(const MatchingImages& images, const CostTables& tables, const SupportRegions& regions,
-           int passes, int max_d, WinnerTakesAll& wta, const BatchMask* mask = nullptr);
+           int passes, int max_d, WinnerTakesAll& wta, const BatchMask* mask = nullptr,
+           pipeline::RowTeam* team = nullptr);
 
   static constexpr int kBatch = 16;
 
  private:
-  void run_fused(const MatchingImages& images, const CostTables& tables,
-                 const SupportRegions& regions, int max_d, WinnerTakesAll& wta,
-                 const BatchMask* mask);
+  // One thread's share of the fused search: its aggregator and its rows of a batch's means.
+  struct Band {
+    BlockAggregator aggregator;
+    Image<std::uint16_t> lines;  // one row per disparity of the batch
+  };
+  void search_band(const MatchingImages& images, const CostTables& tables,
+                   const SupportRegions& regions, int max_d, WinnerTakesAll& wta,
+                   const BatchMask* mask, Band& band, int y_begin, int y_end);
 
-  BlockAggregator aggregator_;
-  Image<std::uint16_t> lines_;  // one row per disparity of the batch
+  std::vector<Band> bands_;
   Image<std::uint32_t> slice_;
   AggregationScratch scratch_;
 };
