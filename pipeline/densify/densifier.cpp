@@ -350,33 +350,30 @@ void Densifier::finish(Image<float>& dense) {
   dense.resize(w, h);
   // An iterative solve stopped early can overshoot in a small region that contours cut off
   // (weakly coupled, so it weighs little in the residual); the exact solution cannot.
-  const bool clamps = data_high_ > 0.0f;
-  const auto clamp_rows = [&](int begin, int end) {
-    for (int y = begin; y < end; ++y) {
-      float* row = solution_.row(y);
-      for (int x = 0; x < w; ++x) row[x] = std::clamp(row[x], data_low_, data_high_);
-    }
-  };
-  if (params_.median_size != 5) {
-    if (clamps) rows_.run(h, [&](int, int begin, int end) { clamp_rows(begin, end); });
-    if (params_.median_size == 3)
-      cv::medianBlur(as_mat(solution_.cview()), as_mat(dense.view()), 3);
-    else
-      dense.copy_from(solution_.cview());
-    return;
+  if (data_high_ > 0.0f)
+    rows_.run(h, [&](int, int begin, int end) {
+      for (int y = begin; y < end; ++y) {
+        float* row = solution_.row(y);
+        for (int x = 0; x < w; ++x) row[x] = std::clamp(row[x], data_low_, data_high_);
+      }
+    });
+  if (params_.median_size == 3) {
+    cv::medianBlur(as_mat(solution_.cview()), as_mat(dense.view()), 3);
+  } else if (params_.median_size == 5) {
+    // Reads two rows on each side: every block was clamped before any is filtered. OpenCV's 5x5
+    // median of floats takes 4 ms per 1280x720 map; the kernel about 1.3.
+    rows_.run(h, [&](int part, int begin, int end) {
+      std::vector<float>& columns = median_columns_[static_cast<std::size_t>(part)];
+      columns.resize(static_cast<std::size_t>(kernels::median5_columns(w)));
+      for (int y = begin; y < end; ++y) {
+        const float* rows[5];
+        for (int i = 0; i < 5; ++i) rows[i] = solution_.row(std::clamp(y + i - 2, 0, h - 1));
+        kernels::median5_row(rows, w, columns.data(), dense.row(y));
+      }
+    });
+  } else {
+    dense.copy_from(solution_.cview());
   }
-  // The 5x5 median reads two rows on each side: every block is clamped before any is filtered.
-  // OpenCV's 5x5 median of floats takes 4 ms per 1280x720 map; the kernel about 1.3.
-  if (clamps) rows_.run(h, [&](int, int begin, int end) { clamp_rows(begin, end); });
-  rows_.run(h, [&](int part, int begin, int end) {
-    std::vector<float>& columns = median_columns_[static_cast<std::size_t>(part)];
-    columns.resize(static_cast<std::size_t>(kernels::median5_columns(w)));
-    for (int y = begin; y < end; ++y) {
-      const float* rows[5];
-      for (int i = 0; i < 5; ++i) rows[i] = solution_.row(std::clamp(y + i - 2, 0, h - 1));
-      kernels::median5_row(rows, w, columns.data(), dense.row(y));
-    }
-  });
 }
 
 void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
