@@ -14,7 +14,8 @@ namespace dco::pipeline::runtime {
 void register_params(ConfigSchema& s, RuntimeParams& p) {
   s.add("runtime.threads", &p.threads, 0, 3,
         "stage threads: 1 all in one, 2 stereo | contour+densify, 3 stereo | contour | densify; "
-        "0 = 3 when the stages run on a GPU and 4 or more CPUs are usable, else 2");
+        "0 = 3 when the stages run on a GPU and 4 or more CPUs are usable or when 8 or more are, "
+        "else 2");
   s.add("runtime.affinity", &p.affinity, {},
         "CPUs for the stage threads, e.g. \"0,1\" (thread i on entry i mod n); empty = any");
   s.add("runtime.queue_depth", &p.queue_depth, 1, 8,
@@ -80,7 +81,8 @@ void validate(const RuntimeParams& p) {
 
 int stage_threads(const RuntimeParams& p, bool stages_on_gpu) {
   if (p.threads != 0) return p.threads;
-  return stages_on_gpu && usable_cpus() >= 4 ? 3 : 2;
+  const int cpus = usable_cpus();
+  return (stages_on_gpu && cpus >= 4) || cpus >= 8 ? 3 : 2;
 }
 
 }  // namespace dco::pipeline::runtime

@@ -50,6 +50,10 @@ Sequence make_sequence(const char* name, int count) {
   s.frames.resize(static_cast<std::size_t>(count));
   for (int i = 0; i < count; ++i) scene.render(i, s.frames[static_cast<std::size_t>(i)]);
   s.params.stereo.max_disparity = synthetic::covering_max_disparity(scene.config());
+  // The flow worker and the stages' row helpers (started with the stages where 4 or more CPUs
+  // are usable) stay out of the thread counts below; the deterministic test turns them on.
+  s.params.contour.parallel_flow = "off";
+  s.params.stereo.row_threads = s.params.contour.row_threads = s.params.densify.row_threads = 1;
   return s;
 }
 
@@ -125,12 +129,13 @@ TEST(DepthRuntime, DeterministicModeEqualsTheOfflinePipelineBitForBit) {
   for (int lookahead : {1, 0}) {
     Sequence s = make_sequence("hand", 6);
     s.params.contour.lookahead = lookahead;
-    s.params.contour.parallel_flow = "off";
     const std::vector<DepthResult> expected = offline(s);
     ASSERT_EQ(expected.size(), 6u);
-    // The runtime computes the two flow fields on two threads: the same output.
+    // The runtime computes the two flow fields on two threads and shares each stage's rows among
+    // three: the same output.
     PipelineParams parallel = s.params;
     parallel.contour.parallel_flow = "on";
+    parallel.stereo.row_threads = parallel.contour.row_threads = parallel.densify.row_threads = 3;
     for (int threads : {1, 2, 3}) {
       RuntimeParams rp;
       rp.deterministic = true;
@@ -662,7 +667,7 @@ TEST(DepthRuntime, ZeroThreadsRunTheCountItsStagesCallFor) {
     rp.deterministic = true;
     StageFactories stages;  // the CPU stages, marked as a GPU's to see the choice
     stages.on_gpu = on_gpu;
-    const int expected = on_gpu && usable_cpus() >= 4 ? 3 : 2;
+    const int expected = (on_gpu && usable_cpus() >= 4) || usable_cpus() >= 8 ? 3 : 2;
     Collector c;
     DepthRuntime runtime(s.params, rp, c.callback(), {}, stages);
     EXPECT_EQ(runtime.runtime_params().threads, expected);

@@ -42,7 +42,9 @@ void validate(const RuntimeParams& params);  // throws dco::Error
 
 // runtime.threads as it will run: an explicit count as it is; 0 gives 3 when the stages run on a
 // GPU and at least four CPUs are usable (the stereo thread then mostly waits, so the contour
-// stage's optical flow and the densify system, both on the CPU, each get a thread), else 2.
+// stage's optical flow and the densify system, both on the CPU, each get a thread) or when at
+// least eight are (the CPU stages then share their rows with helpers, and contour + densify on
+// one thread is the longest), else 2.
 int stage_threads(const RuntimeParams& params, bool stages_on_gpu);
 
 // Parses runtime.affinity ("0,2,3"); throws dco::Error naming the bad entry.
