@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "dco/kernels/boundary_kernels.hpp"
+#include "dco/pipeline/row_team.hpp"
 
 namespace dco::stereo {
 
@@ -153,52 +154,63 @@ void BoundaryRefiner::side_ranges(ImageView<const float> sparse, int hole_reach)
 
 void BoundaryRefiner::apply(ImageView<const float> sparse, ImageView<const std::uint8_t> left,
                             ImageView<const std::uint8_t> right, int scale,
-                            const px::BoundaryRule& rule, ImageView<float> disparity) {
+                            const px::BoundaryRule& rule, ImageView<float> disparity,
+                            pipeline::RowTeam* team) {
   const int w = sparse.width, h = sparse.height;
   const bool holes = rule.hole_reach > px::kBoundaryReach;
   side_ranges(sparse, rule.hole_reach);
   const auto s = static_cast<float>(scale);
   const px::GreyPair im{left.data, right.data, left.stride, right.stride, left.width, left.height};
-  kernels::BoundaryWindow window;  // the side costs of one pixel share its support weights
-  // Most internal pixels are away from any edge: the ones that are, once per internal row, then
-  // a word of eight at a time skipped where none is.
-  edge_.resize(static_cast<std::size_t>(w) + 8);
-  std::fill(edge_.begin() + w, edge_.end(), std::uint8_t{0});
-  int edge_row = -1;
-  for (int y = 0; y < disparity.height; ++y) {
-    const int iy = std::min(y / scale, h - 1);
-    const float* far = far_.row(iy);
-    const float* near = near_.row(iy);
-    const float* hole_far = holes ? hole_far_.row(iy) : far;
-    const float* hole_near = holes ? hole_near_.row(iy) : near;
-    if (iy != edge_row) {
-      edge_columns(far, near, hole_far, hole_near, w, edge_.data());
-      edge_row = iy;
-    }
-    float* out = disparity.row(y);
-    // Input column x belongs to internal column min(x / scale, w - 1).
-    for (int ix = 0; ix < w; ++ix) {
-      if (ix % 8 == 0) {
-        std::uint64_t word;
-        std::memcpy(&word, edge_.data() + ix, sizeof word);
-        if (word == 0) {
-          ix += 7;
-          continue;
+  const int parts = team != nullptr ? team->threads() : 1;
+  if (edges_.size() < static_cast<std::size_t>(parts))
+    edges_.resize(static_cast<std::size_t>(parts));
+  const auto refine_rows = [&](int part, int y_begin, int y_end) {
+    kernels::BoundaryWindow window;  // the side costs of one pixel share its support weights
+    // Most internal pixels are away from any edge: the ones that are, once per internal row,
+    // then a word of eight at a time skipped where none is.
+    std::vector<std::uint8_t>& edge = edges_[static_cast<std::size_t>(part)];
+    edge.resize(static_cast<std::size_t>(w) + 8);
+    std::fill(edge.begin() + w, edge.end(), std::uint8_t{0});
+    int edge_row = -1;
+    for (int y = y_begin; y < y_end; ++y) {
+      const int iy = std::min(y / scale, h - 1);
+      const float* far = far_.row(iy);
+      const float* near = near_.row(iy);
+      const float* hole_far = holes ? hole_far_.row(iy) : far;
+      const float* hole_near = holes ? hole_near_.row(iy) : near;
+      if (iy != edge_row) {
+        edge_columns(far, near, hole_far, hole_near, w, edge.data());
+        edge_row = iy;
+      }
+      float* out = disparity.row(y);
+      // Input column x belongs to internal column min(x / scale, w - 1).
+      for (int ix = 0; ix < w; ++ix) {
+        if (ix % 8 == 0) {
+          std::uint64_t word;
+          std::memcpy(&word, edge.data() + ix, sizeof word);
+          if (word == 0) {
+            ix += 7;
+            continue;
+          }
+        }
+        if (edge[static_cast<std::size_t>(ix)] == 0) continue;
+        const px::SideRange narrow{far[ix], near[ix]}, wide{hole_far[ix], hole_near[ix]};
+        const int x_end = ix + 1 == w ? disparity.width : (ix + 1) * scale;
+        for (int x = ix * scale; x < x_end; ++x) {
+          const px::BoundarySides sides = px::boundary_sides(out[x], narrow, wide, rule);
+          if (!sides.refine) continue;
+          kernels::boundary_window(im, x, y, rule, window);
+          out[x] = px::refined_boundary_choice(out[x], sides.range, s, sides.keep, [&](int d) {
+            return kernels::boundary_side_cost(im, window, d, rule);
+          });
         }
       }
-      if (edge_[static_cast<std::size_t>(ix)] == 0) continue;
-      const px::SideRange narrow{far[ix], near[ix]}, wide{hole_far[ix], hole_near[ix]};
-      const int x_end = ix + 1 == w ? disparity.width : (ix + 1) * scale;
-      for (int x = ix * scale; x < x_end; ++x) {
-        const px::BoundarySides sides = px::boundary_sides(out[x], narrow, wide, rule);
-        if (!sides.refine) continue;
-        kernels::boundary_window(im, x, y, rule, window);
-        out[x] = px::refined_boundary_choice(out[x], sides.range, s, sides.keep, [&](int d) {
-          return kernels::boundary_side_cost(im, window, d, rule);
-        });
-      }
     }
-  }
+  };
+  if (team != nullptr)
+    team->run(disparity.height, refine_rows);
+  else
+    refine_rows(0, 0, disparity.height);
 }
 
 }  // namespace dco::stereo

@@ -165,8 +165,6 @@ class CpuStereoMatcher final : public StereoMatcher {
     if (scale_ == 2) {
       small_left_.resize(w_, h_, left.channels);
       small_right_.resize(w_, h_, left.channels);
-      downsample_half(left, small_left_.view());
-      downsample_half(right, small_right_.view());
       l = small_left_.view();
       r = small_right_.view();
     }
@@ -175,26 +173,42 @@ class CpuStereoMatcher final : public StereoMatcher {
     if (left.channels == 3) {
       gray_left_.resize(w_, h_);
       gray_right_.resize(w_, h_);
-      bgr_to_gray(l, gray_left_.view());
-      bgr_to_gray(r, gray_right_.view());
     }
     const ImageView<const std::uint8_t> gl = left.channels == 3 ? gray_left_.cview() : l;
     census_gray_left_ = gl;
     const ImageView<const std::uint8_t> gr = left.channels == 3 ? gray_right_.cview() : r;
     ad_left_ = color ? l : gl;
     ad_right_ = color ? r : gr;
-
     packed_left_.resize(w_, h_);
     packed_right_.resize(w_, h_);
-    for (int y = 0; y < h_; ++y) {
-      kernels::pack_pixels(ad_left_.row(y), ad_left_.channels, w_, packed_left_.row(y));
-      kernels::pack_pixels(ad_right_.row(y), ad_right_.channels, w_, packed_right_.row(y));
-    }
-
     census_left_.resize(w_, h_);
     census_right_.resize(w_, h_);
-    census_transform(gl, params_.census_width, params_.census_height, census_left_.view());
-    census_transform(gr, params_.census_width, params_.census_height, census_right_.view());
+
+    // Row by row: an internal row needs its two input rows; the census, the grey rows within
+    // its window, so it waits for every block.
+    team_->run(h_, [&](int, int begin, int end) {
+      const int n = end - begin;
+      if (scale_ == 2) {
+        downsample_half(left.sub(0, 2 * begin, left.width, 2 * n),
+                        small_left_.view().sub(0, begin, w_, n));
+        downsample_half(right.sub(0, 2 * begin, right.width, 2 * n),
+                        small_right_.view().sub(0, begin, w_, n));
+      }
+      if (left.channels == 3) {
+        bgr_to_gray(l.sub(0, begin, w_, n), gray_left_.view().sub(0, begin, w_, n));
+        bgr_to_gray(r.sub(0, begin, w_, n), gray_right_.view().sub(0, begin, w_, n));
+      }
+      for (int y = begin; y < end; ++y) {
+        kernels::pack_pixels(ad_left_.row(y), ad_left_.channels, w_, packed_left_.row(y));
+        kernels::pack_pixels(ad_right_.row(y), ad_right_.channels, w_, packed_right_.row(y));
+      }
+    });
+    team_->run(h_, [&](int, int begin, int end) {
+      census_transform_rows(gl, params_.census_width, params_.census_height, begin, end,
+                            census_left_.view());
+      census_transform_rows(gr, params_.census_width, params_.census_height, begin, end,
+                            census_right_.view());
+    });
 
     if (tables_.channels() != ad_left_.channels || tables_.max_arm() != params_.arm_max / scale_)
       tables_.build(model_, ad_left_.channels, params_.arm_max / scale_);
@@ -211,7 +225,7 @@ class CpuStereoMatcher final : public StereoMatcher {
       l = full_grey_left_.cview();
       r = full_grey_right_.cview();
     }
-    boundaries_.apply(values_.cview(), l, r, scale_, boundary_rule_, disparity.view());
+    boundaries_.apply(values_.cview(), l, r, scale_, boundary_rule_, disparity.view(), team_);
   }
 
   void write_output(int width, int height, Image<float>& disparity) {

@@ -23,8 +23,9 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "guided = each row searches only the disparities a half-size pass finds near it; auto = "
         "guided on the CPU when over 64 internal disparities, full on CUDA");
   s.add("stereo.row_threads", &p.row_threads, 0, 16,
-        "threads sharing the CPU disparity search by bands of rows, the stage's own included "
-        "(0 = auto: 1 below 4 usable CPUs, else half of them, at most 4)");
+        "threads sharing the CPU stage's rows (input preparation, census, the disparity search in "
+        "bands, boundary refinement), the stage's own included (0 = auto: 1 below 4 usable "
+        "CPUs, else half of them, at most 4)");
   s.add("stereo.use_color", &p.use_color, "AD cost and arms on colour when the input has it");
   s.add("stereo.lambda_ad", &p.lambda_ad, 0.01, 1000.0, "λ_AD of Eq. 1");
   s.add("stereo.lambda_census", &p.lambda_census, 0.01, 1000.0,

@@ -10,6 +10,7 @@
 #include <new>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -570,11 +571,12 @@ TEST(CpuStereoMatcher, GuidedSearchFindsWhatTheFullSearchFinds) {
   }
 }
 
-// stereo.row_threads shares the search's rows among threads: the same map, guided (whose
-// half-size pass shares the same threads) or full, grey or colour.
+// stereo.row_threads shares the stage's rows among threads (the input downscaled, grey and
+// packed, the census, the search, whose half-size pass shares the same threads, and the boundary
+// refinement): the same map, guided or full, grey or colour, at full and half size.
 TEST(CpuStereoMatcher, RowThreadsGiveTheMapOfOneThread) {
-  for (const bool hd : {false, true}) {
-    const Scene s = hd ? hd_scene(3) : small_scene(3);
+  for (const auto& [hd, channels] : {std::pair{false, 3}, std::pair{true, 3}, std::pair{true, 1}}) {
+    const Scene s = hd ? hd_scene(channels) : small_scene(channels);
     for (const char* range : {"guided", "full"}) {
       StereoParams params;
       params.max_disparity = 200;
@@ -586,7 +588,8 @@ TEST(CpuStereoMatcher, RowThreadsGiveTheMapOfOneThread) {
       Image<float> a, b;
       one->compute(s.left.cview(), s.right.cview(), a);
       three->compute(s.left.cview(), s.right.cview(), b);
-      EXPECT_TRUE(testing::same_bytes(a, b)) << range << (hd ? ", half size" : ", full size");
+      EXPECT_TRUE(testing::same_bytes(a, b))
+          << range << (hd ? ", half size, " : ", full size, ") << channels << " channels";
       EXPECT_TRUE(testing::same_bytes(one->internal_sparse_disparity(),
                                       three->internal_sparse_disparity()));
     }

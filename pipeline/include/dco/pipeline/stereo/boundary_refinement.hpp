@@ -7,6 +7,10 @@
 #include "dco/kernels/boundary_pixel.hpp"
 #include "dco/pipeline/stereo/stereo_params.hpp"
 
+namespace dco::pipeline {
+class RowTeam;
+}
+
 namespace dco::stereo {
 
 // The rule of the boundary refinement (kernels/boundary_pixel.hpp) for these parameters: the
@@ -23,9 +27,12 @@ bool refines_boundaries(const StereoParams& params, int scale);
 // that a frame of the same geometry allocates nothing.
 class BoundaryRefiner {
  public:
+  // With a team, its threads refine blocks of the output's rows (each row on its own: the same
+  // result).
   void apply(ImageView<const float> sparse, ImageView<const std::uint8_t> left,
              ImageView<const std::uint8_t> right, int scale,
-             const kernels::pixel::BoundaryRule& rule, ImageView<float> disparity);
+             const kernels::pixel::BoundaryRule& rule, ImageView<float> disparity,
+             pipeline::RowTeam* team = nullptr);
 
  private:
   // The sides around every internal pixel: within kBoundaryReach (far_, near_) and, when the
@@ -40,7 +47,8 @@ class BoundaryRefiner {
   Image<float> row_far_, row_near_, far_, near_;
   Image<float> row_hole_far_, row_hole_near_, hole_far_, hole_near_;
   std::vector<float> lo_, hi_, lo_next_, hi_next_;  // a row's blocks, padded
-  std::vector<std::uint8_t> edge_;                  // internal columns at a depth edge, one row
+  // Per thread of the team: the internal columns at a depth edge, of one row.
+  std::vector<std::vector<std::uint8_t>> edges_;
 };
 
 }  // namespace dco::stereo

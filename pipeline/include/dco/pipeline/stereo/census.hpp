@@ -12,5 +12,8 @@ namespace dco::stereo {
 // Neighbours outside the image are clamped to the border.
 void census_transform(ImageView<const std::uint8_t> gray, int window_w, int window_h,
                       ImageView<std::uint64_t> out);
+// The same for rows [y_begin, y_end) of `out` (the window still clamps at the image's rows).
+void census_transform_rows(ImageView<const std::uint8_t> gray, int window_w, int window_h,
+                           int y_begin, int y_end, ImageView<std::uint64_t> out);
 
 }  // namespace dco::stereo

@@ -23,8 +23,9 @@ struct StereoParams {
   // "auto": guided on the CPU backend when the search spans more than four batches, full on
   // CUDA, whose cost volume is not the bottleneck.
   std::string search_range = "auto";
-  // Threads that share the CPU stage's disparity search, each a band of rows, the stage's own
-  // included (RowTeam::threads_for: 0 = auto, 1 below 4 usable CPUs). Same output however many.
+  // Threads that share the CPU stage's rows (the input downscaled, grey and packed, the census,
+  // the disparity search in bands, the boundary refinement), the stage's own included
+  // (RowTeam::threads_for: 0 = auto, 1 below 4 usable CPUs). Same output however many.
   int row_threads = 0;
 
   // Matching cost, Eq. 1. The paper's λ_census is 40; 30 gives a denser and more exact sparse map
