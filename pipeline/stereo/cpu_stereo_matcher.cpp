@@ -41,7 +41,7 @@ void spread_pairs(const float* __restrict src, int count, float scale, float* __
 
 class CpuStereoMatcher final : public StereoMatcher {
  public:
-  // `team` shares the disparity search's rows (a stage's guide pass uses the stage's); without
+  // `team` shares the stage's row-wise steps (a stage's guide pass uses the stage's); without
   // one the matcher starts its own, of stereo.row_threads threads.
   explicit CpuStereoMatcher(const StereoParams& params, pipeline::RowTeam* team = nullptr)
       : params_(params), team_(team) {
