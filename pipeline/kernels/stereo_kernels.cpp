@@ -900,8 +900,12 @@ void WtaUpdateRow(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int cou
                   int d, const WtaRow& s) {
   const hn::ScalableTag<std::uint16_t> du;
   const hn::RebindToSigned<decltype(du)> di;
+  using VU = hn::Vec<decltype(du)>;
+  using VI = hn::Vec<decltype(di)>;
   const int n = static_cast<int>(hn::Lanes(du));
   const auto no_cost = hn::Set(du, kNoCost);
+  const auto one = hn::Set(di, 1);
+  const auto first = hn::Set(di, static_cast<std::int16_t>(d));
   int x = 0;
   for (; x + n <= width; x += n) {
     auto best = hn::LoadU(du, s.best + x);
@@ -912,21 +916,34 @@ void WtaUpdateRow(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int cou
     auto prev2 = hn::LoadU(du, s.prev2 + x);
     auto runmin = hn::LoadU(du, s.runmin + x);
     auto disp = hn::LoadU(di, s.disp + x);
-    for (int k = 0; k < count; ++k) {
-      const auto c = hn::LoadU(du, cost + k * cost_stride + x);
-      runmin = hn::Min(runmin, prev2);
-      const auto better = hn::Ne(hn::Min(c, best), best);  // c < best, unsigned
-      const auto next = hn::AndNot(
-          better,
-          hn::RebindMask(du, hn::Eq(disp, hn::Set(di, static_cast<std::int16_t>(d + k - 1)))));
+    VI dk = first;  // the disparity of the step, in every lane
+    // One disparity: pixel::wta_feed on a vector of pixels. `older` is the cost two disparities
+    // back; the caller rotates the names, so no step copies a register.
+    const auto feed = [&](VU c, VU older, VU previous) {
+      runmin = hn::Min(runmin, older);
+      const auto better = hn::Lt(c, best);
+      const auto next = hn::AndNot(better, hn::RebindMask(du, hn::Eq(disp, hn::Sub(dk, one))));
       best = hn::IfThenElse(better, c, best);
-      disp = hn::IfThenElse(hn::RebindMask(di, better),
-                            hn::Set(di, static_cast<std::int16_t>(d + k)), disp);
+      disp = hn::IfThenElse(hn::RebindMask(di, better), dk, disp);
       second = hn::IfThenElse(better, runmin, hn::IfThenElse(next, second, hn::Min(second, c)));
-      below = hn::IfThenElse(better, prev1, below);
+      below = hn::IfThenElse(better, previous, below);
       above = hn::IfThenElse(better, no_cost, hn::IfThenElse(next, c, above));
+      dk = hn::Add(dk, one);
+    };
+    int k = 0;
+    for (; k + 2 <= count; k += 2) {
+      const VU c0 = hn::LoadU(du, cost + k * cost_stride + x);
+      const VU c1 = hn::LoadU(du, cost + (k + 1) * cost_stride + x);
+      feed(c0, prev2, prev1);
+      feed(c1, prev1, c0);
+      prev2 = c0;
+      prev1 = c1;
+    }
+    if (k < count) {
+      const VU c0 = hn::LoadU(du, cost + k * cost_stride + x);
+      feed(c0, prev2, prev1);
       prev2 = prev1;
-      prev1 = c;
+      prev1 = c0;
     }
     hn::StoreU(best, du, s.best + x);
     hn::StoreU(second, du, s.second + x);
@@ -937,23 +954,46 @@ void WtaUpdateRow(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int cou
     hn::StoreU(runmin, du, s.runmin + x);
     hn::StoreU(disp, di, s.disp + x);
   }
-  for (int k = 0; k < count; ++k) {
-    const int dk = d + k;
-    const std::uint16_t* ck = cost + k * cost_stride;
-    detail::wta_left_range(ck, x, width, dk, s);
-    // Right pixel xr = x - dk: a shifted load of the same costs.
-    const auto vd = hn::Set(di, static_cast<std::int16_t>(dk));
-    int xr = std::min(dk, width);
-    for (; xr + n <= width; xr += n) {
-      const auto c = hn::LoadU(du, ck + xr);
-      const auto best = hn::LoadU(du, s.best_right + xr - dk);
-      const auto better = hn::Ne(hn::Min(c, best), best);
-      hn::StoreU(hn::IfThenElse(better, c, best), du, s.best_right + xr - dk);
-      hn::StoreU(
-          hn::IfThenElse(hn::RebindMask(di, better), vd, hn::LoadU(di, s.disp_right + xr - dk)), di,
-          s.disp_right + xr - dk);
+  for (int k = 0; k < count; ++k)
+    detail::wta_left_range(cost + k * cost_stride, x, width, d + k, s);
+  // Right pixel r at disparity d + k is left pixel r + d + k: a shifted load of each disparity's
+  // costs, the right pixels' state in registers over the disparities. Near the row's end a
+  // disparity's costs run out before the vector does: the lanes past them read kNoCost, which
+  // never wins.
+  HWY_ALIGN std::uint16_t tail[HWY_MAX_BYTES / 2];
+  int r = 0;
+  for (; r + n <= width && r < width - d; r += n) {
+    auto best = hn::LoadU(du, s.best_right + r);
+    auto disp = hn::LoadU(di, s.disp_right + r);
+    VI dk = first;
+    for (int k = 0; k < count; ++k) {
+      const int from = r + d + k;  // left pixel of lane 0
+      const int left = width - from;
+      if (left <= 0) break;
+      const std::uint16_t* c_at = cost + k * cost_stride + from;
+      if (left < n) {
+        std::copy(c_at, c_at + left, tail);
+        std::fill(tail + left, tail + n, kNoCost);
+        c_at = tail;
+      }
+      const auto c = hn::LoadU(du, c_at);
+      const auto better = hn::Lt(c, best);
+      best = hn::IfThenElse(better, c, best);
+      disp = hn::IfThenElse(hn::RebindMask(di, better), dk, disp);
+      dk = hn::Add(dk, one);
     }
-    detail::wta_right_range(ck, xr, width, dk, s);
+    hn::StoreU(best, du, s.best_right + r);
+    hn::StoreU(disp, di, s.disp_right + r);
+  }
+  // Right pixels of a last partial vector.
+  for (; r < width - d; ++r) {
+    for (int k = 0; k < count && r + d + k < width; ++k) {
+      const std::uint16_t c = cost[k * cost_stride + r + d + k];
+      if (c < s.best_right[r]) {
+        s.best_right[r] = c;
+        s.disp_right[r] = static_cast<std::int16_t>(d + k);
+      }
+    }
   }
 }
 
