@@ -62,6 +62,7 @@ void run_dco(benchmark::State& state, bool color) {
   const cv::Mat& r = color ? p.right : p.right_gray;
   dco::Image<float> disparity;
   dco::stereo::StereoTimings sum;
+  sum.searched_fraction = 0;
   for (auto _ : state) {
     matcher->compute(dco::as_view<std::uint8_t>(l), dco::as_view<std::uint8_t>(r), disparity);
     const auto& t = matcher->last_timings();
@@ -71,6 +72,8 @@ void run_dco(benchmark::State& state, bool color) {
     sum.refine_ms += t.refine_ms;
     sum.sparse_ms += t.sparse_ms;
     sum.boundary_ms += t.boundary_ms;
+    sum.guide_ms += t.guide_ms;
+    sum.searched_fraction += t.searched_fraction;
     benchmark::DoNotOptimize(disparity.data());
   }
   const double n = static_cast<double>(state.iterations());
@@ -81,6 +84,8 @@ void run_dco(benchmark::State& state, bool color) {
   state.counters["refine_ms"] = sum.refine_ms / n;
   state.counters["sparse_ms"] = sum.sparse_ms / n;
   state.counters["boundary_ms"] = sum.boundary_ms / n;
+  state.counters["guide_ms"] = sum.guide_ms / n;
+  state.counters["searched"] = sum.searched_fraction / n;
 }
 
 void run_sgbm(benchmark::State& state, bool color, int threads) {

@@ -385,13 +385,13 @@ HWY_INLINE hn::Vec<D> CensusCostFromRegisters(D du, const std::uint32_t* census_
       hn::IfThenElse(hn::TestBit(hd, hn::Set(du, static_cast<std::uint32_t>(2 * n))), high, low));
 }
 
-// BlockCosts for pixels from..width - 1 when a batch is one vector of 16 lanes and every right
+// BlockCosts for pixels from..to - 1 when a batch is one vector of 16 lanes and every right
 // pixel a lane reads lies inside the row (from >= d0 + 15): the same operations as its general
 // loop, with the row's pointers in locals and, with kRunning, the running sum carried in a
 // register rather than read back from the row just stored.
 template <bool kRunning, bool kAdInRegisters>
 HWY_NOINLINE void BlockCostsOneVector(const CostRow& row, const CostTableView& t, int d0, int from,
-                                      std::uint32_t* HWY_RESTRICT out) {
+                                      int to, std::uint32_t* HWY_RESTRICT out) {
   const hn::ScalableTag<std::uint32_t> du;
   const hn::RebindToSigned<decltype(du)> di;
   const hn::Repartition<std::uint64_t, decltype(du)> du64;
@@ -401,7 +401,6 @@ HWY_NOINLINE void BlockCostsOneVector(const CostRow& row, const CostTableView& t
   const std::uint64_t* HWY_RESTRICT census_left = row.census_left;
   const std::uint64_t* HWY_RESTRICT census_right = row.census_right;
   const std::uint8_t* HWY_RESTRICT shortest_arm = row.shortest_arm;
-  const int width = row.width;
   const std::uint32_t* HWY_RESTRICT census_table = t.census;
   const int census_size = t.census_size;
   const std::uint32_t* HWY_RESTRICT ad_table = t.ad;
@@ -409,7 +408,7 @@ HWY_NOINLINE void BlockCostsOneVector(const CostRow& row, const CostTableView& t
   const auto flat_from = hn::Set(du, static_cast<std::uint32_t>(t.ad_flat_from));
   auto sum = hn::Zero(du);
   if constexpr (kRunning) sum = hn::LoadU(du, out + from * n);
-  for (int x = from; x < width; ++x) {
+  for (int x = from; x < to; ++x) {
     const int arm = shortest_arm[x];
     const int first = x - d0 - (n - 1);  // the right pixel of the batch's last disparity
     hn::Vec<decltype(du)> ad, hd;
@@ -434,11 +433,13 @@ HWY_NOINLINE void BlockCostsOneVector(const CostRow& row, const CostTableView& t
   }
 }
 
-// Costs of row `row` in the block layout; with kRunning, their running sums along the row instead:
-// out[(x + 1) * count + k] = out[x * count + k] + cost (out[0 .. count) = 0), the prefix sums
-// the horizontal aggregation needs, without a pass of their own.
+// Costs of the row's pixels [from, to) in the block layout; with kRunning, their running sums
+// along the row instead: out[(x + 1) * count + k] = out[x * count + k] + cost (out[from * count ..
+// (from + 1) * count) = 0), the prefix sums the horizontal aggregation needs, without a pass of
+// their own.
 template <bool kRunning>
-void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, std::uint32_t* out) {
+void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, int from, int to,
+                std::uint32_t* out) {
   const hn::ScalableTag<std::uint32_t> du;
   const hn::RebindToSigned<decltype(du)> di;
   const hn::Repartition<std::uint64_t, decltype(du)> du64;
@@ -459,11 +460,11 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
   // Right pixels before the row start read as zero from here; their lanes become `unmatched`.
   HWY_ALIGN std::uint32_t right_pad[HWY_MAX_BYTES / 4];
   HWY_ALIGN std::uint64_t census_pad[HWY_MAX_BYTES / 4];
-  if constexpr (kRunning) std::fill(out, out + count, 0u);
+  if constexpr (kRunning) std::fill(out + from * count, out + (from + 1) * count, 0u);
   // Past the row's first d0 + n - 1 pixels, a batch of one vector takes the fast loop.
   const bool one_vector = n == 16 && count == n && census_in_registers;
-  const int general_end = one_vector ? std::min(row.width, d0 + n - 1) : row.width;
-  for (int x = 0; x < general_end; ++x) {
+  const int general_end = one_vector ? std::clamp(d0 + n - 1, from, to) : to;
+  for (int x = from; x < general_end; ++x) {
     std::uint32_t* dst = out + (kRunning ? x + 1 : x) * count;
     const std::uint32_t* before = out + x * count;  // kRunning: the sums up to x - 1
     const auto emit = [&](hn::Vec<decltype(du)> cost, int k) {
@@ -526,22 +527,22 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, s
       detail::block_cost_range(row, t, x, d0, count, vector_end, count, out);
     }
   }
-  if (general_end < row.width) {
+  if (general_end < to) {
     if (ad_in_registers)
-      BlockCostsOneVector<kRunning, true>(row, t, d0, general_end, out);
+      BlockCostsOneVector<kRunning, true>(row, t, d0, general_end, to, out);
     else
-      BlockCostsOneVector<kRunning, false>(row, t, d0, general_end, out);
+      BlockCostsOneVector<kRunning, false>(row, t, d0, general_end, to, out);
   }
 }
 
 void BlockMatchingCostRow(const CostRow& row, const CostTableView& t, int d0, int count,
                           std::uint32_t* out) {
-  BlockCosts<false>(row, t, d0, count, out);
+  BlockCosts<false>(row, t, d0, count, 0, row.width, out);
 }
 
-void BlockMatchingCostSumsRow(const CostRow& row, const CostTableView& t, int d0, int count,
-                              std::uint32_t* prefix) {
-  BlockCosts<true>(row, t, d0, count, prefix);
+void BlockMatchingCostSumsRange(const CostRow& row, const CostTableView& t, int d0, int count,
+                                int begin, int end, std::uint32_t* prefix) {
+  BlockCosts<true>(row, t, d0, count, begin, end, prefix);
 }
 
 void HorizontalSumsRow(const std::uint32_t* in, const std::uint8_t* left, const std::uint8_t* right,
@@ -896,8 +897,8 @@ void DisparityValuesRow(const DisparityRowInputs& in, int width, bool subpixel, 
   detail::disparity_values_range(in, subpixel, max_value, x, width, raw, sparse);
 }
 
-void WtaUpdateRow(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
-                  int d, const WtaRow& s) {
+void WtaUpdateRange(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int begin,
+                    int end, int d, const WtaRow& s) {
   const hn::ScalableTag<std::uint16_t> du;
   const hn::RebindToSigned<decltype(du)> di;
   using VU = hn::Vec<decltype(du)>;
@@ -906,8 +907,8 @@ void WtaUpdateRow(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int cou
   const auto no_cost = hn::Set(du, kNoCost);
   const auto one = hn::Set(di, 1);
   const auto first = hn::Set(di, static_cast<std::int16_t>(d));
-  int x = 0;
-  for (; x + n <= width; x += n) {
+  int x = begin;
+  for (; x + n <= end; x += n) {
     auto best = hn::LoadU(du, s.best + x);
     auto second = hn::LoadU(du, s.second + x);
     auto below = hn::LoadU(du, s.below + x);
@@ -954,29 +955,19 @@ void WtaUpdateRow(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int cou
     hn::StoreU(runmin, du, s.runmin + x);
     hn::StoreU(disp, di, s.disp + x);
   }
-  for (int k = 0; k < count; ++k)
-    detail::wta_left_range(cost + k * cost_stride, x, width, d + k, s);
-  // Right pixel r at disparity d + k is left pixel r + d + k: a shifted load of each disparity's
-  // costs, the right pixels' state in registers over the disparities. Near the row's end a
-  // disparity's costs run out before the vector does: the lanes past them read kNoCost, which
-  // never wins.
-  HWY_ALIGN std::uint16_t tail[HWY_MAX_BYTES / 2];
-  int r = 0;
-  for (; r + n <= width && r < width - d; r += n) {
+  for (int k = 0; k < count; ++k) detail::wta_left_range(cost + k * cost_stride, x, end, d + k, s);
+  // Right pixel r at disparity d + k is left pixel r + d + k. The right pixels whose left pixels
+  // at every disparity of the call lie in [begin, end) keep their state in registers over the
+  // disparities (a shifted load of each disparity's costs); those at either end of the range
+  // take the costs they have disparity by disparity.
+  const int main_begin = std::max(0, begin - d);
+  int r = main_begin;
+  for (; r + n <= end - d - count + 1; r += n) {
     auto best = hn::LoadU(du, s.best_right + r);
     auto disp = hn::LoadU(di, s.disp_right + r);
     VI dk = first;
     for (int k = 0; k < count; ++k) {
-      const int from = r + d + k;  // left pixel of lane 0
-      const int left = width - from;
-      if (left <= 0) break;
-      const std::uint16_t* c_at = cost + k * cost_stride + from;
-      if (left < n) {
-        std::copy(c_at, c_at + left, tail);
-        std::fill(tail + left, tail + n, kNoCost);
-        c_at = tail;
-      }
-      const auto c = hn::LoadU(du, c_at);
+      const auto c = hn::LoadU(du, cost + k * cost_stride + r + d + k);
       const auto better = hn::Lt(c, best);
       best = hn::IfThenElse(better, c, best);
       disp = hn::IfThenElse(hn::RebindMask(di, better), dk, disp);
@@ -985,26 +976,40 @@ void WtaUpdateRow(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int cou
     hn::StoreU(best, du, s.best_right + r);
     hn::StoreU(disp, di, s.disp_right + r);
   }
-  // Right pixels of a last partial vector.
-  for (; r < width - d; ++r) {
-    for (int k = 0; k < count && r + d + k < width; ++k) {
-      const std::uint16_t c = cost[k * cost_stride + r + d + k];
-      if (c < s.best_right[r]) {
-        s.best_right[r] = c;
-        s.disp_right[r] = static_cast<std::int16_t>(d + k);
+  const int main_end = r;
+  for (int k = 0; k < count; ++k) {
+    const int dk = d + k;
+    const std::uint16_t* ck = cost + k * cost_stride;
+    // Left pixels [x_begin, x_end) update right pixels x - dk.
+    const auto shifted = [&](int x_begin, int x_end) {
+      const auto vd = hn::Set(di, static_cast<std::int16_t>(dk));
+      int xl = x_begin;
+      for (; xl + n <= x_end; xl += n) {
+        const auto c = hn::LoadU(du, ck + xl);
+        const auto best = hn::LoadU(du, s.best_right + xl - dk);
+        const auto better = hn::Lt(c, best);
+        hn::StoreU(hn::IfThenElse(better, c, best), du, s.best_right + xl - dk);
+        hn::StoreU(
+            hn::IfThenElse(hn::RebindMask(di, better), vd, hn::LoadU(di, s.disp_right + xl - dk)),
+            di, s.disp_right + xl - dk);
       }
-    }
+      detail::wta_right_range(ck, xl, x_end, dk, s);
+    };
+    const int low = std::max(begin, dk);  // right pixels from 0 on
+    shifted(low, std::max(low, std::min(end, main_begin + dk)));
+    const int high = std::max(low, main_end + dk);
+    shifted(high, std::max(high, end));
   }
 }
 
-void WtaSkipRow(int count, int width, int d, const WtaRow& s) {
+void WtaSkipRange(int count, int begin, int end, int d, const WtaRow& s) {
   const hn::ScalableTag<std::uint16_t> du;
   const hn::RebindToSigned<decltype(du)> di;
   const int n = static_cast<int>(hn::Lanes(du));
   const auto no_cost = hn::Set(du, kNoCost);
   const auto winner_below = hn::Set(di, static_cast<std::int16_t>(d - 1));  // d == disp + 1
-  int x = 0;
-  for (; x + n <= width; x += n) {
+  int x = begin;
+  for (; x + n <= end; x += n) {
     const auto prev1 = hn::LoadU(du, s.prev1 + x);
     auto runmin = hn::Min(hn::LoadU(du, s.runmin + x), hn::LoadU(du, s.prev2 + x));
     if (count >= 2) runmin = hn::Min(runmin, prev1);
@@ -1014,7 +1019,7 @@ void WtaSkipRow(int count, int width, int d, const WtaRow& s) {
     hn::StoreU(count >= 2 ? no_cost : prev1, du, s.prev2 + x);
     hn::StoreU(no_cost, du, s.prev1 + x);
   }
-  for (; x < width; ++x)
+  for (; x < end; ++x)
     pixel::wta_skip(d, count, s.above[x], s.prev1[x], s.prev2[x], s.runmin[x], s.disp[x]);
 }
 
@@ -1088,7 +1093,7 @@ HWY_EXPORT(CrossArmsRow);
 HWY_EXPORT(GreyCrossArmsRow);
 HWY_EXPORT(MatchingCostRow);
 HWY_EXPORT(BlockMatchingCostRow);
-HWY_EXPORT(BlockMatchingCostSumsRow);
+HWY_EXPORT(BlockMatchingCostSumsRange);
 HWY_EXPORT(HorizontalSumsRow);
 HWY_EXPORT(AccumulateRow);
 HWY_EXPORT(VerticalSumsRow);
@@ -1100,8 +1105,8 @@ HWY_EXPORT(BlockVerticalSumsRow);
 HWY_EXPORT(BlocksToRows);
 HWY_EXPORT(BlockIndicatorRow);
 HWY_EXPORT(BlockVoteRow);
-HWY_EXPORT(WtaUpdateRow);
-HWY_EXPORT(WtaSkipRow);
+HWY_EXPORT(WtaUpdateRange);
+HWY_EXPORT(WtaSkipRange);
 HWY_EXPORT(DisparityValuesRow);
 HWY_EXPORT(LeftRightCheckRow);
 HWY_EXPORT(UniquenessCheckRow);
@@ -1140,7 +1145,11 @@ void block_matching_cost_row(const CostRow& row, const CostTableView& tables, in
 
 void block_matching_cost_sums_row(const CostRow& row, const CostTableView& tables, int d0,
                                   int count, std::uint32_t* prefix) {
-  HWY_DYNAMIC_DISPATCH(BlockMatchingCostSumsRow)(row, tables, d0, count, prefix);
+  HWY_DYNAMIC_DISPATCH(BlockMatchingCostSumsRange)(row, tables, d0, count, 0, row.width, prefix);
+}
+void block_matching_cost_sums_range(const CostRow& row, const CostTableView& tables, int d0,
+                                    int count, int begin, int end, std::uint32_t* prefix) {
+  HWY_DYNAMIC_DISPATCH(BlockMatchingCostSumsRange)(row, tables, d0, count, begin, end, prefix);
 }
 
 void block_window_sums_row(const std::uint32_t* prefix, const std::uint8_t* left,
@@ -1206,11 +1215,20 @@ void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* c
 
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row) {
-  HWY_DYNAMIC_DISPATCH(WtaUpdateRow)(cost, cost_stride, count, width, d, row);
+  HWY_DYNAMIC_DISPATCH(WtaUpdateRange)(cost, cost_stride, count, 0, width, d, row);
+}
+
+void wta_update_range(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int begin,
+                      int end, int d, const WtaRow& row) {
+  HWY_DYNAMIC_DISPATCH(WtaUpdateRange)(cost, cost_stride, count, begin, end, d, row);
 }
 
 void wta_skip_row(int count, int width, int d, const WtaRow& row) {
-  HWY_DYNAMIC_DISPATCH(WtaSkipRow)(count, width, d, row);
+  HWY_DYNAMIC_DISPATCH(WtaSkipRange)(count, 0, width, d, row);
+}
+
+void wta_skip_range(int count, int begin, int end, int d, const WtaRow& row) {
+  HWY_DYNAMIC_DISPATCH(WtaSkipRange)(count, begin, end, d, row);
 }
 
 void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel, float max_value,

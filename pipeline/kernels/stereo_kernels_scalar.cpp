@@ -64,11 +64,16 @@ void block_matching_cost_row(const CostRow& row, const CostTableView& tables, in
 
 void block_matching_cost_sums_row(const CostRow& row, const CostTableView& tables, int d0,
                                   int count, std::uint32_t* prefix) {
+  scalar::block_matching_cost_sums_range(row, tables, d0, count, 0, row.width, prefix);
+}
+
+void block_matching_cost_sums_range(const CostRow& row, const CostTableView& tables, int d0,
+                                    int count, int begin, int end, std::uint32_t* prefix) {
   // The costs one block further on, then summed in place along the row.
-  for (int x = 0; x < row.width; ++x)
+  for (int x = begin; x < end; ++x)
     detail::block_cost_range(row, tables, x, d0, count, 0, count, prefix + count);
-  for (int k = 0; k < count; ++k) prefix[k] = 0;
-  for (int x = 0; x < row.width; ++x)
+  for (int k = 0; k < count; ++k) prefix[begin * count + k] = 0;
+  for (int x = begin; x < end; ++x)
     for (int k = 0; k < count; ++k) prefix[(x + 1) * count + k] += prefix[x * count + k];
 }
 
@@ -136,15 +141,24 @@ void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* c
 
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row) {
+  scalar::wta_update_range(cost, cost_stride, count, 0, width, d, row);
+}
+
+void wta_update_range(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int begin,
+                      int end, int d, const WtaRow& row) {
   for (int k = 0; k < count; ++k) {
     const std::uint16_t* c = cost + k * cost_stride;
-    detail::wta_left_range(c, 0, width, d + k, row);
-    detail::wta_right_range(c, std::min(d + k, width), width, d + k, row);
+    detail::wta_left_range(c, begin, end, d + k, row);
+    detail::wta_right_range(c, std::min(std::max(d + k, begin), end), end, d + k, row);
   }
 }
 
 void wta_skip_row(int count, int width, int d, const WtaRow& row) {
-  for (int x = 0; x < width; ++x)
+  scalar::wta_skip_range(count, 0, width, d, row);
+}
+
+void wta_skip_range(int count, int begin, int end, int d, const WtaRow& row) {
+  for (int x = begin; x < end; ++x)
     pixel::wta_skip(d, count, row.above[x], row.prev1[x], row.prev2[x], row.runmin[x], row.disp[x]);
 }
 

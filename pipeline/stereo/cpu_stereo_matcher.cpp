@@ -81,6 +81,7 @@ class CpuStereoMatcher final : public StereoMatcher {
     timings_.arms_ms = t.lap_ms();
 
     const bool guided = guide_search();
+    timings_.guide_ms = t.since_lap_ms();
     timings_.searched_fraction = guided ? mask_.searched_fraction() : 1.0;
     wta_.reset(w_, h_);
     const MatchingImages images{packed_left_.cview(), packed_right_.cview(), census_left_.cview(),
@@ -121,7 +122,8 @@ class CpuStereoMatcher final : public StereoMatcher {
 
  private:
   // A pass at half the internal size (this stage again, on the internal images halved) that tells
-  // each internal row which disparity batches to search (search_guide.hpp). False: search them all.
+  // each tile of each internal row which disparity batches to search (search_guide.hpp). False:
+  // search them all.
   bool guide_search() {
     if (params_.search_range == "full") return false;
     // Up to four batches the half-size pass costs about what it saves (street scenes at
@@ -148,7 +150,7 @@ class CpuStereoMatcher final : public StereoMatcher {
     downsample_half(internal_left_, coarse_left_.view());
     downsample_half(internal_right_, coarse_right_.view());
     coarse_->compute(coarse_left_.cview(), coarse_right_.cview(), coarse_disparity_);
-    guide_batches(coarse_disparity_.cview(), h_, max_d_, GuideRule{DisparitySearch::kBatch},
+    guide_batches(coarse_disparity_.cview(), w_, h_, max_d_, GuideRule{DisparitySearch::kBatch},
                   guide_scratch_, mask_);
     return true;
   }

@@ -80,10 +80,16 @@ void BlockAggregator::prepare(const CrossArms& arms, int max_block) {
   const int h = arms.height();
   reach_up_ = 0;
   reach_down_ = 0;
+  reach_left_ = 0;
+  reach_right_ = 0;
+  const auto longest = [w](const std::uint8_t* row) {
+    return int(*std::max_element(row, row + w));
+  };
   for (int y = 0; y < h; ++y) {
-    reach_up_ = std::max(reach_up_, int(*std::max_element(arms.up.row(y), arms.up.row(y) + w)));
-    reach_down_ =
-        std::max(reach_down_, int(*std::max_element(arms.down.row(y), arms.down.row(y) + w)));
+    reach_up_ = std::max(reach_up_, longest(arms.up.row(y)));
+    reach_down_ = std::max(reach_down_, longest(arms.down.row(y)));
+    reach_left_ = std::max(reach_left_, longest(arms.left.row(y)));
+    reach_right_ = std::max(reach_right_, longest(arms.right.row(y)));
   }
   // Rows y - up - 1 .. y + down must be alive when row y is taken. The first resize takes room
   // for the longest arms the rule allows, so a frame whose arms reach further than the last does

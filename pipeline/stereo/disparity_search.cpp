@@ -1,20 +1,42 @@
 #include "dco/pipeline/stereo/disparity_search.hpp"
 
 #include <algorithm>
+#include <bit>
 
 #include "dco/core/error.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
 #include "dco/pipeline/row_team.hpp"
 
 namespace dco::stereo {
+namespace {
+
+// Calls f(x_begin, x_end, on) for the runs of tiles [t_begin, t_end) of a row's bits that all
+// search (on) or all do not, left to right, in columns clipped to the image's width.
+template <class F>
+void for_each_tile_run(std::uint64_t bits, int t_begin, int t_end, int tile_width, int width,
+                       F&& f) {
+  const auto column = [&](int t) {
+    return static_cast<int>(std::min<std::int64_t>(width, std::int64_t{t} * tile_width));
+  };
+  for (int t = t_begin; t < t_end;) {
+    const bool on = (bits >> t) & 1u;
+    int end = t + 1;
+    while (end < t_end && (((bits >> end) & 1u) != 0) == on) ++end;
+    if (column(t) < column(end)) f(column(t), column(end), on);
+    t = end;
+  }
+}
+
+}  // namespace
 
 void DisparitySearch::run(const MatchingImages& images, const CostTables& tables,
                           const SupportRegions& regions, int passes, int max_d, WinnerTakesAll& wta,
                           const BatchMask* mask, pipeline::RowTeam* team) {
-  if (mask != nullptr &&
-      (mask->height() != images.left.height || mask->batches() * kBatch <= max_d))
-    throw Error("disparity search: the batch mask does not cover the image rows and disparities");
+  const int w = images.left.width;
   const int h = images.left.height;
+  if (mask != nullptr && (mask->height() != h || mask->batches() * kBatch <= max_d ||
+                          static_cast<std::int64_t>(mask->tiles()) * mask->tile_width() < w))
+    throw Error("disparity search: the batch mask does not cover the image and disparities");
   if (passes == 1) {
     const int parts = team != nullptr ? team->threads() : 1;
     if (bands_.size() < static_cast<std::size_t>(parts))
@@ -29,8 +51,9 @@ void DisparitySearch::run(const MatchingImages& images, const CostTables& tables
       band(0, 0, h);
     return;
   }
-  slice_.resize(images.left.width, h);
-  scratch_.resize(images.left.width, h);
+  slice_.resize(w, h);
+  scratch_.resize(w, h);
+  narrowed_.resize(static_cast<std::size_t>(w));
   for (int d = 0; d <= max_d; ++d) {
     const int batch = d / kBatch;
     if (mask != nullptr) {
@@ -49,10 +72,15 @@ void DisparitySearch::run(const MatchingImages& images, const CostTables& tables
       continue;
     }
     for (int y = 0; y < h; ++y) {
-      if (mask->searches(y, batch))
-        wta.update_slice_row(slice_.row(y), y, d);
-      else
-        wta.skip_row(y, d, 1);
+      const std::uint32_t* costs = slice_.row(y);
+      std::copy(costs, costs + w, narrowed_.begin());
+      for_each_tile_run(mask->tile_bits(y, batch), 0, mask->tiles(), mask->tile_width(), w,
+                        [&](int x0, int x1, bool on) {
+                          if (on)
+                            wta.update_columns(narrowed_.data(), 0, 1, y, d, x0, x1);
+                          else
+                            wta.skip_columns(y, d, 1, x0, x1);
+                        });
     }
   }
 }
@@ -65,55 +93,121 @@ void DisparitySearch::search_band(const MatchingImages& images, const CostTables
   BlockAggregator& aggregator = band.aggregator;
   aggregator.prepare(regions.arms(), kBatch);
   band.lines.resize(w, kBatch);
+  band.covered.resize(static_cast<std::size_t>(y_end - y_begin));
+  // A tile has at most one run of rows per two rows: reserved once, so no frame allocates.
+  const std::size_t runs = static_cast<std::size_t>(y_end - y_begin) / 2 + 1;
+  band.open.reserve(runs);
+  band.next_open.reserve(runs);
   const kernels::CostTableView wide = tables.wide();
   const ImageView<const std::uint32_t> recip = regions.reciprocals(PassOrder::kHorizontalFirst);
-  // Rows closer than this are searched in one run: the rows between cost no more than the
-  // second run's own start-up rows would.
-  const int join_gap = aggregator.reach_up() + aggregator.reach_down();
+  // Rows of one tile closer than this are searched in one run: the rows between cost no more
+  // than the second run's own start-up rows would.
+  const int join_rows = aggregator.reach_up() + aggregator.reach_down();
+  const int tiles = mask != nullptr ? mask->tiles() : 1;
+  const int tile_width = mask != nullptr ? mask->tile_width() : w;
+  const std::uint64_t all_tiles = tiles == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << tiles) - 1;
+  const auto column = [&](int t) {
+    return static_cast<int>(std::min<std::int64_t>(w, std::int64_t{t} * tile_width));
+  };
+  band.windows.reserve(static_cast<std::size_t>(tiles) * runs);
   for (int d0 = 0; d0 <= max_d; d0 += kBatch) {
     // Always whole batches, so the kernels run on whole vectors; disparities past max_d are
     // aggregated but never reach the winner-takes-all state.
     const int count = std::min(kBatch, max_d - d0 + 1);
     const int batch = d0 / kBatch;
-    const auto searched = [&](int y) { return mask == nullptr || mask->searches(y, batch); };
-    const auto cost_sums = [&](int y, std::uint32_t* prefix) {
+    const auto tile_bits = [&](int y) {
+      return mask != nullptr ? mask->tile_bits(y, batch) : all_tiles;
+    };
+    // Windows of rows and tiles: each tile's runs of searched rows, joined across short gaps,
+    // a run shared by neighbouring tiles in one window. Made tile by tile, so any row meets its
+    // windows left to right, as the right image's state needs.
+    std::vector<Window>& windows = band.windows;
+    std::vector<int>& open = band.open;
+    std::vector<int>& next_open = band.next_open;
+    windows.clear();
+    open.clear();
+    for (int t = 0; t < tiles; ++t) {
+      next_open.clear();
+      int y = y_begin;
+      while (y < y_end) {
+        if (((tile_bits(y) >> t) & 1u) == 0) {
+          ++y;
+          continue;
+        }
+        int end = y + 1;
+        for (int gap = 0; end + gap < y_end && gap <= join_rows;) {
+          if (((tile_bits(end + gap) >> t) & 1u) != 0) {
+            end += gap + 1;
+            gap = 0;
+          } else {
+            ++gap;
+          }
+        }
+        int found = -1;
+        for (const int i : open)
+          if (windows[i].y_begin == y && windows[i].y_end == end) found = i;
+        if (found >= 0) {
+          windows[found].t_end = t + 1;
+        } else {
+          found = static_cast<int>(windows.size());
+          windows.push_back({y, end, t, t + 1});
+        }
+        next_open.push_back(found);
+        y = end;
+      }
+      open.swap(next_open);
+    }
+    const auto cost_sums = [&](int y, std::uint32_t* prefix, int x_begin, int x_end) {
       const kernels::CostRow row{images.left.row(y),         images.right.row(y),
                                  images.census_left.row(y),  images.census_right.row(y),
                                  images.shortest_arm.row(y), w};
-      kernels::block_matching_cost_sums_row(row, wide, d0, kBatch, prefix);
+      kernels::block_matching_cost_sums_range(row, wide, d0, kBatch, x_begin, x_end, prefix);
     };
-    // Each row's region means go straight into the winner-takes-all state.
-    const auto select = [&](int y, std::uint32_t* means) {
-      if (!searched(y)) {
-        wta.skip_row(y, d0, count);
-        return;
-      }
-      kernels::blocks_to_rows(means, w, kBatch, count, band.lines.data(), band.lines.stride());
-      wta.update_row(band.lines.row(0), band.lines.stride(), count, y, d0);
-    };
-    if (mask == nullptr) {
-      aggregator.run_rows<true>(kBatch, y_begin, y_end, cost_sums, select, recip);
-      continue;
-    }
-    // Runs of searched rows, joined across short gaps; rows outside every run skip the batch.
-    int y = y_begin;
-    while (y < y_end) {
-      if (!searched(y)) {
-        wta.skip_row(y, d0, count);
-        ++y;
-        continue;
-      }
-      int end = y + 1;
-      for (int gap = 0; end + gap < y_end && gap <= join_gap;) {
-        if (searched(end + gap)) {
-          end += gap + 1;
-          gap = 0;
-        } else {
-          ++gap;
+    std::fill(band.covered.begin(), band.covered.end(), 0);
+    for (const Window& window : windows) {
+      const int x_begin = column(window.t_begin);
+      const int x_end = column(window.t_end);
+      // Each row's region means go straight into the winner-takes-all state; its tiles that do
+      // not search the batch take kNoCost, which leaves the batch out.
+      const auto select = [&](int y, std::uint32_t* means) {
+        const std::uint64_t bits = tile_bits(y);
+        for (int t = window.t_begin; t < window.t_end;) {
+          const bool on = (bits >> t) & 1u;
+          int t_end = t + 1;
+          while (t_end < window.t_end && (((bits >> t_end) & 1u) != 0) == on) ++t_end;
+          const int x0 = column(t), x1 = column(t_end);
+          if (on) {
+            kernels::blocks_to_rows(means + static_cast<std::ptrdiff_t>(x0) * kBatch, x1 - x0,
+                                    kBatch, count, band.lines.data() + x0, band.lines.stride());
+          } else {
+            for (int k = 0; k < count; ++k)
+              std::fill(band.lines.row(k) + x0, band.lines.row(k) + x1, WinnerTakesAll::kNoCost);
+          }
+          t = t_end;
         }
+        wta.update_columns(band.lines.row(0), band.lines.stride(), count, y, d0, x_begin, x_end);
+      };
+      aggregator.run_window(kBatch, window.y_begin, window.y_end, x_begin, x_end, cost_sums, select,
+                            recip);
+      const std::uint64_t window_tiles =
+          (window.t_end == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << window.t_end) - 1) &
+          ~((std::uint64_t{1} << window.t_begin) - 1);
+      for (int y = window.y_begin; y < window.y_end; ++y)
+        band.covered[static_cast<std::size_t>(y - y_begin)] |= window_tiles;
+    }
+    // Every tile of a row outside its windows leaves the batch out.
+    for (int y = y_begin; y < y_end; ++y) {
+      const std::uint64_t rest = all_tiles & ~band.covered[static_cast<std::size_t>(y - y_begin)];
+      for (int t = 0; t < tiles;) {
+        if (((rest >> t) & 1u) == 0) {
+          ++t;
+          continue;
+        }
+        int t_end = t + 1;
+        while (t_end < tiles && ((rest >> t_end) & 1u) != 0) ++t_end;
+        wta.skip_columns(y, d0, count, column(t), column(t_end));
+        t = t_end;
       }
-      aggregator.run_rows<true>(kBatch, y, end, cost_sums, select, recip);
-      y = end;
     }
   }
 }

@@ -39,22 +39,28 @@ void WinnerTakesAll::update_slice_row(const std::uint32_t* costs, int y, int d) 
 
 void WinnerTakesAll::update_row(const std::uint16_t* costs, std::ptrdiff_t stride, int count, int y,
                                 int d) {
+  update_columns(costs, stride, count, y, d, 0, best_.width());
+}
+
+void WinnerTakesAll::update_columns(const std::uint16_t* costs, std::ptrdiff_t stride, int count,
+                                    int y, int d, int begin, int end) {
   static_assert(kNoCost == kernels::kNoCost);
-  const int w = best_.width();
-  for (int k = 0; k < count; ++k)
-    assert(std::all_of(costs + k * stride, costs + k * stride + w,
-                       [](std::uint16_t c) { return c < kNoCost; }));
-  const kernels::WtaRow row{best_.row(y),       second_.row(y),    below_.row(y),  above_.row(y),
-                            prev1_.row(y),      prev2_.row(y),     runmin_.row(y), disp_.row(y),
-                            best_right_.row(y), disp_right_.row(y)};
-  kernels::wta_update_row(costs, stride, count, w, d, row);
+  assert(0 <= begin && begin <= end && end <= best_.width());
+  kernels::wta_update_range(costs, stride, count, begin, end, d, state_row(y));
 }
 
 void WinnerTakesAll::skip_row(int y, int d, int count) {
-  const kernels::WtaRow row{best_.row(y),       second_.row(y),    below_.row(y),  above_.row(y),
-                            prev1_.row(y),      prev2_.row(y),     runmin_.row(y), disp_.row(y),
-                            best_right_.row(y), disp_right_.row(y)};
-  kernels::wta_skip_row(count, best_.width(), d, row);
+  skip_columns(y, d, count, 0, best_.width());
+}
+
+void WinnerTakesAll::skip_columns(int y, int d, int count, int begin, int end) {
+  assert(0 <= begin && begin <= end && end <= best_.width());
+  kernels::wta_skip_range(count, begin, end, d, state_row(y));
+}
+
+kernels::WtaRow WinnerTakesAll::state_row(int y) {
+  return {best_.row(y),  second_.row(y), below_.row(y), above_.row(y),      prev1_.row(y),
+          prev2_.row(y), runmin_.row(y), disp_.row(y),  best_right_.row(y), disp_right_.row(y)};
 }
 
 struct SpeckleFilter::Buffer {

@@ -1,8 +1,10 @@
 #include "dco/pipeline/stereo/search_guide.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
-#include <numeric>
+#include <limits>
+#include <string>
 
 #include "dco/core/error.hpp"
 
@@ -11,57 +13,133 @@ namespace dco::stereo {
 void BatchMask::reset(int height, int batches, bool all) {
   height_ = height;
   batches_ = batches;
-  bits_.assign(static_cast<std::size_t>(height) * static_cast<std::size_t>(batches), all ? 1 : 0);
+  width_ = 0;
+  tiles_ = 1;
+  tile_width_ = std::numeric_limits<int>::max() / 2;
+  all_tiles_ = 1;
+  bits_.assign(static_cast<std::size_t>(height) * static_cast<std::size_t>(batches),
+               all ? all_tiles_ : 0);
+}
+
+void BatchMask::reset(int height, int batches, bool all, int width, int tile_width) {
+  if (width <= 0 || tile_width <= 0 || (width + tile_width - 1) / tile_width > kMaxTiles)
+    throw Error("batch mask: " + std::to_string(width) + " columns need tiles of at least " +
+                std::to_string((width + kMaxTiles - 1) / kMaxTiles) + " columns");
+  height_ = height;
+  batches_ = batches;
+  width_ = width;
+  tile_width_ = tile_width;
+  tiles_ = (width + tile_width - 1) / tile_width;
+  all_tiles_ = tiles_ == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << tiles_) - 1;
+  bits_.assign(static_cast<std::size_t>(height) * static_cast<std::size_t>(batches),
+               all ? all_tiles_ : 0);
 }
 
 double BatchMask::searched_fraction() const {
   if (bits_.empty()) return 0;
-  const auto on = std::accumulate(bits_.begin(), bits_.end(), std::size_t{0});
-  return static_cast<double>(on) / static_cast<double>(bits_.size());
+  if (width_ == 0) {
+    const auto on = std::count_if(bits_.begin(), bits_.end(), [](std::uint64_t b) { return b; });
+    return static_cast<double>(on) / static_cast<double>(bits_.size());
+  }
+  // Every tile but the last is tile_width columns wide.
+  const std::uint64_t last = std::uint64_t{1} << (tiles_ - 1);
+  const int last_width = width_ - (tiles_ - 1) * tile_width_;
+  double columns = 0;
+  for (const std::uint64_t b : bits_)
+    columns += static_cast<double>(std::popcount(b & ~last)) * tile_width_ +
+               ((b & last) != 0 ? last_width : 0);
+  return columns / (static_cast<double>(width_) * static_cast<double>(bits_.size()));
 }
 
-void guide_batches(ImageView<const float> coarse, int height, int max_d, const GuideRule& rule,
-                   GuideScratch& scratch, BatchMask& mask) {
-  if (coarse.empty() || height <= 0 || max_d < 0 || rule.batch <= 0 || rule.margin < 0 ||
-      rule.reach < 0)
+void guide_batches(ImageView<const float> coarse, int width, int height, int max_d,
+                   const GuideRule& rule, GuideScratch& scratch, BatchMask& mask) {
+  if (coarse.empty() || width <= 0 || height <= 0 || max_d < 0 || rule.batch <= 0 ||
+      rule.margin < 0 || rule.reach < 0 || rule.tile <= 0 || rule.tile_margin < 0)
     throw Error("search guide: empty coarse map or bad rule");
   const int batches = max_d / rule.batch + 1;
+  const int tile = std::max(rule.tile, (width + BatchMask::kMaxTiles - 1) / BatchMask::kMaxTiles);
+  const int tiles = (width + tile - 1) / tile;
+  const int cw = coarse.width;
   const int ch = coarse.height;
-  // Per coarse row: which batches its values reach, and how many values it has; as running sums
-  // over the rows, so each internal row's window is two lookups.
-  std::vector<int>& reached = scratch.reached;
-  std::vector<int>& valid = scratch.valid;
-  std::vector<std::uint8_t>& row_bits = scratch.row_bits;
-  reached.assign(static_cast<std::size_t>(batches) * (ch + 1), 0);
-  valid.assign(static_cast<std::size_t>(ch) + 1, 0);
-  row_bits.resize(static_cast<std::size_t>(batches));
+  const auto tile_columns = [&](int t) {  // coarse columns [first, second) a tile takes in
+    const int begin = std::max(0, t * tile - rule.tile_margin) / 2;
+    const int end = std::min(cw, ((t + 1) * tile + rule.tile_margin + 1) / 2);
+    return std::pair{begin, std::max(begin, end)};
+  };
+  // Per coarse row, per tile and for the whole row: which batches its values reach and how many
+  // values it has; as running sums over the rows, so each internal row's window is two lookups.
+  const std::size_t rows = static_cast<std::size_t>(ch) + 1;
+  std::vector<int>& reached = scratch.reached;  // [(tile * batches + b) * rows + cy]
+  std::vector<int>& valid = scratch.valid;      // [tile * rows + cy]
+  std::vector<int>& row_reached = scratch.row_reached;
+  std::vector<int>& row_valid = scratch.row_valid;
+  std::vector<std::uint8_t>& bits = scratch.bits;  // this coarse row: [(tile + 1) * batches + b]
+  reached.assign(static_cast<std::size_t>(tiles) * batches * rows, 0);
+  valid.assign(static_cast<std::size_t>(tiles) * rows, 0);
+  row_reached.assign(static_cast<std::size_t>(batches) * rows, 0);
+  row_valid.assign(rows, 0);
+  bits.resize(static_cast<std::size_t>(tiles + 1) * batches);
   for (int cy = 0; cy < ch; ++cy) {
-    std::fill(row_bits.begin(), row_bits.end(), 0);
-    int count = 0;
+    std::fill(bits.begin(), bits.end(), 0);
     const float* v = coarse.row(cy);
-    for (int x = 0; x < coarse.width; ++x) {
-      if (!std::isfinite(v[x]) || v[x] < 0) continue;
-      ++count;
+    // The batches of column x's value, or none.
+    const auto batch_range = [&](int x) {
+      if (!std::isfinite(v[x]) || v[x] < 0) return std::pair{1, 0};
       const int lo = std::clamp(static_cast<int>(std::floor(2.0f * v[x])) - rule.margin, 0, max_d);
       const int hi = std::clamp(static_cast<int>(std::ceil(2.0f * v[x])) + rule.margin, 0, max_d);
-      for (int b = lo / rule.batch; b <= hi / rule.batch; ++b) row_bits[b] = 1;
+      return std::pair{lo / rule.batch, hi / rule.batch};
+    };
+    int row_count = 0;
+    std::uint8_t* row_bits = bits.data() + static_cast<std::size_t>(tiles) * batches;
+    for (int x = 0; x < cw; ++x) {
+      const auto [lo, hi] = batch_range(x);
+      row_count += lo <= hi;
+      for (int b = lo; b <= hi; ++b) row_bits[b] = 1;
     }
-    valid[cy + 1] = valid[cy] + count;
-    for (int b = 0; b < batches; ++b)
-      reached[static_cast<std::size_t>(b) * (ch + 1) + cy + 1] =
-          reached[static_cast<std::size_t>(b) * (ch + 1) + cy] + row_bits[b];
+    row_valid[cy + 1] = row_valid[cy] + row_count;
+    for (int b = 0; b < batches; ++b) {
+      const std::size_t at = static_cast<std::size_t>(b) * rows + cy;
+      row_reached[at + 1] = row_reached[at] + row_bits[b];
+    }
+    for (int t = 0; t < tiles; ++t) {
+      std::uint8_t* tile_bits = bits.data() + static_cast<std::size_t>(t) * batches;
+      int count = 0;
+      const auto [begin, end] = tile_columns(t);
+      for (int x = begin; x < end; ++x) {
+        const auto [lo, hi] = batch_range(x);
+        count += lo <= hi;
+        for (int b = lo; b <= hi; ++b) tile_bits[b] = 1;
+      }
+      const std::size_t vat = static_cast<std::size_t>(t) * rows + cy;
+      valid[vat + 1] = valid[vat] + count;
+      for (int b = 0; b < batches; ++b) {
+        const std::size_t at = (static_cast<std::size_t>(t) * batches + b) * rows + cy;
+        reached[at + 1] = reached[at] + tile_bits[b];
+      }
+    }
   }
-  mask.reset(height, batches, false);
+  mask.reset(height, batches, false, width, tile);
   const int coarse_reach = (rule.reach + 1) / 2;
   for (int y = 0; y < height; ++y) {
     const int centre = std::min(y / 2, ch - 1);
     const int top = std::max(0, centre - coarse_reach);
     const int bottom = std::min(ch, centre + coarse_reach + 1);  // coarse rows [top, bottom)
-    const double needed = rule.min_valid * (bottom - top) * coarse.width;
-    const bool all = valid[bottom] - valid[top] < needed;
+    const auto window = [&](const std::vector<int>& sums, std::size_t base) {
+      return sums[base + bottom] - sums[base + top];
+    };
+    const bool row_all = window(row_valid, 0) < rule.min_valid * (bottom - top) * cw;
     for (int b = 0; b < batches; ++b) {
-      const std::size_t base = static_cast<std::size_t>(b) * (ch + 1);
-      if (all || reached[base + bottom] > reached[base + top]) mask.set(y, b);
+      const bool row_searches =
+          row_all || window(row_reached, static_cast<std::size_t>(b) * rows) > 0;
+      for (int t = 0; t < tiles; ++t) {
+        const auto [begin, end] = tile_columns(t);
+        const bool few = end == begin || window(valid, static_cast<std::size_t>(t) * rows) <
+                                             rule.tile_min_valid * (bottom - top) * (end - begin);
+        const bool on =
+            few ? row_searches
+                : window(reached, (static_cast<std::size_t>(t) * batches + b) * rows) > 0;
+        if (on) mask.set(y, t, b);
+      }
     }
   }
 }

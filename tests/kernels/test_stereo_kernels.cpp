@@ -3,6 +3,7 @@
 #include "for_each_target.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -280,6 +281,17 @@ TEST(StereoKernels, BlockMatchingCostMatchesTheRowKernel) {
           std::vector<std::uint32_t> reference_sums(sums.size(), 7);
           scalar::block_matching_cost_sums_row(row, tables.view, d0, count, reference_sums.data());
           ASSERT_EQ(reference_sums, sums);
+          // Pixels [begin, end) only: sums starting over at begin, nothing written elsewhere.
+          const int begin = w / 3, end = w - w / 4;
+          std::vector<std::uint32_t> range_sums(sums.size(), 7);
+          for (int k = 0; k < count; ++k) range_sums[begin * count + k] = 0;
+          for (int x = begin; x < end; ++x)
+            for (int k = 0; k < count; ++k)
+              range_sums[(x + 1) * count + k] = range_sums[x * count + k] + expected[x * count + k];
+          std::vector<std::uint32_t> reference_range(sums.size(), 7);
+          scalar::block_matching_cost_sums_range(row, tables.view, d0, count, begin, end,
+                                                 reference_range.data());
+          ASSERT_EQ(reference_range, range_sums);
           for_each_target([&] {
             std::vector<std::uint32_t> out(expected.size(), 1);
             block_matching_cost_row(row, tables.view, d0, count, out.data());
@@ -289,6 +301,11 @@ TEST(StereoKernels, BlockMatchingCostMatchesTheRowKernel) {
             block_matching_cost_sums_row(row, tables.view, d0, count, out_sums.data());
             ASSERT_EQ(out_sums, sums)
                 << "channels " << channels << " width " << w << " d0 " << d0 << " count " << count;
+            std::vector<std::uint32_t> out_range(sums.size(), 7);
+            block_matching_cost_sums_range(row, tables.view, d0, count, begin, end,
+                                           out_range.data());
+            ASSERT_EQ(out_range, range_sums) << "range, channels " << channels << " width " << w
+                                             << " d0 " << d0 << " count " << count;
           });
         }
       }
@@ -762,6 +779,69 @@ TEST(StereoKernels, WinnerTakesAllSkippingBatchesMatchesScalar) {
           else
             wta_skip_row(count, w, d, state.row());
         }
+        ASSERT_TRUE(state == expected) << "width " << w << " batch " << batch;
+      });
+    }
+  }
+}
+
+// Column ranges of a row (a windowed search): each range's columns take their costs or skip,
+// kNoCost among the costs leaves that disparity out, and the right image's state takes in only
+// the costs of the columns updated. The same as the whole row with kNoCost for every cost left
+// out, vector or scalar.
+TEST(StereoKernels, WinnerTakesAllOverColumnRangesEqualsTheRowWithCostsLeftOut) {
+  std::mt19937 rng(37);
+  for (const int w : kWidths) {
+    const int disparities = std::min(w, 48);
+    const std::ptrdiff_t stride = w;
+    std::vector<std::uint16_t> volume(static_cast<std::size_t>(stride * disparities));
+    for (auto& c : volume) c = static_cast<std::uint16_t>(rng() % 9);
+    for (const int batch : {1, 5, 16}) {
+      // Per batch three ranges (cuts at random columns): updated, skipped or updated with some
+      // costs kNoCost.
+      std::vector<std::array<int, 4>> cuts;
+      std::vector<std::array<int, 3>> kinds;
+      for (int d = 0; d < disparities; d += batch) {
+        std::array<int, 4> c{0, static_cast<int>(rng() % (w + 1)),
+                             static_cast<int>(rng() % (w + 1)), w};
+        std::sort(c.begin(), c.end());
+        cuts.push_back(c);
+        kinds.push_back({static_cast<int>(rng() % 3), static_cast<int>(rng() % 3),
+                         static_cast<int>(rng() % 3)});
+      }
+      // The costs as the ranged calls see them: kNoCost where a range leaves them out.
+      std::vector<std::uint16_t> left_out = volume;
+      for (int d = 0, i = 0; d < disparities; d += batch, ++i)
+        for (int r = 0; r < 3; ++r)
+          for (int k = d; k < std::min(d + batch, disparities); ++k)
+            for (int x = cuts[i][r]; x < cuts[i][r + 1]; ++x) {
+              if (kinds[i][r] == 1 || (kinds[i][r] == 2 && (x + k) % 3 == 0))
+                left_out[k * stride + x] = kNoCost;
+            }
+      WtaState expected(w);
+      for (int d = 0; d < disparities; d += batch)
+        scalar::wta_update_row(left_out.data() + d * stride, stride,
+                               std::min(batch, disparities - d), w, d, expected.row());
+      const auto ranged = [&](auto update, auto skip) {
+        WtaState state(w);
+        for (int d = 0, i = 0; d < disparities; d += batch, ++i) {
+          const int count = std::min(batch, disparities - d);
+          for (int r = 0; r < 3; ++r) {
+            const int begin = cuts[i][r], end = cuts[i][r + 1];
+            if (kinds[i][r] == 1)
+              skip(count, begin, end, d, state.row());
+            else
+              update(left_out.data() + d * stride, stride, count, begin, end, d, state.row());
+          }
+        }
+        return state;
+      };
+      const WtaState reference = ranged([](auto... a) { scalar::wta_update_range(a...); },
+                                        [](auto... a) { scalar::wta_skip_range(a...); });
+      ASSERT_TRUE(reference == expected) << "scalar, width " << w << " batch " << batch;
+      for_each_target([&] {
+        const WtaState state = ranged([](auto... a) { wta_update_range(a...); },
+                                      [](auto... a) { wta_skip_range(a...); });
         ASSERT_TRUE(state == expected) << "width " << w << " batch " << batch;
       });
     }

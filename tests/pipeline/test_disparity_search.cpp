@@ -32,7 +32,9 @@ struct Pair {
   Image<std::uint8_t> shortest;
   CostTables tables;
 
-  Pair(int w, int h, int channels, int arm_max, unsigned seed) {
+  // flat: both images one grey level, so every disparity of a pixel costs the same and every
+  // choice between them falls to the order the search takes them in.
+  Pair(int w, int h, int channels, int arm_max, unsigned seed, bool flat = false) {
     std::mt19937 rng(seed);
     left.resize(w, h, channels);
     right.resize(w, h, channels);
@@ -40,14 +42,17 @@ struct Pair {
       for (int x = 0; x < w; ++x)
         for (int c = 0; c < channels; ++c) {
           const int patch = ((x / 5) * 7 + (y / 3) * 13 + c * 29) % 256;
-          left.at(x, y, c) = static_cast<std::uint8_t>(patch + static_cast<int>(rng() % 4));
+          left.at(x, y, c) =
+              static_cast<std::uint8_t>(flat ? 100 : patch + static_cast<int>(rng() % 4));
         }
     constexpr int kShift = 3;
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x)
         for (int c = 0; c < channels; ++c)
-          right.at(x, y, c) = static_cast<std::uint8_t>(std::min(
-              255, left.at(std::min(x + kShift, w - 1), y, c) + static_cast<int>(rng() % 3)));
+          right.at(x, y, c) = static_cast<std::uint8_t>(
+              flat ? 100
+                   : std::min(255, left.at(std::min(x + kShift, w - 1), y, c) +
+                                       static_cast<int>(rng() % 3)));
     gray_left.resize(w, h);
     gray_right.resize(w, h);
     packed_left.resize(w, h);
@@ -210,10 +215,28 @@ BatchMask random_mask(int height, int batches, unsigned seed) {
   return mask;
 }
 
+// The same per tile of `tile_width` columns: each tile's rows search random runs of batches.
+BatchMask random_tiled_mask(int height, int batches, int width, int tile_width, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> length(1, 20), coin(0, 1);
+  BatchMask mask;
+  mask.reset(height, batches, false, width, tile_width);
+  for (int b = 0; b < batches; ++b)
+    for (int t = 0; t < mask.tiles(); ++t)
+      for (int y = 0; y < height;) {
+        const int n = length(rng);
+        const bool on = coin(rng) != 0;
+        for (int k = 0; k < n && y < height; ++k, ++y)
+          if (on) mask.set(y, t, b);
+      }
+  return mask;
+}
+
 TEST(DisparitySearch, WithABatchMaskEqualsTheFullSearchWithTheOtherBatchesLeftOut) {
-  for (const int passes : {1, 2}) {
+  for (const auto& [passes, flat] :
+       {std::pair{1, false}, std::pair{2, false}, std::pair{1, true}}) {
     const int w = 52, h = 61;
-    const Pair p(w, h, 3, 7, 11u);
+    const Pair p(w, h, 3, 7, 11u, flat);
     AggregationScratch scratch;
     SupportRegions regions;
     regions.build(p.arms, scratch);
@@ -222,26 +245,34 @@ TEST(DisparitySearch, WithABatchMaskEqualsTheFullSearchWithTheOtherBatchesLeftOu
     BatchMask all, none;
     all.reset(h, batches, true);
     none.reset(h, batches, false);
-    for (const auto& [name, mask] : {std::pair{"random 1", random_mask(h, batches, 1)},
-                                     std::pair{"random 2", random_mask(h, batches, 2)},
-                                     std::pair{"all", all}, std::pair{"none", none}}) {
+    // Tiles of 5 columns (narrower than the arms), of 13, and of 13 with the last one short.
+    for (const auto& [name, mask] :
+         {std::pair{"random 1", random_mask(h, batches, 1)},
+          std::pair{"random 2", random_mask(h, batches, 2)}, std::pair{"all", all},
+          std::pair{"none", none}, std::pair{"tiles of 5", random_tiled_mask(h, batches, w, 5, 4)},
+          std::pair{"tiles of 13", random_tiled_mask(h, batches, w, 13, 5)},
+          std::pair{"tiles of 26", random_tiled_mask(h, batches, w, 26, 6)}}) {
+      // The full search's costs, kNoCost where the pixel's tile does not search the batch.
       WinnerTakesAll expected;
       expected.reset(w, h);
       Image<std::uint32_t> slice(w, h);
+      std::vector<std::uint16_t> costs(static_cast<std::size_t>(w));
       for (int d = 0; d <= max_d; ++d) {
         reference_slice(p, passes, d, slice.view());
         for (int y = 0; y < h; ++y) {
-          if (mask.searches(y, d / DisparitySearch::kBatch))
-            expected.update_slice_row(slice.row(y), y, d);
-          else
-            expected.skip_row(y, d, 1);
+          for (int x = 0; x < w; ++x)
+            costs[x] = mask.searches(y, x / mask.tile_width(), d / DisparitySearch::kBatch)
+                           ? static_cast<std::uint16_t>(slice.at(x, y))
+                           : WinnerTakesAll::kNoCost;
+          expected.update_row(costs.data(), 0, 1, y, d);
         }
       }
       WinnerTakesAll wta;
       wta.reset(w, h);
       DisparitySearch search;
       search.run(p.images(), p.tables, regions, passes, max_d, wta, &mask);
-      SCOPED_TRACE(testing::Message() << "passes " << passes << ", mask " << name);
+      SCOPED_TRACE(testing::Message()
+                   << "passes " << passes << (flat ? ", flat" : "") << ", mask " << name);
       expect_same_state(wta, expected);
       if (std::string_view(name) == "all") {
         WinnerTakesAll unmasked;
@@ -265,7 +296,8 @@ TEST(DisparitySearch, BandsOfATeamGiveTheSearchOfOneThread) {
   const int max_d = 40;
   const int batches = max_d / DisparitySearch::kBatch + 1;
   const BatchMask mask = random_mask(h, batches, 3);
-  for (const BatchMask* m : {static_cast<const BatchMask*>(nullptr), &mask}) {
+  const BatchMask tiled = random_tiled_mask(h, batches, w, 12, 7);
+  for (const BatchMask* m : {static_cast<const BatchMask*>(nullptr), &mask, &tiled}) {
     WinnerTakesAll expected;
     expected.reset(w, h);
     DisparitySearch one;
@@ -293,11 +325,13 @@ TEST(DisparitySearch, RejectsAMaskThatDoesNotCoverTheSearch) {
   WinnerTakesAll wta;
   wta.reset(20, 9);
   DisparitySearch search;
-  BatchMask short_rows, few_batches;
+  BatchMask short_rows, few_batches, narrow;
   short_rows.reset(8, 2, true);
   few_batches.reset(9, 1, true);
+  narrow.reset(9, 2, true, 16, 4);  // 16 of the 20 columns
   EXPECT_THROW(search.run(p.images(), p.tables, regions, 1, 17, wta, &short_rows), Error);
   EXPECT_THROW(search.run(p.images(), p.tables, regions, 1, 17, wta, &few_batches), Error);
+  EXPECT_THROW(search.run(p.images(), p.tables, regions, 1, 17, wta, &narrow), Error);
   EXPECT_NO_THROW(search.run(p.images(), p.tables, regions, 1, 15, wta, &few_batches));
 }
 

@@ -30,7 +30,7 @@ TEST(SearchGuide, EachRowSearchesTheBatchesNearItsCoarseValues) {
   rule.reach = 2;  // one coarse row
   GuideScratch scratch;
   BatchMask mask;
-  guide_batches(coarse.cview(), 40, 100, rule, scratch, mask);
+  guide_batches(coarse.cview(), 20, 40, 100, rule, scratch, mask);
   ASSERT_EQ(mask.height(), 40);
   ASSERT_EQ(mask.batches(), 7);  // 0..100 in batches of 16
   // Internal row 4 (coarse row 2): 17..23, batch 1 only.
@@ -49,7 +49,7 @@ TEST(SearchGuide, AMarginAcrossABatchEdgeTakesBothBatches) {
   rule.margin = 1;
   GuideScratch scratch;
   BatchMask mask;
-  guide_batches(coarse.cview(), 8, 40, rule, scratch, mask);
+  guide_batches(coarse.cview(), 20, 8, 40, rule, scratch, mask);
   for (int y = 0; y < 8; ++y)
     for (int b = 0; b < 3; ++b) EXPECT_EQ(mask.searches(y, b), b <= 1) << y << "," << b;
 }
@@ -66,7 +66,7 @@ TEST(SearchGuide, RowsWithTooFewCoarseValuesSearchEverything) {
   rule.min_valid = 0.2;
   GuideScratch scratch;
   BatchMask mask;
-  guide_batches(coarse.cview(), 48, 60, rule, scratch, mask);
+  guide_batches(coarse.cview(), 20, 48, 60, rule, scratch, mask);
   for (int b = 0; b < 4; ++b) {
     EXPECT_TRUE(mask.searches(2, b));              // coarse row 1: nothing
     EXPECT_TRUE(mask.searches(14, b));             // coarse row 7: 10 %
@@ -78,22 +78,122 @@ TEST(SearchGuide, ReusedScratchGivesTheSameMask) {
   const Image<float> wide = coarse_map(30, 20.0f), narrow = coarse_map(6, 2.0f);
   GuideScratch scratch;
   BatchMask first, again, other;
-  guide_batches(wide.cview(), 60, 120, GuideRule{}, scratch, first);
-  guide_batches(narrow.cview(), 12, 30, GuideRule{}, scratch, other);
-  guide_batches(wide.cview(), 60, 120, GuideRule{}, scratch, again);
+  guide_batches(wide.cview(), 20, 60, 120, GuideRule{}, scratch, first);
+  guide_batches(narrow.cview(), 20, 12, 30, GuideRule{}, scratch, other);
+  guide_batches(wide.cview(), 20, 60, 120, GuideRule{}, scratch, again);
   for (int y = 0; y < 60; ++y)
-    for (int b = 0; b < first.batches(); ++b) ASSERT_EQ(first.searches(y, b), again.searches(y, b));
+    for (int b = 0; b < first.batches(); ++b)
+      ASSERT_EQ(first.tile_bits(y, b), again.tile_bits(y, b));
+}
+
+// 40 coarse columns (80 internal) in tiles of 16: the left half holds 10 (internal 20), the right
+// half 30 (internal 60).
+Image<float> two_halves(int height) {
+  Image<float> m(40, height);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < 40; ++x) m.at(x, y) = x < 20 ? 10.0f : 30.0f;
+  return m;
+}
+
+TEST(SearchGuide, EachTileSearchesTheBatchesNearItsOwnValues) {
+  const Image<float> coarse = two_halves(10);
+  GuideRule rule;
+  rule.margin = 3;
+  rule.tile = 16;
+  rule.tile_margin = 0;
+  GuideScratch scratch;
+  BatchMask mask;
+  guide_batches(coarse.cview(), 80, 20, 100, rule, scratch, mask);
+  ASSERT_EQ(mask.tiles(), 5);
+  ASSERT_EQ(mask.tile_width(), 16);
+  for (int y = 0; y < 20; ++y) {
+    for (int b = 0; b < 7; ++b) {
+      // Tiles 0 and 1 (internal columns 0..31): 17..23, batch 1; tiles 3 and 4: 57..63, batch 3;
+      // tile 2 (columns 32..47, coarse 16..23) holds both.
+      EXPECT_EQ(mask.searches(y, 0, b), b == 1) << y << "," << b;
+      EXPECT_EQ(mask.searches(y, 1, b), b == 1) << y << "," << b;
+      EXPECT_EQ(mask.searches(y, 2, b), b == 1 || b == 3) << y << "," << b;
+      EXPECT_EQ(mask.searches(y, 3, b), b == 3) << y << "," << b;
+      EXPECT_EQ(mask.searches(y, 4, b), b == 3) << y << "," << b;
+      EXPECT_EQ(mask.searches(y, b), b == 1 || b == 3) << y << "," << b;
+    }
+  }
+  // Six of the 35 (tile, batch) pairs of every row, each 16 columns wide.
+  EXPECT_NEAR(mask.searched_fraction(), 6.0 / 35.0, 1e-9);
+  // A tile margin reaching across the middle takes the other half's batch in too.
+  rule.tile_margin = 10;
+  guide_batches(coarse.cview(), 80, 20, 100, rule, scratch, mask);
+  for (int b = 0; b < 7; ++b) {
+    EXPECT_EQ(mask.searches(0, 1, b), b == 1 || b == 3) << b;  // columns 6..41: coarse 3..20
+    EXPECT_EQ(mask.searches(0, 0, b), b == 1) << b;            // columns 0..25: coarse 0..12
+  }
+}
+
+TEST(SearchGuide, ATileWithTooFewValuesTakesItsRowsBatches) {
+  Image<float> coarse = two_halves(10);
+  // Tile 4 (coarse columns 32..39): one value in four, below the tile's share; the row keeps
+  // enough.
+  for (int y = 0; y < 10; ++y)
+    for (int x = 32; x < 40; ++x)
+      if (x % 4 != 0) coarse.at(x, y) = kNone;
+  GuideRule rule;
+  rule.margin = 3;
+  rule.tile = 16;
+  rule.tile_margin = 0;
+  rule.tile_min_valid = 0.5;
+  GuideScratch scratch;
+  BatchMask mask;
+  guide_batches(coarse.cview(), 80, 20, 100, rule, scratch, mask);
+  for (int b = 0; b < 7; ++b) {
+    EXPECT_EQ(mask.searches(5, 4, b), b == 1 || b == 3) << b;
+    EXPECT_EQ(mask.searches(5, 3, b), b == 3) << b;
+  }
+  // With a share the tile meets, its own values rule.
+  rule.tile_min_valid = 0.2;
+  guide_batches(coarse.cview(), 80, 20, 100, rule, scratch, mask);
+  for (int b = 0; b < 7; ++b) EXPECT_EQ(mask.searches(5, 4, b), b == 3) << b;
+}
+
+TEST(SearchGuide, TilesWidenSoARowNeedsAtMostSixtyFour) {
+  const Image<float> coarse = coarse_map(4, 5.0f);
+  GuideRule rule;
+  rule.tile = 8;
+  GuideScratch scratch;
+  BatchMask mask;
+  guide_batches(coarse.cview(), 1000, 8, 40, rule, scratch, mask);
+  EXPECT_EQ(mask.tile_width(), 16);  // ceil(1000 / 64)
+  EXPECT_EQ(mask.tiles(), 63);
+  EXPECT_EQ(mask.searches(3, 62, 0), true);
+}
+
+TEST(BatchMask, TilesCoverTheWidthAndWeighTheLastByItsColumns) {
+  BatchMask mask;
+  mask.reset(2, 1, false, 40, 16);  // tiles of 16, 16 and 8 columns
+  ASSERT_EQ(mask.tiles(), 3);
+  mask.set(0, 2, 0);
+  EXPECT_NEAR(mask.searched_fraction(), 8.0 / 80.0, 1e-12);
+  mask.set(1, 0);  // every tile of row 1
+  EXPECT_NEAR(mask.searched_fraction(), 48.0 / 80.0, 1e-12);
+  EXPECT_EQ(mask.tile_bits(1, 0), 7u);
+  EXPECT_THROW(mask.reset(2, 1, false, 65 * 4, 4), Error);
+  EXPECT_THROW(mask.reset(2, 1, false, 40, 0), Error);
+  mask.reset(2, 1, true, 64 * 4, 4);  // exactly 64 tiles
+  EXPECT_EQ(mask.tile_bits(0, 0), ~std::uint64_t{0});
 }
 
 TEST(SearchGuide, RejectsAnEmptyMapOrABadRule) {
   GuideScratch scratch;
   BatchMask mask;
   const Image<float> empty, coarse = coarse_map(4, 1.0f);
-  EXPECT_THROW(guide_batches(empty.cview(), 8, 40, GuideRule{}, scratch, mask), Error);
+  EXPECT_THROW(guide_batches(empty.cview(), 20, 8, 40, GuideRule{}, scratch, mask), Error);
   GuideRule bad;
   bad.batch = 0;
-  EXPECT_THROW(guide_batches(coarse.cview(), 8, 40, bad, scratch, mask), Error);
-  EXPECT_THROW(guide_batches(coarse.cview(), 0, 40, GuideRule{}, scratch, mask), Error);
+  EXPECT_THROW(guide_batches(coarse.cview(), 20, 8, 40, bad, scratch, mask), Error);
+  GuideRule no_tile;
+  no_tile.tile = 0;
+  EXPECT_THROW(guide_batches(coarse.cview(), 20, 8, 40, no_tile, scratch, mask), Error);
+  EXPECT_THROW(guide_batches(coarse.cview(), 20, 0, 40, GuideRule{}, scratch, mask), Error);
+  EXPECT_THROW(guide_batches(coarse.cview(), 0, 8, 40, GuideRule{}, scratch, mask), Error);
 }
 
 }  // namespace

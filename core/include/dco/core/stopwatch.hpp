@@ -18,6 +18,10 @@ class Stopwatch {
     lap_ = now;
     return ms;
   }
+  // Time since the previous lap, the lap going on.
+  double since_lap_ms() const {
+    return std::chrono::duration<double, std::milli>(Clock::now() - lap_).count();
+  }
   // Time from the start to the latest lap, so it equals the sum of the laps.
   double total_ms() const {
     return std::chrono::duration<double, std::milli>(lap_ - start_).count();

@@ -86,36 +86,57 @@ class BlockAggregator {
   void prepare(const CrossArms& arms, int max_block);
 
   // With `reciprocals` (SupportRegions::reciprocals), take receives the region means instead.
-  // With kFillsPrefix, fill(y, prefix) writes the running sums of row y's values along the row
-  // ((width + 1) * block elements, as kernels::block_matching_cost_sums_row does) instead of the
-  // values.
-  template <bool kFillsPrefix = false, class Fill, class Take>
+  template <class Fill, class Take>
   void run(int block, Fill&& fill, Take&& take, ImageView<const std::uint32_t> reciprocals = {}) {
-    run_rows<kFillsPrefix>(block, 0, arms_->height(), fill, take, reciprocals);
+    run_core<false>(block, 0, arms_->height(), 0, arms_->width(), fill, take, reciprocals);
   }
 
-  // The same for rows [y_begin, y_end) only: take receives exactly what run gives those rows,
-  // and fill is asked for just the rows their vertical arms reach.
-  template <bool kFillsPrefix = false, class Fill, class Take>
-  void run_rows(int block, int y_begin, int y_end, Fill&& fill, Take&& take,
-                ImageView<const std::uint32_t> reciprocals = {}) {
+  // The same for the window of rows [y_begin, y_end) and columns [x_begin, x_end) only, from
+  // running sums along the rows: fill(y, prefix, xs, xe) writes those of row y's values over the
+  // columns [xs, xe) that the window's horizontal arms reach, starting over at xs (as
+  // kernels::block_matching_cost_sums_range does), and is asked for just the rows the window's
+  // vertical arms reach. take(y, sums) receives, at the window's columns of sums (indexed by
+  // column), exactly what run gives them.
+  template <class Fill, class Take>
+  void run_window(int block, int y_begin, int y_end, int x_begin, int x_end, Fill&& fill,
+                  Take&& take, ImageView<const std::uint32_t> reciprocals = {}) {
+    run_core<true>(block, y_begin, y_end, x_begin, x_end, fill, take, reciprocals);
+  }
+
+  // Rows above / below a row that its vertical arms reach, at most.
+  int reach_up() const { return reach_up_; }
+  int reach_down() const { return reach_down_; }
+  // Columns left / right of a pixel that its horizontal arms reach, at most.
+  int reach_left() const { return reach_left_; }
+  int reach_right() const { return reach_right_; }
+
+ private:
+  template <bool kFillsPrefix, class Fill, class Take>
+  void run_core(int block, int y_begin, int y_end, int x_begin, int x_end, Fill&& fill, Take&& take,
+                ImageView<const std::uint32_t> reciprocals) {
     const CrossArms& a = *arms_;
     const int w = a.width();
     const int h = a.height();
     const int first = std::max(0, y_begin - reach_up_);
     const int last = std::min(h, y_end + reach_down_);  // rows filled: [first, last)
-    for (int i = first; i < last; ++i) rows_[i] = ring_.row(i % ring_.height());
+    const int xs = std::max(0, x_begin - reach_left_);
+    const int xe = std::min(w, x_end + reach_right_);  // columns filled: [xs, xe)
+    const int columns = x_end - x_begin;
+    // Row pointers start at the window's first column, so the kernels see a narrower image.
+    const std::ptrdiff_t offset = static_cast<std::ptrdiff_t>(x_begin) * block;
+    for (int i = first; i < last; ++i) rows_[i] = ring_.row(i % ring_.height()) + offset;
     // The running column sums start at `first`: a region whose top is the row above it
     // subtracts nothing.
-    if (first > 0) rows_[first - 1] = zeros_.data();
+    if (first > 0) rows_[first - 1] = zeros_.data() + offset;
     for (int ya = first; ya < y_end + reach_down_; ++ya) {
       if (ya < last) {
         // Horizontal sums plus the row above's running column sums.
         const std::uint32_t* above = ya > first ? rows_[ya - 1] : nullptr;
         if constexpr (kFillsPrefix) {
-          fill(ya, prefix_.data());
-          kernels::block_window_sums_row(prefix_.data(), a.left.row(ya), a.right.row(ya), w, block,
-                                         above, rows_[ya]);
+          fill(ya, prefix_.data(), xs, xe);
+          kernels::block_window_sums_row(prefix_.data() + offset, a.left.row(ya) + x_begin,
+                                         a.right.row(ya) + x_begin, columns, block, above,
+                                         rows_[ya]);
         } else {
           fill(ya, input_.data());
           kernels::block_horizontal_sums_row(input_.data(), a.left.row(ya), a.right.row(ya), w,
@@ -125,20 +146,15 @@ class BlockAggregator {
       // Row yb has all of its vertical arms' rows once row yb + reach_down is in.
       const int yb = ya - reach_down_;
       if (yb < y_begin) continue;
-      kernels::block_vertical_sums_row(rows_.data(), yb, a.up.row(yb), a.down.row(yb), w, block,
-                                       reciprocals.empty() ? nullptr : reciprocals.row(yb),
-                                       sums_.data());
+      kernels::block_vertical_sums_row(
+          rows_.data(), yb, a.up.row(yb) + x_begin, a.down.row(yb) + x_begin, columns, block,
+          reciprocals.empty() ? nullptr : reciprocals.row(yb) + x_begin, sums_.data() + offset);
       take(yb, sums_.data());
     }
   }
 
-  // Rows above / below a row that its vertical arms reach, at most.
-  int reach_up() const { return reach_up_; }
-  int reach_down() const { return reach_down_; }
-
- private:
   const CrossArms* arms_ = nullptr;
-  int reach_up_ = 0, reach_down_ = 0;
+  int reach_up_ = 0, reach_down_ = 0, reach_left_ = 0, reach_right_ = 0;
   Image<std::uint32_t> ring_;
   std::vector<std::uint32_t*> rows_;  // image row -> its ring row
   std::vector<std::uint32_t> input_, prefix_, sums_;

@@ -28,9 +28,12 @@ struct MatchingImages {
 // disparities at a time, aggregated with the disparities innermost: every disparity of a pixel
 // shares its arms, so the sums are contiguous vector loads instead of per-pixel gathers.
 //
-// With a mask, row y considers only the batches mask.searches(y, b): the winner-takes-all state
-// is that of the full search with every other cost left out (WinnerTakesAll::skip_row), and the
-// fused path computes costs only for the rows a searched batch's regions reach.
+// With a mask, the pixels of row y in tile t consider only the batches mask.searches(y, t, b): the
+// winner-takes-all state is that of the full search with every other cost left out
+// (WinnerTakesAll::skip_columns). The fused path searches a batch in windows: each tile's runs
+// of searched rows (joined across gaps shorter than the vertical arms' reach), neighbouring
+// tiles with the same run sharing one; it computes costs only for the rows and columns a
+// window's regions reach.
 //
 // With a team the fused path gives each of its threads a band of rows: a band aggregates from
 // the rows its vertical arms reach above it (those rows' costs are computed twice), and every
@@ -38,7 +41,7 @@ struct MatchingImages {
 class DisparitySearch {
  public:
   // `wta` must be reset to the images' size; `mask`, when given, covers the images' rows and
-  // every batch up to max_d.
+  // columns and every batch up to max_d.
   void run(const MatchingImages& images, const CostTables& tables, const SupportRegions& regions,
            int passes, int max_d, WinnerTakesAll& wta, const BatchMask* mask = nullptr,
            pipeline::RowTeam* team = nullptr);
@@ -46,10 +49,18 @@ class DisparitySearch {
   static constexpr int kBatch = 16;
 
  private:
-  // One thread's share of the fused search: its aggregator and its rows of a batch's means.
+  // Rows [y_begin, y_end) of tiles [t_begin, t_end) searched together.
+  struct Window {
+    int y_begin, y_end, t_begin, t_end;
+  };
+  // One thread's share of the fused search: its aggregator, its rows of a batch's means, and the
+  // batch's windows.
   struct Band {
     BlockAggregator aggregator;
     Image<std::uint16_t> lines;  // one row per disparity of the batch
+    std::vector<Window> windows;
+    std::vector<int> open, next_open;    // windows of the tile before, of this tile
+    std::vector<std::uint64_t> covered;  // per row of the band, the tiles its windows cover
   };
   void search_band(const MatchingImages& images, const CostTables& tables,
                    const SupportRegions& regions, int max_d, WinnerTakesAll& wta,
@@ -58,6 +69,7 @@ class DisparitySearch {
   std::vector<Band> bands_;
   Image<std::uint32_t> slice_;
   AggregationScratch scratch_;
+  std::vector<std::uint16_t> narrowed_;  // one slice row as 16-bit costs
 };
 
 }  // namespace dco::stereo

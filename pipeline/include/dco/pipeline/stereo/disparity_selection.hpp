@@ -8,6 +8,10 @@
 #include "dco/core/image.hpp"
 #include "dco/kernels/stereo_pixel.hpp"
 
+namespace dco::kernels {
+struct WtaRow;
+}
+
 namespace dco::stereo {
 
 inline constexpr std::int16_t kInvalidDisparity = kernels::pixel::kInvalid;
@@ -32,6 +36,13 @@ class WinnerTakesAll {
   // Row y leaves disparities d .. d + count - 1 out of its search: the same result as
   // update_row with every cost kNoCost.
   void skip_row(int y, int d, int count);
+  // Both for the columns [begin, end) of row y only (costs indexed by column, as in update_row):
+  // every column must still see each disparity once, updated or skipped. Here a cost may be
+  // kNoCost: that column leaves that disparity out, as with skip_columns, and the right image's
+  // state does not take it in.
+  void update_columns(const std::uint16_t* costs, std::ptrdiff_t stride, int count, int y, int d,
+                      int begin, int end);
+  void skip_columns(int y, int d, int count, int begin, int end);
 
   ImageView<const std::int16_t> left_disparity() const { return disp_.view(); }
   ImageView<const std::int16_t> right_disparity() const { return disp_right_.view(); }
@@ -41,6 +52,8 @@ class WinnerTakesAll {
   ImageView<const std::uint16_t> cost_above() const { return above_.view(); }
 
  private:
+  kernels::WtaRow state_row(int y);
+
   Image<std::uint16_t> best_, second_, below_, above_, prev1_, prev2_, runmin_, best_right_;
   Image<std::int16_t> disp_, disp_right_;
   std::vector<std::uint16_t> narrowed_;  // one slice row as 16-bit costs

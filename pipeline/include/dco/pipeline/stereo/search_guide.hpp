@@ -8,45 +8,72 @@
 namespace dco::stereo {
 
 // Which batches of kBatch disparities (batch b: b * kBatch .. b * kBatch + kBatch - 1) each row of
-// the internal image searches.
+// the internal image searches, per tile of columns (tile t: columns t * tile_width ..
+// (t + 1) * tile_width - 1).
 class BatchMask {
  public:
-  // Every row searches every batch (all) or none.
+  static constexpr int kMaxTiles = 64;
+
+  // Every row searches every batch (all) or none, in one tile that spans any width.
   void reset(int height, int batches, bool all);
+  // The same in tiles of tile_width columns over `width` columns (at most kMaxTiles tiles).
+  void reset(int height, int batches, bool all, int width, int tile_width);
   int height() const { return height_; }
   int batches() const { return batches_; }
-  bool searches(int y, int batch) const {
-    return bits_[static_cast<std::size_t>(batch) * height_ + y] != 0;
+  int tiles() const { return tiles_; }
+  int tile_width() const { return tile_width_; }
+  // Whether some tile of row y searches the batch.
+  bool searches(int y, int batch) const { return tile_bits(y, batch) != 0; }
+  bool searches(int y, int tile, int batch) const { return (tile_bits(y, batch) >> tile) & 1u; }
+  // Bit t: tile t of row y searches the batch.
+  std::uint64_t tile_bits(int y, int batch) const {
+    return bits_[static_cast<std::size_t>(batch) * height_ + y];
   }
-  void set(int y, int batch) { bits_[static_cast<std::size_t>(batch) * height_ + y] = 1; }
-  // Share of the (row, batch) pairs searched, in [0, 1].
+  // Every tile of row y searches the batch.
+  void set(int y, int batch) { bits_[static_cast<std::size_t>(batch) * height_ + y] = all_tiles_; }
+  void set(int y, int tile, int batch) {
+    bits_[static_cast<std::size_t>(batch) * height_ + y] |= std::uint64_t{1} << tile;
+  }
+  // Share of the (row, column, batch) triples searched, in [0, 1].
   double searched_fraction() const;
 
  private:
-  int height_ = 0, batches_ = 0;
-  std::vector<std::uint8_t> bits_;  // [batch * height + y]
+  int height_ = 0, batches_ = 0, width_ = 0, tiles_ = 1, tile_width_ = 0;
+  std::uint64_t all_tiles_ = 1;
+  std::vector<std::uint64_t> bits_;  // [batch * height + y], a bit per tile
 };
 
 // How far the guide reaches (internal pixels and rows).
 struct GuideRule {
-  int batch = 16;          // disparities per batch
-  int margin = 12;         // a coarse value v lets its row search 2v - margin .. 2v + margin
-  int reach = 8;           // internal rows above and below whose coarse values a row takes in
-  double min_valid = 0.2;  // fewer coarse values than this share of the rows reached: search all
+  int batch = 16;   // disparities per batch
+  int margin = 12;  // a coarse value v lets its tile search 2v - margin .. 2v + margin
+  int reach = 8;    // internal rows above and below whose coarse values a row takes in
+  // Columns per tile (widened where a row would need more than BatchMask::kMaxTiles), and the
+  // internal columns left and right of a tile whose coarse values it takes in. Narrower tiles
+  // search less but each starts its own run of costs, whose arms reach past its edges.
+  int tile = 128;
+  int tile_margin = 16;
+  // A row with fewer coarse values than this share of those it reaches searches every batch; a
+  // tile with fewer than tile_min_valid takes its row's batches (below half, tiles missed
+  // disparities their rows hold: bench/RESULTS.md).
+  double min_valid = 0.2;
+  double tile_min_valid = 0.5;
 };
 
 // Working memory of guide_batches.
 struct GuideScratch {
-  std::vector<int> reached, valid;
-  std::vector<std::uint8_t> row_bits;
+  std::vector<int> reached, valid, row_reached, row_valid;
+  std::vector<std::uint8_t> bits;
 };
 
 // From the sparse map of a half-size pass over the internal images (coarse pixels, +inf or NaN
-// where it has no value): each internal row searches the batches holding the disparities 2v ±
-// margin of every coarse value v within `reach` rows of it, or every batch when too few coarse
-// values are there to go by. max_d: the largest internal disparity searched. `scratch` is resized
-// on first use and kept across frames.
-void guide_batches(ImageView<const float> coarse, int height, int max_d, const GuideRule& rule,
-                   GuideScratch& scratch, BatchMask& mask);
+// where it has no value): each tile of an internal row searches the batches holding the
+// disparities 2v ± margin of every coarse value v within `reach` rows and `tile_margin` columns
+// of it. A tile with too few coarse values to go by takes the batches of its whole row's values
+// instead (those of every column within `reach` rows), and a row with too few searches every
+// batch. width, height: the internal image's size; max_d: the largest internal disparity
+// searched. `scratch` is resized on first use and kept across frames.
+void guide_batches(ImageView<const float> coarse, int width, int height, int max_d,
+                   const GuideRule& rule, GuideScratch& scratch, BatchMask& mask);
 
 }  // namespace dco::stereo

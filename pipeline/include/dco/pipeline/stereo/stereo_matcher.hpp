@@ -19,8 +19,9 @@ struct StereoTimings {
   double boundary_ms = 0;  // boundary refinement at input resolution (half-size matching only)
   double total_ms = 0;
   // Share of the (internal row, 16-disparity batch) pairs searched: 1 for a full search, less
-  // when a half-size pass guided it (StereoParams::search_range; its time is in initial_ms).
+  // when a half-size pass guided it (StereoParams::search_range).
   double searched_fraction = 1;
+  double guide_ms = 0;  // that pass and the mask it gives, a part of initial_ms
 };
 
 // The sparse stage: a rectified pair in, a disparity map out that carries values only where

@@ -78,6 +78,11 @@ void block_matching_cost_row(const CostRow& row, const CostTableView& tables, in
 // ((width + 1) * count elements, uint32 wrap-around).
 void block_matching_cost_sums_row(const CostRow& row, const CostTableView& tables, int d0,
                                   int count, std::uint32_t* prefix);
+// The same for the row's pixels [begin, end) only, the sums starting over at `begin`:
+// prefix[begin * count .. (begin + 1) * count) = 0 and prefix[(x + 1) * count + k] for x in
+// [begin, end); a window sum inside [begin, end) is the same as from the whole row's sums.
+void block_matching_cost_sums_range(const CostRow& row, const CostTableView& tables, int d0,
+                                    int count, int begin, int end, std::uint32_t* prefix);
 
 // out[x] = sum of in[x - left[x] .. x + right[x]] with uint32 wrap-around; arms stay inside the
 // row. `prefix` holds width + 1 elements of scratch.
@@ -163,9 +168,15 @@ inline constexpr std::uint16_t kNoCost = 0xffff;
 // call keep the state in registers in between.
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row);
+// The same for the left pixels [begin, end) only (costs and state indexed by column): the
+// right image's state sees only the costs of those left pixels.
+void wta_update_range(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int begin,
+                      int end, int d, const WtaRow& row);
 // Passes over disparities d .. d + count - 1 of a row that does not search them
 // (pixel::wta_skip): the state's neighbours and running minima take them as costless.
 void wta_skip_row(int count, int width, int d, const WtaRow& row);
+// The same for the left pixels [begin, end) only.
+void wta_skip_range(int count, int begin, int end, int d, const WtaRow& row);
 
 // Left-right check of one row (pixel::left_right_agree): left[x] becomes pixel::kInvalid where
 // the right image's winner at x - left[x] disagrees by more than max_diff or lies outside the row.
@@ -208,6 +219,8 @@ void block_matching_cost_row(const CostRow& row, const CostTableView& tables, in
                              std::uint32_t* out);
 void block_matching_cost_sums_row(const CostRow& row, const CostTableView& tables, int d0,
                                   int count, std::uint32_t* prefix);
+void block_matching_cost_sums_range(const CostRow& row, const CostTableView& tables, int d0,
+                                    int count, int begin, int end, std::uint32_t* prefix);
 void matching_cost_row(const CostRow& row, const CostTableView& tables, int d, std::uint32_t* out);
 void horizontal_sums_row(const std::uint32_t* in, const std::uint8_t* left,
                          const std::uint8_t* right, int width, std::uint32_t* prefix,
@@ -237,7 +250,10 @@ void block_vote_row(const std::uint32_t* votes, int width, const std::int32_t* c
                     std::int16_t* best_value);
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row);
+void wta_update_range(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int begin,
+                      int end, int d, const WtaRow& row);
 void wta_skip_row(int count, int width, int d, const WtaRow& row);
+void wta_skip_range(int count, int begin, int end, int d, const WtaRow& row);
 void left_right_check_row(std::int16_t* left, const std::int16_t* right, int width, int max_diff);
 void uniqueness_check_row(std::int16_t* disparity, const std::uint16_t* best,
                           const std::uint16_t* second, int width, double keep);
