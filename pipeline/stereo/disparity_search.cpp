@@ -1,7 +1,6 @@
 #include "dco/pipeline/stereo/disparity_search.hpp"
 
 #include <algorithm>
-#include <bit>
 
 #include "dco/core/error.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
@@ -170,21 +169,17 @@ void DisparitySearch::search_band(const MatchingImages& images, const CostTables
       // Each row's region means go straight into the winner-takes-all state; its tiles that do
       // not search the batch take kNoCost, which leaves the batch out.
       const auto select = [&](int y, std::uint32_t* means) {
-        const std::uint64_t bits = tile_bits(y);
-        for (int t = window.t_begin; t < window.t_end;) {
-          const bool on = (bits >> t) & 1u;
-          int t_end = t + 1;
-          while (t_end < window.t_end && (((bits >> t_end) & 1u) != 0) == on) ++t_end;
-          const int x0 = column(t), x1 = column(t_end);
-          if (on) {
-            kernels::blocks_to_rows(means + static_cast<std::ptrdiff_t>(x0) * kBatch, x1 - x0,
-                                    kBatch, count, band.lines.data() + x0, band.lines.stride());
-          } else {
-            for (int k = 0; k < count; ++k)
-              std::fill(band.lines.row(k) + x0, band.lines.row(k) + x1, WinnerTakesAll::kNoCost);
-          }
-          t = t_end;
-        }
+        for_each_tile_run(
+            tile_bits(y), window.t_begin, window.t_end, tile_width, w,
+            [&](int x0, int x1, bool on) {
+              if (on) {
+                kernels::blocks_to_rows(means + static_cast<std::ptrdiff_t>(x0) * kBatch, x1 - x0,
+                                        kBatch, count, band.lines.data() + x0, band.lines.stride());
+                return;
+              }
+              for (int k = 0; k < count; ++k)
+                std::fill(band.lines.row(k) + x0, band.lines.row(k) + x1, WinnerTakesAll::kNoCost);
+            });
         wta.update_columns(band.lines.row(0), band.lines.stride(), count, y, d0, x_begin, x_end);
       };
       aggregator.run_window(kBatch, window.y_begin, window.y_end, x_begin, x_end, cost_sums, select,
@@ -198,16 +193,9 @@ void DisparitySearch::search_band(const MatchingImages& images, const CostTables
     // Every tile of a row outside its windows leaves the batch out.
     for (int y = y_begin; y < y_end; ++y) {
       const std::uint64_t rest = all_tiles & ~band.covered[static_cast<std::size_t>(y - y_begin)];
-      for (int t = 0; t < tiles;) {
-        if (((rest >> t) & 1u) == 0) {
-          ++t;
-          continue;
-        }
-        int t_end = t + 1;
-        while (t_end < tiles && ((rest >> t_end) & 1u) != 0) ++t_end;
-        wta.skip_columns(y, d0, count, column(t), column(t_end));
-        t = t_end;
-      }
+      for_each_tile_run(rest, 0, tiles, tile_width, w, [&](int x0, int x1, bool on) {
+        if (on) wta.skip_columns(y, d0, count, x0, x1);
+      });
     }
   }
 }
