@@ -9,19 +9,23 @@
 namespace dco::stereo {
 namespace {
 
+// The first column of tile t, clipped to the image's width (a one-tile mask's tiles are wider
+// than any image).
+int tile_column(int t, int tile_width, int width) {
+  return static_cast<int>(std::min<std::int64_t>(width, std::int64_t{t} * tile_width));
+}
+
 // Calls f(x_begin, x_end, on) for the runs of tiles [t_begin, t_end) of a row's bits that all
 // search (on) or all do not, left to right, in columns clipped to the image's width.
 template <class F>
 void for_each_tile_run(std::uint64_t bits, int t_begin, int t_end, int tile_width, int width,
                        F&& f) {
-  const auto column = [&](int t) {
-    return static_cast<int>(std::min<std::int64_t>(width, std::int64_t{t} * tile_width));
-  };
   for (int t = t_begin; t < t_end;) {
     const bool on = (bits >> t) & 1u;
     int end = t + 1;
     while (end < t_end && (((bits >> end) & 1u) != 0) == on) ++end;
-    if (column(t) < column(end)) f(column(t), column(end), on);
+    const int x0 = tile_column(t, tile_width, width), x1 = tile_column(end, tile_width, width);
+    if (x0 < x1) f(x0, x1, on);
     t = end;
   }
 }
@@ -52,7 +56,6 @@ void DisparitySearch::run(const MatchingImages& images, const CostTables& tables
   }
   slice_.resize(w, h);
   scratch_.resize(w, h);
-  narrowed_.resize(static_cast<std::size_t>(w));
   for (int d = 0; d <= max_d; ++d) {
     const int batch = d / kBatch;
     if (mask != nullptr) {
@@ -70,17 +73,14 @@ void DisparitySearch::run(const MatchingImages& images, const CostTables& tables
       wta.update(slice_.cview(), d);
       continue;
     }
-    for (int y = 0; y < h; ++y) {
-      const std::uint32_t* costs = slice_.row(y);
-      std::copy(costs, costs + w, narrowed_.begin());
+    for (int y = 0; y < h; ++y)
       for_each_tile_run(mask->tile_bits(y, batch), 0, mask->tiles(), mask->tile_width(), w,
                         [&](int x0, int x1, bool on) {
                           if (on)
-                            wta.update_columns(narrowed_.data(), 0, 1, y, d, x0, x1);
+                            wta.update_slice_columns(slice_.row(y), y, d, x0, x1);
                           else
                             wta.skip_columns(y, d, 1, x0, x1);
                         });
-    }
   }
 }
 
@@ -104,10 +104,7 @@ void DisparitySearch::search_band(const MatchingImages& images, const CostTables
   const int join_rows = aggregator.reach_up() + aggregator.reach_down();
   const int tiles = mask != nullptr ? mask->tiles() : 1;
   const int tile_width = mask != nullptr ? mask->tile_width() : w;
-  const std::uint64_t all_tiles = tiles == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << tiles) - 1;
-  const auto column = [&](int t) {
-    return static_cast<int>(std::min<std::int64_t>(w, std::int64_t{t} * tile_width));
-  };
+  const std::uint64_t all_tiles = BatchMask::tiles_bits(0, tiles);
   band.windows.reserve(static_cast<std::size_t>(tiles) * runs);
   for (int d0 = 0; d0 <= max_d; d0 += kBatch) {
     // Always whole batches, so the kernels run on whole vectors; disparities past max_d are
@@ -164,8 +161,8 @@ void DisparitySearch::search_band(const MatchingImages& images, const CostTables
     };
     std::fill(band.covered.begin(), band.covered.end(), 0);
     for (const Window& window : windows) {
-      const int x_begin = column(window.t_begin);
-      const int x_end = column(window.t_end);
+      const int x_begin = tile_column(window.t_begin, tile_width, w);
+      const int x_end = tile_column(window.t_end, tile_width, w);
       // Each row's region means go straight into the winner-takes-all state; its tiles that do
       // not search the batch take kNoCost, which leaves the batch out.
       const auto select = [&](int y, std::uint32_t* means) {
@@ -184,9 +181,7 @@ void DisparitySearch::search_band(const MatchingImages& images, const CostTables
       };
       aggregator.run_window(kBatch, window.y_begin, window.y_end, x_begin, x_end, cost_sums, select,
                             recip);
-      const std::uint64_t window_tiles =
-          (window.t_end == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << window.t_end) - 1) &
-          ~((std::uint64_t{1} << window.t_begin) - 1);
+      const std::uint64_t window_tiles = BatchMask::tiles_bits(window.t_begin, window.t_end);
       for (int y = window.y_begin; y < window.y_end; ++y)
         band.covered[static_cast<std::size_t>(y - y_begin)] |= window_tiles;
     }

@@ -30,11 +30,15 @@ void WinnerTakesAll::update(ImageView<const std::uint32_t> slice, int d) {
 }
 
 void WinnerTakesAll::update_slice_row(const std::uint32_t* costs, int y, int d) {
-  const int w = best_.width();
-  narrowed_.resize(static_cast<std::size_t>(w));
-  assert(std::all_of(costs, costs + w, [](std::uint32_t c) { return c < kNoCost; }));
-  std::copy(costs, costs + w, narrowed_.begin());
-  update_row(narrowed_.data(), 0, 1, y, d);
+  update_slice_columns(costs, y, d, 0, best_.width());
+}
+
+void WinnerTakesAll::update_slice_columns(const std::uint32_t* costs, int y, int d, int begin,
+                                          int end) {
+  narrowed_.resize(static_cast<std::size_t>(best_.width()));
+  assert(std::all_of(costs + begin, costs + end, [](std::uint32_t c) { return c < kNoCost; }));
+  std::copy(costs + begin, costs + end, narrowed_.begin() + begin);
+  update_columns(narrowed_.data(), 0, 1, y, d, begin, end);
 }
 
 void WinnerTakesAll::update_row(const std::uint16_t* costs, std::ptrdiff_t stride, int count, int y,

@@ -30,7 +30,7 @@ void BatchMask::reset(int height, int batches, bool all, int width, int tile_wid
   width_ = width;
   tile_width_ = tile_width;
   tiles_ = (width + tile_width - 1) / tile_width;
-  all_tiles_ = tiles_ == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << tiles_) - 1;
+  all_tiles_ = tiles_bits(0, tiles_);
   bits_.assign(static_cast<std::size_t>(height) * static_cast<std::size_t>(batches),
                all ? all_tiles_ : 0);
 }

@@ -95,12 +95,18 @@ Image<float> two_halves(int height) {
   return m;
 }
 
-TEST(SearchGuide, EachTileSearchesTheBatchesNearItsOwnValues) {
-  const Image<float> coarse = two_halves(10);
+// Tiles of 16 internal columns that take in only their own coarse values, margin 3.
+GuideRule own_tiles_of_16() {
   GuideRule rule;
   rule.margin = 3;
   rule.tile = 16;
   rule.tile_margin = 0;
+  return rule;
+}
+
+TEST(SearchGuide, EachTileSearchesTheBatchesNearItsOwnValues) {
+  const Image<float> coarse = two_halves(10);
+  GuideRule rule = own_tiles_of_16();
   GuideScratch scratch;
   BatchMask mask;
   guide_batches(coarse.cview(), 80, 20, 100, rule, scratch, mask);
@@ -136,10 +142,7 @@ TEST(SearchGuide, ATileWithTooFewValuesTakesItsRowsBatches) {
   for (int y = 0; y < 10; ++y)
     for (int x = 32; x < 40; ++x)
       if (x % 4 != 0) coarse.at(x, y) = kNone;
-  GuideRule rule;
-  rule.margin = 3;
-  rule.tile = 16;
-  rule.tile_margin = 0;
+  GuideRule rule = own_tiles_of_16();
   rule.tile_min_valid = 0.5;
   GuideScratch scratch;
   BatchMask mask;

@@ -69,7 +69,6 @@ class DisparitySearch {
   std::vector<Band> bands_;
   Image<std::uint32_t> slice_;
   AggregationScratch scratch_;
-  std::vector<std::uint16_t> narrowed_;  // one slice row as 16-bit costs
 };
 
 }  // namespace dco::stereo

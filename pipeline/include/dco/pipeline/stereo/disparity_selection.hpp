@@ -31,15 +31,16 @@ class WinnerTakesAll {
   // Row y of such a slice: what update does for that row.
   void update_slice_row(const std::uint32_t* costs, int y, int d);
   // Row y of the slices of disparities d .. d + count - 1 at once, that of d + k at
-  // costs + k * stride: the same result as `count` calls of update.
+  // costs + k * stride: the same result as `count` calls of update. A cost of kNoCost leaves
+  // that disparity out for that pixel (as skip_row does), and the right image's state does not
+  // take it in.
   void update_row(const std::uint16_t* costs, std::ptrdiff_t stride, int count, int y, int d);
   // Row y leaves disparities d .. d + count - 1 out of its search: the same result as
   // update_row with every cost kNoCost.
   void skip_row(int y, int d, int count);
-  // Both for the columns [begin, end) of row y only (costs indexed by column, as in update_row):
-  // every column must still see each disparity once, updated or skipped. Here a cost may be
-  // kNoCost: that column leaves that disparity out, as with skip_columns, and the right image's
-  // state does not take it in.
+  // These three for the columns [begin, end) of row y only (costs indexed by column, as above):
+  // every column must still see each disparity once, updated or skipped.
+  void update_slice_columns(const std::uint32_t* costs, int y, int d, int begin, int end);
   void update_columns(const std::uint16_t* costs, std::ptrdiff_t stride, int count, int y, int d,
                       int begin, int end);
   void skip_columns(int y, int d, int count, int begin, int end);

@@ -13,6 +13,13 @@ namespace dco::stereo {
 class BatchMask {
  public:
   static constexpr int kMaxTiles = 64;
+  // The bits of tiles [begin, end) (0 <= begin <= end <= kMaxTiles).
+  static std::uint64_t tiles_bits(int begin, int end) {
+    const auto below = [](int t) {
+      return t == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << t) - 1;
+    };
+    return below(end) & ~below(begin);
+  }
 
   // Every row searches every batch (all) or none, in one tile that spans any width.
   void reset(int height, int batches, bool all);

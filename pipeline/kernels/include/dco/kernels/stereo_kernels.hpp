@@ -164,8 +164,9 @@ struct WtaRow {
 inline constexpr std::uint16_t kNoCost = 0xffff;
 
 // Feeds the costs of disparities d .. d + count - 1, those of d + k at cost + k * cost_stride
-// (every cost < kNoCost; disparities grow by one from 0 over the calls). Several disparities per
-// call keep the state in registers in between.
+// (disparities grow by one from 0 over the calls). A cost of kNoCost leaves that disparity out
+// for that pixel, as wta_skip_row does, and never reaches the right image's state. Several
+// disparities per call keep the state in registers in between.
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row);
 // The same for the left pixels [begin, end) only (costs and state indexed by column): the
