@@ -70,8 +70,11 @@ void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmooth
   slot.planes_ms = t.lap_ms();
 }
 
-void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centre,
-                   const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out) {
+namespace {
+
+// The contour step proper and the result's fields other than the image, sparse and planar maps.
+void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
+                 const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out) {
   const bool flow = neighbour_a != nullptr && neighbour_b != nullptr;
   contour::ContourInputs in;
   in.image = centre.image.cview();
@@ -90,17 +93,39 @@ void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centr
   out.contour_timings = extractor.last_timings();
 
   out.index = centre.index;
+  out.planes_done = centre.planes_done;
+  out.densify_timings.planes_ms = centre.planes_ms;
+  out.stereo_timings = centre.stereo_timings;
+  out.stereo_scale = centre.stereo_scale;
+  out.flow_cue = flow;
+}
+
+}  // namespace
+
+void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centre,
+                   const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out) {
+  contours_of(extractor, centre, neighbour_a, neighbour_b, out);
   out.image.resize(centre.image.width(), centre.image.height());
   out.image.copy_from(centre.image.cview());
   out.sparse.resize(centre.sparse.width(), centre.sparse.height());
   out.sparse.copy_from(centre.sparse.cview());
   out.planar.resize(centre.planar.width(), centre.planar.height());
   if (centre.planes_done) out.planar.copy_from(centre.planar.cview());
-  out.planes_done = centre.planes_done;
-  out.densify_timings.planes_ms = centre.planes_ms;
-  out.stereo_timings = centre.stereo_timings;
-  out.stereo_scale = centre.stereo_scale;
-  out.flow_cue = flow;
+}
+
+void contour_frame_moving_maps(contour::ContourExtractor& extractor, StereoSlot& centre,
+                               const StereoSlot* neighbour_a, const StereoSlot* neighbour_b,
+                               DepthResult& out) {
+  contours_of(extractor, centre, neighbour_a, neighbour_b, out);
+  // Three full-size maps a frame, some 8 MB at 1280x720, not copied on the contour thread. The
+  // slot keeps maps of its own size (only the first frames allocate): the next frame in it, and
+  // whatever sizes other slots like it, find their room.
+  out.image.resize(centre.image.width(), centre.image.height());
+  out.sparse.resize(centre.sparse.width(), centre.sparse.height());
+  out.planar.resize(centre.planar.width(), centre.planar.height());
+  out.image.swap(centre.image);
+  out.sparse.swap(centre.sparse);
+  out.planar.swap(centre.planar);
 }
 
 densify::DensifyInputs densify_inputs(const DepthResult& r, ImageView<const float> previous) {
@@ -216,8 +241,8 @@ bool DepthPipeline::finish(DepthResult& out) {
 
 void DepthPipeline::finish_frame(const ContourWindow& window, DepthResult& out) {
   const auto neighbour = [this](int i) { return i >= 0 ? &slot_of(i) : nullptr; };
-  contour_frame(*contour_, slot_of(window.centre), neighbour(window.neighbour_a),
-                neighbour(window.neighbour_b), out);
+  contour_frame_moving_maps(*contour_, slot_of(window.centre), neighbour(window.neighbour_a),
+                            neighbour(window.neighbour_b), out);
   densify_frame(densifier_, out);
 }
 

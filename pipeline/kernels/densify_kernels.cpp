@@ -22,14 +22,37 @@ namespace dco::kernels {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-// The terms of the rows above and below: a GridRow's or a SplitSmoothRow's (the same members).
-template <class D, class Row>
-HWY_INLINE hn::Vec<D> Vertical(D d, const Row& r, int c) {
-  auto v = hn::Zero(d);
-  if (r.x_below != nullptr) v = hn::Mul(hn::LoadU(d, r.wy + c), hn::LoadU(d, r.x_below + c));
-  if (r.x_above != nullptr)
-    v = hn::Add(v, hn::Mul(hn::LoadU(d, r.wy_above + c), hn::LoadU(d, r.x_above + c)));
-  return v;
+// The interior pixels [begin, end) of one colour, with the row pointers in restrict locals
+// and the rows above and below fixed per call. A pixel's update reads only the other colour and
+// the other rows, so updating a pixel twice gives the same bits: the last partial vector is
+// done by one more vector that overlaps the previous one.
+template <bool kBelow, bool kAbove>
+HWY_NOINLINE void SmoothSplitInterior(const SplitSmoothRow& r, int begin, int end,
+                                      float* HWY_RESTRICT x) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const float* HWY_RESTRICT b = r.b;
+  const float* HWY_RESTRICT inv_diag = r.inv_diag;
+  const float* HWY_RESTRICT wx = r.wx;
+  const float* HWY_RESTRICT wx_left = r.wx_other + r.parity - 1;  // [i]: the left edge of i
+  const float* HWY_RESTRICT x_right = r.x_other + r.parity;       // [i]: the right neighbour
+  const float* HWY_RESTRICT x_left = r.x_other + r.parity - 1;
+  const float* HWY_RESTRICT wy = r.wy;
+  const float* HWY_RESTRICT x_below = r.x_below;
+  const float* HWY_RESTRICT wy_above = r.wy_above;
+  const float* HWY_RESTRICT x_above = r.x_above;
+  const auto update = [&](int i) {
+    auto v = hn::Add(hn::LoadU(d, b + i), hn::Mul(hn::LoadU(d, wx + i), hn::LoadU(d, x_right + i)));
+    v = hn::Add(v, hn::Mul(hn::LoadU(d, wx_left + i), hn::LoadU(d, x_left + i)));
+    auto vertical = hn::Zero(d);
+    if constexpr (kBelow) vertical = hn::Mul(hn::LoadU(d, wy + i), hn::LoadU(d, x_below + i));
+    if constexpr (kAbove)
+      vertical = hn::Add(vertical, hn::Mul(hn::LoadU(d, wy_above + i), hn::LoadU(d, x_above + i)));
+    hn::StoreU(hn::Mul(hn::Add(v, vertical), hn::LoadU(d, inv_diag + i)), d, x + i);
+  };
+  int i = begin;
+  for (; i + n <= end; i += n) update(i);
+  if (i < end) update(end - n);
 }
 
 void GridSmoothSplitRow(const SplitSmoothRow& r, float* x) {
@@ -40,59 +63,102 @@ void GridSmoothSplitRow(const SplitSmoothRow& r, float* x) {
   const int begin = 1 - r.parity;
   const int end = std::max(begin, (r.width - r.parity) / 2);
   detail::smooth_split_range(r, x, 0, std::min(begin, count));
-  int i = begin;
-  for (; i + n <= end; i += n) {
-    const int right = i + r.parity;  // the right neighbour among the other parity's pixels
-    auto v = hn::Add(hn::LoadU(d, r.b + i),
-                     hn::Mul(hn::LoadU(d, r.wx + i), hn::LoadU(d, r.x_other + right)));
-    v = hn::Add(v,
-                hn::Mul(hn::LoadU(d, r.wx_other + right - 1), hn::LoadU(d, r.x_other + right - 1)));
-    hn::StoreU(hn::Mul(hn::Add(v, Vertical(d, r, i)), hn::LoadU(d, r.inv_diag + i)), d, x + i);
+  if (end - begin < n) {
+    detail::smooth_split_range(r, x, std::min(begin, count), count);
+    return;
   }
-  detail::smooth_split_range(r, x, std::min(i, count), count);
+  const bool below = r.x_below != nullptr;
+  const bool above = r.x_above != nullptr;
+  if (below && above)
+    SmoothSplitInterior<true, true>(r, begin, end, x);
+  else if (below)
+    SmoothSplitInterior<true, false>(r, begin, end, x);
+  else if (above)
+    SmoothSplitInterior<false, true>(r, begin, end, x);
+  else
+    SmoothSplitInterior<false, false>(r, begin, end, x);
+  detail::smooth_split_range(r, x, end, count);
 }
 
-void SplitRow(const float* in, int width, float* even, float* odd) {
+void SplitRow(const float* HWY_RESTRICT in, int width, float* HWY_RESTRICT even,
+              float* HWY_RESTRICT odd) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
   const int pairs = width / 2;
-  int i = 0;
-  for (; i + n <= pairs; i += n) {
+  const auto split = [&](int i) {
     hn::Vec<decltype(d)> e, o;
     hn::LoadInterleaved2(d, in + 2 * i, e, o);
     hn::StoreU(e, d, even + i);
     hn::StoreU(o, d, odd + i);
-  }
+  };
+  int i = 0;
+  for (; i + n <= pairs; i += n) split(i);
+  if (i < pairs && pairs >= n) split(pairs - n), i = pairs;  // overlaps: the same values again
   detail::split_range(in, width, i, parity_count(width, 0), even, odd);
 }
 
-void MergeRow(const float* even, const float* odd, int width, float* out) {
+void MergeRow(const float* HWY_RESTRICT even, const float* HWY_RESTRICT odd, int width,
+              float* HWY_RESTRICT out) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
   const int pairs = width / 2;
-  int i = 0;
-  for (; i + n <= pairs; i += n)
+  const auto merge = [&](int i) {
     hn::StoreInterleaved2(hn::LoadU(d, even + i), hn::LoadU(d, odd + i), d, out + 2 * i);
+  };
+  int i = 0;
+  for (; i + n <= pairs; i += n) merge(i);
+  if (i < pairs && pairs >= n) merge(pairs - n), i = pairs;  // overlaps: the same values again
   detail::merge_range(even, odd, width, i, parity_count(width, 0), out);
+}
+
+// Columns [begin, end) of A x, each with both row neighbours; as SmoothSplitInterior, the last
+// partial vector is one more vector that overlaps the previous one (out is not an input).
+template <bool kBelow, bool kAbove>
+HWY_NOINLINE void ApplyInterior(const GridRow& r, const float* HWY_RESTRICT x, int begin, int end,
+                                float* HWY_RESTRICT out) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const float* HWY_RESTRICT diag = r.diag;
+  const float* HWY_RESTRICT wx = r.wx;
+  const float* HWY_RESTRICT wy = r.wy;
+  const float* HWY_RESTRICT x_below = r.x_below;
+  const float* HWY_RESTRICT wy_above = r.wy_above;
+  const float* HWY_RESTRICT x_above = r.x_above;
+  const auto apply = [&](int c) {
+    auto v = hn::Sub(hn::Mul(hn::LoadU(d, diag + c), hn::LoadU(d, x + c)),
+                     hn::Mul(hn::LoadU(d, wx + c), hn::LoadU(d, x + c + 1)));
+    v = hn::Sub(v, hn::Mul(hn::LoadU(d, wx + c - 1), hn::LoadU(d, x + c - 1)));
+    auto vertical = hn::Zero(d);
+    if constexpr (kBelow) vertical = hn::Mul(hn::LoadU(d, wy + c), hn::LoadU(d, x_below + c));
+    if constexpr (kAbove)
+      vertical = hn::Add(vertical, hn::Mul(hn::LoadU(d, wy_above + c), hn::LoadU(d, x_above + c)));
+    hn::StoreU(hn::Sub(v, vertical), d, out + c);
+  };
+  int c = begin;
+  for (; c + n <= end; c += n) apply(c);
+  if (c < end) apply(end - n);
 }
 
 void GridApplyRow(const GridRow& r, const float* x, float* out) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
   const int w = r.width;
-  if (w < 2) {
+  if (w - 2 < n) {
     detail::apply_range(r, x, out, 0, w);
     return;
   }
   detail::apply_range(r, x, out, 0, 1);
-  int c = 1;
-  for (; c + n <= w - 1; c += n) {
-    auto v = hn::Sub(hn::Mul(hn::LoadU(d, r.diag + c), hn::LoadU(d, x + c)),
-                     hn::Mul(hn::LoadU(d, r.wx + c), hn::LoadU(d, x + c + 1)));
-    v = hn::Sub(v, hn::Mul(hn::LoadU(d, r.wx + c - 1), hn::LoadU(d, x + c - 1)));
-    hn::StoreU(hn::Sub(v, Vertical(d, r, c)), d, out + c);
-  }
-  detail::apply_range(r, x, out, c, w);
+  const bool below = r.x_below != nullptr;
+  const bool above = r.x_above != nullptr;
+  if (below && above)
+    ApplyInterior<true, true>(r, x, 1, w - 1, out);
+  else if (below)
+    ApplyInterior<true, false>(r, x, 1, w - 1, out);
+  else if (above)
+    ApplyInterior<false, true>(r, x, 1, w - 1, out);
+  else
+    ApplyInterior<false, false>(r, x, 1, w - 1, out);
+  detail::apply_range(r, x, out, w - 1, w);
 }
 
 void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) {

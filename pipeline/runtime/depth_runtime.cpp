@@ -388,7 +388,7 @@ void DepthRuntime::contour_end(std::stop_token stop) {
 }
 
 void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b) {
-  const SlotEntry& c = slots_[static_cast<std::size_t>(centre)];
+  SlotEntry& c = slots_[static_cast<std::size_t>(centre)];
   int result = -1;
   {
     std::unique_lock lock(mutex_);
@@ -405,7 +405,8 @@ void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a
     if (hook_) hook_(Stage::kContour, c.slot.index);
     r.times = c.times;
     r.times.contour_start = Clock::now();
-    contour_frame(*contour_, c.slot, neighbour(neighbour_a), neighbour(neighbour_b), r.result);
+    contour_frame_moving_maps(*contour_, c.slot, neighbour(neighbour_a), neighbour(neighbour_b),
+                              r.result);
     r.times.contour_end = Clock::now();
   } catch (...) {
     fail(std::current_exception());

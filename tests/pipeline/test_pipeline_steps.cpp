@@ -108,6 +108,51 @@ TEST(PlaneFrame, TheStereoThreadsPlanesAreTheDensifiersOwnFirstStep) {
   }
 }
 
+TEST(ContourFrame, MovingTheMapsGivesTheCopysResultAndLeavesTheSlotItsSizes) {
+  const synthetic::SceneConfig config = synthetic::preset("hand", 320, 180);
+  const synthetic::SceneRenderer scene(config);
+  PipelineParams params;
+  params.stereo.max_disparity = synthetic::covering_max_disparity(config);
+  params.stereo.internal_resolution = "half";
+  const auto matcher = stereo::make_cpu_stereo_matcher(params.stereo);
+  StereoSlot slots[3];
+  densify::MatchPlaneSmoother planes;
+  for (int i = 0; i < 3; ++i) {
+    synthetic::StereoSample s;
+    scene.render(i, s);
+    prepare_frame(params.stereo, s.left.cview(), i, slots[i]);
+    stereo_frame(*matcher, s.left.cview(), s.right.cview(), slots[i]);
+    plane_frame(params.densify, planes, slots[i]);
+  }
+  const auto extractor = contour::make_cpu_contour_extractor(params.contour);
+  DepthResult copied;
+  contour_frame(*extractor, slots[1], &slots[0], &slots[2], copied);
+  // `moved` starts with maps of another size and content: the slot must not keep them.
+  DepthResult moved;
+  moved.image.resize(7, 5);
+  moved.sparse.resize(3, 2);
+  StereoSlot& centre = slots[1];
+  contour_frame_moving_maps(*extractor, centre, &slots[0], &slots[2], moved);
+  for (const DepthResult* r : {&copied, &moved}) {
+    EXPECT_EQ(r->index, 1);
+    EXPECT_TRUE(r->flow_cue);
+    EXPECT_TRUE(r->planes_done);
+  }
+  EXPECT_TRUE(same_bytes(moved.image.cview(), copied.image.cview()));
+  EXPECT_TRUE(same_bytes(moved.sparse.cview(), copied.sparse.cview()));
+  EXPECT_TRUE(same_bytes(moved.planar.cview(), copied.planar.cview()));
+  EXPECT_TRUE(same_bytes(moved.contours.cview(), copied.contours.cview()));
+  EXPECT_TRUE(same_bytes(moved.m_fuse.cview(), copied.m_fuse.cview()));
+  EXPECT_TRUE(centre.image.view().same_size(copied.image.view()));
+  EXPECT_TRUE(centre.sparse.view().same_size(copied.sparse.view()));
+  EXPECT_TRUE(centre.planar.view().same_size(copied.planar.view()));
+  // Both results densify alike.
+  densify::Densifier a(params.densify), b(params.densify);
+  densify_frame(a, copied);
+  densify_frame(b, moved);
+  EXPECT_TRUE(same_bytes(moved.dense.cview(), copied.dense.cview()));
+}
+
 TEST(ContourWindows, CentredWindowTrailsByOneAndCausalWindowLooksBack) {
   const auto expect = [](ContourWindow w, int centre, int a, int b) {
     EXPECT_EQ(w.centre, centre);

@@ -81,6 +81,12 @@ void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmooth
 //    planar maps and stereo timings into it.
 void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centre,
                    const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out);
+// The same, but the centre's image, sparse and planar maps move into `out` instead of being
+// copied: the slot takes `out`'s buffers for them in exchange, same sizes, contents stale. For
+// callers that read no more of those maps from the slot (the next frame's steps overwrite them).
+void contour_frame_moving_maps(contour::ContourExtractor& extractor, StereoSlot& centre,
+                               const StereoSlot* neighbour_a, const StereoSlot* neighbour_b,
+                               DepthResult& out);
 // What the densifier reads of a result the contour step filled; `previous` is the stability
 // term's previous frame (empty for none).
 densify::DensifyInputs densify_inputs(const DepthResult& r, ImageView<const float> previous);
