@@ -177,8 +177,7 @@ void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) 
   const bool colour_in_register = colour != nullptr && rule.colour_floor_from < lanes;
   const auto colour_lanes = colour_in_register ? hn::LoadU(df, colour) : hn::Zero(df);
   const auto colour_last = hn::Set(di, colour_in_register ? rule.colour_floor_from : 0);
-  int i = 0;
-  for (; i + lanes <= n; i += lanes) {
+  const auto weights = [&](int i) {
     const auto ba = hn::PromoteTo(di, hn::LoadU(du8, e.barrier_a + i));
     const auto bb = hn::PromoteTo(di, hn::LoadU(du8, e.barrier_b + i));
     const auto sa = hn::LoadU(df, e.strength_a + i);
@@ -198,7 +197,11 @@ void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) 
     }
     const auto kept = hn::Mul(scale, hn::IfThenElse(hn::Lt(weight, floor), floor, weight));
     hn::StoreU(hn::IfThenElse(hn::RebindMask(df, hn::Ne(ba, bb)), cut, kept), df, out + i);
-  }
+  };
+  int i = 0;
+  for (; i + lanes <= n; i += lanes) weights(i);
+  // The last partial vector overlaps the one before it (out is not an input).
+  if (i < n && n >= lanes) weights(n - lanes), i = n;
   detail::edge_range(e, rule, i, n, out);
 }
 
@@ -359,28 +362,49 @@ void DataTermsRow(const float* sparse, const float* hint, const float* previous,
   detail::data_terms_range(sparse, hint, previous, rule, x, width, data, b, low, high);
 }
 
+// Columns [begin, end) of DiagonalRow, each with both row edges, with the rows above and below
+// fixed per call; the last partial vector is one more vector that overlaps the previous one
+// (the outputs are not inputs). The additions keep kernels::pixel::diagonal's order.
+template <bool kBelow, bool kAbove>
+HWY_NOINLINE void DiagonalInterior(const float* HWY_RESTRICT data, const float* HWY_RESTRICT wx,
+                                   const float* HWY_RESTRICT wy, const float* HWY_RESTRICT wy_above,
+                                   int begin, int end, float* HWY_RESTRICT diag,
+                                   float* HWY_RESTRICT inv_diag) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const auto zero = hn::Zero(d);
+  const auto one = hn::Set(d, 1.0f);
+  const auto diagonal = [&](int x) {
+    auto s = hn::Add(hn::LoadU(d, data + x), hn::LoadU(d, wx + x));
+    s = hn::Add(s, hn::LoadU(d, wx + x - 1));
+    if constexpr (kBelow) s = hn::Add(s, hn::LoadU(d, wy + x));
+    if constexpr (kAbove) s = hn::Add(s, hn::LoadU(d, wy_above + x));
+    hn::StoreU(s, d, diag + x);
+    hn::StoreU(hn::IfThenElseZero(hn::Gt(s, zero), hn::Div(one, s)), d, inv_diag + x);
+  };
+  int x = begin;
+  for (; x + n <= end; x += n) diagonal(x);
+  if (x < end) diagonal(end - n);
+}
+
 void DiagonalRow(const float* data, const float* wx, const float* wy, const float* wy_above,
                  int width, float* diag, float* inv_diag) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
-  if (width < 2) {
+  if (width - 2 < n) {
     detail::diagonal_range(data, wx, wy, wy_above, width, 0, width, diag, inv_diag);
     return;
   }
   detail::diagonal_range(data, wx, wy, wy_above, width, 0, 1, diag, inv_diag);
-  const auto zero = hn::Zero(d);
-  const auto one = hn::Set(d, 1.0f);
-  int x = 1;
-  // Interior columns have both row edges; the additions keep kernels::pixel::diagonal's order.
-  for (; x + n <= width - 1; x += n) {
-    auto s = hn::Add(hn::LoadU(d, data + x), hn::LoadU(d, wx + x));
-    s = hn::Add(s, hn::LoadU(d, wx + x - 1));
-    if (wy != nullptr) s = hn::Add(s, hn::LoadU(d, wy + x));
-    if (wy_above != nullptr) s = hn::Add(s, hn::LoadU(d, wy_above + x));
-    hn::StoreU(s, d, diag + x);
-    hn::StoreU(hn::IfThenElseZero(hn::Gt(s, zero), hn::Div(one, s)), d, inv_diag + x);
-  }
-  detail::diagonal_range(data, wx, wy, wy_above, width, x, width, diag, inv_diag);
+  if (wy != nullptr && wy_above != nullptr)
+    DiagonalInterior<true, true>(data, wx, wy, wy_above, 1, width - 1, diag, inv_diag);
+  else if (wy != nullptr)
+    DiagonalInterior<true, false>(data, wx, wy, wy_above, 1, width - 1, diag, inv_diag);
+  else if (wy_above != nullptr)
+    DiagonalInterior<false, true>(data, wx, wy, wy_above, 1, width - 1, diag, inv_diag);
+  else
+    DiagonalInterior<false, false>(data, wx, wy, wy_above, 1, width - 1, diag, inv_diag);
+  detail::diagonal_range(data, wx, wy, wy_above, width, width - 1, width, diag, inv_diag);
 }
 
 void MatchPlaneRow(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
