@@ -122,9 +122,9 @@ void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<
                        Finish&& finish) {
   const int h = a.height();
   if (h == 0) return;
-  // At step r the rows from r - 2 sweeps (read by the last update of the row below it) to r + 1
-  // are in use.
-  rows.start(a.width(), h, 2 * std::max(sweeps, 0) + 2);
+  // At step r the rows from r - 2 sweeps - 1 (above the row `finish` gets, which may read the
+  // rows next to it from the slots) to r + 1 are in use.
+  rows.start(a.width(), h, 2 * std::max(sweeps, 0) + 3);
   if (sweeps <= 0) {
     prepare(0);
     for (int r = 0; r < h; ++r) {
@@ -181,7 +181,11 @@ ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> 
   };
   const auto residual_row_norms = [&](int y) {
     float* out = r.empty() ? rows.spare_row() : r.row(y);
-    residual_row(a, b, x, y, out);
+    // After sweeps the rows are still in the slots: no second read of the system's rows.
+    if (sweeps > 0)
+      rows.residual(y, out);
+    else
+      residual_row(a, b, x, y, out);
     n.rr += kernels::dot_row(out, out, w);
     n.bb += kernels::dot_row(b.row(y), b.row(y), w);
   };
@@ -239,7 +243,10 @@ void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x
   Level& next = levels_[static_cast<std::size_t>(level)];
   fill(next.b.view(), 0.0f);
   const auto restrict_row = [&](int y) {
-    residual_row(a, b, x, y, residual_row_.data());
+    if (smoothing_sweeps > 0)
+      rows_.residual(y, residual_row_.data());
+    else
+      residual_row(a, b, x, y, residual_row_.data());
     add_to_parents(residual_row_.data(), w, next.b.row(y / 2));
   };
   gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/true, rows_, zero_row, restrict_row);

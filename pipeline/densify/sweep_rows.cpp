@@ -13,6 +13,7 @@ void SweepRows::start(int width, int height, int slots) {
   half_ = (kernels::parity_count(width, 0) + kLineFloats - 1) / kLineFloats * kLineFloats;
   ring_.resize(2 * kArrays * half_, slots_);
   spare_.resize(width, 1);
+  residual_.resize(2 * half_, 1);
 }
 
 float* SweepRows::array(int r, Array a, int parity) {
@@ -30,12 +31,15 @@ void SweepRows::load(const GridSystem& a, ImageView<const float> b, ImageView<co
   };
   split(x.row(r), kX);
   split(b.row(r), kB);
-  split(a.inv_diag.row(r), kInvDiag);
+  split(a.diag.row(r), kDiag);
   split(a.wx.row(r), kWx);
   split(a.wy.row(r), kWy);
+  for (int parity = 0; parity < 2; ++parity)
+    kernels::inverse_diagonal_row(array(r, kDiag, parity), kernels::parity_count(width_, parity),
+                                  array(r, kInvDiag, parity));
 }
 
-void SweepRows::smooth(int r, int parity) {
+kernels::SplitSmoothRow SweepRows::smooth_row(int r, int parity) const {
   const int other = 1 - parity;
   kernels::SplitSmoothRow row;
   row.width = width_;
@@ -53,7 +57,19 @@ void SweepRows::smooth(int r, int parity) {
     row.wy_above = array(r - 1, kWy, parity);
     row.x_above = array(r - 1, kX, parity);
   }
-  kernels::grid_smooth_split_row(row, array(r, kX, parity));
+  return row;
+}
+
+void SweepRows::smooth(int r, int parity) {
+  kernels::grid_smooth_split_row(smooth_row(r, parity), array(r, kX, parity));
+}
+
+void SweepRows::residual(int r, float* out) {
+  float* split[2] = {residual_.row(0), residual_.row(0) + half_};
+  for (int parity = 0; parity < 2; ++parity)
+    kernels::split_residual_row(
+        {smooth_row(r, parity), array(r, kDiag, parity), array(r, kX, parity)}, split[parity]);
+  kernels::merge_row(split[0], split[1], width_, out);
 }
 
 void SweepRows::store(int r, ImageView<float> x) const {

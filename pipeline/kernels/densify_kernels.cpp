@@ -80,6 +80,80 @@ void GridSmoothSplitRow(const SplitSmoothRow& r, float* x) {
   detail::smooth_split_range(r, x, end, count);
 }
 
+// The interior pixels [begin, end) of one colour of split_residual_row, as SmoothSplitInterior
+// (the output is not an input, so the last partial vector overlaps the one before it).
+template <bool kBelow, bool kAbove>
+HWY_NOINLINE void ResidualSplitInterior(const SplitResidualRow& r, int begin, int end,
+                                        float* HWY_RESTRICT out) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const SplitSmoothRow& s = r.row;
+  const float* HWY_RESTRICT b = s.b;
+  const float* HWY_RESTRICT diag = r.diag;
+  const float* HWY_RESTRICT x = r.x;
+  const float* HWY_RESTRICT wx = s.wx;
+  const float* HWY_RESTRICT wx_left = s.wx_other + s.parity - 1;
+  const float* HWY_RESTRICT x_right = s.x_other + s.parity;
+  const float* HWY_RESTRICT x_left = s.x_other + s.parity - 1;
+  const float* HWY_RESTRICT wy = s.wy;
+  const float* HWY_RESTRICT x_below = s.x_below;
+  const float* HWY_RESTRICT wy_above = s.wy_above;
+  const float* HWY_RESTRICT x_above = s.x_above;
+  const auto residual = [&](int i) {
+    auto v = hn::Sub(hn::Mul(hn::LoadU(d, diag + i), hn::LoadU(d, x + i)),
+                     hn::Mul(hn::LoadU(d, wx + i), hn::LoadU(d, x_right + i)));
+    v = hn::Sub(v, hn::Mul(hn::LoadU(d, wx_left + i), hn::LoadU(d, x_left + i)));
+    auto vertical = hn::Zero(d);
+    if constexpr (kBelow) vertical = hn::Mul(hn::LoadU(d, wy + i), hn::LoadU(d, x_below + i));
+    if constexpr (kAbove)
+      vertical = hn::Add(vertical, hn::Mul(hn::LoadU(d, wy_above + i), hn::LoadU(d, x_above + i)));
+    hn::StoreU(hn::Sub(hn::LoadU(d, b + i), hn::Sub(v, vertical)), d, out + i);
+  };
+  int i = begin;
+  for (; i + n <= end; i += n) residual(i);
+  if (i < end) residual(end - n);
+}
+
+void ResidualSplitRow(const SplitResidualRow& r, float* out) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const SplitSmoothRow& s = r.row;
+  const int count = parity_count(s.width, s.parity);
+  const int begin = 1 - s.parity;
+  const int end = std::max(begin, (s.width - s.parity) / 2);
+  detail::residual_split_range(r, out, 0, std::min(begin, count));
+  if (end - begin < n) {
+    detail::residual_split_range(r, out, std::min(begin, count), count);
+    return;
+  }
+  const bool below = s.x_below != nullptr;
+  const bool above = s.x_above != nullptr;
+  if (below && above)
+    ResidualSplitInterior<true, true>(r, begin, end, out);
+  else if (below)
+    ResidualSplitInterior<true, false>(r, begin, end, out);
+  else if (above)
+    ResidualSplitInterior<false, true>(r, begin, end, out);
+  else
+    ResidualSplitInterior<false, false>(r, begin, end, out);
+  detail::residual_split_range(r, out, end, count);
+}
+
+void InverseDiagonalRow(const float* HWY_RESTRICT diag, int count, float* HWY_RESTRICT inv) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const auto zero = hn::Zero(d);
+  const auto one = hn::Set(d, 1.0f);
+  const auto inverse = [&](int i) {
+    const auto s = hn::LoadU(d, diag + i);
+    hn::StoreU(hn::IfThenElseZero(hn::Gt(s, zero), hn::Div(one, s)), d, inv + i);
+  };
+  int i = 0;
+  for (; i + n <= count; i += n) inverse(i);
+  if (i < count && count >= n) inverse(count - n), i = count;  // overlaps: the same values again
+  detail::inverse_diagonal_range(diag, i, count, inv);
+}
+
 void SplitRow(const float* HWY_RESTRICT in, int width, float* HWY_RESTRICT even,
               float* HWY_RESTRICT odd) {
   const hn::ScalableTag<float> d;
@@ -580,6 +654,8 @@ namespace dco::kernels {
 HWY_EXPORT(GridApplyRow);
 HWY_EXPORT(GridSmoothSplitRow);
 HWY_EXPORT(SplitRow);
+HWY_EXPORT(ResidualSplitRow);
+HWY_EXPORT(InverseDiagonalRow);
 HWY_EXPORT(MergeRow);
 HWY_EXPORT(DotRow);
 HWY_EXPORT(MatchPlaneRowSums);
@@ -601,6 +677,14 @@ void grid_smooth_split_row(const SplitSmoothRow& row, float* x) {
 
 void split_row(const float* in, int width, float* even, float* odd) {
   HWY_DYNAMIC_DISPATCH(SplitRow)(in, width, even, odd);
+}
+
+void split_residual_row(const SplitResidualRow& row, float* out) {
+  HWY_DYNAMIC_DISPATCH(ResidualSplitRow)(row, out);
+}
+
+void inverse_diagonal_row(const float* diag, int n, float* inv) {
+  HWY_DYNAMIC_DISPATCH(InverseDiagonalRow)(diag, n, inv);
 }
 
 void merge_row(const float* even, const float* odd, int width, float* out) {

@@ -74,6 +74,14 @@ void grid_smooth_split_row(const SplitSmoothRow& row, float* x) {
   detail::smooth_split_range(row, x, 0, parity_count(row.width, row.parity));
 }
 
+void split_residual_row(const SplitResidualRow& row, float* out) {
+  detail::residual_split_range(row, out, 0, parity_count(row.row.width, row.row.parity));
+}
+
+void inverse_diagonal_row(const float* diag, int n, float* inv) {
+  detail::inverse_diagonal_range(diag, 0, n, inv);
+}
+
 void split_row(const float* in, int width, float* even, float* odd) {
   detail::split_range(in, width, 0, parity_count(width, 0), even, odd);
 }

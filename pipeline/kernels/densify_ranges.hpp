@@ -21,6 +21,14 @@ inline void smooth_split_range(const SplitSmoothRow& r, float* x, int begin, int
   for (int i = begin; i < end; ++i) x[i] = pixel::smooth_split_at(r, i);
 }
 
+inline void residual_split_range(const SplitResidualRow& r, float* out, int begin, int end) {
+  for (int i = begin; i < end; ++i) out[i] = pixel::residual_split_at(r, i);
+}
+
+inline void inverse_diagonal_range(const float* diag, int begin, int end, float* inv) {
+  for (int i = begin; i < end; ++i) inv[i] = pixel::inverse_diagonal(diag[i]);
+}
+
 inline void split_range(const float* in, int width, int begin, int end, float* even, float* odd) {
   for (int i = begin; i < end; ++i) {
     even[i] = in[2 * i];

@@ -60,7 +60,7 @@ struct RowData {
 
 // A row of RowData split by column parity (split_row's layout).
 struct SplitRowData {
-  std::vector<float> b[2], inv[2], wx[2], wy[2], wy_above[2], x_above[2], x_below[2], x[2];
+  std::vector<float> b[2], diag[2], inv[2], wx[2], wy[2], wy_above[2], x_above[2], x_below[2], x[2];
 
   explicit SplitRowData(const RowData& d) {
     const int w = static_cast<int>(d.diag.size());
@@ -70,7 +70,7 @@ struct SplitRowData {
         for (int c = p; c < w; c += 2) out[p].push_back(in[static_cast<std::size_t>(c)]);
       }
     };
-    split(d.b, b), split(d.inv, inv), split(d.wx, wx), split(d.wy, wy);
+    split(d.b, b), split(d.diag, diag), split(d.inv, inv), split(d.wx, wx), split(d.wy, wy);
     split(d.wy_above, wy_above), split(d.x_above, x_above), split(d.x_below, x_below);
     split(d.x, x);
   }
@@ -115,6 +115,61 @@ TEST(DensifyKernels, SmoothSplitRowIsTheSmoothRowBitForBit) {
               ASSERT_EQ(reference[i], want) << "scalar, w " << w << " pixel " << i;
             }
           }
+  });
+}
+
+TEST(DensifyKernels, SplitResidualRowIsThePlainResidualBitForBit) {
+  // b - A x of each colour in the split layout equals, bit for bit, b minus the plain layout's
+  // grid_apply_row on every target.
+  std::mt19937 rng(17);
+  for_each_target([&] {
+    for (const int w : kWidths)
+      for (const int parity : {0, 1})
+        for (const bool above : {false, true})
+          for (const bool below : {false, true}) {
+            const RowData data(rng, w);
+            std::vector<float> ax(static_cast<std::size_t>(w));
+            scalar::grid_apply_row(data.row(above, below), data.x.data(), ax.data());
+            const SplitRowData split(data);
+            const SplitResidualRow row{split.row(w, parity, above, below),
+                                       split.diag[parity].data(), split.x[parity].data()};
+            const int count = parity_count(w, parity);
+            const float guard = 1234.5f;  // one float past the colour's pixels
+            std::vector<float> actual(static_cast<std::size_t>(count) + 1, guard);
+            std::vector<float> reference(static_cast<std::size_t>(count));
+            split_residual_row(row, actual.data());
+            scalar::split_residual_row(row, reference.data());
+            ASSERT_EQ(actual.back(), guard) << "w " << w;
+            for (int i = 0; i < count; ++i) {
+              const std::size_t c = static_cast<std::size_t>(2 * i + parity);
+              const float want = data.b[c] - ax[c];
+              ASSERT_EQ(actual[static_cast<std::size_t>(i)], want)
+                  << "w " << w << " parity " << parity << " above " << above << " below " << below
+                  << " pixel " << i;
+              ASSERT_EQ(reference[static_cast<std::size_t>(i)], want) << "scalar, w " << w;
+            }
+          }
+  });
+}
+
+TEST(DensifyKernels, InverseDiagonalRowIsTheSystemsRule) {
+  // 1 / diag where diag > 0, else 0 (an empty row of the system), as GridSystem keeps inv_diag.
+  std::mt19937 rng(18);
+  for_each_target([&] {
+    for (const int n : kWidths) {
+      std::vector<float> diag = random_floats(rng, n, 0.01f, 9.0f);
+      for (int i = 0; i < n; i += 3) diag[static_cast<std::size_t>(i)] = i % 2 == 0 ? 0.0f : -1.0f;
+      std::vector<float> inv(static_cast<std::size_t>(n) + 1, 1234.5f), reference(diag.size());
+      inverse_diagonal_row(diag.data(), n, inv.data());
+      scalar::inverse_diagonal_row(diag.data(), n, reference.data());
+      ASSERT_EQ(inv.back(), 1234.5f) << "n " << n;
+      for (int i = 0; i < n; ++i) {
+        const float d = diag[static_cast<std::size_t>(i)];
+        const float want = d > 0.0f ? 1.0f / d : 0.0f;
+        ASSERT_EQ(inv[static_cast<std::size_t>(i)], want) << "n " << n << " i " << i;
+        ASSERT_EQ(reference[static_cast<std::size_t>(i)], want) << "scalar, n " << n;
+      }
+    }
   });
 }
 

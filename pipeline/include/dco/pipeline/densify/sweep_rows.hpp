@@ -18,17 +18,22 @@ class SweepRows {
   // allocates nothing.
   void start(int width, int height, int slots);
 
-  // Copies row r of x, b and of a's coefficients into row r's slot.
+  // Copies row r of x, b and of a's coefficients into row r's slot (1 / diag worked out from
+  // diag, by GridSystem's rule: one row fewer to read).
   void load(const GridSystem& a, ImageView<const float> b, ImageView<const float> x, int r);
   // Updates the pixels of one column parity of row r; the rows next to it must be loaded.
   void smooth(int r, int parity);
   // Copies row r's x back into x.
   void store(int r, ImageView<float> x) const;
+  // out = row r of b - A x from the rows in the slots (r and the rows next to it must be loaded),
+  // the same bits as densify::residual_row.
+  void residual(int r, float* out);
   // A row of `width` floats of the caller's own, kept with the ring.
   float* spare_row() { return spare_.data(); }
 
  private:
-  enum Array { kX, kB, kInvDiag, kWx, kWy, kArrays };
+  enum Array { kX, kB, kDiag, kInvDiag, kWx, kWy, kArrays };
+  kernels::SplitSmoothRow smooth_row(int r, int parity) const;
   float* array(int r, Array a, int parity);
   const float* array(int r, Array a, int parity) const;
 
@@ -36,6 +41,7 @@ class SweepRows {
   int half_ = 0;       // floats of one parity of one array, padded to whole cache lines
   Image<float> ring_;  // one slot per row: kArrays arrays, each its even then its odd pixels
   Image<float> spare_;
+  Image<float> residual_;  // a residual row split, before it is merged
 };
 
 }  // namespace dco::densify

@@ -56,6 +56,22 @@ constexpr int parity_count(int width, int parity) {
 // as scalar::grid_smooth_row, so the same bits. Every operand is a contiguous run of floats.
 void grid_smooth_split_row(const SplitSmoothRow& row, float* x);
 
+// One colour of row y of the residual b - A x in the split layout: `row` as for the smoothing
+// (its inv_diag unused), and the colour's own pixels of x and of the diagonal.
+struct SplitResidualRow {
+  SplitSmoothRow row;
+  const float* diag = nullptr;
+  const float* x = nullptr;
+};
+
+// out[i] = (b - A x) at the parity_count(width, parity) pixels of the row's colour: the same
+// operations in the same order as grid_apply_row followed by b minus its result, so the same
+// bits as the residual of the plain layout.
+void split_residual_row(const SplitResidualRow& row, float* out);
+
+// inv[i] = 1 / diag[i], 0 where diag[i] <= 0 (GridSystem::inv_diag's rule), for n values.
+void inverse_diagonal_row(const float* diag, int n, float* inv);
+
 // even[i] = in[2 i], odd[i] = in[2 i + 1]: a row into the split layout.
 void split_row(const float* in, int width, float* even, float* odd);
 // The inverse of split_row.
@@ -194,6 +210,8 @@ void diagonal_row(const float* data, const float* wx, const float* wy, const flo
 void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out);
 void grid_apply_row(const GridRow& row, const float* x, float* out);
 void grid_smooth_split_row(const SplitSmoothRow& row, float* x);
+void split_residual_row(const SplitResidualRow& row, float* out);
+void inverse_diagonal_row(const float* diag, int n, float* inv);
 void split_row(const float* in, int width, float* even, float* odd);
 void merge_row(const float* even, const float* odd, int width, float* out);
 double dot_row(const float* a, const float* b, int n);

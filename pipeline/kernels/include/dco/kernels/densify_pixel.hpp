@@ -41,6 +41,17 @@ DCO_HD inline float smooth_split_at(const SplitSmoothRow& r, int i) {
   return (v + vertical_term(r, i)) * r.inv_diag[i];
 }
 
+// (b - A x) at pixel i of a row in the split layout: apply_at's operations, then b minus them.
+DCO_HD inline float residual_split_at(const SplitResidualRow& r, int i) {
+  const SplitSmoothRow& s = r.row;
+  const int c = 2 * i + s.parity;
+  const int right = i + s.parity;
+  float v = r.diag[i] * r.x[i];
+  if (c + 1 < s.width) v = v - s.wx[i] * s.x_other[right];
+  if (c > 0) v = v - s.wx_other[right - 1] * s.x_other[right - 1];
+  return s.b[i] - (v - vertical_term(s, i));
+}
+
 // (A x)[c].
 DCO_HD inline float apply_at(const GridRow& r, const float* x, int c) {
   float v = r.diag[c] * x[c];
