@@ -32,27 +32,29 @@ void CensusRow(const std::uint8_t* const* rows, int width, int window_w, int win
   const hn::RepartitionToWide<decltype(b32)> b64;
   const int n = static_cast<int>(hn::Lanes(d8));
   const int rx = window_w / 2;
-  const int ry = window_h / 2;
-  const int neighbours = window_w * window_h - 1;
-  // pixel::census_bits compares grey levels as ints; the bytes compare as signed once their top
-  // bit is flipped.
-  const auto flip = hn::Set(d8, std::uint8_t{0x80});
-  const hn::RebindToSigned<decltype(d8)> ds8;
-  const auto grey = [&](const std::uint8_t* p) {
-    return hn::BitCast(ds8, hn::Xor(hn::LoadU(d8, p), flip));
-  };
+  // pixel::census_bits compares grey levels as ints: unsigned bytes compare the same (one
+  // instruction on AVX-512, NEON and SVE; Highway flips the top bit where the ISA has only
+  // signed compares).
+  const auto grey = [&](const std::uint8_t* p) { return hn::LoadU(d8, p); };
   HWY_ALIGN std::uint8_t bytes[8][HWY_MAX_BYTES];
-  const auto vector_at = [&](int x) {
-    const auto centre = grey(rows[ry] + x);
+  // kW, kH > 0: the window's size known at compile time, so the loops unroll and every bit's
+  // place is a constant (0: window_w, window_h).
+  const auto vector_at = [&]<int kW, int kH>(int x) {
+    const int ww = kW > 0 ? kW : window_w;
+    const int wh = kH > 0 ? kH : window_h;
+    const int cx = ww / 2, cy = wh / 2;
+    const auto centre = grey(rows[cy] + x);
     // The bits come in falling order, so each byte is complete before the next one starts: one
     // accumulator, stored when its byte is done.
     for (int k = 0; k < 8; ++k) hn::Store(hn::Zero(d8), d8, bytes[k]);
     auto acc = hn::Zero(d8);
-    int bit = neighbours - 1;
-    for (int j = 0; j < window_h; ++j)
-      for (int dx = -rx; dx <= rx; ++dx) {
-        if (j == ry && dx == 0) continue;
-        const auto below = hn::RebindMask(d8, hn::Lt(grey(rows[j] + x + dx), centre));
+    int bit = ww * wh - 2;
+#pragma GCC unroll 16
+    for (int j = 0; j < wh; ++j) {
+#pragma GCC unroll 16
+      for (int dx = -cx; dx <= cx; ++dx) {
+        if (j == cy && dx == 0) continue;
+        const auto below = hn::Lt(grey(rows[j] + x + dx), centre);
         acc = hn::Or(acc, hn::IfThenElseZero(
                               below, hn::Set(d8, static_cast<std::uint8_t>(1u << (bit & 7)))));
         if ((bit & 7) == 0) {
@@ -61,6 +63,7 @@ void CensusRow(const std::uint8_t* const* rows, int width, int window_w, int win
         }
         --bit;
       }
+    }
     for (int p = 0; p < n; p += 16) {
       // (No arrays of vectors: SVE vectors are sizeless.)
       const auto v0 = hn::Load(b8, bytes[0] + p), v1 = hn::Load(b8, bytes[1] + p);
@@ -83,14 +86,21 @@ void CensusRow(const std::uint8_t* const* rows, int width, int window_w, int win
       store(hn::ZipUpper(b32, hi01, hi23), hn::ZipUpper(b32, hi45, hi67), 12);
     }
   };
+  // The default window (StereoParams: 9 x 7) unrolled, any other as it comes.
+  const auto vector = [&](int at) {
+    if (window_w == 9 && window_h == 7)
+      vector_at.template operator()<9, 7>(at);
+    else
+      vector_at.template operator()<0, 0>(at);
+  };
   const int begin = std::min(rx, width);
   int x = begin;
   if (n >= 16) {
-    for (; x + n + rx <= width; x += n) vector_at(x);
+    for (; x + n + rx <= width; x += n) vector(x);
     // The rest but the clamped end: one more vector, overlapping pixels already done (the same
     // values again), so that few pixels are left to the scalar loop.
     if (x < width - rx && width - rx - n >= begin) {
-      vector_at(width - rx - n);
+      vector(width - rx - n);
       x = width - rx;
     }
   }
