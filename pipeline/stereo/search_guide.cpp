@@ -79,46 +79,43 @@ void guide_batches(ImageView<const float> coarse, int width, int height, int max
   row_reached.assign(static_cast<std::size_t>(batches) * rows, 0);
   row_valid.assign(rows, 0);
   bits.resize(static_cast<std::size_t>(tiles + 1) * batches);
-  std::vector<std::int16_t>& first = scratch.first_batch;  // this coarse row, per column
-  std::vector<std::int16_t>& last = scratch.last_batch;    // (first > last: no value)
-  first.resize(static_cast<std::size_t>(cw));
-  last.resize(static_cast<std::size_t>(cw));
+  const auto cap = static_cast<float>(max_d + rule.margin + 1);
   for (int cy = 0; cy < ch; ++cy) {
     std::fill(bits.begin(), bits.end(), 0);
     const float* v = coarse.row(cy);
-    // The batches of each column's value, once per row (the tiles' columns overlap).
-    for (int x = 0; x < cw; ++x) {
-      const std::size_t at = static_cast<std::size_t>(x);
-      if (!std::isfinite(v[x]) || v[x] < 0) {
-        first[at] = 1, last[at] = 0;
-        continue;
-      }
-      const int lo = std::clamp(static_cast<int>(std::floor(2.0f * v[x])) - rule.margin, 0, max_d);
-      const int hi = std::clamp(static_cast<int>(std::ceil(2.0f * v[x])) + rule.margin, 0, max_d);
-      first[at] = static_cast<std::int16_t>(lo / rule.batch);
-      last[at] = static_cast<std::int16_t>(hi / rule.batch);
-    }
-    // Marks the batches of columns [begin, end) in `out`; returns how many have a value.
-    const auto mark = [&](int begin, int end, std::uint8_t* out) {
-      int count = 0;
-      for (int x = begin; x < end; ++x) {
-        const int lo = first[static_cast<std::size_t>(x)], hi = last[static_cast<std::size_t>(x)];
-        count += lo <= hi;
-        for (int b = lo; b <= hi; ++b) out[b] = 1;
-      }
-      return count;
+    // The batches of column x's value, or none.
+    const auto batch_range = [&](int x) {
+      if (!std::isfinite(v[x]) || v[x] < 0) return std::pair{1, 0};
+      // A value past `cap` reaches max_d at both ends, as the cap does, which keeps the
+      // conversions in range.
+      const float twice = 2.0f * std::min(v[x], cap);
+      const int lo = std::clamp(static_cast<int>(std::floor(twice)) - rule.margin, 0, max_d);
+      const int hi = std::clamp(static_cast<int>(std::ceil(twice)) + rule.margin, 0, max_d);
+      return std::pair{lo / rule.batch, hi / rule.batch};
     };
+    int row_count = 0;
     std::uint8_t* row_bits = bits.data() + static_cast<std::size_t>(tiles) * batches;
-    row_valid[cy + 1] = row_valid[cy] + mark(0, cw, row_bits);
+    for (int x = 0; x < cw; ++x) {
+      const auto [lo, hi] = batch_range(x);
+      row_count += lo <= hi;
+      for (int b = lo; b <= hi; ++b) row_bits[b] = 1;
+    }
+    row_valid[cy + 1] = row_valid[cy] + row_count;
     for (int b = 0; b < batches; ++b) {
       const std::size_t at = static_cast<std::size_t>(b) * rows + cy;
       row_reached[at + 1] = row_reached[at] + row_bits[b];
     }
     for (int t = 0; t < tiles; ++t) {
       std::uint8_t* tile_bits = bits.data() + static_cast<std::size_t>(t) * batches;
+      int count = 0;
       const auto [begin, end] = tile_columns(t);
+      for (int x = begin; x < end; ++x) {
+        const auto [lo, hi] = batch_range(x);
+        count += lo <= hi;
+        for (int b = lo; b <= hi; ++b) tile_bits[b] = 1;
+      }
       const std::size_t vat = static_cast<std::size_t>(t) * rows + cy;
-      valid[vat + 1] = valid[vat] + mark(begin, end, tile_bits);
+      valid[vat + 1] = valid[vat] + count;
       for (int b = 0; b < batches; ++b) {
         const std::size_t at = (static_cast<std::size_t>(t) * batches + b) * rows + cy;
         reached[at + 1] = reached[at] + tile_bits[b];

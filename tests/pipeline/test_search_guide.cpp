@@ -1,5 +1,6 @@
 #include "dco/pipeline/stereo/search_guide.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -52,6 +53,24 @@ TEST(SearchGuide, AMarginAcrossABatchEdgeTakesBothBatches) {
   guide_batches(coarse.cview(), 20, 8, 40, rule, scratch, mask);
   for (int y = 0; y < 8; ++y)
     for (int b = 0; b < 3; ++b) EXPECT_EQ(mask.searches(y, b), b <= 1) << y << "," << b;
+}
+
+TEST(SearchGuide, ValuesPastTheSearchTakeItsLastBatches) {
+  // max_d 40 (batches 0..2): coarse 19.5 is internal 39..39 +- margin, the last two batches with
+  // a margin of 9; 1e30 and the largest float reach only past the search, so the last batch, as
+  // does 21 (internal 42); a wide margin (60) reaches back to batch 0 from 21 but not from 1e30.
+  for (const float v : {19.5f, 21.0f, 1e30f, std::numeric_limits<float>::max()})
+    for (const int margin : {9, 60}) {
+      const Image<float> coarse = coarse_map(4, v);
+      GuideRule rule;
+      rule.margin = margin;
+      GuideScratch scratch;
+      BatchMask mask;
+      guide_batches(coarse.cview(), 20, 8, 40, rule, scratch, mask);
+      const int d_lo = std::clamp(static_cast<int>(std::min(2.0f * v, 1e9f)) - margin, 0, 40);
+      for (int b = 0; b < 3; ++b)
+        EXPECT_EQ(mask.searches(3, b), b >= d_lo / 16) << v << " margin " << margin << " " << b;
+    }
 }
 
 TEST(SearchGuide, RowsWithTooFewCoarseValuesSearchEverything) {

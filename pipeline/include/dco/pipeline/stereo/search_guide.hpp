@@ -71,7 +71,6 @@ struct GuideRule {
 struct GuideScratch {
   std::vector<int> reached, valid, row_reached, row_valid;
   std::vector<std::uint8_t> bits;
-  std::vector<std::int16_t> first_batch, last_batch;
 };
 
 // From the sparse map of a half-size pass over the internal images (coarse pixels, +inf or NaN
