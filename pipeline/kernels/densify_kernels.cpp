@@ -527,33 +527,52 @@ void MatchPlaneRow(const float* sums, const float* own, int n, const MatchPlaneR
 void MatchPlaneRowSums(const float* match, const float* dv, const float* dd, int n, int radius,
                        float* sums) {
   const hn::ScalableTag<float> d;
+  using V = hn::Vec<decltype(d)>;
   const int lanes = static_cast<int>(hn::Lanes(d));
-  std::fill(sums, sums + 6 * static_cast<std::ptrdiff_t>(n), 0.0f);
-  float* s0 = sums;
-  float* s1 = s0 + n;
-  float* s2 = s1 + n;
-  float* s3 = s2 + n;
-  float* s4 = s3 + n;
-  float* s5 = s4 + n;
-  for (int k = -radius; k <= radius; ++k) {
-    const auto fk = static_cast<float>(k);
-    const float fk2 = fk * fk;
-    const auto one = hn::Set(d, 1.0f), vk = hn::Set(d, fk), vk2 = hn::Set(d, fk2);
-    const int x0 = std::max(0, -k), x1 = std::min(n, n - k);
-    int x = x0;
-    for (; x + lanes <= x1; x += lanes) {
+  // Pixels with every offset inside the row, [radius, n - radius): a vector of them keeps its six
+  // sums in registers over the offsets and stores them once, and the last partial vector overlaps
+  // the one before it (its sums are computed afresh, so the same values again). The sums add the
+  // offsets in rising order, as pixel::match_plane_row_step's callers do.
+  const int begin = std::min(radius, n);
+  const int end = std::max(begin, n - radius);
+  const auto one = hn::Set(d, 1.0f);
+  const auto interior = [&](int x) {
+    V a0 = hn::Zero(d), a1 = a0, a2 = a0, a3 = a0, a4 = a0, a5 = a0;
+    for (int k = -radius; k <= radius; ++k) {
+      const auto fk = static_cast<float>(k);
+      const auto vk = hn::Set(d, fk), vk2 = hn::Set(d, fk * fk);
       const auto m = hn::LoadU(d, match + x + k), v = hn::LoadU(d, dv + x + k);
       const auto vv = hn::LoadU(d, dd + x + k);
-      hn::StoreU(hn::Add(hn::LoadU(d, s0 + x), hn::Mul(one, m)), d, s0 + x);
-      hn::StoreU(hn::Add(hn::LoadU(d, s1 + x), hn::Mul(vk, m)), d, s1 + x);
-      hn::StoreU(hn::Add(hn::LoadU(d, s2 + x), hn::Mul(vk2, m)), d, s2 + x);
-      hn::StoreU(hn::Add(hn::LoadU(d, s3 + x), hn::Mul(one, v)), d, s3 + x);
-      hn::StoreU(hn::Add(hn::LoadU(d, s4 + x), hn::Mul(vk, v)), d, s4 + x);
-      hn::StoreU(hn::Add(hn::LoadU(d, s5 + x), hn::Mul(one, vv)), d, s5 + x);
+      a0 = hn::Add(a0, hn::Mul(one, m));
+      a1 = hn::Add(a1, hn::Mul(vk, m));
+      a2 = hn::Add(a2, hn::Mul(vk2, m));
+      a3 = hn::Add(a3, hn::Mul(one, v));
+      a4 = hn::Add(a4, hn::Mul(vk, v));
+      a5 = hn::Add(a5, hn::Mul(one, vv));
     }
-    for (; x < x1; ++x)
-      pixel::match_plane_row_step(match[x + k], dv[x + k], dd[x + k], fk, fk2, sums + x, n);
+    const auto at = [&](int j) { return sums + static_cast<std::ptrdiff_t>(j) * n + x; };
+    hn::StoreU(a0, d, at(0));
+    hn::StoreU(a1, d, at(1));
+    hn::StoreU(a2, d, at(2));
+    hn::StoreU(a3, d, at(3));
+    hn::StoreU(a4, d, at(4));
+    hn::StoreU(a5, d, at(5));
+  };
+  int vector_end = begin;
+  if (end - begin >= lanes) {
+    for (; vector_end + lanes <= end; vector_end += lanes) interior(vector_end);
+    if (vector_end < end) interior(end - lanes), vector_end = end;
   }
+  // The rest pixel by pixel, over the offsets inside the row.
+  const auto pixel_sums = [&](int x) {
+    for (int j = 0; j < 6; ++j) sums[static_cast<std::ptrdiff_t>(j) * n + x] = 0.0f;
+    for (int k = std::max(-radius, -x); k <= std::min(radius, n - 1 - x); ++k) {
+      const auto fk = static_cast<float>(k);
+      pixel::match_plane_row_step(match[x + k], dv[x + k], dd[x + k], fk, fk * fk, sums + x, n);
+    }
+  };
+  for (int x = 0; x < begin; ++x) pixel_sums(x);
+  for (int x = vector_end; x < n; ++x) pixel_sums(x);
 }
 
 void MatchPlaneWindowSums(const float* const* rows, int radius, int n, float* s) {
