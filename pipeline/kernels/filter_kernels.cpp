@@ -47,14 +47,17 @@ void RowFilter(const float* in, int width, const float* taps, int radius, float*
   const int begin = std::min(radius, width);
   const int end = std::max(begin, width - radius);
   detail::row_filter_range(in, width, taps, radius, 0, begin, out);
-  int x = begin;
-  for (; x + n <= end; x += n) {
-    const float* src = in + x - radius;
+  const auto filter = [&](int at) {
+    const float* src = in + at - radius;
     auto sum = hn::Zero(d);
     for (int k = 0; k <= 2 * radius; ++k)
       sum = hn::Add(sum, hn::Mul(hn::Set(d, taps[k]), hn::LoadU(d, src + k)));
-    hn::StoreU(sum, d, out + x);
-  }
+    hn::StoreU(sum, d, out + at);
+  };
+  int x = begin;
+  for (; x + n <= end; x += n) filter(x);
+  // The last partial vector overlaps the one before it (out is not an input).
+  if (x < end && end - begin >= n) filter(end - n), x = end;
   detail::row_filter_range(in, width, taps, radius, x, width, out);
 }
 
@@ -91,8 +94,7 @@ void SobelRow(const SobelRows& r, float inv_norm, float* magnitude, std::uint8_t
   // Columns 1 .. w - 2 have both neighbours; column 0 and w - 1 clamp.
   const int end = std::max(1, w - 1);
   detail::sobel_range(r, inv_norm, 0, std::min(1, w), magnitude, direction);
-  int x = 1;
-  for (; x + n <= end; x += n) {
+  const auto gradient = [&](int x) {
     const auto column = [&](const float* row, int offset) {
       return hn::LoadU(df, row + x + offset);
     };
@@ -117,7 +119,11 @@ void SobelRow(const SobelRows& r, float inv_norm, float* magnitude, std::uint8_t
         hn::RebindMask(di, hn::Le(ay, hn::Mul(ax, tan22))), sector_h,
         hn::IfThenElse(hn::RebindMask(di, hn::Ge(ay, hn::Mul(ax, tan67))), sector_v, diagonal));
     hn::StoreU(hn::DemoteTo(du8, sector), du8, direction + x);
-  }
+  };
+  int x = 1;
+  for (; x + n <= end; x += n) gradient(x);
+  // The last partial vector overlaps the one before it (the outputs are not inputs).
+  if (x < end && end - 1 >= n) gradient(end - n), x = end;
   detail::sobel_range(r, inv_norm, std::min(x, w), w, magnitude, direction);
 }
 
