@@ -31,8 +31,7 @@ void CannyClassifyRow(const CannyRow& r, const CannyLevels& t, std::uint8_t* out
   const auto depth = hn::Set(d, t.depth);
   const auto weak = hn::Set(di, kCannyWeak);
   const auto strong = hn::Set(di, kCannyStrong);
-  int x = 1;
-  for (; x + n <= w - 1; x += n) {
+  const auto classify = [&](int x) {
     const auto v = hn::LoadU(d, r.row + x);
     const auto dir = hn::PromoteTo(di, hn::LoadU(du8, r.direction + x));
     const auto horizontal = hn::RebindMask(d, hn::Eq(dir, hn::Set(di, 0)));
@@ -53,7 +52,11 @@ void CannyClassifyRow(const CannyRow& r, const CannyLevels& t, std::uint8_t* out
     const auto cls = hn::IfThenElse(hn::RebindMask(di, hn::Gt(v, high)), strong, weak);
     const auto result = hn::IfThenElseZero(hn::RebindMask(di, keep), cls);
     hn::StoreU(hn::DemoteTo(du8, result), du8, out + x);
-  }
+  };
+  int x = 1;
+  for (; x + n <= w - 1; x += n) classify(x);
+  // The last partial vector overlaps the one before it (out is not an input).
+  if (x < w - 1 && w - 2 >= n) classify(w - 1 - n), x = w - 1;
   detail::canny_classify_range(r, t, x, w - 1, out);
   out[w - 1] = kCannyNone;
 }
