@@ -467,9 +467,20 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, i
   const bool ad_in_registers =
       n >= 16 && t.ad_flat_from > 0 && t.ad_flat_from < 6 * n && t.ad_size >= 6 * n;
   const auto flat_from = hn::Set(du, static_cast<std::uint32_t>(t.ad_flat_from));
-  // Right pixels before the row start read as zero from here; their lanes become `unmatched`.
-  HWY_ALIGN std::uint32_t right_pad[HWY_MAX_BYTES / 4];
-  HWY_ALIGN std::uint64_t census_pad[HWY_MAX_BYTES / 4];
+  // The right pixels -(n - 1) .. n - 1 of the row, those before its start (and past its end) as
+  // zero: a vector whose right pixels start before the row reads them from here, and its lanes
+  // there become `unmatched`. Filled once per call, so the vector loads never wait on the
+  // stores that filled them. Only a call that starts near the row's start needs it (a vector's
+  // right pixels precede the row only for x < d0 + count - 1 + n - 1).
+  HWY_ALIGN std::uint32_t right_head[2 * HWY_MAX_BYTES / 4];
+  HWY_ALIGN std::uint64_t census_head[2 * HWY_MAX_BYTES / 4];
+  const int head_size = from < d0 + count + n ? 2 * n - 1 : 0;
+  for (int i = 0; i < head_size; ++i) {
+    const int xi = i - (n - 1);
+    const bool inside = xi >= 0 && xi < row.width;
+    right_head[i] = inside ? row.right[xi] : 0u;
+    census_head[i] = inside ? row.census_right[xi] : 0u;
+  }
   if constexpr (kRunning) std::fill(out + from * count, out + (from + 1) * count, 0u);
   // Past the row's first d0 + n - 1 pixels, a batch of one vector takes the fast loop.
   const bool one_vector = n == 16 && count == n && census_in_registers;
@@ -498,20 +509,11 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, i
         emit(unmatched, k);
         continue;
       }
-      // The right pixels xr - (n - 1) .. xr; from the padded copy when some precede the row.
+      // The right pixels xr - (n - 1) .. xr; from the head copy when some precede the row.
       const bool partial = xr < n - 1;
-      const std::uint32_t* right = right_pad;
-      const std::uint64_t* census_right = census_pad;
-      if (partial) {
-        for (int i = 0; i < n; ++i) {
-          const int xi = xr - (n - 1) + i;
-          right_pad[i] = xi >= 0 ? row.right[xi] : 0u;
-          census_pad[i] = xi >= 0 ? row.census_right[xi] : 0u;
-        }
-      } else {
-        right = row.right + xr - (n - 1);
-        census_right = row.census_right + xr - (n - 1);
-      }
+      const std::uint32_t* right = partial ? right_head + xr : row.right + xr - (n - 1);
+      const std::uint64_t* census_right =
+          partial ? census_head + xr : row.census_right + xr - (n - 1);
       hn::Vec<decltype(du)> ad, hd;
       MatchDistances(du, a, cl, right, census_right, ad, hd);
       const auto ad_cost =
