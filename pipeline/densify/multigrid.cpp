@@ -6,27 +6,39 @@
 namespace dco::densify {
 namespace {
 
-void fill(ImageView<float> v, float value) {
-  for (int y = 0; y < v.height; ++y) std::fill(v.row(y), v.row(y) + v.width, value);
-}
-
 // coarse_row[x / 2] += fine_row[x] in the order of x: one fine row's share of restrict_sum.
-// Written per parent, so the compiler vectorises it.
+// kFirst for a coarse row's first fine row: its sums start from 0.0f (the same bits as adding to
+// a row filled with zeros first, without the pass that fills it). Written per parent, so the
+// compiler vectorises it.
+template <bool kFirst>
 void add_to_parents(const float* fine_row, int width, float* coarse_row) {
   const int pairs = width / 2;
   for (int c = 0; c < pairs; ++c) {
-    float sum = coarse_row[c];
+    float sum = kFirst ? 0.0f : coarse_row[c];
     sum += fine_row[2 * c];
     sum += fine_row[2 * c + 1];
     coarse_row[c] = sum;
   }
-  if (width % 2 != 0) coarse_row[pairs] += fine_row[width - 1];
+  if (width % 2 != 0) coarse_row[pairs] = (kFirst ? 0.0f : coarse_row[pairs]) + fine_row[width - 1];
+}
+
+// add_to_parents<true> for even fine rows, <false> for odd ones.
+void add_row_to_parents(const float* fine_row, int y, int width, float* coarse_row) {
+  if (y % 2 == 0)
+    add_to_parents<true>(fine_row, width, coarse_row);
+  else
+    add_to_parents<false>(fine_row, width, coarse_row);
 }
 
 // coarse_row[c] += fine_row[2 c + 1] for c < count: the edges from each aggregate's right
-// column to the next aggregate (restrict pointers: the compiler vectorises it).
-void add_odd_columns(const float* __restrict fine_row, int count, float* __restrict coarse_row) {
-  for (int c = 0; c < count; ++c) coarse_row[c] += fine_row[2 * c + 1];
+// column to the next aggregate (restrict pointers: the compiler vectorises it). kFirst as
+// above, and the coarse row's other columns [count, coarse_width) set to 0.
+template <bool kFirst>
+void add_odd_columns(const float* __restrict fine_row, int count, int coarse_width,
+                     float* __restrict coarse_row) {
+  for (int c = 0; c < count; ++c)
+    coarse_row[c] = (kFirst ? 0.0f : coarse_row[c]) + fine_row[2 * c + 1];
+  if (kFirst) std::fill(coarse_row + count, coarse_row + coarse_width, 0.0f);
 }
 
 // fine_row[x] (+)= coarse_row[x / 2].
@@ -45,8 +57,8 @@ void from_parents(const float* coarse_row, int width, float* fine_row) {
 }  // namespace
 
 void restrict_sum(ImageView<const float> fine, ImageView<float> coarse) {
-  fill(coarse, 0.0f);
-  for (int y = 0; y < fine.height; ++y) add_to_parents(fine.row(y), fine.width, coarse.row(y / 2));
+  for (int y = 0; y < fine.height; ++y)
+    add_row_to_parents(fine.row(y), y, fine.width, coarse.row(y / 2));
 }
 
 void restrict_mean(ImageView<const float> fine, ImageView<float> coarse) {
@@ -71,9 +83,6 @@ void coarsen(const GridSystem& fine, GridSystem& coarse, float edge_scale) {
   const int cw = (w + 1) / 2;
   const int ch = (h + 1) / 2;
   coarse.resize(cw, ch);
-  fill(coarse.data.view(), 0.0f);
-  fill(coarse.wx.view(), 0.0f);
-  fill(coarse.wy.view(), 0.0f);
   for (int y = 0; y < h; ++y) {
     const float* d = fine.data.row(y);
     const float* ex = fine.wx.row(y);
@@ -81,11 +90,16 @@ void coarsen(const GridSystem& fine, GridSystem& coarse, float edge_scale) {
     float* cd = coarse.data.row(y / 2);
     float* cex = coarse.wx.row(y / 2);
     float* cey = coarse.wy.row(y / 2);
-    add_to_parents(d, w, cd);
+    add_row_to_parents(d, y, w, cd);
     // Only edges that leave the aggregate survive: odd column -> next aggregate, odd row -> next.
-    add_odd_columns(ex, (w - 1) / 2, cex);
-    if (y % 2 == 1 && y + 1 < h) add_to_parents(ey, w, cey);
+    if (y % 2 == 0)
+      add_odd_columns<true>(ex, (w - 1) / 2, cw, cex);
+    else
+      add_odd_columns<false>(ex, (w - 1) / 2, cw, cex);
+    if (y % 2 == 1 && y + 1 < h) add_to_parents<true>(ey, w, cey);
   }
+  // The last coarse row has no odd fine row with a row below it: no edges leave it downwards.
+  std::fill(coarse.wy.row(ch - 1), coarse.wy.row(ch - 1) + cw, 0.0f);
   if (edge_scale != 1.0f) {
     for (int y = 0; y < ch; ++y) {
       float* cex = coarse.wx.row(y);
@@ -241,13 +255,12 @@ void Multigrid::cycle_at(int level, ImageView<const float> b, ImageView<float> x
   }
   // coarse b = restrict_sum(b - A x) after the pre-smoothing; the fine residual is never stored.
   Level& next = levels_[static_cast<std::size_t>(level)];
-  fill(next.b.view(), 0.0f);
-  const auto restrict_row = [&](int y) {
+  const auto restrict_row = [&](int y) {  // rows in order: each coarse row's even row first
     if (smoothing_sweeps > 0)
       rows_.residual(y, residual_row_.data());
     else
       residual_row(a, b, x, y, residual_row_.data());
-    add_to_parents(residual_row_.data(), w, next.b.row(y / 2));
+    add_row_to_parents(residual_row_.data(), y, w, next.b.row(y / 2));
   };
   gauss_seidel_rows(a, b, x, smoothing_sweeps, /*red_first=*/true, rows_, zero_row, restrict_row);
   cycle_at(level + 1, next.b.view(), next.x.view(), nullptr);

@@ -909,6 +909,45 @@ TEST(Multigrid, TransfersOnOddSizes) {
   EXPECT_FLOAT_EQ(back.at(4, 2), 24.0f);
 }
 
+TEST(Multigrid, CoarseOutputsOverwriteWhatTheirImagesHeld) {
+  // The coarse system and the restrictions write every coarse value (no fill first): into images
+  // that hold NaN they give the bytes they give into fresh ones, on even and odd sizes.
+  for (const auto& [w, h] : {std::pair{9, 7}, std::pair{8, 6}, std::pair{5, 2}, std::pair{1, 1}}) {
+    GridSystem a;
+    a.resize(w, h);
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<float> u(0.1f, 2.0f);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        a.data.at(x, y) = u(rng);
+        a.wx.at(x, y) = x + 1 < w ? u(rng) : 0.0f;
+        a.wy.at(x, y) = y + 1 < h ? u(rng) : 0.0f;
+      }
+    a.update_diagonal();
+    GridSystem fresh, stale;
+    coarsen(a, fresh);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    stale.resize(fresh.width(), fresh.height());
+    for (Image<float>* img : {&stale.data, &stale.wx, &stale.wy, &stale.diag, &stale.inv_diag})
+      img->fill(nan);
+    coarsen(a, stale);
+    SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
+    EXPECT_TRUE(testing::same_bytes(stale.data.cview(), fresh.data.cview()));
+    EXPECT_TRUE(testing::same_bytes(stale.wx.cview(), fresh.wx.cview()));
+    EXPECT_TRUE(testing::same_bytes(stale.wy.cview(), fresh.wy.cview()));
+    EXPECT_TRUE(testing::same_bytes(stale.diag.cview(), fresh.diag.cview()));
+    Image<float> sum(fresh.width(), fresh.height()), stale_sum(fresh.width(), fresh.height());
+    sum.fill(0.0f);
+    stale_sum.fill(nan);
+    restrict_sum(a.data.cview(), sum.view());
+    restrict_sum(a.data.cview(), stale_sum.view());
+    EXPECT_TRUE(testing::same_bytes(stale_sum.cview(), sum.cview()));
+    // No coarse edge leaves the last column to the right, nor the last row downwards.
+    for (int y = 0; y < fresh.height(); ++y) EXPECT_EQ(stale.wx.at(fresh.width() - 1, y), 0.0f);
+    for (int x = 0; x < fresh.width(); ++x) EXPECT_EQ(stale.wy.at(x, fresh.height() - 1), 0.0f);
+  }
+}
+
 TEST(Densifier, DiagonalContourStillSeparates) {
   Image<std::uint8_t> diagonal(4, 4), closed(4, 4);
   diagonal.fill(0);
