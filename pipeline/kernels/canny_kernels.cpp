@@ -6,6 +6,7 @@
 
 #include "canny_ranges.hpp"
 #include "dco/kernels/canny_kernels.hpp"
+#include "vector_cover.hpp"
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "canny_kernels.cpp"
@@ -53,11 +54,8 @@ void CannyClassifyRow(const CannyRow& r, const CannyLevels& t, std::uint8_t* out
     const auto result = hn::IfThenElseZero(hn::RebindMask(di, keep), cls);
     hn::StoreU(hn::DemoteTo(du8, result), du8, out + x);
   };
-  int x = 1;
-  for (; x + n <= w - 1; x += n) classify(x);
-  // The last partial vector overlaps the one before it (out is not an input).
-  if (x < w - 1 && w - 2 >= n) classify(w - 1 - n), x = w - 1;
-  detail::canny_classify_range(r, t, x, w - 1, out);
+  const int done = detail::cover_with_vectors(1, w - 1, n, classify);  // out is not an input
+  detail::canny_classify_range(r, t, done, w - 1, out);
   out[w - 1] = kCannyNone;
 }
 

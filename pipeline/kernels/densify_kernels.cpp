@@ -11,6 +11,7 @@
 
 #include "dco/kernels/densify_kernels.hpp"
 #include "densify_ranges.hpp"
+#include "vector_cover.hpp"
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "densify_kernels.cpp"
@@ -23,12 +24,12 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 // The interior pixels [begin, end) of one colour, with the row pointers in restrict locals
-// and the rows above and below fixed per call. A pixel's update reads only the other colour and
-// the other rows, so updating a pixel twice gives the same bits: the last partial vector is
-// done by one more vector that overlaps the previous one.
+// and the rows above and below fixed per call; returns the first pixel left undone. A pixel's
+// update reads only the other colour and the other rows, so updating a pixel twice gives the
+// same bits (detail::cover_with_vectors).
 template <bool kBelow, bool kAbove>
-HWY_NOINLINE void SmoothSplitInterior(const SplitSmoothRow& r, int begin, int end,
-                                      float* HWY_RESTRICT x) {
+HWY_NOINLINE int SmoothSplitInterior(const SplitSmoothRow& r, int begin, int end,
+                                     float* HWY_RESTRICT x) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
   const float* HWY_RESTRICT b = r.b;
@@ -50,41 +51,29 @@ HWY_NOINLINE void SmoothSplitInterior(const SplitSmoothRow& r, int begin, int en
       vertical = hn::Add(vertical, hn::Mul(hn::LoadU(d, wy_above + i), hn::LoadU(d, x_above + i)));
     hn::StoreU(hn::Mul(hn::Add(v, vertical), hn::LoadU(d, inv_diag + i)), d, x + i);
   };
-  int i = begin;
-  for (; i + n <= end; i += n) update(i);
-  if (i < end) update(end - n);
+  return detail::cover_with_vectors(begin, end, n, update);
 }
 
 void GridSmoothSplitRow(const SplitSmoothRow& r, float* x) {
-  const hn::ScalableTag<float> d;
-  const int n = static_cast<int>(hn::Lanes(d));
   const int count = parity_count(r.width, r.parity);
   // Pixels with both row neighbours: column 2 i + p > 0 and 2 i + p + 1 < width.
   const int begin = 1 - r.parity;
   const int end = std::max(begin, (r.width - r.parity) / 2);
   detail::smooth_split_range(r, x, 0, std::min(begin, count));
-  if (end - begin < n) {
-    detail::smooth_split_range(r, x, std::min(begin, count), count);
-    return;
-  }
-  const bool below = r.x_below != nullptr;
-  const bool above = r.x_above != nullptr;
-  if (below && above)
-    SmoothSplitInterior<true, true>(r, begin, end, x);
-  else if (below)
-    SmoothSplitInterior<true, false>(r, begin, end, x);
-  else if (above)
-    SmoothSplitInterior<false, true>(r, begin, end, x);
-  else
-    SmoothSplitInterior<false, false>(r, begin, end, x);
-  detail::smooth_split_range(r, x, end, count);
+  int done = begin;
+  detail::with_rows_next_to(
+      r.x_below != nullptr, r.x_above != nullptr, [&](auto below, auto above) {
+        done =
+            SmoothSplitInterior<decltype(below)::value, decltype(above)::value>(r, begin, end, x);
+      });
+  detail::smooth_split_range(r, x, done, count);
 }
 
 // The interior pixels [begin, end) of one colour of split_residual_row, as SmoothSplitInterior
 // (the output is not an input, so the last partial vector overlaps the one before it).
 template <bool kBelow, bool kAbove>
-HWY_NOINLINE void ResidualSplitInterior(const SplitResidualRow& r, int begin, int end,
-                                        float* HWY_RESTRICT out) {
+HWY_NOINLINE int ResidualSplitInterior(const SplitResidualRow& r, int begin, int end,
+                                       float* HWY_RESTRICT out) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
   const SplitSmoothRow& s = r.row;
@@ -109,34 +98,22 @@ HWY_NOINLINE void ResidualSplitInterior(const SplitResidualRow& r, int begin, in
       vertical = hn::Add(vertical, hn::Mul(hn::LoadU(d, wy_above + i), hn::LoadU(d, x_above + i)));
     hn::StoreU(hn::Sub(hn::LoadU(d, b + i), hn::Sub(v, vertical)), d, out + i);
   };
-  int i = begin;
-  for (; i + n <= end; i += n) residual(i);
-  if (i < end) residual(end - n);
+  return detail::cover_with_vectors(begin, end, n, residual);
 }
 
 void ResidualSplitRow(const SplitResidualRow& r, float* out) {
-  const hn::ScalableTag<float> d;
-  const int n = static_cast<int>(hn::Lanes(d));
   const SplitSmoothRow& s = r.row;
   const int count = parity_count(s.width, s.parity);
   const int begin = 1 - s.parity;
   const int end = std::max(begin, (s.width - s.parity) / 2);
   detail::residual_split_range(r, out, 0, std::min(begin, count));
-  if (end - begin < n) {
-    detail::residual_split_range(r, out, std::min(begin, count), count);
-    return;
-  }
-  const bool below = s.x_below != nullptr;
-  const bool above = s.x_above != nullptr;
-  if (below && above)
-    ResidualSplitInterior<true, true>(r, begin, end, out);
-  else if (below)
-    ResidualSplitInterior<true, false>(r, begin, end, out);
-  else if (above)
-    ResidualSplitInterior<false, true>(r, begin, end, out);
-  else
-    ResidualSplitInterior<false, false>(r, begin, end, out);
-  detail::residual_split_range(r, out, end, count);
+  int done = begin;
+  detail::with_rows_next_to(
+      s.x_below != nullptr, s.x_above != nullptr, [&](auto below, auto above) {
+        done = ResidualSplitInterior<decltype(below)::value, decltype(above)::value>(r, begin, end,
+                                                                                     out);
+      });
+  detail::residual_split_range(r, out, done, count);
 }
 
 void InverseDiagonalRow(const float* HWY_RESTRICT diag, int count, float* HWY_RESTRICT inv) {
@@ -148,10 +125,8 @@ void InverseDiagonalRow(const float* HWY_RESTRICT diag, int count, float* HWY_RE
     const auto s = hn::LoadU(d, diag + i);
     hn::StoreU(hn::IfThenElseZero(hn::Gt(s, zero), hn::Div(one, s)), d, inv + i);
   };
-  int i = 0;
-  for (; i + n <= count; i += n) inverse(i);
-  if (i < count && count >= n) inverse(count - n), i = count;  // overlaps: the same values again
-  detail::inverse_diagonal_range(diag, i, count, inv);
+  const int done = detail::cover_with_vectors(0, count, n, inverse);
+  detail::inverse_diagonal_range(diag, done, count, inv);
 }
 
 void SplitRow(const float* HWY_RESTRICT in, int width, float* HWY_RESTRICT even,
@@ -165,10 +140,8 @@ void SplitRow(const float* HWY_RESTRICT in, int width, float* HWY_RESTRICT even,
     hn::StoreU(e, d, even + i);
     hn::StoreU(o, d, odd + i);
   };
-  int i = 0;
-  for (; i + n <= pairs; i += n) split(i);
-  if (i < pairs && pairs >= n) split(pairs - n), i = pairs;  // overlaps: the same values again
-  detail::split_range(in, width, i, parity_count(width, 0), even, odd);
+  const int done = detail::cover_with_vectors(0, pairs, n, split);
+  detail::split_range(in, width, done, parity_count(width, 0), even, odd);
 }
 
 void MergeRow(const float* HWY_RESTRICT even, const float* HWY_RESTRICT odd, int width,
@@ -179,17 +152,15 @@ void MergeRow(const float* HWY_RESTRICT even, const float* HWY_RESTRICT odd, int
   const auto merge = [&](int i) {
     hn::StoreInterleaved2(hn::LoadU(d, even + i), hn::LoadU(d, odd + i), d, out + 2 * i);
   };
-  int i = 0;
-  for (; i + n <= pairs; i += n) merge(i);
-  if (i < pairs && pairs >= n) merge(pairs - n), i = pairs;  // overlaps: the same values again
-  detail::merge_range(even, odd, width, i, parity_count(width, 0), out);
+  const int done = detail::cover_with_vectors(0, pairs, n, merge);
+  detail::merge_range(even, odd, width, done, parity_count(width, 0), out);
 }
 
-// Columns [begin, end) of A x, each with both row neighbours; as SmoothSplitInterior, the last
-// partial vector is one more vector that overlaps the previous one (out is not an input).
+// Columns [begin, end) of A x, each with both row neighbours, as SmoothSplitInterior (out is
+// not an input); returns the first column left undone.
 template <bool kBelow, bool kAbove>
-HWY_NOINLINE void ApplyInterior(const GridRow& r, const float* HWY_RESTRICT x, int begin, int end,
-                                float* HWY_RESTRICT out) {
+HWY_NOINLINE int ApplyInterior(const GridRow& r, const float* HWY_RESTRICT x, int begin, int end,
+                               float* HWY_RESTRICT out) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
   const float* HWY_RESTRICT diag = r.diag;
@@ -208,31 +179,19 @@ HWY_NOINLINE void ApplyInterior(const GridRow& r, const float* HWY_RESTRICT x, i
       vertical = hn::Add(vertical, hn::Mul(hn::LoadU(d, wy_above + c), hn::LoadU(d, x_above + c)));
     hn::StoreU(hn::Sub(v, vertical), d, out + c);
   };
-  int c = begin;
-  for (; c + n <= end; c += n) apply(c);
-  if (c < end) apply(end - n);
+  return detail::cover_with_vectors(begin, end, n, apply);
 }
 
 void GridApplyRow(const GridRow& r, const float* x, float* out) {
-  const hn::ScalableTag<float> d;
-  const int n = static_cast<int>(hn::Lanes(d));
   const int w = r.width;
-  if (w - 2 < n) {
-    detail::apply_range(r, x, out, 0, w);
-    return;
-  }
-  detail::apply_range(r, x, out, 0, 1);
-  const bool below = r.x_below != nullptr;
-  const bool above = r.x_above != nullptr;
-  if (below && above)
-    ApplyInterior<true, true>(r, x, 1, w - 1, out);
-  else if (below)
-    ApplyInterior<true, false>(r, x, 1, w - 1, out);
-  else if (above)
-    ApplyInterior<false, true>(r, x, 1, w - 1, out);
-  else
-    ApplyInterior<false, false>(r, x, 1, w - 1, out);
-  detail::apply_range(r, x, out, w - 1, w);
+  detail::apply_range(r, x, out, 0, std::min(1, w));
+  int done = 1;
+  detail::with_rows_next_to(r.x_below != nullptr, r.x_above != nullptr,
+                            [&](auto below, auto above) {
+                              done = ApplyInterior<decltype(below)::value, decltype(above)::value>(
+                                  r, x, 1, std::max(1, w - 1), out);
+                            });
+  detail::apply_range(r, x, out, done, w);
 }
 
 void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) {
@@ -272,11 +231,8 @@ void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) 
     const auto kept = hn::Mul(scale, hn::IfThenElse(hn::Lt(weight, floor), floor, weight));
     hn::StoreU(hn::IfThenElse(hn::RebindMask(df, hn::Ne(ba, bb)), cut, kept), df, out + i);
   };
-  int i = 0;
-  for (; i + lanes <= n; i += lanes) weights(i);
-  // The last partial vector overlaps the one before it (out is not an input).
-  if (i < n && n >= lanes) weights(n - lanes), i = n;
-  detail::edge_range(e, rule, i, n, out);
+  const int done = detail::cover_with_vectors(0, n, lanes, weights);  // out is not an input
+  detail::edge_range(e, rule, done, n, out);
 }
 
 // Bit i of `bits`: values[i] is known (positive and finite), for i < count <= 64.
@@ -437,13 +393,13 @@ void DataTermsRow(const float* sparse, const float* hint, const float* previous,
 }
 
 // Columns [begin, end) of DiagonalRow, each with both row edges, with the rows above and below
-// fixed per call; the last partial vector is one more vector that overlaps the previous one
-// (the outputs are not inputs). The additions keep kernels::pixel::diagonal's order.
+// fixed per call (the outputs are not inputs); returns the first column left undone. The
+// additions keep kernels::pixel::diagonal's order.
 template <bool kBelow, bool kAbove>
-HWY_NOINLINE void DiagonalInterior(const float* HWY_RESTRICT data, const float* HWY_RESTRICT wx,
-                                   const float* HWY_RESTRICT wy, const float* HWY_RESTRICT wy_above,
-                                   int begin, int end, float* HWY_RESTRICT diag,
-                                   float* HWY_RESTRICT inv_diag) {
+HWY_NOINLINE int DiagonalInterior(const float* HWY_RESTRICT data, const float* HWY_RESTRICT wx,
+                                  const float* HWY_RESTRICT wy, const float* HWY_RESTRICT wy_above,
+                                  int begin, int end, float* HWY_RESTRICT diag,
+                                  float* HWY_RESTRICT inv_diag) {
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
   const auto zero = hn::Zero(d);
@@ -456,29 +412,18 @@ HWY_NOINLINE void DiagonalInterior(const float* HWY_RESTRICT data, const float* 
     hn::StoreU(s, d, diag + x);
     hn::StoreU(hn::IfThenElseZero(hn::Gt(s, zero), hn::Div(one, s)), d, inv_diag + x);
   };
-  int x = begin;
-  for (; x + n <= end; x += n) diagonal(x);
-  if (x < end) diagonal(end - n);
+  return detail::cover_with_vectors(begin, end, n, diagonal);
 }
 
 void DiagonalRow(const float* data, const float* wx, const float* wy, const float* wy_above,
                  int width, float* diag, float* inv_diag) {
-  const hn::ScalableTag<float> d;
-  const int n = static_cast<int>(hn::Lanes(d));
-  if (width - 2 < n) {
-    detail::diagonal_range(data, wx, wy, wy_above, width, 0, width, diag, inv_diag);
-    return;
-  }
-  detail::diagonal_range(data, wx, wy, wy_above, width, 0, 1, diag, inv_diag);
-  if (wy != nullptr && wy_above != nullptr)
-    DiagonalInterior<true, true>(data, wx, wy, wy_above, 1, width - 1, diag, inv_diag);
-  else if (wy != nullptr)
-    DiagonalInterior<true, false>(data, wx, wy, wy_above, 1, width - 1, diag, inv_diag);
-  else if (wy_above != nullptr)
-    DiagonalInterior<false, true>(data, wx, wy, wy_above, 1, width - 1, diag, inv_diag);
-  else
-    DiagonalInterior<false, false>(data, wx, wy, wy_above, 1, width - 1, diag, inv_diag);
-  detail::diagonal_range(data, wx, wy, wy_above, width, width - 1, width, diag, inv_diag);
+  detail::diagonal_range(data, wx, wy, wy_above, width, 0, std::min(1, width), diag, inv_diag);
+  int done = 1;
+  detail::with_rows_next_to(wy != nullptr, wy_above != nullptr, [&](auto below, auto above) {
+    done = DiagonalInterior<decltype(below)::value, decltype(above)::value>(
+        data, wx, wy, wy_above, 1, std::max(1, width - 1), diag, inv_diag);
+  });
+  detail::diagonal_range(data, wx, wy, wy_above, width, done, width, diag, inv_diag);
 }
 
 void MatchPlaneRow(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
@@ -530,9 +475,9 @@ void MatchPlaneRowSums(const float* match, const float* dv, const float* dd, int
   using V = hn::Vec<decltype(d)>;
   const int lanes = static_cast<int>(hn::Lanes(d));
   // Pixels with every offset inside the row, [radius, n - radius): a vector of them keeps its six
-  // sums in registers over the offsets and stores them once, and the last partial vector overlaps
-  // the one before it (its sums are computed afresh, so the same values again). The sums add the
-  // offsets in rising order, as pixel::match_plane_row_step's callers do.
+  // sums in registers over the offsets and stores them once (computed afresh, so an overlapping
+  // last vector gives the same values again). The sums add the offsets in rising order, as
+  // pixel::match_plane_row_step's callers do.
   const int begin = std::min(radius, n);
   const int end = std::max(begin, n - radius);
   const auto one = hn::Set(d, 1.0f);
@@ -558,11 +503,7 @@ void MatchPlaneRowSums(const float* match, const float* dv, const float* dd, int
     hn::StoreU(a4, d, at(4));
     hn::StoreU(a5, d, at(5));
   };
-  int vector_end = begin;
-  if (end - begin >= lanes) {
-    for (; vector_end + lanes <= end; vector_end += lanes) interior(vector_end);
-    if (vector_end < end) interior(end - lanes), vector_end = end;
-  }
+  const int vector_end = detail::cover_with_vectors(begin, end, lanes, interior);
   // The rest pixel by pixel, over the offsets inside the row.
   const auto pixel_sums = [&](int x) {
     for (int j = 0; j < 6; ++j) sums[static_cast<std::ptrdiff_t>(j) * n + x] = 0.0f;

@@ -9,6 +9,7 @@
 
 #include "dco/kernels/filter_kernels.hpp"
 #include "filter_ranges.hpp"
+#include "vector_cover.hpp"
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "filter_kernels.cpp"
@@ -54,11 +55,8 @@ void RowFilter(const float* in, int width, const float* taps, int radius, float*
       sum = hn::Add(sum, hn::Mul(hn::Set(d, taps[k]), hn::LoadU(d, src + k)));
     hn::StoreU(sum, d, out + at);
   };
-  int x = begin;
-  for (; x + n <= end; x += n) filter(x);
-  // The last partial vector overlaps the one before it (out is not an input).
-  if (x < end && end - begin >= n) filter(end - n), x = end;
-  detail::row_filter_range(in, width, taps, radius, x, width, out);
+  const int done = detail::cover_with_vectors(begin, end, n, filter);  // out is not an input
+  detail::row_filter_range(in, width, taps, radius, done, width, out);
 }
 
 void BoxVerticalRow(const float* in, std::ptrdiff_t stride, int height, int y, int size, float inv,
@@ -120,11 +118,9 @@ void SobelRow(const SobelRows& r, float inv_norm, float* magnitude, std::uint8_t
         hn::IfThenElse(hn::RebindMask(di, hn::Ge(ay, hn::Mul(ax, tan67))), sector_v, diagonal));
     hn::StoreU(hn::DemoteTo(du8, sector), du8, direction + x);
   };
-  int x = 1;
-  for (; x + n <= end; x += n) gradient(x);
-  // The last partial vector overlaps the one before it (the outputs are not inputs).
-  if (x < end && end - 1 >= n) gradient(end - n), x = end;
-  detail::sobel_range(r, inv_norm, std::min(x, w), w, magnitude, direction);
+  // The outputs are not inputs.
+  const int done = detail::cover_with_vectors(1, end, n, gradient);
+  detail::sobel_range(r, inv_norm, std::min(done, w), w, magnitude, direction);
 }
 
 // Sorts five vectors lane by lane (a network of nine compare-exchanges).

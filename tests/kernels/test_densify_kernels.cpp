@@ -90,31 +90,38 @@ struct SplitRowData {
   }
 };
 
+// f(w, parity, above, below) for every width of kWidths, both colours, with and without the
+// rows above and below.
+template <class F>
+void for_each_split_case(F&& f) {
+  for (const int w : kWidths)
+    for (const int parity : {0, 1})
+      for (const bool above : {false, true})
+        for (const bool below : {false, true}) f(w, parity, above, below);
+}
+
 TEST(DensifyKernels, SmoothSplitRowIsTheSmoothRowBitForBit) {
   // The split layout changes where the operands are, not the arithmetic: every target's update of
   // a parity equals the scalar update of that colour in the plain layout.
   std::mt19937 rng(15);
   for_each_target([&] {
-    for (const int w : kWidths)
-      for (const int parity : {0, 1})
-        for (const bool above : {false, true})
-          for (const bool below : {false, true}) {
-            const RowData data(rng, w);
-            std::vector<float> expected = data.x;
-            scalar::grid_smooth_row(data.row(above, below), parity, data.b.data(), expected.data());
-            const SplitRowData split(data);
-            const SplitSmoothRow row = split.row(w, parity, above, below);
-            std::vector<float> actual = split.x[parity], reference = split.x[parity];
-            grid_smooth_split_row(row, actual.data());
-            scalar::grid_smooth_split_row(row, reference.data());
-            ASSERT_EQ(static_cast<int>(actual.size()), parity_count(w, parity));
-            for (int i = 0; i < parity_count(w, parity); ++i) {
-              const float want = expected[static_cast<std::size_t>(2 * i + parity)];
-              ASSERT_EQ(actual[i], want) << "w " << w << " parity " << parity << " above " << above
-                                         << " below " << below << " pixel " << i;
-              ASSERT_EQ(reference[i], want) << "scalar, w " << w << " pixel " << i;
-            }
-          }
+    for_each_split_case([&](int w, int parity, bool above, bool below) {
+      const RowData data(rng, w);
+      std::vector<float> expected = data.x;
+      scalar::grid_smooth_row(data.row(above, below), parity, data.b.data(), expected.data());
+      const SplitRowData split(data);
+      const SplitSmoothRow row = split.row(w, parity, above, below);
+      std::vector<float> actual = split.x[parity], reference = split.x[parity];
+      grid_smooth_split_row(row, actual.data());
+      scalar::grid_smooth_split_row(row, reference.data());
+      ASSERT_EQ(static_cast<int>(actual.size()), parity_count(w, parity));
+      for (int i = 0; i < parity_count(w, parity); ++i) {
+        const float want = expected[static_cast<std::size_t>(2 * i + parity)];
+        ASSERT_EQ(actual[i], want) << "w " << w << " parity " << parity << " above " << above
+                                   << " below " << below << " pixel " << i;
+        ASSERT_EQ(reference[i], want) << "scalar, w " << w << " pixel " << i;
+      }
+    });
   });
 }
 
@@ -123,32 +130,29 @@ TEST(DensifyKernels, SplitResidualRowIsThePlainResidualBitForBit) {
   // grid_apply_row on every target.
   std::mt19937 rng(17);
   for_each_target([&] {
-    for (const int w : kWidths)
-      for (const int parity : {0, 1})
-        for (const bool above : {false, true})
-          for (const bool below : {false, true}) {
-            const RowData data(rng, w);
-            std::vector<float> ax(static_cast<std::size_t>(w));
-            scalar::grid_apply_row(data.row(above, below), data.x.data(), ax.data());
-            const SplitRowData split(data);
-            const SplitResidualRow row{split.row(w, parity, above, below),
-                                       split.diag[parity].data(), split.x[parity].data()};
-            const int count = parity_count(w, parity);
-            const float guard = 1234.5f;  // one float past the colour's pixels
-            std::vector<float> actual(static_cast<std::size_t>(count) + 1, guard);
-            std::vector<float> reference(static_cast<std::size_t>(count));
-            split_residual_row(row, actual.data());
-            scalar::split_residual_row(row, reference.data());
-            ASSERT_EQ(actual.back(), guard) << "w " << w;
-            for (int i = 0; i < count; ++i) {
-              const std::size_t c = static_cast<std::size_t>(2 * i + parity);
-              const float want = data.b[c] - ax[c];
-              ASSERT_EQ(actual[static_cast<std::size_t>(i)], want)
-                  << "w " << w << " parity " << parity << " above " << above << " below " << below
-                  << " pixel " << i;
-              ASSERT_EQ(reference[static_cast<std::size_t>(i)], want) << "scalar, w " << w;
-            }
-          }
+    for_each_split_case([&](int w, int parity, bool above, bool below) {
+      const RowData data(rng, w);
+      std::vector<float> ax(static_cast<std::size_t>(w));
+      scalar::grid_apply_row(data.row(above, below), data.x.data(), ax.data());
+      const SplitRowData split(data);
+      const SplitResidualRow row{split.row(w, parity, above, below), split.diag[parity].data(),
+                                 split.x[parity].data()};
+      const int count = parity_count(w, parity);
+      const float guard = 1234.5f;  // one float past the colour's pixels
+      std::vector<float> actual(static_cast<std::size_t>(count) + 1, guard);
+      std::vector<float> reference(static_cast<std::size_t>(count));
+      split_residual_row(row, actual.data());
+      scalar::split_residual_row(row, reference.data());
+      ASSERT_EQ(actual.back(), guard) << "w " << w;
+      for (int i = 0; i < count; ++i) {
+        const std::size_t c = static_cast<std::size_t>(2 * i + parity);
+        const float want = data.b[c] - ax[c];
+        ASSERT_EQ(actual[static_cast<std::size_t>(i)], want)
+            << "w " << w << " parity " << parity << " above " << above << " below " << below
+            << " pixel " << i;
+        ASSERT_EQ(reference[static_cast<std::size_t>(i)], want) << "scalar, w " << w;
+      }
+    });
   });
 }
 

@@ -909,21 +909,28 @@ TEST(Multigrid, TransfersOnOddSizes) {
   EXPECT_FLOAT_EQ(back.at(4, 2), 24.0f);
 }
 
+// A system whose data terms and edges are drawn from [0.1, 2) in row order (data, then the edge
+// to the right, then the edge below; none past the last column or row).
+GridSystem uniform_random_system(int w, int h, std::mt19937& rng) {
+  GridSystem a;
+  a.resize(w, h);
+  std::uniform_real_distribution<float> u(0.1f, 2.0f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      a.data.at(x, y) = u(rng);
+      a.wx.at(x, y) = x + 1 < w ? u(rng) : 0.0f;
+      a.wy.at(x, y) = y + 1 < h ? u(rng) : 0.0f;
+    }
+  a.update_diagonal();
+  return a;
+}
+
 TEST(Multigrid, CoarseOutputsOverwriteWhatTheirImagesHeld) {
   // The coarse system and the restrictions write every coarse value (no fill first): into images
   // that hold NaN they give the bytes they give into fresh ones, on even and odd sizes.
   for (const auto& [w, h] : {std::pair{9, 7}, std::pair{8, 6}, std::pair{5, 2}, std::pair{1, 1}}) {
-    GridSystem a;
-    a.resize(w, h);
     std::mt19937 rng(21);
-    std::uniform_real_distribution<float> u(0.1f, 2.0f);
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        a.data.at(x, y) = u(rng);
-        a.wx.at(x, y) = x + 1 < w ? u(rng) : 0.0f;
-        a.wy.at(x, y) = y + 1 < h ? u(rng) : 0.0f;
-      }
-    a.update_diagonal();
+    const GridSystem a = uniform_random_system(w, h, rng);
     GridSystem fresh, stale;
     coarsen(a, fresh);
     const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -1121,17 +1128,9 @@ TEST(Densifier, RejectsMismatchedInputsAndBadParams) {
 TEST(Multigrid, CoarseningPreservesTheEnergyOfPiecewiseConstantVectors) {
   // x^T A x = y^T A_c y when x is y repeated over 2x2 blocks (Galerkin with P = injection).
   const int w = 9, h = 7;
-  GridSystem a;
-  a.resize(w, h);
   std::mt19937 rng(7);
+  const GridSystem a = uniform_random_system(w, h, rng);
   std::uniform_real_distribution<float> u(0.1f, 2.0f);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      a.data.at(x, y) = u(rng);
-      a.wx.at(x, y) = x + 1 < w ? u(rng) : 0.0f;
-      a.wy.at(x, y) = y + 1 < h ? u(rng) : 0.0f;
-    }
-  a.update_diagonal();
   GridSystem c;
   coarsen(a, c);
   ASSERT_EQ(c.width(), 5);
