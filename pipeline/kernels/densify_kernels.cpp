@@ -35,16 +35,19 @@ HWY_NOINLINE int SmoothSplitInterior(const SplitSmoothRow& r, int begin, int end
   const float* HWY_RESTRICT b = r.b;
   const float* HWY_RESTRICT inv_diag = r.inv_diag;
   const float* HWY_RESTRICT wx = r.wx;
-  const float* HWY_RESTRICT wx_left = r.wx_other + r.parity - 1;  // [i]: the left edge of i
-  const float* HWY_RESTRICT x_right = r.x_other + r.parity;       // [i]: the right neighbour
-  const float* HWY_RESTRICT x_left = r.x_other + r.parity - 1;
+  // Pixel i's right neighbour is x_other[i + p], its left one and left edge at i + p - 1 (offset
+  // where used: the row of a colour with no pixels has no data to point into).
+  const float* HWY_RESTRICT wx_other = r.wx_other;
+  const float* HWY_RESTRICT x_other = r.x_other;
+  const int p = r.parity;
   const float* HWY_RESTRICT wy = r.wy;
   const float* HWY_RESTRICT x_below = r.x_below;
   const float* HWY_RESTRICT wy_above = r.wy_above;
   const float* HWY_RESTRICT x_above = r.x_above;
   const auto update = [&](int i) {
-    auto v = hn::Add(hn::LoadU(d, b + i), hn::Mul(hn::LoadU(d, wx + i), hn::LoadU(d, x_right + i)));
-    v = hn::Add(v, hn::Mul(hn::LoadU(d, wx_left + i), hn::LoadU(d, x_left + i)));
+    auto v =
+        hn::Add(hn::LoadU(d, b + i), hn::Mul(hn::LoadU(d, wx + i), hn::LoadU(d, x_other + i + p)));
+    v = hn::Add(v, hn::Mul(hn::LoadU(d, wx_other + i + p - 1), hn::LoadU(d, x_other + i + p - 1)));
     auto vertical = hn::Zero(d);
     if constexpr (kBelow) vertical = hn::Mul(hn::LoadU(d, wy + i), hn::LoadU(d, x_below + i));
     if constexpr (kAbove)
@@ -81,17 +84,17 @@ HWY_NOINLINE int ResidualSplitInterior(const SplitResidualRow& r, int begin, int
   const float* HWY_RESTRICT diag = r.diag;
   const float* HWY_RESTRICT x = r.x;
   const float* HWY_RESTRICT wx = s.wx;
-  const float* HWY_RESTRICT wx_left = s.wx_other + s.parity - 1;
-  const float* HWY_RESTRICT x_right = s.x_other + s.parity;
-  const float* HWY_RESTRICT x_left = s.x_other + s.parity - 1;
+  const float* HWY_RESTRICT wx_other = s.wx_other;
+  const float* HWY_RESTRICT x_other = s.x_other;
+  const int p = s.parity;
   const float* HWY_RESTRICT wy = s.wy;
   const float* HWY_RESTRICT x_below = s.x_below;
   const float* HWY_RESTRICT wy_above = s.wy_above;
   const float* HWY_RESTRICT x_above = s.x_above;
   const auto residual = [&](int i) {
     auto v = hn::Sub(hn::Mul(hn::LoadU(d, diag + i), hn::LoadU(d, x + i)),
-                     hn::Mul(hn::LoadU(d, wx + i), hn::LoadU(d, x_right + i)));
-    v = hn::Sub(v, hn::Mul(hn::LoadU(d, wx_left + i), hn::LoadU(d, x_left + i)));
+                     hn::Mul(hn::LoadU(d, wx + i), hn::LoadU(d, x_other + i + p)));
+    v = hn::Sub(v, hn::Mul(hn::LoadU(d, wx_other + i + p - 1), hn::LoadU(d, x_other + i + p - 1)));
     auto vertical = hn::Zero(d);
     if constexpr (kBelow) vertical = hn::Mul(hn::LoadU(d, wy + i), hn::LoadU(d, x_below + i));
     if constexpr (kAbove)
