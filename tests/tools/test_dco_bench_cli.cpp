@@ -76,14 +76,16 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   // Each round's ratio is its peer / dco; the headline figures are the rounds' medians.
   const std::regex round_pattern(
       "\\{\"ms_per_frame\": ([0-9.eE+-]+), \"peer_ms_per_frame\": ([0-9.eE+-]+), "
-      "\"ratio\": ([0-9.eE+-]+)\\}");
+      "\"ratio\": ([0-9.eE+-]+), \"steady_ms\": ([0-9.eE+-]+)\\}");
   const std::string first_sequence = r.out.substr(0, r.out.find("\"sequences\""));
-  std::vector<double> dco_ms, peer_ms, ratios;
+  std::vector<double> dco_ms, peer_ms, ratios, steady_ms;
   for (std::sregex_iterator it(first_sequence.begin(), first_sequence.end(), round_pattern), end;
        it != end; ++it) {
     dco_ms.push_back(std::stod((*it)[1].str()));
     peer_ms.push_back(std::stod((*it)[2].str()));
     ratios.push_back(std::stod((*it)[3].str()));
+    steady_ms.push_back(std::stod((*it)[4].str()));
+    EXPECT_GT(steady_ms.back(), 0);
     EXPECT_NEAR(ratios.back(), peer_ms.back() / dco_ms.back(), 1e-6 * ratios.back());
   }
   ASSERT_EQ(ratios.size(), 3u) << r.out;
@@ -94,6 +96,8 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   EXPECT_DOUBLE_EQ(ours, middle(dco_ms));
   EXPECT_DOUBLE_EQ(peer, middle(peer_ms));
   EXPECT_DOUBLE_EQ(json_value(r.out, "ratio"), middle(ratios));
+  // The interval between the first and the last result, without the filling of the pipeline.
+  EXPECT_DOUBLE_EQ(json_value(r.out, "steady_ms"), middle(steady_ms));
   const double p50 = json_value(r.out, "latency_p50_ms");
   EXPECT_GT(p50, 0);
   EXPECT_GE(json_value(r.out, "latency_p99_ms"), p50);

@@ -59,7 +59,9 @@ Runs the depth pipeline in the real-time runtime and, on the same frames in the 
 OpenCV StereoSGBM (3-way) + WLS. Per sequence:
   throughput  runtime.deterministic on, frames pushed as fast as it takes them: ms per frame
               (first push to last result / frames), frames per second and the mean time of
-              each stage; also how long a new runtime took to its first result;
+              each stage; the steady interval (first result to last result / (frames - 1):
+              the pipeline's period once it is full); how long a new runtime took to its first
+              result;
   latency     frames pushed at --fps (capture time = the frame's due time), newest wins at the
               entry and a frame that waited past runtime.entry_deadline_ms is late (no depth):
               capture-to-result latency p50 / p99 and the frames dropped (late ones included);
@@ -442,6 +444,7 @@ rt::RuntimeStats counts_since(const rt::RuntimeStats& before, const rt::RuntimeS
 // One turn of the throughput run and the peer.
 struct Round {
   double ms_per_frame = 0, peer_ms_per_frame = 0;
+  double steady_ms = 0;  // first result to last / (frames - 1): no filling, no draining
   double ratio() const { return peer_ms_per_frame / ms_per_frame; }
 };
 
@@ -458,6 +461,7 @@ struct Result {
   }
   std::vector<Round> rounds;
   double ms_per_frame = 0;  // the medians over the rounds
+  double steady_ms = 0;
   double peer_ms_per_frame = 0;
   double ratio = 0;            // the median of the rounds' ratios
   double first_result_ms = 0;  // a new runtime: first push to first result (the warm-up pass)
@@ -524,6 +528,9 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
                                      frames.name, times.size(), r.frames));
       if (warmup_frames.empty()) first_results.push_back(ms_between(start, times.front().release));
       turn.ms_per_frame = ms_between(start, times.back().release) / r.frames;
+      turn.steady_ms =
+          r.frames > 1 ? ms_between(times.front().release, times.back().release) / (r.frames - 1)
+                       : turn.ms_per_frame;
       const rt::RuntimeStats st = pipeline.stats();
       r.planes_on_stereo += st.planes_on_stereo_thread;
       r.planes_frames += st.published;
@@ -544,6 +551,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
     return dco::bench::median(std::move(v));
   };
   r.ms_per_frame = median_of([](const Round& t) { return t.ms_per_frame; });
+  r.steady_ms = median_of([](const Round& t) { return t.steady_ms; });
   r.peer_ms_per_frame = median_of([](const Round& t) { return t.peer_ms_per_frame; });
   r.ratio = median_of([](const Round& t) { return t.ratio(); });
   r.first_result_ms = dco::bench::median(first_results);
@@ -615,6 +623,8 @@ void print_text(const Result& r) {
       "result "
       "after {:.0f} ms\n",
       r.ms_per_frame, 1000.0 / r.ms_per_frame, r.rounds.size(), r.first_result_ms);
+  fmt::print("  steady   {:8.1f} ms between results once the pipeline is full ({:.2f} fps)\n",
+             r.steady_ms, 1000.0 / r.steady_ms);
   fmt::print(
       "  stages   stereo {:.1f}  contour {:.1f}  densify {:.1f} ms  (mean; p99 {:.1f} / {:.1f} / "
       "{:.1f})\n",
@@ -639,8 +649,9 @@ void print_text(const Result& r) {
       "median of the rounds' ratios)\n",
       r.peer_ms_per_frame, r.ratio);
   for (std::size_t i = 0; i < r.rounds.size(); ++i)
-    fmt::print("  round {}  dco {:.1f}, peer {:.1f} ms/frame, ratio {:.3f}\n", i + 1,
-               r.rounds[i].ms_per_frame, r.rounds[i].peer_ms_per_frame, r.rounds[i].ratio());
+    fmt::print("  round {}  dco {:.1f} (steady {:.1f}), peer {:.1f} ms/frame, ratio {:.3f}\n",
+               i + 1, r.rounds[i].ms_per_frame, r.rounds[i].steady_ms,
+               r.rounds[i].peer_ms_per_frame, r.rounds[i].ratio());
   fmt::print("  {}\n", r.backend_message);
   if (r.check)
     fmt::print(
@@ -669,14 +680,15 @@ void print_text(const Result& r) {
         r.check->cpu_rectify_ms / r.check->cuda_rectify_ms, r.check->differing_rectified_bytes);
 }
 
-// {"ms_per_frame": ..., "peer_ms_per_frame": ..., "ratio": ...} of each round.
+// {"ms_per_frame": ..., "peer_ms_per_frame": ..., "ratio": ..., "steady_ms": ...} of each round.
 std::vector<std::string> round_objects(const Result& r) {
   using dco::tools::json_number;
   std::vector<std::string> out;
   for (const Round& turn : r.rounds)
-    out.push_back(fmt::format("{{\"ms_per_frame\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}}}",
-                              json_number(turn.ms_per_frame), json_number(turn.peer_ms_per_frame),
-                              json_number(turn.ratio())));
+    out.push_back(fmt::format(
+        "{{\"ms_per_frame\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}, \"steady_ms\": {}}}",
+        json_number(turn.ms_per_frame), json_number(turn.peer_ms_per_frame),
+        json_number(turn.ratio()), json_number(turn.steady_ms)));
   return out;
 }
 
@@ -692,7 +704,7 @@ std::string json_fields(const Result& r) {
              "\"contour_row_threads\": {}, \"densify_row_threads\": {}, "
              "\"warmup_frames\": {}, "
              "\"first_result_ms\": {}, "
-             "\"ms_per_frame\": {}, \"fps\": {}, \"stereo_ms\": {}, "
+             "\"ms_per_frame\": {}, \"fps\": {}, \"steady_ms\": {}, \"stereo_ms\": {}, "
              "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
              "\"latency_p99_ms\": {}, \"latency_max_ms\": {}, \"ready_p50_ms\": {}, "
              "\"ready_p99_ms\": {}, "
@@ -704,13 +716,13 @@ std::string json_fields(const Result& r) {
              r.threads, r.parallel_flow ? "true" : "false", r.stereo_row_threads,
              r.contour_row_threads, r.densify_row_threads, r.warmup, json_number(r.first_result_ms),
              json_number(r.ms_per_frame), json_number(1000.0 / r.ms_per_frame),
-             json_number(t.stereo.mean_ms), json_number(t.contour.mean_ms),
-             json_number(t.densify.mean_ms), json_number(r.fps), json_number(ls.latency.p50_ms),
-             json_number(ls.latency.p99_ms), json_number(ls.latency.max_ms),
-             json_number(ls.ready.p50_ms), json_number(ls.ready.p99_ms),
-             json_number(r.release_latency_ms), l.overdue, l.early, l.pushed, l.dropped, l.late,
-             l.published, json_number(r.planes_share()), json_number(r.peer_ms_per_frame),
-             json_number(r.ratio)) +
+             json_number(r.steady_ms), json_number(t.stereo.mean_ms),
+             json_number(t.contour.mean_ms), json_number(t.densify.mean_ms), json_number(r.fps),
+             json_number(ls.latency.p50_ms), json_number(ls.latency.p99_ms),
+             json_number(ls.latency.max_ms), json_number(ls.ready.p50_ms),
+             json_number(ls.ready.p99_ms), json_number(r.release_latency_ms), l.overdue, l.early,
+             l.pushed, l.dropped, l.late, l.published, json_number(r.planes_share()),
+             json_number(r.peer_ms_per_frame), json_number(r.ratio)) +
          fmt::format(", \"rounds\": [{}]", fmt::join(round_objects(r), ", ")) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
          (r.check ? fmt::format(
