@@ -135,66 +135,82 @@ HWY_INLINE void Sort5(V& a, V& b, V& c, V& d, V& e) {
   exchange(a, c), exchange(b, e), exchange(b, d), exchange(b, c);
 }
 
+// Sorts four vectors lane by lane (five compare-exchanges).
+template <class V>
+HWY_INLINE void Sort4(V& a, V& b, V& c, V& d) {
+  const auto exchange = [](V& lo, V& hi) {
+    const V min = hn::Min(lo, hi);
+    hi = hn::Max(lo, hi);
+    lo = min;
+  };
+  exchange(a, b), exchange(c, d), exchange(a, c), exchange(b, d), exchange(b, c);
+}
+
 // The 25 values of a window as a 5x5 matrix, each column sorted, then each row: the matrix is
 // then sorted along both, so element (i, j) has at least (i + 1)(j + 1) - 1 others at or below
 // it and (5 - i)(5 - j) - 1 at or above it. Six elements are then below the median for sure and
 // six above; the median is the 7th smallest of the other 13: the top two of row 0, the top
 // three of row 1, the middle three of row 2, the bottom three of row 3 and the bottom two of
 // row 4. Sorted runs of those merge with the rule that the k-th smallest of two sorted runs x
-// and y is the least over i + j = k of max(x_i, y_j) (x_0 = y_0 = -inf). The columns are sorted
-// once per row into `columns`; the compiler drops the row sorts' unused outputs.
+// and y is the least over i + j = k of max(x_i, y_j) (x_0 = y_0 = -inf).
+// The columns are sorted once per row, the even and the odd ones apart, so that the outputs at
+// 2i and 2i + 1 (one vector of each) share four of their five columns: each row of the matrix
+// sorts those four once, and each output inserts its fifth column into them.
 void Median5Row(const float* const rows[5], int width, float* columns, float* out) {
   const hn::ScalableTag<float> d;
   using V = hn::Vec<decltype(d)>;
   const int n = static_cast<int>(hn::Lanes(d));
-  if (width < n) {
+  const int pairs = width / 2;  // of columns 2i, 2i + 1 both inside the row
+  if (pairs < n) {
     detail::median5_range(rows, width, 0, width, out);
     return;
   }
-  float* sorted[5];
-  for (int k = 0; k < 5; ++k) sorted[k] = columns + k * (width + 4) + 2;
-  int x = 0;
-  for (; x + n <= width; x += n) {
-    V a = hn::LoadU(d, rows[0] + x), b = hn::LoadU(d, rows[1] + x), c = hn::LoadU(d, rows[2] + x),
-      e = hn::LoadU(d, rows[3] + x), f = hn::LoadU(d, rows[4] + x);
-    Sort5(a, b, c, e, f);
-    hn::StoreU(a, d, sorted[0] + x), hn::StoreU(b, d, sorted[1] + x);
-    hn::StoreU(c, d, sorted[2] + x), hn::StoreU(e, d, sorted[3] + x);
-    hn::StoreU(f, d, sorted[4] + x);
+  // Rank k of column x, the row's ends replicated two columns out: padded column q = x + 2 is
+  // even[k][q / 2] or odd[k][q / 2].
+  const int half = median5_columns(width) / 10;
+  float* even[5];
+  float* odd[5];
+  for (int k = 0; k < 5; ++k) {
+    even[k] = columns + 2 * k * half;
+    odd[k] = even[k] + half;
   }
-  for (; x < width; ++x) {
+  const auto slot = [&](int k, int x) -> float& {
+    const int q = x + 2;
+    return (q & 1 ? odd : even)[k][q >> 1];
+  };
+  int m = 0;  // columns 2m, 2m + 1
+  for (; m + n <= pairs; m += n) {
+    V e0, o0, e1, o1, e2, o2, e3, o3, e4, o4;
+    hn::LoadInterleaved2(d, rows[0] + 2 * m, e0, o0);
+    hn::LoadInterleaved2(d, rows[1] + 2 * m, e1, o1);
+    hn::LoadInterleaved2(d, rows[2] + 2 * m, e2, o2);
+    hn::LoadInterleaved2(d, rows[3] + 2 * m, e3, o3);
+    hn::LoadInterleaved2(d, rows[4] + 2 * m, e4, o4);
+    Sort5(e0, e1, e2, e3, e4);
+    Sort5(o0, o1, o2, o3, o4);
+    hn::StoreU(e0, d, even[0] + m + 1), hn::StoreU(o0, d, odd[0] + m + 1);
+    hn::StoreU(e1, d, even[1] + m + 1), hn::StoreU(o1, d, odd[1] + m + 1);
+    hn::StoreU(e2, d, even[2] + m + 1), hn::StoreU(o2, d, odd[2] + m + 1);
+    hn::StoreU(e3, d, even[3] + m + 1), hn::StoreU(o3, d, odd[3] + m + 1);
+    hn::StoreU(e4, d, even[4] + m + 1), hn::StoreU(o4, d, odd[4] + m + 1);
+  }
+  for (int x = 2 * m; x < width; ++x) {
     float v[5] = {rows[0][x], rows[1][x], rows[2][x], rows[3][x], rows[4][x]};
     std::sort(v, v + 5);
-    for (int k = 0; k < 5; ++k) sorted[k][x] = v[k];
+    for (int k = 0; k < 5; ++k) slot(k, x) = v[k];
   }
   for (int k = 0; k < 5; ++k) {
-    sorted[k][-2] = sorted[k][-1] = sorted[k][0];
-    sorted[k][width] = sorted[k][width + 1] = sorted[k][width - 1];
+    slot(k, -2) = slot(k, -1) = slot(k, 0);
+    slot(k, width) = slot(k, width + 1) = slot(k, width - 1);
   }
   const auto max = [](V p, V q) { return hn::Max(p, q); };
   const auto min = [](V p, V q) { return hn::Min(p, q); };
-  // The last vector overlaps the one before it when width is not a multiple of n.
-  for (x = 0; x < width; x += n) {
-    const int at = std::min(x, width - n);
-    // Sizeless (SVE) vectors make no arrays: one named vector per element.
-    const auto sorted_row = [&](int i, V& v0, V& v1, V& v2, V& v3, V& v4) {
-      const float* p = sorted[i] + at - 2;
-      v0 = hn::LoadU(d, p), v1 = hn::LoadU(d, p + 1), v2 = hn::LoadU(d, p + 2);
-      v3 = hn::LoadU(d, p + 3), v4 = hn::LoadU(d, p + 4);
-      Sort5(v0, v1, v2, v3, v4);
-    };
-    V r00, r01, r02, r03, r04, r10, r11, r12, r13, r14, r20, r21, r22, r23, r24;
-    V r30, r31, r32, r33, r34, r40, r41, r42, r43, r44;
-    sorted_row(0, r00, r01, r02, r03, r04);
-    sorted_row(1, r10, r11, r12, r13, r14);
-    sorted_row(2, r20, r21, r22, r23, r24);
-    sorted_row(3, r30, r31, r32, r33, r34);
-    sorted_row(4, r40, r41, r42, r43, r44);
+  // The 13 candidates of one output into its median (see above).
+  const auto median_of = [&](V a1, V a2, V b1, V b2, V b3, V c1, V c2, V c3, V d1, V d2, V d3, V e1,
+                             V e2) {
     // Rows 0 and 4 (two candidates each) into u, four sorted; row 3 joins it: t, seven.
-    const V a1 = r03, a2 = r04, e1 = r40, e2 = r41;
     const V u1 = min(a1, e1), u2 = min(max(a1, e1), min(a2, e2));
     const V u3 = min(max(a2, e1), max(a1, e2)), u4 = max(a2, e2);
-    const V d1 = r30, d2 = r31, d3 = r32;
     const V t1 = min(u1, d1);
     const V t2 = min(min(u2, d2), max(u1, d1));
     const V t3 = min(min(u3, d3), min(max(u2, d1), max(u1, d2)));
@@ -203,8 +219,6 @@ void Median5Row(const float* const rows[5], int width, float* columns, float* ou
     const V t6 = min(max(u4, d2), max(u3, d3));
     const V t7 = max(u4, d3);
     // Rows 1 and 2 (three each) into s, six sorted.
-    const V b1 = r12, b2 = r13, b3 = r14;
-    const V c1 = r21, c2 = r22, c3 = r23;
     const V s1 = min(b1, c1);
     const V s2 = min(max(b1, c1), min(b2, c2));
     const V s3 = min(min(b3, c3), min(max(b2, c1), max(b1, c2)));
@@ -214,9 +228,43 @@ void Median5Row(const float* const rows[5], int width, float* columns, float* ou
     // The 7th smallest of s and t.
     V median = min(t7, max(s1, t6));
     median = min(median, min(max(s2, t5), max(s3, t4)));
-    median = min(median, min(max(s4, t3), min(max(s5, t2), max(s6, t1))));
-    hn::StoreU(median, d, out + at);
+    return min(median, min(max(s4, t3), min(max(s5, t2), max(s6, t1))));
+  };
+  // Outputs 2i and 2i + 1 for i = i0 .. i0 + n - 1; the last vector overlaps the one before it.
+  for (int i = 0; i < pairs; i += n) {
+    const int i0 = std::min(i, pairs - n);
+    // Output 2i reads padded columns 2i .. 2i + 4, output 2i + 1 columns 2i + 1 .. 2i + 5: both
+    // read s = columns 2i + 1 .. 2i + 4 (sorted per row below), the first also column 2i (p),
+    // the second column 2i + 5 (q). Ranks r of a row after inserting x into sorted s:
+    // r0 = min(s0, x), r_j = min(s_j, max(s_(j-1), x)), r4 = max(s3, x).
+    // (Sizeless SVE vectors cannot be captured: the lambda takes them as parameters.)
+    const auto row = [&](int k, V& s0, V& s1, V& s2, V& s3, V& p, V& q) {
+      s0 = hn::LoadU(d, odd[k] + i0), s1 = hn::LoadU(d, even[k] + i0 + 1);
+      s2 = hn::LoadU(d, odd[k] + i0 + 1), s3 = hn::LoadU(d, even[k] + i0 + 2);
+      p = hn::LoadU(d, even[k] + i0), q = hn::LoadU(d, odd[k] + i0 + 2);
+      Sort4(s0, s1, s2, s3);
+    };
+    V s0, s1, s2, s3, p, q;
+    row(0, s0, s1, s2, s3, p, q);  // ranks 3 and 4
+    const V a1p = min(s3, max(s2, p)), a2p = max(s3, p);
+    const V a1q = min(s3, max(s2, q)), a2q = max(s3, q);
+    row(1, s0, s1, s2, s3, p, q);  // ranks 2, 3 and 4
+    const V b1p = min(s2, max(s1, p)), b2p = min(s3, max(s2, p)), b3p = max(s3, p);
+    const V b1q = min(s2, max(s1, q)), b2q = min(s3, max(s2, q)), b3q = max(s3, q);
+    row(2, s0, s1, s2, s3, p, q);  // ranks 1, 2 and 3
+    const V c1p = min(s1, max(s0, p)), c2p = min(s2, max(s1, p)), c3p = min(s3, max(s2, p));
+    const V c1q = min(s1, max(s0, q)), c2q = min(s2, max(s1, q)), c3q = min(s3, max(s2, q));
+    row(3, s0, s1, s2, s3, p, q);  // ranks 0, 1 and 2
+    const V d1p = min(s0, p), d2p = min(s1, max(s0, p)), d3p = min(s2, max(s1, p));
+    const V d1q = min(s0, q), d2q = min(s1, max(s0, q)), d3q = min(s2, max(s1, q));
+    row(4, s0, s1, s2, s3, p, q);  // ranks 0 and 1
+    const V e1p = min(s0, p), e2p = min(s1, max(s0, p));
+    const V e1q = min(s0, q), e2q = min(s1, max(s0, q));
+    const V at_even = median_of(a1p, a2p, b1p, b2p, b3p, c1p, c2p, c3p, d1p, d2p, d3p, e1p, e2p);
+    const V at_odd = median_of(a1q, a2q, b1q, b2q, b3q, c1q, c2q, c3q, d1q, d2q, d3q, e1q, e2q);
+    hn::StoreInterleaved2(at_even, at_odd, d, out + 2 * i0);
   }
+  if (width > 2 * pairs) detail::median5_range(rows, width, width - 1, width, out);
 }
 
 }  // namespace HWY_NAMESPACE

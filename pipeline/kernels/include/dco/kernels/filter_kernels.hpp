@@ -49,7 +49,7 @@ void repeat_pairs(const float* in, int width, float* out);
 // by the caller). Finite values only (min and max decide the order). `columns` is scratch of
 // median5_columns(width) floats.
 inline constexpr int median5_columns(int width) {
-  return 5 * (width + 4);
+  return 10 * ((width + 5) / 2 + 1);
 }
 void median5_row(const float* const rows[5], int width, float* columns, float* out);
 
