@@ -9,7 +9,6 @@
 
 #include "dco/kernels/densify_kernels.hpp"
 #include "dco/kernels/densify_pixel.hpp"
-#include "dco/kernels/filter_kernels.hpp"
 
 namespace dco::densify {
 namespace {
@@ -50,13 +49,9 @@ void offset_matches(const float* __restrict own, int n, float offset, float* __r
   }
 }
 
-// out[x] = in[column[x]]: the grid row spread to the input width; step 2 (column[x] = x / 2)
-// by the vectorised kernels::repeat_pairs.
-void spread_row(const float* in, const int* column, int width, int step, float* out) {
-  if (step == 2)
-    kernels::repeat_pairs(in, width, out);
-  else
-    for (int x = 0; x < width; ++x) out[x] = in[column[x]];
+// out[x] = in[column[x]]: the grid row spread to the input width.
+void spread_row(const float* in, const int* column, int width, float* out) {
+  for (int x = 0; x < width; ++x) out[x] = in[column[x]];
 }
 
 }  // namespace
@@ -134,18 +129,24 @@ void MatchPlaneSmoother::apply(ImageView<const float> sparse, int step, int radi
     float* plane = row_.data();                       // the row scratch is free again here
     kernels::match_plane_row(sum, grid, n, rule, plane);
     // The block's input pixels that hold the grid value take the plane's (the others were
-    // decided apart at the input resolution, or are holes): the grid row spread to the input
-    // width first, so the loop over each input row is a plain select. Every input row is
-    // written here (the grid's rows cover the image).
+    // decided apart at the input resolution, or are holes). Every input row is written here
+    // (the grid's rows cover the image).
+    if (step == 2) {
+      for (int y = gy * step; y < std::min(gy * step + step, h); ++y)
+        kernels::match_plane_select_half_row(sparse.row(y), grid, plane, w, out.row(y));
+      continue;
+    }
+    // Other steps: the grid row spread to the input width first, so the loop over each input
+    // row is a plain select.
     float* plane_wide = row_.data() + n;
     float* own_wide = plane_wide + w;
-    spread_row(plane, column_.data(), w, step, plane_wide);
-    spread_row(grid, column_.data(), w, step, own_wide);
+    spread_row(plane, column_.data(), w, plane_wide);
+    spread_row(grid, column_.data(), w, own_wide);
     for (int y = gy * step; y < std::min(gy * step + step, h); ++y) {
       const float* s = sparse.row(y);
       float* o = out.row(y);
       for (int x = 0; x < w; ++x)
-        o[x] = (s[x] == own_wide[x]) & (plane_wide[x] == plane_wide[x]) ? plane_wide[x] : s[x];
+        o[x] = kernels::pixel::match_plane_select(s[x], own_wide[x], plane_wide[x]);
     }
   }
 }

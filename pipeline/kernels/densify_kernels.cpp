@@ -607,6 +607,26 @@ double DotRow(const float* a, const float* b, int n) {
   return detail::finish_dot(a, b, i, n, partial);
 }
 
+// match_plane_select_half_row: the even and the odd columns of a vector of grid pixels apart.
+void MatchPlaneSelectHalfRow(const float* HWY_RESTRICT sparse, const float* HWY_RESTRICT own,
+                             const float* HWY_RESTRICT plane, int width, float* HWY_RESTRICT out) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const int pairs = width / 2;
+  int i = 0;
+  for (; i + n <= pairs; i += n) {
+    hn::Vec<decltype(d)> even, odd;
+    hn::LoadInterleaved2(d, sparse + 2 * i, even, odd);
+    const auto g = hn::LoadU(d, own + i);
+    const auto p = hn::LoadU(d, plane + i);
+    const auto kept = hn::Eq(p, p);
+    hn::StoreInterleaved2(hn::IfThenElse(hn::And(hn::Eq(even, g), kept), p, even),
+                          hn::IfThenElse(hn::And(hn::Eq(odd, g), kept), p, odd), d, out + 2 * i);
+  }
+  for (int x = 2 * i; x < width; ++x)
+    out[x] = pixel::match_plane_select(sparse[x], own[x / 2], plane[x / 2]);
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace dco::kernels
 HWY_AFTER_NAMESPACE();
@@ -624,6 +644,7 @@ HWY_EXPORT(DotRow);
 HWY_EXPORT(MatchPlaneRowSums);
 HWY_EXPORT(MatchPlaneWindowSums);
 HWY_EXPORT(MatchPlaneRow);
+HWY_EXPORT(MatchPlaneSelectHalfRow);
 HWY_EXPORT(EdgeWeightsRow);
 HWY_EXPORT(HoleHintRow);
 HWY_EXPORT(OcclusionFillRow);
@@ -670,6 +691,11 @@ void match_plane_window_sums(const float* const* rows, int radius, int n, float*
 void match_plane_row(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
                      float* plane) {
   HWY_DYNAMIC_DISPATCH(MatchPlaneRow)(sums, own, n, rule, plane);
+}
+
+void match_plane_select_half_row(const float* sparse, const float* own, const float* plane,
+                                 int width, float* out) {
+  HWY_DYNAMIC_DISPATCH(MatchPlaneSelectHalfRow)(sparse, own, plane, width, out);
 }
 
 void edge_weights_row(const EdgeEnds& ends, const EdgeRule& rule, int n, float* out) {

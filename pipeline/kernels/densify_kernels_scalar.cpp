@@ -102,6 +102,12 @@ void match_plane_row(const float* sums, const float* own, int n, const MatchPlan
                                   at(6, i), at(7, i), at(8, i), at(9, i), own[i], rule);
 }
 
+void match_plane_select_half_row(const float* sparse, const float* own, const float* plane,
+                                 int width, float* out) {
+  for (int x = 0; x < width; ++x)
+    out[x] = pixel::match_plane_select(sparse[x], own[x / 2], plane[x / 2]);
+}
+
 void match_plane_row_sums(const float* match, const float* d, const float* dd, int n, int radius,
                           float* sums) {
   std::fill(sums, sums + 6 * static_cast<std::ptrdiff_t>(n), 0.0f);

@@ -376,6 +376,37 @@ TEST(DensifyKernels, MatchPlaneIsTheLeastSquaresPlaneAndMatchesScalar) {
   });
 }
 
+// Each input pixel that holds its grid pixel's own value takes the grid pixel's plane where one
+// was kept; other values (the boundary refinement's, holes) and pixels without a plane stay.
+TEST(DensifyKernels, MatchPlaneSelectHalfRowTakesThePlaneOnlyWhereTheGridValueIs) {
+  std::mt19937 rng(17);
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const int w : kWidths) {
+    const int n = (w + 1) / 2;
+    std::vector<float> own(n), plane(n), sparse(w);
+    for (int i = 0; i < n; ++i) {
+      own[i] = rng() % 5 == 0 ? inf : 10.0f + static_cast<float>(rng() % 50);
+      plane[i] = rng() % 3 == 0 ? nan : own[i] + 0.25f;
+    }
+    for (int x = 0; x < w; ++x)
+      sparse[x] = rng() % 4 == 0 ? own[x / 2] + 1.0f : rng() % 7 == 0 ? inf : own[x / 2];
+    std::vector<float> reference(w);
+    scalar::match_plane_select_half_row(sparse.data(), own.data(), plane.data(), w,
+                                        reference.data());
+    for (int x = 0; x < w; ++x) {
+      const bool takes = sparse[x] == own[x / 2] && !std::isnan(plane[x / 2]);
+      ASSERT_EQ(reference[x], takes ? plane[x / 2] : sparse[x]) << "w " << w << " x " << x;
+    }
+    for_each_target([&] {
+      std::vector<float> out(static_cast<std::size_t>(w) + 1, -7.0f);
+      match_plane_select_half_row(sparse.data(), own.data(), plane.data(), w, out.data());
+      for (int x = 0; x < w; ++x) ASSERT_EQ(out[x], reference[x]) << "w " << w << " x " << x;
+      EXPECT_EQ(out[w], -7.0f) << "nothing past the row";
+    });
+  }
+}
+
 TEST(DensifyKernels, EdgeWeightsMatchScalar) {
   std::mt19937 rng(9);
   std::vector<float> colour(256);

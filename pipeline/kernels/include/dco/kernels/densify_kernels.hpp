@@ -108,6 +108,11 @@ struct MatchPlaneRule {
 };
 void match_plane_row(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
                      float* plane);
+// The planes back at the input resolution with half-size matching: for an input row whose grid
+// row (every second pixel) holds `own` and `plane` ((width + 1) / 2 values each), out[x] =
+// plane[x / 2] where sparse[x] equals own[x / 2] and a plane was kept (not NaN), else sparse[x].
+void match_plane_select_half_row(const float* sparse, const float* own, const float* plane,
+                                 int width, float* out);
 
 // The pixels at both ends of a run of smoothness edges: edge i joins pixel i of the "a" rows with
 // pixel i of the "b" rows (for the edges within a row, b is a one column further on).
@@ -220,6 +225,8 @@ void match_plane_row_sums(const float* match, const float* d, const float* dd, i
 void match_plane_window_sums(const float* const* rows, int radius, int n, float* sums);
 void match_plane_row(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
                      float* plane);
+void match_plane_select_half_row(const float* sparse, const float* own, const float* plane,
+                                 int width, float* out);
 }  // namespace scalar
 
 }  // namespace dco::kernels

@@ -248,4 +248,10 @@ inline float match_plane(float count, float su, float sv, float suu, float suv, 
               : std::numeric_limits<float>::quiet_NaN();
 }
 
+// A pixel of the input row after the match planes (match_plane_select_half_row): the plane's value
+// where the pixel holds its grid pixel's own value and a plane was kept, else its own.
+inline float match_plane_select(float sparse, float own, float plane) {
+  return (sparse == own) & (plane == plane) ? plane : sparse;
+}
+
 }  // namespace dco::kernels::pixel
