@@ -16,7 +16,8 @@ namespace {
 
 // Widths around the lane counts of every target (4 .. 16 float lanes, SVE up to 64), odd ones,
 // and rows too short for an interior.
-const std::vector<int> kWidths = {1, 2, 3, 4, 5, 8, 9, 15, 16, 17, 18, 31, 32, 33, 34, 47, 64, 65, 66, 130, 257};
+const std::vector<int> kWidths = {1,  2,  3,  4,  5,  8,  9,  15, 16,  17, 18,
+                                  31, 32, 33, 34, 47, 64, 65, 66, 130, 257};
 
 std::vector<float> random_floats(std::mt19937& rng, int n, float lo, float hi) {
   std::uniform_real_distribution<float> dist(lo, hi);
