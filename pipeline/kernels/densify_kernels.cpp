@@ -613,8 +613,7 @@ void MatchPlaneSelectHalfRow(const float* HWY_RESTRICT sparse, const float* HWY_
   const hn::ScalableTag<float> d;
   const int n = static_cast<int>(hn::Lanes(d));
   const int pairs = width / 2;
-  int i = 0;
-  for (; i + n <= pairs; i += n) {
+  const auto select = [&](int i) {
     hn::Vec<decltype(d)> even, odd;
     hn::LoadInterleaved2(d, sparse + 2 * i, even, odd);
     const auto g = hn::LoadU(d, own + i);
@@ -622,8 +621,11 @@ void MatchPlaneSelectHalfRow(const float* HWY_RESTRICT sparse, const float* HWY_
     const auto kept = hn::Eq(p, p);
     hn::StoreInterleaved2(hn::IfThenElse(hn::And(hn::Eq(even, g), kept), p, even),
                           hn::IfThenElse(hn::And(hn::Eq(odd, g), kept), p, odd), d, out + 2 * i);
-  }
-  for (int x = 2 * i; x < width; ++x)
+  };
+  // out is not an input; the rest (a row narrower than two vectors, an odd last column) pixel by
+  // pixel.
+  const int done = detail::cover_with_vectors(0, pairs, n, select);
+  for (int x = 2 * done; x < width; ++x)
     out[x] = pixel::match_plane_select(sparse[x], own[x / 2], plane[x / 2]);
 }
 

@@ -178,8 +178,9 @@ void Median5Row(const float* const rows[5], int width, float* columns, float* ou
     const int q = x + 2;
     return (q & 1 ? odd : even)[k][q >> 1];
   };
-  int m = 0;  // columns 2m, 2m + 1
-  for (; m + n <= pairs; m += n) {
+  // Columns 2m .. 2m + 2n - 1 (the outputs are not the inputs, so the overlapping last vector
+  // stores the same values again); an odd width leaves its last column.
+  detail::cover_with_vectors(0, pairs, n, [&](int m) {
     V e0, o0, e1, o1, e2, o2, e3, o3, e4, o4;
     hn::LoadInterleaved2(d, rows[0] + 2 * m, e0, o0);
     hn::LoadInterleaved2(d, rows[1] + 2 * m, e1, o1);
@@ -193,8 +194,9 @@ void Median5Row(const float* const rows[5], int width, float* columns, float* ou
     hn::StoreU(e2, d, even[2] + m + 1), hn::StoreU(o2, d, odd[2] + m + 1);
     hn::StoreU(e3, d, even[3] + m + 1), hn::StoreU(o3, d, odd[3] + m + 1);
     hn::StoreU(e4, d, even[4] + m + 1), hn::StoreU(o4, d, odd[4] + m + 1);
-  }
-  for (int x = 2 * m; x < width; ++x) {
+  });
+  if (width > 2 * pairs) {
+    const int x = width - 1;
     float v[5] = {rows[0][x], rows[1][x], rows[2][x], rows[3][x], rows[4][x]};
     std::sort(v, v + 5);
     for (int k = 0; k < 5; ++k) slot(k, x) = v[k];
@@ -230,9 +232,8 @@ void Median5Row(const float* const rows[5], int width, float* columns, float* ou
     median = min(median, min(max(s2, t5), max(s3, t4)));
     return min(median, min(max(s4, t3), min(max(s5, t2), max(s6, t1))));
   };
-  // Outputs 2i and 2i + 1 for i = i0 .. i0 + n - 1; the last vector overlaps the one before it.
-  for (int i = 0; i < pairs; i += n) {
-    const int i0 = std::min(i, pairs - n);
+  // Outputs 2i and 2i + 1 for i = i0 .. i0 + n - 1.
+  detail::cover_with_vectors(0, pairs, n, [&](int i0) {
     // Output 2i reads padded columns 2i .. 2i + 4, output 2i + 1 columns 2i + 1 .. 2i + 5: both
     // read s = columns 2i + 1 .. 2i + 4 (sorted per row below), the first also column 2i (p),
     // the second column 2i + 5 (q). Ranks r of a row after inserting x into sorted s:
@@ -263,7 +264,7 @@ void Median5Row(const float* const rows[5], int width, float* columns, float* ou
     const V at_even = median_of(a1p, a2p, b1p, b2p, b3p, c1p, c2p, c3p, d1p, d2p, d3p, e1p, e2p);
     const V at_odd = median_of(a1q, a2q, b1q, b2q, b3q, c1q, c2q, c3q, d1q, d2q, d3q, e1q, e2q);
     hn::StoreInterleaved2(at_even, at_odd, d, out + 2 * i0);
-  }
+  });
   if (width > 2 * pairs) detail::median5_range(rows, width, width - 1, width, out);
 }
 
