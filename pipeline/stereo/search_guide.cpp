@@ -73,52 +73,75 @@ void guide_batches(ImageView<const float> coarse, int width, int height, int max
   std::vector<int>& valid = scratch.valid;      // [tile * rows + cy]
   std::vector<int>& row_reached = scratch.row_reached;
   std::vector<int>& row_valid = scratch.row_valid;
-  std::vector<std::uint8_t>& bits = scratch.bits;  // this coarse row: [(tile + 1) * batches + b]
   reached.assign(static_cast<std::size_t>(tiles) * batches * rows, 0);
   valid.assign(static_cast<std::size_t>(tiles) * rows, 0);
   row_reached.assign(static_cast<std::size_t>(batches) * rows, 0);
   row_valid.assign(rows, 0);
-  bits.resize(static_cast<std::size_t>(tiles + 1) * batches);
+  // The batch of each disparity, looked up: a division per value would cost more than the rest
+  // of the pass.
+  std::vector<int>& batch_of = scratch.batch_of;
+  batch_of.resize(static_cast<std::size_t>(max_d) + 1);
+  for (int d = 0; d <= max_d; ++d) batch_of[static_cast<std::size_t>(d)] = d / rule.batch;
+  // This coarse row's batch range per column, [lo, hi] (lo > hi: no value), made once and read
+  // by the row and by every tile that takes the column in.
+  std::vector<int>& column_lo = scratch.column_lo;
+  std::vector<int>& column_hi = scratch.column_hi;
+  column_lo.resize(static_cast<std::size_t>(cw));
+  column_hi.resize(static_cast<std::size_t>(cw));
   const auto cap = static_cast<float>(max_d + rule.margin + 1);
+  // Per coarse row, the batch ranges of the row's and of each tile's columns as difference
+  // arrays (+1 at a range's first batch, -1 past its last): two stores per column whatever
+  // its range, and a running sum over the batches gives the bits.
+  std::vector<int>& ends =
+      scratch.range_ends;  // [(tile or `tiles` for the row) * (batches + 1) + b]
+  const std::size_t span = static_cast<std::size_t>(batches) + 1;
+  ends.resize(static_cast<std::size_t>(tiles + 1) * span);
+  int* row_ends = ends.data() + static_cast<std::size_t>(tiles) * span;
+  int* lo_of = column_lo.data();
+  int* hi_of = column_hi.data();
   for (int cy = 0; cy < ch; ++cy) {
-    std::fill(bits.begin(), bits.end(), 0);
+    std::fill(ends.begin(), ends.end(), 0);
     const float* v = coarse.row(cy);
-    // The batches of column x's value, or none.
-    const auto batch_range = [&](int x) {
-      if (!std::isfinite(v[x]) || v[x] < 0) return std::pair{1, 0};
-      // A value past `cap` reaches max_d at both ends, as the cap does, which keeps the
-      // conversions in range.
-      const float twice = 2.0f * std::min(v[x], cap);
-      const int lo = std::clamp(static_cast<int>(std::floor(twice)) - rule.margin, 0, max_d);
-      const int hi = std::clamp(static_cast<int>(std::ceil(twice)) + rule.margin, 0, max_d);
-      return std::pair{lo / rule.batch, hi / rule.batch};
-    };
     int row_count = 0;
-    std::uint8_t* row_bits = bits.data() + static_cast<std::size_t>(tiles) * batches;
     for (int x = 0; x < cw; ++x) {
-      const auto [lo, hi] = batch_range(x);
-      row_count += lo <= hi;
-      for (int b = lo; b <= hi; ++b) row_bits[b] = 1;
+      int lo = 1, hi = 0;
+      if (std::isfinite(v[x]) && v[x] >= 0) {
+        // A value past `cap` reaches max_d at both ends, as the cap does, which keeps the
+        // conversions in range.
+        const float twice = 2.0f * std::min(v[x], cap);
+        lo = batch_of[static_cast<std::size_t>(
+            std::clamp(static_cast<int>(std::floor(twice)) - rule.margin, 0, max_d))];
+        hi = batch_of[static_cast<std::size_t>(
+            std::clamp(static_cast<int>(std::ceil(twice)) + rule.margin, 0, max_d))];
+        ++row_count;
+        ++row_ends[lo];
+        --row_ends[hi + 1];
+      }
+      lo_of[x] = lo;
+      hi_of[x] = hi;
     }
     row_valid[cy + 1] = row_valid[cy] + row_count;
-    for (int b = 0; b < batches; ++b) {
+    for (int b = 0, open = 0; b < batches; ++b) {
+      open += row_ends[b];
       const std::size_t at = static_cast<std::size_t>(b) * rows + cy;
-      row_reached[at + 1] = row_reached[at] + row_bits[b];
+      row_reached[at + 1] = row_reached[at] + (open > 0);
     }
     for (int t = 0; t < tiles; ++t) {
-      std::uint8_t* tile_bits = bits.data() + static_cast<std::size_t>(t) * batches;
+      int* tile_ends = ends.data() + static_cast<std::size_t>(t) * span;
       int count = 0;
       const auto [begin, end] = tile_columns(t);
       for (int x = begin; x < end; ++x) {
-        const auto [lo, hi] = batch_range(x);
-        count += lo <= hi;
-        for (int b = lo; b <= hi; ++b) tile_bits[b] = 1;
+        if (lo_of[x] > hi_of[x]) continue;
+        ++count;
+        ++tile_ends[lo_of[x]];
+        --tile_ends[hi_of[x] + 1];
       }
       const std::size_t vat = static_cast<std::size_t>(t) * rows + cy;
       valid[vat + 1] = valid[vat] + count;
-      for (int b = 0; b < batches; ++b) {
+      for (int b = 0, open = 0; b < batches; ++b) {
+        open += tile_ends[b];
         const std::size_t at = (static_cast<std::size_t>(t) * batches + b) * rows + cy;
-        reached[at + 1] = reached[at] + tile_bits[b];
+        reached[at + 1] = reached[at] + (open > 0);
       }
     }
   }

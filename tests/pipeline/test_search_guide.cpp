@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -201,6 +202,87 @@ TEST(BatchMask, TilesCoverTheWidthAndWeighTheLastByItsColumns) {
   EXPECT_THROW(mask.reset(2, 1, false, 40, 0), Error);
   mask.reset(2, 1, true, 64 * 4, 4);  // exactly 64 tiles
   EXPECT_EQ(mask.tile_bits(0, 0), ~std::uint64_t{0});
+}
+
+// The mask straight from its definition (search_guide.hpp), one coarse value at a time: which
+// batches tile t of internal row y searches.
+std::vector<bool> reference_tile(ImageView<const float> coarse, int width, int max_d,
+                                 const GuideRule& rule, int y, int t) {
+  const int batches = max_d / rule.batch + 1;
+  const int tile = std::max(rule.tile, (width + BatchMask::kMaxTiles - 1) / BatchMask::kMaxTiles);
+  const int centre = std::min(y / 2, coarse.height - 1);
+  const int reach = (rule.reach + 1) / 2;
+  const int top = std::max(0, centre - reach);
+  const int bottom = std::min(coarse.height, centre + reach + 1);
+  const auto scan = [&](int x_begin, int x_end, std::vector<bool>& on) {
+    int values = 0;
+    for (int cy = top; cy < bottom; ++cy)
+      for (int x = x_begin; x < x_end; ++x) {
+        const float v = coarse.row(cy)[x];
+        if (!std::isfinite(v) || v < 0) continue;
+        ++values;
+        const double twice = 2.0 * std::min<double>(v, max_d + rule.margin + 1);
+        const int lo = std::clamp(static_cast<int>(std::floor(twice)) - rule.margin, 0, max_d);
+        const int hi = std::clamp(static_cast<int>(std::ceil(twice)) + rule.margin, 0, max_d);
+        for (int d = lo; d <= hi; ++d) on[static_cast<std::size_t>(d / rule.batch)] = true;
+      }
+    return values;
+  };
+  std::vector<bool> row(static_cast<std::size_t>(batches), false);
+  const int row_values = scan(0, coarse.width, row);
+  if (row_values < rule.min_valid * (bottom - top) * coarse.width)
+    return std::vector<bool>(static_cast<std::size_t>(batches), true);
+  const int begin = std::max(0, t * tile - rule.tile_margin) / 2;
+  const int end =
+      std::max(begin, std::min(coarse.width, ((t + 1) * tile + rule.tile_margin + 1) / 2));
+  std::vector<bool> own(static_cast<std::size_t>(batches), false);
+  const int own_values = scan(begin, end, own);
+  return end == begin || own_values < rule.tile_min_valid * (bottom - top) * (end - begin) ? row
+                                                                                           : own;
+}
+
+TEST(SearchGuide, MatchesTheDefinitionOnRandomMaps) {
+  std::mt19937 rng(7);
+  GuideScratch scratch;  // reused across sizes and rules
+  for (int trial = 0; trial < 60; ++trial) {
+    const int cw = 3 + static_cast<int>(rng() % 60), ch = 2 + static_cast<int>(rng() % 30);
+    const int width = 2 * cw + static_cast<int>(rng() % 2),
+              height = 2 * ch + static_cast<int>(rng() % 2);
+    const int max_d = static_cast<int>(rng() % 140);
+    GuideRule rule;
+    rule.batch = 1 + static_cast<int>(rng() % 16);
+    rule.margin = static_cast<int>(rng() % 14);
+    rule.reach = static_cast<int>(rng() % 9);
+    rule.tile = 1 + static_cast<int>(rng() % 40);
+    rule.tile_margin = static_cast<int>(rng() % 12);
+    rule.min_valid = (rng() % 5) * 0.1;
+    rule.tile_min_valid = (rng() % 8) * 0.1;
+    Image<float> coarse(cw, ch);
+    // Mostly smooth surfaces at a few depths, with holes, NaN, negative values and values past
+    // the search.
+    const float base = static_cast<float>(rng() % 80);
+    for (int cy = 0; cy < ch; ++cy)
+      for (int x = 0; x < cw; ++x) {
+        const unsigned r = rng() % 20;
+        float v = base + 0.37f * static_cast<float>(x % 17) + 0.5f * static_cast<float>(cy / 5);
+        if (r == 0) v = kNone;
+        if (r == 1) v = std::numeric_limits<float>::quiet_NaN();
+        if (r == 2) v = -3.0f;
+        if (r == 3) v = 1000.0f;
+        if (r == 4) v = static_cast<float>(rng() % 1000) / 10.0f;
+        coarse.at(x, cy) = v;
+      }
+    BatchMask mask;
+    guide_batches(coarse.cview(), width, height, max_d, rule, scratch, mask);
+    ASSERT_EQ(mask.batches(), max_d / rule.batch + 1);
+    for (int y = 0; y < height; ++y)
+      for (int t = 0; t < mask.tiles(); ++t) {
+        const std::vector<bool> want = reference_tile(coarse.cview(), width, max_d, rule, y, t);
+        for (int b = 0; b < mask.batches(); ++b)
+          ASSERT_EQ(mask.searches(y, t, b), want[static_cast<std::size_t>(b)])
+              << "trial " << trial << " row " << y << " tile " << t << " batch " << b;
+      }
+  }
 }
 
 TEST(SearchGuide, RejectsAnEmptyMapOrABadRule) {

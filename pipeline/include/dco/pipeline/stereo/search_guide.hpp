@@ -70,7 +70,7 @@ struct GuideRule {
 // Working memory of guide_batches.
 struct GuideScratch {
   std::vector<int> reached, valid, row_reached, row_valid;
-  std::vector<std::uint8_t> bits;
+  std::vector<int> batch_of, column_lo, column_hi, range_ends;
 };
 
 // From the sparse map of a half-size pass over the internal images (coarse pixels, +inf or NaN
