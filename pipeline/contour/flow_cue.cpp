@@ -103,6 +103,7 @@ struct FlowCue::State {
   cv::Mat centre_copy, neighbour_copy, neighbour_b_copy;  // continuous copies of padded views
   std::unique_ptr<FlowFieldWorker> field_b;  // with parallel_flow: computes flow_b meanwhile
   Image<float> speed, speed_b, amplitude_a, amplitude_b, contrast_a, contrast_b, fused, tmp;
+  FlowInversionScratch inversion;
 };
 
 FlowCue::FlowCue(const ContourParams& params) : s_(std::make_unique<State>(params)) {
@@ -145,7 +146,7 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
   zero(s.flow_b);
   if (reuse) {
     s.dis->calc(centre, continuous(in.neighbour_b, s.neighbour_copy), s.flow_b);
-    invert_flow(as_view<float>(static_cast<const cv::Mat&>(s.last_b)), s.speed.view(),
+    invert_flow(as_view<float>(static_cast<const cv::Mat&>(s.last_b)), s.inversion,
                 as_view<float>(s.flow_a));
   } else if (s.field_b) {
     const cv::Mat neighbour_a = continuous(in.neighbour_a, s.neighbour_copy);

@@ -72,34 +72,44 @@ void fuse_amplitude_rows(ImageView<const float> amplitude_a, ImageView<const flo
   }
 }
 
-void invert_flow(ImageView<const float> forward, ImageView<float> speed,
+void invert_flow(ImageView<const float> forward, FlowInversionScratch& scratch,
                  ImageView<float> backward) {
-  assert(forward.channels == 2 && backward.channels == 2 && speed.channels == 1 &&
-         backward.same_size(forward) && speed.same_size(forward));
+  assert(forward.channels == 2 && backward.channels == 2 && backward.same_size(forward));
   const int w = forward.width;
   const int h = forward.height;
+  scratch.speed.resize(w, h);
+  scratch.column.resize(static_cast<std::size_t>(w));
+  scratch.row.resize(static_cast<std::size_t>(w));
+  scratch.row_speed.resize(static_cast<std::size_t>(w));
+  const ImageView<float> speed = scratch.speed.view();
   // speed holds the squared speed of the source that landed on each pixel, -1 where none did.
   for (int y = 0; y < h; ++y) std::fill(speed.row(y), speed.row(y) + w, -1.0f);
+  const kernels::FlowField field{forward.data, forward.stride, w, h};
+  const std::int32_t* column = scratch.column.data();
+  const std::int32_t* row = scratch.row.data();
+  const float* row_speed = scratch.row_speed.data();
+  float discard[3];
   for (int y = 0; y < h; ++y) {
+    // Where the row lands, vectorised; the writes stay in order, so of equally fast sources the
+    // first one wins.
+    kernels::flow_targets_row(field, y, scratch.column.data(), scratch.row.data(),
+                              scratch.row_speed.data());
     const float* f = forward.row(y);
     for (int x = 0; x < w; ++x) {
-      const float u = f[2 * x];
-      const float v = f[2 * x + 1];
-      const float tx = static_cast<float>(x) + u + 0.5f;
-      const float ty = static_cast<float>(y) + v + 0.5f;
-      // Also false for NaN; past these bounds the truncation below is the floor.
-      if (!(tx >= 0.0f && tx < static_cast<float>(w) && ty >= 0.0f && ty < static_cast<float>(h)))
-        continue;
-      const int qx = static_cast<int>(tx);
-      const int qy = static_cast<int>(ty);
-      const float s = u * u + v * v;
-      float& best = speed.row(qy)[qx];
-      if (s > best) {
-        best = s;
-        float* b = backward.row(qy) + 2 * qx;
-        b[0] = -u;
-        b[1] = -v;
-      }
+      const int qx = column[x];
+      if (qx < 0) continue;
+      const int qy = row[x];
+      const float s = row_speed[x];
+      float* best = speed.row(qy) + qx;
+      float* b = backward.row(qy) + 2 * qx;
+      // A loser writes to `discard` instead of branching: whether a source wins is as good as
+      // random where a surface's sub-pixel motion makes pixels collide.
+      const bool wins = s > *best;
+      best = wins ? best : discard;
+      b = wins ? b : discard + 1;
+      best[0] = s;
+      b[0] = -f[2 * x];
+      b[1] = -f[2 * x + 1];
     }
   }
   for (int y = 0; y < h; ++y) {

@@ -1,6 +1,7 @@
-// SIMD version of the flow cue's projection test, compiled once per Highway target and dispatched
-// at run time: the two bilinear samples per pixel are gathers, the rest whole-vector arithmetic
-// in the reference's order; the tail goes to the scalar range.
+// SIMD versions of the flow cue's row kernels, compiled once per Highway target and dispatched at
+// run time: in the projection test the two bilinear samples per pixel are gathers, the rest (and
+// the flow targets) whole-vector arithmetic in the reference's order; tails go to the scalar
+// range.
 
 #include <cstddef>
 #include <cstdint>
@@ -124,6 +125,38 @@ void ProjectionContrastRow(const FlowField& f, int y, float distance, float min_
   detail::projection_contrast_range(f, y, distance, min_length, x, f.width, contrast);
 }
 
+void FlowTargetsRow(const FlowField& f, int y, std::int32_t* column, std::int32_t* row,
+                    float* speed) {
+  const hn::ScalableTag<float> d;
+  const hn::RebindToSigned<decltype(d)> di;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const float* r = f.data + y * f.stride;
+  const auto zero = hn::Zero(d);
+  const auto half = hn::Set(d, 0.5f);
+  const auto w = hn::Set(d, static_cast<float>(f.width));
+  const auto h = hn::Set(d, static_cast<float>(f.height));
+  const auto yf = hn::Set(d, static_cast<float>(y));
+  const auto lanes = hn::ConvertTo(d, hn::Iota(di, 0));
+  const auto none = hn::Set(di, -1);
+  int x = 0;
+  for (; x + n <= f.width; x += n) {
+    hn::Vec<decltype(d)> u, v;
+    hn::LoadInterleaved2(d, r + 2 * x, u, v);
+    const auto tx = hn::Add(hn::Add(hn::Add(hn::Set(d, static_cast<float>(x)), lanes), u), half);
+    const auto ty = hn::Add(hn::Add(yf, v), half);
+    // Comparisons with NaN are false, so NaN lands nowhere, as in the reference.
+    const auto inside =
+        hn::And(hn::And(hn::Ge(tx, zero), hn::Lt(tx, w)), hn::And(hn::Ge(ty, zero), hn::Lt(ty, h)));
+    const auto inside_i = hn::RebindMask(di, inside);
+    // Lanes outside are replaced before the conversion, which keeps it in range.
+    hn::StoreU(hn::IfThenElse(inside_i, hn::ConvertTo(di, hn::IfThenElseZero(inside, tx)), none),
+               di, column + x);
+    hn::StoreU(hn::ConvertTo(di, hn::IfThenElseZero(inside, ty)), di, row + x);
+    hn::StoreU(hn::Add(hn::Mul(u, u), hn::Mul(v, v)), d, speed + x);
+  }
+  detail::flow_targets_range(f, y, x, f.width, column, row, speed);
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace dco::kernels
 HWY_AFTER_NAMESPACE();
@@ -132,10 +165,16 @@ HWY_AFTER_NAMESPACE();
 namespace dco::kernels {
 
 HWY_EXPORT(ProjectionContrastRow);
+HWY_EXPORT(FlowTargetsRow);
 
 void projection_contrast_row(const FlowField& flow, int y, float distance, float min_length,
                              float* contrast) {
   HWY_DYNAMIC_DISPATCH(ProjectionContrastRow)(flow, y, distance, min_length, contrast);
+}
+
+void flow_targets_row(const FlowField& flow, int y, std::int32_t* column, std::int32_t* row,
+                      float* speed) {
+  HWY_DYNAMIC_DISPATCH(FlowTargetsRow)(flow, y, column, row, speed);
 }
 
 }  // namespace dco::kernels

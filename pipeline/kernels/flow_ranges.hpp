@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "dco/kernels/flow_kernels.hpp"
 
@@ -53,6 +54,24 @@ inline void projection_contrast_range(const FlowField& f, int y, float distance,
     const FlowSample f1 = sample_flow(f, std::clamp(static_cast<float>(x) + dx, 0.0f, max_x),
                                       std::clamp(static_cast<float>(y) + dy, 0.0f, max_y));
     contrast[x] = (f1.u * ex + f1.v * ey) - (f0.u * ex + f0.v * ey);
+  }
+}
+
+inline void flow_targets_range(const FlowField& f, int y, int begin, int end, std::int32_t* column,
+                               std::int32_t* row, float* speed) {
+  const float* r = f.data + y * f.stride;
+  const float w = static_cast<float>(f.width);
+  const float h = static_cast<float>(f.height);
+  for (int x = begin; x < end; ++x) {
+    const float u = r[2 * x];
+    const float v = r[2 * x + 1];
+    const float tx = static_cast<float>(x) + u + 0.5f;
+    const float ty = static_cast<float>(y) + v + 0.5f;
+    // Also false for NaN; inside these bounds the truncation is the floor.
+    const bool inside = tx >= 0.0f && tx < w && ty >= 0.0f && ty < h;
+    column[x] = inside ? static_cast<std::int32_t>(tx) : -1;
+    row[x] = inside ? static_cast<std::int32_t>(ty) : 0;
+    speed[x] = u * u + v * v;
   }
 }
 

@@ -1,6 +1,8 @@
 #include "dco/kernels/flow_kernels.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -45,6 +47,77 @@ TEST(FlowKernels, ProjectionContrastRowMatchesScalar) {
             ASSERT_EQ(out, expected) << w << "x" << h << " row " << y << " distance " << distance;
           });
         }
+    }
+}
+
+TEST(FlowKernels, FlowTargetsRowMatchesScalar) {
+  std::mt19937 rng(37);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const int w : {1, 2, 5, 15, 16, 17, 33, 70})
+    for (const int h : {1, 3, 9}) {
+      const std::ptrdiff_t stride = 2 * w + 6;
+      std::vector<float> data = random_field(rng, w, h, stride);
+      // Flows that are not numbers, land exactly on the field's edges or just past them.
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          float* p = data.data() + y * stride + 2 * x;
+          switch (rng() % 8) {
+            case 0:
+              p[rng() % 2] = nan;
+              break;
+            case 1:
+              p[0] = static_cast<float>(w - x) - 0.5f;
+              break;  // tx = w
+            case 2:
+              p[0] = -static_cast<float>(x) - 0.5f;
+              break;  // tx = 0
+            case 3:
+              p[1] = static_cast<float>(h - y) - 0.5f;
+              break;  // ty = h
+            case 4:
+              p[1] = -static_cast<float>(y) - 0.5000001f;
+              break;  // just above
+            case 5:
+              p[0] = std::numeric_limits<float>::infinity();
+              break;
+            default:
+              break;
+          }
+        }
+      const FlowField field{data.data(), stride, w, h};
+      for (int y = 0; y < h; ++y) {
+        std::vector<std::int32_t> column(static_cast<std::size_t>(w)), row(column.size());
+        std::vector<float> speed(column.size());
+        scalar::flow_targets_row(field, y, column.data(), row.data(), speed.data());
+        for (int x = 0; x < w; ++x) {
+          // The reference itself: the nearest pixel inside the field, or none.
+          const float u = data[y * stride + 2 * x], v = data[y * stride + 2 * x + 1];
+          const double tx = std::floor(static_cast<double>(x) + u + 0.5);
+          const double ty = std::floor(static_cast<double>(y) + v + 0.5);
+          if (column[x] >= 0) {
+            ASSERT_LT(column[x], w);
+            ASSERT_GE(row[x], 0);
+            ASSERT_LT(row[x], h);
+            ASSERT_NEAR(column[x], tx, 1.0) << x;  // float rounding of x + u + 0.5 aside
+            ASSERT_NEAR(row[x], ty, 1.0) << x;
+          } else {
+            ASSERT_EQ(column[x], -1);
+          }
+          if (std::isnan(u) || std::isnan(v)) {
+            ASSERT_EQ(column[x], -1);
+          }
+        }
+        for_each_target([&] {
+          std::vector<std::int32_t> c2(column.size(), 7), r2(column.size(), 7);
+          std::vector<float> s2(column.size(), 7.0f);
+          flow_targets_row(field, y, c2.data(), r2.data(), s2.data());
+          ASSERT_EQ(c2, column) << w << "x" << h << " row " << y;
+          ASSERT_EQ(r2, row) << w << "x" << h << " row " << y;
+          for (int x = 0; x < w; ++x)
+            ASSERT_TRUE(s2[x] == speed[x] || (std::isnan(s2[x]) && std::isnan(speed[x])))
+                << w << "x" << h << " at " << x << "," << y;
+        });
+      }
     }
 }
 

@@ -104,9 +104,10 @@ TEST(ContourFlowFusion, InvertedFlowSendsEveryPixelBackWhereItCameFrom) {
   // -3 (the object wins over the still background it lands on), and the background it uncovered,
   // [10, 13), takes the still side of its run rather than the object's motion.
   const Image<float> forward = object_flow(3.0f);
-  Image<float> speed(kW, kH), backward(kW, kH, 2);
+  Image<float> backward(kW, kH, 2);
+  FlowInversionScratch scratch;
   backward.fill(std::numeric_limits<float>::quiet_NaN());  // every pixel must be written
-  invert_flow(forward.view(), speed.view(), backward.view());
+  invert_flow(forward.view(), scratch, backward.view());
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
       const bool object = x >= kObjBegin + 3 && x < kObjEnd + 3;
@@ -114,13 +115,14 @@ TEST(ContourFlowFusion, InvertedFlowSendsEveryPixelBackWhereItCameFrom) {
       EXPECT_EQ(backward.at(x, y, 1), 0.0f) << x << "," << y;
     }
   // Moving left, the uncovered run [17, 20) lies right of the object: the still side again.
-  invert_flow(object_flow(-3.0f).view(), speed.view(), backward.view());
+  invert_flow(object_flow(-3.0f).view(), scratch, backward.view());
   for (int x = 0; x < kW; ++x)
     EXPECT_EQ(backward.at(x, 4, 0), x >= kObjBegin - 3 && x < kObjEnd - 3 ? 3.0f : 0.0f) << x;
 }
 
 TEST(ContourFlowFusion, InvertedFlowRoundsSubPixelMotionAndFillsWhatNothingReaches) {
-  Image<float> forward(kW, kH, 2), speed(kW, kH), backward(kW, kH, 2);
+  Image<float> forward(kW, kH, 2), backward(kW, kH, 2);
+  FlowInversionScratch scratch;
   forward.fill(0.0f);
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
@@ -128,7 +130,7 @@ TEST(ContourFlowFusion, InvertedFlowRoundsSubPixelMotionAndFillsWhatNothingReach
       forward.at(x, y, 1) = 0.6f;
     }
   backward.fill(std::numeric_limits<float>::quiet_NaN());
-  invert_flow(forward.view(), speed.view(), backward.view());
+  invert_flow(forward.view(), scratch, backward.view());
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
       // The first row and the first two columns receive nothing: the row's run takes its right
@@ -139,7 +141,7 @@ TEST(ContourFlowFusion, InvertedFlowRoundsSubPixelMotionAndFillsWhatNothingReach
     }
   // Flows that are not numbers land nowhere.
   forward.fill(std::numeric_limits<float>::quiet_NaN());
-  invert_flow(forward.view(), speed.view(), backward.view());
+  invert_flow(forward.view(), scratch, backward.view());
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) ASSERT_EQ(backward.at(x, y, 0), 0.0f);
 }

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "dco/core/image.hpp"
 
 // The flow cue of the depth-contour filter (§5.1–5.2). Flow fields are 2-channel (u, v) float
@@ -40,13 +43,20 @@ void fuse_amplitude_rows(ImageView<const float> amplitude_a, ImageView<const flo
                          ImageView<const float> amplitude_b, ImageView<const float> contrast_b,
                          int y_begin, int y_end, ImageView<float> fused);
 
+// Working memory of invert_flow, sized on first use: a field of the same size reuses it.
+struct FlowInversionScratch {
+  Image<float> speed;                     // of the source that landed on each pixel
+  std::vector<std::int32_t> column, row;  // where the pixels of one row land
+  std::vector<float> row_speed;
+};
+
 // The field from the neighbour back to the centre, from `forward` (centre -> neighbour): each
 // centre pixel p lands on round(p + forward(p)) in the neighbour, which takes -forward(p); where
 // several land on one pixel the fastest wins (the nearer surface, under a camera's translation),
 // and a run of pixels none lands on (uncovered from behind a moving surface) takes the value at
-// its row end that moves less (the farther surface), or 0 on a row with none. `speed` is scratch
-// of the same size.
-void invert_flow(ImageView<const float> forward, ImageView<float> speed, ImageView<float> backward);
+// its row end that moves less (the farther surface), or 0 on a row with none.
+void invert_flow(ImageView<const float> forward, FlowInversionScratch& scratch,
+                 ImageView<float> backward);
 
 // Divides every value by max(largest value, floor) so the result lies in [0, 1]; returns that
 // divisor. An all-zero image (with floor 0) is left as it is and 0 is returned.

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 // Row kernels of the contour stage's flow cue (dco::contour::projection_contrast). Every function
 // in dco::kernels dispatches at run time to the best SIMD target (see stereo_kernels.hpp); the
@@ -22,9 +23,17 @@ struct FlowField {
 void projection_contrast_row(const FlowField& flow, int y, float distance, float min_length,
                              float* contrast);
 
+// Where the pixels of row y land in the field's other frame: (column[x], row[x]) = the floor of
+// (x + u + 0.5, y + v + 0.5), the nearest pixel to (x + u, y + v), or column[x] = -1 where that
+// lies outside the field or the flow is not a number; speed[x] = u * u + v * v.
+void flow_targets_row(const FlowField& flow, int y, std::int32_t* column, std::int32_t* row,
+                      float* speed);
+
 namespace scalar {
 void projection_contrast_row(const FlowField& flow, int y, float distance, float min_length,
                              float* contrast);
+void flow_targets_row(const FlowField& flow, int y, std::int32_t* column, std::int32_t* row,
+                      float* speed);
 }  // namespace scalar
 
 }  // namespace dco::kernels
