@@ -11,6 +11,7 @@
 #include "dco/gpu/densify_passes.hpp"
 #include "dco/gpu/grid_transfers.hpp"
 #include "dco/pipeline/densify/densifier.hpp"
+#include "dco/pipeline/densify/multigrid.hpp"
 #include "dco/pipeline/densify/system_solver.hpp"
 
 namespace dco::gpu {
@@ -25,10 +26,10 @@ namespace dco::gpu {
 template <class Grid>
 class GridSystemSolver final : public densify::SystemSolver {
  public:
-  // The CPU multigrid's settings (densify::Multigrid).
-  static constexpr int kCoarsestSize = 24;
-  static constexpr int kSmoothingSweeps = 2;
-  static constexpr int kCoarsestSweeps = 40;
+  // The CPU multigrid's settings.
+  static constexpr int kCoarsestSize = densify::Multigrid::kCoarsestSize;
+  static constexpr int kSmoothingSweeps = densify::Multigrid::kSmoothingSweeps;
+  static constexpr int kCoarsestSweeps = densify::Multigrid::kCoarsestSweeps;
 
   template <class... GridArgs>
   explicit GridSystemSolver(const densify::DensifyParams& params, GridArgs&&... grid_args)

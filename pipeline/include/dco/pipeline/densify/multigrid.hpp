@@ -17,9 +17,17 @@ namespace dco::densify {
 // then red after it, so the cycle is a symmetric operator.
 class Multigrid {
  public:
+  // Defaults, shared with the GPU solver (gpu/grid_system_solver.hpp), which must follow the
+  // same steps. Three sweeps each side: on the 1280x720 hand the half-size solve then reaches
+  // the tolerance in two iterations instead of three with two sweeps, 0.6-1 ms sooner
+  // (bench/RESULTS.md).
+  static constexpr int kCoarsestSize = 24;
+  static constexpr int kSmoothingSweeps = 3;
+  static constexpr int kCoarsestSweeps = 40;
+
   // Builds the hierarchy for `fine` (kept by reference: it must outlive the next cycle).
   // Levels are added until the coarsest is at most `coarsest_size` pixels on its longer side.
-  void build(const GridSystem& fine, int coarsest_size = 24);
+  void build(const GridSystem& fine, int coarsest_size = kCoarsestSize);
 
   // z ≈ A^{-1} r with one V-cycle from z = 0.
   void cycle(ImageView<const float> r, ImageView<float> z);
@@ -30,8 +38,8 @@ class Multigrid {
   // The system of level 1 .. levels() - 1 (coarsen of the level above it).
   const GridSystem& coarse_system(int level) const { return system_at(level); }
 
-  int smoothing_sweeps = 2;
-  int coarsest_sweeps = 40;
+  int smoothing_sweeps = kSmoothingSweeps;
+  int coarsest_sweeps = kCoarsestSweeps;
 
  private:
   struct Level {
