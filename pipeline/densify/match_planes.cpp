@@ -74,11 +74,12 @@ void MatchPlaneSmoother::reserve(int width, int step, int radius) {
   radius_ = radius;
   grid_width_ = (width + step - 1) / step;
   const auto n = static_cast<std::size_t>(grid_width_);
-  const auto span = static_cast<std::size_t>(2 * radius + 1);
-  ring_.resize(static_cast<std::size_t>(kRingRows) * n * span);
+  // The window's rows and the one that just left it (match_plane_window_slide reads it).
+  const auto ring = static_cast<std::size_t>(2 * radius + 2);
+  ring_.resize(static_cast<std::size_t>(kRingRows) * n * ring);
   window_.resize(static_cast<std::size_t>(kWindowSums) * n);
   row_.resize(3 * n + 2 * static_cast<std::size_t>(width));
-  window_rows_.resize(span);
+  window_rows_.resize(ring - 1);
   column_.resize(static_cast<std::size_t>(width));
   for (int x = 0; x < width; ++x)
     column_[static_cast<std::size_t>(x)] = std::min(x / step, grid_width_ - 1);
@@ -113,7 +114,7 @@ void MatchPlaneSmoother::apply(ImageView<const float> sparse, int step, int radi
   const kernels::MatchPlaneRule rule{offset, 0.25f * static_cast<float>(span * span),
                                      max_rms * max_rms};
   const auto ring_row = [&](int y) {
-    return ring_.data() + static_cast<std::size_t>(y % span) * row_size;
+    return ring_.data() + static_cast<std::size_t>(y % (span + 1)) * row_size;
   };
   for (int y = 0; y < std::min(radius, grid_height); ++y)
     row_moments(sparse, y, offset, ring_row(y));
@@ -123,7 +124,13 @@ void MatchPlaneSmoother::apply(ImageView<const float> sparse, int step, int radi
       window_rows_[static_cast<std::size_t>(j + radius)] =
           gy + j >= 0 && gy + j < grid_height ? ring_row(gy + j) : nullptr;
     float* sum = window_.data();
-    kernels::match_plane_window_sums(window_rows_.data(), radius, n, sum);
+    // The first window's sums from its rows, each next one moved down from the one above.
+    if (gy == 0)
+      kernels::match_plane_window_sums(window_rows_.data(), radius, n, sum);
+    else
+      kernels::match_plane_window_slide(window_rows_.data(),
+                                        gy - 1 - radius >= 0 ? ring_row(gy - 1 - radius) : nullptr,
+                                        radius, n, sum);
     // The plane of every grid pixel; NaN where none is kept.
     const float* grid = ring_row(gy) + kRowSums * n;  // the grid row's own values
     float* plane = row_.data();                       // the row scratch is free again here

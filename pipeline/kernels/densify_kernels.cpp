@@ -572,6 +572,67 @@ void MatchPlaneWindowSums(const float* const* rows, int radius, int n, float* s)
   }
 }
 
+void MatchPlaneWindowSlide(const float* const* rows, const float* left, int radius, int n,
+                           float* s) {
+  const hn::ScalableTag<float> d;
+  using V = hn::Vec<decltype(d)>;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const float* entered = rows[2 * radius];
+  const auto fr = static_cast<float>(radius);
+  const auto one = hn::Set(d, 1.0f), two = hn::Set(d, 2.0f);
+  const auto r = hn::Set(d, fr), r1 = hn::Set(d, fr + 1.0f);
+  const auto rr = hn::Set(d, fr * fr), r1r1 = hn::Set(d, (fr + 1.0f) * (fr + 1.0f));
+  const auto at = [&](int k, int x) { return s + static_cast<std::ptrdiff_t>(k) * n + x; };
+  int x = 0;
+  for (; x + lanes <= n; x += lanes) {
+    // pixel::match_plane_window_move, operation for operation.
+    const auto load = [&](const float* row, int k) {
+      return row != nullptr ? hn::LoadU(d, row + static_cast<std::ptrdiff_t>(k) * n + x)
+                            : hn::Zero(d);
+    };
+    const V l0 = load(left, 0), l1 = load(left, 1), l2 = load(left, 2);
+    const V e0 = load(entered, 0), e1 = load(entered, 1), e2 = load(entered, 2);
+    const V count = hn::Add(hn::Sub(hn::LoadU(d, at(0, x)), l0), e0);
+    const V su = hn::Add(hn::Sub(hn::LoadU(d, at(1, x)), l1), e1);
+    const V sv_up = hn::Add(hn::Add(hn::LoadU(d, at(2, x)), hn::Mul(r, l0)), hn::Mul(r1, e0));
+    const V svv_up = hn::Add(hn::Sub(hn::LoadU(d, at(5, x)), hn::Mul(rr, l0)), hn::Mul(r1r1, e0));
+    const V suv_up = hn::Add(hn::Add(hn::LoadU(d, at(4, x)), hn::Mul(r, l1)), hn::Mul(r1, e1));
+    hn::StoreU(count, d, at(0, x));
+    hn::StoreU(su, d, at(1, x));
+    hn::StoreU(hn::Sub(sv_up, count), d, at(2, x));
+    hn::StoreU(hn::Add(hn::Sub(hn::LoadU(d, at(3, x)), l2), e2), d, at(3, x));
+    hn::StoreU(hn::Sub(suv_up, su), d, at(4, x));
+    hn::StoreU(hn::Add(hn::Sub(svv_up, hn::Mul(two, sv_up)), count), d, at(5, x));
+    // The disparity sums afresh, in registers over the window's rows.
+    V a6 = hn::Zero(d), a7 = a6, a8 = a6, a9 = a6;
+    for (int j = -radius; j <= radius; ++j) {
+      const float* row = rows[j + radius];
+      if (row == nullptr) continue;
+      const auto v = hn::Set(d, static_cast<float>(j));
+      const auto rd = hn::LoadU(d, row + 3 * n + x), rud = hn::LoadU(d, row + 4 * n + x);
+      const auto rdd = hn::LoadU(d, row + 5 * n + x);
+      a6 = hn::Add(a6, hn::Mul(one, rd));
+      a7 = hn::Add(a7, hn::Mul(one, rud));
+      a8 = hn::Add(a8, hn::Mul(v, rd));
+      a9 = hn::Add(a9, hn::Mul(one, rdd));
+    }
+    hn::StoreU(a6, d, at(6, x));
+    hn::StoreU(a7, d, at(7, x));
+    hn::StoreU(a8, d, at(8, x));
+    hn::StoreU(a9, d, at(9, x));
+  }
+  for (int i = x; i < n; ++i)
+    pixel::match_plane_window_move(left != nullptr ? left + i : nullptr,
+                                   entered != nullptr ? entered + i : nullptr, fr, n, s + i);
+  for (int k = 6; k < 10; ++k) std::fill(at(k, x), at(k, n), 0.0f);
+  for (int j = -radius; j <= radius; ++j) {
+    const float* row = rows[j + radius];
+    if (row == nullptr) continue;
+    const auto v = static_cast<float>(j);
+    for (int i = x; i < n; ++i) pixel::match_plane_window_disparity_step(row + i, v, n, s + i);
+  }
+}
+
 double DotRow(const float* a, const float* b, int n) {
   // At most 16 lanes, so a vector is a whole number of the reference's partial sums: vector k of
   // a block holds partial sums k * lanes .. (k + 1) * lanes - 1.
@@ -645,6 +706,7 @@ HWY_EXPORT(MergeRow);
 HWY_EXPORT(DotRow);
 HWY_EXPORT(MatchPlaneRowSums);
 HWY_EXPORT(MatchPlaneWindowSums);
+HWY_EXPORT(MatchPlaneWindowSlide);
 HWY_EXPORT(MatchPlaneRow);
 HWY_EXPORT(MatchPlaneSelectHalfRow);
 HWY_EXPORT(EdgeWeightsRow);
@@ -688,6 +750,11 @@ void match_plane_row_sums(const float* match, const float* d, const float* dd, i
 
 void match_plane_window_sums(const float* const* rows, int radius, int n, float* sums) {
   HWY_DYNAMIC_DISPATCH(MatchPlaneWindowSums)(rows, radius, n, sums);
+}
+
+void match_plane_window_slide(const float* const* rows, const float* left, int radius, int n,
+                              float* sums) {
+  HWY_DYNAMIC_DISPATCH(MatchPlaneWindowSlide)(rows, left, radius, n, sums);
 }
 
 void match_plane_row(const float* sums, const float* own, int n, const MatchPlaneRule& rule,

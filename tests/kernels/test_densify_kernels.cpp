@@ -315,6 +315,48 @@ TEST(DensifyKernels, MatchPlaneSumsMatchScalarBitForBit) {
   });
 }
 
+// Moving the window sums down a grid gives the bits of adding each window up afresh, with rows
+// missing above and below the grid as the densifier's windows have them, on every target.
+TEST(DensifyKernels, MatchPlaneWindowSlideHasTheBitsOfTheWindowSums) {
+  std::mt19937 rng(14);
+  for_each_target([&] {
+    for (const int n : kWidths)
+      for (const int radius : {1, 3, 7}) {
+        const int rows = 2 * radius + 9, span = 2 * radius + 1;
+        std::vector<std::vector<float>> sums(static_cast<std::size_t>(rows));
+        for (auto& row_sums : sums) {
+          const MatchRow row(rng, n);
+          row_sums.assign(6 * static_cast<std::size_t>(n), 0.0f);
+          scalar::match_plane_row_sums(row.match.data(), row.d.data(), row.dd.data(), n, radius,
+                                       row_sums.data());
+        }
+        const auto window = [&](int centre) {
+          std::vector<const float*> w(static_cast<std::size_t>(span));
+          for (int j = -radius; j <= radius; ++j)
+            w[static_cast<std::size_t>(j + radius)] =
+                centre + j >= 0 && centre + j < rows
+                    ? sums[static_cast<std::size_t>(centre + j)].data()
+                    : nullptr;
+          return w;
+        };
+        std::vector<float> moved(10 * static_cast<std::size_t>(n)), moved_ref(moved), fresh(moved);
+        match_plane_window_sums(window(0).data(), radius, n, moved.data());
+        moved_ref = moved;
+        for (int centre = 1; centre < rows; ++centre) {
+          const float* left = centre - 1 - radius >= 0
+                                  ? sums[static_cast<std::size_t>(centre - 1 - radius)].data()
+                                  : nullptr;
+          match_plane_window_slide(window(centre).data(), left, radius, n, moved.data());
+          scalar::match_plane_window_slide(window(centre).data(), left, radius, n,
+                                           moved_ref.data());
+          scalar::match_plane_window_sums(window(centre).data(), radius, n, fresh.data());
+          ASSERT_EQ(moved_ref, fresh) << n << " radius " << radius << " centre " << centre;
+          ASSERT_EQ(moved, fresh) << n << " radius " << radius << " centre " << centre;
+        }
+      }
+  });
+}
+
 TEST(DensifyKernels, MatchPlaneIsTheLeastSquaresPlaneAndMatchesScalar) {
   std::mt19937 rng(13);
   // Windows of 7x7 on planes d = c + a u + b v with some matches missing, some noisy: the sums

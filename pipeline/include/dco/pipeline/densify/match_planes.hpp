@@ -37,8 +37,9 @@ class MatchPlaneSmoother {
   void row_moments(ImageView<const float> sparse, int grid_y, float offset, float* sums);
 
   int step_ = 1, radius_ = 1, grid_width_ = 0;
-  // Ring of (2 radius + 1) grid rows of six row sums; the ten window sums of a grid row; a grid
-  // row's matches (1 or 0), offset disparities and their squares.
+  // Ring of (2 radius + 2) grid rows of six row sums (a window's rows and the one that left it);
+  // the ten window sums of a grid row, moved down the grid; a grid row's matches (1 or 0),
+  // offset disparities and their squares.
   std::vector<float> ring_, window_, row_;
   std::vector<int> column_;                // grid column of each input column
   std::vector<const float*> window_rows_;  // the ring rows of a window, nullptr outside

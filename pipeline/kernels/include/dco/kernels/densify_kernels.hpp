@@ -96,6 +96,16 @@ void match_plane_row_sums(const float* match, const float* d, const float* dd, i
 // row sums of the window's rows at offsets v = -radius..radius (rows[v + radius]; nullptr for a
 // row outside the image), each sum added up from 0 in that order.
 void match_plane_window_sums(const float* const* rows, int radius, int n, float* sums);
+// The same ten sums for the window one row further down, from those of the window above it
+// (`sums`, updated in place) and the rows of the new window (rows[v + radius] as above) plus the
+// row that left it (`left`, nullptr for none). The sums whose row sums are whole numbers (Σ1,
+// Σu, Σu²: match counts and column offsets, exact in any order) are moved by the rows that
+// left and entered; the four with disparities are added up afresh as match_plane_window_sums
+// does. So the result has match_plane_window_sums' bits whenever the first three row sums of
+// every row are whole numbers and (radius + 1)^2 times any of them, and every window sum, stays
+// below 2^24 (for the densifier's windows, at most 31 columns: below 2^17).
+void match_plane_window_slide(const float* const* rows, const float* left, int radius, int n,
+                              float* sums);
 
 // The densifier's match planes (dco/pipeline/densify/match_planes.hpp): from the ten window sums
 // of each of n grid pixels (`sums`: Σ1, Σu, Σv, Σu², Σuv, Σv², Σd, Σud, Σvd, Σd², each n floats,
@@ -223,6 +233,8 @@ double dot_row(const float* a, const float* b, int n);
 void match_plane_row_sums(const float* match, const float* d, const float* dd, int n, int radius,
                           float* sums);
 void match_plane_window_sums(const float* const* rows, int radius, int n, float* sums);
+void match_plane_window_slide(const float* const* rows, const float* left, int radius, int n,
+                              float* sums);
 void match_plane_row(const float* sums, const float* own, int n, const MatchPlaneRule& rule,
                      float* plane);
 void match_plane_select_half_row(const float* sparse, const float* own, const float* plane,

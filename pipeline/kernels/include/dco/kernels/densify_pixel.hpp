@@ -208,19 +208,51 @@ inline void match_plane_row_step(float match, float d, float dd, float k, float 
 
 // One window row at offset v of match_plane_window_add at one pixel (row sums r, window sums s,
 // `stride` floats between arrays).
+// Its last four sums (Σd, Σud, Σvd, Σd²), the ones with disparities.
+inline void match_plane_window_disparity_step(const float* r, float v, int stride, float* s) {
+  const float rd = r[3 * stride], rud = r[4 * stride], rdd = r[5 * stride];
+  s[6 * stride] += 1.0f * rd;
+  s[7 * stride] += 1.0f * rud;
+  s[8 * stride] += v * rd;
+  s[9 * stride] += 1.0f * rdd;
+}
 inline void match_plane_window_step(const float* r, float v, float v2, int stride, float* s) {
   const float r0 = r[0], r1 = r[stride], r2 = r[2 * stride];
-  const float rd = r[3 * stride], rud = r[4 * stride], rdd = r[5 * stride];
   s[0] += 1.0f * r0;
   s[stride] += 1.0f * r1;
   s[2 * stride] += v * r0;
   s[3 * stride] += 1.0f * r2;
   s[4 * stride] += v * r1;
   s[5 * stride] += v2 * r0;
-  s[6 * stride] += 1.0f * rd;
-  s[7 * stride] += 1.0f * rud;
-  s[8 * stride] += v * rd;
-  s[9 * stride] += 1.0f * rdd;
+  match_plane_window_disparity_step(r, v, stride, s);
+}
+
+// match_plane_window_slide at one pixel (window sums s of the window centred one row up, the
+// row sums `left` of the row that left it and `entered` of the row that entered it, each
+// nullptr for none, radius r; `stride` floats between arrays): the six whole-number sums moved
+// one row down. With e/l the entering/leaving row's Σ1 (and likewise for Σu, Σu²), a sum over
+// the rows at offset v from the centre, Σ v^p x, becomes Σ (v - 1)^p x over the new window:
+// every step is exact on whole numbers.
+inline void match_plane_window_move(const float* left, const float* entered, float r, int stride,
+                                    float* s) {
+  const float l0 = left != nullptr ? left[0] : 0.0f, l1 = left != nullptr ? left[stride] : 0.0f;
+  const float l2 = left != nullptr ? left[2 * stride] : 0.0f;
+  const float e0 = entered != nullptr ? entered[0] : 0.0f;
+  const float e1 = entered != nullptr ? entered[stride] : 0.0f;
+  const float e2 = entered != nullptr ? entered[2 * stride] : 0.0f;
+  const float r1 = r + 1.0f;
+  const float count = s[0] - l0 + e0;
+  const float su = s[stride] - l1 + e1;
+  // Σ (v' + 1) x and Σ (v' + 1)^2 x over the new window (v' its offsets), from the old sums.
+  const float sv_up = s[2 * stride] + r * l0 + r1 * e0;
+  const float svv_up = s[5 * stride] - r * r * l0 + r1 * r1 * e0;
+  const float suv_up = s[4 * stride] + r * l1 + r1 * e1;
+  s[0] = count;
+  s[stride] = su;
+  s[2 * stride] = sv_up - count;
+  s[3 * stride] = s[3 * stride] - l2 + e2;
+  s[4 * stride] = suv_up - su;
+  s[5 * stride] = svv_up - 2.0f * sv_up + count;
 }
 
 // The least-squares plane d = md + a (u - mu) + b (v - mv) through a window's matches, from its
