@@ -102,8 +102,8 @@ void match_plane_window_sums(const float* const* rows, int radius, int n, float*
 // Σu, Σu²: match counts and column offsets, exact in any order) are moved by the rows that
 // left and entered; the four with disparities are added up afresh as match_plane_window_sums
 // does. So the result has match_plane_window_sums' bits whenever the first three row sums of
-// every row are whole numbers and (radius + 1)^2 times any of them, and every window sum, stays
-// below 2^24 (for the densifier's windows, at most 31 columns: below 2^17).
+// every row are whole numbers and every sum and product the move forms stays below 2^24 in
+// magnitude (in the densifier's windows, at most 31 x 31 pixels, all stay below 2^17).
 void match_plane_window_slide(const float* const* rows, const float* left, int radius, int n,
                               float* sums);
 
