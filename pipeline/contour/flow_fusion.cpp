@@ -85,15 +85,14 @@ void invert_flow(ImageView<const float> forward, FlowInversionScratch& scratch,
   // speed holds the squared speed of the source that landed on each pixel, -1 where none did.
   for (int y = 0; y < h; ++y) std::fill(speed.row(y), speed.row(y) + w, -1.0f);
   const kernels::FlowField field{forward.data, forward.stride, w, h};
-  const std::int32_t* column = scratch.column.data();
-  const std::int32_t* row = scratch.row.data();
-  const float* row_speed = scratch.row_speed.data();
+  std::int32_t* column = scratch.column.data();
+  std::int32_t* row = scratch.row.data();
+  float* row_speed = scratch.row_speed.data();
   float discard[3];
   for (int y = 0; y < h; ++y) {
     // Where the row lands, vectorised; the writes stay in order, so of equally fast sources the
     // first one wins.
-    kernels::flow_targets_row(field, y, scratch.column.data(), scratch.row.data(),
-                              scratch.row_speed.data());
+    kernels::flow_targets_row(field, y, column, row, row_speed);
     const float* f = forward.row(y);
     for (int x = 0; x < w; ++x) {
       const int qx = column[x];

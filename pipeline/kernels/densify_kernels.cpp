@@ -519,35 +519,56 @@ void MatchPlaneRowSums(const float* match, const float* dv, const float* dd, int
   for (int x = vector_end; x < n; ++x) pixel_sums(x);
 }
 
+// The four disparity sums (Σd, Σud, Σvd, Σd²) of the window at columns [x, x + lanes), in
+// registers over the window's rows and stored once, each added up from 0 in row order.
+template <class D>
+HWY_INLINE void WindowDisparitySums(D d, const float* const* rows, int radius, int n, int x,
+                                    float* s) {
+  using V = hn::Vec<D>;
+  const auto one = hn::Set(d, 1.0f);
+  V a6 = hn::Zero(d), a7 = a6, a8 = a6, a9 = a6;
+  for (int j = -radius; j <= radius; ++j) {
+    const float* r = rows[j + radius];
+    if (r == nullptr) continue;
+    const auto v = hn::Set(d, static_cast<float>(j));
+    const auto rd = hn::LoadU(d, r + 3 * n + x), rud = hn::LoadU(d, r + 4 * n + x);
+    const auto rdd = hn::LoadU(d, r + 5 * n + x);
+    a6 = hn::Add(a6, hn::Mul(one, rd));
+    a7 = hn::Add(a7, hn::Mul(one, rud));
+    a8 = hn::Add(a8, hn::Mul(v, rd));
+    a9 = hn::Add(a9, hn::Mul(one, rdd));
+  }
+  const auto at = [&](int k) { return s + static_cast<std::ptrdiff_t>(k) * n + x; };
+  hn::StoreU(a6, d, at(6));
+  hn::StoreU(a7, d, at(7));
+  hn::StoreU(a8, d, at(8));
+  hn::StoreU(a9, d, at(9));
+}
+
 void MatchPlaneWindowSums(const float* const* rows, int radius, int n, float* s) {
   const hn::ScalableTag<float> d;
   using V = hn::Vec<decltype(d)>;
   const int lanes = static_cast<int>(hn::Lanes(d));
   const auto one = hn::Set(d, 1.0f);
   int x = 0;
-  // Each vector of columns: the ten sums in registers over the window's rows, stored once
-  // (named vectors: SVE vectors cannot form an array).
+  // Each vector of columns: the six whole-number sums in registers over the window's rows,
+  // stored once (named vectors: SVE vectors cannot form an array), then the four disparity
+  // sums (each sum its own accumulator, so two passes give the bits of one).
   for (; x + lanes <= n; x += lanes) {
-    V a0 = hn::Zero(d), a1 = a0, a2 = a0, a3 = a0, a4 = a0, a5 = a0, a6 = a0, a7 = a0, a8 = a0,
-      a9 = a0;
+    V a0 = hn::Zero(d), a1 = a0, a2 = a0, a3 = a0, a4 = a0, a5 = a0;
     for (int j = -radius; j <= radius; ++j) {
       const float* r = rows[j + radius];
       if (r == nullptr) continue;
       const auto fv = static_cast<float>(j);
       const auto v = hn::Set(d, fv), v2 = hn::Set(d, fv * fv);
       const auto r0 = hn::LoadU(d, r + x), r1 = hn::LoadU(d, r + n + x);
-      const auto r2 = hn::LoadU(d, r + 2 * n + x), rd = hn::LoadU(d, r + 3 * n + x);
-      const auto rud = hn::LoadU(d, r + 4 * n + x), rdd = hn::LoadU(d, r + 5 * n + x);
+      const auto r2 = hn::LoadU(d, r + 2 * n + x);
       a0 = hn::Add(a0, hn::Mul(one, r0));
       a1 = hn::Add(a1, hn::Mul(one, r1));
       a2 = hn::Add(a2, hn::Mul(v, r0));
       a3 = hn::Add(a3, hn::Mul(one, r2));
       a4 = hn::Add(a4, hn::Mul(v, r1));
       a5 = hn::Add(a5, hn::Mul(v2, r0));
-      a6 = hn::Add(a6, hn::Mul(one, rd));
-      a7 = hn::Add(a7, hn::Mul(one, rud));
-      a8 = hn::Add(a8, hn::Mul(v, rd));
-      a9 = hn::Add(a9, hn::Mul(one, rdd));
     }
     const auto at = [&](int k) { return s + static_cast<std::ptrdiff_t>(k) * n + x; };
     hn::StoreU(a0, d, at(0));
@@ -556,10 +577,7 @@ void MatchPlaneWindowSums(const float* const* rows, int radius, int n, float* s)
     hn::StoreU(a3, d, at(3));
     hn::StoreU(a4, d, at(4));
     hn::StoreU(a5, d, at(5));
-    hn::StoreU(a6, d, at(6));
-    hn::StoreU(a7, d, at(7));
-    hn::StoreU(a8, d, at(8));
-    hn::StoreU(a9, d, at(9));
+    WindowDisparitySums(d, rows, radius, n, x, s);
   }
   for (int k = 0; k < 10; ++k)
     std::fill(s + static_cast<std::ptrdiff_t>(k) * n + x,
@@ -579,7 +597,7 @@ void MatchPlaneWindowSlide(const float* const* rows, const float* left, int radi
   const int lanes = static_cast<int>(hn::Lanes(d));
   const float* entered = rows[2 * radius];
   const auto fr = static_cast<float>(radius);
-  const auto one = hn::Set(d, 1.0f), two = hn::Set(d, 2.0f);
+  const auto two = hn::Set(d, 2.0f);
   const auto r = hn::Set(d, fr), r1 = hn::Set(d, fr + 1.0f);
   const auto rr = hn::Set(d, fr * fr), r1r1 = hn::Set(d, (fr + 1.0f) * (fr + 1.0f));
   const auto at = [&](int k, int x) { return s + static_cast<std::ptrdiff_t>(k) * n + x; };
@@ -603,34 +621,9 @@ void MatchPlaneWindowSlide(const float* const* rows, const float* left, int radi
     hn::StoreU(hn::Add(hn::Sub(hn::LoadU(d, at(3, x)), l2), e2), d, at(3, x));
     hn::StoreU(hn::Sub(suv_up, su), d, at(4, x));
     hn::StoreU(hn::Add(hn::Sub(svv_up, hn::Mul(two, sv_up)), count), d, at(5, x));
-    // The disparity sums afresh, in registers over the window's rows.
-    V a6 = hn::Zero(d), a7 = a6, a8 = a6, a9 = a6;
-    for (int j = -radius; j <= radius; ++j) {
-      const float* row = rows[j + radius];
-      if (row == nullptr) continue;
-      const auto v = hn::Set(d, static_cast<float>(j));
-      const auto rd = hn::LoadU(d, row + 3 * n + x), rud = hn::LoadU(d, row + 4 * n + x);
-      const auto rdd = hn::LoadU(d, row + 5 * n + x);
-      a6 = hn::Add(a6, hn::Mul(one, rd));
-      a7 = hn::Add(a7, hn::Mul(one, rud));
-      a8 = hn::Add(a8, hn::Mul(v, rd));
-      a9 = hn::Add(a9, hn::Mul(one, rdd));
-    }
-    hn::StoreU(a6, d, at(6, x));
-    hn::StoreU(a7, d, at(7, x));
-    hn::StoreU(a8, d, at(8, x));
-    hn::StoreU(a9, d, at(9, x));
+    WindowDisparitySums(d, rows, radius, n, x, s);  // afresh
   }
-  for (int i = x; i < n; ++i)
-    pixel::match_plane_window_move(left != nullptr ? left + i : nullptr,
-                                   entered != nullptr ? entered + i : nullptr, fr, n, s + i);
-  for (int k = 6; k < 10; ++k) std::fill(at(k, x), at(k, n), 0.0f);
-  for (int j = -radius; j <= radius; ++j) {
-    const float* row = rows[j + radius];
-    if (row == nullptr) continue;
-    const auto v = static_cast<float>(j);
-    for (int i = x; i < n; ++i) pixel::match_plane_window_disparity_step(row + i, v, n, s + i);
-  }
+  detail::match_plane_window_slide_range(rows, left, radius, n, x, n, s);
 }
 
 double DotRow(const float* a, const float* b, int n) {

@@ -131,20 +131,7 @@ void match_plane_window_sums(const float* const* rows, int radius, int n, float*
 
 void match_plane_window_slide(const float* const* rows, const float* left, int radius, int n,
                               float* sums) {
-  const float* entered = rows[2 * radius];
-  const auto r = static_cast<float>(radius);
-  for (int x = 0; x < n; ++x)
-    pixel::match_plane_window_move(left != nullptr ? left + x : nullptr,
-                                   entered != nullptr ? entered + x : nullptr, r, n, sums + x);
-  for (int k = 6; k < 10; ++k)
-    std::fill(sums + k * static_cast<std::ptrdiff_t>(n),
-              sums + (k + 1) * static_cast<std::ptrdiff_t>(n), 0.0f);
-  for (int j = -radius; j <= radius; ++j) {
-    const float* row = rows[j + radius];
-    if (row == nullptr) continue;
-    const auto v = static_cast<float>(j);
-    for (int x = 0; x < n; ++x) pixel::match_plane_window_disparity_step(row + x, v, n, sums + x);
-  }
+  detail::match_plane_window_slide_range(rows, left, radius, n, 0, n, sums);
 }
 
 }  // namespace dco::kernels::scalar

@@ -25,6 +25,27 @@ inline void residual_split_range(const SplitResidualRow& r, float* out, int begi
   for (int i = begin; i < end; ++i) out[i] = pixel::residual_split_at(r, i);
 }
 
+// match_plane_window_slide over columns [begin, end): the whole-number sums moved, the
+// disparity sums added up afresh.
+inline void match_plane_window_slide_range(const float* const* rows, const float* left, int radius,
+                                           int n, int begin, int end, float* sums) {
+  const float* entered = rows[2 * radius];
+  const auto r = static_cast<float>(radius);
+  for (int x = begin; x < end; ++x)
+    pixel::match_plane_window_move(left != nullptr ? left + x : nullptr,
+                                   entered != nullptr ? entered + x : nullptr, r, n, sums + x);
+  for (int k = 6; k < 10; ++k)
+    std::fill(sums + k * static_cast<std::ptrdiff_t>(n) + begin,
+              sums + k * static_cast<std::ptrdiff_t>(n) + end, 0.0f);
+  for (int j = -radius; j <= radius; ++j) {
+    const float* row = rows[j + radius];
+    if (row == nullptr) continue;
+    const auto v = static_cast<float>(j);
+    for (int x = begin; x < end; ++x)
+      pixel::match_plane_window_disparity_step(row + x, v, n, sums + x);
+  }
+}
+
 inline void inverse_diagonal_range(const float* diag, int begin, int end, float* inv) {
   for (int i = begin; i < end; ++i) inv[i] = pixel::inverse_diagonal(diag[i]);
 }
