@@ -70,6 +70,22 @@ void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmooth
   slot.planes_ms = t.lap_ms();
 }
 
+void gradient_frame(contour::GradientScratch& scratch, StereoSlot& slot, bool here) {
+  Stopwatch t;
+  slot.gradients_done = here;
+  slot.gradients_ms = 0;
+  if (!here) {
+    // Sized all the same, so that neither allocates when the step moves here.
+    const int w = slot.image.width(), h = slot.image.height();
+    for (Image<float>* img : {&slot.m_intensity, &scratch.blur_tmp, &scratch.blurred})
+      img->resize(w, h);
+    slot.direction.resize(w, h);
+    return;
+  }
+  contour::intensity_gradients(slot.image.cview(), scratch, slot.m_intensity, slot.direction);
+  slot.gradients_ms = t.lap_ms();
+}
+
 namespace {
 
 // The contour step proper and the result's fields other than the image, sparse and planar maps.
@@ -84,6 +100,10 @@ void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
     in.neighbour_a = neighbour_a->small.cview();
     in.neighbour_b = neighbour_b->small.cview();
   }
+  if (centre.gradients_done) {
+    in.m_intensity = centre.m_intensity.cview();
+    in.direction = centre.direction.cview();
+  }
   contour::ContourOutputs contours{std::move(out.m_fuse), std::move(out.m_intensity),
                                    std::move(out.contours)};
   extractor.compute(in, contours);
@@ -91,9 +111,11 @@ void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
   out.m_intensity = std::move(contours.m_intensity);
   out.contours = std::move(contours.contours);
   out.contour_timings = extractor.last_timings();
+  if (centre.gradients_done) out.contour_timings.gaussian_ms = centre.gradients_ms;
 
   out.index = centre.index;
   out.planes_done = centre.planes_done;
+  out.gradients_done = centre.gradients_done;
   out.densify_timings.planes_ms = centre.planes_ms;
   out.stereo_timings = centre.stereo_timings;
   out.stereo_scale = centre.stereo_scale;
@@ -105,6 +127,10 @@ void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
 void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centre,
                    const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out) {
   contours_of(extractor, centre, neighbour_a, neighbour_b, out);
+  if (centre.gradients_done) {
+    out.m_intensity.resize(centre.m_intensity.width(), centre.m_intensity.height());
+    out.m_intensity.copy_from(centre.m_intensity.cview());
+  }
   out.image.resize(centre.image.width(), centre.image.height());
   out.image.copy_from(centre.image.cview());
   out.sparse.resize(centre.sparse.width(), centre.sparse.height());
@@ -117,15 +143,19 @@ void contour_frame_moving_maps(contour::ContourExtractor& extractor, StereoSlot&
                                const StereoSlot* neighbour_a, const StereoSlot* neighbour_b,
                                DepthResult& out) {
   contours_of(extractor, centre, neighbour_a, neighbour_b, out);
-  // Three full-size maps a frame, some 8 MB at 1280x720, not copied on the contour thread. The
-  // slot keeps maps of its own size (only the first frames allocate): the next frame in it, and
-  // whatever sizes other slots like it, find their room.
+  // Three or four full-size maps a frame, some 8-12 MB at 1280x720, not copied on the contour
+  // thread. The slot keeps maps of its own size (only the first frames allocate): the next frame
+  // in it, and whatever sizes other slots like it, find their room.
   out.image.resize(centre.image.width(), centre.image.height());
   out.sparse.resize(centre.sparse.width(), centre.sparse.height());
   out.planar.resize(centre.planar.width(), centre.planar.height());
   out.image.swap(centre.image);
   out.sparse.swap(centre.sparse);
   out.planar.swap(centre.planar);
+  if (centre.gradients_done) {
+    out.m_intensity.resize(centre.m_intensity.width(), centre.m_intensity.height());
+    out.m_intensity.swap(centre.m_intensity);
+  }
 }
 
 densify::DensifyInputs densify_inputs(const DepthResult& r, ImageView<const float> previous) {
@@ -170,6 +200,8 @@ void size_like(const StereoSlot& model, StereoSlot& out) {
   size_image_like(model.raw_disparity, out.raw_disparity);
   size_image_like(model.sparse, out.sparse);
   size_image_like(model.planar, out.planar);
+  size_image_like(model.m_intensity, out.m_intensity);
+  size_image_like(model.direction, out.direction);
 }
 
 void size_like(const DepthResult& model, DepthResult& out) {
@@ -197,13 +229,15 @@ DepthPipeline::DepthPipeline(const PipelineParams& params, const StageFactories&
     : params_(params),
       stereo_(stereo::make_stereo_matcher(stages.stereo, params.stereo)),
       contour_(contour::make_contour_extractor(stages.contour, params.contour)),
-      densifier_(params.densify, stages.densify_solver) {
+      densifier_(params.densify, stages.densify_solver),
+      gradients_apart_(!stages.on_gpu) {
   validate(params_);
 }
 
 void DepthPipeline::reset() {
   next_index_ = 0;
   next_output_ = 0;
+  stereo_->reset();
   densifier_.reset();
   for (StereoSlot& s : slots_) s.index = -1;
 }
@@ -224,6 +258,7 @@ bool DepthPipeline::push(ImageView<const std::uint8_t> left, ImageView<const std
   stereo_frame(*stereo_, left, right, slot);  // first: it rejects bad input
   plane_frame(params_.densify, planes_, slot);
   prepare_frame(params_.stereo, left, t, slot);
+  gradient_frame(gradients_, slot, gradients_apart_);
   ++next_index_;
   const ContourWindow window = window_on_arrival(params_.contour.lookahead, t);
   if (window.centre < 0) return false;  // frame 0 waits for frame 1

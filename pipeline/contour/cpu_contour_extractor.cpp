@@ -49,12 +49,16 @@ class CpuContourExtractor final : public ContourExtractor {
       timings_.stereo_cue_ms = t.lap_ms();
     }
 
-    gaussian_blur_5x5(in.image, blur_tmp_.view(), blurred_.view());
-    timings_.gaussian_ms = t.lap_ms();
-    sobel_magnitude(blurred_.cview(), kMaxSobelMagnitude8Bit, out.m_intensity.view(),
-                    direction_.view());
-    gated_canny(out.m_intensity.cview(), direction_.cview(), out.m_fuse.cview(), thresholds_,
-                out.contours.view(), canny_);
+    ImageView<const float> m_intensity = in.m_intensity;
+    ImageView<const std::uint8_t> direction = in.direction;
+    if (m_intensity.empty()) {
+      intensity_gradients(in.image, gradient_scratch_, out.m_intensity, direction_);
+      m_intensity = out.m_intensity.cview();
+      direction = direction_.cview();
+      timings_.gaussian_ms = t.lap_ms();
+    }
+    gated_canny(m_intensity, direction, out.m_fuse.cview(), thresholds_, out.contours.view(),
+                canny_);
     timings_.canny_ms = t.lap_ms();
     timings_.total_ms = t.total_ms();
   }
@@ -67,19 +71,20 @@ class CpuContourExtractor final : public ContourExtractor {
     const int cw = in.centre.width, ch = in.centre.height;
     const int iw = in.image.width, ih = in.image.height;
     out.m_fuse.resize(cw, ch);
-    out.m_intensity.resize(iw, ih);
     out.contours.resize(iw, ih);
-    for (Image<float>* img : {&tmp_, &jumps_, &stereo_cue_}) img->resize(cw, ch);
-    blur_tmp_.resize(iw, ih);
-    blurred_.resize(iw, ih);
+    // The gradients' buffers too when the inputs carry them, so that a frame without them does
+    // not allocate.
+    gradient_scratch_.blur_tmp.resize(iw, ih);
+    gradient_scratch_.blurred.resize(iw, ih);
     direction_.resize(iw, ih);
+    for (Image<float>* img : {&tmp_, &jumps_, &stereo_cue_}) img->resize(cw, ch);
   }
 
   ContourParams params_;
   CannyThresholds thresholds_;
   FlowCue flow_cue_;
   Image<float> tmp_, jumps_, stereo_cue_;
-  Image<float> blur_tmp_, blurred_;
+  GradientScratch gradient_scratch_;
   Image<std::uint8_t> direction_;
   CannyScratch canny_;
   ContourTimings timings_;

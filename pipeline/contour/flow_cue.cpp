@@ -52,11 +52,11 @@ std::string size_text(ImageView<T> v) {
 
 // An optional input is either absent or a single-channel image of the internal size.
 template <typename T>
-void check_optional(ImageView<const T> v, ImageView<const std::uint8_t> centre, const char* name) {
+void check_optional(ImageView<const T> v, ImageView<const std::uint8_t> like, const char* name) {
   if (v.empty()) return;
-  if (v.channels != 1 || !v.same_size(centre))
+  if (v.channels != 1 || !v.same_size(like))
     throw Error(std::string("contour: ") + name + " is " + size_text(v) + ", expected " +
-                std::to_string(centre.width) + "x" + std::to_string(centre.height) + "x1");
+                std::to_string(like.width) + "x" + std::to_string(like.height) + "x1");
 }
 
 bool same_pixels(ImageView<const std::uint8_t> a, const Image<std::uint8_t>& b) {
@@ -86,6 +86,10 @@ void check_contour_input(const ContourInputs& in) {
   check_optional(in.neighbour_a, in.centre, "neighbour_a");
   check_optional(in.neighbour_b, in.centre, "neighbour_b");
   check_optional(in.disparity, in.centre, "disparity");
+  if (in.m_intensity.empty() != in.direction.empty())
+    throw Error("contour: m_intensity and direction come together or not at all");
+  check_optional(in.m_intensity, in.image, "m_intensity");
+  check_optional(in.direction, in.image, "direction");
 }
 
 struct FlowCue::State {

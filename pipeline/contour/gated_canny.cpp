@@ -8,6 +8,7 @@
 #include "dco/kernels/canny_kernels.hpp"
 #include "dco/kernels/contour_pixel.hpp"
 #include "dco/kernels/filter_kernels.hpp"
+#include "dco/pipeline/contour/separable_filters.hpp"
 
 namespace dco::contour {
 namespace {
@@ -46,6 +47,19 @@ void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<floa
                                   smoothed.row(std::min(y + 1, h - 1)), w};
     kernels::sobel_row(rows, inv, magnitude.row(y), direction.row(y));
   }
+}
+
+void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& scratch,
+                         Image<float>& m_intensity, Image<std::uint8_t>& direction) {
+  assert(image.channels == 1);
+  const int w = image.width, h = image.height;
+  scratch.blur_tmp.resize(w, h);
+  scratch.blurred.resize(w, h);
+  m_intensity.resize(w, h);
+  direction.resize(w, h);
+  gaussian_blur_5x5(image, scratch.blur_tmp.view(), scratch.blurred.view());
+  sobel_magnitude(scratch.blurred.cview(), kMaxSobelMagnitude8Bit, m_intensity.view(),
+                  direction.view());
 }
 
 void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t> direction,

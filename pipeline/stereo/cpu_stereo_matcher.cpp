@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -40,6 +41,13 @@ void spread_pairs(const float* __restrict src, int count, float scale, float* __
 }
 
 class CpuStereoMatcher final : public StereoMatcher {
+  // A pass of the search guide and the map it leaves.
+  struct CoarsePass {
+    std::unique_ptr<StereoMatcher> matcher;
+    int scale = 0;  // the internal scale it was made for
+    Image<float> disparity;
+  };
+
  public:
   // `team` shares the stage's row-wise steps (a stage's guide pass uses the stage's); without
   // one the matcher starts its own, of stereo.row_threads threads.
@@ -60,10 +68,15 @@ class CpuStereoMatcher final : public StereoMatcher {
   void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                Image<float>& disparity) override {
     check_stereo_input(params_, left, right);
+    // Cleared first, so that a frame that fails part-way leaves no previous map behind.
+    const bool had_previous = has_previous_;
+    has_previous_ = false;
     Stopwatch t;
     timings_ = {};
 
     prepare(left, right);
+    const bool previous =
+        had_previous && previous_w_ == w_ && previous_h_ == h_ && previous_max_d_ == max_d_;
     timings_.prepare_ms = t.lap_ms();
 
     // Arm lengths are given in input pixels; the windows cover the same scene area at any
@@ -80,7 +93,7 @@ class CpuStereoMatcher final : public StereoMatcher {
     regions_.build(arms_, agg_scratch_, params_.aggregation_passes);
     timings_.arms_ms = t.lap_ms();
 
-    const bool guided = guide_search();
+    const bool guided = guide_search(previous);
     timings_.guide_ms = t.since_lap_ms();
     timings_.searched_fraction = guided ? mask_.searched_fraction() : 1.0;
     wta_.reset(w_, h_);
@@ -111,7 +124,13 @@ class CpuStereoMatcher final : public StereoMatcher {
       timings_.boundary_ms = t.lap_ms();
     }
     timings_.total_ms = t.total_ms();
+    has_previous_ = true;
+    previous_w_ = w_;
+    previous_h_ = h_;
+    previous_max_d_ = max_d_;
   }
+
+  void reset() override { has_previous_ = false; }
 
   const StereoTimings& last_timings() const override { return timings_; }
   int last_scale() const override { return scale_; }
@@ -121,37 +140,75 @@ class CpuStereoMatcher final : public StereoMatcher {
   const StereoParams& params() const override { return params_; }
 
  private:
-  // A pass at half the internal size (this stage again, on the internal images halved) that tells
-  // each tile of each internal row which disparity batches to search (search_guide.hpp). False:
-  // search them all.
-  bool guide_search() {
+  // Which disparity batches each tile of each internal row searches (search_guide.hpp), from a
+  // pass of this stage at half the internal size or, with "temporal" and the previous frame's
+  // map at hand, from that map and a pass at a quarter of the size. False: search them all.
+  bool guide_search(bool previous) {
     if (params_.search_range == "full") return false;
     // Up to four batches the half-size pass costs about what it saves (street scenes at
     // 96 px search about three quarters of their batches even when guided).
     if (params_.search_range == "auto" && max_d_ + 1 <= 4 * DisparitySearch::kBatch) return false;
-    const int cw = w_ / 2, ch = h_ / 2;
-    const int coarse_max = (max_d_ + 1) / 2;
+    const bool temporal = params_.search_range == "temporal" || params_.search_range == "auto";
+    if (temporal && previous && guide_from_previous()) return true;
+    if (!coarse_pass(half_, 2)) return false;
+    guide_batches(half_.disparity.cview(), w_, h_, max_d_, GuideRule{DisparitySearch::kBatch},
+                  guide_scratch_, mask_);
+    return true;
+  }
+
+  // The previous frame's map (which values_ still holds) tells where the surfaces were: each
+  // tile searches the batches within kPreviousMargin of its values. A quarter-size pass adds the
+  // batches of what has come into view since (its margin covers its coarser values); it misses
+  // thin objects on their own, which the half-size pass of a frame without a previous map finds.
+  bool guide_from_previous() {
+    if (!coarse_pass(quarter_, 4)) return false;
+    GuideRule rule{DisparitySearch::kBatch};
+    rule.scale = 4;
+    rule.margin = kQuarterMargin;
+    guide_batches(quarter_.disparity.cview(), w_, h_, max_d_, rule, guide_scratch_, mask_);
+    previous_half_.resize(w_ / 2, h_ / 2);
+    halve_sparse_map(values_.cview(), previous_half_.view());
+    rule.scale = 2;
+    rule.margin = kPreviousMargin;
+    guide_batches(previous_half_.cview(), w_, h_, max_d_, rule, guide_scratch_, previous_mask_);
+    mask_.merge(previous_mask_);
+    return true;
+  }
+
+  // This stage, searching every disparity, on the internal images shrunk `factor` times (2 or 4:
+  // halved once or twice), into pass.disparity. False where the shrunk images are too small.
+  bool coarse_pass(CoarsePass& pass, int factor) {
+    const int cw = w_ / factor, ch = h_ / factor;
+    const int coarse_max = (max_d_ + 1) / factor;
     // Too small for a pass of its own: the full search is cheap there anyway.
     if (coarse_max < 1 || coarse_max >= cw || cw < params_.census_width ||
         ch < params_.census_height)
       return false;
-    if (!coarse_ || coarse_->params().max_disparity != coarse_max || coarse_scale_ != scale_) {
+    if (!pass.matcher || pass.matcher->params().max_disparity != coarse_max ||
+        pass.scale != scale_) {
       StereoParams p = params_;
       p.search_range = "full";
       p.internal_resolution = "full";
       p.max_disparity = coarse_max;
-      p.arm_max = std::max(2, params_.arm_max / (2 * scale_));
-      p.arm_short = std::min(p.arm_max, params_.arm_short / (2 * scale_));
-      coarse_ = std::make_unique<CpuStereoMatcher>(p, team_);
-      coarse_scale_ = scale_;
+      p.arm_max = std::max(2, params_.arm_max / (factor * scale_));
+      p.arm_short = std::min(p.arm_max, params_.arm_short / (factor * scale_));
+      pass.matcher = std::make_unique<CpuStereoMatcher>(p, team_);
+      pass.scale = scale_;
     }
-    coarse_left_.resize(cw, ch, internal_left_.channels);
-    coarse_right_.resize(cw, ch, internal_right_.channels);
-    downsample_half(internal_left_, coarse_left_.view());
-    downsample_half(internal_right_, coarse_right_.view());
-    coarse_->compute(coarse_left_.cview(), coarse_right_.cview(), coarse_disparity_);
-    guide_batches(coarse_disparity_.cview(), w_, h_, max_d_, GuideRule{DisparitySearch::kBatch},
-                  guide_scratch_, mask_);
+    halves_[0].resize(w_ / 2, h_ / 2, internal_left_.channels);
+    halves_[1].resize(w_ / 2, h_ / 2, internal_right_.channels);
+    downsample_half(internal_left_, halves_[0].view());
+    downsample_half(internal_right_, halves_[1].view());
+    ImageView<const std::uint8_t> l = halves_[0].cview(), r = halves_[1].cview();
+    if (factor == 4) {
+      quarters_[0].resize(cw, ch, internal_left_.channels);
+      quarters_[1].resize(cw, ch, internal_right_.channels);
+      downsample_half(l, quarters_[0].view());
+      downsample_half(r, quarters_[1].view());
+      l = quarters_[0].cview();
+      r = quarters_[1].cview();
+    }
+    pass.matcher->compute(l, r, pass.disparity);
     return true;
   }
 
@@ -299,12 +356,18 @@ class CpuStereoMatcher final : public StereoMatcher {
   Image<std::uint8_t> full_grey_left_, full_grey_right_;
   BoundaryRefiner boundaries_;
   ImageView<const std::uint8_t> internal_left_, internal_right_;  // input channels, internal size
-  std::unique_ptr<StereoMatcher> coarse_;
-  int coarse_scale_ = 0;
-  Image<std::uint8_t> coarse_left_, coarse_right_;
-  Image<float> coarse_disparity_;
+  CoarsePass half_, quarter_;                                     // the guide's passes
+  std::array<Image<std::uint8_t>, 2> halves_, quarters_;          // left, right
+  Image<float> previous_half_;
   GuideScratch guide_scratch_;
-  BatchMask mask_;
+  BatchMask mask_, previous_mask_;
+  // The previous frame's map (values_) and the geometry it was made for.
+  bool has_previous_ = false;
+  int previous_w_ = 0, previous_h_ = 0, previous_max_d_ = 0;
+  // Disparity margins (internal pixels) of the temporal guide: the previous frame's values are
+  // exact to a pixel but the surfaces move, the quarter pass's are four internal pixels apart.
+  static constexpr int kPreviousMargin = 4;
+  static constexpr int kQuarterMargin = 8;
 };
 
 }  // namespace

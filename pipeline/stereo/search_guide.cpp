@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -35,6 +36,13 @@ void BatchMask::reset(int height, int batches, bool all, int width, int tile_wid
                all ? all_tiles_ : 0);
 }
 
+void BatchMask::merge(const BatchMask& other) {
+  if (other.height_ != height_ || other.batches_ != batches_ || other.width_ != width_ ||
+      other.tile_width_ != tile_width_)
+    throw Error("batch mask: merging masks of different geometry");
+  for (std::size_t i = 0; i < bits_.size(); ++i) bits_[i] |= other.bits_[i];
+}
+
 double BatchMask::searched_fraction() const {
   if (bits_.empty()) return 0;
   if (width_ == 0) {
@@ -54,16 +62,17 @@ double BatchMask::searched_fraction() const {
 void guide_batches(ImageView<const float> coarse, int width, int height, int max_d,
                    const GuideRule& rule, GuideScratch& scratch, BatchMask& mask) {
   if (coarse.empty() || width <= 0 || height <= 0 || max_d < 0 || rule.batch <= 0 ||
-      rule.margin < 0 || rule.reach < 0 || rule.tile <= 0 || rule.tile_margin < 0)
+      rule.margin < 0 || rule.reach < 0 || rule.tile <= 0 || rule.tile_margin < 0 || rule.scale < 1)
     throw Error("search guide: empty coarse map or bad rule");
   const int batches = max_d / rule.batch + 1;
   const int tile = std::max(rule.tile, (width + BatchMask::kMaxTiles - 1) / BatchMask::kMaxTiles);
   const int tiles = (width + tile - 1) / tile;
+  const int f = rule.scale;
   const int cw = coarse.width;
   const int ch = coarse.height;
   const auto tile_columns = [&](int t) {  // coarse columns [first, second) a tile takes in
-    const int begin = std::max(0, t * tile - rule.tile_margin) / 2;
-    const int end = std::min(cw, ((t + 1) * tile + rule.tile_margin + 1) / 2);
+    const int begin = std::max(0, t * tile - rule.tile_margin) / f;
+    const int end = std::min(cw, ((t + 1) * tile + rule.tile_margin + f - 1) / f);
     return std::pair{begin, std::max(begin, end)};
   };
   // Per coarse row, per tile and for the whole row: which batches its values reach and how many
@@ -108,11 +117,11 @@ void guide_batches(ImageView<const float> coarse, int width, int height, int max
       if (std::isfinite(v[x]) && v[x] >= 0) {
         // A value past `cap` reaches max_d at both ends, as the cap does, which keeps the
         // conversions in range.
-        const float twice = 2.0f * std::min(v[x], cap);
+        const float scaled = static_cast<float>(f) * std::min(v[x], cap);
         lo = batch_of[static_cast<std::size_t>(
-            std::clamp(static_cast<int>(std::floor(twice)) - rule.margin, 0, max_d))];
+            std::clamp(static_cast<int>(std::floor(scaled)) - rule.margin, 0, max_d))];
         hi = batch_of[static_cast<std::size_t>(
-            std::clamp(static_cast<int>(std::ceil(twice)) + rule.margin, 0, max_d))];
+            std::clamp(static_cast<int>(std::ceil(scaled)) + rule.margin, 0, max_d))];
         ++row_count;
         ++row_ends[lo];
         --row_ends[hi + 1];
@@ -146,9 +155,9 @@ void guide_batches(ImageView<const float> coarse, int width, int height, int max
     }
   }
   mask.reset(height, batches, false, width, tile);
-  const int coarse_reach = (rule.reach + 1) / 2;
+  const int coarse_reach = (rule.reach + f - 1) / f;
   for (int y = 0; y < height; ++y) {
-    const int centre = std::min(y / 2, ch - 1);
+    const int centre = std::min(y / f, ch - 1);
     const int top = std::max(0, centre - coarse_reach);
     const int bottom = std::min(ch, centre + coarse_reach + 1);  // coarse rows [top, bottom)
     const auto window = [&](const std::vector<int>& sums, std::size_t base) {
@@ -167,6 +176,36 @@ void guide_batches(ImageView<const float> coarse, int width, int height, int max
                 : window(reached, (static_cast<std::size_t>(t) * batches + b) * rows) > 0;
         if (on) mask.set(y, t, b);
       }
+    }
+  }
+}
+
+void halve_sparse_map(ImageView<const float> map, ImageView<float> half) {
+  if (half.width != map.width / 2 || half.height != map.height / 2)
+    throw Error("search guide: a halved map of " + std::to_string(map.width) + "x" +
+                std::to_string(map.height) + " is " + std::to_string(map.width / 2) + "x" +
+                std::to_string(map.height / 2) + ", not " + std::to_string(half.width) + "x" +
+                std::to_string(half.height));
+  // On the bits: a finite float v >= 0 is below the bits of +inf as an unsigned number (NaN,
+  // infinities and negative values are not), and its bits order as its values do. Each usable
+  // value becomes its bits + 1, any other 0, and the block keeps the largest. Masks instead of
+  // branches, so that the compiler vectorises the row.
+  constexpr std::uint32_t kInfinityBits = 0x7f800000u;
+  const auto key = [](float v) {
+    const auto bits = std::bit_cast<std::uint32_t>(v);
+    return (bits + 1) & (0u - static_cast<std::uint32_t>(bits < kInfinityBits));
+  };
+  for (int y = 0; y < half.height; ++y) {
+    const float* __restrict a = map.row(2 * y);
+    const float* __restrict b = map.row(2 * y + 1);
+    float* __restrict out = half.row(y);
+    for (int x = 0; x < half.width; ++x) {
+      const std::uint32_t best = std::max(std::max(key(a[2 * x]), key(a[2 * x + 1])),
+                                          std::max(key(b[2 * x]), key(b[2 * x + 1])));
+      // Halved whatever `best` is (a NaN when 0), then that or +inf by the mask.
+      const auto halved = std::bit_cast<std::uint32_t>(0.5f * std::bit_cast<float>(best - 1));
+      const std::uint32_t found = 0u - static_cast<std::uint32_t>(best != 0);
+      out[x] = std::bit_cast<float>((halved & found) | (kInfinityBits & ~found));
     }
   }
 }

@@ -19,9 +19,11 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "largest disparity searched, pixels of the input image");
   s.add("stereo.internal_resolution", &p.internal_resolution, {"auto", "full", "half"},
         "auto = half size when the input is wider than 640 px");
-  s.add("stereo.search_range", &p.search_range, {"auto", "full", "guided"},
-        "guided = each row searches only the disparities a half-size pass finds near it; auto = "
-        "guided on the CPU when over 64 internal disparities, full on CUDA");
+  s.add("stereo.search_range", &p.search_range, {"auto", "full", "guided", "temporal"},
+        "guided = each row searches only the disparities a half-size pass finds near it; "
+        "temporal = those of the previous frame's map and of a quarter-size pass (a sequence's "
+        "first frame: guided); auto = temporal on the CPU when over 64 internal disparities, "
+        "full on CUDA");
   s.add("stereo.row_threads", &p.row_threads, 0, 16,
         "threads sharing the CPU stage's rows (input preparation, census, the disparity search in "
         "bands, boundary refinement), the stage's own included (0 = auto: 1 below 4 usable "
@@ -79,8 +81,9 @@ void validate(const StereoParams& p) {
   require(p.internal_resolution == "auto" || p.internal_resolution == "full" ||
               p.internal_resolution == "half",
           "internal_resolution must be auto, full or half, not '" + p.internal_resolution + "'");
-  require(p.search_range == "auto" || p.search_range == "full" || p.search_range == "guided",
-          "search_range must be auto, full or guided, not '" + p.search_range + "'");
+  require(p.search_range == "auto" || p.search_range == "full" || p.search_range == "guided" ||
+              p.search_range == "temporal",
+          "search_range must be auto, full, guided or temporal, not '" + p.search_range + "'");
   require(p.row_threads >= 0 && p.row_threads <= 16,
           "row_threads must be in 0..16 (0 = auto), not " + std::to_string(p.row_threads));
   require(p.lambda_ad > 0 && p.lambda_census > 0, "lambda_ad and lambda_census must be positive");

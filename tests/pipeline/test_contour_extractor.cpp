@@ -19,6 +19,8 @@
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
+#include "dco/pipeline/contour/gated_canny.hpp"
+#include "support/same_bytes.hpp"
 
 namespace dco::contour {
 namespace {
@@ -569,6 +571,45 @@ TEST(ContourExtractor, RejectsInconsistentInputs) {
   in.image = scene.centre.internal.view();
   in.centre = scene.centre.input.view();
   EXPECT_THAT(compute_error(in), HasSubstr("larger than the input image"));
+  // Gradients the caller made: both, of the input image's size.
+  Image<float> m_intensity(kInW, kInH), small_m(kInW, kInH - 1);
+  Image<std::uint8_t> direction(kInW, kInH);
+  m_intensity.fill(0);
+  small_m.fill(0);
+  direction.fill(0);
+  in = scene.inputs();
+  in.m_intensity = m_intensity.view();
+  EXPECT_THAT(compute_error(in), HasSubstr("m_intensity and direction come together"));
+  in.direction = direction.view();
+  EXPECT_EQ(compute_error(in), "");
+  in.m_intensity = small_m.view();
+  EXPECT_THAT(compute_error(in), HasSubstr("m_intensity is"));
+}
+
+// Given the image's gradients (intensity_gradients, as the real-time runtime's stereo thread
+// makes them), the stage gives the same M_fuse and contours, leaves out.m_intensity alone and
+// reports no time for them.
+TEST(ContourExtractor, TakesTheGradientsTheCallerMade) {
+  const MovingSquare scene;
+  const auto extractor = make_cpu_contour_extractor({});
+  ContourOutputs expected, given_out;
+  extractor->compute(scene.inputs(), expected);
+  GradientScratch scratch;
+  Image<float> m_intensity;
+  Image<std::uint8_t> direction;
+  intensity_gradients(scene.inputs().image, scratch, m_intensity, direction);
+  EXPECT_TRUE(dco::testing::same_bytes(m_intensity, expected.m_intensity));
+  ContourInputs in = scene.inputs();
+  in.m_intensity = m_intensity.cview();
+  in.direction = direction.cview();
+  given_out.m_intensity = Image<float>(3, 2);
+  given_out.m_intensity.fill(7.0f);
+  extractor->compute(in, given_out);
+  EXPECT_TRUE(dco::testing::same_bytes(given_out.m_fuse, expected.m_fuse));
+  EXPECT_TRUE(dco::testing::same_bytes(given_out.contours, expected.contours));
+  EXPECT_EQ(given_out.m_intensity.width(), 3);
+  EXPECT_EQ(given_out.m_intensity.at(2, 1), 7.0f);
+  EXPECT_EQ(extractor->last_timings().gaussian_ms, 0);
 }
 
 // DIS cannot build its pyramid on small frames; the extractor says so instead of returning garbage.

@@ -8,6 +8,7 @@
 #include "dco/core/error.hpp"
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
+#include "support/same_bytes.hpp"
 
 namespace dco::pipeline {
 namespace {
@@ -95,6 +96,32 @@ TEST(DepthPipeline, RefusesASizeChangeWithinASequence) {
   EXPECT_FALSE(pipeline.push(b.left.cview(), b.right.cview(), r));  // a new sequence
   ASSERT_TRUE(pipeline.finish(r));
   EXPECT_EQ(r.index, 0);
+}
+
+// After reset() the pipeline owes nothing to the frames before: the stereo stage's temporal
+// guide, the flow window and the stability term start again, as in a new pipeline.
+TEST(DepthPipeline, ResetForgetsTheSequenceBefore) {
+  const auto scene = small_scene("hand");
+  PipelineParams p = params_for(scene);
+  p.stereo.search_range = "temporal";
+  DepthPipeline used(p), fresh(p);
+  synthetic::StereoSample s;
+  DepthResult a, b;
+  for (int i = 0; i < 4; ++i) {
+    scene.render(i, s);
+    used.push(s.left.cview(), s.right.cview(), a);
+  }
+  used.reset();
+  for (int i = 20; i < 24; ++i) {
+    scene.render(i, s);
+    const bool from_used = used.push(s.left.cview(), s.right.cview(), a);
+    ASSERT_EQ(from_used, fresh.push(s.left.cview(), s.right.cview(), b));
+    if (!from_used) continue;
+    EXPECT_EQ(a.index, b.index);
+    EXPECT_EQ(a.stereo_timings.searched_fraction, b.stereo_timings.searched_fraction);
+    EXPECT_TRUE(testing::same_bytes(a.sparse, b.sparse)) << "frame " << i;
+    EXPECT_TRUE(testing::same_bytes(a.dense, b.dense)) << "frame " << i;
+  }
 }
 
 }  // namespace

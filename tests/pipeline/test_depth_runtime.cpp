@@ -126,9 +126,13 @@ void expect_identical(const std::vector<DepthResult>& expected, const std::vecto
 }
 
 TEST(DepthRuntime, DeterministicModeEqualsTheOfflinePipelineBitForBit) {
-  for (int lookahead : {1, 0}) {
+  // "temporal": the stereo stage's guide follows the previous frame (this scene's search is
+  // too narrow for "auto" to guide it).
+  for (const auto& [lookahead, search_range] :
+       {std::pair{1, "auto"}, std::pair{0, "auto"}, std::pair{1, "temporal"}}) {
     Sequence s = make_sequence("hand", 6);
     s.params.contour.lookahead = lookahead;
+    s.params.stereo.search_range = search_range;
     const std::vector<DepthResult> expected = offline(s);
     ASSERT_EQ(expected.size(), 6u);
     // The runtime computes the two flow fields on two threads and shares each stage's rows among
@@ -149,8 +153,9 @@ TEST(DepthRuntime, DeterministicModeEqualsTheOfflinePipelineBitForBit) {
         for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
         runtime.drain();
         expect_identical(expected, c.results,
-                         "lookahead " + std::to_string(lookahead) + ", " + std::to_string(threads) +
-                             " thread(s), round " + std::to_string(round));
+                         "lookahead " + std::to_string(lookahead) + ", " + search_range + ", " +
+                             std::to_string(threads) + " thread(s), round " +
+                             std::to_string(round));
         c.results.clear();
       }
       const RuntimeStats st = runtime.stats();
@@ -162,7 +167,9 @@ TEST(DepthRuntime, DeterministicModeEqualsTheOfflinePipelineBitForBit) {
   }
 }
 
-TEST(DepthRuntime, TheMatchPlanesRunOnTheThreadWithLessOtherWorkAndNoByteChanges) {
+// The match planes (a densify step) and the intensity gradients (a contour step) go to the stereo
+// thread while it has less other work, and the bytes are those of the offline pipeline.
+TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) {
   for (const bool heavy_densify : {true, false}) {
     Sequence s = make_sequence("hand", 16);
     s.params.contour.use_flow = false;
@@ -185,15 +192,24 @@ TEST(DepthRuntime, TheMatchPlanesRunOnTheThreadWithLessOtherWorkAndNoByteChanges
     for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
     runtime.drain();
     expect_identical(expected, c.results, heavy_densify ? "heavy densify" : "heavy stereo");
-    const long on_stereo = runtime.stats().planes_on_stereo_thread;
-    // Decided from the published frames' times: the first frames go before any is known.
-    if (heavy_densify)
-      EXPECT_EQ(on_stereo, 16);
-    else
-      EXPECT_LE(on_stereo, 4);
-    long carried = 0;
-    for (const DepthResult& r : c.results) carried += r.planes_done;
-    EXPECT_EQ(carried, on_stereo);
+    const RuntimeStats st = runtime.stats();
+    // Decided from the published frames' times: the first frames go before any is known (the
+    // planes to the stereo thread, the gradients to the contour step).
+    if (heavy_densify) {
+      EXPECT_EQ(st.planes_on_stereo_thread, 16);
+      EXPECT_GE(st.gradients_on_stereo_thread, 12);
+    } else {
+      EXPECT_LE(st.planes_on_stereo_thread, 4);
+      EXPECT_EQ(st.gradients_on_stereo_thread, 0);
+    }
+    long planes = 0, gradients = 0;
+    for (const DepthResult& r : c.results) {
+      planes += r.planes_done;
+      gradients += r.gradients_done;
+      EXPECT_EQ(r.contour_timings.gaussian_ms > 0, true) << "the gradients' time, either thread";
+    }
+    EXPECT_EQ(planes, st.planes_on_stereo_thread);
+    EXPECT_EQ(gradients, st.gradients_on_stereo_thread);
   }
 }
 

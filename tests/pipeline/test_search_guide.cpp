@@ -204,41 +204,89 @@ TEST(BatchMask, TilesCoverTheWidthAndWeighTheLastByItsColumns) {
   EXPECT_EQ(mask.tile_bits(0, 0), ~std::uint64_t{0});
 }
 
+TEST(BatchMask, MergeSearchesWhatEitherSearches) {
+  BatchMask a, b;
+  a.reset(3, 2, false, 40, 16);
+  b.reset(3, 2, false, 40, 16);
+  a.set(0, 0, 1);
+  b.set(0, 2, 1);
+  b.set(2, 0);
+  a.merge(b);
+  EXPECT_EQ(a.tile_bits(0, 1), 5u);
+  EXPECT_EQ(a.tile_bits(2, 0), 7u);
+  EXPECT_EQ(a.tile_bits(1, 0) | a.tile_bits(1, 1) | a.tile_bits(0, 0), 0u);
+  EXPECT_EQ(b.tile_bits(0, 1), 4u) << "the other mask is left as it was";
+  BatchMask other_tiles;
+  other_tiles.reset(3, 2, false, 40, 8);
+  EXPECT_THROW(a.merge(other_tiles), Error);
+  BatchMask other_batches;
+  other_batches.reset(3, 3, false, 40, 16);
+  EXPECT_THROW(a.merge(other_batches), Error);
+}
+
+TEST(SearchGuide, HalvedMapKeepsEachBlocksNearestSurfaceHalved) {
+  // 5x5: the last row and column fall outside the 2x2 halved map.
+  Image<float> map(5, 5);
+  map.fill(kNone);
+  map.at(0, 0) = 10.0f;  // block (0, 0): 10, 30 and junk -> 15
+  map.at(1, 1) = 30.0f;
+  map.at(1, 0) = std::numeric_limits<float>::quiet_NaN();
+  map.at(0, 1) = -4.0f;
+  map.at(2, 0) = 7.0f;   // block (1, 0): 7 -> 3.5
+  map.at(4, 4) = 99.0f;  // outside
+  map.at(4, 0) = 99.0f;
+  Image<float> half(2, 2);
+  halve_sparse_map(map.cview(), half.view());
+  EXPECT_EQ(half.at(0, 0), 15.0f);
+  EXPECT_EQ(half.at(1, 0), 3.5f);
+  EXPECT_EQ(half.at(0, 1), kNone);  // only +inf there
+  EXPECT_EQ(half.at(1, 1), kNone);
+  Image<float> wrong(3, 2);
+  EXPECT_THROW(halve_sparse_map(map.cview(), wrong.view()), Error);
+}
+
 // The mask straight from its definition (search_guide.hpp), one coarse value at a time: which
 // batches tile t of internal row y searches.
 std::vector<bool> reference_tile(ImageView<const float> coarse, int width, int max_d,
                                  const GuideRule& rule, int y, int t) {
+  const int f = rule.scale;
   const int batches = max_d / rule.batch + 1;
   const int tile = std::max(rule.tile, (width + BatchMask::kMaxTiles - 1) / BatchMask::kMaxTiles);
-  const int centre = std::min(y / 2, coarse.height - 1);
-  const int reach = (rule.reach + 1) / 2;
+  const int centre = std::min(y / f, coarse.height - 1);
+  const int reach = (rule.reach + f - 1) / f;  // coarse rows that cover `reach` internal rows
   const int top = std::max(0, centre - reach);
   const int bottom = std::min(coarse.height, centre + reach + 1);
-  const auto scan = [&](int x_begin, int x_end, std::vector<bool>& on) {
+  const auto scan = [&](const std::vector<bool>& columns, std::vector<bool>& on) {
     int values = 0;
     for (int cy = top; cy < bottom; ++cy)
-      for (int x = x_begin; x < x_end; ++x) {
+      for (int x = 0; x < coarse.width; ++x) {
         const float v = coarse.row(cy)[x];
-        if (!std::isfinite(v) || v < 0) continue;
+        if (!columns[static_cast<std::size_t>(x)] || !std::isfinite(v) || v < 0) continue;
         ++values;
-        const double twice = 2.0 * std::min<double>(v, max_d + rule.margin + 1);
-        const int lo = std::clamp(static_cast<int>(std::floor(twice)) - rule.margin, 0, max_d);
-        const int hi = std::clamp(static_cast<int>(std::ceil(twice)) + rule.margin, 0, max_d);
+        const double scaled = f * std::min<double>(v, max_d + rule.margin + 1);
+        const int lo = std::clamp(static_cast<int>(std::floor(scaled)) - rule.margin, 0, max_d);
+        const int hi = std::clamp(static_cast<int>(std::ceil(scaled)) + rule.margin, 0, max_d);
         for (int d = lo; d <= hi; ++d) on[static_cast<std::size_t>(d / rule.batch)] = true;
       }
     return values;
   };
+  const std::vector<bool> every(static_cast<std::size_t>(coarse.width), true);
   std::vector<bool> row(static_cast<std::size_t>(batches), false);
-  const int row_values = scan(0, coarse.width, row);
+  const int row_values = scan(every, row);
   if (row_values < rule.min_valid * (bottom - top) * coarse.width)
     return std::vector<bool>(static_cast<std::size_t>(batches), true);
-  const int begin = std::max(0, t * tile - rule.tile_margin) / 2;
-  const int end =
-      std::max(begin, std::min(coarse.width, ((t + 1) * tile + rule.tile_margin + 1) / 2));
+  // The tile's coarse columns: those with an internal column within tile_margin of the tile.
+  std::vector<bool> columns(static_cast<std::size_t>(coarse.width), false);
+  int taken = 0;
+  for (int x = 0; x < coarse.width; ++x) {
+    const bool near = f * x + f - 1 >= t * tile - rule.tile_margin &&
+                      f * x <= (t + 1) * tile + rule.tile_margin - 1;
+    columns[static_cast<std::size_t>(x)] = near;
+    taken += near;
+  }
   std::vector<bool> own(static_cast<std::size_t>(batches), false);
-  const int own_values = scan(begin, end, own);
-  return end == begin || own_values < rule.tile_min_valid * (bottom - top) * (end - begin) ? row
-                                                                                           : own;
+  const int own_values = scan(columns, own);
+  return taken == 0 || own_values < rule.tile_min_valid * (bottom - top) * taken ? row : own;
 }
 
 TEST(SearchGuide, MatchesTheDefinitionOnRandomMaps) {
@@ -246,10 +294,12 @@ TEST(SearchGuide, MatchesTheDefinitionOnRandomMaps) {
   GuideScratch scratch;  // reused across sizes and rules
   for (int trial = 0; trial < 60; ++trial) {
     const int cw = 3 + static_cast<int>(rng() % 60), ch = 2 + static_cast<int>(rng() % 30);
-    const int width = 2 * cw + static_cast<int>(rng() % 2),
-              height = 2 * ch + static_cast<int>(rng() % 2);
-    const int max_d = static_cast<int>(rng() % 140);
     GuideRule rule;
+    rule.scale = 1 << (trial % 3);  // 1, 2 and 4
+    const int f = rule.scale;
+    const int width = f * cw + static_cast<int>(rng() % f),
+              height = f * ch + static_cast<int>(rng() % f);
+    const int max_d = static_cast<int>(rng() % 140);
     rule.batch = 1 + static_cast<int>(rng() % 16);
     rule.margin = static_cast<int>(rng() % 14);
     rule.reach = static_cast<int>(rng() % 9);
@@ -296,6 +346,9 @@ TEST(SearchGuide, RejectsAnEmptyMapOrABadRule) {
   GuideRule no_tile;
   no_tile.tile = 0;
   EXPECT_THROW(guide_batches(coarse.cview(), 20, 8, 40, no_tile, scratch, mask), Error);
+  GuideRule no_scale;
+  no_scale.scale = 0;
+  EXPECT_THROW(guide_batches(coarse.cview(), 20, 8, 40, no_scale, scratch, mask), Error);
   EXPECT_THROW(guide_batches(coarse.cview(), 20, 0, 40, GuideRule{}, scratch, mask), Error);
   EXPECT_THROW(guide_batches(coarse.cview(), 0, 8, 40, GuideRule{}, scratch, mask), Error);
 }

@@ -379,6 +379,7 @@ TEST(CpuStereoMatcher, BgrWithoutColourEqualsItsGreyImage) {
   const auto matcher = make_cpu_stereo_matcher(params);
   Image<float> from_bgr, from_gray;
   matcher->compute(s.left.cview(), s.right.cview(), from_bgr);
+  matcher->reset();  // not the next frame of a sequence: the same frame again
   matcher->compute(gl.cview(), gr.cview(), from_gray);
   EXPECT_TRUE(same_bytes(from_bgr, from_gray));
   // With colour the result differs (the AD term and the arms see three channels).
@@ -571,6 +572,72 @@ TEST(CpuStereoMatcher, GuidedSearchFindsWhatTheFullSearchFinds) {
   }
 }
 
+// Share of the pixels in front of the background (the truth at least 3 px above the empty
+// scene's) whose value is within 1 px of the truth.
+double found_in_front(const Image<float>& d, const synthetic::StereoSample& with,
+                      const synthetic::StereoSample& without) {
+  long in_front = 0, found = 0;
+  for (int y = 0; y < d.height(); ++y)
+    for (int x = 0; x < d.width(); ++x) {
+      const float truth = with.disparity.at(x, y);
+      if (truth < without.disparity.at(x, y) + 3) continue;
+      ++in_front;
+      found += std::isfinite(d.at(x, y)) && std::fabs(d.at(x, y) - truth) <= 1.0f;
+    }
+  return static_cast<double>(found) / static_cast<double>(std::max(1L, in_front));
+}
+
+// "temporal" guides a frame by the previous frame's map and a quarter-size pass: a sequence's
+// first frame, a frame after reset() or after another geometry takes the half-size pass
+// ("guided") instead, and a hand that comes into view in front of an empty scene is found in
+// its first frame as the half-size pass finds it.
+TEST(CpuStereoMatcher, TemporalSearchFindsWhatComesIntoView) {
+  const synthetic::SceneConfig with = synthetic::preset("hand", 640, 360);
+  synthetic::SceneConfig without = with;
+  without.objects.clear();
+  const synthetic::SceneRenderer hand(with), empty(without);
+  StereoParams params;
+  params.max_disparity = synthetic::covering_max_disparity(with);
+  params.search_range = "temporal";
+  const auto temporal = make_cpu_stereo_matcher(params);
+  params.search_range = "guided";
+  const auto guided = make_cpu_stereo_matcher(params);
+  synthetic::StereoSample a, b;
+  Image<float> t, g;
+  empty.render(8, a);
+  temporal->compute(a.left.cview(), a.right.cview(), t);
+  guided->compute(a.left.cview(), a.right.cview(), g);
+  EXPECT_TRUE(same_bytes(t, g)) << "a first frame";
+  empty.render(9, a);
+  temporal->compute(a.left.cview(), a.right.cview(), t);
+  EXPECT_LT(temporal->last_timings().searched_fraction, 1.0);
+  for (int frame = 10; frame < 13; ++frame) {
+    hand.render(frame, b);
+    empty.render(frame, a);
+    temporal->compute(b.left.cview(), b.right.cview(), t);
+    guided->reset();
+    guided->compute(b.left.cview(), b.right.cview(), g);
+    EXPECT_FALSE(same_bytes(t, g)) << "frame " << frame << " took the half-size pass";
+    const double found = found_in_front(t, b, a), by_guided = found_in_front(g, b, a);
+    EXPECT_GT(by_guided, 0.85) << frame;
+    EXPECT_GT(found, by_guided - (frame == 10 ? 0.02 : 0.01)) << frame;
+  }
+  temporal->reset();
+  hand.render(13, b);
+  temporal->compute(b.left.cview(), b.right.cview(), t);
+  guided->reset();
+  guided->compute(b.left.cview(), b.right.cview(), g);
+  EXPECT_TRUE(same_bytes(t, g)) << "after a reset";
+  // A frame of another size in between: the next one has no previous map of its size.
+  const Scene other = small_scene(1);
+  temporal->compute(other.left.cview(), other.right.cview(), t);
+  hand.render(14, b);
+  temporal->compute(b.left.cview(), b.right.cview(), t);
+  guided->reset();
+  guided->compute(b.left.cview(), b.right.cview(), g);
+  EXPECT_TRUE(same_bytes(t, g)) << "after another geometry";
+}
+
 // stereo.row_threads shares the stage's rows among threads (the input downscaled, grey and
 // packed, the census, the search, whose half-size pass shares the same threads, and the boundary
 // refinement): the same map, guided or full, grey or colour, at full and half size.
@@ -625,12 +692,13 @@ TEST(CpuStereoMatcher, AutoSearchRangeGuidesOnlyWideSearches) {
   EXPECT_EQ(matcher->last_timings().searched_fraction, 1.0);
 }
 
-TEST(CpuStereoMatcher, SecondComputeOnTheSameGeometryDoesNotAllocate) {
+// A sequence's first frame sizes the half-size pass's buffers, its second the temporal guide's
+// (StereoParams::search_range); from then on nothing allocates, after a reset neither.
+TEST(CpuStereoMatcher, WarmComputesOnTheSameGeometryDoNotAllocate) {
   for (int channels : {1, 3})
     for (bool hd : {false, true}) {
       const Scene s = hd ? hd_scene(channels) : small_scene(channels);
-      // A search wide enough for the guided search of "auto", whose half-size pass must not
-      // allocate either.
+      // A search wide enough for the guide of "auto", whose passes must not allocate either.
       StereoParams params;
       params.max_disparity = 150;
       const auto matcher = make_cpu_stereo_matcher(params);
@@ -644,14 +712,20 @@ TEST(CpuStereoMatcher, SecondComputeOnTheSameGeometryDoesNotAllocate) {
         EXPECT_GT(first.aligned_alloc_calls, 0);
       }
       const float* const data = disp.data();
-
-      testing::start_counting_allocations();
       matcher->compute(s.left.cview(), s.right.cview(), disp);
-      const testing::AllocationCounts second = testing::stop_counting_allocations();
-      EXPECT_EQ(second.new_calls, 0) << channels << " channels, " << (hd ? "half" : "full");
-      EXPECT_EQ(second.aligned_alloc_calls, 0)
-          << channels << " channels, " << (hd ? "half" : "full");
-      EXPECT_EQ(disp.data(), data);
+      EXPECT_LT(matcher->last_timings().searched_fraction, 1.0);
+
+      for (const bool reset : {false, true}) {
+        if (reset) matcher->reset();
+        testing::start_counting_allocations();
+        matcher->compute(s.left.cview(), s.right.cview(), disp);
+        const testing::AllocationCounts warm = testing::stop_counting_allocations();
+        EXPECT_EQ(warm.new_calls, 0) << channels << " channels, " << (hd ? "half" : "full")
+                                     << (reset ? ", after a reset" : "");
+        EXPECT_EQ(warm.aligned_alloc_calls, 0)
+            << channels << " channels, " << (hd ? "half" : "full");
+        EXPECT_EQ(disp.data(), data);
+      }
     }
 }
 

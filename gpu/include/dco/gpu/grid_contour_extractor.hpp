@@ -44,26 +44,32 @@ class GridContourExtractor final : public contour::ContourExtractor {
     const int iw = in.image.width, ih = in.image.height;
     const std::size_t internal = static_cast<std::size_t>(cw) * static_cast<std::size_t>(ch);
     const std::size_t full = static_cast<std::size_t>(iw) * static_cast<std::size_t>(ih);
+    const bool given_gradients = !in.m_intensity.empty();
     out.m_fuse.resize(cw, ch);
-    out.m_intensity.resize(iw, ih);
+    if (!given_gradients) out.m_intensity.resize(iw, ih);
     out.contours.resize(iw, ih);
 
-    // The blur and the gradient need nothing of the cues: they are queued first, so a GPU
-    // computes them while the CPU runs the optical flow.
-    image_.resize(full);
-    for (auto* b : {&blur_tmp_, &blurred_, &magnitude_}) b->resize(full);
-    direction_.resize(full);
     classes_.resize(full);
-    upload_rows(grid_, in.image, staging_image_, image_);
-    passes::GaussianVertical vertical{image_.data(), blur_tmp_.data(), iw, ih, {}};
-    passes::GaussianHorizontal horizontal{blur_tmp_.data(), blurred_.data(), iw, {}};
-    const auto& taps = contour::gaussian5_taps();
-    for (int k = 0; k < 5; ++k) vertical.taps[k] = horizontal.taps[k] = taps[k];
-    grid_.launch(iw, ih, vertical);
-    grid_.launch(iw, ih, horizontal);
-    grid_.launch(iw, ih,
-                 passes::Sobel{blurred_.data(), magnitude_.data(), direction_.data(), iw, ih,
-                               1.0f / contour::kMaxSobelMagnitude8Bit});
+    if (given_gradients) {
+      upload_rows(grid_, in.m_intensity, staging_magnitude_, magnitude_);
+      upload_rows(grid_, in.direction, staging_direction_, direction_);
+    } else {
+      // The blur and the gradient need nothing of the cues: they are queued first, so a GPU
+      // computes them while the CPU runs the optical flow.
+      image_.resize(full);
+      for (auto* b : {&blur_tmp_, &blurred_, &magnitude_}) b->resize(full);
+      direction_.resize(full);
+      upload_rows(grid_, in.image, staging_image_, image_);
+      passes::GaussianVertical vertical{image_.data(), blur_tmp_.data(), iw, ih, {}};
+      passes::GaussianHorizontal horizontal{blur_tmp_.data(), blurred_.data(), iw, {}};
+      const auto& taps = contour::gaussian5_taps();
+      for (int k = 0; k < 5; ++k) vertical.taps[k] = horizontal.taps[k] = taps[k];
+      grid_.launch(iw, ih, vertical);
+      grid_.launch(iw, ih, horizontal);
+      grid_.launch(iw, ih,
+                   passes::Sobel{blurred_.data(), magnitude_.data(), direction_.data(), iw, ih,
+                                 1.0f / contour::kMaxSobelMagnitude8Bit});
+    }
     timings_.gaussian_ms = t.lap_ms();
 
     fuse_.resize(internal);
@@ -74,7 +80,7 @@ class GridContourExtractor final : public contour::ContourExtractor {
     } else if (!stereo) {
       grid_.launch(cw, ch, passes::FillFloat{fuse_.data(), cw, 0.0f});
     }
-    // What the blur and gradient still took after the flow.
+    // What the blur and gradient (or the upload of the given ones) still took after the flow.
     grid_.synchronize();
     timings_.gaussian_ms += t.lap_ms();
     if (stereo) {
@@ -94,11 +100,11 @@ class GridContourExtractor final : public contour::ContourExtractor {
                  passes::CannyClassify{magnitude_.data(), direction_.data(), fuse_.data(), iw, ih,
                                        cw, ch, levels_, classes_.data()});
     download_values(grid_, fuse_.data(), internal, staging_fuse_);
-    download_values(grid_, magnitude_.data(), full, staging_magnitude_);
+    if (!given_gradients) download_values(grid_, magnitude_.data(), full, staging_magnitude_);
     download_values(grid_, classes_.data(), full, staging_classes_);
     grid_.synchronize();
     copy_rows(staging_fuse_, cw, ch, out.m_fuse);
-    copy_rows(staging_magnitude_, iw, ih, out.m_intensity);
+    if (!given_gradients) copy_rows(staging_magnitude_, iw, ih, out.m_intensity);
     copy_rows(staging_classes_, iw, ih, out.contours);
     contour::canny_hysteresis(out.contours.view(), canny_);
     timings_.canny_ms = t.lap_ms();
@@ -127,7 +133,7 @@ class GridContourExtractor final : public contour::ContourExtractor {
   Grid grid_;
   contour::CannyScratch canny_;
   contour::ContourTimings timings_;
-  Staging<std::uint8_t> staging_image_, staging_classes_;
+  Staging<std::uint8_t> staging_image_, staging_classes_, staging_direction_;
   Staging<float> staging_fuse_, staging_disparity_, staging_magnitude_;
   Buffer<std::uint8_t> image_, direction_, classes_;
   Buffer<float> fuse_, disparity_, jumps_, tmp_, cue_, blur_tmp_, blurred_, magnitude_;

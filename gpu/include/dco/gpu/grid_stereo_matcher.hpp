@@ -31,8 +31,9 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
       : params_(params), grid_(std::forward<GridArgs>(grid_args)...) {
     stereo::validate(params_);
     // The grid search evaluates the whole cost volume in one pass; "auto" means full here.
-    if (params_.search_range == "guided")
-      throw Error("stereo.search_range = guided is a CPU-backend option; use auto or full here");
+    if (params_.search_range == "guided" || params_.search_range == "temporal")
+      throw Error("stereo.search_range = " + params_.search_range +
+                  " is a CPU-backend option; use auto or full here");
     boundary_rule_ = stereo::boundary_rule(params_);
     model_ = {params_.lambda_ad, params_.lambda_census, params_.gamma_l, params_.epsilon};
   }

@@ -6,6 +6,7 @@
 
 #include "dco/core/image.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
+#include "dco/pipeline/contour/gated_canny.hpp"
 #include "dco/pipeline/densify/densifier.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 
@@ -32,6 +33,7 @@ struct DepthResult {
   Image<float> sparse;           // input px, +inf where the stereo checks left no value
   Image<float> planar;           // sparse after densify::smooth_matches, when planes_done
   bool planes_done = false;      // the stereo thread ran smooth_matches (else the densify step)
+  bool gradients_done = false;   // the stereo thread made m_intensity (else the contour step)
   Image<float> dense;            // input px, every pixel set
   Image<float> m_fuse;           // internal resolution, [0, 1]
   Image<float> m_intensity;      // input resolution, [0, 1]
@@ -53,10 +55,14 @@ struct StereoSlot {
   Image<float> raw_disparity;        // internal px, every pixel
   Image<float> sparse;               // input px
   Image<float> planar;               // sparse after densify::smooth_matches, when planes_done
+  Image<float> m_intensity;          // the image's M_I, when gradients_done
+  Image<std::uint8_t> direction;     // and its gradient directions
   stereo::StereoTimings stereo_timings;
   int stereo_scale = 1;  // internal downscale of the stage
   bool planes_done = false;
   double planes_ms = 0;  // the time smooth_matches took
+  bool gradients_done = false;
+  double gradients_ms = 0;  // the time intensity_gradients took
 };
 
 // The steps of one frame, shared by DepthPipeline and the real-time runtime (pipeline/runtime),
@@ -76,6 +82,11 @@ void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> 
 //    when the step moves. The output is the same bytes either way.
 void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmoother& planes,
                  StereoSlot& slot, bool here = true);
+// 2c. The contour step's intensity gradients of the image (contour::intensity_gradients, M_I and
+//    directions), run after step 1 when `here`, so that the stereo thread can carry them. Without
+//    `here` the contour step computes them; the slot's images and `scratch` are still sized. The
+//    output is the same bytes either way.
+void gradient_frame(contour::GradientScratch& scratch, StereoSlot& slot, bool here = true);
 // 3. Contours of `centre` given its flow neighbours (the flow cue needs both; nullptr when
 //    missing). Fills the contour fields of `out` and copies the centre's index, image, sparse and
 //    planar maps and stereo timings into it.
@@ -147,6 +158,10 @@ class DepthPipeline {
   std::unique_ptr<contour::ContourExtractor> contour_;
   densify::Densifier densifier_;
   densify::MatchPlaneSmoother planes_;
+  contour::GradientScratch gradients_;
+  // The intensity gradients as their own step (gradient_frame), as the runtime's stereo thread
+  // makes them, with a CPU contour stage; a GPU one makes them beside its flow.
+  bool gradients_apart_;
   std::array<StereoSlot, 3> slots_;
   int next_index_ = 0;   // index of the next pushed frame
   int next_output_ = 0;  // index of the next frame to finish

@@ -65,12 +65,18 @@ struct ContourInputs {
   ImageView<const std::uint8_t> neighbour_a;  // t-1 (lookahead 1) or t-1 (lookahead 0)
   ImageView<const std::uint8_t> neighbour_b;  // t+1 (lookahead 1) or t-2 (lookahead 0)
   ImageView<const float> disparity;           // internal px, dense (e.g. the WTA map); optional
+  // The image's M_I and gradient directions (intensity_gradients) when the caller made them,
+  // both or neither: then compute() reads them and leaves out.m_intensity alone, which is the
+  // caller's to carry (so another thread can take that step off the stage).
+  ImageView<const float> m_intensity;
+  ImageView<const std::uint8_t> direction;
 };
 
 // Milliseconds per step of the last compute(), named after Table 2: flow = both fields (DIS or
 // reused), amplitude = Eq. 6-8 on both, fusion = projection test and Eq. 12, box and normalise =
 // the flow cue's, stereo_cue = disparity jumps with their box filter and the max with the flow cue,
-// gaussian = the 5x5 blur, canny = gradient, suppression, gate and hysteresis.
+// gaussian = the 5x5 blur and the Sobel gradients (0 when the inputs carry them), canny =
+// suppression, gate and hysteresis.
 struct ContourTimings {
   double flow_ms = 0, amplitude_ms = 0, fusion_ms = 0, box_ms = 0, normalise_ms = 0,
          stereo_cue_ms = 0, gaussian_ms = 0, canny_ms = 0, total_ms = 0;
@@ -81,7 +87,8 @@ struct ContourTimings {
 //  m_fuse      internal resolution, [0, 1]: how likely a depth edge is near each pixel, the larger
 //              of the flow and stereo cues (all 0 when neither is available);
 //  m_intensity input resolution, [0, 1]: Sobel magnitude of the blurred image divided by the
-//              largest one 8-bit input allows (M_I of Eq. 17), a fixed scale on every frame;
+//              largest one 8-bit input allows (M_I of Eq. 17), a fixed scale on every frame
+//              (left alone when the inputs carry it);
 //  contours    input resolution, 255 on a depth contour (B_dp of Eq. 16), else 0.
 struct ContourOutputs {
   Image<float> m_fuse;

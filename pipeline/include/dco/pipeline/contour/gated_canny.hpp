@@ -29,6 +29,17 @@ inline constexpr float kMaxSobelMagnitude8Bit = 1140.3946f;
 void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<float> magnitude,
                      ImageView<std::uint8_t> direction);
 
+// Working memory of intensity_gradients, sized on first use.
+struct GradientScratch {
+  Image<float> blur_tmp, blurred;
+};
+
+// M_I of Eq. 17 and each pixel's gradient direction for a grey image: the 5x5 Gaussian blur
+// (gaussian_blur_5x5), then sobel_magnitude with norm kMaxSobelMagnitude8Bit. Resizes
+// m_intensity and direction to the image's size (allocating only when it grows).
+void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& scratch,
+                         Image<float>& m_intensity, Image<std::uint8_t>& direction);
+
 struct CannyThresholds {
   float high = 0.06f;   // T_high: a suppressed maximum above it starts an edge
   float low = 0.03f;    // T_low: at or above it, a maximum may continue an edge

@@ -41,6 +41,8 @@ class BatchMask {
   void set(int y, int tile, int batch) {
     bits_[static_cast<std::size_t>(batch) * height_ + y] |= std::uint64_t{1} << tile;
   }
+  // Also searches what `other` (of the same geometry) searches.
+  void merge(const BatchMask& other);
   // Share of the (row, column, batch) triples searched, in [0, 1].
   double searched_fraction() const;
 
@@ -65,6 +67,7 @@ struct GuideRule {
   // disparities their rows hold: bench/RESULTS.md).
   double min_valid = 0.2;
   double tile_min_valid = 0.5;
+  int scale = 2;  // internal pixels per coarse pixel, across and down (1, 2, 4, ...)
 };
 
 // Working memory of guide_batches.
@@ -73,14 +76,21 @@ struct GuideScratch {
   std::vector<int> batch_of, column_lo, column_hi, range_ends;
 };
 
-// From the sparse map of a half-size pass over the internal images (coarse pixels, +inf or NaN
-// where it has no value): each tile of an internal row searches the batches holding the
-// disparities 2v ± margin of every coarse value v within `reach` rows and `tile_margin` columns
-// of it. A tile with too few coarse values to go by takes the batches of its whole row's values
-// instead (those of every column within `reach` rows), and a row with too few searches every
-// batch. width, height: the internal image's size; max_d: the largest internal disparity
-// searched. `scratch` is resized on first use and kept across frames.
+// From a coarse sparse map of the internal images, rule.scale internal pixels per coarse pixel
+// across and down (a pass over the internal images halved: 2; +inf or NaN where it has no
+// value): each tile of an internal row searches the batches holding the disparities
+// scale * v ± margin of every coarse value v within `reach` rows and `tile_margin` columns of it. A
+// tile with too few coarse values to go by takes the batches of its whole row's values instead
+// (those of every column within `reach` rows), and a row with too few searches every batch. width,
+// height: the internal image's size; max_d: the largest internal disparity searched. `scratch` is
+// resized on first use and kept across frames.
 void guide_batches(ImageView<const float> coarse, int width, int height, int max_d,
                    const GuideRule& rule, GuideScratch& scratch, BatchMask& mask);
+
+// A sparse map of the internal images as a coarse map of rule.scale 2: each 2x2 block's largest
+// value (the nearest surface the block holds), halved, +inf where the block has none (values
+// are finite floats from +0 up; NaN, infinities and negative values are none); a last odd row
+// or column is left out. `half` is (map.width / 2) x (map.height / 2).
+void halve_sparse_map(ImageView<const float> map, ImageView<float> half);
 
 }  // namespace dco::stereo

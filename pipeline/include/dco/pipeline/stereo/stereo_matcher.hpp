@@ -19,7 +19,7 @@ struct StereoTimings {
   double boundary_ms = 0;  // boundary refinement at input resolution (half-size matching only)
   double total_ms = 0;
   // Share of the (internal row, 16-disparity batch) pairs searched: 1 for a full search, less
-  // when a half-size pass guided it (StereoParams::search_range).
+  // when a coarser pass or the previous frame guided it (StereoParams::search_range).
   double searched_fraction = 1;
   double guide_ms = 0;  // that pass and the mask it gives, a part of initial_ms
 };
@@ -36,6 +36,9 @@ class StereoMatcher {
   virtual void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                        Image<float>& disparity) = 0;
 
+  // Forgets the previous frame (which stereo.search_range = temporal searches around): the next
+  // frame starts a new, unrelated sequence.
+  virtual void reset() {}
   virtual const StereoTimings& last_timings() const = 0;
 
   // What the last frame left at the internal resolution, for the stages that follow (valid until

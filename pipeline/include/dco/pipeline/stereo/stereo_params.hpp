@@ -20,8 +20,11 @@ struct StereoParams {
   // Which disparities each row searches. "full": all of 0..max. "guided": a pass at half the
   // internal size first, then each internal row searches only the 16-disparity batches that its
   // map reaches near the row (search_guide.hpp); images too small for that pass search all.
-  // "auto": guided on the CPU backend when the search spans more than four batches, full on
-  // CUDA, whose cost volume is not the bottleneck.
+  // "temporal": after a sequence's first frame (guided), the batches near the previous frame's
+  // map and near a pass at a quarter of the internal size, which finds what came into view (a
+  // thin object on its own takes a frame or two longer). "auto": temporal on the CPU backend
+  // when the search spans more than four batches, full on CUDA, whose cost volume is not the
+  // bottleneck.
   std::string search_range = "auto";
   // Threads that share the CPU stage's rows (the input downscaled, grey and packed, the census,
   // the disparity search in bands, the boundary refinement), the stage's own included
