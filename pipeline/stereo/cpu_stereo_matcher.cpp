@@ -162,15 +162,20 @@ class CpuStereoMatcher final : public StereoMatcher {
   // thin objects on their own, which the half-size pass of a frame without a previous map finds.
   bool guide_from_previous() {
     if (!coarse_pass(quarter_, 4)) return false;
-    GuideRule rule{DisparitySearch::kBatch};
-    rule.scale = 4;
-    rule.margin = kQuarterMargin;
-    guide_batches(quarter_.disparity.cview(), w_, h_, max_d_, rule, guide_scratch_, mask_);
+    GuideRule quarter{DisparitySearch::kBatch};
+    quarter.scale = 4;
+    quarter.margin = kQuarterMargin;
+    // Only the batches of its own values: where it has few, the previous frame's map decides
+    // (with its fallbacks to the row's or every batch). With fallbacks of its own it added
+    // twice as much to the search and found no more (bench/RESULTS.md).
+    quarter.min_valid = 0;
+    quarter.tile_min_valid = 0;
+    guide_batches(quarter_.disparity.cview(), w_, h_, max_d_, quarter, guide_scratch_, mask_);
     previous_half_.resize(w_ / 2, h_ / 2);
     halve_sparse_map(values_.cview(), previous_half_.view());
-    rule.scale = 2;
-    rule.margin = kPreviousMargin;
-    guide_batches(previous_half_.cview(), w_, h_, max_d_, rule, guide_scratch_, previous_mask_);
+    GuideRule previous{DisparitySearch::kBatch};
+    previous.margin = kPreviousMargin;
+    guide_batches(previous_half_.cview(), w_, h_, max_d_, previous, guide_scratch_, previous_mask_);
     mask_.merge(previous_mask_);
     return true;
   }
