@@ -70,20 +70,31 @@ void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmooth
   slot.planes_ms = t.lap_ms();
 }
 
-void gradient_frame(contour::GradientScratch& scratch, StereoSlot& slot, bool here) {
+void early_contour_frame(const contour::ContourParams& params, EarlyContourScratch& scratch,
+                         StereoSlot& slot, bool here) {
   Stopwatch t;
-  slot.gradients_done = here;
-  slot.gradients_ms = 0;
+  slot.early_contour_done = here;
+  slot.stereo_cue_done = here && params.use_stereo;
+  slot.gradients_ms = slot.stereo_cue_ms = 0;
   if (!here) {
-    // Sized all the same, so that neither allocates when the step moves here.
+    // Sized all the same, so that nothing allocates when the step moves here.
     const int w = slot.image.width(), h = slot.image.height();
-    for (Image<float>* img : {&slot.m_intensity, &scratch.blur_tmp, &scratch.blurred})
+    for (Image<float>* img :
+         {&slot.m_intensity, &scratch.gradients.blur_tmp, &scratch.gradients.blurred})
       img->resize(w, h);
     slot.direction.resize(w, h);
+    const int cw = slot.raw_disparity.width(), ch = slot.raw_disparity.height();
+    for (Image<float>* img : {&slot.stereo_cue, &scratch.cue.jumps, &scratch.cue.tmp})
+      img->resize(cw, ch);
     return;
   }
-  contour::intensity_gradients(slot.image.cview(), scratch, slot.m_intensity, slot.direction);
+  contour::intensity_gradients(slot.image.cview(), scratch.gradients, slot.m_intensity,
+                               slot.direction);
   slot.gradients_ms = t.lap_ms();
+  if (!slot.stereo_cue_done) return;
+  contour::stereo_cue(slot.raw_disparity.cview(), static_cast<float>(params.stereo_jump),
+                      params.box_size, scratch.cue, slot.stereo_cue);
+  slot.stereo_cue_ms = t.lap_ms();
 }
 
 namespace {
@@ -100,10 +111,11 @@ void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
     in.neighbour_a = neighbour_a->small.cview();
     in.neighbour_b = neighbour_b->small.cview();
   }
-  if (centre.gradients_done) {
+  if (centre.early_contour_done) {
     in.m_intensity = centre.m_intensity.cview();
     in.direction = centre.direction.cview();
   }
+  if (centre.stereo_cue_done) in.stereo_cue = centre.stereo_cue.cview();
   contour::ContourOutputs contours{std::move(out.m_fuse), std::move(out.m_intensity),
                                    std::move(out.contours)};
   extractor.compute(in, contours);
@@ -111,11 +123,14 @@ void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
   out.m_intensity = std::move(contours.m_intensity);
   out.contours = std::move(contours.contours);
   out.contour_timings = extractor.last_timings();
-  if (centre.gradients_done) out.contour_timings.gaussian_ms = centre.gradients_ms;
+  if (centre.early_contour_done) {
+    out.contour_timings.gaussian_ms = centre.gradients_ms;
+    out.contour_timings.stereo_cue_ms += centre.stereo_cue_ms;  // and the extractor's max with it
+  }
 
   out.index = centre.index;
   out.planes_done = centre.planes_done;
-  out.gradients_done = centre.gradients_done;
+  out.early_contour_done = centre.early_contour_done;
   out.densify_timings.planes_ms = centre.planes_ms;
   out.stereo_timings = centre.stereo_timings;
   out.stereo_scale = centre.stereo_scale;
@@ -127,7 +142,7 @@ void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
 void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centre,
                    const StereoSlot* neighbour_a, const StereoSlot* neighbour_b, DepthResult& out) {
   contours_of(extractor, centre, neighbour_a, neighbour_b, out);
-  if (centre.gradients_done) {
+  if (centre.early_contour_done) {
     out.m_intensity.resize(centre.m_intensity.width(), centre.m_intensity.height());
     out.m_intensity.copy_from(centre.m_intensity.cview());
   }
@@ -152,7 +167,7 @@ void contour_frame_moving_maps(contour::ContourExtractor& extractor, StereoSlot&
   out.image.swap(centre.image);
   out.sparse.swap(centre.sparse);
   out.planar.swap(centre.planar);
-  if (centre.gradients_done) {
+  if (centre.early_contour_done) {
     out.m_intensity.resize(centre.m_intensity.width(), centre.m_intensity.height());
     out.m_intensity.swap(centre.m_intensity);
   }
@@ -202,6 +217,7 @@ void size_like(const StereoSlot& model, StereoSlot& out) {
   size_image_like(model.planar, out.planar);
   size_image_like(model.m_intensity, out.m_intensity);
   size_image_like(model.direction, out.direction);
+  size_image_like(model.stereo_cue, out.stereo_cue);
 }
 
 void size_like(const DepthResult& model, DepthResult& out) {
@@ -230,7 +246,7 @@ DepthPipeline::DepthPipeline(const PipelineParams& params, const StageFactories&
       stereo_(stereo::make_stereo_matcher(stages.stereo, params.stereo)),
       contour_(contour::make_contour_extractor(stages.contour, params.contour)),
       densifier_(params.densify, stages.densify_solver),
-      gradients_apart_(!stages.on_gpu) {
+      early_contour_apart_(!stages.on_gpu) {
   validate(params_);
 }
 
@@ -258,7 +274,7 @@ bool DepthPipeline::push(ImageView<const std::uint8_t> left, ImageView<const std
   stereo_frame(*stereo_, left, right, slot);  // first: it rejects bad input
   plane_frame(params_.densify, planes_, slot);
   prepare_frame(params_.stereo, left, t, slot);
-  gradient_frame(gradients_, slot, gradients_apart_);
+  early_contour_frame(params_.contour, early_contour_, slot, early_contour_apart_);
   ++next_index_;
   const ContourWindow window = window_on_arrival(params_.contour.lookahead, t);
   if (window.centre < 0) return false;  // frame 0 waits for frame 1

@@ -32,20 +32,25 @@ class CpuContourExtractor final : public ContourExtractor {
     timings_ = {};
     prepare(in, out);
 
-    const bool stereo = params_.use_stereo && !in.disparity.empty();
+    const bool stereo = params_.use_stereo && (!in.disparity.empty() || !in.stereo_cue.empty());
     if (flow) {
       flow_cue_.compute(in, out.m_fuse.view(), timings_, t);
     } else if (!stereo) {
       out.m_fuse.fill(0.0f);  // no cue at all: the gate rejects everything when t_depth > 0
     }
     if (stereo) {
-      disparity_jump_strength(in.disparity, static_cast<float>(params_.stereo_jump), jumps_.view());
-      if (flow) {
-        box_filter(jumps_.cview(), params_.box_size, tmp_.view(), stereo_cue_.view());
-        max_into(stereo_cue_.cview(), out.m_fuse.view());
-      } else {
-        box_filter(jumps_.cview(), params_.box_size, tmp_.view(), out.m_fuse.view());
+      ImageView<const float> cue = in.stereo_cue;
+      if (cue.empty()) {
+        // Without the flow cue it is the filter itself.
+        Image<float>& into = flow ? stereo_cue_ : out.m_fuse;
+        stereo_cue(in.disparity, static_cast<float>(params_.stereo_jump), params_.box_size,
+                   cue_scratch_, into);
+        cue = into.cview();
       }
+      if (flow)
+        max_into(cue, out.m_fuse.view());
+      else if (cue.data != out.m_fuse.cview().data)
+        out.m_fuse.copy_from(cue);
       timings_.stereo_cue_ms = t.lap_ms();
     }
 
@@ -77,13 +82,17 @@ class CpuContourExtractor final : public ContourExtractor {
     gradient_scratch_.blur_tmp.resize(iw, ih);
     gradient_scratch_.blurred.resize(iw, ih);
     direction_.resize(iw, ih);
-    for (Image<float>* img : {&tmp_, &jumps_, &stereo_cue_}) img->resize(cw, ch);
+    // The stereo cue's buffers too when the inputs carry it, so that a frame without it does
+    // not allocate.
+    for (Image<float>* img : {&cue_scratch_.jumps, &cue_scratch_.tmp, &stereo_cue_})
+      img->resize(cw, ch);
   }
 
   ContourParams params_;
   CannyThresholds thresholds_;
   FlowCue flow_cue_;
-  Image<float> tmp_, jumps_, stereo_cue_;
+  StereoCueScratch cue_scratch_;
+  Image<float> stereo_cue_;
   GradientScratch gradient_scratch_;
   Image<std::uint8_t> direction_;
   CannyScratch canny_;

@@ -86,6 +86,7 @@ void check_contour_input(const ContourInputs& in) {
   check_optional(in.neighbour_a, in.centre, "neighbour_a");
   check_optional(in.neighbour_b, in.centre, "neighbour_b");
   check_optional(in.disparity, in.centre, "disparity");
+  check_optional(in.stereo_cue, in.centre, "stereo_cue");
   if (in.m_intensity.empty() != in.direction.empty())
     throw Error("contour: m_intensity and direction come together or not at all");
   check_optional(in.m_intensity, in.image, "m_intensity");

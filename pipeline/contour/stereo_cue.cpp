@@ -4,6 +4,7 @@
 #include <cassert>
 
 #include "dco/kernels/contour_pixel.hpp"
+#include "dco/pipeline/contour/separable_filters.hpp"
 
 namespace dco::contour {
 
@@ -27,6 +28,16 @@ void disparity_jump_strength(ImageView<const float> disparity, float full_jump,
     for (int x = 1; x < w - 1; ++x) s[x] = at(x, x - 1, x + 1);
     if (w > 1) s[w - 1] = at(w - 1, w - 2, w - 1);
   }
+}
+
+void stereo_cue(ImageView<const float> disparity, float full_jump, int box_size,
+                StereoCueScratch& scratch, Image<float>& cue) {
+  const int w = disparity.width, h = disparity.height;
+  scratch.jumps.resize(w, h);
+  scratch.tmp.resize(w, h);
+  cue.resize(w, h);
+  disparity_jump_strength(disparity, full_jump, scratch.jumps.view());
+  box_filter(scratch.jumps.cview(), box_size, scratch.tmp.view(), cue.view());
 }
 
 }  // namespace dco::contour

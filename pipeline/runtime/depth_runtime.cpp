@@ -74,7 +74,7 @@ DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& 
       stereo_(stereo::make_stereo_matcher(stages.stereo, pipeline.stereo)),
       contour_(contour::make_contour_extractor(stages.contour, pipeline.contour)),
       densifier_(pipeline.densify, stages.densify_solver),
-      gradients_move_(params_.threads == 2 && !stages.on_gpu),
+      early_contour_moves_(params_.threads == 2 && !stages.on_gpu),
       // In flight at once: the contour window (3 frames), a full stereo queue and the frame in
       // the stereo stage.
       slots_(static_cast<std::size_t>(runtime.queue_depth) + 4),
@@ -128,8 +128,8 @@ void DepthRuntime::start() {
     contour_ms_.clear();
     densify_ms_.clear();
     pushed_ = dropped_ = late_ = published_ = overdue_ = early_ = 0;
-    stereo_work_ms_ = other_work_ms_ = planes_work_ms_ = gradients_work_ms_ = 0;
-    work_samples_ = planes_on_stereo_ = gradients_on_stereo_ = 0;
+    stereo_work_ms_ = other_work_ms_ = planes_work_ms_ = early_contour_work_ms_ = 0;
+    work_samples_ = planes_on_stereo_ = early_contour_on_stereo_ = 0;
     entry_high_water_ = 0;
     // Fresh queues: their high-water marks are statistics too.
     stereo_queue_ = BoundedQueue<int>(stereo_queue_.capacity());
@@ -276,7 +276,7 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
     int input = -1;
     bool late = false;
     bool planes_here = true;
-    bool gradients_here = false;
+    bool early_contour_here = false;
     {
       std::unique_lock lock(mutex_);
       if (!changed_.wait(lock, stop, [&] { return waiting_input_ >= 0 || end_requested_; })) return;
@@ -285,8 +285,8 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
         late = is_late(inputs_[static_cast<std::size_t>(input)]);
         planes_here = planes_on_stereo_thread();
         planes_on_stereo_ += planes_here && !late;
-        gradients_here = gradients_on_stereo_thread(planes_here);
-        gradients_on_stereo_ += gradients_here && !late;
+        early_contour_here = early_contour_on_stereo_thread(planes_here);
+        early_contour_on_stereo_ += early_contour_here && !late;
         dropped_ += late;
         late_ += late;
         changed_.notify_all();  // room at the entry
@@ -324,7 +324,7 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
       if (!late) {
         stereo_frame(*stereo_, in.left.cview(), in.right.cview(), entry.slot);
         plane_frame(pipeline_.densify, planes_, entry.slot, planes_here);
-        gradient_frame(gradients_, entry.slot, gradients_here);
+        early_contour_frame(pipeline_.contour, early_contour_, entry.slot, early_contour_here);
       }
     } catch (...) {
       fail(std::current_exception());
@@ -524,23 +524,24 @@ void DepthRuntime::deliver(int result, bool early) {
   stereo_ms_.record(stereo_ms);
   contour_ms_.record(contour_ms);
   densify_ms_.record(densify_ms);
-  // What decides which thread runs the match planes and the intensity gradients
-  // (planes_on_stereo_thread, gradients_on_stereo_thread).
+  // What decides which thread runs the match planes and the early contour work
+  // (planes_on_stereo_thread, early_contour_on_stereo_thread).
   const double planes_ms = r.result.densify_timings.planes_ms;
-  const double gradients_ms = r.result.contour_timings.gaussian_ms;
+  const double early_ms =
+      r.result.contour_timings.gaussian_ms + r.result.contour_timings.stereo_cue_ms;
   const double planes_stereo = r.result.planes_done ? planes_ms : 0.0;
-  const double gradients_stereo = r.result.gradients_done ? gradients_ms : 0.0;
-  const double stereo_own = stereo_ms - planes_stereo - gradients_stereo;
-  const double other_own = params_.threads >= 3
-                               ? densify_ms - (planes_ms - planes_stereo)
-                               : contour_ms + densify_ms - (planes_ms - planes_stereo) -
-                                     (gradients_ms - gradients_stereo);
+  const double early_stereo = r.result.early_contour_done ? early_ms : 0.0;
+  const double stereo_own = stereo_ms - planes_stereo - early_stereo;
+  const double other_own =
+      params_.threads >= 3
+          ? densify_ms - (planes_ms - planes_stereo)
+          : contour_ms + densify_ms - (planes_ms - planes_stereo) - (early_ms - early_stereo);
   constexpr double kWeight = 0.125;  // about the last eight frames
   const double weight = work_samples_ == 0 ? 1.0 : kWeight;
   stereo_work_ms_ += weight * (stereo_own - stereo_work_ms_);
   other_work_ms_ += weight * (other_own - other_work_ms_);
   planes_work_ms_ += weight * (planes_ms - planes_work_ms_);
-  gradients_work_ms_ += weight * (gradients_ms - gradients_work_ms_);
+  early_contour_work_ms_ += weight * (early_ms - early_contour_work_ms_);
   ++work_samples_;
   ++published_;
   if (releasing_ && t.densify_end - t.capture > release_latency_) ++overdue_;
@@ -571,13 +572,14 @@ bool DepthRuntime::planes_on_stereo_thread() const {
   return stereo_work_ms_ <= other_work_ms_ + planes_work_ms_;
 }
 
-bool DepthRuntime::gradients_on_stereo_thread(bool planes_here) const {
-  if (!gradients_move_ || work_samples_ == 0) return false;
-  // The planes' rule again, with the planes where they go: the stereo thread takes the
-  // gradients unless its work already exceeds the other thread's with them.
+bool DepthRuntime::early_contour_on_stereo_thread(bool planes_here) const {
+  if (!early_contour_moves_) return false;
+  if (work_samples_ == 0) return true;  // as the planes
+  // The planes' rule again, with the planes where they go: the stereo thread takes the work
+  // unless its own already exceeds the other thread's with it.
   const double stereo = stereo_work_ms_ + (planes_here ? planes_work_ms_ : 0.0);
   const double other = other_work_ms_ + (planes_here ? 0.0 : planes_work_ms_);
-  return stereo <= other + gradients_work_ms_;
+  return stereo <= other + early_contour_work_ms_;
 }
 
 RuntimeStats DepthRuntime::stats() const {
@@ -598,7 +600,7 @@ RuntimeStats DepthRuntime::stats() const {
   s.stereo_queue_high_water = stereo_queue_.high_water();
   s.densify_queue_high_water = densify_queue_.high_water();
   s.planes_on_stereo_thread = planes_on_stereo_;
-  s.gradients_on_stereo_thread = gradients_on_stereo_;
+  s.early_contour_on_stereo_thread = early_contour_on_stereo_;
   return s;
 }
 

@@ -13,6 +13,7 @@
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 #include "dco/pipeline/contour/gated_canny.hpp"
+#include "dco/pipeline/contour/stereo_cue.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 #include "stereo_cases.hpp"
 #include "support/same_bytes.hpp"
@@ -134,15 +135,22 @@ void expect_same_contours_as_cpu(const ContourCase& c, const Make& make) {
       EXPECT_TRUE(same_bytes(actual.m_fuse, expected.m_fuse));
       EXPECT_TRUE(same_bytes(actual.m_intensity, expected.m_intensity));
       EXPECT_TRUE(same_bytes(actual.contours, expected.contours));
-      // With the image's gradients made by the caller: the same contours, and M_I left to it.
+      // With the image's gradients and the stereo cue made by the caller: the same contours, and
+      // M_I left to it.
       contour::ContourInputs given = c.inputs(neighbours);
       contour::GradientScratch scratch;
-      Image<float> m_intensity;
+      Image<float> m_intensity, cue;
       Image<std::uint8_t> direction;
       contour::intensity_gradients(given.image, scratch, m_intensity, direction);
       EXPECT_TRUE(same_bytes(m_intensity, expected.m_intensity));
       given.m_intensity = m_intensity.cview();
       given.direction = direction.cview();
+      if (!given.disparity.empty()) {
+        contour::StereoCueScratch cue_scratch;
+        contour::stereo_cue(given.disparity, static_cast<float>(params.stereo_jump),
+                            params.box_size, cue_scratch, cue);
+        given.stereo_cue = cue.cview();
+      }
       contour::ContourOutputs by_cpu, by_stage;
       cpu->compute(given, by_cpu);
       stage->compute(given, by_stage);

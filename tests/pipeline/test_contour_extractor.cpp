@@ -20,6 +20,7 @@
 #include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
 #include "dco/pipeline/contour/gated_canny.hpp"
+#include "dco/pipeline/contour/stereo_cue.hpp"
 #include "support/same_bytes.hpp"
 
 namespace dco::contour {
@@ -584,32 +585,50 @@ TEST(ContourExtractor, RejectsInconsistentInputs) {
   EXPECT_EQ(compute_error(in), "");
   in.m_intensity = small_m.view();
   EXPECT_THAT(compute_error(in), HasSubstr("m_intensity is"));
+  in = scene.inputs();
+  in.stereo_cue = disparity.view();  // one row short
+  EXPECT_THAT(compute_error(in), HasSubstr("stereo_cue is"));
 }
 
-// Given the image's gradients (intensity_gradients, as the real-time runtime's stereo thread
-// makes them), the stage gives the same M_fuse and contours, leaves out.m_intensity alone and
-// reports no time for them.
-TEST(ContourExtractor, TakesTheGradientsTheCallerMade) {
+// Given the image's gradients (intensity_gradients) and the stereo cue (stereo_cue), as the
+// real-time runtime's stereo thread makes them, the stage gives the same M_fuse and contours with
+// and without the flow cue, leaves out.m_intensity alone and reports no time for the gradients.
+TEST(ContourExtractor, TakesTheGradientsAndStereoCueTheCallerMade) {
   const MovingSquare scene;
-  const auto extractor = make_cpu_contour_extractor({});
-  ContourOutputs expected, given_out;
-  extractor->compute(scene.inputs(), expected);
+  const ContourParams params;
+  // A disparity step inside the frame: the stereo cue marks it.
+  Image<float> disparity(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) disparity.at(x, y) = x < kW / 3 ? 20.0f : 8.0f;
   GradientScratch scratch;
-  Image<float> m_intensity;
+  Image<float> m_intensity, cue;
   Image<std::uint8_t> direction;
-  intensity_gradients(scene.inputs().image, scratch, m_intensity, direction);
-  EXPECT_TRUE(dco::testing::same_bytes(m_intensity, expected.m_intensity));
-  ContourInputs in = scene.inputs();
-  in.m_intensity = m_intensity.cview();
-  in.direction = direction.cview();
-  given_out.m_intensity = Image<float>(3, 2);
-  given_out.m_intensity.fill(7.0f);
-  extractor->compute(in, given_out);
-  EXPECT_TRUE(dco::testing::same_bytes(given_out.m_fuse, expected.m_fuse));
-  EXPECT_TRUE(dco::testing::same_bytes(given_out.contours, expected.contours));
-  EXPECT_EQ(given_out.m_intensity.width(), 3);
-  EXPECT_EQ(given_out.m_intensity.at(2, 1), 7.0f);
-  EXPECT_EQ(extractor->last_timings().gaussian_ms, 0);
+  StereoCueScratch cue_scratch;
+  for (const bool flow : {true, false}) {
+    ContourInputs in = scene.inputs();
+    in.disparity = disparity.cview();
+    if (!flow) in.neighbour_a = in.neighbour_b = {};
+    const auto extractor = make_cpu_contour_extractor(params);
+    ContourOutputs expected, given_out;
+    extractor->compute(in, expected);
+    intensity_gradients(in.image, scratch, m_intensity, direction);
+    stereo_cue(in.disparity, static_cast<float>(params.stereo_jump), params.box_size, cue_scratch,
+               cue);
+    EXPECT_TRUE(dco::testing::same_bytes(m_intensity, expected.m_intensity));
+    in.m_intensity = m_intensity.cview();
+    in.direction = direction.cview();
+    in.stereo_cue = cue.cview();
+    given_out.m_intensity = Image<float>(3, 2);
+    given_out.m_intensity.fill(7.0f);
+    extractor->compute(in, given_out);
+    EXPECT_TRUE(dco::testing::same_bytes(given_out.m_fuse, expected.m_fuse)) << flow;
+    EXPECT_TRUE(dco::testing::same_bytes(given_out.contours, expected.contours)) << flow;
+    EXPECT_EQ(given_out.m_intensity.width(), 3);
+    EXPECT_EQ(given_out.m_intensity.at(2, 1), 7.0f);
+    EXPECT_EQ(extractor->last_timings().gaussian_ms, 0);
+    // Not trivially equal: the step shows in the filter.
+    EXPECT_GT(given_out.m_fuse.at(kW / 3, kH / 2), 0.2f) << flow;  // 2 of 9 columns jump
+  }
 }
 
 // DIS cannot build its pyramid on small frames; the extractor says so instead of returning garbage.

@@ -167,8 +167,9 @@ TEST(DepthRuntime, DeterministicModeEqualsTheOfflinePipelineBitForBit) {
   }
 }
 
-// The match planes (a densify step) and the intensity gradients (a contour step) go to the stereo
-// thread while it has less other work, and the bytes are those of the offline pipeline.
+// The match planes (a densify step) and the early contour work (the intensity gradients and the
+// stereo cue) go to the stereo thread while it has less other work, and the bytes are those of
+// the offline pipeline.
 TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) {
   for (const bool heavy_densify : {true, false}) {
     Sequence s = make_sequence("hand", 16);
@@ -193,23 +194,24 @@ TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) 
     runtime.drain();
     expect_identical(expected, c.results, heavy_densify ? "heavy densify" : "heavy stereo");
     const RuntimeStats st = runtime.stats();
-    // Decided from the published frames' times: the first frames go before any is known (the
-    // planes to the stereo thread, the gradients to the contour step).
+    // Decided from the published frames' times: the first frames go to the stereo thread before
+    // any is known.
     if (heavy_densify) {
       EXPECT_EQ(st.planes_on_stereo_thread, 16);
-      EXPECT_GE(st.gradients_on_stereo_thread, 12);
+      EXPECT_EQ(st.early_contour_on_stereo_thread, 16);
     } else {
       EXPECT_LE(st.planes_on_stereo_thread, 4);
-      EXPECT_EQ(st.gradients_on_stereo_thread, 0);
+      EXPECT_LE(st.early_contour_on_stereo_thread, 4);
     }
-    long planes = 0, gradients = 0;
+    long planes = 0, early = 0;
     for (const DepthResult& r : c.results) {
       planes += r.planes_done;
-      gradients += r.gradients_done;
-      EXPECT_EQ(r.contour_timings.gaussian_ms > 0, true) << "the gradients' time, either thread";
+      early += r.early_contour_done;
+      EXPECT_GT(r.contour_timings.gaussian_ms, 0) << "the gradients' time, either thread";
+      EXPECT_GT(r.contour_timings.stereo_cue_ms, 0) << "the stereo cue's";
     }
     EXPECT_EQ(planes, st.planes_on_stereo_thread);
-    EXPECT_EQ(gradients, st.gradients_on_stereo_thread);
+    EXPECT_EQ(early, st.early_contour_on_stereo_thread);
   }
 }
 

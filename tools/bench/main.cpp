@@ -467,13 +467,13 @@ struct Result {
   double first_result_ms = 0;  // a new runtime: first push to first result (the warm-up pass)
   PassFigures throughput;      // every round's frames
   // Of every round's frames (warm-up included), those whose match planes, and those whose
-  // intensity gradients, the stereo thread made.
-  long planes_on_stereo = 0, gradients_on_stereo = 0, planes_frames = 0;
+  // early contour work (intensity gradients, stereo cue), the stereo thread did.
+  long planes_on_stereo = 0, early_contour_on_stereo = 0, planes_frames = 0;
   double planes_share() const {
     return planes_frames > 0 ? static_cast<double>(planes_on_stereo) / planes_frames : 0.0;
   }
-  double gradients_share() const {
-    return planes_frames > 0 ? static_cast<double>(gradients_on_stereo) / planes_frames : 0.0;
+  double early_contour_share() const {
+    return planes_frames > 0 ? static_cast<double>(early_contour_on_stereo) / planes_frames : 0.0;
   }
   double fps = 0;
   int paced_frames = 0;
@@ -537,7 +537,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
                        : turn.ms_per_frame;
       const rt::RuntimeStats st = pipeline.stats();
       r.planes_on_stereo += st.planes_on_stereo_thread;
-      r.gradients_on_stereo += st.gradients_on_stereo_thread;
+      r.early_contour_on_stereo += st.early_contour_on_stereo_thread;
       r.planes_frames += st.published;
       all_times.insert(all_times.end(), times.begin(), times.end());
     }
@@ -637,8 +637,8 @@ void print_text(const Result& r) {
       t.densify.p99_ms);
   fmt::print(
       "  planes   the densify stage's match planes ran on the stereo thread for {} of {} frames, "
-      "the contour stage's intensity gradients for {}\n",
-      r.planes_on_stereo, r.planes_frames, r.gradients_on_stereo);
+      "the contour stage's early work (gradients, stereo cue) for {}\n",
+      r.planes_on_stereo, r.planes_frames, r.early_contour_on_stereo);
   fmt::print(
       "  latency  p50 {:.1f} ms  p99 {:.1f} ms  (p99 - p50 {:.1f} ms) at {:g} fps input; "
       "{} of {} frames dropped ({} late), {} published\n",
@@ -717,7 +717,7 @@ std::string json_fields(const Result& r) {
              "\"release_latency_ms\": {}, \"overdue\": {}, \"early\": {}, "
              "\"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
              "\"published\": {}, \"planes_on_stereo_thread\": {}, "
-             "\"gradients_on_stereo_thread\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
+             "\"early_contour_on_stereo_thread\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
              dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity,
              r.threads, r.parallel_flow ? "true" : "false", r.stereo_row_threads,
              r.contour_row_threads, r.densify_row_threads, r.warmup, json_number(r.first_result_ms),
@@ -728,7 +728,7 @@ std::string json_fields(const Result& r) {
              json_number(ls.latency.max_ms), json_number(ls.ready.p50_ms),
              json_number(ls.ready.p99_ms), json_number(r.release_latency_ms), l.overdue, l.early,
              l.pushed, l.dropped, l.late, l.published, json_number(r.planes_share()),
-             json_number(r.gradients_share()), json_number(r.peer_ms_per_frame),
+             json_number(r.early_contour_share()), json_number(r.peer_ms_per_frame),
              json_number(r.ratio)) +
          fmt::format(", \"rounds\": [{}]", fmt::join(round_objects(r), ", ")) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +

@@ -73,7 +73,7 @@ class GridContourExtractor final : public contour::ContourExtractor {
     timings_.gaussian_ms = t.lap_ms();
 
     fuse_.resize(internal);
-    const bool stereo = params_.use_stereo && !in.disparity.empty();
+    const bool stereo = params_.use_stereo && (!in.disparity.empty() || !in.stereo_cue.empty());
     if (flow) {
       flow_cue_.compute(in, out.m_fuse.view(), timings_, t);
       upload_rows(grid_, out.m_fuse.cview(), staging_fuse_, fuse_);
@@ -85,12 +85,15 @@ class GridContourExtractor final : public contour::ContourExtractor {
     timings_.gaussian_ms += t.lap_ms();
     if (stereo) {
       for (auto* b : {&disparity_, &jumps_, &tmp_, &cue_}) b->resize(internal);
-      upload_rows(grid_, in.disparity, staging_disparity_, disparity_);
-      const float inv_jump = 1.0f / static_cast<float>(params_.stereo_jump);
-      grid_.launch(cw, ch,
-                   passes::JumpStrength{disparity_.data(), jumps_.data(), cw, ch, inv_jump});
-      float* filtered = flow ? cue_.data() : fuse_.data();
-      box(jumps_.data(), filtered, cw, ch);
+      if (!in.stereo_cue.empty()) {
+        upload_rows(grid_, in.stereo_cue, staging_disparity_, flow ? cue_ : fuse_);
+      } else {
+        upload_rows(grid_, in.disparity, staging_disparity_, disparity_);
+        const float inv_jump = 1.0f / static_cast<float>(params_.stereo_jump);
+        grid_.launch(cw, ch,
+                     passes::JumpStrength{disparity_.data(), jumps_.data(), cw, ch, inv_jump});
+        box(jumps_.data(), flow ? cue_.data() : fuse_.data(), cw, ch);
+      }
       if (flow) grid_.launch(cw, ch, passes::MaxInto{cue_.data(), fuse_.data(), cw});
       grid_.synchronize();
       timings_.stereo_cue_ms = t.lap_ms();

@@ -7,6 +7,7 @@
 #include "dco/core/image.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 #include "dco/pipeline/contour/gated_canny.hpp"
+#include "dco/pipeline/contour/stereo_cue.hpp"
 #include "dco/pipeline/densify/densifier.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 
@@ -29,15 +30,15 @@ void validate(const PipelineParams& params);  // throws dco::Error
 // Everything the pipeline knows about one frame once it is done.
 struct DepthResult {
   int index = -1;
-  Image<std::uint8_t> image;     // grey left image, input resolution
-  Image<float> sparse;           // input px, +inf where the stereo checks left no value
-  Image<float> planar;           // sparse after densify::smooth_matches, when planes_done
-  bool planes_done = false;      // the stereo thread ran smooth_matches (else the densify step)
-  bool gradients_done = false;   // the stereo thread made m_intensity (else the contour step)
-  Image<float> dense;            // input px, every pixel set
-  Image<float> m_fuse;           // internal resolution, [0, 1]
-  Image<float> m_intensity;      // input resolution, [0, 1]
-  Image<std::uint8_t> contours;  // input resolution, 255 on depth contours
+  Image<std::uint8_t> image;        // grey left image, input resolution
+  Image<float> sparse;              // input px, +inf where the stereo checks left no value
+  Image<float> planar;              // sparse after densify::smooth_matches, when planes_done
+  bool planes_done = false;         // the stereo thread ran smooth_matches (else the densify step)
+  bool early_contour_done = false;  // the stereo thread made m_intensity (else the contour step)
+  Image<float> dense;               // input px, every pixel set
+  Image<float> m_fuse;              // internal resolution, [0, 1]
+  Image<float> m_intensity;         // input resolution, [0, 1]
+  Image<std::uint8_t> contours;     // input resolution, 255 on depth contours
   stereo::StereoTimings stereo_timings;
   int stereo_scale = 1;  // the stereo stage's internal downscale (its matches' grid)
   contour::ContourTimings contour_timings;
@@ -55,14 +56,24 @@ struct StereoSlot {
   Image<float> raw_disparity;        // internal px, every pixel
   Image<float> sparse;               // input px
   Image<float> planar;               // sparse after densify::smooth_matches, when planes_done
-  Image<float> m_intensity;          // the image's M_I, when gradients_done
-  Image<std::uint8_t> direction;     // and its gradient directions
+  // When early_contour_done: the image's M_I and gradient directions, and (with
+  // contour.use_stereo) the stereo cue of raw_disparity.
+  Image<float> m_intensity;
+  Image<std::uint8_t> direction;
+  Image<float> stereo_cue;
   stereo::StereoTimings stereo_timings;
   int stereo_scale = 1;  // internal downscale of the stage
   bool planes_done = false;
   double planes_ms = 0;  // the time smooth_matches took
-  bool gradients_done = false;
-  double gradients_ms = 0;  // the time intensity_gradients took
+  bool early_contour_done = false;
+  bool stereo_cue_done = false;
+  double gradients_ms = 0, stereo_cue_ms = 0;  // the times they took
+};
+
+// Working memory of early_contour_frame.
+struct EarlyContourScratch {
+  contour::GradientScratch gradients;
+  contour::StereoCueScratch cue;
 };
 
 // The steps of one frame, shared by DepthPipeline and the real-time runtime (pipeline/runtime),
@@ -82,11 +93,13 @@ void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> 
 //    when the step moves. The output is the same bytes either way.
 void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmoother& planes,
                  StereoSlot& slot, bool here = true);
-// 2c. The contour step's intensity gradients of the image (contour::intensity_gradients, M_I and
-//    directions), run after step 1 when `here`, so that the stereo thread can carry them. Without
-//    `here` the contour step computes them; the slot's images and `scratch` are still sized. The
-//    output is the same bytes either way.
-void gradient_frame(contour::GradientScratch& scratch, StereoSlot& slot, bool here = true);
+// 2c. The contour step's work on this frame alone: the image's intensity gradients
+//    (contour::intensity_gradients, M_I and directions) and, with params.use_stereo, the stereo
+//    cue of its raw disparity (contour::stereo_cue). Run after steps 1 and 2 when `here`, so that
+//    the stereo thread can carry it. Without `here` the contour step does it; the slot's images
+//    and `scratch` are still sized. The output is the same bytes either way.
+void early_contour_frame(const contour::ContourParams& params, EarlyContourScratch& scratch,
+                         StereoSlot& slot, bool here = true);
 // 3. Contours of `centre` given its flow neighbours (the flow cue needs both; nullptr when
 //    missing). Fills the contour fields of `out` and copies the centre's index, image, sparse and
 //    planar maps and stereo timings into it.
@@ -158,10 +171,10 @@ class DepthPipeline {
   std::unique_ptr<contour::ContourExtractor> contour_;
   densify::Densifier densifier_;
   densify::MatchPlaneSmoother planes_;
-  contour::GradientScratch gradients_;
-  // The intensity gradients as their own step (gradient_frame), as the runtime's stereo thread
-  // makes them, with a CPU contour stage; a GPU one makes them beside its flow.
-  bool gradients_apart_;
+  EarlyContourScratch early_contour_;
+  // The contour step's work on a frame alone as a step of its own (early_contour_frame), as the
+  // runtime's stereo thread does it, with a CPU contour stage; a GPU one does it beside its flow.
+  bool early_contour_apart_;
   std::array<StereoSlot, 3> slots_;
   int next_index_ = 0;   // index of the next pushed frame
   int next_output_ = 0;  // index of the next frame to finish

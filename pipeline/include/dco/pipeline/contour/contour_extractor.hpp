@@ -70,6 +70,9 @@ struct ContourInputs {
   // caller's to carry (so another thread can take that step off the stage).
   ImageView<const float> m_intensity;
   ImageView<const std::uint8_t> direction;
+  // The stereo cue of `disparity` (stereo_cue with stereo_jump and box_size) when the caller made
+  // it: then compute() takes it instead (with use_stereo).
+  ImageView<const float> stereo_cue;
 };
 
 // Milliseconds per step of the last compute(), named after Table 2: flow = both fields (DIS or

@@ -12,4 +12,15 @@ namespace dco::contour {
 void disparity_jump_strength(ImageView<const float> disparity, float full_jump,
                              ImageView<float> strength);
 
+// Working memory of stereo_cue, sized on first use.
+struct StereoCueScratch {
+  Image<float> jumps, tmp;
+};
+
+// The stereo cue of a disparity map: disparity_jump_strength, then the box filter of box_size
+// that widens it as the flow cue is widened (§5.2). Resizes `cue` to the map's size (allocating
+// only when it grows).
+void stereo_cue(ImageView<const float> disparity, float full_jump, int box_size,
+                StereoCueScratch& scratch, Image<float>& cue);
+
 }  // namespace dco::contour

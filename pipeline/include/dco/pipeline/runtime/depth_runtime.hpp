@@ -65,10 +65,11 @@ struct RuntimeStats {
   // ran: while its own work was not longer than the other thread's with the planes. The others'
   // ran in the densify step.
   long planes_on_stereo_thread = 0;
-  // Frames whose intensity gradients (the contour step's blur and Sobel, gradient_frame) the
-  // stereo thread made, by the same rule after the planes' share; the others' were the contour
-  // step's. With two stage threads and a CPU contour stage only.
-  long gradients_on_stereo_thread = 0;
+  // Frames whose early contour work (the contour step's work on the frame alone: the intensity
+  // gradients and the stereo cue, early_contour_frame) the stereo thread did, by the same rule
+  // after the planes' share; the others' was the contour step's. With two stage threads and a
+  // CPU contour stage only.
+  long early_contour_on_stereo_thread = 0;
 };
 
 // The depth pipeline in real time: the stereo, contour and densify steps of DepthPipeline on their
@@ -193,13 +194,13 @@ class DepthRuntime {
   std::unique_ptr<contour::ContourExtractor> contour_;
   densify::Densifier densifier_;
   densify::MatchPlaneSmoother planes_;  // the stereo thread's (plane_frame)
-  contour::GradientScratch gradients_;  // the stereo thread's (gradient_frame)
-  // Two stage threads and a contour stage on the CPU: the intensity gradients can move.
-  const bool gradients_move_;
-  // Whether the stereo thread runs the match planes, and then the intensity gradients, of the
+  EarlyContourScratch early_contour_;   // the stereo thread's (early_contour_frame)
+  // Two stage threads and a contour stage on the CPU: the early contour work can move.
+  const bool early_contour_moves_;
+  // Whether the stereo thread runs the match planes, and then the early contour work, of the
   // frame it takes next (under mutex_).
   bool planes_on_stereo_thread() const;
-  bool gradients_on_stereo_thread(bool planes_here) const;
+  bool early_contour_on_stereo_thread(bool planes_here) const;
 
   mutable std::mutex mutex_;
   std::condition_variable_any changed_;  // any state below changed
@@ -238,11 +239,11 @@ class DepthRuntime {
 
   Histogram latency_, ready_, stereo_ms_, contour_ms_, densify_ms_;
   long pushed_ = 0, dropped_ = 0, late_ = 0, published_ = 0, overdue_ = 0, early_ = 0;
-  // Running means of each thread's work per frame, the match planes and the intensity gradients
+  // Running means of each thread's work per frame, the match planes and the early contour work
   // left out: the stereo thread's, and the contour + densify steps' (the densify thread's alone
   // with three threads); and of those two steps.
-  double stereo_work_ms_ = 0, other_work_ms_ = 0, planes_work_ms_ = 0, gradients_work_ms_ = 0;
-  long work_samples_ = 0, planes_on_stereo_ = 0, gradients_on_stereo_ = 0;
+  double stereo_work_ms_ = 0, other_work_ms_ = 0, planes_work_ms_ = 0, early_contour_work_ms_ = 0;
+  long work_samples_ = 0, planes_on_stereo_ = 0, early_contour_on_stereo_ = 0;
 
   std::vector<std::jthread> threads_;
 };
