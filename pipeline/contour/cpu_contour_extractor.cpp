@@ -39,18 +39,19 @@ class CpuContourExtractor final : public ContourExtractor {
       out.m_fuse.fill(0.0f);  // no cue at all: the gate rejects everything when t_depth > 0
     }
     if (stereo) {
-      ImageView<const float> cue = in.stereo_cue;
-      if (cue.empty()) {
-        // Without the flow cue it is the filter itself.
-        Image<float>& into = flow ? stereo_cue_ : out.m_fuse;
+      const auto make_cue = [&](Image<float>& into) {
         stereo_cue(in.disparity, static_cast<float>(params_.stereo_jump), params_.box_size,
                    cue_scratch_, into);
-        cue = into.cview();
+      };
+      // Without the flow cue the stereo cue is the filter itself.
+      if (!flow && in.stereo_cue.empty()) {
+        make_cue(out.m_fuse);
+      } else if (!flow) {
+        out.m_fuse.copy_from(in.stereo_cue);
+      } else {
+        if (in.stereo_cue.empty()) make_cue(stereo_cue_);
+        max_into(in.stereo_cue.empty() ? stereo_cue_.cview() : in.stereo_cue, out.m_fuse.view());
       }
-      if (flow)
-        max_into(cue, out.m_fuse.view());
-      else if (cue.data != out.m_fuse.cview().data)
-        out.m_fuse.copy_from(cue);
       timings_.stereo_cue_ms = t.lap_ms();
     }
 

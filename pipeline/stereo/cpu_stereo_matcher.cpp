@@ -76,7 +76,7 @@ class CpuStereoMatcher final : public StereoMatcher {
 
     prepare(left, right);
     const bool previous =
-        had_previous && previous_w_ == w_ && previous_h_ == h_ && previous_max_d_ == max_d_;
+        had_previous && values_.cview().same_size(w_, h_) && previous_max_d_ == max_d_;
     timings_.prepare_ms = t.lap_ms();
 
     // Arm lengths are given in input pixels; the windows cover the same scene area at any
@@ -125,8 +125,6 @@ class CpuStereoMatcher final : public StereoMatcher {
     }
     timings_.total_ms = t.total_ms();
     has_previous_ = true;
-    previous_w_ = w_;
-    previous_h_ = h_;
     previous_max_d_ = max_d_;
   }
 
@@ -366,9 +364,10 @@ class CpuStereoMatcher final : public StereoMatcher {
   Image<float> previous_half_;
   GuideScratch guide_scratch_;
   BatchMask mask_, previous_mask_;
-  // The previous frame's map (values_) and the geometry it was made for.
+  // values_ is the previous frame's map (its size that frame's internal size), searched up to
+  // previous_max_d_.
   bool has_previous_ = false;
-  int previous_w_ = 0, previous_h_ = 0, previous_max_d_ = 0;
+  int previous_max_d_ = 0;
   // Disparity margins (internal pixels) of the temporal guide: the previous frame's values are
   // exact to a pixel but the surfaces move, the quarter pass's are four internal pixels apart.
   static constexpr int kPreviousMargin = 4;
