@@ -12,6 +12,7 @@
 
 #include "dco/core/error.hpp"
 #include "dco/core/time_slice.hpp"
+#include "dco/core/usable_cpus.hpp"
 
 namespace dco::pipeline::runtime {
 namespace {
@@ -56,6 +57,7 @@ constexpr std::uint64_t kReleaseSliceNs = 100'000;
 
 RuntimeParams with_stage_threads(RuntimeParams params, const StageFactories& stages) {
   params.threads = stage_threads(params, stages.on_gpu);
+  params.opencv_threads = opencv_threads_for(params.opencv_threads, params.threads, usable_cpus());
   return params;
 }
 
@@ -135,6 +137,7 @@ void DepthRuntime::start() {
     stereo_queue_ = BoundedQueue<int>(stereo_queue_.capacity());
     densify_queue_ = BoundedQueue<int>(densify_queue_.capacity());
   }
+  if (params_.opencv_threads > 0) opencv_threads_.emplace(params_.opencv_threads);
   threads_.reserve(4);
   threads_.emplace_back([this](std::stop_token stop) { stereo_loop(stop); });
   if (params_.threads >= 2)
@@ -160,6 +163,7 @@ void DepthRuntime::start() {
 void DepthRuntime::stop() {
   for (std::jthread& t : threads_) t.request_stop();
   threads_.clear();  // joins
+  opencv_threads_.reset();
   std::lock_guard lock(mutex_);
   reset_state();
 }

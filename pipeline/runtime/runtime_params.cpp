@@ -18,6 +18,9 @@ void register_params(ConfigSchema& s, RuntimeParams& p) {
         "else 2");
   s.add("runtime.affinity", &p.affinity, {},
         "CPUs for the stage threads, e.g. \"0,1\" (thread i on entry i mod n); empty = any");
+  s.add("runtime.opencv_threads", &p.opencv_threads, 0, 256,
+        "threads of OpenCV's parallel loops (DIS flow) while the runtime runs, process-wide; "
+        "0 = 1 when the stage threads are as many as the usable CPUs, else OpenCV's choice");
   s.add("runtime.queue_depth", &p.queue_depth, 1, 8,
         "frames each queue between stage threads holds (each one is a frame of latency)");
   s.add("runtime.entry_deadline_ms", &p.entry_deadline_ms, 0.0, 1000.0,
@@ -66,6 +69,9 @@ void validate(const RuntimeParams& p) {
   if (p.threads < 0 || p.threads > 3)
     throw Error("runtime.threads must be 0 (chosen with the stages), 1, 2 or 3, not " +
                 std::to_string(p.threads));
+  if (p.opencv_threads < 0 || p.opencv_threads > 256)
+    throw Error("runtime.opencv_threads must be in [0, 256], not " +
+                std::to_string(p.opencv_threads));
   if (p.queue_depth < 1 || p.queue_depth > 8)
     throw Error("runtime.queue_depth must be in [1, 8], not " + std::to_string(p.queue_depth));
   if (!(p.entry_deadline_ms >= 0 && p.entry_deadline_ms <= 1000))

@@ -19,6 +19,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
 
 #include "dco/core/error.hpp"
 #include "dco/core/synthetic_scene.hpp"
@@ -696,6 +697,40 @@ TEST(DepthRuntime, ZeroThreadsRunTheCountItsStagesCallFor) {
     runtime.stop();
     EXPECT_EQ(c.results.size(), 3u);
   }
+}
+
+TEST(DepthRuntime, OpenCvsLoopsRunOnTheThreadsAskedForWhileItRuns) {
+  const Sequence s = make_sequence("hand", 4);  // with the flow cue: DIS runs
+  const int original = cv::getNumThreads();
+  cv::setNumThreads(3);
+  RuntimeParams rp;
+  rp.threads = 2;
+  rp.deterministic = true;
+  rp.opencv_threads = 1;
+  std::atomic<int> in_contour{-1};
+  Collector c;
+  {
+    DepthRuntime runtime(s.params, rp, c.callback(), [&](Stage stage, int) {
+      if (stage == Stage::kContour) in_contour = cv::getNumThreads();
+    });
+    EXPECT_EQ(runtime.runtime_params().opencv_threads, 1);
+    EXPECT_EQ(cv::getNumThreads(), 3);  // not before start
+    runtime.start();
+    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+    runtime.drain();
+    EXPECT_EQ(in_contour.load(), 1);
+    runtime.stop();
+    EXPECT_EQ(cv::getNumThreads(), 3);  // given back
+    runtime.start();
+    EXPECT_EQ(cv::getNumThreads(), 1);
+  }  // the destructor stops, and gives it back
+  EXPECT_EQ(cv::getNumThreads(), 3);
+  EXPECT_EQ(c.results.size(), 4u);
+  // Auto: one thread where the two stage threads take every usable CPU, else OpenCV's choice.
+  rp.opencv_threads = 0;
+  const DepthRuntime automatic(s.params, rp, c.callback());
+  EXPECT_EQ(automatic.runtime_params().opencv_threads, usable_cpus() <= 2 ? 1 : 0);
+  cv::setNumThreads(original);
 }
 
 TEST(DepthRuntime, StopDiscardsFramesInFlightAndTheNextStartBeginsAfresh) {

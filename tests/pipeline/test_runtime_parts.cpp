@@ -6,12 +6,14 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
 
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/usable_cpus.hpp"
 #include "dco/pipeline/runtime/bounded_queue.hpp"
 #include "dco/pipeline/runtime/histogram.hpp"
+#include "dco/pipeline/runtime/opencv_threads.hpp"
 #include "dco/pipeline/runtime/runtime_params.hpp"
 #include "support/one_cpu.hpp"
 
@@ -122,6 +124,8 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   EXPECT_THROW(schema.set("runtime.entry_deadline_ms=1001"), Error);
   EXPECT_THROW(schema.set("runtime.release_latency_ms=-5"), Error);
   EXPECT_THROW(schema.set("runtime.release_latency_ms=1000.5"), Error);
+  EXPECT_THROW(schema.set("runtime.opencv_threads=-1"), Error);
+  EXPECT_THROW(schema.set("runtime.opencv_threads=257"), Error);
   RuntimeParams direct;
   direct.threads = 7;
   EXPECT_THROW(validate(direct), Error);
@@ -134,6 +138,40 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   direct = {};
   direct.release_latency_ms = 2000;
   EXPECT_THROW(validate(direct), Error);
+  direct = {};
+  direct.opencv_threads = -2;
+  EXPECT_THROW(validate(direct), Error);
+}
+
+TEST(OpenCvThreads, AutoTakesOneThreadWhereTheStageThreadsFillTheCpus) {
+  EXPECT_EQ(opencv_threads_for(0, 2, 2), 1);
+  EXPECT_EQ(opencv_threads_for(0, 3, 2), 1);
+  EXPECT_EQ(opencv_threads_for(0, 1, 1), 1);
+  EXPECT_EQ(opencv_threads_for(0, 2, 3), 0);  // a CPU left over: OpenCV's own choice
+  EXPECT_EQ(opencv_threads_for(0, 3, 8), 0);
+  EXPECT_EQ(opencv_threads_for(3, 2, 2), 3);  // an explicit count is kept
+  EXPECT_EQ(opencv_threads_for(1, 2, 16), 1);
+}
+
+TEST(OpenCvThreads, EachLeaseSetsItsCountAndTheLastOneGivesTheFirstOneBack) {
+  const int original = cv::getNumThreads();
+  cv::setNumThreads(3);
+  {
+    const OpenCvThreadsLease outer(1);
+    EXPECT_EQ(cv::getNumThreads(), 1);
+    {
+      const OpenCvThreadsLease inner(2);
+      EXPECT_EQ(cv::getNumThreads(), 2);
+    }
+    EXPECT_EQ(cv::getNumThreads(), 2);  // the outer lease still lives
+  }
+  EXPECT_EQ(cv::getNumThreads(), 3);
+  {
+    const OpenCvThreadsLease again(1);  // a new first lease takes the count as it is now
+    cv::setNumThreads(5);
+  }
+  EXPECT_EQ(cv::getNumThreads(), 3);
+  cv::setNumThreads(original);
 }
 
 TEST(RuntimeParams, ZeroThreadsGiveAThirdThreadWhereCpusAreFree) {

@@ -29,6 +29,7 @@
 #include "dco/core/memory_policy.hpp"
 #include "dco/core/rectifier.hpp"
 #include "dco/core/stopwatch.hpp"
+#include "dco/core/usable_cpus.hpp"
 #include "dco/gpu/backend.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 #include "dco/pipeline/densify/densifier.hpp"
@@ -454,6 +455,7 @@ struct Result {
   std::optional<BackendCheck> check;
   int width = 0, height = 0, frames = 0, max_disparity = 0, threads = 0, warmup = 0;
   bool parallel_flow = false;  // the flow cue's two fields on two threads
+  int opencv_threads = 0;      // runtime.opencv_threads resolved (0: OpenCV's own choice)
   // Threads sharing each stage's row-wise steps (stereo.row_threads, ... resolved).
   int stereo_row_threads = 1, contour_row_threads = 1, densify_row_threads = 1;
   bool shares_rows() const {
@@ -496,6 +498,8 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
       dco::gpu::choose_backend(p.runtime.backend, p.pipeline.stereo);
   r.threads = rt::stage_threads(p.runtime, backend.stages.on_gpu);
   r.parallel_flow = dco::contour::parallel_flow_fields(p.pipeline.contour);
+  r.opencv_threads =
+      rt::opencv_threads_for(p.runtime.opencv_threads, r.threads, dco::usable_cpus());
   r.stereo_row_threads = dco::pipeline::RowTeam::threads_for(p.pipeline.stereo.row_threads);
   r.contour_row_threads = dco::pipeline::RowTeam::threads_for(p.pipeline.contour.row_threads);
   r.densify_row_threads = dco::pipeline::RowTeam::threads_for(p.pipeline.densify.row_threads);
@@ -614,10 +618,11 @@ void print_text(const Result& r) {
   const rt::RuntimeStats& l = r.paced;
   const PassFigures& ls = r.paced_figures;
   fmt::print(
-      "{}: {} frames of {}x{}, max-disp {}, {} stage thread(s){}{}, each run after an untimed "
+      "{}: {} frames of {}x{}, max-disp {}, {} stage thread(s){}{}{}, each run after an untimed "
       "pass over the first {}\n",
       r.name, r.frames, r.width, r.height, r.max_disparity, r.threads,
       r.parallel_flow ? " (+ a flow worker)" : "",
+      r.opencv_threads > 0 ? fmt::format(", OpenCV's loops on {} thread(s)", r.opencv_threads) : "",
       r.shares_rows()
           ? fmt::format(" (rows on {} / {} / {} threads in stereo / contour / densify)",
                         r.stereo_row_threads, r.contour_row_threads, r.densify_row_threads)
@@ -706,7 +711,8 @@ std::string json_fields(const Result& r) {
   const PassFigures& ls = r.paced_figures;
   return fmt::format(
              "\"name\": {}, \"width\": {}, \"height\": {}, \"frames\": {}, \"max_disparity\": {}, "
-             "\"threads\": {}, \"parallel_flow\": {}, \"stereo_row_threads\": {}, "
+             "\"threads\": {}, \"parallel_flow\": {}, \"opencv_threads\": {}, "
+             "\"stereo_row_threads\": {}, "
              "\"contour_row_threads\": {}, \"densify_row_threads\": {}, "
              "\"warmup_frames\": {}, "
              "\"first_result_ms\": {}, "
@@ -719,7 +725,7 @@ std::string json_fields(const Result& r) {
              "\"published\": {}, \"planes_on_stereo_thread\": {}, "
              "\"early_contour_on_stereo_thread\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
              dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity,
-             r.threads, r.parallel_flow ? "true" : "false", r.stereo_row_threads,
+             r.threads, r.parallel_flow ? "true" : "false", r.opencv_threads, r.stereo_row_threads,
              r.contour_row_threads, r.densify_row_threads, r.warmup, json_number(r.first_result_ms),
              json_number(r.ms_per_frame), json_number(1000.0 / r.ms_per_frame),
              json_number(r.steady_ms), json_number(t.stereo.mean_ms),

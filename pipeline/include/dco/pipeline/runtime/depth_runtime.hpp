@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stop_token>
 #include <thread>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/bounded_queue.hpp"
 #include "dco/pipeline/runtime/histogram.hpp"
+#include "dco/pipeline/runtime/opencv_threads.hpp"
 #include "dco/pipeline/runtime/runtime_params.hpp"
 
 namespace dco::pipeline::runtime {
@@ -124,7 +126,8 @@ class DepthRuntime {
 
   RuntimeStats stats() const;  // from any thread
   const PipelineParams& pipeline_params() const { return pipeline_; }
-  // As it runs: runtime.threads = 0 resolved by stage_threads.
+  // As it runs: runtime.threads = 0 resolved by stage_threads, runtime.opencv_threads by
+  // opencv_threads_for (0: OpenCV's own choice).
   const RuntimeParams& runtime_params() const { return params_; }
   // Whether results wait for their capture time + runtime.release_latency_ms (never in a
   // deterministic run).
@@ -245,6 +248,7 @@ class DepthRuntime {
   double stereo_work_ms_ = 0, other_work_ms_ = 0, planes_work_ms_ = 0, early_contour_work_ms_ = 0;
   long work_samples_ = 0, planes_on_stereo_ = 0, early_contour_on_stereo_ = 0;
 
+  std::optional<OpenCvThreadsLease> opencv_threads_;  // while running, with opencv_threads > 0
   std::vector<std::jthread> threads_;
 };
 
