@@ -65,7 +65,9 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
                                    "--set",
                                    "contour.row_threads=1",
                                    "--set",
-                                   "densify.row_threads=1"});
+                                   "densify.row_threads=1",
+                                   "--set",
+                                   "runtime.opencv_threads=3"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, ::testing::StartsWith("{"));
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one object on one line";
@@ -103,7 +105,7 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   EXPECT_GE(json_value(r.out, "latency_p99_ms"), p50);
   EXPECT_EQ(json_value(r.out, "width"), 320);
   EXPECT_EQ(json_value(r.out, "frames"), 3);
-  EXPECT_EQ(json_value(r.out, "warmup_frames"), 3) << "the default 4, at most the frames";
+  EXPECT_EQ(json_value(r.out, "warmup_frames"), 3) << "the default 8, at most the frames";
   EXPECT_GT(json_value(r.out, "first_result_ms"), 0);
   const double planes_share = json_value(r.out, "planes_on_stereo_thread");
   EXPECT_GE(planes_share, 0.0);
@@ -123,21 +125,28 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   EXPECT_EQ(json_value(r.out, "stereo_row_threads"), 1);
   EXPECT_EQ(json_value(r.out, "contour_row_threads"), 1);
   EXPECT_EQ(json_value(r.out, "densify_row_threads"), 1);
+  EXPECT_EQ(json_value(r.out, "opencv_threads"), 3);
 }
 
 TEST(DcoBenchCli, TextNamesEveryMeasurementOnTheKarlsruheClip) {
   if (!fs::is_directory(kKarlsruhe / "images")) GTEST_SKIP() << "no Karlsruhe clip in the data";
   TempDir dir;
-  const CliRun r =
-      run_bench(dir, {"--sequence", "karlsruhe", "--frames", "2", "--warmup", "1", "--paced-frames",
-                      "3", "--set", "runtime.threads=3", "--set", "contour.parallel_flow=on",
-                      "--set", "stereo.row_threads=3", "--set", "contour.row_threads=1", "--set",
-                      "densify.row_threads=2"});
+  const CliRun r = run_bench(dir, {"--sequence",     "karlsruhe",
+                                   "--frames",       "2",
+                                   "--warmup",       "1",
+                                   "--paced-frames", "3",
+                                   "--set",          "runtime.threads=3",
+                                   "--set",          "contour.parallel_flow=on",
+                                   "--set",          "stereo.row_threads=3",
+                                   "--set",          "contour.row_threads=1",
+                                   "--set",          "densify.row_threads=2",
+                                   "--set",          "runtime.opencv_threads=2"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("karlsruhe 2010_03_09_drive_0023: 2 frames of 1344x372"));
   EXPECT_THAT(r.out,
               HasSubstr("max-disp 96, 3 stage thread(s) (+ a flow worker) (rows on 3 / 1 / 2 "
-                        "threads in stereo / contour / densify), each run after an untimed "
+                        "threads in stereo / contour / densify), OpenCV's loops on 2 thread(s), "
+                        "each run after an untimed "
                         "pass over the first 1"));
   EXPECT_THAT(r.out, HasSubstr("a new runtime's first result after"));
   EXPECT_THAT(r.out, HasSubstr("ms/frame"));

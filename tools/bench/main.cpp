@@ -86,8 +86,9 @@ and decisions).
   --synthetic NAME    hand | boxes | static (default hand)
   --size WxH          synthetic resolution (default 1280x720)
   --frames N          frames of each sequence (default 20; the Karlsruhe clip has 10)
-  --warmup N          frames of the untimed pass before each run (default 4, at most the
-                      frames)
+  --warmup N          frames of the untimed pass before each run (default 8, at most the
+                      frames: the runtime takes its frame pool's entries in turn, so its
+                      buffers are all touched after 8 frames)
   --rounds N          turns of the throughput run and the peer (default 3)
   --karlsruhe DIR     the clip (default: the shared data's 2010_03_09_drive_0023), max-disp 96
   --fps F             input rate of the latency run (default 30)
@@ -111,7 +112,7 @@ struct Options {
   std::string sequence = "all";
   std::string synthetic = "hand";
   int width = 1280, height = 720, frames = 20;
-  int warmup = 4;
+  int warmup = 8;
   int rounds = 3;
   fs::path karlsruhe = fs::path(DCO_DATA_DIR) / "karlsruhe_sequences" / "2010_03_09_drive_0023";
   double fps = 30;
@@ -622,11 +623,11 @@ void print_text(const Result& r) {
       "pass over the first {}\n",
       r.name, r.frames, r.width, r.height, r.max_disparity, r.threads,
       r.parallel_flow ? " (+ a flow worker)" : "",
-      r.opencv_threads > 0 ? fmt::format(", OpenCV's loops on {} thread(s)", r.opencv_threads) : "",
       r.shares_rows()
           ? fmt::format(" (rows on {} / {} / {} threads in stereo / contour / densify)",
                         r.stereo_row_threads, r.contour_row_threads, r.densify_row_threads)
           : "",
+      r.opencv_threads > 0 ? fmt::format(", OpenCV's loops on {} thread(s)", r.opencv_threads) : "",
       r.warmup);
   fmt::print(
       "  dco      {:8.1f} ms/frame  ({:.2f} fps, median of {} rounds); a new runtime's first "
