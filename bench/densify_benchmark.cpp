@@ -63,7 +63,7 @@ void run_dco(benchmark::State& state, const char* solve_resolution) {
   }
   state.counters["iterations"] = densifier.last_report().iterations;
   state.counters["fine_iterations"] = densifier.last_report().fine_iterations;
-  state.counters["output_residual"] = densifier.last_report().output_residual;
+  state.counters["final_residual"] = densifier.last_report().final_residual;
   state.counters["build_ms"] = densifier.last_timings().build_ms;
   state.counters["median_ms"] = densifier.last_timings().median_ms;
 }

@@ -1,3 +1,5 @@
+#include <limits>
+
 #include "dco/pipeline/densify/densifier.hpp"
 #include "dco/pipeline/densify/multigrid.hpp"
 #include "dco/pipeline/densify/system_solver.hpp"
@@ -51,10 +53,14 @@ class CpuSystemSolver final : public SystemSolver {
                                  params_.fine_iterations, params_.tolerance, scratch_);
       report.fine_iterations = fine.iterations;
       report.output_residual = fine.final_residual;
-    } else {
+    } else if (params_.output_residual) {
       report.output_residual = gauss_seidel_residual(a, b, x, params_.fine_sweeps, true, {},
                                                      scratch_.rows, coarse_solution_.cview())
                                    .relative();
+    } else {
+      gauss_seidel_from_coarse(a, b, x, params_.fine_sweeps, true, scratch_.rows,
+                               coarse_solution_.cview());
+      report.output_residual = std::numeric_limits<double>::quiet_NaN();
     }
     return report;
   }

@@ -86,6 +86,9 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
         "Gauss-Seidel sweeps at full size after a half-size solve");
   s.add("densify.fine_iterations", &p.fine_iterations, 0, 100,
         "conjugate-gradient iterations at full size after a half-size solve and its sweeps");
+  s.add("densify.output_residual", &p.output_residual,
+        "after a half-size solve's sweeps also measure the output's residual on the full system "
+        "(a pass over it; dco-depth prints it)");
   s.add("densify.max_iterations", &p.max_iterations, 1, 10000, "conjugate-gradient iterations");
   s.add("densify.tolerance", &p.tolerance, 1e-9, 0.1, "relative residual to stop at");
   s.add("densify.multigrid", &p.multigrid, "multigrid V-cycle preconditioner");

@@ -184,6 +184,14 @@ void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float
   gauss_seidel_rows(a, b, x, sweeps, red_first, rows, no_row_work, no_row_work);
 }
 
+void gauss_seidel_from_coarse(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
+                              int sweeps, bool red_first, SweepRows& rows,
+                              ImageView<const float> coarse_start) {
+  const int w = a.width();
+  const auto start_row = [&](int y) { from_parents<false>(coarse_start.row(y / 2), w, x.row(y)); };
+  gauss_seidel_rows(a, b, x, sweeps, red_first, rows, start_row, no_row_work);
+}
+
 ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> b,
                                     ImageView<float> x, int sweeps, bool red_first,
                                     ImageView<float> r, SweepRows& rows,

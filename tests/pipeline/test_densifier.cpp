@@ -580,8 +580,20 @@ TEST(Densifier, HalfResolutionSolveKeepsAContourOnAnOddColumn) {
   params.solve_resolution = "half";
   params.fine_sweeps = 4;
   params.fine_iterations = 0;
+  params.output_residual = true;
   Densifier d(params);
   d.compute(in, half);
+  // Without the residual's pass: the same map, and no figure.
+  {
+    DensifyParams unmeasured = params;
+    unmeasured.output_residual = false;
+    Densifier u(unmeasured);
+    Image<float> same;
+    u.compute(in, same);
+    EXPECT_TRUE(dco::testing::same_bytes(same.cview(), half.cview()));
+    EXPECT_TRUE(std::isnan(u.last_report().output_residual));
+    EXPECT_EQ(u.last_report().final_residual, d.last_report().final_residual);
+  }
   EXPECT_TRUE(d.last_report().converged);
   EXPECT_EQ(d.last_report().fine_iterations, 0);
   EXPECT_GT(d.last_report().output_residual, 0.0);

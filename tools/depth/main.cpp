@@ -212,10 +212,14 @@ std::string timing_text(const dco::pipeline::DepthResult& r, bool sparse) {
   const std::string full_size = r.solver.fine_iterations > 0
                                     ? fmt::format(" + {} at full size", r.solver.fine_iterations)
                                     : std::string();
-  return fmt::format("stereo {:.1f} + contour {:.1f} + densify {:.1f} ms ({} it{}, res {:.1e})",
+  // The output's residual on the full system when measured (densify.output_residual), else the
+  // half-size solve's.
+  const std::string residual = std::isnan(r.solver.output_residual)
+                                   ? fmt::format("half-size res {:.1e}", r.solver.final_residual)
+                                   : fmt::format("res {:.1e}", r.solver.output_residual);
+  return fmt::format("stereo {:.1f} + contour {:.1f} + densify {:.1f} ms ({} it{}, {})",
                      r.stereo_timings.total_ms, r.contour_timings.total_ms,
-                     r.densify_timings.total_ms, r.solver.iterations, full_size,
-                     r.solver.output_residual);
+                     r.densify_timings.total_ms, r.solver.iterations, full_size, residual);
 }
 
 float median_disparity(const dco::Image<float>& d) {

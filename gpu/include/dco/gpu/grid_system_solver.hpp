@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -68,9 +69,11 @@ class GridSystemSolver final : public densify::SystemSolver {
             pcg(fine_, fine_b_.data(), fine_x_.data(), params_.fine_iterations, fine_space_);
         report.fine_iterations = refined.iterations;
         report.output_residual = refined.final_residual;
-      } else {
+      } else if (params_.output_residual) {
         report.output_residual =
             relative_residual(fine_.view(), fine_b_.data(), fine_x_.data(), fine_space_);
+      } else {
+        report.output_residual = std::numeric_limits<double>::quiet_NaN();
       }
     } else {
       report = pcg(fine_, fine_b_.data(), fine_x_.data(), params_.max_iterations, fine_space_);

@@ -12,7 +12,8 @@ struct SolverReport {
   double final_residual = 0;    // ||b - A x|| / ||b||
   bool converged = false;
   // ||b - A x|| / ||b|| of the full-resolution system for the map that is output; equals
-  // final_residual unless the system was solved at a coarser resolution.
+  // final_residual unless the system was solved at a coarser resolution. NaN after a coarser
+  // solve's sweeps without DensifyParams::output_residual.
   double output_residual = 0;
   // Conjugate-gradient iterations on the full-resolution system after a coarser solve.
   int fine_iterations = 0;

@@ -63,6 +63,11 @@ class Multigrid {
 void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
                   bool red_first, SweepRows& rows);
 
+// gauss_seidel with x starting as prolong(coarse_start), a row at a time in the same pass.
+void gauss_seidel_from_coarse(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
+                              int sweeps, bool red_first, SweepRows& rows,
+                              ImageView<const float> coarse_start);
+
 // dot(r, r) and dot(b, b) of a residual r = b - A x.
 struct ResidualNorms {
   double rr = 0, bb = 0;
