@@ -68,7 +68,8 @@ struct DensifyParams {
   int fine_iterations = 0;
   // After a half-size solve's sweeps (and no full-size iteration), also measure the residual of
   // the output on the full system (SolverReport::output_residual, else NaN): one more pass over
-  // it, 0.5-1 ms of a 1280x720 frame, for a figure the tools print and nothing else reads.
+  // it, about 0.2-0.4 ms of a 1280x720 frame, for a figure the tools print and nothing else
+  // reads.
   bool output_residual = false;
   int max_iterations = 60;
   double tolerance = 1e-4;  // relative residual ||b - Ax|| / ||b||

@@ -2,7 +2,7 @@
 
 namespace dco::pipeline::runtime {
 
-// OpenCV runs its own parallel loops (DIS optical flow, resizes) on a pool of its threads. When
+// OpenCV runs its own parallel loops (DIS optical flow) on a pool of its threads. When
 // the stage threads already keep every usable CPU busy, that pool only takes turns with them: a
 // stage waits for a part of its loop that waits for a CPU. While a lease lives, OpenCV uses
 // `threads` threads (cv::setNumThreads). The setting is process-wide: each lease sets its count,

@@ -17,7 +17,7 @@ struct RuntimeParams {
   // CPUs the stage threads are pinned to, e.g. "0,1": thread i runs on the (i mod n)-th entry;
   // empty = wherever the scheduler puts them.
   std::string affinity;
-  // Threads of OpenCV's own parallel loops (DIS optical flow, resizes) while the runtime runs
+  // Threads of OpenCV's own parallel loops (DIS optical flow) while the runtime runs
   // (OpenCvThreadsLease: process-wide, put back when it stops): 0 = auto, 1 when the stage
   // threads are as many as the usable CPUs (OpenCV's pool would only take turns with them), else
   // OpenCV's choice.
