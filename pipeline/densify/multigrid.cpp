@@ -177,6 +177,14 @@ void gauss_seidel_rows(const GridSystem& a, ImageView<const float> b, ImageView<
 
 void no_row_work(int) {}
 
+// The prepare(row) of gauss_seidel_rows that starts each row of x as prolong(coarse_start)
+// (nothing when coarse_start is empty).
+auto prolonged_start(ImageView<const float> coarse_start, ImageView<float> x) {
+  return [coarse_start, x](int y) {
+    if (!coarse_start.empty()) from_parents<false>(coarse_start.row(y / 2), x.width, x.row(y));
+  };
+}
+
 }  // namespace
 
 void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float> x, int sweeps,
@@ -187,9 +195,8 @@ void gauss_seidel(const GridSystem& a, ImageView<const float> b, ImageView<float
 void gauss_seidel_from_coarse(const GridSystem& a, ImageView<const float> b, ImageView<float> x,
                               int sweeps, bool red_first, SweepRows& rows,
                               ImageView<const float> coarse_start) {
-  const int w = a.width();
-  const auto start_row = [&](int y) { from_parents<false>(coarse_start.row(y / 2), w, x.row(y)); };
-  gauss_seidel_rows(a, b, x, sweeps, red_first, rows, start_row, no_row_work);
+  gauss_seidel_rows(a, b, x, sweeps, red_first, rows, prolonged_start(coarse_start, x),
+                    no_row_work);
 }
 
 ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> b,
@@ -198,9 +205,6 @@ ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> 
                                     ImageView<const float> coarse_start) {
   const int w = a.width();
   ResidualNorms n;
-  const auto start_row = [&](int y) {
-    if (!coarse_start.empty()) from_parents<false>(coarse_start.row(y / 2), w, x.row(y));
-  };
   const auto residual_row_norms = [&](int y) {
     float* out = r.empty() ? rows.spare_row() : r.row(y);
     // After sweeps the rows are still in the slots: no second read of the system's rows.
@@ -211,7 +215,8 @@ ResidualNorms gauss_seidel_residual(const GridSystem& a, ImageView<const float> 
     n.rr += kernels::dot_row(out, out, w);
     n.bb += kernels::dot_row(b.row(y), b.row(y), w);
   };
-  gauss_seidel_rows(a, b, x, sweeps, red_first, rows, start_row, residual_row_norms);
+  gauss_seidel_rows(a, b, x, sweeps, red_first, rows, prolonged_start(coarse_start, x),
+                    residual_row_norms);
   return n;
 }
 
