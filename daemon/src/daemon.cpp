@@ -177,6 +177,18 @@ void Daemon::start_pipeline() {
                       ? fmt::format(", rows on {} / {} / {} threads in stereo / contour / densify",
                                     stereo_rows, contour_rows, densify_rows)
                       : ""));
+  const pipeline::runtime::RuntimeParams& rp = loaded_.config.runtime;
+  if (runtime_->holds_results_for_release()) {
+    if (runtime_->stats().release_realtime)
+      log_.info(fmt::format("results go out {:g} ms after capture, from a SCHED_FIFO {} thread",
+                            rp.release_latency_ms, rp.release_priority));
+    else if (rp.release_priority > 0)
+      log_.warning(fmt::format(
+          "results go out {:g} ms after capture, but SCHED_FIFO {} was refused (no CAP_SYS_NICE, "
+          "RLIMIT_RTPRIO below it, or the unit's RestrictRealtime): while the stages keep every "
+          "CPU busy a release can slip by a scheduler tick",
+          rp.release_latency_ms, rp.release_priority));
+  }
   pipeline_start_ns_ = monotonic_ns();
 }
 

@@ -50,9 +50,12 @@ std::string size_text(ImageView<const std::uint8_t> v) {
          std::to_string(v.channels);
 }
 
-// The release thread asks for a 0.1 ms time slice. With the stage threads keeping every CPU busy,
-// a thread woken at a deadline otherwise waits for the running one's slice to end: on a 2-vCPU VM
-// 4 ms at p99, 0.15 ms with it. Kernels before 6.12 ignore it, which costs only precision.
+// Without real-time priority the release thread asks for a 0.1 ms time slice. With the stage
+// threads keeping every CPU busy, a thread woken at a deadline otherwise waits for the running
+// one's slice to end: on a 2-vCPU VM 4 ms at p99, 0.15 ms with it. It is not enough on its own:
+// a thread that ran just before the CPU went idle wakes behind the stage threads (it was owed no
+// time), and then waits for the next scheduler tick, up to 6 ms in all, where SCHED_FIFO took
+// 0.2 ms. Kernels before 6.12 ignore the slice, which costs only precision.
 constexpr std::uint64_t kReleaseSliceNs = 100'000;
 
 RuntimeParams with_stage_threads(RuntimeParams params, const StageFactories& stages) {
@@ -114,6 +117,7 @@ void DepthRuntime::reset_state() {
   release_queue_.clear();
   held_for_release_ = 0;
   release_wanted_ = false;
+  release_thread_ready_ = false;
   stereo_->reset();
   densifier_.reset();
   failure_ = nullptr;
@@ -145,6 +149,11 @@ void DepthRuntime::start() {
   if (params_.threads >= 3)
     threads_.emplace_back([this](std::stop_token stop) { densify_loop(stop); });
   if (releasing_) threads_.emplace_back([this](std::stop_token stop) { release_loop(stop); });
+  name_threads();
+  if (releasing_) {  // so stats() tells from the start whether it runs at real-time priority
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return release_thread_ready_; });
+  }
   if (cpus_.empty()) return;
   for (std::size_t i = 0; i < threads_.size(); ++i) {
     const int cpu = cpus_[i % cpus_.size()];
@@ -158,6 +167,15 @@ void DepthRuntime::start() {
                   ": " + std::strerror(err));
     }
   }
+}
+
+void DepthRuntime::name_threads() {
+  // Named for top, perf and gdb; a name that cannot be set costs nothing but the name.
+  std::size_t i = 0;
+  pthread_setname_np(threads_[i++].native_handle(), "dco-stereo");
+  if (params_.threads >= 2) pthread_setname_np(threads_[i++].native_handle(), "dco-contour");
+  if (params_.threads >= 3) pthread_setname_np(threads_[i++].native_handle(), "dco-densify");
+  if (releasing_) pthread_setname_np(threads_[i++].native_handle(), "dco-release");
 }
 
 void DepthRuntime::stop() {
@@ -462,13 +480,16 @@ void DepthRuntime::densify_receive(std::stop_token stop, int result) {
     return;
   }
   std::unique_lock lock(mutex_);
-  release_wanted_ = true;  // with every release slot taken, the oldest result goes now
-  changed_.notify_all();
+  release_wanted_ = true;
+  // With every release slot taken, the oldest result goes now. The release thread is woken only
+  // when what it waits for changed: each needless run preempts a stage thread.
+  if (held_for_release_ == kReleaseSlots) release_changed_.notify_all();
   if (!changed_.wait(lock, stop, [&] { return held_for_release_ < kReleaseSlots; })) return;
   release_wanted_ = false;
+  const bool was_empty = release_queue_.empty();
   release_queue_.push(result);
   ++held_for_release_;
-  changed_.notify_all();
+  if (was_empty) release_changed_.notify_all();
 }
 
 void DepthRuntime::densify_end(std::stop_token stop) {
@@ -478,23 +499,31 @@ void DepthRuntime::densify_end(std::stop_token stop) {
     return;
   }
   // The end takes no release slot (the queue has one more place), so it sends no result early.
-  hand_on(stop, release_queue_, kEnd);
+  if (hand_on(stop, release_queue_, kEnd)) release_changed_.notify_all();
 }
 
 void DepthRuntime::release_loop(std::stop_token stop) {
-  request_time_slice(kReleaseSliceNs);
+  const bool realtime =
+      params_.release_priority > 0 && request_fifo_priority(params_.release_priority);
+  if (!realtime) request_time_slice(kReleaseSliceNs);
+  {
+    std::lock_guard lock(mutex_);
+    release_thread_ready_ = true;
+    release_realtime_ = realtime;
+  }
+  changed_.notify_all();
   while (true) {
     int item = kEnd;
     bool early = false;
     {
       std::unique_lock lock(mutex_);
-      if (!changed_.wait(lock, stop, [&] { return !release_queue_.empty(); })) return;
+      if (!release_changed_.wait(lock, stop, [&] { return !release_queue_.empty(); })) return;
       item = release_queue_.front();
       if (item != kEnd) {
         const Clock::time_point due =
             results_[static_cast<std::size_t>(item)].times.capture + release_latency_;
-        changed_.wait_until(lock, stop, due,
-                            [&] { return release_wanted_ && held_for_release_ == kReleaseSlots; });
+        release_changed_.wait_until(
+            lock, stop, due, [&] { return release_wanted_ && held_for_release_ == kReleaseSlots; });
         if (stop.stop_requested()) return;
         early = Clock::now() < due;
         --held_for_release_;
@@ -600,6 +629,7 @@ RuntimeStats DepthRuntime::stats() const {
   s.published = published_;
   s.overdue = overdue_;
   s.early = early_;
+  s.release_realtime = release_realtime_;
   s.entry_high_water = entry_high_water_;
   s.stereo_queue_high_water = stereo_queue_.high_water();
   s.densify_queue_high_water = densify_queue_.high_water();

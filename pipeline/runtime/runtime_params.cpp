@@ -29,6 +29,9 @@ void register_params(ConfigSchema& s, RuntimeParams& p) {
   s.add("runtime.release_latency_ms", &p.release_latency_ms, 0.0, 1000.0,
         "hand every depth map on this long after its capture, a constant age; one ready later "
         "goes at once (overdue); 0 = as soon as it is ready");
+  s.add("runtime.release_priority", &p.release_priority, 0, 99,
+        "SCHED_FIFO priority of the thread that hands results on at their release time (and "
+        "runs the result callback), where the process may use it; 0 = a normal thread");
   s.add("runtime.deterministic", &p.deterministic,
         "never drop frames (push waits): same output as the offline pipeline, for replays");
   s.add("runtime.backend", &p.backend, {"auto", "cpu", "cuda"},
@@ -80,6 +83,9 @@ void validate(const RuntimeParams& p) {
   if (!(p.release_latency_ms >= 0 && p.release_latency_ms <= 1000))
     throw Error("runtime.release_latency_ms must be in [0, 1000], not " +
                 std::to_string(p.release_latency_ms));
+  if (p.release_priority < 0 || p.release_priority > 99)
+    throw Error("runtime.release_priority must be in [0, 99], not " +
+                std::to_string(p.release_priority));
   parse_affinity(p.affinity);
   if (p.backend != "auto" && p.backend != "cpu" && p.backend != "cuda")
     throw Error("runtime.backend must be auto, cpu or cuda, not '" + p.backend + "'");

@@ -364,6 +364,11 @@ TEST(Dcod, AReleaseLatencyPublishesEveryFrameAtItsCaptureTimePlusThatLatency) {
   // One release may wake a scheduler slice late when the sanitizer suite loads both CPUs.
   EXPECT_GE(age_ms.front(), 300.0);
   EXPECT_LT(age_ms[age_ms.size() - 2] - age_ms.front(), 20.0);
+  // The log says whether the release thread got real-time priority (runtime.release_priority 1).
+  const std::string log = dcod.log();
+  EXPECT_TRUE(log.find("from a SCHED_FIFO 1 thread") != std::string::npos ||
+              log.find("SCHED_FIFO 1 was refused") != std::string::npos)
+      << log;
 }
 
 TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {

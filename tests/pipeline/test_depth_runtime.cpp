@@ -3,14 +3,18 @@
 // once warm, errors of a stage thread reported to the producer.
 
 #include <dirent.h>
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <iostream>
 #include <mutex>
 #include <new>
 #include <string>
@@ -97,6 +101,24 @@ int thread_count() {
     closedir(dir);
   }
   return n;
+}
+
+// The names of this process's threads (/proc/self/task/<tid>/comm).
+std::vector<std::string> thread_names() {
+  std::vector<std::string> names;
+  if (DIR* dir = opendir("/proc/self/task")) {
+    while (const dirent* e = readdir(dir)) {
+      if (e->d_name[0] == '.') continue;
+      const std::string path = std::string("/proc/self/task/") + e->d_name + "/comm";
+      if (FILE* f = std::fopen(path.c_str(), "r")) {
+        char name[32] = {};
+        if (std::fgets(name, sizeof name, f)) names.emplace_back(name, std::strcspn(name, "\n"));
+        std::fclose(f);
+      }
+    }
+    closedir(dir);
+  }
+  return names;
 }
 
 // The kernel clears a thread's id (which releases pthread_join) a moment before the thread leaves
@@ -536,6 +558,69 @@ TEST(DepthRuntime, AResultReadyAfterItsReleaseTimeGoesAtOnceAndCountsAsOverdue) 
   }
 }
 
+// Whether a thread of this process may move itself to SCHED_FIFO at `priority`, tried on a thread
+// of its own.
+bool may_use_fifo_priority(int priority) {
+  bool ok = false;
+  std::thread([&] { ok = dco::request_fifo_priority(priority); }).join();
+  return ok;
+}
+
+// The callback runs on the release thread: what it sees there, over a short sequence.
+struct ReleaseThreadView {
+  std::vector<int> policies, priorities;
+  std::vector<std::string> names;
+  RuntimeStats stats;
+  bool realtime_at_start = false;
+};
+
+ReleaseThreadView view_release_thread(int release_priority) {
+  const Sequence s = make_sequence("hand", 2);
+  RuntimeParams rp;
+  rp.release_latency_ms = 20;
+  rp.release_priority = release_priority;
+  ReleaseThreadView v;
+  std::mutex mutex;
+  DepthRuntime runtime(s.params, rp, [&](const DepthResult&, const FrameTimes&) {
+    sched_param param{};
+    int policy = -1;
+    pthread_getschedparam(pthread_self(), &policy, &param);
+    char name[16] = {};
+    pthread_getname_np(pthread_self(), name, sizeof name);
+    std::lock_guard lock(mutex);
+    v.policies.push_back(policy);
+    v.priorities.push_back(param.sched_priority);
+    v.names.emplace_back(name);
+  });
+  runtime.start();
+  v.realtime_at_start = runtime.stats().release_realtime;
+  for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+  runtime.drain();
+  v.stats = runtime.stats();
+  return v;
+}
+
+TEST(DepthRuntime, TheReleaseThreadRunsAtTheRealTimePriorityAskedForWhereTheProcessMayUseIt) {
+  const bool allowed = may_use_fifo_priority(3);
+  const ReleaseThreadView v = view_release_thread(3);
+  ASSERT_FALSE(v.policies.empty());         // newest wins at the entry: not every frame gets depth
+  EXPECT_EQ(v.realtime_at_start, allowed);  // known as soon as start returns
+  EXPECT_EQ(v.stats.release_realtime, allowed);
+  for (std::size_t i = 0; i < v.policies.size(); ++i) {
+    EXPECT_EQ(v.policies[i], allowed ? SCHED_FIFO : SCHED_OTHER);
+    EXPECT_EQ(v.priorities[i], allowed ? 3 : 0);
+    EXPECT_EQ(v.names[i], "dco-release");
+  }
+  if (!allowed) std::cout << "[ NOTE     ] this process may not use SCHED_FIFO: fallback checked\n";
+}
+
+TEST(DepthRuntime, AReleasePriorityOfZeroKeepsTheReleaseThreadNormal) {
+  const ReleaseThreadView v = view_release_thread(0);
+  ASSERT_FALSE(v.policies.empty());  // newest wins at the entry: not every frame gets depth
+  EXPECT_FALSE(v.stats.release_realtime);
+  for (int policy : v.policies) EXPECT_EQ(policy, SCHED_OTHER);
+}
+
 TEST(DepthRuntime, TheReleaseThreadAsksForAShortTimeSliceAndKeepsItsNiceValue) {
   if (!dco::testing::kernel_keeps_time_slices())
     GTEST_SKIP() << "this kernel does not keep time slices";
@@ -549,6 +634,7 @@ TEST(DepthRuntime, TheReleaseThreadAsksForAShortTimeSliceAndKeepsItsNiceValue) {
     ASSERT_TRUE(dco::testing::set_time_slice(2'000'000));  // inherited by the runtime's threads
     RuntimeParams rp;
     rp.release_latency_ms = 50;
+    rp.release_priority = 0;  // a normal thread
     std::mutex mutex;
     DepthRuntime runtime(s.params, rp, [&](const DepthResult&, const FrameTimes&) {
       SchedAttr a;
@@ -602,6 +688,26 @@ TEST(DepthRuntime, WithEveryReleaseSlotTakenTheOldestResultGoesEarlyAndNoStageWa
     EXPECT_EQ(st.early, kPushed - 4);
   }
   EXPECT_GT(Clock::now() - start, 1000ms);  // drain waited for the last results' time
+}
+
+TEST(DepthRuntime, EachThreadCarriesTheNameOfWhatItRuns) {
+  const Sequence s = make_sequence("hand", 1);
+  for (int threads : {2, 3}) {
+    RuntimeParams rp;
+    rp.threads = threads;
+    rp.release_latency_ms = 10;
+    DepthRuntime runtime(s.params, rp, [](const DepthResult&, const FrameTimes&) {});
+    runtime.start();
+    std::vector<std::string> names = thread_names();
+    const auto count = [&](const char* name) {
+      return std::count(names.begin(), names.end(), name);
+    };
+    EXPECT_EQ(count("dco-stereo"), 1) << threads << " threads";
+    EXPECT_EQ(count("dco-contour"), 1) << threads << " threads";
+    EXPECT_EQ(count("dco-densify"), threads == 3 ? 1 : 0) << threads << " threads";
+    EXPECT_EQ(count("dco-release"), 1) << threads << " threads";
+    runtime.stop();
+  }
 }
 
 TEST(DepthRuntime, StopDoesNotWaitForResultsHeldForTheirReleaseTime) {

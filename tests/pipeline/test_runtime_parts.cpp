@@ -126,6 +126,9 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   EXPECT_THROW(schema.set("runtime.release_latency_ms=1000.5"), Error);
   EXPECT_THROW(schema.set("runtime.opencv_threads=-1"), Error);
   EXPECT_THROW(schema.set("runtime.opencv_threads=257"), Error);
+  EXPECT_THROW(schema.set("runtime.release_priority=-1"), Error);
+  EXPECT_THROW(schema.set("runtime.release_priority=100"), Error);
+  EXPECT_NO_THROW(schema.set("runtime.release_priority=99"));
   RuntimeParams direct;
   direct.threads = 7;
   EXPECT_THROW(validate(direct), Error);
@@ -140,6 +143,9 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   EXPECT_THROW(validate(direct), Error);
   direct = {};
   direct.opencv_threads = -2;
+  EXPECT_THROW(validate(direct), Error);
+  direct = {};
+  direct.release_priority = 120;
   EXPECT_THROW(validate(direct), Error);
 }
 

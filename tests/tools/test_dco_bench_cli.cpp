@@ -67,7 +67,11 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
                                    "--set",
                                    "densify.row_threads=1",
                                    "--set",
-                                   "runtime.opencv_threads=3"});
+                                   "runtime.opencv_threads=3",
+                                   "--set",
+                                   "runtime.release_latency_ms=100",
+                                   "--set",
+                                   "runtime.release_priority=0"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, ::testing::StartsWith("{"));
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one object on one line";
@@ -126,6 +130,22 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   EXPECT_EQ(json_value(r.out, "contour_row_threads"), 1);
   EXPECT_EQ(json_value(r.out, "densify_row_threads"), 1);
   EXPECT_EQ(json_value(r.out, "opencv_threads"), 3);
+  EXPECT_EQ(json_value(r.out, "release_latency_ms"), 100);
+  EXPECT_THAT(r.out, HasSubstr("\"release_realtime\": false"));
+}
+
+TEST(DcoBenchCli, TheReleaseLineSaysHowTheReleaseThreadIsScheduled) {
+  TempDir dir;
+  const CliRun r =
+      run_bench(dir, {"--sequence", "synthetic", "--size", "160x96", "--frames", "2", "--warmup",
+                      "1", "--paced-frames", "4", "--rounds", "1", "--set",
+                      "runtime.release_latency_ms=80", "--set", "runtime.release_priority=2"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("release  at capture + 80 ms"));
+  // Either it got the priority, or it says why not; never silently a normal thread.
+  EXPECT_THAT(r.out, ::testing::AnyOf(HasSubstr("release thread at SCHED_FIFO 2"),
+                                      HasSubstr("release thread a normal one (SCHED_FIFO not "
+                                                "allowed here)")));
 }
 
 TEST(DcoBenchCli, TextNamesEveryMeasurementOnTheKarlsruheClip) {

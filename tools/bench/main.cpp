@@ -481,6 +481,7 @@ struct Result {
   double fps = 0;
   int paced_frames = 0;
   double release_latency_ms = 0;  // runtime.release_latency_ms of the latency run
+  int release_priority = 0;       // runtime.release_priority of the latency run
   rt::RuntimeStats paced;         // the counts of its timed pass: pushed, dropped, late, ...
   PassFigures paced_figures;
 };
@@ -598,6 +599,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
     std::erase_if(timed, [&](const rt::FrameTimes& t) { return t.capture < timed_from; });
     r.fps = opt.fps;
     r.release_latency_ms = p.runtime.release_latency_ms;
+    r.release_priority = p.runtime.release_priority;
     r.paced_frames = opt.paced_frames;
     // Late, overdue and early count from the first timed push (a warm-up frame still in flight
     // then may fall on either side); every timed frame is either published or dropped.
@@ -653,9 +655,13 @@ void print_text(const Result& r) {
   if (r.release_latency_ms > 0)
     fmt::print(
         "  release  at capture + {:g} ms (the latest {:.2f} ms after); ready p50 {:.1f} ms  p99 "
-        "{:.1f} ms; {} overdue, {} early\n",
+        "{:.1f} ms; {} overdue, {} early; {}\n",
         r.release_latency_ms, ls.latency.max_ms - r.release_latency_ms, ls.ready.p50_ms,
-        ls.ready.p99_ms, l.overdue, l.early);
+        ls.ready.p99_ms, l.overdue, l.early,
+        l.release_realtime ? fmt::format("release thread at SCHED_FIFO {}", r.release_priority)
+        : r.release_priority > 0
+            ? std::string("release thread a normal one (SCHED_FIFO not allowed here)")
+            : std::string("release thread a normal one"));
   fmt::print(
       "  peer     {:8.1f} ms/frame  OpenCV StereoSGBM 3-way + WLS; ratio peer / dco {:.3f} (the "
       "median of the rounds' ratios)\n",
@@ -721,7 +727,8 @@ std::string json_fields(const Result& r) {
              "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
              "\"latency_p99_ms\": {}, \"latency_max_ms\": {}, \"ready_p50_ms\": {}, "
              "\"ready_p99_ms\": {}, "
-             "\"release_latency_ms\": {}, \"overdue\": {}, \"early\": {}, "
+             "\"release_latency_ms\": {}, \"release_realtime\": {}, \"overdue\": {}, "
+             "\"early\": {}, "
              "\"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
              "\"published\": {}, \"planes_on_stereo_thread\": {}, "
              "\"early_contour_on_stereo_thread\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
@@ -733,10 +740,10 @@ std::string json_fields(const Result& r) {
              json_number(t.contour.mean_ms), json_number(t.densify.mean_ms), json_number(r.fps),
              json_number(ls.latency.p50_ms), json_number(ls.latency.p99_ms),
              json_number(ls.latency.max_ms), json_number(ls.ready.p50_ms),
-             json_number(ls.ready.p99_ms), json_number(r.release_latency_ms), l.overdue, l.early,
-             l.pushed, l.dropped, l.late, l.published, json_number(r.planes_share()),
-             json_number(r.early_contour_share()), json_number(r.peer_ms_per_frame),
-             json_number(r.ratio)) +
+             json_number(ls.ready.p99_ms), json_number(r.release_latency_ms),
+             l.release_realtime ? "true" : "false", l.overdue, l.early, l.pushed, l.dropped, l.late,
+             l.published, json_number(r.planes_share()), json_number(r.early_contour_share()),
+             json_number(r.peer_ms_per_frame), json_number(r.ratio)) +
          fmt::format(", \"rounds\": [{}]", fmt::join(round_objects(r), ", ")) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
          (r.check ? fmt::format(

@@ -1,9 +1,11 @@
 #pragma once
 
 // The time slice a thread asks the scheduler for (sched_setattr's sched_runtime), which Linux 6.12
-// and later honour for normal threads without privileges; older kernels ignore it. Header-only and
-// without dco_core's dependencies, so libdco-client uses it too.
+// and later honour for normal threads without privileges; older kernels ignore it. And real-time
+// priority, for the threads that must wake on time. Header-only and without dco_core's
+// dependencies, so libdco-client uses it too.
 
+#include <pthread.h>
 #include <sched.h>
 #include <sys/syscall.h>
 #include <sys/types.h>
@@ -49,6 +51,14 @@ inline bool request_time_slice(std::uint64_t ns) {
   if (attr.sched_policy != SCHED_OTHER && attr.sched_policy != SCHED_BATCH) return false;
   if (attr.sched_runtime != 0 && attr.sched_runtime <= ns) return false;
   return set_time_slice(attr, ns);
+}
+
+// Moves the calling thread to SCHED_FIFO at `priority` (1-99). A process may where it has
+// CAP_SYS_NICE or an RLIMIT_RTPRIO of at least `priority`; true when the kernel agreed.
+inline bool request_fifo_priority(int priority) {
+  sched_param param{};
+  param.sched_priority = priority;
+  return pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
 }
 
 }  // namespace dco

@@ -60,6 +60,10 @@ struct RuntimeStats {
   // With runtime.release_latency_ms: results ready after their release time (handed on at once),
   // and results handed on before it because every release slot was taken.
   long overdue = 0, early = 0;
+  // With runtime.release_latency_ms: whether the release thread got the real-time priority of
+  // runtime.release_priority (false: a normal thread, whose release times can slip by a
+  // scheduler tick while the stage threads keep the CPUs busy).
+  bool release_realtime = false;
   // The most frames each queue ever held: the entry (a single waiting frame), stereo -> contour
   // and contour -> densify. None can exceed its capacity, so latency cannot grow.
   std::size_t entry_high_water = 0, stereo_queue_high_water = 0, densify_queue_high_water = 0;
@@ -184,6 +188,7 @@ class DepthRuntime {
   void fail(std::exception_ptr error);
   void rethrow_failure();
   void reset_state();
+  void name_threads();
 
   const PipelineParams pipeline_;
   const RuntimeParams params_;
@@ -207,6 +212,10 @@ class DepthRuntime {
 
   mutable std::mutex mutex_;
   std::condition_variable_any changed_;  // any state below changed
+  // Only what the release thread waits for (a result in an empty release queue, every release
+  // slot taken while the densify stage wants one, the end): at real-time priority each needless
+  // wake-up of it preempts a stage thread.
+  std::condition_variable_any release_changed_;
 
   // Entry (producer side).
   std::array<Input, kInputs> inputs_;
@@ -234,8 +243,10 @@ class DepthRuntime {
 
   // Densify -> release.
   BoundedQueue<int> release_queue_;
-  std::size_t held_for_release_ = 0;  // results in release_queue_
-  bool release_wanted_ = false;       // the densify stage waits for a release slot
+  std::size_t held_for_release_ = 0;   // results in release_queue_
+  bool release_wanted_ = false;        // the densify stage waits for a release slot
+  bool release_thread_ready_ = false;  // the release thread has chosen its scheduling
+  bool release_realtime_ = false;      // ... and got runtime.release_priority
 
   long drained_ = 0;  // sequences fully published
   std::exception_ptr failure_;

@@ -34,6 +34,12 @@ struct RuntimeParams {
   // age. A map ready later than that goes out at once and counts as overdue. 0 = as soon as it
   // is ready. Deterministic runs ignore it.
   double release_latency_ms = 0;
+  // With release_latency_ms: the SCHED_FIFO priority (1-99) the release thread asks for, so it
+  // wakes at each release time even while the stage threads keep every CPU busy (a normal thread
+  // woken then can wait up to a scheduler tick or more). The result callback runs at it too. A
+  // process without CAP_SYS_NICE or a high enough RLIMIT_RTPRIO gets a normal thread with a
+  // 0.1 ms time slice instead (RuntimeStats::release_realtime says which). 0 = never ask.
+  int release_priority = 1;
   // Never drop: push waits for room, so every frame is processed in order and the output equals
   // the offline DepthPipeline's (for replays and tests).
   bool deterministic = false;
