@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "dco/core/error.hpp"
+#include "dco/core/thread_name.hpp"
 #include "dco/core/usable_cpus.hpp"
 
 namespace dco::pipeline {
@@ -14,7 +15,10 @@ RowTeam::RowTeam(int threads) : threads_(threads) {
     throw Error("row team: " + std::to_string(threads) + " threads, expected 1..64");
   helpers_.reserve(static_cast<std::size_t>(threads - 1));
   for (int part = 1; part < threads; ++part)
-    helpers_.emplace_back([this, part](std::stop_token stop) { helper_loop(stop, part); });
+    helpers_.emplace_back([this, part](std::stop_token stop) {
+      name_this_thread("dco-rows");
+      helper_loop(stop, part);
+    });
 }
 
 RowTeam::~RowTeam() {

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "dco/core/thread_name.hpp"
+
 namespace dco::daemon {
 namespace {
 
@@ -22,7 +24,10 @@ RawRecorder::RawRecorder(std::string calibration_toml, RawRecorderOptions option
       options_(options),
       send_(std::move(send)),
       encoder_(options.png_level),
-      thread_([this] { run(); }) {
+      thread_([this] {
+        name_this_thread("dco-recorder");
+        run();
+      }) {
   std::lock_guard lock(mutex_);  // the thread reads the message under it
   message_.pipeline_config = options_.pipeline_config;
 }

@@ -11,6 +11,7 @@
 #include <fmt/ranges.h>
 
 #include "dco/core/error.hpp"
+#include "dco/core/thread_name.hpp"
 #include "dco/indemind/clock_map.hpp"
 #include "dco/indemind/frame_assembler.hpp"
 #include "dco/indemind/frame_metadata.hpp"
@@ -87,8 +88,14 @@ class IndemindSource final : public FrameSource {
     if (running_) throw Error("indemind: source already started");
     sink_ = &sink;
     running_ = true;
-    delivery_ = std::thread([this] { delivery_loop(); });
-    events_ = std::thread([this] { event_loop(); });
+    delivery_ = std::thread([this] {
+      name_this_thread("dco-usb-deliver");
+      delivery_loop();
+    });
+    events_ = std::thread([this] {
+      name_this_thread("dco-usb-events");
+      event_loop();
+    });
   }
 
   void stop() override {

@@ -35,6 +35,7 @@
 
 #include "../src/sources.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/thread_name.hpp"
 #include "frame_pairer.hpp"
 
 namespace dco::drivers {
@@ -340,7 +341,10 @@ class LibcameraSource final : public FrameSource {
       for (std::size_t i = 0; i < started; ++i) devices_[i]->camera->stop();
       throw;
     }
-    thread_ = std::thread([this, &sink] { deliver(sink); });
+    thread_ = std::thread([this, &sink] {
+      name_this_thread("dco-libcamera");
+      deliver(sink);
+    });
   }
 
   void stop() override {

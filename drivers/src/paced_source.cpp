@@ -3,6 +3,7 @@
 #include <exception>
 
 #include "dco/core/error.hpp"
+#include "dco/core/thread_name.hpp"
 
 namespace dco::drivers {
 namespace {
@@ -17,7 +18,10 @@ std::int64_t monotonic_ns() {
 
 void PacedSource::start(FrameSink& sink) {
   if (thread_.joinable()) throw Error(info().uri + ": source already started");
-  thread_ = std::jthread([this, &sink](std::stop_token stop) { run(stop, sink); });
+  thread_ = std::jthread([this, &sink](std::stop_token stop) {
+    name_this_thread("dco-source");
+    run(stop, sink);
+  });
 }
 
 void PacedSource::stop() {

@@ -21,6 +21,7 @@
 #include "dcod_process.hpp"
 #include "support/synthetic_recording.hpp"
 #include "support/temp_dir.hpp"
+#include "support/thread_names.hpp"
 
 namespace dco::testing {
 namespace {
@@ -62,6 +63,10 @@ TEST(Dcod, ReadyWatchdogPingsAndACleanStopOnSigterm) {
   ASSERT_TRUE(frame.has_value());
   EXPECT_EQ(frame->info().width, 160u);
   EXPECT_EQ(frame->info().image_channels, 1u);
+  // Its threads say what they run (top -H, perf, gdb).
+  const std::vector<std::string> names = thread_names(dcod.pid());
+  for (const char* name : {"dco-source", "dco-stereo", "dco-contour"})
+    EXPECT_EQ(count_named(names, name), 1) << name;
 
   const auto term = SteadyClock::now();
   dcod.signal(SIGTERM);

@@ -10,6 +10,7 @@
 #include "dco/core/error.hpp"
 #include "dco/drivers/indemind_source.hpp"
 #include "indemind_sim.hpp"
+#include "support/thread_names.hpp"
 
 namespace dco::drivers {
 namespace {
@@ -146,6 +147,10 @@ TEST(IndemindSource, StreamsEveryModeWithCalibrationAndImu) {
     EXPECT_EQ(rig.source->calibration().left.width, c.width);
     rig.source->start(rig.sink);
     ASSERT_TRUE(rig.wait_frames(12));
+    // Frames came through both threads, so both have named themselves.
+    const std::vector<std::string> names = dco::testing::thread_names();
+    EXPECT_EQ(dco::testing::count_named(names, "dco-usb-events"), 1);
+    EXPECT_EQ(dco::testing::count_named(names, "dco-usb-deliver"), 1);
     rig.source->stop();
     EXPECT_EQ(rig.sim->transfers_in_flight(), 0);
     const auto rec = rig.sim->record();

@@ -32,6 +32,7 @@
 #include "dco/pipeline/runtime/depth_runtime.hpp"
 #include "support/allocation_counter.hpp"
 #include "support/same_bytes.hpp"
+#include "support/thread_names.hpp"
 #include "support/time_slice_probe.hpp"
 
 namespace dco::pipeline::runtime {
@@ -101,24 +102,6 @@ int thread_count() {
     closedir(dir);
   }
   return n;
-}
-
-// The names of this process's threads (/proc/self/task/<tid>/comm).
-std::vector<std::string> thread_names() {
-  std::vector<std::string> names;
-  if (DIR* dir = opendir("/proc/self/task")) {
-    while (const dirent* e = readdir(dir)) {
-      if (e->d_name[0] == '.') continue;
-      const std::string path = std::string("/proc/self/task/") + e->d_name + "/comm";
-      if (FILE* f = std::fopen(path.c_str(), "r")) {
-        char name[32] = {};
-        if (std::fgets(name, sizeof name, f)) names.emplace_back(name, std::strcspn(name, "\n"));
-        std::fclose(f);
-      }
-    }
-    closedir(dir);
-  }
-  return names;
 }
 
 // The kernel clears a thread's id (which releases pthread_join) a moment before the thread leaves
@@ -698,10 +681,8 @@ TEST(DepthRuntime, EachThreadCarriesTheNameOfWhatItRuns) {
     rp.release_latency_ms = 10;
     DepthRuntime runtime(s.params, rp, [](const DepthResult&, const FrameTimes&) {});
     runtime.start();
-    std::vector<std::string> names = thread_names();
-    const auto count = [&](const char* name) {
-      return std::count(names.begin(), names.end(), name);
-    };
+    const std::vector<std::string> names = dco::testing::thread_names();
+    const auto count = [&](const char* name) { return dco::testing::count_named(names, name); };
     EXPECT_EQ(count("dco-stereo"), 1) << threads << " threads";
     EXPECT_EQ(count("dco-contour"), 1) << threads << " threads";
     EXPECT_EQ(count("dco-densify"), threads == 3 ? 1 : 0) << threads << " threads";

@@ -10,11 +10,22 @@
 #include <vector>
 
 #include "../support/allocation_counter.hpp"
+#include "../support/thread_names.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/usable_cpus.hpp"
 
 namespace dco::pipeline {
 namespace {
+
+TEST(RowTeam, HelpersCarryTheirName) {
+  const long before = dco::testing::count_named(dco::testing::thread_names(), "dco-rows");
+  {
+    RowTeam team(3);
+    // Each helper names itself as it starts; a run needs every helper, so it has started.
+    team.run(30, [](int, int, int) {});
+    EXPECT_EQ(dco::testing::count_named(dco::testing::thread_names(), "dco-rows"), before + 2);
+  }
+}
 
 // Every row is visited exactly once, in contiguous blocks given by block_begin, each by the part
 // it names; run after run on the same team.

@@ -9,6 +9,8 @@
 
 #include <opencv2/video/tracking.hpp>
 
+#include "dco/core/thread_name.hpp"
+
 namespace dco::contour {
 
 // One DIS flow field computed on a thread of its own while the caller computes the other: the
@@ -17,7 +19,10 @@ namespace dco::contour {
 class FlowFieldWorker {
  public:
   explicit FlowFieldWorker(cv::Ptr<cv::DISOpticalFlow> dis)
-      : dis_(std::move(dis)), thread_([this](std::stop_token stop) { loop(stop); }) {}
+      : dis_(std::move(dis)), thread_([this](std::stop_token stop) {
+          name_this_thread("dco-flow");
+          loop(stop);
+        }) {}
   FlowFieldWorker(const FlowFieldWorker&) = delete;
   FlowFieldWorker& operator=(const FlowFieldWorker&) = delete;
 

@@ -1,0 +1,32 @@
+#include "dco/core/thread_name.hpp"
+
+#include <gtest/gtest.h>
+#include <pthread.h>
+
+#include <string>
+#include <thread>
+
+namespace dco {
+namespace {
+
+std::string name_seen_after(const char* name) {
+  std::string seen;
+  std::thread([&] {
+    name_this_thread(name);
+    char buffer[32] = {};
+    pthread_getname_np(pthread_self(), buffer, sizeof buffer);
+    seen = buffer;
+  }).join();
+  return seen;
+}
+
+TEST(ThreadName, NamesTheCallingThread) {
+  EXPECT_EQ(name_seen_after("dco-test"), "dco-test");
+}
+
+TEST(ThreadName, ALongNameIsCutToTheFifteenCharactersLinuxKeeps) {
+  EXPECT_EQ(name_seen_after("dco-a-name-far-too-long"), "dco-a-name-far-");
+}
+
+}  // namespace
+}  // namespace dco
