@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "dco/core/error.hpp"
+#include "dco/core/thread_name.hpp"
 #include "dco/core/time_slice.hpp"
 #include "dco/core/usable_cpus.hpp"
 
@@ -170,12 +171,12 @@ void DepthRuntime::start() {
 }
 
 void DepthRuntime::name_threads() {
-  // Named for top, perf and gdb; a name that cannot be set costs nothing but the name.
+  // From here rather than by each thread, so the names are there when start returns.
   std::size_t i = 0;
-  pthread_setname_np(threads_[i++].native_handle(), "dco-stereo");
-  if (params_.threads >= 2) pthread_setname_np(threads_[i++].native_handle(), "dco-contour");
-  if (params_.threads >= 3) pthread_setname_np(threads_[i++].native_handle(), "dco-densify");
-  if (releasing_) pthread_setname_np(threads_[i++].native_handle(), "dco-release");
+  name_thread(threads_[i++].native_handle(), "dco-stereo");
+  if (params_.threads >= 2) name_thread(threads_[i++].native_handle(), "dco-contour");
+  if (params_.threads >= 3) name_thread(threads_[i++].native_handle(), "dco-densify");
+  if (releasing_) name_thread(threads_[i++].native_handle(), "dco-release");
 }
 
 void DepthRuntime::stop() {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <pthread.h>
 
+#include <chrono>
 #include <string>
 #include <thread>
 
@@ -22,6 +23,19 @@ std::string name_seen_after(const char* name) {
 
 TEST(ThreadName, NamesTheCallingThread) {
   EXPECT_EQ(name_seen_after("dco-test"), "dco-test");
+}
+
+TEST(ThreadName, NamesAnotherThreadByItsHandle) {
+  std::string seen;
+  std::thread named([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    char buffer[32] = {};
+    pthread_getname_np(pthread_self(), buffer, sizeof buffer);
+    seen = buffer;
+  });
+  name_thread(named.native_handle(), "dco-other");
+  named.join();
+  EXPECT_EQ(seen, "dco-other");
 }
 
 TEST(ThreadName, ALongNameIsCutToTheFifteenCharactersLinuxKeeps) {

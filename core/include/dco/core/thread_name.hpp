@@ -1,7 +1,7 @@
 #pragma once
 
-// Names the calling thread, so top -H, perf and gdb tell dco's threads apart. Linux keeps 15
-// characters; a longer name is cut to them. A name that cannot be set costs nothing but the name.
+// Names a thread, so top -H, perf and gdb tell dco's threads apart. Linux keeps 15 characters; a
+// longer name is cut to them. A name that cannot be set costs nothing but the name.
 
 #include <pthread.h>
 
@@ -10,10 +10,14 @@
 
 namespace dco {
 
-inline void name_this_thread(const char* name) {
+inline void name_thread(pthread_t thread, const char* name) {
   char kept[16] = {};
   std::memcpy(kept, name, std::min(std::strlen(name), sizeof kept - 1));
-  pthread_setname_np(pthread_self(), kept);
+  pthread_setname_np(thread, kept);
+}
+
+inline void name_this_thread(const char* name) {
+  name_thread(pthread_self(), name);
 }
 
 }  // namespace dco
