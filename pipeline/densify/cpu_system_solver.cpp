@@ -11,6 +11,12 @@ class CpuSystemSolver final : public SystemSolver {
  public:
   explicit CpuSystemSolver(const DensifyParams& params) : params_(params) {}
 
+  // At half size with sweeps alone the full system is coarsened (data and weights) and swept
+  // (SweepRows works each row's diagonal out as it loads it).
+  bool needs_diagonal(int width) const override {
+    return !(solves_at_half(params_, width) && params_.fine_iterations == 0);
+  }
+
   SolverReport solve(const GridSystem& a, ImageView<const float> b, ImageView<float> x) override {
     if (solves_at_half(params_, a.width())) return solve_at_half(a, b, x);
     if (params_.multigrid) multigrid_.build(a);

@@ -264,6 +264,8 @@ void Densifier::build_system(const DensifyInputs& in) {
   const kernels::OcclusionRule occlusion{
       static_cast<float>(params_.lambda_d * params_.occlusion_fill), terms.hint_weight};
   std::fill(part_range_.begin(), part_range_.end(), std::array<float, 2>{low, high});
+  // The full-size diagonal only where the solver reads it (two images fewer to write).
+  const bool diagonal = solver_->needs_diagonal(w);
   rows_.run(h, [&](int part, int begin, int end) {
     std::array<float, 2>& range = part_range_[static_cast<std::size_t>(part)];
     for (int y = begin; y < end; ++y) {
@@ -274,8 +276,9 @@ void Densifier::build_system(const DensifyInputs& in) {
         kernels::occlusion_fill_row(in.sparse.row(y), hint_.row(y), w, occlusion,
                                     system_.data.row(y), rhs_.row(y));
     }
-    system_.update_diagonal_rows(begin, end);
+    if (diagonal) system_.update_diagonal_rows(begin, end);
   });
+  system_.has_diagonal = diagonal;
   for (int part = 0; part < rows_.threads(); ++part) {
     low = std::min(low, part_range_[static_cast<std::size_t>(part)][0]);
     high = std::max(high, part_range_[static_cast<std::size_t>(part)][1]);
@@ -341,6 +344,11 @@ void smooth_matches(const DensifyParams& params, MatchPlaneSmoother& planes,
   }
   for (int y = 0; y < sparse.height; ++y)
     std::copy(sparse.row(y), sparse.row(y) + sparse.width, out.row(y));
+}
+
+const GridSystem& Densifier::last_system() {
+  if (!system_.has_diagonal && system_.width() > 0) system_.update_diagonal();
+  return system_;
 }
 
 bool Densifier::solves_at_half(int width) const {

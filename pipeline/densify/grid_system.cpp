@@ -13,6 +13,7 @@ void GridSystem::resize(int width, int height) {
   wy.resize(width, height);
   diag.resize(width, height);
   inv_diag.resize(width, height);
+  has_diagonal = false;
 }
 
 void GridSystem::update_diagonal_rows(int begin, int end) {

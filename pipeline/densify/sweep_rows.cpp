@@ -13,6 +13,7 @@ void SweepRows::start(int width, int height, int slots) {
   half_ = (kernels::parity_count(width, 0) + kLineFloats - 1) / kLineFloats * kLineFloats;
   ring_.resize(2 * kArrays * half_, slots_);
   spare_.resize(width, 1);
+  diagonal_.resize(width, 2);
   residual_.resize(2 * half_, 1);
 }
 
@@ -31,7 +32,14 @@ void SweepRows::load(const GridSystem& a, ImageView<const float> b, ImageView<co
   };
   split(x.row(r), kX);
   split(b.row(r), kB);
-  split(a.diag.row(r), kDiag);
+  if (a.has_diagonal) {
+    split(a.diag.row(r), kDiag);
+  } else {
+    float* diag = diagonal_.row(0);
+    kernels::diagonal_row(a.data.row(r), a.wx.row(r), r + 1 < height_ ? a.wy.row(r) : nullptr,
+                          r > 0 ? a.wy.row(r - 1) : nullptr, width_, diag, diagonal_.row(1));
+    split(diag, kDiag);
+  }
   split(a.wx.row(r), kWx);
   split(a.wy.row(r), kWy);
   for (int parity = 0; parity < 2; ++parity)

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <random>
 #include <string>
 #include <utility>
@@ -21,6 +22,8 @@
 #include "dco/pipeline/densify/conjugate_gradients.hpp"
 #include "dco/pipeline/densify/densifier.hpp"
 #include "dco/pipeline/densify/multigrid.hpp"
+#include "dco/pipeline/densify/sweep_rows.hpp"
+#include "dco/pipeline/densify/system_solver.hpp"
 #include "kernels/occlusion_reference.hpp"
 
 namespace dco::densify {
@@ -516,6 +519,71 @@ TEST(Densifier, RowThreadsGiveTheBytesOfOneThread) {
   }
 }
 
+// The CPU solver as it is, but recording whether each system it solved held its diagonal and
+// claiming to need it or not as told.
+class DiagonalWatch final : public SystemSolver {
+ public:
+  DiagonalWatch(const DensifyParams& params, bool force, std::vector<bool>& seen)
+      : inner_(make_cpu_system_solver(params)), force_(force), seen_(seen) {}
+  SolverReport solve(const GridSystem& a, ImageView<const float> b, ImageView<float> x) override {
+    seen_.push_back(a.has_diagonal);
+    return inner_->solve(a, b, x);
+  }
+  bool needs_diagonal(int width) const override { return force_ || inner_->needs_diagonal(width); }
+
+ private:
+  std::unique_ptr<SystemSolver> inner_;
+  bool force_;
+  std::vector<bool>& seen_;
+};
+
+TEST(Densifier, TheFullSizeDiagonalIsBuiltOnlyForASolveThatReadsIt) {
+  // A wide frame solved at half size with full-size sweeps alone: the sweeps work each row's
+  // diagonal out as they load it, so the system leaves its two diagonal images out, and the
+  // output is the bytes of a build that made them. A full-size solve, or full-size iterations
+  // after the sweeps, read them: they are built.
+  const int w = 700, h = 41;
+  const Problem first = random_problem(w, h, 31, 0.3);
+  const Problem second = random_problem(w, h, 32, 0.3);
+  struct Case {
+    std::string resolution;
+    int fine_iterations;
+    bool built;
+  };
+  for (const Case& c : {Case{"auto", 0, false}, Case{"half", 0, false}, Case{"half", 2, true},
+                        Case{"full", 0, true}}) {
+    DensifyParams params;
+    params.solve_resolution = c.resolution;
+    params.fine_iterations = c.fine_iterations;
+    std::vector<bool> seen, forced_seen;
+    Densifier d(params, [&](const DensifyParams& p) {
+      return std::make_unique<DiagonalWatch>(p, false, seen);
+    });
+    Densifier forced(params, [&](const DensifyParams& p) {
+      return std::make_unique<DiagonalWatch>(p, true, forced_seen);
+    });
+    const std::string what = c.resolution + ", " + std::to_string(c.fine_iterations) + " fine";
+    Image<float> actual, expected;
+    for (const Problem* frame : {&first, &second}) {
+      DensifyInputs in = inputs_of(*frame);
+      in.previous = d.last_solution();
+      d.compute(in, actual);
+      in.previous = forced.last_solution();
+      forced.compute(in, expected);
+      ASSERT_TRUE(testing::same_bytes(expected, actual)) << what;
+      EXPECT_EQ(d.last_report().final_residual, forced.last_report().final_residual) << what;
+      // Asked for, the system has its diagonal, the bytes a build would have made.
+      const GridSystem& built = forced.last_system();
+      const GridSystem& asked = d.last_system();
+      ASSERT_TRUE(asked.has_diagonal) << what;
+      EXPECT_TRUE(testing::same_bytes(built.diag, asked.diag)) << what;
+      EXPECT_TRUE(testing::same_bytes(built.inv_diag, asked.inv_diag)) << what;
+    }
+    EXPECT_EQ(seen, std::vector<bool>(2, c.built)) << what;
+    EXPECT_EQ(forced_seen, std::vector<bool>(2, true)) << what;
+  }
+}
+
 TEST(Densifier, ImageEdgesWeakenSmoothing) {
   // The same hole, but the image has an edge at x = 25: the fill follows the image edge.
   const int w = 60, h = 10;
@@ -741,6 +809,42 @@ TEST(Multigrid, GaussSeidelMatchesThePlainColourOrder) {
           EXPECT_EQ(fused.at(c, y), plain_layout.at(c, y)) << w << "x" << h << " " << c << "," << y;
         }
     }
+  }
+}
+
+TEST(Multigrid, SweepsWorkOutTheDiagonalOfASystemThatLeavesItOut) {
+  // A system without its diagonal images (has_diagonal false, the images NaN) sweeps and
+  // measures its residual to the bytes of the same system with them.
+  for (const auto& [w, h] :
+       {std::pair{37, 23}, std::pair{2, 5}, std::pair{1, 1}, std::pair{8, 2}}) {
+    const GridSystem with = random_system(w, h, 13);
+    ASSERT_TRUE(with.has_diagonal);
+    GridSystem without = with;
+    without.has_diagonal = false;
+    without.diag.fill(std::numeric_limits<float>::quiet_NaN());
+    without.inv_diag.fill(std::numeric_limits<float>::quiet_NaN());
+    Image<float> b(w, h), x(w, h), coarse((w + 1) / 2, (h + 1) / 2);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    for (int y = 0; y < h; ++y)
+      for (int c = 0; c < w; ++c) b.at(c, y) = 10.0f * unit(rng), x.at(c, y) = unit(rng);
+    for (int y = 0; y < coarse.height(); ++y)
+      for (int c = 0; c < coarse.width(); ++c) coarse.at(c, y) = unit(rng);
+    SweepRows rows;
+    Image<float> expected = x, actual = x;
+    gauss_seidel(with, b.cview(), expected.view(), 3, true, rows);
+    gauss_seidel(without, b.cview(), actual.view(), 3, true, rows);
+    EXPECT_TRUE(testing::same_bytes(expected, actual)) << w << "x" << h;
+    gauss_seidel_from_coarse(with, b.cview(), expected.view(), 2, false, rows, coarse.cview());
+    gauss_seidel_from_coarse(without, b.cview(), actual.view(), 2, false, rows, coarse.cview());
+    EXPECT_TRUE(testing::same_bytes(expected, actual)) << w << "x" << h;
+    Image<float> r_with(w, h), r_without(w, h);
+    const ResidualNorms n_with =
+        gauss_seidel_residual(with, b.cview(), expected.view(), 1, true, r_with.view(), rows);
+    const ResidualNorms n_without =
+        gauss_seidel_residual(without, b.cview(), actual.view(), 1, true, r_without.view(), rows);
+    EXPECT_TRUE(testing::same_bytes(r_with, r_without)) << w << "x" << h;
+    EXPECT_EQ(n_with.relative(), n_without.relative()) << w << "x" << h;
   }
 }
 

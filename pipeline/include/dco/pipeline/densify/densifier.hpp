@@ -137,8 +137,8 @@ class Densifier {
     return has_solution_ ? solution_.view() : ImageView<const float>{};
   }
   // The full-resolution system A x = b of the last call (Eq. 20's normal equations), for
-  // checks against other solvers.
-  const GridSystem& last_system() const { return system_; }
+  // checks against other solvers; its diagonal is worked out here if the solve did not need it.
+  const GridSystem& last_system();
   ImageView<const float> last_rhs() const { return rhs_.cview(); }
   // Whether a frame `width` pixels wide is solved at half resolution.
   bool solves_at_half(int width) const;

@@ -13,12 +13,19 @@ namespace dco::densify {
 struct GridSystem {
   Image<float> data, wx, wy, diag;
   Image<float> inv_diag;  // 1 / diag, 0 where diag is 0: smoothing multiplies instead of dividing
+  // Whether diag and inv_diag hold the current diagonal. A system whose solver works it out from
+  // data and the weights as it goes (SweepRows::load) skips the two full-size images.
+  bool has_diagonal = false;
 
+  // Leaves has_diagonal false.
   void resize(int width, int height);
   int width() const { return data.width(); }
   int height() const { return data.height(); }
-  // Recomputes diag and inv_diag from data and the edge weights.
-  void update_diagonal() { update_diagonal_rows(0, height()); }
+  // Recomputes diag and inv_diag from data and the edge weights; sets has_diagonal.
+  void update_diagonal() {
+    update_diagonal_rows(0, height());
+    has_diagonal = true;
+  }
   // The same for rows [begin, end) (reads the wy row above each).
   void update_diagonal_rows(int begin, int end);
 };

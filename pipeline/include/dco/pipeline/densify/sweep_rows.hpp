@@ -19,7 +19,8 @@ class SweepRows {
   void start(int width, int height, int slots);
 
   // Copies row r of x, b and of a's coefficients into row r's slot (1 / diag worked out from
-  // diag, by GridSystem's rule: one row fewer to read).
+  // diag, by GridSystem's rule: one row fewer to read). Without a.has_diagonal the diagonal row
+  // is worked out from data and the weights first, as GridSystem::update_diagonal_rows does.
   void load(const GridSystem& a, ImageView<const float> b, ImageView<const float> x, int r);
   // Updates the pixels of one column parity of row r; the rows next to it must be loaded.
   void smooth(int r, int parity);
@@ -41,6 +42,7 @@ class SweepRows {
   int half_ = 0;       // floats of one parity of one array, padded to whole cache lines
   Image<float> ring_;  // one slot per row: kArrays arrays, each its even then its odd pixels
   Image<float> spare_;
+  Image<float> diagonal_;  // a diagonal row and its inverse, for a system without its diagonal
   Image<float> residual_;  // a residual row split, before it is merged
 };
 

@@ -19,6 +19,9 @@ class SystemSolver {
  public:
   virtual ~SystemSolver() = default;
   virtual SolverReport solve(const GridSystem& a, ImageView<const float> b, ImageView<float> x) = 0;
+  // Whether solve reads the diagonal images of a system `width` pixels wide (GridSystem::diag,
+  // inv_diag); when not, the caller may leave them out (has_diagonal false).
+  virtual bool needs_diagonal(int /*width*/) const { return true; }
 };
 
 // Makes the solver of a backend (CPU, CUDA); an empty factory means the CPU one.
