@@ -79,9 +79,8 @@ void early_contour_frame(const contour::ContourParams& params, EarlyContourScrat
   if (!here) {
     // Sized all the same, so that nothing allocates when the step moves here.
     const int w = slot.image.width(), h = slot.image.height();
-    for (Image<float>* img :
-         {&slot.m_intensity, &scratch.gradients.blur_tmp, &scratch.gradients.blurred})
-      img->resize(w, h);
+    slot.m_intensity.resize(w, h);
+    scratch.gradients.resize(w);
     slot.direction.resize(w, h);
     const int cw = slot.raw_disparity.width(), ch = slot.raw_disparity.height();
     for (Image<float>* img : {&slot.stereo_cue, &scratch.cue.jumps, &scratch.cue.tmp})

@@ -80,8 +80,7 @@ class CpuContourExtractor final : public ContourExtractor {
     out.contours.resize(iw, ih);
     // The gradients' buffers too when the inputs carry them, so that a frame without them does
     // not allocate.
-    gradient_scratch_.blur_tmp.resize(iw, ih);
-    gradient_scratch_.blurred.resize(iw, ih);
+    gradient_scratch_.resize(iw);
     direction_.resize(iw, ih);
     // The stereo cue's buffers too when the inputs carry it, so that a frame without it does
     // not allocate.

@@ -1,6 +1,7 @@
 #include "dco/pipeline/contour/gated_canny.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <cstring>
@@ -53,13 +54,30 @@ void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& s
                          Image<float>& m_intensity, Image<std::uint8_t>& direction) {
   assert(image.channels == 1);
   const int w = image.width, h = image.height;
-  scratch.blur_tmp.resize(w, h);
-  scratch.blurred.resize(w, h);
+  scratch.resize(w);
   m_intensity.resize(w, h);
   direction.resize(w, h);
-  gaussian_blur_5x5(image, scratch.blur_tmp.view(), scratch.blurred.view());
-  sobel_magnitude(scratch.blurred.cview(), kMaxSobelMagnitude8Bit, m_intensity.view(),
-                  direction.view());
+  if (w == 0 || h == 0) return;
+  const std::array<float, 5>& taps = gaussian5_taps();
+  // gaussian_blur_5x5's two passes for row y, into the ring's slot y % 3.
+  const auto blur_row = [&](int y) {
+    const std::uint8_t* const rows[5] = {
+        image.row(std::max(y - 2, 0)), image.row(std::max(y - 1, 0)), image.row(y),
+        image.row(std::min(y + 1, h - 1)), image.row(std::min(y + 2, h - 1))};
+    kernels::gaussian5_vertical_row(rows, taps.data(), w, scratch.blur_tmp.row(0));
+    kernels::row_filter(scratch.blur_tmp.row(0), w, taps.data(), 2, scratch.blurred.row(y % 3));
+  };
+  const auto blurred = [&](int y) { return scratch.blurred.row(y % 3); };
+  // sobel_magnitude's rows: row y reads the blurred rows y - 1 .. y + 1 (clamped), so the ring
+  // holds row y + 1 once row y - 2 is no longer read.
+  const float inv = 1.0f / kMaxSobelMagnitude8Bit;
+  blur_row(0);
+  for (int y = 0; y < h; ++y) {
+    if (y + 1 < h) blur_row(y + 1);
+    const kernels::SobelRows rows{blurred(std::max(y - 1, 0)), blurred(y),
+                                  blurred(std::min(y + 1, h - 1)), w};
+    kernels::sobel_row(rows, inv, m_intensity.row(y), direction.row(y));
+  }
 }
 
 void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t> direction,

@@ -29,14 +29,21 @@ inline constexpr float kMaxSobelMagnitude8Bit = 1140.3946f;
 void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<float> magnitude,
                      ImageView<std::uint8_t> direction);
 
-// Working memory of intensity_gradients, sized on first use.
+// Working memory of intensity_gradients: a row of the vertical blur and the last three rows of
+// the blurred image, sized on first use (or by resize, for images `width` pixels wide).
 struct GradientScratch {
   Image<float> blur_tmp, blurred;
+  void resize(int width) {
+    blur_tmp.resize(width, 1);
+    blurred.resize(width, 3);
+  }
 };
 
 // M_I of Eq. 17 and each pixel's gradient direction for a grey image: the 5x5 Gaussian blur
-// (gaussian_blur_5x5), then sobel_magnitude with norm kMaxSobelMagnitude8Bit. Resizes
-// m_intensity and direction to the image's size (allocating only when it grows).
+// (gaussian_blur_5x5), then sobel_magnitude with norm kMaxSobelMagnitude8Bit, the same bytes.
+// Row by row: each blurred row is made just before the gradients that read it, so the blurred
+// image never goes to memory in full. Resizes m_intensity and direction to the image's size
+// (allocating only when it grows).
 void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& scratch,
                          Image<float>& m_intensity, Image<std::uint8_t>& direction);
 
