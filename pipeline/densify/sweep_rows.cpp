@@ -32,19 +32,21 @@ void SweepRows::load(const GridSystem& a, ImageView<const float> b, ImageView<co
   };
   split(x.row(r), kX);
   split(b.row(r), kB);
-  if (a.has_diagonal) {
-    split(a.diag.row(r), kDiag);
-  } else {
-    float* diag = diagonal_.row(0);
-    kernels::diagonal_row(a.data.row(r), a.wx.row(r), r + 1 < height_ ? a.wy.row(r) : nullptr,
-                          r > 0 ? a.wy.row(r - 1) : nullptr, width_, diag, diagonal_.row(1));
-    split(diag, kDiag);
-  }
   split(a.wx.row(r), kWx);
   split(a.wy.row(r), kWy);
-  for (int parity = 0; parity < 2; ++parity)
-    kernels::inverse_diagonal_row(array(r, kDiag, parity), kernels::parity_count(width_, parity),
-                                  array(r, kInvDiag, parity));
+  if (a.has_diagonal) {
+    split(a.diag.row(r), kDiag);
+    for (int parity = 0; parity < 2; ++parity)
+      kernels::inverse_diagonal_row(array(r, kDiag, parity), kernels::parity_count(width_, parity),
+                                    array(r, kInvDiag, parity));
+    return;
+  }
+  // The diagonal row and its inverse together, as GridSystem::update_diagonal_rows makes them.
+  kernels::diagonal_row(a.data.row(r), a.wx.row(r), r + 1 < height_ ? a.wy.row(r) : nullptr,
+                        r > 0 ? a.wy.row(r - 1) : nullptr, width_, diagonal_.row(0),
+                        diagonal_.row(1));
+  split(diagonal_.row(0), kDiag);
+  split(diagonal_.row(1), kInvDiag);
 }
 
 kernels::SplitSmoothRow SweepRows::smooth_row(int r, int parity) const {
