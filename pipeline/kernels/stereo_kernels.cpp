@@ -786,8 +786,74 @@ void BlockVerticalSumsRow(const std::uint32_t* const* column_rows, int y, const 
                                reciprocal, out);
 }
 
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+// BlocksToRows for whole batches of 16 (block == count == 16), 16 pixels at a time: each pixel's
+// 16 values narrowed into the 16-bit lanes of one 256-bit vector, then the 16x16 matrix
+// transposed in registers: the 8x8 transpose of 16-bit lanes (interleaves of 16, 32 and 64 bits)
+// on pixels 0..7 and on 8..15 does both 128-bit halves (values 0..7 and 8..15) at once, and
+// joining the halves gives each value's row of 16 pixels. Returns the pixels done.
+int BlocksToRows16(const std::uint32_t* HWY_RESTRICT blocks, int width,
+                   std::uint16_t* HWY_RESTRICT rows, std::ptrdiff_t row_stride) {
+  const hn::FixedTag<std::int32_t, 16> di;
+  const hn::FixedTag<std::uint16_t, 16> d16;
+  const hn::Repartition<std::uint32_t, decltype(d16)> d32;
+  const hn::Repartition<std::uint64_t, decltype(d16)> d64;
+  using V = hn::Vec<decltype(d16)>;
+  const auto pixel = [&](int x) {
+    return hn::DemoteTo(d16, hn::LoadU(di, reinterpret_cast<const std::int32_t*>(blocks) + x * 16));
+  };
+  const auto lo32 = [&](V a, V b) {
+    return hn::BitCast(d16, hn::InterleaveLower(d32, hn::BitCast(d32, a), hn::BitCast(d32, b)));
+  };
+  const auto hi32 = [&](V a, V b) {
+    return hn::BitCast(d16, hn::InterleaveUpper(d32, hn::BitCast(d32, a), hn::BitCast(d32, b)));
+  };
+  const auto lo64 = [&](V a, V b) {
+    return hn::BitCast(d16, hn::InterleaveLower(d64, hn::BitCast(d64, a), hn::BitCast(d64, b)));
+  };
+  const auto hi64 = [&](V a, V b) {
+    return hn::BitCast(d16, hn::InterleaveUpper(d64, hn::BitCast(d64, a), hn::BitCast(d64, b)));
+  };
+  // Pixels x0 .. x0 + 7 into c[j]: value j of each in the lower half, value j + 8 in the upper.
+  const auto eight = [&](int x0, V* c) {
+    V t[8], u[8];
+    for (int i = 0; i < 4; ++i) {
+      const V a = pixel(x0 + 2 * i), b = pixel(x0 + 2 * i + 1);
+      t[2 * i] = hn::InterleaveLower(d16, a, b);
+      t[2 * i + 1] = hn::InterleaveUpper(d16, a, b);
+    }
+    for (int i = 0; i < 2; ++i) {
+      u[4 * i] = lo32(t[4 * i], t[4 * i + 2]);
+      u[4 * i + 1] = hi32(t[4 * i], t[4 * i + 2]);
+      u[4 * i + 2] = lo32(t[4 * i + 1], t[4 * i + 3]);
+      u[4 * i + 3] = hi32(t[4 * i + 1], t[4 * i + 3]);
+    }
+    for (int i = 0; i < 4; ++i) {
+      c[2 * i] = lo64(u[i], u[i + 4]);
+      c[2 * i + 1] = hi64(u[i], u[i + 4]);
+    }
+  };
+  int x = 0;
+  for (; x + 16 <= width; x += 16) {
+    V first[8], second[8];
+    eight(x, first);
+    eight(x + 8, second);
+    for (int j = 0; j < 8; ++j) {
+      hn::StoreU(hn::ConcatLowerLower(d16, second[j], first[j]), d16, rows + j * row_stride + x);
+      hn::StoreU(hn::ConcatUpperUpper(d16, second[j], first[j]), d16,
+                 rows + (j + 8) * row_stride + x);
+    }
+  }
+  return x;
+}
+#endif
+
 void BlocksToRows(const std::uint32_t* blocks, int width, int block, int count, std::uint16_t* rows,
                   std::ptrdiff_t row_stride) {
+  int x_begin = 0;
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+  if (block == 16 && count == 16) x_begin = BlocksToRows16(blocks, width, rows, row_stride);
+#endif
   // 4x4 tiles transposed in registers (32-bit then 64-bit interleaves), then narrowed to 16 bits
   // (the values are below kNoCost, so the saturating narrowing is exact).
   const hn::FixedTag<std::uint32_t, 4> d;
@@ -799,7 +865,7 @@ void BlocksToRows(const std::uint32_t* blocks, int width, int block, int count, 
   const auto narrow = [&](hn::Vec<decltype(d64)> v) {
     return hn::DemoteTo(d16, hn::BitCast(di, v));
   };
-  for (int x = 0; x < x_end; x += 4) {
+  for (int x = x_begin; x < x_end; x += 4) {
     const std::uint32_t* src = blocks + x * block;
     for (int k = 0; k < k_end; k += 4) {
       const auto r0 = hn::LoadU(d, src + k);

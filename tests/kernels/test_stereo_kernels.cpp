@@ -600,7 +600,7 @@ TEST(StereoKernels, BlockVerticalSumsAndMeansMatchScalar) {
 
 TEST(StereoKernels, BlocksToRowsTransposes) {
   std::mt19937 rng(17);
-  for (const int w : {1, 4, 7, 16, 33}) {
+  for (const int w : {1, 4, 7, 16, 33, 48, 100}) {
     for (const int block : kBlocks) {
       for (const int count : {1, block / 2 + 1, block}) {
         // Region means below kNoCost, the largest included.
