@@ -787,12 +787,13 @@ void BlockVerticalSumsRow(const std::uint32_t* const* column_rows, int y, const 
 }
 
 #if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
-// BlocksToRows for whole batches of 16 (block == count == 16), 16 pixels at a time: each pixel's
+// BlocksToRows for blocks of 16 (block == 16, count <= 16), 16 pixels at a time: each pixel's
 // 16 values narrowed into the 16-bit lanes of one 256-bit vector, then the 16x16 matrix
 // transposed in registers: the 8x8 transpose of 16-bit lanes (interleaves of 16, 32 and 64 bits)
 // on pixels 0..7 and on 8..15 does both 128-bit halves (values 0..7 and 8..15) at once, and
-// joining the halves gives each value's row of 16 pixels. Returns the pixels done.
-int BlocksToRows16(const std::uint32_t* HWY_RESTRICT blocks, int width,
+// joining the halves gives each value's row of 16 pixels; only the first `count` rows are
+// stored. Returns the pixels done.
+int BlocksToRows16(const std::uint32_t* HWY_RESTRICT blocks, int width, int count,
                    std::uint16_t* HWY_RESTRICT rows, std::ptrdiff_t row_stride) {
   const hn::FixedTag<std::int32_t, 16> di;
   const hn::FixedTag<std::uint16_t, 16> d16;
@@ -838,11 +839,11 @@ int BlocksToRows16(const std::uint32_t* HWY_RESTRICT blocks, int width,
     V first[8], second[8];
     eight(x, first);
     eight(x + 8, second);
-    for (int j = 0; j < 8; ++j) {
+    for (int j = 0; j < std::min(count, 8); ++j)
       hn::StoreU(hn::ConcatLowerLower(d16, second[j], first[j]), d16, rows + j * row_stride + x);
-      hn::StoreU(hn::ConcatUpperUpper(d16, second[j], first[j]), d16,
-                 rows + (j + 8) * row_stride + x);
-    }
+    for (int j = 8; j < count; ++j)
+      hn::StoreU(hn::ConcatUpperUpper(d16, second[j - 8], first[j - 8]), d16,
+                 rows + j * row_stride + x);
   }
   return x;
 }
@@ -852,7 +853,7 @@ void BlocksToRows(const std::uint32_t* blocks, int width, int block, int count, 
                   std::ptrdiff_t row_stride) {
   int x_begin = 0;
 #if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
-  if (block == 16 && count == 16) x_begin = BlocksToRows16(blocks, width, rows, row_stride);
+  if (block == 16) x_begin = BlocksToRows16(blocks, width, count, rows, row_stride);
 #endif
   // 4x4 tiles transposed in registers (32-bit then 64-bit interleaves), then narrowed to 16 bits
   // (the values are below kNoCost, so the saturating narrowing is exact).
