@@ -1,11 +1,13 @@
 #include "dco/pipeline/stereo/boundary_refinement.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 
 #include "dco/kernels/boundary_kernels.hpp"
+#include "dco/kernels/filter_kernels.hpp"
 #include "dco/pipeline/row_team.hpp"
 
 namespace dco::stereo {
@@ -30,21 +32,14 @@ bool refines_boundaries(const StereoParams& params, int scale) {
 
 namespace {
 
-// a[i] = min(a[i], b[i]) and the like, on restrict pointers so that the compiler vectorises them
-// (`p < q ? p : q` is what minps computes).
-void min_of_pairs(const float* __restrict a, const float* __restrict b, int n,
-                  float* __restrict out) {
-  for (int i = 0; i < n; ++i) out[i] = b[i] < a[i] ? b[i] : a[i];
+// out = the elementwise least (greatest) of a and b, as `b < a ? b : a` (`b > a ? b : a`).
+void min_of_pairs(const float* a, const float* b, int n, float* out) {
+  const float* rows[2] = {a, b};
+  kernels::min_of_rows(rows, 2, n, out);
 }
-void max_of_pairs(const float* __restrict a, const float* __restrict b, int n,
-                  float* __restrict out) {
-  for (int i = 0; i < n; ++i) out[i] = b[i] > a[i] ? b[i] : a[i];
-}
-void min_into(float* __restrict acc, const float* __restrict b, int n) {
-  for (int i = 0; i < n; ++i) acc[i] = b[i] < acc[i] ? b[i] : acc[i];
-}
-void max_into(float* __restrict acc, const float* __restrict b, int n) {
-  for (int i = 0; i < n; ++i) acc[i] = b[i] > acc[i] ? b[i] : acc[i];
+void max_of_pairs(const float* a, const float* b, int n, float* out) {
+  const float* rows[2] = {a, b};
+  kernels::max_of_rows(rows, 2, n, out);
 }
 
 // edge[x] = 1 where the narrow or the wide sides of internal pixel x span a depth edge
@@ -130,22 +125,17 @@ void BoundaryRefiner::side_ranges(ImageView<const float> sparse, int hole_reach)
   }
   const auto columns = [&](const Image<float>& row_far, const Image<float>& row_near,
                            Image<float>& far, Image<float>& near) {
+    std::array<const float*, 2 * px::kBoundaryReach + 1> fars{}, nears{};
     for (int y = 0; y < h; ++y) {
       const int top = std::max(0, y - px::kBoundaryReach);
       const int bottom = std::min(h - 1, y + px::kBoundaryReach);
-      float* f = far.row(y);
-      float* n = near.row(y);
-      if (bottom == top) {
-        std::copy(row_far.row(top), row_far.row(top) + w, f);
-        std::copy(row_near.row(top), row_near.row(top) + w, n);
-        continue;
+      const int count = bottom - top + 1;
+      for (int k = 0; k < count; ++k) {
+        fars[static_cast<std::size_t>(k)] = row_far.row(top + k);
+        nears[static_cast<std::size_t>(k)] = row_near.row(top + k);
       }
-      min_of_pairs(row_far.row(top), row_far.row(top + 1), w, f);
-      max_of_pairs(row_near.row(top), row_near.row(top + 1), w, n);
-      for (int yy = top + 2; yy <= bottom; ++yy) {
-        min_into(f, row_far.row(yy), w);
-        max_into(n, row_near.row(yy), w);
-      }
+      kernels::min_of_rows(fars.data(), count, w, far.row(y));
+      kernels::max_of_rows(nears.data(), count, w, near.row(y));
     }
   };
   columns(row_far_, row_near_, far_, near_);
