@@ -20,6 +20,34 @@ namespace dco::kernels {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
+void HalfMeansRow(const std::uint8_t* HWY_RESTRICT a, const std::uint8_t* HWY_RESTRICT b, int count,
+                  std::uint8_t* HWY_RESTRICT out) {
+  // The even and odd bytes of both rows apart, their sums in 16-bit lanes (each half of the
+  // vector widened on its own), rounded, shifted and narrowed back.
+  const hn::ScalableTag<std::uint8_t> d8;
+  const hn::Half<decltype(d8)> dh;
+  const hn::Rebind<std::int16_t, decltype(dh)> d16;  // sums up to 4 * 255 + 2
+  const int n = static_cast<int>(hn::Lanes(d8));
+  const auto two = hn::Set(d16, std::int16_t{2});
+  const auto means = [&](auto ae, auto ao, auto be, auto bo) {
+    const auto sum = hn::Add(hn::Add(hn::PromoteTo(d16, ae), hn::PromoteTo(d16, ao)),
+                             hn::Add(hn::PromoteTo(d16, be), hn::PromoteTo(d16, bo)));
+    return hn::DemoteTo(dh, hn::ShiftRight<2>(hn::Add(sum, two)));
+  };
+  int x = 0;
+  for (; x + n <= count; x += n) {
+    hn::Vec<decltype(d8)> ae, ao, be, bo;
+    hn::LoadInterleaved2(d8, a + 2 * x, ae, ao);
+    hn::LoadInterleaved2(d8, b + 2 * x, be, bo);
+    const auto low = means(hn::LowerHalf(dh, ae), hn::LowerHalf(dh, ao), hn::LowerHalf(dh, be),
+                           hn::LowerHalf(dh, bo));
+    const auto high = means(hn::UpperHalf(dh, ae), hn::UpperHalf(dh, ao), hn::UpperHalf(dh, be),
+                            hn::UpperHalf(dh, bo));
+    hn::StoreU(hn::Combine(d8, high, low), d8, out + x);
+  }
+  for (; x < count; ++x) out[x] = pixel::half_mean(a[2 * x], a[2 * x + 1], b[2 * x], b[2 * x + 1]);
+}
+
 void CensusRow(const std::uint8_t* const* rows, int width, int window_w, int window_h,
                std::uint64_t* out) {
   // Neighbour i of N sets bit N - 1 - i (pixel::census_bits). The comparisons run on byte lanes,
@@ -1167,6 +1195,7 @@ HWY_AFTER_NAMESPACE();
 namespace dco::kernels {
 
 HWY_EXPORT(TargetName);
+HWY_EXPORT(HalfMeansRow);
 HWY_EXPORT(CensusRow);
 HWY_EXPORT(CrossArmsRow);
 HWY_EXPORT(GreyCrossArmsRow);
@@ -1192,6 +1221,10 @@ HWY_EXPORT(UniquenessCheckRow);
 
 const char* simd_target() {
   return HWY_DYNAMIC_DISPATCH(TargetName)();
+}
+
+void half_means_row(const std::uint8_t* a, const std::uint8_t* b, int count, std::uint8_t* out) {
+  HWY_DYNAMIC_DISPATCH(HalfMeansRow)(a, b, count, out);
 }
 
 void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,

@@ -33,6 +33,11 @@ void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel
   detail::disparity_values_range(in, subpixel, max_value, 0, width, raw, sparse);
 }
 
+void half_means_row(const std::uint8_t* a, const std::uint8_t* b, int count, std::uint8_t* out) {
+  for (int x = 0; x < count; ++x)
+    out[x] = pixel::half_mean(a[2 * x], a[2 * x + 1], b[2 * x], b[2 * x + 1]);
+}
+
 void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,
                 std::uint64_t* out) {
   detail::census_range(rows, width, window_w, window_h, 0, width, out);

@@ -2,21 +2,10 @@
 
 #include <cassert>
 
+#include "dco/kernels/stereo_kernels.hpp"
 #include "dco/kernels/stereo_pixel.hpp"
 
 namespace dco::stereo {
-namespace {
-
-// dst[x] = the rounded mean of the 2x2 block at column 2 x of rows a and b; restrict pointers,
-// so that the compiler vectorises it.
-void half_means_grey(const std::uint8_t* __restrict a, const std::uint8_t* __restrict b, int count,
-                     std::uint8_t* __restrict dst) {
-  for (int x = 0; x < count; ++x)
-    dst[x] = kernels::pixel::half_mean(a[2 * x], a[2 * x + 1], b[2 * x], b[2 * x + 1]);
-}
-
-}  // namespace
-
 void downsample_half(ImageView<const std::uint8_t> in, ImageView<std::uint8_t> out) {
   assert(out.width == in.width / 2 && out.height == in.height / 2 && out.channels == in.channels);
   const int ch = in.channels;
@@ -25,7 +14,7 @@ void downsample_half(ImageView<const std::uint8_t> in, ImageView<std::uint8_t> o
     const std::uint8_t* b = in.row(2 * y + 1);
     std::uint8_t* dst = out.row(y);
     if (ch == 1) {  // grey (the headset camera)
-      half_means_grey(a, b, out.width, dst);
+      kernels::half_means_row(a, b, out.width, dst);
       continue;
     }
     for (int x = 0; x < out.width; ++x)

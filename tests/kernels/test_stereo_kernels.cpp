@@ -598,6 +598,26 @@ TEST(StereoKernels, BlockVerticalSumsAndMeansMatchScalar) {
   }
 }
 
+TEST(StereoKernels, HalfMeansRowMatchesScalarAndTheRoundedBlockMean) {
+  std::mt19937 rng(29);
+  for (const int count : {1, 7, 16, 31, 32, 33, 63, 64, 65, 100, 640}) {
+    const auto a = random_vector<std::uint8_t>(rng, static_cast<std::size_t>(2 * count), 0, 255);
+    auto b = random_vector<std::uint8_t>(rng, static_cast<std::size_t>(2 * count), 0, 255);
+    b[0] = 255;  // the largest sum, 4 * 255 + 2, still fits
+    std::vector<std::uint8_t> expected(static_cast<std::size_t>(count));
+    scalar::half_means_row(a.data(), b.data(), count, expected.data());
+    for (int x = 0; x < count; ++x)
+      ASSERT_EQ(expected[x], (a[2 * x] + a[2 * x + 1] + b[2 * x] + b[2 * x + 1] + 2) / 4) << x;
+    for_each_target([&] {
+      std::vector<std::uint8_t> out(expected.size() + 1, 7);
+      half_means_row(a.data(), b.data(), count, out.data());
+      EXPECT_EQ(out.back(), 7) << "nothing past the row";
+      out.pop_back();
+      ASSERT_EQ(out, expected) << "count " << count;
+    });
+  }
+}
+
 TEST(StereoKernels, BlocksToRowsTransposes) {
   std::mt19937 rng(17);
   for (const int w : {1, 4, 7, 16, 33, 48, 100}) {

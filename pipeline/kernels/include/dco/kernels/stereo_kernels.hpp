@@ -21,6 +21,10 @@ void pack_pixels(const std::uint8_t* src, int channels, int width, std::uint32_t
 // clamped to the image, for j = 0 .. window_h - 1 (odd sizes, window_w * window_h - 1 <= 64).
 // Bits in row-major neighbour order from the most significant used bit down, set where the
 // neighbour (columns clamped to the row) is darker than the centre.
+// out[x] = pixel::half_mean(a[2x], a[2x + 1], b[2x], b[2x + 1]) for x < count: a grey row pair
+// halved (the stereo stage's internal resolution and its coarse passes).
+void half_means_row(const std::uint8_t* a, const std::uint8_t* b, int count, std::uint8_t* out);
+
 void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,
                 std::uint64_t* out);
 
@@ -205,6 +209,7 @@ void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel
                           float* raw, float* sparse);
 
 namespace scalar {
+void half_means_row(const std::uint8_t* a, const std::uint8_t* b, int count, std::uint8_t* out);
 
 void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel, float max_value,
                           float* raw, float* sparse);
