@@ -177,7 +177,9 @@ void Densifier::build_system(const DensifyInputs& in) {
   const int h = in.sparse.height;
   system_.resize(w, h);
   rhs_.resize(w, h);
-  hint_.resize(w, h);
+  // The hole hints are written at the holes only: the matched pixels' entries are never read,
+  // but are set once, so no frame reads memory nothing wrote.
+  if (hint_.resize(w, h)) hint_.fill(0.0f);
   smooth_strength_.resize(w, h);
   barrier_.resize(w, h);
 
@@ -421,10 +423,15 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   timings_.build_ms = t.lap_ms();
 
   if (!has_solution_ || !solution_.view().same_size(w, h)) {
-    // Cold start: each pixel's hint (its sparse value, or for a hole the value of the row's
+    // Cold start: each pixel's sparse value, or for a hole its hint (the value of the row's
     // surface it is filled towards; 0 where a row has none), which is already near the solution.
     solution_.resize(w, h);
-    solution_.copy_from(hint_.cview());
+    for (int y = 0; y < h; ++y) {
+      const float* s = inputs.sparse.row(y);
+      const float* hint = hint_.row(y);
+      float* x0 = solution_.row(y);
+      for (int x = 0; x < w; ++x) x0[x] = kernels::pixel::known_value(s[x]) ? s[x] : hint[x];
+    }
   }
   report_ = solver_->solve(system_, rhs_.cview(), solution_.view());
   has_solution_ = true;

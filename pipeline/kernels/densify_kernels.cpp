@@ -329,10 +329,9 @@ void ForEachHoleRun(const float* sparse, int width, Run&& run) {
   if (open && run_start < width) run(run_start, width);
 }
 
-// Every matched pixel is its own hint; the runs of holes between them are filled a stretch at a
-// time.
+// The runs of holes between the matched pixels are filled a stretch at a time; the matched
+// pixels' entries are left alone.
 void HoleHintRow(const float* sparse, const float* wx, int width, float crossing, float* hint) {
-  std::copy(sparse, sparse + width, hint);
   ForEachHoleRun(sparse, width, [&](int start, int end) {
     HoleRunHints(sparse, wx, width, crossing, start, end, hint);
   });

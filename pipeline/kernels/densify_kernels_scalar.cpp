@@ -17,7 +17,7 @@ void hole_hint_row(const float* sparse, const float* wx, int width, float crossi
     const bool k = pixel::known_value(sparse[x]);
     last = k ? sparse[x] : last;
     crossed = !k && crossed;
-    hint[x] = crossed ? -last : last;
+    if (!k) hint[x] = crossed ? -last : last;
     crossed = crossed || (x + 1 < width && wx[x] < crossing);
   }
   last = 0.0f;
@@ -26,7 +26,7 @@ void hole_hint_row(const float* sparse, const float* wx, int width, float crossi
     const bool k = pixel::known_value(sparse[x]);
     last = k ? sparse[x] : last;
     crossed = !k && crossed;
-    hint[x] = pixel::hole_hint(hint[x], last, crossed);
+    if (!k) hint[x] = pixel::hole_hint(hint[x], last, crossed);
     if (x > 0) crossed = crossed || wx[x - 1] < crossing;
   }
 }

@@ -590,13 +590,14 @@ TEST(DensifyKernels, DataTermsRowMatchesScalarAndTheRule) {
       }
 }
 
-// The hole hint as hole_hint_row states it, searched out pixel by pixel.
+// The hole hint as hole_hint_row states it, searched out pixel by pixel; `untouched` for a known
+// pixel, whose entry it does not write.
 float hole_hint_by_search(const std::vector<float>& sparse, const std::vector<float>& wx, int x,
-                          float crossing) {
+                          float crossing, float untouched) {
   const auto known = [&](int i) {
     return sparse[i] > 0.0f && sparse[i] < std::numeric_limits<float>::infinity();
   };
-  if (known(x)) return sparse[x];
+  if (known(x)) return untouched;
   const int w = static_cast<int>(sparse.size());
   int l = x - 1, r = x + 1;
   while (l >= 0 && !known(l)) --l;
@@ -632,7 +633,7 @@ TEST(DensifyKernels, HoleHintRowMatchesScalarAndTheRule) {
           if (unit(rng) < weak_share) e = crossing * static_cast<float>(unit(rng));
         wx.back() = 0.0f;  // the edge past the row end is not an edge
         std::vector<float> want(static_cast<std::size_t>(w));
-        for (int x = 0; x < w; ++x) want[x] = hole_hint_by_search(sparse, wx, x, crossing);
+        for (int x = 0; x < w; ++x) want[x] = hole_hint_by_search(sparse, wx, x, crossing, -7.0f);
         std::vector<float> hint(want.size(), -7.0f);
         scalar::hole_hint_row(sparse.data(), wx.data(), w, crossing, hint.data());
         ASSERT_EQ(hint, want) << "width " << w << " known " << known_share;

@@ -177,8 +177,9 @@ void data_terms_row(const float* sparse, const float* hint, const float* previou
 void diagonal_row(const float* data, const float* wx, const float* wy, const float* wy_above,
                   int width, float* diag, float* inv_diag);
 
-// The hint of each pixel of one row (Densifier): the nearest known sparse values to its left and
-// right (0 where there is none). A known pixel is its own hint. A hole takes the farther (the
+// The hint of each hole of one row (Densifier): the nearest known sparse values to its left and
+// right (0 where there is none); a known pixel's entry is not written (its hint is its own
+// value, which the readers take from the sparse row). A hole takes the farther (the
 // smaller) of the two, unless the path to exactly one of them crosses a weak smoothness edge,
 // wx[j] < crossing for an edge j between the hole and that value, in which case the hole takes
 // the other one (it lies on the other side's surface). wx[j] joins pixels j and j + 1;
