@@ -374,16 +374,23 @@ HWY_INLINE hn::Vec<D> TwoTableLookup(D du, hn::Vec<D> lo, hn::Vec<D> hi, hn::Vec
 // right[n - 1 - j] (the lanes run over the disparities, so the right image is read backwards).
 // `a` is the left pixel's packed channels in every lane, `cl` its census descriptor; `ad` gets the
 // sums of absolute channel differences, `hd` the Hamming distances of the descriptors.
-template <class D>
+// With kGrey (one channel: every packed pixel is its grey level, the other bytes zero) the sum
+// of the bytes' differences is the difference of the words.
+template <bool kGrey = false, class D>
 HWY_INLINE void MatchDistances(D du, hn::Vec<D> a, hn::Vec<hn::Repartition<std::uint64_t, D>> cl,
                                const std::uint32_t* right, const std::uint64_t* census_right,
                                hn::Vec<D>& ad, hn::Vec<D>& hd) {
   const hn::Repartition<std::uint8_t, D> du8;
   const hn::Repartition<std::uint64_t, D> du64;
   const int half = static_cast<int>(hn::Lanes(du64));
-  const auto a8 = hn::BitCast(du8, a);
-  const auto b8 = hn::BitCast(du8, hn::Reverse(du, hn::LoadU(du, right)));
-  ad = SumOfBytes(du, hn::BitCast(du, hn::Sub(hn::Max(a8, b8), hn::Min(a8, b8))));
+  const auto b = hn::Reverse(du, hn::LoadU(du, right));
+  if constexpr (kGrey) {
+    ad = hn::Sub(hn::Max(a, b), hn::Min(a, b));
+  } else {
+    const auto a8 = hn::BitCast(du8, a);
+    const auto b8 = hn::BitCast(du8, b);
+    ad = SumOfBytes(du, hn::BitCast(du, hn::Sub(hn::Max(a8, b8), hn::Min(a8, b8))));
+  }
   const auto lo =
       hn::PopulationCount(hn::Xor(cl, hn::Reverse(du64, hn::LoadU(du64, census_right + half))));
   const auto hi =
@@ -427,7 +434,7 @@ HWY_INLINE hn::Vec<D> CensusCostFromRegisters(D du, const std::uint32_t* census_
 // pixel a lane reads lies inside the row (from >= d0 + 15): the same operations as its general
 // loop, with the row's pointers in locals and, with kRunning, the running sum carried in a
 // register rather than read back from the row just stored.
-template <bool kRunning, bool kAdInRegisters>
+template <bool kRunning, bool kAdInRegisters, bool kGrey>
 HWY_NOINLINE void BlockCostsOneVector(const CostRow& row, const CostTableView& t, int d0, int from,
                                       int to, std::uint32_t* HWY_RESTRICT out) {
   const hn::ScalableTag<std::uint32_t> du;
@@ -450,8 +457,8 @@ HWY_NOINLINE void BlockCostsOneVector(const CostRow& row, const CostTableView& t
     const int arm = shortest_arm[x];
     const int first = x - d0 - (n - 1);  // the right pixel of the batch's last disparity
     hn::Vec<decltype(du)> ad, hd;
-    MatchDistances(du, hn::Set(du, left[x]), hn::Set(du64, census_left[x]), right + first,
-                   census_right + first, ad, hd);
+    MatchDistances<kGrey>(du, hn::Set(du, left[x]), hn::Set(du64, census_left[x]), right + first,
+                          census_right + first, ad, hd);
     hn::Vec<decltype(du)> ad_cost;
     if constexpr (kAdInRegisters) {
       ad_cost = AdCostFromRegisters(du, ad_table + arm * ad_size, ad, flat_from);
@@ -568,10 +575,14 @@ void BlockCosts(const CostRow& row, const CostTableView& t, int d0, int count, i
     }
   }
   if (general_end < to) {
-    if (ad_in_registers)
-      BlockCostsOneVector<kRunning, true>(row, t, d0, general_end, to, out);
+    // A table of 256 AD entries is one channel's (CostTables: 255 channels + 1).
+    const bool grey = t.ad_size == 256;
+    if (ad_in_registers && grey)
+      BlockCostsOneVector<kRunning, true, true>(row, t, d0, general_end, to, out);
+    else if (ad_in_registers)
+      BlockCostsOneVector<kRunning, true, false>(row, t, d0, general_end, to, out);
     else
-      BlockCostsOneVector<kRunning, false>(row, t, d0, general_end, to, out);
+      BlockCostsOneVector<kRunning, false, false>(row, t, d0, general_end, to, out);
   }
 }
 

@@ -52,7 +52,7 @@ void grey_cross_arms_row(const std::uint8_t* image, std::ptrdiff_t stride, int w
 // census[arm[x] * census_size + Hamming distance].
 struct CostTableView {
   const std::uint32_t* ad = nullptr;
-  int ad_size = 0;
+  int ad_size = 0;  // 255 channels + 1; 256: one channel, whose packed pixels are the grey level
   const std::uint32_t* census = nullptr;
   int census_size = 0;
   std::uint32_t unmatched = 0;  // cost of a left pixel whose partner x - d is outside the image
