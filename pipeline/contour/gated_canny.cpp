@@ -1,7 +1,6 @@
 #include "dco/pipeline/contour/gated_canny.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cassert>
 #include <cmath>
 #include <cstring>
@@ -35,6 +34,15 @@ void weak_beside_strong(const std::uint8_t* __restrict above, const std::uint8_t
   }
 }
 
+// sobel_magnitude's row y of an image of h rows, whose rows `row(i)` gives: the rows above and
+// below clamped to the image.
+template <class Row>
+void sobel_magnitude_row(Row&& row, int y, int h, int w, float inv, float* magnitude,
+                         std::uint8_t* direction) {
+  const kernels::SobelRows rows{row(std::max(y - 1, 0)), row(y), row(std::min(y + 1, h - 1)), w};
+  kernels::sobel_row(rows, inv, magnitude, direction);
+}
+
 }  // namespace
 
 void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<float> magnitude,
@@ -43,11 +51,9 @@ void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<floa
   const int w = smoothed.width;
   const int h = smoothed.height;
   const float inv = 1.0f / norm;
-  for (int y = 0; y < h; ++y) {
-    const kernels::SobelRows rows{smoothed.row(std::max(y - 1, 0)), smoothed.row(y),
-                                  smoothed.row(std::min(y + 1, h - 1)), w};
-    kernels::sobel_row(rows, inv, magnitude.row(y), direction.row(y));
-  }
+  const auto row = [&](int i) { return smoothed.row(i); };
+  for (int y = 0; y < h; ++y)
+    sobel_magnitude_row(row, y, h, w, inv, magnitude.row(y), direction.row(y));
 }
 
 void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& scratch,
@@ -58,25 +64,17 @@ void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& s
   m_intensity.resize(w, h);
   direction.resize(w, h);
   if (w == 0 || h == 0) return;
-  const std::array<float, 5>& taps = gaussian5_taps();
-  // gaussian_blur_5x5's two passes for row y, into the ring's slot y % 3.
-  const auto blur_row = [&](int y) {
-    const std::uint8_t* const rows[5] = {
-        image.row(std::max(y - 2, 0)), image.row(std::max(y - 1, 0)), image.row(y),
-        image.row(std::min(y + 1, h - 1)), image.row(std::min(y + 2, h - 1))};
-    kernels::gaussian5_vertical_row(rows, taps.data(), w, scratch.blur_tmp.row(0));
-    kernels::row_filter(scratch.blur_tmp.row(0), w, taps.data(), 2, scratch.blurred.row(y % 3));
-  };
+  // Blurred row y lives in the ring's slot y % 3. Gradient row y reads the blurred rows
+  // y - 1 .. y + 1 (clamped), so the ring takes row y + 1 once row y - 2 is no longer read.
   const auto blurred = [&](int y) { return scratch.blurred.row(y % 3); };
-  // sobel_magnitude's rows: row y reads the blurred rows y - 1 .. y + 1 (clamped), so the ring
-  // holds row y + 1 once row y - 2 is no longer read.
+  const auto blur_row = [&](int y) {
+    gaussian_blur_5x5_row(image, y, scratch.blur_tmp.row(0), blurred(y));
+  };
   const float inv = 1.0f / kMaxSobelMagnitude8Bit;
   blur_row(0);
   for (int y = 0; y < h; ++y) {
     if (y + 1 < h) blur_row(y + 1);
-    const kernels::SobelRows rows{blurred(std::max(y - 1, 0)), blurred(y),
-                                  blurred(std::min(y + 1, h - 1)), w};
-    kernels::sobel_row(rows, inv, m_intensity.row(y), direction.row(y));
+    sobel_magnitude_row(blurred, y, h, w, inv, m_intensity.row(y), direction.row(y));
   }
 }
 

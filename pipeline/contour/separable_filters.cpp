@@ -34,16 +34,19 @@ const std::array<float, 5>& gaussian5_taps() {
 void gaussian_blur_5x5(ImageView<const std::uint8_t> in, ImageView<float> tmp,
                        ImageView<float> out) {
   assert(in.channels == 1 && tmp.same_size(in) && out.same_size(in));
+  for (int y = 0; y < in.height; ++y) gaussian_blur_5x5_row(in, y, tmp.row(y), out.row(y));
+}
+
+void gaussian_blur_5x5_row(ImageView<const std::uint8_t> in, int y, float* tmp_row,
+                           float* out_row) {
+  assert(in.channels == 1);
   const std::array<float, 5>& taps = gaussian5_taps();
-  const int w = in.width;
   const int h = in.height;
-  for (int y = 0; y < h; ++y) {
-    const std::uint8_t* const rows[5] = {in.row(std::max(y - 2, 0)), in.row(std::max(y - 1, 0)),
-                                         in.row(y), in.row(std::min(y + 1, h - 1)),
-                                         in.row(std::min(y + 2, h - 1))};
-    kernels::gaussian5_vertical_row(rows, taps.data(), w, tmp.row(y));
-  }
-  for (int y = 0; y < h; ++y) kernels::row_filter(tmp.row(y), w, taps.data(), 2, out.row(y));
+  const std::uint8_t* const rows[5] = {in.row(std::max(y - 2, 0)), in.row(std::max(y - 1, 0)),
+                                       in.row(y), in.row(std::min(y + 1, h - 1)),
+                                       in.row(std::min(y + 2, h - 1))};
+  kernels::gaussian5_vertical_row(rows, taps.data(), in.width, tmp_row);
+  kernels::row_filter(tmp_row, in.width, taps.data(), 2, out_row);
 }
 
 namespace {

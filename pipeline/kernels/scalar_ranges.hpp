@@ -12,6 +12,12 @@
 
 namespace dco::kernels::detail {
 
+inline void half_means_range(const std::uint8_t* a, const std::uint8_t* b, int begin, int end,
+                             std::uint8_t* out) {
+  for (int x = begin; x < end; ++x)
+    out[x] = pixel::half_mean(a[2 * x], a[2 * x + 1], b[2 * x], b[2 * x + 1]);
+}
+
 using pixel::absdiff_sum;
 using pixel::colour_diff;
 

@@ -45,7 +45,7 @@ void HalfMeansRow(const std::uint8_t* HWY_RESTRICT a, const std::uint8_t* HWY_RE
                             hn::UpperHalf(dh, bo));
     hn::StoreU(hn::Combine(d8, high, low), d8, out + x);
   }
-  for (; x < count; ++x) out[x] = pixel::half_mean(a[2 * x], a[2 * x + 1], b[2 * x], b[2 * x + 1]);
+  detail::half_means_range(a, b, x, count, out);
 }
 
 void CensusRow(const std::uint8_t* const* rows, int width, int window_w, int window_h,

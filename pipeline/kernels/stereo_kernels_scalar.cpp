@@ -34,8 +34,7 @@ void disparity_values_row(const DisparityRowInputs& in, int width, bool subpixel
 }
 
 void half_means_row(const std::uint8_t* a, const std::uint8_t* b, int count, std::uint8_t* out) {
-  for (int x = 0; x < count; ++x)
-    out[x] = pixel::half_mean(a[2 * x], a[2 * x + 1], b[2 * x], b[2 * x + 1]);
+  detail::half_means_range(a, b, 0, count, out);
 }
 
 void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,

@@ -17,6 +17,9 @@ const std::array<float, 5>& gaussian5_taps();
 // `tmp` and `out` have the size of `in`; all single-channel.
 void gaussian_blur_5x5(ImageView<const std::uint8_t> in, ImageView<float> tmp,
                        ImageView<float> out);
+// Its row y alone: the vertical pass into `tmp_row`, then the horizontal one into `out_row`
+// (rows of in.width floats).
+void gaussian_blur_5x5_row(ImageView<const std::uint8_t> in, int y, float* tmp_row, float* out_row);
 
 // Normalised (mean) box filter of odd `size`. `tmp` and `out` have the size of `in`; `out` may not
 // alias `in`.

@@ -17,14 +17,14 @@ const char* simd_target();
 // zero), so the absolute-difference sum over the channels is a handful of lane operations.
 void pack_pixels(const std::uint8_t* src, int channels, int width, std::uint32_t* out);
 
-// Census transform of one row (dco::stereo::census_transform): rows[j] is image row y + j - ry,
-// clamped to the image, for j = 0 .. window_h - 1 (odd sizes, window_w * window_h - 1 <= 64).
-// Bits in row-major neighbour order from the most significant used bit down, set where the
-// neighbour (columns clamped to the row) is darker than the centre.
 // out[x] = pixel::half_mean(a[2x], a[2x + 1], b[2x], b[2x + 1]) for x < count: a grey row pair
 // halved (the stereo stage's internal resolution and its coarse passes).
 void half_means_row(const std::uint8_t* a, const std::uint8_t* b, int count, std::uint8_t* out);
 
+// Census transform of one row (dco::stereo::census_transform): rows[j] is image row y + j - ry,
+// clamped to the image, for j = 0 .. window_h - 1 (odd sizes, window_w * window_h - 1 <= 64).
+// Bits in row-major neighbour order from the most significant used bit down, set where the
+// neighbour (columns clamped to the row) is darker than the centre.
 void census_row(const std::uint8_t* const* rows, int width, int window_w, int window_h,
                 std::uint64_t* out);
 
