@@ -82,13 +82,17 @@ void early_contour_frame(const contour::ContourParams& params, EarlyContourScrat
     slot.m_intensity.resize(w, h);
     scratch.gradients.resize(w);
     slot.direction.resize(w, h);
+    slot.canny_classes.resize(w, h);
     const int cw = slot.raw_disparity.width(), ch = slot.raw_disparity.height();
     for (Image<float>* img : {&slot.stereo_cue, &scratch.cue.jumps, &scratch.cue.tmp})
       img->resize(cw, ch);
     return;
   }
-  contour::intensity_gradients(slot.image.cview(), scratch.gradients, slot.m_intensity,
-                               slot.direction);
+  const contour::CannyThresholds thresholds{static_cast<float>(params.t_high),
+                                            static_cast<float>(params.t_low),
+                                            static_cast<float>(params.t_depth)};
+  contour::intensity_gradients_and_classes(slot.image.cview(), thresholds, scratch.gradients,
+                                           slot.m_intensity, slot.direction, slot.canny_classes);
   slot.gradients_ms = t.lap_ms();
   if (!slot.stereo_cue_done) return;
   contour::stereo_cue(slot.raw_disparity.cview(), static_cast<float>(params.stereo_jump),
@@ -113,6 +117,7 @@ void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
   if (centre.early_contour_done) {
     in.m_intensity = centre.m_intensity.cview();
     in.direction = centre.direction.cview();
+    in.canny_classes = centre.canny_classes.cview();
   }
   if (centre.stereo_cue_done) in.stereo_cue = centre.stereo_cue.cview();
   contour::ContourOutputs contours{std::move(out.m_fuse), std::move(out.m_intensity),
@@ -216,6 +221,7 @@ void size_like(const StereoSlot& model, StereoSlot& out) {
   size_image_like(model.planar, out.planar);
   size_image_like(model.m_intensity, out.m_intensity);
   size_image_like(model.direction, out.direction);
+  size_image_like(model.canny_classes, out.canny_classes);
   size_image_like(model.stereo_cue, out.stereo_cue);
 }
 

@@ -63,8 +63,12 @@ class CpuContourExtractor final : public ContourExtractor {
       direction = direction_.cview();
       timings_.gaussian_ms = t.lap_ms();
     }
-    gated_canny(m_intensity, direction, out.m_fuse.cview(), thresholds_, out.contours.view(),
-                canny_);
+    if (!in.canny_classes.empty())
+      gated_canny_classified(in.canny_classes, out.m_fuse.cview(), thresholds_, out.contours.view(),
+                             canny_);
+    else
+      gated_canny(m_intensity, direction, out.m_fuse.cview(), thresholds_, out.contours.view(),
+                  canny_);
     timings_.canny_ms = t.lap_ms();
     timings_.total_ms = t.total_ms();
   }

@@ -91,6 +91,7 @@ void check_contour_input(const ContourInputs& in) {
     throw Error("contour: m_intensity and direction come together or not at all");
   check_optional(in.m_intensity, in.image, "m_intensity");
   check_optional(in.direction, in.image, "direction");
+  check_optional(in.canny_classes, in.image, "canny_classes");
 }
 
 struct FlowCue::State {

@@ -56,8 +56,13 @@ void sobel_magnitude(ImageView<const float> smoothed, float norm, ImageView<floa
     sobel_magnitude_row(row, y, h, w, inv, magnitude.row(y), direction.row(y));
 }
 
-void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& scratch,
-                         Image<float>& m_intensity, Image<std::uint8_t>& direction) {
+namespace {
+
+// intensity_gradients, calling after_row(y) once gradient row y is written.
+template <class AfterRow>
+void gradients_rows(ImageView<const std::uint8_t> image, GradientScratch& scratch,
+                    Image<float>& m_intensity, Image<std::uint8_t>& direction,
+                    AfterRow&& after_row) {
   assert(image.channels == 1);
   const int w = image.width, h = image.height;
   scratch.resize(w);
@@ -75,7 +80,86 @@ void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& s
   for (int y = 0; y < h; ++y) {
     if (y + 1 < h) blur_row(y + 1);
     sobel_magnitude_row(blurred, y, h, w, inv, m_intensity.row(y), direction.row(y));
+    after_row(y);
   }
+}
+
+// Suppression and dual threshold of interior row y (1 <= y < h - 1); `gate` per column or null.
+void classify_row(ImageView<const float> magnitude, ImageView<const std::uint8_t> direction, int y,
+                  const float* gate, const kernels::CannyLevels& levels, std::uint8_t* out) {
+  kernels::CannyRow row;
+  row.above = magnitude.row(y - 1);
+  row.row = magnitude.row(y);
+  row.below = magnitude.row(y + 1);
+  row.direction = direction.row(y);
+  row.gate = gate;
+  row.width = magnitude.width;
+  kernels::canny_classify_row(row, levels, out);
+}
+
+// Sizes the scratch for gate_row on images `w` wide: the gate's column of each image column.
+void prepare_gate(ImageView<const float> gate, int w, CannyScratch& scratch) {
+  if (gate.empty()) return;
+  if (scratch.gate_row.size() < static_cast<std::size_t>(w)) scratch.gate_row.resize(w);
+  if (scratch.gate_x.size() < static_cast<std::size_t>(w)) scratch.gate_x.resize(w);
+  for (int x = 0; x < w; ++x) scratch.gate_x[x] = px::gate_sample(x, w, gate.width);
+}
+
+// The gate of image row y of h, one value per image column (gate_sample): the gate's own row
+// when it has the image's width, else gathered into the scratch (prepare_gate first).
+const float* gate_row(ImageView<const float> gate, int y, int w, int h, CannyScratch& scratch) {
+  const float* g = gate.row(px::gate_sample(y, h, gate.height));
+  if (gate.width == w) return g;
+  if (2 * gate.width == w)  // gate_sample's column x * (w / 2) / w is x / 2
+    kernels::repeat_pairs(g, w, scratch.gate_row.data());
+  else
+    for (int x = 0; x < w; ++x) scratch.gate_row[x] = g[scratch.gate_x[x]];
+  return scratch.gate_row.data();
+}
+
+void zero_rows(ImageView<std::uint8_t> image, int begin, int end) {
+  for (int y = begin; y < end; ++y)
+    std::memset(image.row(y), 0, static_cast<std::size_t>(image.width));
+}
+
+}  // namespace
+
+void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& scratch,
+                         Image<float>& m_intensity, Image<std::uint8_t>& direction) {
+  gradients_rows(image, scratch, m_intensity, direction, [](int) {});
+}
+
+void intensity_gradients_and_classes(ImageView<const std::uint8_t> image, const CannyThresholds& t,
+                                     GradientScratch& scratch, Image<float>& m_intensity,
+                                     Image<std::uint8_t>& direction, Image<std::uint8_t>& classes) {
+  const int w = image.width, h = image.height;
+  classes.resize(w, h);
+  const bool interior = w >= 3 && h >= 3;
+  if (!interior) zero_rows(classes.view(), 0, h);
+  const kernels::CannyLevels levels{t.low, t.high, t.depth};
+  gradients_rows(image, scratch, m_intensity, direction, [&](int y) {
+    if (y == 0 || y + 1 == h) std::memset(classes.row(y), 0, static_cast<std::size_t>(w));
+    // Row y - 1 reads gradient rows y - 2 .. y, all written now.
+    if (interior && y >= 2)
+      classify_row(m_intensity.cview(), direction.cview(), y - 1, nullptr, levels,
+                   classes.row(y - 1));
+  });
+}
+
+void canny_classes(ImageView<const float> magnitude, ImageView<const std::uint8_t> direction,
+                   const CannyThresholds& t, ImageView<std::uint8_t> classes) {
+  assert(magnitude.channels == 1 && direction.same_size(magnitude) && classes.same_size(magnitude));
+  const int w = magnitude.width;
+  const int h = magnitude.height;
+  if (w < 3 || h < 3) {
+    zero_rows(classes, 0, h);
+    return;
+  }
+  zero_rows(classes, 0, 1);
+  zero_rows(classes, h - 1, h);
+  const kernels::CannyLevels levels{t.low, t.high, t.depth};
+  for (int y = 1; y < h - 1; ++y)
+    classify_row(magnitude, direction, y, nullptr, levels, classes.row(y));
 }
 
 void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t> direction,
@@ -84,34 +168,33 @@ void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t>
   assert(magnitude.channels == 1 && direction.same_size(magnitude) && edges.same_size(magnitude));
   const int w = magnitude.width;
   const int h = magnitude.height;
-  for (int y = 0; y < h; ++y) std::memset(edges.row(y), 0, static_cast<std::size_t>(w));
+  zero_rows(edges, 0, h);
   if (w < 3 || h < 3) return;
-
-  const bool gated = !gate.empty();
-  if (gated) {
-    if (scratch.gate_x.size() < static_cast<std::size_t>(w)) scratch.gate_x.resize(w);
-    for (int x = 0; x < w; ++x) scratch.gate_x[x] = px::gate_sample(x, w, gate.width);
-  }
   // Non-maximum suppression, depth gate and dual threshold, a row at a time. Of two equal maxima
   // side by side only the first (left/upper) survives, so a plateau still thins to one pixel.
-  if (gated && scratch.gate_row.size() < static_cast<std::size_t>(w)) scratch.gate_row.resize(w);
+  prepare_gate(gate, w, scratch);
   const kernels::CannyLevels levels{t.low, t.high, t.depth};
+  for (int y = 1; y < h - 1; ++y)
+    classify_row(magnitude, direction, y, gate.empty() ? nullptr : gate_row(gate, y, w, h, scratch),
+                 levels, edges.row(y));
+  canny_hysteresis(edges, scratch);
+}
+
+void gated_canny_classified(ImageView<const std::uint8_t> classes, ImageView<const float> gate,
+                            const CannyThresholds& t, ImageView<std::uint8_t> edges,
+                            CannyScratch& scratch) {
+  assert(classes.channels == 1 && edges.same_size(classes));
+  const int w = classes.width;
+  const int h = classes.height;
+  zero_rows(edges, 0, h);
+  if (w < 3 || h < 3) return;
+  prepare_gate(gate, w, scratch);
   for (int y = 1; y < h - 1; ++y) {
-    kernels::CannyRow row;
-    row.above = magnitude.row(y - 1);
-    row.row = magnitude.row(y);
-    row.below = magnitude.row(y + 1);
-    row.direction = direction.row(y);
-    row.width = w;
-    if (gated) {
-      const float* g = gate.row(px::gate_sample(y, h, gate.height));
-      if (2 * gate.width == w)  // gate_sample's column x * (w / 2) / w is x / 2
-        kernels::repeat_pairs(g, w, scratch.gate_row.data());
-      else
-        for (int x = 0; x < w; ++x) scratch.gate_row[x] = g[scratch.gate_x[x]];
-      row.gate = scratch.gate_row.data();
-    }
-    kernels::canny_classify_row(row, levels, edges.row(y));
+    if (gate.empty())
+      std::memcpy(edges.row(y), classes.row(y), static_cast<std::size_t>(w));
+    else
+      kernels::canny_gate_row(classes.row(y), gate_row(gate, y, w, h, scratch), t.depth, w,
+                              edges.row(y));
   }
   canny_hysteresis(edges, scratch);
 }

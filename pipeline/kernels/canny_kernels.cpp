@@ -1,6 +1,6 @@
-// SIMD version of the Canny row classification, compiled once per Highway target and dispatched
-// at run time. All four comparison pairs are loaded and the direction selects one per lane, so
-// textured images cost no mispredicted branches; the tail goes to the scalar range.
+// SIMD versions of the Canny row classification and gate, compiled once per Highway target and
+// dispatched at run time. All four comparison pairs are loaded and the direction selects one per
+// lane, so textured images cost no mispredicted branches; the tails go to the scalar ranges.
 
 #include <cstdint>
 
@@ -59,6 +59,23 @@ void CannyClassifyRow(const CannyRow& r, const CannyLevels& t, std::uint8_t* out
   out[w - 1] = kCannyNone;
 }
 
+void CannyGateRow(const std::uint8_t* classes, const float* gate, float depth, int width,
+                  std::uint8_t* out) {
+  const hn::ScalableTag<float> d;
+  const hn::RebindToSigned<decltype(d)> di;
+  const hn::Rebind<std::uint8_t, decltype(di)> du8;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const auto limit = hn::Set(d, depth);
+  int x = 0;
+  // Each vector reads its lanes before it stores them, so out may be classes.
+  for (; x + n <= width; x += n) {
+    const auto cls = hn::PromoteTo(di, hn::LoadU(du8, classes + x));
+    const auto closed = hn::RebindMask(di, hn::Lt(hn::LoadU(d, gate + x), limit));
+    hn::StoreU(hn::DemoteTo(du8, hn::IfThenZeroElse(closed, cls)), du8, out + x);
+  }
+  detail::canny_gate_range(classes, gate, depth, x, width, out);
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace dco::kernels
 HWY_AFTER_NAMESPACE();
@@ -67,9 +84,15 @@ HWY_AFTER_NAMESPACE();
 namespace dco::kernels {
 
 HWY_EXPORT(CannyClassifyRow);
+HWY_EXPORT(CannyGateRow);
 
 void canny_classify_row(const CannyRow& row, const CannyLevels& levels, std::uint8_t* out) {
   HWY_DYNAMIC_DISPATCH(CannyClassifyRow)(row, levels, out);
+}
+
+void canny_gate_row(const std::uint8_t* classes, const float* gate, float depth, int width,
+                    std::uint8_t* out) {
+  HWY_DYNAMIC_DISPATCH(CannyGateRow)(classes, gate, depth, width, out);
 }
 
 }  // namespace dco::kernels

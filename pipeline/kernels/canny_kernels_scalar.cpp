@@ -11,4 +11,9 @@ void canny_classify_row(const CannyRow& row, const CannyLevels& levels, std::uin
   out[row.width - 1] = kCannyNone;
 }
 
+void canny_gate_row(const std::uint8_t* classes, const float* gate, float depth, int width,
+                    std::uint8_t* out) {
+  detail::canny_gate_range(classes, gate, depth, 0, width, out);
+}
+
 }  // namespace dco::kernels::scalar

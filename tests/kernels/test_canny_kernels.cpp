@@ -57,6 +57,31 @@ TEST(CannyKernels, ClassifyRowMatchesScalar) {
   });
 }
 
+TEST(CannyKernels, GateRowMatchesScalarAndTheRule) {
+  // Gate values on both sides of depth and at it exactly; in place too (out = classes).
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> pick(0, 2), level(0, 6);
+  const std::uint8_t classes_of[3] = {kCannyNone, kCannyWeak, kCannyStrong};
+  const float depth = 0.03f;
+  for_each_target([&] {
+    for (const int w : {0, 1, 3, 15, 16, 17, 31, 64, 65, 130, 257}) {
+      std::vector<std::uint8_t> classes(static_cast<std::size_t>(w));
+      std::vector<float> gate(classes.size());
+      for (auto& c : classes) c = classes_of[pick(rng)];
+      for (float& g : gate) g = 0.01f * static_cast<float>(level(rng));
+      std::vector<std::uint8_t> expected(classes.size(), 7), actual(classes.size(), 7);
+      scalar::canny_gate_row(classes.data(), gate.data(), depth, w, expected.data());
+      canny_gate_row(classes.data(), gate.data(), depth, w, actual.data());
+      ASSERT_EQ(actual, expected) << "w " << w;
+      for (int x = 0; x < w; ++x)
+        ASSERT_EQ(expected[x], gate[x] < depth ? kCannyNone : classes[x])
+            << "w " << w << " x " << x;
+      canny_gate_row(classes.data(), gate.data(), depth, w, classes.data());
+      ASSERT_EQ(classes, expected) << "in place, w " << w;
+    }
+  });
+}
+
 TEST(CannyKernels, ClassifiesByDirectionThresholdsAndGate) {
   // Column 2 is 0.1 (above high) with neighbours 0.05 to its left and right and 0.2 above it.
   std::vector<float> above(5, 0.0f), row = {0, 0.05f, 0.1f, 0.05f, 0}, below(5, 0.0f);

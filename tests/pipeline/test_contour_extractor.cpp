@@ -19,6 +19,7 @@
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
+#include "dco/kernels/canny_kernels.hpp"
 #include "dco/pipeline/contour/gated_canny.hpp"
 #include "dco/pipeline/contour/stereo_cue.hpp"
 #include "support/same_bytes.hpp"
@@ -588,11 +589,17 @@ TEST(ContourExtractor, RejectsInconsistentInputs) {
   in = scene.inputs();
   in.stereo_cue = disparity.view();  // one row short
   EXPECT_THAT(compute_error(in), HasSubstr("stereo_cue is"));
+  in = scene.inputs();
+  Image<std::uint8_t> classes(kInW - 1, kInH);
+  classes.fill(0);
+  in.canny_classes = classes.view();
+  EXPECT_THAT(compute_error(in), HasSubstr("canny_classes is"));
 }
 
-// Given the image's gradients (intensity_gradients) and the stereo cue (stereo_cue), as the
-// real-time runtime's stereo thread makes them, the stage gives the same M_fuse and contours with
-// and without the flow cue, leaves out.m_intensity alone and reports no time for the gradients.
+// Given the image's gradients and Canny classes (intensity_gradients_and_classes) and the stereo
+// cue (stereo_cue), as the real-time runtime's stereo thread makes them, the stage gives the same
+// M_fuse and contours with and without the flow cue, leaves out.m_intensity alone and reports no
+// time for the gradients. It gates the classes it is given rather than classifying again.
 TEST(ContourExtractor, TakesTheGradientsAndStereoCueTheCallerMade) {
   const MovingSquare scene;
   const ContourParams params;
@@ -602,7 +609,7 @@ TEST(ContourExtractor, TakesTheGradientsAndStereoCueTheCallerMade) {
     for (int x = 0; x < kW; ++x) disparity.at(x, y) = x < kW / 3 ? 20.0f : 8.0f;
   GradientScratch scratch;
   Image<float> m_intensity, cue;
-  Image<std::uint8_t> direction;
+  Image<std::uint8_t> direction, classes;
   StereoCueScratch cue_scratch;
   for (const bool flow : {true, false}) {
     ContourInputs in = scene.inputs();
@@ -611,13 +618,15 @@ TEST(ContourExtractor, TakesTheGradientsAndStereoCueTheCallerMade) {
     const auto extractor = make_cpu_contour_extractor(params);
     ContourOutputs expected, given_out;
     extractor->compute(in, expected);
-    intensity_gradients(in.image, scratch, m_intensity, direction);
+    intensity_gradients_and_classes(in.image, CannyThresholds{}, scratch, m_intensity, direction,
+                                    classes);
     stereo_cue(in.disparity, static_cast<float>(params.stereo_jump), params.box_size, cue_scratch,
                cue);
     EXPECT_TRUE(dco::testing::same_bytes(m_intensity, expected.m_intensity));
     in.m_intensity = m_intensity.cview();
     in.direction = direction.cview();
     in.stereo_cue = cue.cview();
+    in.canny_classes = classes.cview();
     given_out.m_intensity = Image<float>(3, 2);
     given_out.m_intensity.fill(7.0f);
     extractor->compute(in, given_out);
@@ -628,6 +637,18 @@ TEST(ContourExtractor, TakesTheGradientsAndStereoCueTheCallerMade) {
     EXPECT_EQ(extractor->last_timings().gaussian_ms, 0);
     // Not trivially equal: the step shows in the filter.
     EXPECT_GT(given_out.m_fuse.at(kW / 3, kH / 2), 0.2f) << flow;  // 2 of 9 columns jump
+    // The classes given are the ones gated: without a single edge class, no contour.
+    Image<std::uint8_t> no_classes(classes.width(), classes.height());
+    no_classes.fill(kernels::kCannyNone);
+    in.canny_classes = no_classes.cview();
+    ContourOutputs none_out;
+    extractor->compute(in, none_out);
+    int edges = 0, none = 0;
+    for (int y = 0; y < kInH; ++y)
+      for (int x = 0; x < kInW; ++x)
+        edges += expected.contours.at(x, y) != 0, none += none_out.contours.at(x, y) != 0;
+    EXPECT_GT(edges, 0) << flow;
+    EXPECT_EQ(none, 0) << flow;
   }
 }
 

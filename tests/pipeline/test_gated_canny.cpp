@@ -14,6 +14,7 @@
 #include "dco/core/image.hpp"
 #include "dco/kernels/canny_kernels.hpp"
 #include "dco/pipeline/contour/separable_filters.hpp"
+#include "support/same_bytes.hpp"
 
 namespace dco::contour {
 namespace {
@@ -233,6 +234,54 @@ TEST(GatedCanny, TinyImagesHaveNoEdges) {
     gated_canny(mag.view(), dir.view(), {}, {}, edges.view(), scratch);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) EXPECT_EQ(edges.at(x, y), 0);
+  }
+}
+
+// A frame's classes made before its gate, then gated, are gated_canny's bytes: with no gate, a
+// gate of the image's size, of half its size (the contour stage's) and of another size, on a
+// textured image with an outline; intensity_gradients_and_classes makes the classes of its own
+// gradients in the same pass, on every size (one to three rows or columns have no interior).
+TEST(GatedCanny, ClassesMadeBeforeTheGateGiveTheSameEdges) {
+  std::mt19937 rng(12);
+  std::uniform_int_distribution<int> grey(0, 60);
+  std::uniform_real_distribution<float> level(0.0f, 0.06f);
+  GradientScratch scratch;
+  CannyScratch canny_scratch;
+  const CannyThresholds t;
+  for (const auto& [w, h] : {std::pair{97, 61}, std::pair{160, 90}, std::pair{3, 3},
+                             std::pair{64, 2}, std::pair{2, 40}, std::pair{1, 1}}) {
+    Image<std::uint8_t> img(w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        img.at(x, y) = static_cast<std::uint8_t>(grey(rng) + (x > w / 3 && y > h / 4 ? 150 : 0));
+    Image<float> mag, own_mag;
+    Image<std::uint8_t> dir, own_dir, own_classes;
+    intensity_gradients(img.view(), scratch, mag, dir);
+    Image<std::uint8_t> classes(w, h);
+    classes.fill(9);
+    canny_classes(mag.view(), dir.view(), t, classes.view());
+    intensity_gradients_and_classes(img.view(), t, scratch, own_mag, own_dir, own_classes);
+    ASSERT_TRUE(dco::testing::same_bytes(own_mag, mag)) << w << "x" << h;
+    ASSERT_TRUE(dco::testing::same_bytes(own_dir, dir)) << w << "x" << h;
+    ASSERT_TRUE(dco::testing::same_bytes(own_classes, classes)) << w << "x" << h;
+    int kept = 0;
+    for (const auto& [gw, gh] :
+         {std::pair{0, 0}, std::pair{w, h}, std::pair{(w + 1) / 2, (h + 1) / 2},
+          std::pair{std::max(1, w / 3), std::max(1, h / 5)}}) {
+      Image<float> gate(gw, gh);
+      for (int y = 0; y < gh; ++y)
+        for (int x = 0; x < gw; ++x) gate.at(x, y) = level(rng);
+      Image<std::uint8_t> expected(w, h), actual(w, h);
+      actual.fill(9);
+      gated_canny(mag.view(), dir.view(), gate.view(), t, expected.view(), canny_scratch);
+      gated_canny_classified(classes.view(), gate.view(), t, actual.view(), canny_scratch);
+      ASSERT_TRUE(dco::testing::same_bytes(actual, expected))
+          << w << "x" << h << " gate " << gw << "x" << gh;
+      kept += count_edges(expected, 0, w);
+    }
+    if (w > 50 && h > 50) {
+      EXPECT_GT(kept, 0) << w << "x" << h;  // not trivially equal
+    }
   }
 }
 

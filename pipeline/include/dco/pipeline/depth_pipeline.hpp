@@ -56,10 +56,11 @@ struct StereoSlot {
   Image<float> raw_disparity;        // internal px, every pixel
   Image<float> sparse;               // input px
   Image<float> planar;               // sparse after densify::smooth_matches, when planes_done
-  // When early_contour_done: the image's M_I and gradient directions, and (with
+  // When early_contour_done: the image's M_I, gradient directions and Canny classes, and (with
   // contour.use_stereo) the stereo cue of raw_disparity.
   Image<float> m_intensity;
   Image<std::uint8_t> direction;
+  Image<std::uint8_t> canny_classes;
   Image<float> stereo_cue;
   stereo::StereoTimings stereo_timings;
   int stereo_scale = 1;  // internal downscale of the stage
@@ -93,9 +94,10 @@ void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> 
 //    when the step moves. The output is the same bytes either way.
 void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmoother& planes,
                  StereoSlot& slot, bool here = true);
-// 2c. The contour step's work on this frame alone: the image's intensity gradients
-//    (contour::intensity_gradients, M_I and directions) and, with params.use_stereo, the stereo
-//    cue of its raw disparity (contour::stereo_cue). Run after steps 1 and 2 when `here`, so that
+// 2c. The contour step's work on this frame alone: the image's intensity gradients and their
+//    Canny classes (contour::intensity_gradients_and_classes: M_I, directions, the suppression
+//    and dual threshold before the gate) and, with params.use_stereo, the stereo cue of its raw
+//    disparity (contour::stereo_cue). Run after steps 1 and 2 when `here`, so that
 //    the stereo thread can carry it. Without `here` the contour step does it; the slot's images
 //    and `scratch` are still sized. The output is the same bytes either way.
 void early_contour_frame(const contour::ContourParams& params, EarlyContourScratch& scratch,

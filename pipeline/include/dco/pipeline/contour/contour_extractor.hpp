@@ -73,13 +73,17 @@ struct ContourInputs {
   // The stereo cue of `disparity` (stereo_cue with stereo_jump and box_size) when the caller made
   // it: then compute() takes it instead (with use_stereo).
   ImageView<const float> stereo_cue;
+  // The image's Canny classes (canny_classes of its M_I and directions with t_low and t_high)
+  // when the caller made them: then compute() gates those (gated_canny_classified) instead of
+  // classifying the gradients. A stage may also ignore them: the edges are the same bytes.
+  ImageView<const std::uint8_t> canny_classes;
 };
 
 // Milliseconds per step of the last compute(), named after Table 2: flow = both fields (DIS or
 // reused), amplitude = Eq. 6-8 on both, fusion = projection test and Eq. 12, box and normalise =
 // the flow cue's, stereo_cue = disparity jumps with their box filter and the max with the flow cue,
 // gaussian = the 5x5 blur and the Sobel gradients (0 when the inputs carry them), canny =
-// suppression, gate and hysteresis.
+// suppression, gate and hysteresis (the gate and hysteresis when the inputs carry the classes).
 struct ContourTimings {
   double flow_ms = 0, amplitude_ms = 0, fusion_ms = 0, box_ms = 0, normalise_ms = 0,
          stereo_cue_ms = 0, gaussian_ms = 0, canny_ms = 0, total_ms = 0;

@@ -61,12 +61,31 @@ struct CannyScratch {
   std::vector<std::uint8_t> seeds;   // hysteresis seeds of one row, and eight zero bytes
 };
 
+// intensity_gradients, and canny_classes of its output (`classes` resized to the image), in one
+// pass: each row is classified as soon as the row below it has its gradients.
+void intensity_gradients_and_classes(ImageView<const std::uint8_t> image,
+                                     const CannyThresholds& thresholds, GradientScratch& scratch,
+                                     Image<float>& m_intensity, Image<std::uint8_t>& direction,
+                                     Image<std::uint8_t>& classes);
+
 // Writes 255 on edge pixels of `edges` and 0 elsewhere. `gate` (may be empty: no gating) can be
 // smaller than the image: pixel (x, y) reads gate(x * gate.width / width, y * gate.height /
 // height), i.e. (x / scale, y / scale) rounded down. The one-pixel image border is never an edge.
 void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t> direction,
                  ImageView<const float> gate, const CannyThresholds& thresholds,
                  ImageView<std::uint8_t> edges, CannyScratch& scratch);
+
+// The suppression and dual threshold of gated_canny without its gate: kernels::kCannyNone,
+// kCannyWeak or kCannyStrong per pixel, kCannyNone on the one-pixel border. They need only the
+// image, so a frame's classes can be made before its gate (the depth-contour filter) exists.
+void canny_classes(ImageView<const float> magnitude, ImageView<const std::uint8_t> direction,
+                   const CannyThresholds& thresholds, ImageView<std::uint8_t> classes);
+
+// gated_canny given the classes canny_classes made of the same magnitude and directions with the
+// same thresholds: the same bytes, with the gate applied to the classes.
+void gated_canny_classified(ImageView<const std::uint8_t> classes, ImageView<const float> gate,
+                            const CannyThresholds& thresholds, ImageView<std::uint8_t> edges,
+                            CannyScratch& scratch);
 
 // The hysteresis step of gated_canny on its classified map (0, kernels::kCannyWeak,
 // kernels::kCannyStrong, with 0 on the border rows and columns): every weak pixel 8-connected to

@@ -1,9 +1,9 @@
 #pragma once
 
-// Row kernel of the gated Canny of the contour stage (dco::contour::gated_canny): non-maximum
-// suppression, the depth gate and the dual threshold of one row. Dispatched at run time like the
-// other kernels; dco::kernels::scalar::canny_classify_row is the reference, and the vector
-// version gives identical results (comparisons only).
+// Row kernels of the gated Canny of the contour stage (dco::contour::gated_canny): non-maximum
+// suppression, the depth gate and the dual threshold of one row, and the gate alone on a row
+// classified without it. Dispatched at run time like the other kernels; the dco::kernels::scalar
+// versions are the reference, and the vector versions give identical results (comparisons only).
 
 #include <cstdint>
 
@@ -34,8 +34,16 @@ struct CannyLevels {
 // kCannyStrong when m > high, kCannyWeak otherwise. out[0] and out[width - 1] are kCannyNone.
 void canny_classify_row(const CannyRow& row, const CannyLevels& levels, std::uint8_t* out);
 
+// The depth gate on a row canny_classify_row classified without one: out[x] = kCannyNone where
+// gate[x] < depth, else classes[x], for x < width. Gating first or after is the same: the gate
+// masks single pixels. out may be classes.
+void canny_gate_row(const std::uint8_t* classes, const float* gate, float depth, int width,
+                    std::uint8_t* out);
+
 namespace scalar {
 void canny_classify_row(const CannyRow& row, const CannyLevels& levels, std::uint8_t* out);
+void canny_gate_row(const std::uint8_t* classes, const float* gate, float depth, int width,
+                    std::uint8_t* out);
 }  // namespace scalar
 
 }  // namespace dco::kernels
