@@ -1,6 +1,7 @@
 #include "dco/pipeline/contour/gated_canny.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <cmath>
 #include <cstring>
@@ -217,7 +218,7 @@ void canny_hysteresis(ImageView<std::uint8_t> edges, CannyScratch& scratch) {
   // pixels next to a strong one (marked strong at once) rather than from every strong pixel. A
   // row's seeds are found by byte compares over the whole row first; a weak pixel whose strong
   // neighbour was itself seeded in the same row is reached by the growth below instead, so the
-  // result is the same. Seeds are few in a row: eight at a time, a word without one is skipped.
+  // result is the same. The seeds are read eight bytes at a time, and only the set ones visited.
   scratch.seeds.resize(static_cast<std::size_t>(w) + 8);
   std::uint8_t* seeds = scratch.seeds.data();
   std::fill(seeds + w, seeds + w + 8, std::uint8_t{0});
@@ -227,9 +228,10 @@ void canny_hysteresis(ImageView<std::uint8_t> edges, CannyScratch& scratch) {
     for (int x = 0; x < w; x += 8) {
       std::uint64_t word;
       std::memcpy(&word, seeds + x, sizeof word);
-      if (word == 0) continue;
-      for (int i = x; i < std::min(x + 8, w); ++i) {
-        if (seeds[i] == 0) continue;
+      // A seed is a byte of 1 (the bytes past the row are 0): the lowest set bit is the next.
+      if constexpr (std::endian::native != std::endian::little) word = __builtin_bswap64(word);
+      for (; word != 0; word &= word - 1) {
+        const int i = x + std::countr_zero(word) / 8;
         base[row + i] = kEdge;
         stack[top++] = static_cast<std::int32_t>(row + i);
       }
