@@ -179,6 +179,13 @@ inline void block_vote_range(const std::uint32_t* votes, int x, const std::int32
 }
 
 // The left image's state: columns [begin, end).
+// The left image's state of columns [begin, end) as it is before disparity 0.
+inline void wta_start_range(int begin, int end, const WtaRow& r) {
+  for (int x = begin; x < end; ++x)
+    pixel::wta_start(r.best[x], r.second[x], r.below[x], r.above[x], r.prev1[x], r.prev2[x],
+                     r.runmin[x], r.disp[x]);
+}
+
 inline void wta_left_range(const std::uint16_t* cost, int begin, int end, int d, const WtaRow& r) {
   for (int x = begin; x < end; ++x)
     pixel::wta_feed(cost[x], d, r.best[x], r.second[x], r.below[x], r.above[x], r.prev1[x],

@@ -1025,16 +1025,24 @@ void WtaUpdateRange(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int c
   const auto no_cost = hn::Set(du, kNoCost);
   const auto one = hn::Set(di, 1);
   const auto first = hn::Set(di, static_cast<std::int16_t>(d));
+  // Disparity 0 starts the left state: it is set, not loaded.
+  const bool fresh = d == 0;
+  const auto no_disparity = hn::Set(di, pixel::kInvalid);
   int x = begin;
   for (; x + n <= end; x += n) {
-    auto best = hn::LoadU(du, s.best + x);
-    auto second = hn::LoadU(du, s.second + x);
-    auto below = hn::LoadU(du, s.below + x);
-    auto above = hn::LoadU(du, s.above + x);
-    auto prev1 = hn::LoadU(du, s.prev1 + x);
-    auto prev2 = hn::LoadU(du, s.prev2 + x);
-    auto runmin = hn::LoadU(du, s.runmin + x);
-    auto disp = hn::LoadU(di, s.disp + x);
+    auto best = no_cost, second = no_cost, below = no_cost, above = no_cost;
+    auto prev1 = no_cost, prev2 = no_cost, runmin = no_cost;
+    auto disp = no_disparity;
+    if (!fresh) {
+      best = hn::LoadU(du, s.best + x);
+      second = hn::LoadU(du, s.second + x);
+      below = hn::LoadU(du, s.below + x);
+      above = hn::LoadU(du, s.above + x);
+      prev1 = hn::LoadU(du, s.prev1 + x);
+      prev2 = hn::LoadU(du, s.prev2 + x);
+      runmin = hn::LoadU(du, s.runmin + x);
+      disp = hn::LoadU(di, s.disp + x);
+    }
     VI dk = first;  // the disparity of the step, in every lane
     // One disparity: pixel::wta_feed on a vector of pixels. `older` is the cost two disparities
     // back; the caller rotates the names, so no step copies a register.
@@ -1073,6 +1081,7 @@ void WtaUpdateRange(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int c
     hn::StoreU(runmin, du, s.runmin + x);
     hn::StoreU(disp, di, s.disp + x);
   }
+  if (fresh) detail::wta_start_range(x, end, s);
   for (int k = 0; k < count; ++k) detail::wta_left_range(cost + k * cost_stride, x, end, d + k, s);
   // Right pixel r at disparity d + k is left pixel r + d + k. The right pixels whose left pixels
   // at every disparity of the call lie in [begin, end) keep their state in registers over the
@@ -1126,17 +1135,35 @@ void WtaSkipRange(int count, int begin, int end, int d, const WtaRow& s) {
   const int n = static_cast<int>(hn::Lanes(du));
   const auto no_cost = hn::Set(du, kNoCost);
   const auto winner_below = hn::Set(di, static_cast<std::int16_t>(d - 1));  // d == disp + 1
+  // Disparity 0 starts the left state: it is set, not loaded (the winner and its costs too).
+  const bool fresh = d == 0;
+  const auto no_disparity = hn::Set(di, pixel::kInvalid);
   int x = begin;
   for (; x + n <= end; x += n) {
-    const auto prev1 = hn::LoadU(du, s.prev1 + x);
-    auto runmin = hn::Min(hn::LoadU(du, s.runmin + x), hn::LoadU(du, s.prev2 + x));
+    auto prev1 = no_cost, prev2 = no_cost, runmin = no_cost, above = no_cost;
+    auto disp = no_disparity;
+    if (!fresh) {
+      prev1 = hn::LoadU(du, s.prev1 + x);
+      prev2 = hn::LoadU(du, s.prev2 + x);
+      runmin = hn::LoadU(du, s.runmin + x);
+      above = hn::LoadU(du, s.above + x);
+      disp = hn::LoadU(di, s.disp + x);
+    }
+    runmin = hn::Min(runmin, prev2);
     if (count >= 2) runmin = hn::Min(runmin, prev1);
     hn::StoreU(runmin, du, s.runmin + x);
-    const auto next = hn::RebindMask(du, hn::Eq(hn::LoadU(di, s.disp + x), winner_below));
-    hn::StoreU(hn::IfThenElse(next, no_cost, hn::LoadU(du, s.above + x)), du, s.above + x);
+    const auto next = hn::RebindMask(du, hn::Eq(disp, winner_below));
+    hn::StoreU(hn::IfThenElse(next, no_cost, above), du, s.above + x);
     hn::StoreU(count >= 2 ? no_cost : prev1, du, s.prev2 + x);
     hn::StoreU(no_cost, du, s.prev1 + x);
+    if (fresh) {
+      hn::StoreU(no_cost, du, s.best + x);
+      hn::StoreU(no_cost, du, s.second + x);
+      hn::StoreU(no_cost, du, s.below + x);
+      hn::StoreU(disp, di, s.disp + x);
+    }
   }
+  if (fresh) detail::wta_start_range(x, end, s);
   for (; x < end; ++x)
     pixel::wta_skip(d, count, s.above[x], s.prev1[x], s.prev2[x], s.runmin[x], s.disp[x]);
 }

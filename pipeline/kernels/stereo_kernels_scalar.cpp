@@ -150,6 +150,7 @@ void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int c
 
 void wta_update_range(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int begin,
                       int end, int d, const WtaRow& row) {
+  if (d == 0) detail::wta_start_range(begin, end, row);
   for (int k = 0; k < count; ++k) {
     const std::uint16_t* c = cost + k * cost_stride;
     detail::wta_left_range(c, begin, end, d + k, row);
@@ -162,6 +163,7 @@ void wta_skip_row(int count, int width, int d, const WtaRow& row) {
 }
 
 void wta_skip_range(int count, int begin, int end, int d, const WtaRow& row) {
+  if (d == 0) detail::wta_start_range(begin, end, row);
   for (int x = begin; x < end; ++x)
     pixel::wta_skip(d, count, row.above[x], row.prev1[x], row.prev2[x], row.runmin[x], row.disp[x]);
 }

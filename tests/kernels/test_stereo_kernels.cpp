@@ -707,11 +707,12 @@ TEST(StereoKernels, BlockVoteMatchesScalar) {
   }
 }
 
-// Winner-takes-all state for one row, owned.
+// Winner-takes-all state for one row, owned. With `left_over`, the left image's state holds
+// random values instead (a previous frame's): disparity 0 must start it afresh without them.
 struct WtaState {
   std::vector<std::uint16_t> best, second, below, above, prev1, prev2, runmin, best_right;
   std::vector<std::int16_t> disp, disp_right;
-  explicit WtaState(int w)
+  explicit WtaState(int w, std::mt19937* left_over = nullptr)
       : best(w, kNoCost),
         second(w, kNoCost),
         below(w, kNoCost),
@@ -721,7 +722,12 @@ struct WtaState {
         runmin(w, kNoCost),
         best_right(w, kNoCost),
         disp(w, -1),
-        disp_right(w, -1) {}
+        disp_right(w, -1) {
+    if (left_over == nullptr) return;
+    for (auto* v : {&best, &second, &below, &above, &prev1, &prev2, &runmin})
+      for (auto& e : *v) e = static_cast<std::uint16_t>((*left_over)() % 20);
+    for (auto& e : disp) e = static_cast<std::int16_t>((*left_over)() % 40);
+  }
   WtaRow row() {
     return {best.data(),  second.data(), below.data(), above.data(),      prev1.data(),
             prev2.data(), runmin.data(), disp.data(),  best_right.data(), disp_right.data()};
@@ -742,14 +748,14 @@ TEST(StereoKernels, WinnerTakesAllMatchesScalar) {
       WtaState expected(w);
       for (int d = 0; d < disparities; ++d)
         scalar::wta_update_row(volume.data() + d * stride, stride, 1, w, d, expected.row());
-      WtaState batched(w);  // the scalar reference fed several disparities per call
+      WtaState batched(w, &rng);  // the scalar reference fed several disparities per call
       for (int d = 0; d < disparities; d += 3)
         scalar::wta_update_row(volume.data() + d * stride, stride, std::min(3, disparities - d), w,
                                d, batched.row());
       ASSERT_TRUE(batched == expected);
       for (const int batch : {1, 4, 7, 16}) {
         for_each_target([&] {
-          WtaState state(w);
+          WtaState state(w, &rng);
           for (int d = 0; d < disparities; d += batch)
             wta_update_row(volume.data() + d * stride, stride, std::min(batch, disparities - d), w,
                            d, state.row());
@@ -773,34 +779,47 @@ TEST(StereoKernels, WinnerTakesAllSkippingBatchesMatchesScalar) {
       for (int x = 0; x < w; ++x)
         volume[d * stride + x] = static_cast<std::uint16_t>(rng() % (d % 3 == 0 ? 9 : 50));
     for (const int batch : {1, 2, 5, 16}) {
-      // Batches 1, 3 and 4 skipped: a skip of one disparity and runs of skips both occur.
-      const auto searched = [&](int d) {
-        const int b = d / batch;
-        return b != 1 && b != 3 && b != 4;
-      };
-      WtaState expected(w);
-      for (int d = 0; d < disparities; d += batch) {
-        const int count = std::min(batch, disparities - d);
-        if (searched(d))
-          scalar::wta_update_row(volume.data() + d * stride, stride, count, w, d, expected.row());
-        else
-          scalar::wta_skip_row(count, w, d, expected.row());
-      }
-      for (int x = 0; x < w; ++x) {
-        const int winner = expected.disp[x];
-        ASSERT_TRUE(winner >= 0 && searched(winner)) << "x " << x << " winner " << winner;
-      }
-      for_each_target([&] {
-        WtaState state(w);
+      // Batches 1, 3 and 4 skipped: a skip of one disparity and runs of skips both occur. Or
+      // with disparity 0's batch skipped too: the left state then starts with a skip.
+      for (const bool skip_first : {false, true}) {
+        const auto searched = [&](int d) {
+          const int b = d / batch;
+          return b != 1 && b != 3 && b != 4 && !(skip_first && b == 0);
+        };
+        WtaState expected(w);
         for (int d = 0; d < disparities; d += batch) {
           const int count = std::min(batch, disparities - d);
           if (searched(d))
-            wta_update_row(volume.data() + d * stride, stride, count, w, d, state.row());
+            scalar::wta_update_row(volume.data() + d * stride, stride, count, w, d, expected.row());
           else
-            wta_skip_row(count, w, d, state.row());
+            scalar::wta_skip_row(count, w, d, expected.row());
         }
-        ASSERT_TRUE(state == expected) << "width " << w << " batch " << batch;
-      });
+        for (int x = 0; x < w; ++x) {
+          const int winner = expected.disp[x];
+          ASSERT_TRUE(winner >= 0 && searched(winner)) << "x " << x << " winner " << winner;
+        }
+        WtaState reference(w, &rng);
+        for (int d = 0; d < disparities; d += batch) {
+          const int count = std::min(batch, disparities - d);
+          if (searched(d))
+            scalar::wta_update_row(volume.data() + d * stride, stride, count, w, d,
+                                   reference.row());
+          else
+            scalar::wta_skip_row(count, w, d, reference.row());
+        }
+        ASSERT_TRUE(reference == expected) << "scalar, width " << w << " batch " << batch;
+        for_each_target([&] {
+          WtaState state(w, &rng);
+          for (int d = 0; d < disparities; d += batch) {
+            const int count = std::min(batch, disparities - d);
+            if (searched(d))
+              wta_update_row(volume.data() + d * stride, stride, count, w, d, state.row());
+            else
+              wta_skip_row(count, w, d, state.row());
+          }
+          ASSERT_TRUE(state == expected) << "width " << w << " batch " << batch;
+        });
+      }
     }
   }
 }
@@ -843,7 +862,7 @@ TEST(StereoKernels, WinnerTakesAllOverColumnRangesEqualsTheRowWithCostsLeftOut) 
         scalar::wta_update_row(left_out.data() + d * stride, stride,
                                std::min(batch, disparities - d), w, d, expected.row());
       const auto ranged = [&](auto update, auto skip) {
-        WtaState state(w);
+        WtaState state(w, &rng);
         for (int d = 0, i = 0; d < disparities; d += batch, ++i) {
           const int count = std::min(batch, disparities - d);
           for (int r = 0; r < 3; ++r) {

@@ -221,16 +221,37 @@ TEST(WinnerTakesAll, SkippedDisparitiesAreLeftOutOfTheSearch) {
     }
 }
 
-TEST(WinnerTakesAll, ResetClearsEverything) {
+// Reset starts the right image's state; the left image's starts with each pixel's disparity 0,
+// skipped or fed, whatever a previous frame left in it.
+TEST(WinnerTakesAll, ResetAndDisparityZeroStartAfresh) {
   WinnerTakesAll wta;
-  wta.reset(3, 2);
-  for (int y = 0; y < 2; ++y)
-    for (int x = 0; x < 3; ++x) {
-      EXPECT_EQ(wta.left_disparity().at(x, y), kInv);
-      EXPECT_EQ(wta.right_disparity().at(x, y), kInv);
-      EXPECT_EQ(wta.best_cost().at(x, y), kNo);
-      EXPECT_EQ(wta.second_cost().at(x, y), kNo);
+  const std::vector<std::uint16_t> costs = {7, 3, 9, 1, 4, 2};  // disparities 0 and 1, 3 columns
+  for (const bool skip_first : {true, false}) {
+    wta.reset(3, 2);
+    for (int y = 0; y < 2; ++y) wta.update_row(costs.data(), 3, 2, y, 0);  // a previous frame
+    ASSERT_NE(wta.best_cost().at(0, 0), kNo);
+    wta.reset(3, 2);
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 3; ++x) {
+        EXPECT_EQ(wta.right_disparity().at(x, y), kInv);
+      }
+    const std::vector<std::uint16_t> none(3, kNo);
+    for (int y = 0; y < 2; ++y) {
+      if (skip_first)
+        wta.skip_row(y, 0, 1);
+      else
+        wta.update_row(none.data(), 3, 1, y, 0);
     }
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 3; ++x) {
+        EXPECT_EQ(wta.left_disparity().at(x, y), kInv) << skip_first;
+        EXPECT_EQ(wta.right_disparity().at(x, y), kInv) << skip_first;
+        EXPECT_EQ(wta.best_cost().at(x, y), kNo) << skip_first;
+        EXPECT_EQ(wta.second_cost().at(x, y), kNo) << skip_first;
+        EXPECT_EQ(wta.cost_below().at(x, y), kNo) << skip_first;
+        EXPECT_EQ(wta.cost_above().at(x, y), kNo) << skip_first;
+      }
+  }
 }
 
 Image<std::int16_t> row16(std::initializer_list<int> v) {

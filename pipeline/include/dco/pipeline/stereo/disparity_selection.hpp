@@ -25,6 +25,8 @@ class WinnerTakesAll {
  public:
   static constexpr std::uint16_t kNoCost = 0xffff;
 
+  // Sizes the state and starts the right image's. The left image's starts with each pixel's
+  // disparity 0 (kernels::wta_update_range), so every pixel must see it, updated or skipped.
   void reset(int width, int height);
   // Slice values must be < kNoCost; d must grow by one from 0 between calls.
   void update(ImageView<const std::uint32_t> slice, int d);

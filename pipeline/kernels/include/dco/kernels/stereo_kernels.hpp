@@ -170,7 +170,9 @@ inline constexpr std::uint16_t kNoCost = 0xffff;
 // Feeds the costs of disparities d .. d + count - 1, those of d + k at cost + k * cost_stride
 // (disparities grow by one from 0 over the calls). A cost of kNoCost leaves that disparity out
 // for that pixel, as wta_skip_row does, and never reaches the right image's state. Several
-// disparities per call keep the state in registers in between.
+// disparities per call keep the state in registers in between. A call for d = 0 (update or
+// skip) starts the left image's state of its pixels afresh (pixel::WtaState's values) without
+// reading it, so only the right image's state needs setting before the first disparity.
 void wta_update_row(const std::uint16_t* cost, std::ptrdiff_t cost_stride, int count, int width,
                     int d, const WtaRow& row);
 // The same for the left pixels [begin, end) only (costs and state indexed by column): the

@@ -141,6 +141,13 @@ struct WtaState {
   std::uint16_t prev1 = kNoCost, prev2 = kNoCost, runmin = kNoCost;
   std::int16_t disp = kInvalid;
 };
+// The state before disparity 0 (WtaState's values), written in place.
+template <class U16, class I16>
+DCO_HD void wta_start(U16& best, U16& second, U16& below, U16& above, U16& prev1, U16& prev2,
+                      U16& runmin, I16& disp) {
+  best = second = below = above = prev1 = prev2 = runmin = kNoCost;
+  disp = kInvalid;
+}
 template <class U16, class I16>
 DCO_HD void wta_feed(std::uint16_t c, int d, U16& best, U16& second, U16& below, U16& above,
                      U16& prev1, U16& prev2, U16& runmin, I16& disp) {
