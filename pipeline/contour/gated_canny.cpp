@@ -169,8 +169,12 @@ void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t>
   assert(magnitude.channels == 1 && direction.same_size(magnitude) && edges.same_size(magnitude));
   const int w = magnitude.width;
   const int h = magnitude.height;
-  zero_rows(edges, 0, h);
-  if (w < 3 || h < 3) return;
+  if (w < 3 || h < 3) {
+    zero_rows(edges, 0, h);
+    return;
+  }
+  zero_rows(edges, 0, 1);  // every other row is written whole below
+  zero_rows(edges, h - 1, h);
   // Non-maximum suppression, depth gate and dual threshold, a row at a time. Of two equal maxima
   // side by side only the first (left/upper) survives, so a plateau still thins to one pixel.
   prepare_gate(gate, w, scratch);
@@ -187,8 +191,12 @@ void gated_canny_classified(ImageView<const std::uint8_t> classes, ImageView<con
   assert(classes.channels == 1 && edges.same_size(classes));
   const int w = classes.width;
   const int h = classes.height;
-  zero_rows(edges, 0, h);
-  if (w < 3 || h < 3) return;
+  if (w < 3 || h < 3) {
+    zero_rows(edges, 0, h);
+    return;
+  }
+  zero_rows(edges, 0, 1);  // every other row is written whole below
+  zero_rows(edges, h - 1, h);
   prepare_gate(gate, w, scratch);
   for (int y = 1; y < h - 1; ++y) {
     if (gate.empty())

@@ -272,6 +272,7 @@ TEST(GatedCanny, ClassesMadeBeforeTheGateGiveTheSameEdges) {
       for (int y = 0; y < gh; ++y)
         for (int x = 0; x < gw; ++x) gate.at(x, y) = level(rng);
       Image<std::uint8_t> expected(w, h), actual(w, h);
+      expected.fill(7);  // neither call may leave a pixel unwritten
       actual.fill(9);
       gated_canny(mag.view(), dir.view(), gate.view(), t, expected.view(), canny_scratch);
       gated_canny_classified(classes.view(), gate.view(), t, actual.view(), canny_scratch);
