@@ -123,6 +123,20 @@ void zero_rows(ImageView<std::uint8_t> image, int begin, int end) {
     std::memset(image.row(y), 0, static_cast<std::size_t>(image.width));
 }
 
+// Zeroes the rows of a Canny map that no pass over its interior rows writes (those rows are
+// written whole, border columns included): every row of a map under 3x3, else the first and the
+// last. Returns whether the map has interior rows.
+bool zero_canny_border(ImageView<std::uint8_t> map) {
+  const int h = map.height;
+  if (map.width < 3 || h < 3) {
+    zero_rows(map, 0, h);
+    return false;
+  }
+  zero_rows(map, 0, 1);
+  zero_rows(map, h - 1, h);
+  return true;
+}
+
 }  // namespace
 
 void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& scratch,
@@ -133,13 +147,10 @@ void intensity_gradients(ImageView<const std::uint8_t> image, GradientScratch& s
 void intensity_gradients_and_classes(ImageView<const std::uint8_t> image, const CannyThresholds& t,
                                      GradientScratch& scratch, Image<float>& m_intensity,
                                      Image<std::uint8_t>& direction, Image<std::uint8_t>& classes) {
-  const int w = image.width, h = image.height;
-  classes.resize(w, h);
-  const bool interior = w >= 3 && h >= 3;
-  if (!interior) zero_rows(classes.view(), 0, h);
+  classes.resize(image.width, image.height);
+  const bool interior = zero_canny_border(classes.view());
   const kernels::CannyLevels levels{t.low, t.high, t.depth};
   gradients_rows(image, scratch, m_intensity, direction, [&](int y) {
-    if (y == 0 || y + 1 == h) std::memset(classes.row(y), 0, static_cast<std::size_t>(w));
     // Row y - 1 reads gradient rows y - 2 .. y, all written now.
     if (interior && y >= 2)
       classify_row(m_intensity.cview(), direction.cview(), y - 1, nullptr, levels,
@@ -150,14 +161,8 @@ void intensity_gradients_and_classes(ImageView<const std::uint8_t> image, const 
 void canny_classes(ImageView<const float> magnitude, ImageView<const std::uint8_t> direction,
                    const CannyThresholds& t, ImageView<std::uint8_t> classes) {
   assert(magnitude.channels == 1 && direction.same_size(magnitude) && classes.same_size(magnitude));
-  const int w = magnitude.width;
   const int h = magnitude.height;
-  if (w < 3 || h < 3) {
-    zero_rows(classes, 0, h);
-    return;
-  }
-  zero_rows(classes, 0, 1);
-  zero_rows(classes, h - 1, h);
+  if (!zero_canny_border(classes)) return;
   const kernels::CannyLevels levels{t.low, t.high, t.depth};
   for (int y = 1; y < h - 1; ++y)
     classify_row(magnitude, direction, y, nullptr, levels, classes.row(y));
@@ -169,12 +174,7 @@ void gated_canny(ImageView<const float> magnitude, ImageView<const std::uint8_t>
   assert(magnitude.channels == 1 && direction.same_size(magnitude) && edges.same_size(magnitude));
   const int w = magnitude.width;
   const int h = magnitude.height;
-  if (w < 3 || h < 3) {
-    zero_rows(edges, 0, h);
-    return;
-  }
-  zero_rows(edges, 0, 1);  // every other row is written whole below
-  zero_rows(edges, h - 1, h);
+  if (!zero_canny_border(edges)) return;
   // Non-maximum suppression, depth gate and dual threshold, a row at a time. Of two equal maxima
   // side by side only the first (left/upper) survives, so a plateau still thins to one pixel.
   prepare_gate(gate, w, scratch);
@@ -191,12 +191,7 @@ void gated_canny_classified(ImageView<const std::uint8_t> classes, ImageView<con
   assert(classes.channels == 1 && edges.same_size(classes));
   const int w = classes.width;
   const int h = classes.height;
-  if (w < 3 || h < 3) {
-    zero_rows(edges, 0, h);
-    return;
-  }
-  zero_rows(edges, 0, 1);  // every other row is written whole below
-  zero_rows(edges, h - 1, h);
+  if (!zero_canny_border(edges)) return;
   prepare_gate(gate, w, scratch);
   for (int y = 1; y < h - 1; ++y) {
     if (gate.empty())
