@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "boundary_ranges.hpp"
 #include "dco/kernels/boundary_kernels.hpp"
 
 #undef HWY_TARGET_INCLUDE
@@ -41,6 +42,57 @@ std::uint32_t BoundarySideCost(const pixel::GreyPair& im, const BoundaryWindow& 
   return hn::GetLane(hn::SumOfLanes(d32, sum));
 }
 
+// The scalar rule's selects (not hn::Min / hn::Max, whose NaN and signed-zero rules differ
+// between targets), a vector of columns at a time.
+void BoundaryColumnSides(const float* const* rows, int count, int width, float* HWY_RESTRICT far,
+                         float* HWY_RESTRICT near) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const auto none = hn::Set(d, pixel::infinity());
+  const auto no_near = hn::Set(d, -pixel::infinity());
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    auto lo = none, hi = no_near;
+    for (int k = 0; k < count; ++k) {
+      const auto v = hn::LoadU(d, rows[k] + x);
+      // v < lo implies v < +inf; v > hi does not.
+      lo = hn::IfThenElse(hn::Lt(v, lo), v, lo);
+      hi = hn::IfThenElse(hn::And(hn::Gt(v, hi), hn::Lt(v, none)), v, hi);
+    }
+    hn::StoreU(lo, d, far + x);
+    hn::StoreU(hi, d, near + x);
+  }
+  detail::boundary_column_sides_range(rows, count, x, width, far, near);
+}
+
+void BoundaryRowSides(const float* lo, const float* hi, int width, int reach, int narrow_reach,
+                      float* HWY_RESTRICT far, float* HWY_RESTRICT near,
+                      float* HWY_RESTRICT narrow_far, float* HWY_RESTRICT narrow_near) {
+  const hn::ScalableTag<float> d;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const int inner = narrow_far != nullptr ? narrow_reach : reach;
+  int x = 0;
+  for (; x + n <= width; x += n) {
+    auto f = hn::LoadU(d, lo + x - inner), g = hn::LoadU(d, hi + x - inner);
+    const auto fold = [&](int o) {
+      const auto b = hn::LoadU(d, lo + x + o), c = hn::LoadU(d, hi + x + o);
+      f = hn::IfThenElse(hn::Lt(b, f), b, f);
+      g = hn::IfThenElse(hn::Gt(c, g), c, g);
+    };
+    for (int o = -inner + 1; o <= inner; ++o) fold(o);
+    if (narrow_far != nullptr) {
+      hn::StoreU(f, d, narrow_far + x);
+      hn::StoreU(g, d, narrow_near + x);
+      for (int o = -reach; o < -inner; ++o) fold(o);
+      for (int o = inner + 1; o <= reach; ++o) fold(o);
+    }
+    hn::StoreU(f, d, far + x);
+    hn::StoreU(g, d, near + x);
+  }
+  detail::boundary_row_sides_range(lo, hi, reach, narrow_reach, x, width, far, near, narrow_far,
+                                   narrow_near);
+}
+
 // NOLINTNEXTLINE(google-readability-namespace-comments)
 }  // namespace HWY_NAMESPACE
 }  // namespace dco::kernels
@@ -53,6 +105,19 @@ static_assert(pixel::kBoundaryWeightOne * pixel::kBoundaryCap < 65536,
               "weighted differences must fit 16-bit lanes");
 
 HWY_EXPORT(BoundarySideCost);
+HWY_EXPORT(BoundaryColumnSides);
+HWY_EXPORT(BoundaryRowSides);
+
+void boundary_column_sides(const float* const* rows, int count, int width, float* far,
+                           float* near) {
+  HWY_DYNAMIC_DISPATCH(BoundaryColumnSides)(rows, count, width, far, near);
+}
+
+void boundary_row_sides(const float* lo, const float* hi, int width, int reach, int narrow_reach,
+                        float* far, float* near, float* narrow_far, float* narrow_near) {
+  HWY_DYNAMIC_DISPATCH(BoundaryRowSides)
+  (lo, hi, width, reach, narrow_reach, far, near, narrow_far, narrow_near);
+}
 
 void boundary_window(const pixel::GreyPair& im, int x, int y, const pixel::BoundaryRule& rule,
                      BoundaryWindow& window) {

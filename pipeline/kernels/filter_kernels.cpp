@@ -123,32 +123,6 @@ void SobelRow(const SobelRows& r, float inv_norm, float* magnitude, std::uint8_t
   detail::sobel_range(r, inv_norm, std::min(done, w), w, magnitude, direction);
 }
 
-// min_of_rows (kGreatest false) and max_of_rows: the scalar rule's select, a vector of columns
-// at a time (not hn::Min / hn::Max, whose NaN and signed-zero rules differ between targets).
-template <bool kGreatest>
-void ExtremeOfRows(const float* const* rows, int count, int width, float* HWY_RESTRICT out) {
-  const hn::ScalableTag<float> d;
-  const int n = static_cast<int>(hn::Lanes(d));
-  int x = 0;
-  for (; x + n <= width; x += n) {
-    auto v = hn::LoadU(d, rows[0] + x);
-    for (int k = 1; k < count; ++k) {
-      const auto b = hn::LoadU(d, rows[k] + x);
-      v = hn::IfThenElse(kGreatest ? hn::Gt(b, v) : hn::Lt(b, v), b, v);
-    }
-    hn::StoreU(v, d, out + x);
-  }
-  detail::extreme_of_rows_range<kGreatest>(rows, count, x, width, out);
-}
-
-void MinOfRows(const float* const* rows, int count, int width, float* out) {
-  ExtremeOfRows<false>(rows, count, width, out);
-}
-
-void MaxOfRows(const float* const* rows, int count, int width, float* out) {
-  ExtremeOfRows<true>(rows, count, width, out);
-}
-
 // Sorts five vectors lane by lane (a network of nine compare-exchanges).
 template <class V>
 HWY_INLINE void Sort5(V& a, V& b, V& c, V& d, V& e) {
@@ -302,8 +276,6 @@ HWY_AFTER_NAMESPACE();
 namespace dco::kernels {
 
 HWY_EXPORT(Median5Row);
-HWY_EXPORT(MinOfRows);
-HWY_EXPORT(MaxOfRows);
 HWY_EXPORT(Gaussian5VerticalRow);
 HWY_EXPORT(RowFilter);
 HWY_EXPORT(BoxVerticalRow);
@@ -311,14 +283,6 @@ HWY_EXPORT(SobelRow);
 
 void median5_row(const float* const rows[5], int width, float* columns, float* out) {
   HWY_DYNAMIC_DISPATCH(Median5Row)(rows, width, columns, out);
-}
-
-void min_of_rows(const float* const* rows, int count, int width, float* out) {
-  HWY_DYNAMIC_DISPATCH(MinOfRows)(rows, count, width, out);
-}
-
-void max_of_rows(const float* const* rows, int count, int width, float* out) {
-  HWY_DYNAMIC_DISPATCH(MaxOfRows)(rows, count, width, out);
 }
 
 void gaussian5_vertical_row(const std::uint8_t* const rows[5], const float* taps, int width,

@@ -16,14 +16,6 @@ void repeat_pairs(const float* __restrict in, int width, float* __restrict out) 
 
 namespace dco::kernels::scalar {
 
-void min_of_rows(const float* const* rows, int count, int width, float* out) {
-  detail::extreme_of_rows_range<false>(rows, count, 0, width, out);
-}
-
-void max_of_rows(const float* const* rows, int count, int width, float* out) {
-  detail::extreme_of_rows_range<true>(rows, count, 0, width, out);
-}
-
 void median5_row(const float* const rows[5], int width, float* out) {
   detail::median5_range(rows, width, 0, width, out);
 }

@@ -11,20 +11,6 @@
 
 namespace dco::kernels::detail {
 
-// min_of_rows (kGreatest false) and max_of_rows over the columns [begin, end).
-template <bool kGreatest>
-inline void extreme_of_rows_range(const float* const* rows, int count, int begin, int end,
-                                  float* out) {
-  for (int x = begin; x < end; ++x) {
-    float v = rows[0][x];
-    for (int k = 1; k < count; ++k) {
-      const float b = rows[k][x];
-      v = (kGreatest ? b > v : b < v) ? b : v;
-    }
-    out[x] = v;
-  }
-}
-
 // The 13th smallest of the 25 values around column x (columns clamped to the row).
 inline void median5_range(const float* const rows[5], int width, int begin, int end, float* out) {
   for (int x = begin; x < end; ++x) {

@@ -4,9 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <random>
-#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -36,45 +34,6 @@ TEST(FilterKernels, RepeatPairsPutsEveryValueTwice) {
     repeat_pairs(in.data(), width, out.data());
     for (int x = 0; x < width; ++x) ASSERT_EQ(out[x], in[x / 2]) << "width " << width << " x " << x;
     EXPECT_EQ(out[width], -99.0f) << "nothing past the row";
-  }
-}
-
-TEST(FilterKernels, MinAndMaxOfRowsMatchScalarAndTheExtremes) {
-  // Rows of finite values and infinities of both signs (the boundary refinement's "none"), one
-  // to five of them, some overlapping (shifted views of one row).
-  std::mt19937 rng(23);
-  const float inf = std::numeric_limits<float>::infinity();
-  for (const int width : kWidths) {
-    std::vector<std::vector<float>> rows;
-    for (int k = 0; k < 5; ++k) {
-      std::vector<float> r = random_floats(rng, width + 8, 0.0f, 100.0f);
-      for (std::size_t i = static_cast<std::size_t>(k); i < r.size(); i += 5)
-        r[i] = (i / 5) % 2 == 0 ? inf : -inf;
-      rows.push_back(std::move(r));
-    }
-    for (int count = 1; count <= 5; ++count) {
-      for (const bool overlapping : {false, true}) {
-        std::vector<const float*> in;
-        for (int k = 0; k < count; ++k)
-          in.push_back(overlapping ? rows[0].data() + k : rows[static_cast<std::size_t>(k)].data());
-        std::vector<float> low(static_cast<std::size_t>(width)), high(low.size());
-        scalar::min_of_rows(in.data(), count, width, low.data());
-        scalar::max_of_rows(in.data(), count, width, high.data());
-        for (int x = 0; x < width; ++x) {
-          float lo = in[0][x], hi = in[0][x];
-          for (int k = 1; k < count; ++k) lo = std::min(lo, in[k][x]), hi = std::max(hi, in[k][x]);
-          ASSERT_EQ(low[x], lo) << "width " << width << " count " << count << " x " << x;
-          ASSERT_EQ(high[x], hi) << "width " << width << " count " << count << " x " << x;
-        }
-        for_each_target([&] {
-          std::vector<float> vlow(low.size(), -1.0f), vhigh(low.size(), -1.0f);
-          min_of_rows(in.data(), count, width, vlow.data());
-          max_of_rows(in.data(), count, width, vhigh.data());
-          ASSERT_EQ(vlow, low) << "width " << width << " count " << count;
-          ASSERT_EQ(vhigh, high) << "width " << width << " count " << count;
-        });
-      }
-    }
   }
 }
 

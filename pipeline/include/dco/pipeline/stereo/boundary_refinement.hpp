@@ -23,8 +23,9 @@ bool refines_boundaries(const StereoParams& params, int scale);
 // Re-decides the side of every input pixel next to a depth edge of the half-size map (and of
 // pixels without a value within the rule's hole reach of one), in place on `disparity` (input
 // size, input px, +inf = none). `sparse` is the internal map (internal px), `left` and `right`
-// the grey input images; the sides found around each internal pixel are kept between frames so
-// that a frame of the same geometry allocates nothing.
+// the grey input images. The sides around each internal pixel are found one internal row at a
+// time, as the rows are refined, in rows kept between frames so that a frame of the same
+// geometry allocates nothing.
 class BoundaryRefiner {
  public:
   // With a team, its threads refine blocks of the output's rows (each row on its own: the same
@@ -35,20 +36,17 @@ class BoundaryRefiner {
              pipeline::RowTeam* team = nullptr);
 
  private:
-  // The sides around every internal pixel: within kBoundaryReach (far_, near_) and, when the
-  // rule searches holes along the row, within its hole reach (hole_far_, hole_near_).
-  void side_ranges(ImageView<const float> sparse, int hole_reach);
-  // One row's minimum (far) and maximum (near, "none" left out) over +-reach columns, and over
-  // +-narrow_reach columns too where narrow_far is not null (narrow_reach <= reach). The block
-  // buffers must hold w + 2 reach values (side_ranges sizes them).
-  void row_windows(const float* v, int w, int reach, int narrow_reach, float* far, float* near,
-                   float* narrow_far, float* narrow_near);
+  // One thread's sides of one internal row: its columns' extremes over kBoundaryReach rows
+  // (padded by the widest reach with "none"), the sides within kBoundaryReach (far, near) and,
+  // when the rule searches holes along the row, within its hole reach (wide_far, wide_near), and
+  // which columns sit at a depth edge.
+  struct RowSides {
+    std::vector<float> lo, hi, far, near, wide_far, wide_near;
+    std::vector<std::uint8_t> edge;
+  };
+  static void side_row(ImageView<const float> sparse, int iy, int hole_reach, RowSides& s);
 
-  Image<float> row_far_, row_near_, far_, near_;
-  Image<float> row_hole_far_, row_hole_near_, hole_far_, hole_near_;
-  std::vector<float> lo_, hi_, lo_next_, hi_next_;  // a row's blocks, padded
-  // Per thread of the team: the internal columns at a depth edge, of one row.
-  std::vector<std::vector<std::uint8_t>> edges_;
+  std::vector<RowSides> sides_;  // per thread of the team
 };
 
 }  // namespace dco::stereo

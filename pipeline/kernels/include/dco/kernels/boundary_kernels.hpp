@@ -1,9 +1,10 @@
 #pragma once
 
-// The side costs of the boundary refinement (pixel::side_cost) on the CPU: the window's support
+// The boundary refinement on the CPU. The side costs (pixel::side_cost): the window's support
 // weights are computed once per pixel for all of its candidate disparities, and the weighted
 // differences of each window row go by one vector. Integer sums of the same terms, so the
-// results are pixel::side_cost's bit for bit.
+// results are pixel::side_cost's bit for bit. The sides around each internal pixel
+// (pixel::side_range), separably: across the rows first, then along the row.
 
 #include <cstdint>
 
@@ -30,5 +31,23 @@ void boundary_window(const pixel::GreyPair& im, int x, int y, const pixel::Bound
 // pixel::side_cost(im, window.x, window.y, d, rule).
 std::uint32_t boundary_side_cost(const pixel::GreyPair& im, const BoundaryWindow& window, int d,
                                  const pixel::BoundaryRule& rule);
+
+// far[x] = the least and near[x] = the greatest of rows[0][x] .. rows[count - 1][x], taken row by
+// row as `v < far ? v : far` (`v > near ? v : near`) over the values below +inf only (the
+// sparse map's "none" and NaN left out): +inf and -inf where a column holds no value.
+void boundary_column_sides(const float* const* rows, int count, int width, float* far, float* near);
+// far[x] = the least of lo[x - reach .. x + reach] and near[x] = the greatest of hi[x - reach ..
+// x + reach], for x < width; lo and hi (boundary_column_sides' far and near) are read from index
+// -reach to width + reach - 1. With narrow_far (and narrow_near), those over narrow_reach
+// (<= reach) too. Each window is folded as `b < v ? b : v` (`b > v ? b : v`): the narrow
+// one's columns left to right, then the wider one's other columns left to right.
+void boundary_row_sides(const float* lo, const float* hi, int width, int reach, int narrow_reach,
+                        float* far, float* near, float* narrow_far, float* narrow_near);
+
+namespace scalar {
+void boundary_column_sides(const float* const* rows, int count, int width, float* far, float* near);
+void boundary_row_sides(const float* lo, const float* hi, int width, int reach, int narrow_reach,
+                        float* far, float* near, float* narrow_far, float* narrow_near);
+}  // namespace scalar
 
 }  // namespace dco::kernels

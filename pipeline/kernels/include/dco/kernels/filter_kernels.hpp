@@ -53,15 +53,7 @@ inline constexpr int median5_columns(int width) {
 }
 void median5_row(const float* const rows[5], int width, float* columns, float* out);
 
-// out[x] = the least (the greatest) of rows[0][x] .. rows[count - 1][x] for x < width, taken
-// row by row as `b < a ? b : a` (`b > a ? b : a`), count >= 1; the rows may overlap each other,
-// not out. The running extremes of the boundary refinement's windows.
-void min_of_rows(const float* const* rows, int count, int width, float* out);
-void max_of_rows(const float* const* rows, int count, int width, float* out);
-
 namespace scalar {
-void min_of_rows(const float* const* rows, int count, int width, float* out);
-void max_of_rows(const float* const* rows, int count, int width, float* out);
 void median5_row(const float* const rows[5], int width, float* out);
 void gaussian5_vertical_row(const std::uint8_t* const rows[5], const float* taps, int width,
                             float* out);
