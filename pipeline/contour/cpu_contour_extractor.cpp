@@ -75,6 +75,8 @@ class CpuContourExtractor final : public ContourExtractor {
 
   const ContourTimings& last_timings() const override { return timings_; }
 
+  bool prepare_next() override { return params_.use_flow && flow_cue_.prepare_next(); }
+
  private:
   // Sizes every buffer; after the first frame of a given size nothing here allocates.
   void prepare(const ContourInputs& in, ContourOutputs& out) {

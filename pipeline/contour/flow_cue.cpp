@@ -5,6 +5,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/video/tracking.hpp>
@@ -106,6 +107,8 @@ struct FlowCue::State {
   cv::Mat last_b;
   Image<std::uint8_t> last_centre, last_neighbour_b;
   bool has_last = false;
+  // prepare_next made flow_a, speed, amplitude_a and contrast_a from last_b.
+  bool next_prepared = false;
   cv::Mat centre_copy, neighbour_copy, neighbour_b_copy;  // continuous copies of padded views
   std::unique_ptr<FlowFieldWorker> field_b;  // with parallel_flow: computes flow_b meanwhile
   Image<float> speed, speed_b, amplitude_a, amplitude_b, contrast_a, contrast_b, fused, tmp;
@@ -121,6 +124,30 @@ FlowCue::FlowCue(const ContourParams& params) : s_(std::make_unique<State>(param
 }
 
 FlowCue::~FlowCue() = default;
+
+bool FlowCue::prepare_next() {
+  State& s = *s_;
+  s.next_prepared = false;
+  if (!s.has_last) return false;
+  // The sizes of the call that made last_b: the next one resizes nothing if it reuses it.
+  const int cw = s.last_centre.width(), ch = s.last_centre.height();
+  for (Image<float>* img : {&s.speed, &s.amplitude_a, &s.contrast_a}) img->resize(cw, ch);
+  s.flow_a.create(ch, cw, CV_32FC2);
+  invert_flow(as_view<float>(static_cast<const cv::Mat&>(s.last_b)), s.inversion,
+              as_view<float>(s.flow_a));
+  // compute()'s steps of that field, as it makes them.
+  const ImageView<const float> fa = as_view<float>(static_cast<const cv::Mat&>(s.flow_a));
+  const auto distance = static_cast<float>(s.params.projection_distance);
+  s.rows.run(ch, [&](int, int begin, int end) { flow_speed_rows(fa, begin, end, s.speed.view()); });
+  s.rows.run(ch, [&](int, int begin, int end) {
+    flow_amplitude_rows(s.speed.cview(), begin, end, s.amplitude_a.view());
+  });
+  s.rows.run(ch, [&](int, int begin, int end) {
+    projection_contrast_rows(fa, distance, begin, end, s.contrast_a.view());
+  });
+  s.next_prepared = true;
+  return true;
+}
 
 void FlowCue::check_size(ImageView<const std::uint8_t> centre) const {
   if (!dis_handles(s_->dis, centre.width, centre.height))
@@ -146,14 +173,17 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
                      same_pixels(in.neighbour_a, s.last_centre) &&
                      same_pixels(in.centre, s.last_neighbour_b);
   timings.dis_fields = reuse ? 1 : 2;
+  // The field to the previous frame and its steps up to the fusion, when prepare_next made them.
+  const bool prepared = std::exchange(s.next_prepared, false) && reuse;
   // A flow Mat of the right size is taken by DIS as a candidate initial flow; zero what DIS
   // writes so that frame t's result depends on its window only, not on the previous call.
   if (!reuse) zero(s.flow_a);  // otherwise invert_flow writes every pixel
   zero(s.flow_b);
   if (reuse) {
     s.dis->calc(centre, continuous(in.neighbour_b, s.neighbour_copy), s.flow_b);
-    invert_flow(as_view<float>(static_cast<const cv::Mat&>(s.last_b)), s.inversion,
-                as_view<float>(s.flow_a));
+    if (!prepared)
+      invert_flow(as_view<float>(static_cast<const cv::Mat&>(s.last_b)), s.inversion,
+                  as_view<float>(s.flow_a));
   } else if (s.field_b) {
     const cv::Mat neighbour_a = continuous(in.neighbour_a, s.neighbour_copy);
     const cv::Mat neighbour_b = continuous(in.neighbour_b, s.neighbour_b_copy);
@@ -179,19 +209,20 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
   // on every block of rows.
   const ImageView<const float> fa = as_view<float>(static_cast<const cv::Mat&>(s.flow_a));
   const ImageView<const float> fb = as_view<float>(static_cast<const cv::Mat&>(s.flow_b));
+  const bool field_a = !prepared;
   s.rows.run(ch, [&](int, int begin, int end) {
-    flow_speed_rows(fa, begin, end, s.speed.view());
+    if (field_a) flow_speed_rows(fa, begin, end, s.speed.view());
     flow_speed_rows(fb, begin, end, s.speed_b.view());
   });
   s.rows.run(ch, [&](int, int begin, int end) {
-    flow_amplitude_rows(s.speed.cview(), begin, end, s.amplitude_a.view());
+    if (field_a) flow_amplitude_rows(s.speed.cview(), begin, end, s.amplitude_a.view());
     flow_amplitude_rows(s.speed_b.cview(), begin, end, s.amplitude_b.view());
   });
   timings.amplitude_ms = t.lap_ms();
 
   const auto distance = static_cast<float>(s.params.projection_distance);
   s.rows.run(ch, [&](int, int begin, int end) {
-    projection_contrast_rows(fa, distance, begin, end, s.contrast_a.view());
+    if (field_a) projection_contrast_rows(fa, distance, begin, end, s.contrast_a.view());
     projection_contrast_rows(fb, distance, begin, end, s.contrast_b.view());
     fuse_amplitude_rows(s.amplitude_a.cview(), s.contrast_a.cview(), s.amplitude_b.cview(),
                         s.contrast_b.cview(), begin, end, s.fused.view());

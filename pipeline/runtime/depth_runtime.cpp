@@ -113,6 +113,8 @@ void DepthRuntime::reset_state() {
   }
   stereo_queue_.clear();
   received_ = 0;
+  next_contour_ = NextContour::kNone;
+  contour_waiting_ = false;
   for (std::size_t i = 0; i < results_.size(); ++i) result_free_[i] = true;
   densify_queue_.clear();
   release_queue_.clear();
@@ -136,7 +138,7 @@ void DepthRuntime::start() {
     densify_ms_.clear();
     pushed_ = dropped_ = late_ = published_ = overdue_ = early_ = 0;
     stereo_work_ms_ = other_work_ms_ = planes_work_ms_ = early_contour_work_ms_ = 0;
-    work_samples_ = planes_on_stereo_ = early_contour_on_stereo_ = 0;
+    work_samples_ = planes_on_stereo_ = early_contour_on_stereo_ = next_contour_on_stereo_ = 0;
     entry_high_water_ = 0;
     // Fresh queues: their high-water marks are statistics too.
     stereo_queue_ = BoundedQueue<int>(stereo_queue_.capacity());
@@ -266,7 +268,7 @@ bool DepthRuntime::hand_on(std::stop_token stop, BoundedQueue<int>& queue, int i
 int DepthRuntime::acquire_slot(std::stop_token stop, bool neighbour_only) {
   std::unique_lock lock(mutex_);
   int slot = -1;
-  if (!changed_.wait(lock, stop, [&] { return (slot = take_free(slot_free_, slot_cursor_)) >= 0; }))
+  if (!stereo_wait(lock, stop, [&] { return (slot = take_free(slot_free_, slot_cursor_)) >= 0; }))
     return -1;
   slots_[static_cast<std::size_t>(slot)].stereo_done = false;
   slots_[static_cast<std::size_t>(slot)].neighbour_only = neighbour_only;
@@ -302,6 +304,7 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
     bool early_contour_here = false;
     {
       std::unique_lock lock(mutex_);
+      // Not stereo_wait: a frame arriving meanwhile would wait for the next contour step's share.
       if (!changed_.wait(lock, stop, [&] { return waiting_input_ >= 0 || end_requested_; })) return;
       if (waiting_input_ >= 0) {
         input = std::exchange(waiting_input_, -1);
@@ -323,7 +326,7 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
         contour_end(stop);
         continue;
       }
-      if (!hand_on(stop, stereo_queue_, kEnd)) return;
+      if (!stereo_hand_on(stop, kEnd)) return;
       continue;
     }
     const int slot = acquire_slot(stop, late);
@@ -341,7 +344,7 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
         // Hand the frame on before its stereo: the previous frame's contours need only its
         // grey image, and run meanwhile.
         const Clock::time_point waiting = Clock::now();
-        if (!hand_on(stop, stereo_queue_, slot)) return;
+        if (!stereo_hand_on(stop, slot)) return;
         entry.times.stereo_blocked = Clock::now() - waiting;
       }
       if (!late) {
@@ -353,13 +356,16 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
       fail(std::current_exception());
       return;
     }
+    bool prepare_contour = false;
     {
       std::lock_guard lock(mutex_);
       entry.times.stereo_end = Clock::now();
       entry.stereo_done = !late;
       input_free_[static_cast<std::size_t>(input)] = true;
+      prepare_contour = claim_next_contour();
       changed_.notify_all();
     }
+    if (prepare_contour) prepare_next_contour();
     if (params_.threads == 1) contour_receive(stop, slot);
   }
 }
@@ -369,7 +375,10 @@ void DepthRuntime::contour_loop(std::stop_token stop) {
     int item = kEnd;
     {
       std::unique_lock lock(mutex_);
-      if (!changed_.wait(lock, stop, [&] { return !stereo_queue_.empty(); })) return;
+      contour_waiting_ = true;
+      const bool woken = changed_.wait(lock, stop, [&] { return !stereo_queue_.empty(); });
+      contour_waiting_ = false;
+      if (!woken) return;
       item = stereo_queue_.pop();
       changed_.notify_all();
     }
@@ -394,8 +403,8 @@ void DepthRuntime::contour_receive(std::stop_token stop, int slot) {
   window_[static_cast<std::size_t>(t) % window_.size()] = slot;
   const ContourWindow w = window_on_arrival(pipeline_.contour.lookahead, t);
   if (has_depth(w.centre))
-    run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a),
-                window_slot(w.neighbour_b));
+    run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a), window_slot(w.neighbour_b),
+                /*last=*/false);
   // In no later window, either lookahead.
   if (t >= 2) release_slot(window_slot(t - 2), window_slot(w.centre));
 }
@@ -405,7 +414,7 @@ void DepthRuntime::contour_end(std::stop_token stop) {
     const ContourWindow w = window_at_end(received_ - 1);
     if (has_depth(w.centre))
       run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a),
-                  window_slot(w.neighbour_b));
+                  window_slot(w.neighbour_b), /*last=*/true);
   }
   for (int t = std::max(received_ - 2, 0); t < received_; ++t)
     release_slot(window_slot(t), window_slot(received_ - 1));
@@ -417,15 +426,22 @@ void DepthRuntime::contour_end(std::stop_token stop) {
   hand_on(stop, densify_queue_, kEnd);
 }
 
-void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b) {
+void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b,
+                               bool last) {
   SlotEntry& c = slots_[static_cast<std::size_t>(centre)];
   int result = -1;
   {
     std::unique_lock lock(mutex_);
+    // The stereo thread's share of this step, when it took it, must be done first.
     const auto ready = [&] {
-      return c.stereo_done && (result = take_free(result_free_, result_cursor_)) >= 0;
+      return c.stereo_done && next_contour_ != NextContour::kPreparing &&
+             (result = take_free(result_free_, result_cursor_)) >= 0;
     };
-    if (!changed_.wait(lock, stop, ready)) return;
+    contour_waiting_ = true;
+    const bool woken = changed_.wait(lock, stop, ready);
+    contour_waiting_ = false;
+    if (!woken) return;
+    next_contour_ = NextContour::kNone;  // what was not taken this step makes itself
   }
   ResultEntry& r = results_[static_cast<std::size_t>(result)];
   const auto neighbour = [&](int slot) {
@@ -442,11 +458,45 @@ void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a
     fail(std::current_exception());
     return;
   }
+  if (early_contour_moves_ && !last) {  // the sequence's last step has no next one
+    std::lock_guard lock(mutex_);
+    next_contour_ = NextContour::kReady;
+  }
   if (params_.threads < 3) {
     densify_receive(stop, result);
     return;
   }
   hand_on(stop, densify_queue_, result);
+}
+
+bool DepthRuntime::stereo_hand_on(std::stop_token stop, int item) {
+  std::unique_lock lock(mutex_);
+  if (!stereo_wait(lock, stop, [&] { return !stereo_queue_.full(); })) return false;
+  stereo_queue_.push(item);
+  changed_.notify_all();
+  return true;
+}
+
+bool DepthRuntime::claim_next_contour() {
+  // The contour + densify thread is busy with an earlier frame: the next contour step's work
+  // that the last one's results allow is the stereo thread's. Not while that thread waits, which
+  // would then wait for it.
+  if (next_contour_ != NextContour::kReady || contour_waiting_) return false;
+  next_contour_ = NextContour::kPreparing;
+  return true;
+}
+
+void DepthRuntime::prepare_next_contour() {
+  bool done = false;
+  try {
+    done = contour_->prepare_next();
+  } catch (...) {
+    fail(std::current_exception());
+  }
+  std::lock_guard lock(mutex_);
+  next_contour_ = NextContour::kNone;
+  next_contour_on_stereo_ += done;
+  changed_.notify_all();
 }
 
 void DepthRuntime::densify_loop(std::stop_token stop) {
@@ -636,6 +686,7 @@ RuntimeStats DepthRuntime::stats() const {
   s.densify_queue_high_water = densify_queue_.high_water();
   s.planes_on_stereo_thread = planes_on_stereo_;
   s.early_contour_on_stereo_thread = early_contour_on_stereo_;
+  s.next_contour_on_stereo_thread = next_contour_on_stereo_;
   return s;
 }
 

@@ -509,6 +509,59 @@ TEST(ContourExtractor, ReusesTheLastFieldWhenTheWindowMovesOn) {
   EXPECT_EQ(causal->last_timings().dis_fields, 2);
 }
 
+// prepare_next makes the next window's field to the previous frame (the last field turned round)
+// and its steps up to the fusion ahead of compute: the same outputs as compute making them. A
+// window that does not follow the last one leaves what was prepared unused.
+TEST(ContourExtractor, PreparedNextStepsGiveTheSameOutputs) {
+  const MovingSquare scene;
+  const Frame earlier = frame_at(-2);
+  ContourInputs first;  // centred on frame -1
+  first.image = scene.past.input.view();
+  first.centre = scene.past.internal.view();
+  first.neighbour_a = earlier.internal.view();
+  first.neighbour_b = scene.centre.internal.view();
+  const auto same_outputs = [](const ContourOutputs& a, const ContourOutputs& b) {
+    return dco::testing::same_bytes(a.m_fuse, b.m_fuse) &&
+           dco::testing::same_bytes(a.contours, b.contours);
+  };
+  const auto plain = make_cpu_contour_extractor({});
+  const auto prepared = make_cpu_contour_extractor({});
+  ContourOutputs expected, actual;
+  EXPECT_FALSE(prepared->prepare_next()) << "nothing before the first window";
+  plain->compute(first, expected);
+  prepared->compute(first, actual);
+  ASSERT_TRUE(same_outputs(actual, expected));
+  EXPECT_TRUE(prepared->prepare_next());
+  plain->compute(scene.inputs(), expected);
+  prepared->compute(scene.inputs(), actual);
+  EXPECT_EQ(prepared->last_timings().dis_fields, 1);
+  EXPECT_TRUE(same_outputs(actual, expected)) << "the window that follows";
+  // Prepared from the window centred on 0, then given that window again (not its successor):
+  // its own two fields, as without the preparation.
+  EXPECT_TRUE(prepared->prepare_next());
+  plain->compute(scene.inputs(), expected);
+  prepared->compute(scene.inputs(), actual);
+  EXPECT_EQ(prepared->last_timings().dis_fields, 2);
+  EXPECT_TRUE(same_outputs(actual, expected)) << "a window that does not follow";
+  // And the preparation is gone: the next window that follows makes its own steps again.
+  plain->compute(first, expected);
+  prepared->compute(first, actual);
+  plain->compute(scene.inputs(), expected);
+  prepared->compute(scene.inputs(), actual);
+  EXPECT_TRUE(same_outputs(actual, expected)) << "after an unused preparation";
+  // No flow cue (or no reused field): nothing to prepare.
+  ContourParams no_flow;
+  no_flow.use_flow = false;
+  const auto without_flow = make_cpu_contour_extractor(no_flow);
+  without_flow->compute(first, actual);
+  EXPECT_FALSE(without_flow->prepare_next());
+  ContourParams causal;
+  causal.lookahead = 0;
+  const auto causal_extractor = make_cpu_contour_extractor(causal);
+  causal_extractor->compute(first, actual);
+  EXPECT_FALSE(causal_extractor->prepare_next());
+}
+
 TEST(ContourExtractor, ReportsEveryStepsTime) {
   const MovingSquare scene;
   const auto extractor = make_cpu_contour_extractor({});

@@ -214,6 +214,62 @@ TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) 
   }
 }
 
+// The work that a frame's contour results allow for the next frame's (the reused flow field
+// turned round, with its steps up to the fusion) goes to the stereo thread when it ends a frame
+// while the contour + densify thread is busy, and stays the contour step's while that thread
+// waits for the stereo stage: the bytes of the offline pipeline either way.
+TEST(DepthRuntime, NextContourWorkGoesToTheStereoThreadOnlyWhileTheOtherIsBusy) {
+  for (const bool heavy_densify : {true, false}) {
+    Sequence s = make_sequence("hand", 12);
+    if (heavy_densify) {
+      s.params.densify.tolerance = 1e-9;
+      s.params.densify.max_iterations = 400;
+      s.params.densify.multigrid = false;
+    } else {
+      s.params.stereo.aggregation_passes = 8;
+      s.params.stereo.search_range = "full";
+      s.params.densify.max_iterations = 1;
+    }
+    const std::vector<DepthResult> expected = offline(s);
+    RuntimeParams rp;
+    rp.deterministic = true;
+    rp.threads = 2;
+    Collector c;
+    DepthRuntime runtime(s.params, rp, c.callback());
+    runtime.start();
+    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+    runtime.drain();
+    expect_identical(expected, c.results, heavy_densify ? "heavy densify" : "heavy stereo");
+    const long on_stereo = runtime.stats().next_contour_on_stereo_thread;
+    std::printf("%s: the stereo thread did %ld of the next contour steps' shares\n",
+                heavy_densify ? "heavy densify" : "heavy stereo", on_stereo);
+    // Eleven contour steps have a previous one; some find the stereo thread still busy.
+    if (heavy_densify)
+      EXPECT_GE(on_stereo, 6);
+    else
+      EXPECT_LE(on_stereo, 2);
+  }
+  // Three stage threads or no flow cue: nothing to take.
+  for (const bool three_threads : {true, false}) {
+    Sequence s = make_sequence("hand", 6);
+    s.params.densify.tolerance = 1e-9;
+    s.params.densify.max_iterations = 400;
+    s.params.densify.multigrid = false;
+    if (!three_threads) s.params.contour.use_flow = false;
+    const std::vector<DepthResult> expected = offline(s);
+    RuntimeParams rp;
+    rp.deterministic = true;
+    rp.threads = three_threads ? 3 : 2;
+    Collector c;
+    DepthRuntime runtime(s.params, rp, c.callback());
+    runtime.start();
+    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+    runtime.drain();
+    expect_identical(expected, c.results, three_threads ? "three threads" : "no flow cue");
+    EXPECT_EQ(runtime.stats().next_contour_on_stereo_thread, 0);
+  }
+}
+
 TEST(DepthRuntime, ColourInputAtHalfResolutionEqualsTheOfflinePipeline) {
   Sequence s = make_sequence("boxes", 3);
   for (auto& f : s.frames) {  // a colour pair: the grey replicated with a tint

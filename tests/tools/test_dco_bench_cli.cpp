@@ -117,6 +117,9 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   const double early_contour_share = json_value(r.out, "early_contour_on_stereo_thread");
   EXPECT_GE(early_contour_share, 0.0);
   EXPECT_LE(early_contour_share, 1.0);
+  const double next_contour_share = json_value(r.out, "next_contour_on_stereo_thread");
+  EXPECT_GE(next_contour_share, 0.0);
+  EXPECT_LE(next_contour_share, 1.0);
   EXPECT_EQ(json_value(r.out, "paced_frames"), 8);
   // Only the timed frames' results count, not those of the warm-up frames before them.
   const double published = json_value(r.out, "published");

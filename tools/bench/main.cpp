@@ -469,14 +469,19 @@ struct Result {
   double ratio = 0;            // the median of the rounds' ratios
   double first_result_ms = 0;  // a new runtime: first push to first result (the warm-up pass)
   PassFigures throughput;      // every round's frames
-  // Of every round's frames (warm-up included), those whose match planes, and those whose
-  // early contour work (intensity gradients, stereo cue), the stereo thread did.
-  long planes_on_stereo = 0, early_contour_on_stereo = 0, planes_frames = 0;
+  // Of every round's frames (warm-up included), those whose match planes, those whose early
+  // contour work (intensity gradients, stereo cue) and those whose share of the next frame's
+  // contour step (the reused flow field turned round) the stereo thread did.
+  long planes_on_stereo = 0, early_contour_on_stereo = 0, next_contour_on_stereo = 0,
+       planes_frames = 0;
   double planes_share() const {
     return planes_frames > 0 ? static_cast<double>(planes_on_stereo) / planes_frames : 0.0;
   }
   double early_contour_share() const {
     return planes_frames > 0 ? static_cast<double>(early_contour_on_stereo) / planes_frames : 0.0;
+  }
+  double next_contour_share() const {
+    return planes_frames > 0 ? static_cast<double>(next_contour_on_stereo) / planes_frames : 0.0;
   }
   double fps = 0;
   int paced_frames = 0;
@@ -544,6 +549,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
       const rt::RuntimeStats st = pipeline.stats();
       r.planes_on_stereo += st.planes_on_stereo_thread;
       r.early_contour_on_stereo += st.early_contour_on_stereo_thread;
+      r.next_contour_on_stereo += st.next_contour_on_stereo_thread;
       r.planes_frames += st.published;
       all_times.insert(all_times.end(), times.begin(), times.end());
     }
@@ -645,8 +651,9 @@ void print_text(const Result& r) {
       t.densify.p99_ms);
   fmt::print(
       "  planes   the densify stage's match planes ran on the stereo thread for {} of {} frames, "
-      "the contour stage's early work (gradients, stereo cue) for {}\n",
-      r.planes_on_stereo, r.planes_frames, r.early_contour_on_stereo);
+      "the contour stage's early work (gradients, stereo cue) for {}, the next frame's reused "
+      "flow field for {}\n",
+      r.planes_on_stereo, r.planes_frames, r.early_contour_on_stereo, r.next_contour_on_stereo);
   fmt::print(
       "  latency  p50 {:.1f} ms  p99 {:.1f} ms  (p99 - p50 {:.1f} ms) at {:g} fps input; "
       "{} of {} frames dropped ({} late), {} published\n",
@@ -731,7 +738,8 @@ std::string json_fields(const Result& r) {
              "\"early\": {}, "
              "\"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
              "\"published\": {}, \"planes_on_stereo_thread\": {}, "
-             "\"early_contour_on_stereo_thread\": {}, \"peer_ms_per_frame\": {}, \"ratio\": {}",
+             "\"early_contour_on_stereo_thread\": {}, \"next_contour_on_stereo_thread\": {}, "
+             "\"peer_ms_per_frame\": {}, \"ratio\": {}",
              dco::tools::json_string(r.name), r.width, r.height, r.frames, r.max_disparity,
              r.threads, r.parallel_flow ? "true" : "false", r.opencv_threads, r.stereo_row_threads,
              r.contour_row_threads, r.densify_row_threads, r.warmup, json_number(r.first_result_ms),
@@ -743,7 +751,8 @@ std::string json_fields(const Result& r) {
              json_number(ls.ready.p99_ms), json_number(r.release_latency_ms),
              l.release_realtime ? "true" : "false", l.overdue, l.early, l.pushed, l.dropped, l.late,
              l.published, json_number(r.planes_share()), json_number(r.early_contour_share()),
-             json_number(r.peer_ms_per_frame), json_number(r.ratio)) +
+             json_number(r.next_contour_share()), json_number(r.peer_ms_per_frame),
+             json_number(r.ratio)) +
          fmt::format(", \"rounds\": [{}]", fmt::join(round_objects(r), ", ")) +
          fmt::format(", \"backend\": {}", dco::tools::json_string(r.backend)) +
          (r.check ? fmt::format(

@@ -108,6 +108,12 @@ class ContourExtractor {
   virtual ~ContourExtractor() = default;
   virtual void compute(const ContourInputs& in, ContourOutputs& out) = 0;
   virtual const ContourTimings& last_timings() const = 0;
+  // Work of the next compute() that the last one's results allow, done now, e.g. by a thread
+  // that would otherwise wait; never concurrently with compute(). The next compute() takes it
+  // only if its window is the one it was made for. Returns whether there was any (the CPU stage:
+  // the last field to the next frame turned round, with its speed, amplitude and projection
+  // contrast, under reuse_flow with lookahead 1).
+  virtual bool prepare_next() { return false; }
 };
 
 std::unique_ptr<ContourExtractor> make_cpu_contour_extractor(const ContourParams& params);

@@ -24,6 +24,12 @@ class FlowCue {
   // M_fuse from the flow into `dst` (the centre's size); fills the flow steps of `timings`.
   void compute(const ContourInputs& in, ImageView<float> dst, ContourTimings& timings,
                Stopwatch& t);
+  // With reuse_flow and lookahead 1: the steps of the next call's field to the previous frame
+  // that this call's results allow (this call's field turned round, its speed, amplitude and
+  // projection contrast), done now. The next call takes them if its window is the one they were
+  // made for, else makes its own. Returns whether there were any. Never concurrently with
+  // compute().
+  bool prepare_next();
 
  private:
   struct State;

@@ -76,6 +76,12 @@ struct RuntimeStats {
   // after the planes' share; the others' was the contour step's. With two stage threads and a
   // CPU contour stage only.
   long early_contour_on_stereo_thread = 0;
+  // Times the stereo thread did the work that a contour step's results allow for the next one
+  // (ContourExtractor::prepare_next): it takes that work when it ends a frame or waits for a slot
+  // or room in the queue while the contour + densify thread is busy, else the next contour step
+  // does it. With two stage threads
+  // and a CPU contour stage only.
+  long next_contour_on_stereo_thread = 0;
 };
 
 // The depth pipeline in real time: the stereo, contour and densify steps of DepthPipeline on their
@@ -170,7 +176,34 @@ class DepthRuntime {
   void contour_end(std::stop_token stop);
   int window_slot(int frame) const;  // -1 for a frame before the first
   bool has_depth(int frame) const;   // a received frame of the window that is not late
-  void run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b);
+  // `last`: the sequence's last contour step.
+  void run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b, bool last);
+  // The stereo thread's share of the next contour step (ContourExtractor::prepare_next):
+  // claim_next_contour (under mutex_) takes it when it is there to take, prepare_next_contour
+  // (without) does it.
+  bool claim_next_contour();
+  void prepare_next_contour();
+  // The stereo thread's waits for the stages after it (a slot, room in the stereo queue): until
+  // `ready`,
+  // doing the next contour step's share meanwhile when it can take it. False when stopped first.
+  // `ready` is called once per wake-up and may take what it waits for.
+  template <class Ready>
+  bool stereo_wait(std::unique_lock<std::mutex>& lock, std::stop_token stop, Ready&& ready) {
+    while (true) {
+      bool is_ready = false;
+      const auto go_on = [&] {
+        is_ready = ready();
+        return is_ready || (next_contour_ == NextContour::kReady && !contour_waiting_);
+      };
+      if (!changed_.wait(lock, stop, go_on)) return false;
+      if (is_ready) return true;
+      claim_next_contour();
+      lock.unlock();
+      prepare_next_contour();
+      lock.lock();
+    }
+  }
+  bool stereo_hand_on(std::stop_token stop, int item);
   void densify_receive(std::stop_token stop, int result);
   void densify_end(std::stop_token stop);
   void release_loop(std::stop_token stop);
@@ -234,6 +267,12 @@ class DepthRuntime {
   BoundedQueue<int> stereo_queue_;
   std::array<int, 3> window_{};  // slot of frame t at t mod 3, for the last three frames
   int received_ = 0;             // frames of the sequence the contour step received
+  // The work the last contour step's results allow for the next one: none to take, ready for the
+  // stereo thread to take, or being done by it (the contour step then waits for it). Only while
+  // early_contour_moves_.
+  enum class NextContour { kNone, kReady, kPreparing };
+  NextContour next_contour_ = NextContour::kNone;
+  bool contour_waiting_ = false;  // the contour thread waits for a frame or its stereo
 
   // Contour -> densify.
   std::vector<ResultEntry> results_;
@@ -258,6 +297,7 @@ class DepthRuntime {
   // with three threads); and of those two steps.
   double stereo_work_ms_ = 0, other_work_ms_ = 0, planes_work_ms_ = 0, early_contour_work_ms_ = 0;
   long work_samples_ = 0, planes_on_stereo_ = 0, early_contour_on_stereo_ = 0;
+  long next_contour_on_stereo_ = 0;
 
   std::optional<OpenCvThreadsLease> opencv_threads_;  // while running, with opencv_threads > 0
   std::vector<std::jthread> threads_;
