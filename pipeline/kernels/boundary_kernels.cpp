@@ -1,5 +1,6 @@
-// SIMD side costs of the boundary refinement, compiled once per Highway target and dispatched at
-// run time; windows that the vectors cannot take go to pixel::side_cost.
+// SIMD kernels of the boundary refinement, compiled once per Highway target and dispatched at run
+// time: the side costs (windows that the vectors cannot take go to pixel::side_cost) and the
+// sides around each internal pixel (boundary_ranges.hpp holds their scalar rule).
 
 #include <cstddef>
 #include <cstdint>
