@@ -444,16 +444,22 @@ TEST(ContourExtractor, RowThreadsGiveTheOutputsOfOneThread) {
   EXPECT_GT(top, 0.5f);
 }
 
+// The window centred on frame -1, which the scene's window follows; `earlier` is frame -2.
+ContourInputs window_before(const MovingSquare& scene, const Frame& earlier) {
+  ContourInputs in;
+  in.image = scene.past.input.view();
+  in.centre = scene.past.internal.view();
+  in.neighbour_a = earlier.internal.view();
+  in.neighbour_b = scene.centre.internal.view();
+  return in;
+}
+
 // With lookahead 1 the window (t-1, t, t+1) follows (t-2, t-1, t): the field t -> t-1 is the last
 // call's t-1 -> t turned round, and the cue stays what two DIS runs give.
 TEST(ContourExtractor, ReusesTheLastFieldWhenTheWindowMovesOn) {
   const MovingSquare scene;
   const Frame earlier = frame_at(-2);
-  ContourInputs first;  // centred on frame -1
-  first.image = scene.past.input.view();
-  first.centre = scene.past.internal.view();
-  first.neighbour_a = earlier.internal.view();
-  first.neighbour_b = scene.centre.internal.view();
+  const ContourInputs first = window_before(scene, earlier);
   ContourParams fresh_params;
   fresh_params.reuse_flow = false;
   const auto reusing = make_cpu_contour_extractor({});
@@ -515,11 +521,7 @@ TEST(ContourExtractor, ReusesTheLastFieldWhenTheWindowMovesOn) {
 TEST(ContourExtractor, PreparedNextStepsGiveTheSameOutputs) {
   const MovingSquare scene;
   const Frame earlier = frame_at(-2);
-  ContourInputs first;  // centred on frame -1
-  first.image = scene.past.input.view();
-  first.centre = scene.past.internal.view();
-  first.neighbour_a = earlier.internal.view();
-  first.neighbour_b = scene.centre.internal.view();
+  const ContourInputs first = window_before(scene, earlier);
   const auto same_outputs = [](const ContourOutputs& a, const ContourOutputs& b) {
     return dco::testing::same_bytes(a.m_fuse, b.m_fuse) &&
            dco::testing::same_bytes(a.contours, b.contours);

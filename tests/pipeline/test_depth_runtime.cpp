@@ -18,6 +18,7 @@
 #include <new>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -166,6 +167,37 @@ TEST(DepthRuntime, DeterministicModeEqualsTheOfflinePipelineBitForBit) {
   }
 }
 
+// A solve many times the stereo stage's time (heavy_densify), or a stereo stage many times the
+// rest.
+void make_one_stage_heavy(PipelineParams& p, bool heavy_densify) {
+  if (heavy_densify) {
+    p.densify.tolerance = 1e-9;
+    p.densify.max_iterations = 400;
+    p.densify.multigrid = false;
+  } else {
+    p.stereo.aggregation_passes = 8;
+    p.stereo.search_range = "full";
+    p.densify.max_iterations = 1;
+  }
+}
+
+// The sequence through a deterministic runtime of `threads` stage threads, as one sequence.
+struct DeterministicRun {
+  std::vector<DepthResult> results;
+  RuntimeStats stats;
+};
+DeterministicRun run_deterministic(const Sequence& s, int threads) {
+  RuntimeParams rp;
+  rp.deterministic = true;
+  rp.threads = threads;
+  Collector c;
+  DepthRuntime runtime(s.params, rp, c.callback());
+  runtime.start();
+  for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+  runtime.drain();
+  return {std::move(c.results), runtime.stats()};
+}
+
 // The match planes (a densify step) and the early contour work (the intensity gradients and the
 // stereo cue) go to the stereo thread while it has less other work, and the bytes are those of
 // the offline pipeline.
@@ -173,26 +205,11 @@ TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) 
   for (const bool heavy_densify : {true, false}) {
     Sequence s = make_sequence("hand", 16);
     s.params.contour.use_flow = false;
-    if (heavy_densify) {  // a solve many times the stereo stage's time
-      s.params.densify.tolerance = 1e-9;
-      s.params.densify.max_iterations = 400;
-      s.params.densify.multigrid = false;
-    } else {  // a stereo stage many times the rest
-      s.params.stereo.aggregation_passes = 8;
-      s.params.stereo.search_range = "full";
-      s.params.densify.max_iterations = 1;
-    }
+    make_one_stage_heavy(s.params, heavy_densify);
     const std::vector<DepthResult> expected = offline(s);
-    RuntimeParams rp;
-    rp.deterministic = true;
-    rp.threads = 2;
-    Collector c;
-    DepthRuntime runtime(s.params, rp, c.callback());
-    runtime.start();
-    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
-    runtime.drain();
-    expect_identical(expected, c.results, heavy_densify ? "heavy densify" : "heavy stereo");
-    const RuntimeStats st = runtime.stats();
+    const DeterministicRun run = run_deterministic(s, 2);
+    expect_identical(expected, run.results, heavy_densify ? "heavy densify" : "heavy stereo");
+    const RuntimeStats& st = run.stats;
     // Decided from the published frames' times: the first frames go to the stereo thread before
     // any is known.
     if (heavy_densify) {
@@ -203,7 +220,7 @@ TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) 
       EXPECT_LE(st.early_contour_on_stereo_thread, 4);
     }
     long planes = 0, early = 0;
-    for (const DepthResult& r : c.results) {
+    for (const DepthResult& r : run.results) {
       planes += r.planes_done;
       early += r.early_contour_done;
       EXPECT_GT(r.contour_timings.gaussian_ms, 0) << "the gradients' time, either thread";
@@ -221,26 +238,11 @@ TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) 
 TEST(DepthRuntime, NextContourWorkGoesToTheStereoThreadOnlyWhileTheOtherIsBusy) {
   for (const bool heavy_densify : {true, false}) {
     Sequence s = make_sequence("hand", 12);
-    if (heavy_densify) {
-      s.params.densify.tolerance = 1e-9;
-      s.params.densify.max_iterations = 400;
-      s.params.densify.multigrid = false;
-    } else {
-      s.params.stereo.aggregation_passes = 8;
-      s.params.stereo.search_range = "full";
-      s.params.densify.max_iterations = 1;
-    }
+    make_one_stage_heavy(s.params, heavy_densify);
     const std::vector<DepthResult> expected = offline(s);
-    RuntimeParams rp;
-    rp.deterministic = true;
-    rp.threads = 2;
-    Collector c;
-    DepthRuntime runtime(s.params, rp, c.callback());
-    runtime.start();
-    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
-    runtime.drain();
-    expect_identical(expected, c.results, heavy_densify ? "heavy densify" : "heavy stereo");
-    const long on_stereo = runtime.stats().next_contour_on_stereo_thread;
+    const DeterministicRun run = run_deterministic(s, 2);
+    expect_identical(expected, run.results, heavy_densify ? "heavy densify" : "heavy stereo");
+    const long on_stereo = run.stats.next_contour_on_stereo_thread;
     std::printf("%s: the stereo thread did %ld of the next contour steps' shares\n",
                 heavy_densify ? "heavy densify" : "heavy stereo", on_stereo);
     // Eleven contour steps have a previous one; some find the stereo thread still busy.
@@ -252,21 +254,12 @@ TEST(DepthRuntime, NextContourWorkGoesToTheStereoThreadOnlyWhileTheOtherIsBusy) 
   // Three stage threads or no flow cue: nothing to take.
   for (const bool three_threads : {true, false}) {
     Sequence s = make_sequence("hand", 6);
-    s.params.densify.tolerance = 1e-9;
-    s.params.densify.max_iterations = 400;
-    s.params.densify.multigrid = false;
+    make_one_stage_heavy(s.params, /*heavy_densify=*/true);
     if (!three_threads) s.params.contour.use_flow = false;
     const std::vector<DepthResult> expected = offline(s);
-    RuntimeParams rp;
-    rp.deterministic = true;
-    rp.threads = three_threads ? 3 : 2;
-    Collector c;
-    DepthRuntime runtime(s.params, rp, c.callback());
-    runtime.start();
-    for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
-    runtime.drain();
-    expect_identical(expected, c.results, three_threads ? "three threads" : "no flow cue");
-    EXPECT_EQ(runtime.stats().next_contour_on_stereo_thread, 0);
+    const DeterministicRun run = run_deterministic(s, three_threads ? 3 : 2);
+    expect_identical(expected, run.results, three_threads ? "three threads" : "no flow cue");
+    EXPECT_EQ(run.stats.next_contour_on_stereo_thread, 0);
   }
 }
 
