@@ -279,14 +279,8 @@ TEST(DepthRuntime, ColourInputAtHalfResolutionEqualsTheOfflinePipeline) {
   s.params.stereo.internal_resolution = "half";
   s.params.contour.use_flow = false;  // DIS needs more than the halved 80x48
   const std::vector<DepthResult> expected = offline(s);
-  RuntimeParams rp;
-  rp.deterministic = true;
-  Collector c;
-  DepthRuntime runtime(s.params, rp, c.callback());
-  runtime.start();
-  for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
-  runtime.drain();
-  expect_identical(expected, c.results, "colour, half resolution");
+  expect_identical(expected, run_deterministic(s, RuntimeParams{}.threads).results,
+                   "colour, half resolution");
 }
 
 TEST(DepthRuntime, FramesCarryTheirTimesInStageOrder) {
