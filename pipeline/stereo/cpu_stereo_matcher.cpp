@@ -387,12 +387,21 @@ void check_stereo_input(const StereoParams& params, ImageView<const std::uint8_t
   const int scale = internal_scale(params, left.width);
   const int w = left.width / scale;
   const int h = left.height / scale;
+  // Above 640 px the stage matches at half size: the limits hold there, so the errors say so.
   if (w < params.census_width || h < params.census_height)
-    throw Error("stereo: image " + size_text(left) + " is smaller than the census window");
+    throw Error("stereo: image " + size_text(left) +
+                (scale == 1 ? ""
+                            : ", matched at half size (" + std::to_string(w) + "x" +
+                                  std::to_string(h) + "),") +
+                " is smaller than the " + std::to_string(params.census_width) + "x" +
+                std::to_string(params.census_height) + " census window");
   const int max_d = params.max_disparity / scale;
   if (max_d >= w)
     throw Error("stereo: max disparity " + std::to_string(params.max_disparity) +
-                " must be smaller than the image width " + std::to_string(left.width));
+                (scale == 1 ? " must be smaller than the image width " + std::to_string(w)
+                            : " (" + std::to_string(max_d) +
+                                  " px at half size) must be smaller than the half-size width " +
+                                  std::to_string(w) + " (image " + size_text(left) + ")"));
 }
 
 std::unique_ptr<StereoMatcher> make_stereo_matcher(const StereoMatcherFactory& factory,

@@ -338,6 +338,21 @@ TEST(CpuStereoMatcher, BadInputThrowsErrorsThatNameTheProblem) {
     EXPECT_THAT(e, HasSubstr("max disparity " + std::to_string(max_d)));
     EXPECT_THAT(e, HasSubstr("width 320"));
   }
+  // Above 640 px the limits hold at half size, and the errors name that size.
+  Image<std::uint8_t> flat(645, 7);
+  flat.fill(0);
+  const std::string flat_error = compute_error(*matcher, flat.cview(), flat.cview());
+  EXPECT_THAT(flat_error, HasSubstr("645x7x1, matched at half size (322x3)"));
+  EXPECT_THAT(flat_error, HasSubstr("9x7 census window"));
+  Image<std::uint8_t> wide_image(641, 40);
+  wide_image.fill(0);
+  StereoParams wide_max;
+  wide_max.max_disparity = 640;
+  const std::string half_error =
+      compute_error(*make_cpu_stereo_matcher(wide_max), wide_image.cview(), wide_image.cview());
+  EXPECT_THAT(half_error, HasSubstr("max disparity 640 (320 px at half size)"));
+  EXPECT_THAT(half_error, HasSubstr("half-size width 320 (image 641x40x1)"));
+
   StereoParams just_fits;
   just_fits.max_disparity = 319;
   EXPECT_EQ(compute_error(*make_cpu_stereo_matcher(just_fits), s.left.cview(), s.right.cview()),
