@@ -8,7 +8,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cassert>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -85,6 +84,12 @@ RingWriter::RingWriter(const std::filesystem::path& path, const RingOptions& opt
   // Readers take a shared lock to learn whether the writer died; the kernel drops ours with us.
   if (flock(fd_, LOCK_EX | LOCK_NB) != 0) cleanup("flock");
   if (ftruncate(fd_, static_cast<off_t>(size_)) != 0) cleanup("ftruncate");
+  // ftruncate reserves nothing on tmpfs: a full /run would fault (SIGBUS) on the first touch of
+  // a page below. Reserving the pages now turns that into an error here.
+  if (const int err = posix_fallocate(fd_, 0, static_cast<off_t>(size_)); err != 0) {
+    errno = err;
+    cleanup("cannot reserve the depth ring's memory");
+  }
   void* p = mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, 0);
   if (p == MAP_FAILED) cleanup("mmap");
   base_ = static_cast<unsigned char*>(p);
@@ -142,18 +147,22 @@ unsigned char* RingWriter::slot_base(std::uint32_t index) const {
 }
 
 RingWriter::Slot RingWriter::begin_write() {
-  assert(!open_slot_ && "publish() the open slot first");
   auto* h = reinterpret_cast<layout::RingHeader*>(base_);
-  // Readers that poll through a write get up now, while the slot fills, so they are running
-  // when it is published.
-  layout::change_and_wake(h->writes_begun);
-  writing_ = (writing_ + 1) % h->slot_count;
+  // A slot still open is one whose write was never published (its frame failed half-way): its
+  // counter is odd, so readers keep away from it, and it is written again. Opening the next one
+  // would leave it odd, and flip it back to even on a half-filled slot when its turn came.
+  if (!open_slot_) {
+    // Readers that poll through a write get up now, while the slot fills, so they are running
+    // when it is published.
+    layout::change_and_wake(h->writes_begun);
+    writing_ = (writing_ + 1) % h->slot_count;
+    auto* s = reinterpret_cast<layout::SlotHeader*>(slot_base(writing_));
+    const std::uint64_t c = s->seqlock.load(std::memory_order_relaxed);
+    s->seqlock.store(c + 1, std::memory_order_relaxed);
+    layout::fence_release();
+    open_slot_ = true;
+  }
   unsigned char* base = slot_base(writing_);
-  auto* s = reinterpret_cast<layout::SlotHeader*>(base);
-  const std::uint64_t c = s->seqlock.load(std::memory_order_relaxed);
-  s->seqlock.store(c + 1, std::memory_order_relaxed);
-  layout::fence_release();
-  open_slot_ = true;
   Slot slot;
   slot.index = writing_;
   slot.depth = ImageView<float>(reinterpret_cast<float*>(base + h->depth_offset), options_.width,
@@ -167,7 +176,8 @@ RingWriter::Slot RingWriter::begin_write() {
 }
 
 std::uint64_t RingWriter::publish(const FrameMeta& meta) {
-  assert(open_slot_ && "begin_write() first");
+  // Without an open slot the counter below would turn odd on a published frame.
+  if (!open_slot_) throw Error(path_.string() + ": publish() without begin_write()");
   auto* h = reinterpret_cast<layout::RingHeader*>(base_);
   auto* s = reinterpret_cast<layout::SlotHeader*>(slot_base(writing_));
   const std::uint64_t index = published_ + 1;

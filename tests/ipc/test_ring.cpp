@@ -1,12 +1,18 @@
 // One process, writer and client side by side: what a reader sees of a frame and when a view
 // stops being valid.
 
+#include <sched.h>
+#include <sys/mount.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
+#include <fstream>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -81,6 +87,46 @@ TEST(RingWriter, RejectsBadGeometryAndMismatchedFrames) {
   EXPECT_THROW(writer.write(depth.cview(), colour.cview(), {}), Error);
   EXPECT_THROW(writer.write(depth.cview(), {}, {}), Error) << "depth without its image";
   EXPECT_EQ(writer.published(), 0u);
+}
+
+// In a child with a mount namespace of its own: a 1 MiB tmpfs at `dir`, then a ring larger than
+// that. Exit 0: a dco::Error naming the reservation and no file left; 77: no namespace here.
+int ring_on_a_full_tmpfs(const std::filesystem::path& dir) {
+  if (unshare(CLONE_NEWNS) != 0) {
+    // Not root: a user namespace that maps our uid lets us mount all the same.
+    const uid_t uid = getuid();
+    const gid_t gid = getgid();
+    if (unshare(CLONE_NEWUSER | CLONE_NEWNS) != 0) return 77;
+    std::ofstream("/proc/self/setgroups") << "deny";
+    std::ofstream("/proc/self/uid_map") << "0 " << uid << " 1";
+    std::ofstream("/proc/self/gid_map") << "0 " << gid << " 1";
+  }
+  if (mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0 ||
+      mount("none", dir.c_str(), "tmpfs", 0, "size=1m") != 0)
+    return 77;
+  RingOptions big;
+  big.width = 640;
+  big.height = 360;
+  big.image_channels = 1;
+  try {
+    RingWriter writer(dir / "depth.shm", big);  // about 4.6 MB
+    return 2;
+  } catch (const Error& e) {
+    if (std::string(e.what()).find("reserve") == std::string::npos) return 3;
+  }
+  return std::filesystem::is_empty(dir) ? 0 : 4;
+}
+
+TEST(RingWriter, AFullTmpfsIsAnErrorNotABusFault) {
+  TempDir dir;
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) _exit(ring_on_a_full_tmpfs(dir.path()));
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+  if (WEXITSTATUS(status) == 77) GTEST_SKIP() << "no mount namespace for a small tmpfs here";
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "2: no error, 3: another error, 4: a file left behind";
 }
 
 TEST(RingWriter, DefaultDirectoryFollowsRuntimeDirectory) {
@@ -195,6 +241,92 @@ TEST(RingClient, ReadLatestCopiesAnUntornFrameIntoCallerMemory) {
   buf.depth_capacity = depth.size();
   buf.image_stride = kWidth - 1;
   EXPECT_EQ(dco_client_read_latest(c.handle(), &buf, &out), DCO_E_BUFFER_TOO_SMALL);
+
+  // Strides whose product with the rows wraps round to a small size are too small too, and
+  // nothing is written.
+  buf.image_stride = kWidth;
+  std::fill(depth.begin(), depth.end(), 0xAB);
+  for (const std::size_t stride : {std::size_t{1} << 63, SIZE_MAX / (kHeight - 1) + 1, SIZE_MAX}) {
+    buf.depth_stride = stride;
+    EXPECT_EQ(dco_client_read_latest(c.handle(), &buf, &out), DCO_E_BUFFER_TOO_SMALL) << stride;
+    buf.depth_stride = kDepthStride;
+    buf.image_stride = stride;
+    EXPECT_EQ(dco_client_read_latest(c.handle(), &buf, &out), DCO_E_BUFFER_TOO_SMALL) << stride;
+    buf.image_stride = kWidth;
+  }
+  EXPECT_EQ(std::count(depth.begin(), depth.end(), 0xAB),
+            static_cast<std::ptrdiff_t>(depth.size()));
+}
+
+TEST(RingWriter, AWriteNeverPublishedIsWrittenAgainAndNeverLooksPublished) {
+  TempDir dir;
+  constexpr int kSlots = 3;
+  RingWriter writer(dir.path() / "depth.shm", small_ring(kSlots));
+  client::Client c = connect(writer.path());
+  std::vector<std::uint64_t> seq_of_index = {0};  // frame_seq by publish index
+  auto publish = [&](std::uint64_t seq) {
+    EXPECT_EQ(publish_pattern(writer, seq), seq_of_index.size());
+    seq_of_index.push_back(seq);
+  };
+  // Every frame the ring still hands out, by announcement, is one whole published frame.
+  auto check_announced = [&] {
+    std::vector<unsigned char> depth(kWidth * sizeof(float) * kHeight);
+    std::vector<std::uint8_t> image(kWidth * kHeight);
+    dco_frame_buffer buf;
+    dco_frame_buffer_init(&buf);
+    buf.depth = reinterpret_cast<float*>(depth.data());
+    buf.depth_stride = kWidth * sizeof(float);
+    buf.depth_capacity = depth.size();
+    buf.image = image.data();
+    buf.image_stride = kWidth;
+    buf.image_capacity = image.size();
+    int accepted = 0;
+    for (std::uint32_t slot = 0; slot < kSlots; ++slot)
+      for (std::uint64_t index = 1; index < seq_of_index.size(); ++index) {
+        const auto info = c.read_announced(writer.session_id(), slot, index, buf);
+        if (!info) continue;
+        ++accepted;
+        EXPECT_EQ(info->frame_seq, seq_of_index[index]);
+        EXPECT_EQ(frame_checksum(depth.data(), buf.depth_stride, image.data(), kWidth, kWidth,
+                                 kHeight, 1),
+                  expected_checksum(seq_of_index[index], kWidth, kHeight, true))
+            << "slot " << slot << ", index " << index;
+      }
+    return accepted;
+  };
+  for (std::uint64_t seq = 1; seq <= kSlots; ++seq) publish(seq);
+  // A frame that fails half-way between begin_write and publish: the daemon catches the error
+  // and goes on with the next frame.
+  const RingWriter::Slot abandoned = writer.begin_write();
+  for (int y = 0; y < kHeight; ++y) std::fill_n(abandoned.depth.row(y), kWidth, -1.0f);
+  EXPECT_EQ(check_announced(), kSlots - 1) << "the open slot's frame is refused";
+  EXPECT_EQ(writer.begin_write().index, abandoned.index) << "the open slot is written again";
+  publish(10);
+  EXPECT_EQ(writer.current_slot(), abandoned.index);
+  // Round the ring twice, each frame first half-written: only whole frames are ever accepted.
+  for (std::uint64_t seq = 11; seq < 11 + 2 * kSlots; ++seq) {
+    const RingWriter::Slot open = writer.begin_write();
+    for (int y = 0; y < kHeight / 2; ++y) open.depth.row(y)[0] = -2.0f;
+    EXPECT_EQ(check_announced(), kSlots - 1);
+    const auto newest = c.latest();
+    ASSERT_TRUE(newest.has_value());
+    EXPECT_EQ(newest->info().frame_seq, seq_of_index.back());
+    publish(seq);
+    EXPECT_EQ(check_announced(), kSlots);
+  }
+}
+
+TEST(RingWriter, PublishWithoutAnOpenSlotThrows) {
+  TempDir dir;
+  RingWriter writer(dir.path() / "depth.shm", small_ring());
+  EXPECT_THROW(writer.publish({}), dco::Error);
+  publish_pattern(writer, 1);
+  EXPECT_THROW(writer.publish({}), dco::Error);
+  client::Client c = connect(writer.path());
+  const auto v = c.latest();
+  ASSERT_TRUE(v.has_value());
+  EXPECT_EQ(v->info().frame_seq, 1u);
+  EXPECT_TRUE(c.still_valid(*v));
 }
 
 TEST(RingClient, RingWithoutImageHasNoImagePointer) {
@@ -300,6 +432,54 @@ TEST(RingClient, FollowsARestartedWriterToItsNewSession) {
   const auto after = c.wait_next(std::chrono::milliseconds(1000));
   ASSERT_TRUE(after.has_value());
   EXPECT_EQ(after->info().frame_seq, 2u);
+}
+
+TEST(RingClient, AViewOfARestartedWriterStaysMappedUntilAFrameIsReturned) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  auto old_writer = std::make_unique<RingWriter>(path, small_ring());
+  client::Client c = connect(path);
+  publish_pattern(*old_writer, 7);
+  const auto kept = c.latest();
+  ASSERT_TRUE(kept.has_value());
+  // The daemon restarts and has published nothing yet: a renderer keeps drawing its last frame
+  // while the calls that look for a new one follow the path to the new ring and find none.
+  old_writer.reset();
+  RingWriter writer(path, small_ring(5));
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));  // a path check is due
+  EXPECT_FALSE(c.latest().has_value());
+  EXPECT_FALSE(c.wait_next(std::chrono::milliseconds(30)).has_value());
+  EXPECT_FALSE(c.view_announced(writer.session_id(), 0, 1).has_value());
+  EXPECT_EQ(c.session_id(), writer.session_id());
+  EXPECT_FALSE(c.still_valid(*kept));
+  EXPECT_EQ(view_checksum(*kept), expected_checksum(7, kWidth, kHeight, true))
+      << "the old ring's pixels are still mapped";
+  publish_pattern(writer, 1);
+  const auto fresh = c.latest();
+  ASSERT_TRUE(fresh.has_value());
+  EXPECT_EQ(view_checksum(*fresh), expected_checksum(1, kWidth, kHeight, true));
+}
+
+TEST(RingClient, WaitsLongerThanTheCApiCanSayAreCutNotWrapped) {
+  TempDir dir;
+  RingWriter writer(dir.path() / "depth.shm", small_ring());
+  client::Client c = connect(writer.path());
+  // Cast to the C call's 32-bit milliseconds, 2^32 + 1 ms was a 1 ms wait and 600 h a negative
+  // one (an exception).
+  std::uint64_t seq = 0;
+  for (const std::chrono::milliseconds wait :
+       {std::chrono::milliseconds((std::int64_t{1} << 32) + 1),
+        std::chrono::milliseconds(std::chrono::hours(600))}) {
+    std::thread later([&writer, s = ++seq] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      publish_pattern(writer, s);
+    });
+    const auto v = c.wait_next(wait);
+    later.join();
+    ASSERT_TRUE(v.has_value()) << wait.count() << " ms";
+    EXPECT_EQ(v->info().frame_seq, seq);
+  }
+  EXPECT_FALSE(c.wait_next(std::chrono::milliseconds(-5)).has_value()) << "a negative wait polls";
 }
 
 }  // namespace

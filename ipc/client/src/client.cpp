@@ -84,7 +84,10 @@ struct Expectations {
   std::uint32_t height = 0;
 };
 
-dco_status check_header(const Mapping& m, const Expectations& e, std::uint64_t file_size) {
+// Checks the header and hands back the geometry and sizes it validated. Each field is read from
+// the mapping once: the file is shared, and what is used must be what was checked.
+dco_status check_header(const Mapping& m, const Expectations& e, std::uint64_t file_size,
+                        layout::Geometry& geometry, layout::Sizes& sizes) {
   const layout::RingHeader& h = *m.header();
   const std::string& p = e.path;
   if (h.magic != layout::kMagic) return fail(DCO_E_BAD_FORMAT, p + ": not a dco depth ring");
@@ -110,10 +113,12 @@ dco_status check_header(const Mapping& m, const Expectations& e, std::uint64_t f
   if (file_size < s->file_size)
     return fail(DCO_E_BAD_FORMAT, p + ": truncated (" + std::to_string(file_size) + " of " +
                                       std::to_string(s->file_size) + " bytes)");
-  if ((e.width != 0 && e.width != h.width) || (e.height != 0 && e.height != h.height))
-    return fail(DCO_E_GEOMETRY, p + ": ring is " + std::to_string(h.width) + "x" +
-                                    std::to_string(h.height) + ", expected " +
+  if ((e.width != 0 && e.width != g.width) || (e.height != 0 && e.height != g.height))
+    return fail(DCO_E_GEOMETRY, p + ": ring is " + std::to_string(g.width) + "x" +
+                                    std::to_string(g.height) + ", expected " +
                                     std::to_string(e.width) + "x" + std::to_string(e.height));
+  geometry = g;
+  sizes = *s;
   return DCO_OK;
 }
 
@@ -159,21 +164,25 @@ dco_status map_segment(const Expectations& e, Mapping& out) {
   m.base = static_cast<const unsigned char*>(p);
   m.dev = st.st_dev;
   m.ino = st.st_ino;
-  status = check_header(m, e, m.size);
+  status = check_header(m, e, m.size, m.geometry, m.sizes);
   if (status != DCO_OK) {
     m.release();
     return status;
   }
-  const layout::RingHeader& h = *m.header();
-  m.geometry = {h.width, h.height, h.image_channels, h.slot_count};
-  m.sizes = *layout::compute_sizes(m.geometry);
-  m.session_id = h.session_id;
+  m.session_id = m.header()->session_id;
   out = m;
   return DCO_OK;
 }
 
 bool struct_ok(const void* p, std::uint32_t size, std::uint32_t expected) {
   return p != nullptr && size >= expected;
+}
+
+// Whether `rows` rows of `row_bytes` at `stride` fit in `capacity` bytes. Divides instead of
+// multiplying: a caller's huge stride must not wrap the product round to a small size.
+bool rows_fit(std::size_t capacity, std::size_t stride, std::size_t rows, std::size_t row_bytes) {
+  if (stride < row_bytes || capacity < row_bytes) return false;
+  return rows <= 1 || stride <= (capacity - row_bytes) / (rows - 1);
 }
 
 // Asks, once per thread, for a 0.1 ms time slice, which the thread keeps: a polling reader then
@@ -200,13 +209,26 @@ struct dco_client {
   Expectations expect;
   std::uint32_t max_attempts = kDefaultAttempts;
   Mapping map;
+  // The ring a restarted daemon left behind, still mapped while the caller may hold views into
+  // it: until the next call that returns a frame (dco_frame_view promises that much).
+  Mapping retired;
   std::uint64_t last_index = 0;  // publish_index of the last frame returned
   std::int64_t last_path_check_ns = 0;
   std::int64_t poll_ns = 0;
   std::uint32_t polled_write = 0;  // writes_begun value of the write polled through last
   std::int64_t poll_end_ns = 0;    // when polling through that write stops
 
-  ~dco_client() { map.release(); }
+  ~dco_client() {
+    map.release();
+    retired.release();
+  }
+
+  // Every call that returns a frame passes its status through here: views of an older ring are
+  // no longer the caller's after it.
+  dco_status returned(dco_status status) {
+    if (status == DCO_OK) retired.release();
+    return status;
+  }
 
   // Reads slot `slot`'s metadata under its seqlock into a view (pixels are left in place).
   // False when the slot was being written or changed during the read.
@@ -257,6 +279,16 @@ struct dco_client {
     }
     return fail(DCO_E_OVERTAKEN, expect.path + ": slot overwritten during " +
                                      std::to_string(max_attempts) + " attempts");
+  }
+
+  // take_latest, after following a restarted daemon when a path check is due.
+  dco_status checked_latest(dco_frame_view* view) {
+    if (now_ns() - last_path_check_ns >= kPathCheckNs) {
+      bool remapped = false;
+      const dco_status status = follow_path(&remapped);
+      if (status != DCO_OK) return status;
+    }
+    return take_latest(view);
   }
 
   // The frame an announcement names, only if the slot holds it (see dco_client_view_announced).
@@ -320,7 +352,12 @@ struct dco_client {
     Mapping fresh;
     const dco_status status = map_segment(expect, fresh);
     if (status != DCO_OK) return status;
-    map.release();
+    // The caller's views point into `retired` when it is set (no frame was returned since), so
+    // the current ring has none and can go.
+    if (retired.base == nullptr)
+      retired = map;
+    else
+      map.release();
     map = fresh;
     last_index = 0;
     polled_write = 0;
@@ -402,12 +439,7 @@ void dco_client_close(dco_client* client) {
 dco_status dco_client_latest(dco_client* client, dco_frame_view* view) {
   if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_latest: bad client or view");
-  if (now_ns() - client->last_path_check_ns >= kPathCheckNs) {
-    bool remapped = false;
-    const dco_status status = client->follow_path(&remapped);
-    if (status != DCO_OK) return status;
-  }
-  return client->take_latest(view);
+  return client->returned(client->checked_latest(view));
 }
 
 int dco_client_still_valid(const dco_client* client, const dco_frame_view* view) {
@@ -430,7 +462,7 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     const std::uint64_t published = h->publish_count.load(std::memory_order_acquire);
     if (published > client->last_index) {
       const dco_status status = client->take_latest(view);
-      if (status != DCO_E_NO_FRAME) return status;
+      if (status != DCO_E_NO_FRAME) return client->returned(status);
     }
     const std::int64_t now = now_ns();
     const bool closed = h->state.load(std::memory_order_acquire) == layout::kStateClosed;
@@ -485,13 +517,11 @@ dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
   const Mapping& m = client->map;
   const std::size_t depth_row = std::size_t{m.geometry.width} * sizeof(float);
   const std::size_t rows = m.geometry.height;
-  if (dst->depth_stride < depth_row ||
-      dst->depth_capacity < dst->depth_stride * (rows - 1) + depth_row)
+  if (!rows_fit(dst->depth_capacity, dst->depth_stride, rows, depth_row))
     return fail(DCO_E_BUFFER_TOO_SMALL, "dco_client_copy: depth buffer too small");
   const bool copy_image = dst->image != nullptr && m.geometry.image_channels != 0;
   const std::size_t image_row = std::size_t{m.geometry.width} * m.geometry.image_channels;
-  if (copy_image && (dst->image_stride < image_row ||
-                     dst->image_capacity < dst->image_stride * (rows - 1) + image_row))
+  if (copy_image && !rows_fit(dst->image_capacity, dst->image_stride, rows, image_row))
     return fail(DCO_E_BUFFER_TOO_SMALL, "dco_client_copy: image buffer too small");
   if (!client->valid(view))
     return fail(DCO_E_OVERTAKEN, client->expect.path + ": slot overwritten before the copy");
@@ -516,12 +546,12 @@ dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst, dco
   dco_frame_view view;
   dco_frame_view_init(&view);
   for (std::uint32_t attempt = 0; attempt < client->max_attempts; ++attempt) {
-    dco_status status = dco_client_latest(client, &view);
+    dco_status status = client->checked_latest(&view);
     if (status != DCO_OK) return status;
     status = dco_client_copy(client, &view, dst);
     if (status == DCO_E_OVERTAKEN) continue;
     if (status == DCO_OK && info != nullptr) *info = view.info;
-    return status;
+    return client->returned(status);
   }
   return fail(DCO_E_OVERTAKEN, client->expect.path + ": every copy was overtaken (" +
                                    std::to_string(client->max_attempts) + " attempts)");
@@ -531,7 +561,7 @@ dco_status dco_client_view_announced(dco_client* client, uint64_t session_id, ui
                                      uint64_t publish_index, dco_frame_view* view) {
   if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_view_announced: bad client or view");
-  return client->take_announced(session_id, slot, publish_index, view);
+  return client->returned(client->take_announced(session_id, slot, publish_index, view));
 }
 
 dco_status dco_client_read_announced(dco_client* client, uint64_t session_id, uint32_t slot,
@@ -545,7 +575,7 @@ dco_status dco_client_read_announced(dco_client* client, uint64_t session_id, ui
   if (status != DCO_OK) return status;
   status = dco_client_copy(client, &view, dst);
   if (status == DCO_OK && info != nullptr) *info = view.info;
-  return status;
+  return client->returned(status);
 }
 
 uint64_t dco_client_session_id(const dco_client* client) {

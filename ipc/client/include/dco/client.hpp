@@ -5,8 +5,10 @@
 
 #include <dco/client.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -86,8 +88,10 @@ class Client {
   // The next frame, empty on timeout or overtaken; throws when the writer is gone.
   std::optional<FrameView> wait_next(std::chrono::milliseconds timeout) {
     FrameView v = blank_view();
-    const dco_status s =
-        dco_client_wait_next(handle_, static_cast<std::int32_t>(timeout.count()), &v.raw);
+    // The C call takes 32-bit milliseconds: longer waits are cut to about 24 days, not wrapped.
+    const auto ms = std::clamp<std::chrono::milliseconds::rep>(
+        timeout.count(), 0, std::numeric_limits<std::int32_t>::max());
+    const dco_status s = dco_client_wait_next(handle_, static_cast<std::int32_t>(ms), &v.raw);
     if (s == DCO_E_TIMEOUT || s == DCO_E_OVERTAKEN) return std::nullopt;
     check(s);
     return v;

@@ -41,9 +41,11 @@ class RingWriter {
     std::uint32_t index = 0;
   };
 
-  // Opens the next slot (never the newest one); readers of that slot see it as overwritten.
+  // Opens the next slot (never the newest one); readers of that slot see it as overwritten. A
+  // slot left open by a write that was never published is opened again instead.
   Slot begin_write();
   // Stamps the metadata and publish time and makes the slot the newest. Returns its publish index.
+  // Throws dco::Error without an open slot.
   std::uint64_t publish(const FrameMeta& meta);
 
   // begin_write + copy + publish. `image` must match the ring: empty exactly when it holds none.
