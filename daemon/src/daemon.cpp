@@ -52,6 +52,8 @@ Daemon::Daemon(ConfigSources sources, LoadedConfig config, Logger& log, SourceOp
 }
 
 Daemon::~Daemon() {
+  // The logger outlives the daemon (main logs what ended it): no forward into a dead publisher.
+  log_.set_forward({});
   stop_all();
   if (event_fd_ >= 0) close(event_fd_);
 }
@@ -237,7 +239,12 @@ void Daemon::on_error(const std::string& message) {
 void Daemon::on_result(const pipeline::DepthResult& result,
                        const pipeline::runtime::FrameTimes& times) {
   const int max_frames = max_frames_;
-  if (max_frames > 0 && published_ >= max_frames) return;
+  if (max_frames > 0 && published_ >= max_frames) {
+    // A reload can lower the limit below what is already published: that is reaching it too.
+    max_reached_ = true;
+    wake();
+    return;
+  }
   const std::int64_t capture_ns =
       std::chrono::duration_cast<std::chrono::nanoseconds>(times.capture.time_since_epoch())
           .count();
@@ -421,6 +428,16 @@ void Daemon::report_raw_recording() {
   raw_failed_reported_ = n.failed;
 }
 
+void Daemon::apply_live_settings() {
+  log_.set_level(parse_log_level(loaded_.config.log_level));
+  max_frames_ = loaded_.config.max_frames;
+  {
+    std::lock_guard lock(publish_mutex_);
+    publisher_->set_preview_hz(loaded_.config.preview_hz);
+  }
+  configure_raw_recording();
+}
+
 void Daemon::reload() {
   notifier_.reloading();
   LoadedConfig next;
@@ -456,23 +473,34 @@ void Daemon::reload() {
   next.config.ring_image = loaded_.config.ring_image;
   next.config.lcm_url = loaded_.config.lcm_url;
 
-  log_.set_level(parse_log_level(next.config.log_level));
-  max_frames_ = next.config.max_frames;
-  {
-    std::lock_guard lock(publish_mutex_);
-    publisher_->set_preview_hz(next.config.preview_hz);
-  }
-  const bool restart_pipeline = !restarted.empty();
+  LoadedConfig previous = std::move(loaded_);
   loaded_ = std::move(next);
-  configure_raw_recording();
-  if (restart_pipeline) {
+  apply_live_settings();
+  if (!restarted.empty()) {
     try {
       source_->stop();
       runtime_->stop();
       start_pipeline();
       start_source();
     } catch (const std::exception& e) {
-      on_error(std::string("restarting the pipeline: ") + e.what());
+      // Some values pass every check and fail only when the stages start (a CPU the process may
+      // not use, a backend this machine lacks): go back to what ran.
+      log_.error(std::string("reload failed, the running configuration stays: restarting the "
+                             "pipeline: ") +
+                 e.what());
+      loaded_ = std::move(previous);
+      apply_live_settings();
+      try {
+        source_->stop();
+        if (runtime_) runtime_->stop();
+        start_pipeline();
+        start_source();
+      } catch (const std::exception& again) {
+        on_error(std::string("restarting the pipeline with the running configuration: ") +
+                 again.what());
+        return;
+      }
+      notifier_.ready(status_line(runtime_->stats()));
       return;
     }
   }

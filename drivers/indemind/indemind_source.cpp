@@ -513,7 +513,14 @@ class IndemindSource final : public FrameSource {
       f.left = ImageView<const std::uint8_t>(row0 + (swap ? w : 0), w, h, 1, 2 * w);
       f.right = ImageView<const std::uint8_t>(row0 + (swap ? 0 : w), w, h, 1, 2 * w);
       f.imu = deliver_.imu;
-      sink_->on_frame(f);
+      try {
+        sink_->on_frame(f);
+      } catch (const std::exception& e) {
+        // As every source does: the sink's failure ends the delivery, reported, not thrown out
+        // of this thread (which would terminate the process).
+        sink_->on_error(e.what());
+        return;
+      }
       ++counters_.delivered;
     }
   }

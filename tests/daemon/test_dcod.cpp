@@ -142,6 +142,75 @@ TEST(Dcod, SighupReloadsWhatItCanAndNamesTheRest) {
   EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
 }
 
+TEST(Dcod, AReloadWhoseStagesCannotStartKeepsTheRunningConfiguration) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  const auto config = dir.write("dcod.toml", "[densify]\nlambda_s = 1.2\n");
+  DcodOptions o;
+  o.args = base_args(dir, kScene);
+  o.args.insert(o.args.end(), {"--config", config.string()});
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  dco::client::Options co;
+  co.path = (dir / "depth.shm").string();
+  dco::client::Client client(co);
+  ASSERT_TRUE(client.wait_next(2s));
+
+  // A CPU number the checks accept (below CPU_SETSIZE) that no machine here has: only starting
+  // the stage threads finds out.
+  dir.write("dcod.toml", "[densify]\nlambda_s = 2\n[runtime]\naffinity = \"1000\"\n");
+  const std::size_t before = notify.messages().size();
+  dcod.signal(SIGHUP);
+  ASSERT_TRUE(notify.wait_for("RELOADING=1", 5s, before)) << dcod.log();
+  ASSERT_TRUE(notify.wait_for("READY=1", 5s, before)) << dcod.log();
+  EXPECT_NE(dcod.log().find("reload failed, the running configuration stays: restarting the "
+                            "pipeline: runtime.affinity: cannot run a stage thread on CPU 1000"),
+            std::string::npos)
+      << dcod.log();
+  const auto after = client.wait_next(3s);
+  ASSERT_TRUE(after.has_value()) << dcod.log();
+  EXPECT_TRUE(dcod.running());
+
+  // The next good reload compares against what runs: lambda_s = 2 is a change again.
+  dir.write("dcod.toml", "[densify]\nlambda_s = 2\n");
+  const std::size_t again = notify.messages().size();
+  dcod.signal(SIGHUP);
+  ASSERT_TRUE(notify.wait_for("READY=1", 5s, again)) << dcod.log();
+  EXPECT_NE(dcod.log().find("restarted the pipeline for densify.lambda_s"), std::string::npos)
+      << dcod.log();
+  EXPECT_TRUE(client.wait_next(3s).has_value());
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+}
+
+TEST(Dcod, AReloadThatLowersMaxFramesBelowThePublishedCountStopsCleanly) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  const auto config = dir.write("dcod.toml", "[service]\nmax_frames = 0\n");
+  DcodOptions o;
+  o.args = base_args(dir, kScene);
+  o.args.insert(o.args.end(), {"--config", config.string()});
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  dco::client::Options co;
+  co.path = (dir / "depth.shm").string();
+  dco::client::Client client(co);
+  std::uint64_t index = 0;
+  while (index < 6) {
+    const auto frame = client.wait_next(3s);
+    ASSERT_TRUE(frame.has_value()) << dcod.log();
+    index = frame->info().publish_index;
+  }
+  dir.write("dcod.toml", "[service]\nmax_frames = 2\n");
+  dcod.signal(SIGHUP);
+  EXPECT_EQ(dcod.wait(5s), 0) << dcod.log();
+  EXPECT_NE(dcod.log().find("(service.max_frames): stopping"), std::string::npos) << dcod.log();
+}
+
 TEST(Dcod, BadConfigurationsFailWithFileLineAndReason) {
   TempDir dir;
   const auto exe = std::string(DCOD_EXE);

@@ -229,6 +229,41 @@ TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {
   EXPECT_LT(rec.worst_recovery_ns, 2'000'000'000);
 }
 
+// A sink that fails (the pipeline behind it threw) ends the delivery with on_error on the
+// delivery thread, as every source does; the exception never leaves that thread.
+TEST(IndemindSource, ASinkThatThrowsIsReportedNotFatal) {
+  class Failing final : public FrameSink {
+   public:
+    void on_frame(const StereoFrame&) override {
+      if (++frames == 3) throw Error("stage failed");
+    }
+    void on_end() override {}
+    void on_error(const std::string& m) override {
+      std::lock_guard lock(mutex);
+      errors.push_back(m);
+    }
+    std::atomic<int> frames{0};
+    std::mutex mutex;
+    std::vector<std::string> errors;
+  } sink;
+  Rig rig;
+  rig.source->start(sink);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  for (;;) {
+    {
+      std::lock_guard lock(sink.mutex);
+      if (!sink.errors.empty()) break;
+    }
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "no error reported";
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  rig.source->stop();
+  EXPECT_EQ(sink.frames, 3) << "no frame after the failure";
+  ASSERT_EQ(sink.errors.size(), 1u);
+  EXPECT_EQ(sink.errors[0], "stage failed");
+}
+
 // A thousand faults of every kind, one at a time with clean frames between them: no crash, no
 // transfer left behind, recovery after each replug within 2 s, every fault in its counter.
 TEST(IndemindSource, CountsAThousandInjectedFaultsAndRecovers) {

@@ -61,6 +61,8 @@ class Daemon final : public drivers::FrameSink {
   // Reads the recorded depth previews when the source replays a field log deterministically.
   void open_replay_check();
   void reload();
+  // What a reload applies without restarting the pipeline, from loaded_.
+  void apply_live_settings();
   // Starts, stops or re-creates the DCO_RAW recorder as the configuration says.
   void configure_raw_recording();
   void report_raw_recording();
@@ -92,8 +94,10 @@ class Daemon final : public drivers::FrameSink {
   std::unique_ptr<ReplayCheck> replay_check_;  // replaying a field log in deterministic mode
 
   // Source sequence numbers by capture time, so a result names the camera frame it came from.
+  // Every push is recorded, dropped frames too, for as long as a frame can be in flight: the
+  // stages plus up to runtime.release_latency_ms (1 s), 2.5 s of a 200 fps camera here.
   std::mutex seq_mutex_;
-  std::array<std::pair<std::int64_t, std::uint64_t>, 32> pushed_{};
+  std::array<std::pair<std::int64_t, std::uint64_t>, 512> pushed_{};
   std::size_t pushed_cursor_ = 0;
 
   std::atomic<std::int64_t> last_publish_ns_{0};
