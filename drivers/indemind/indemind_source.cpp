@@ -28,6 +28,15 @@ using namespace indemind;
 constexpr std::chrono::milliseconds kEventSlice{20};
 constexpr std::int64_t kReopenEveryNs = 250'000'000;
 constexpr std::size_t kMaxQueuedImu = 8192;
+// How far before the host clock a sample's device time may map: beyond it the counter or ticks
+// that placed it are garbage (the metadata row and IMU reports carry no checksum).
+constexpr std::int64_t kLeadNs = 50'000'000;
+// How long after the host clock: an IMU report older than this did not wait in a queue.
+constexpr std::int64_t kLagNs = 1'000'000'000;
+// Protocol notes §7.1: the counter can move on before the ticks reset; the vendor SDK then
+// takes 0.1 ms into the frame.
+constexpr std::uint32_t kRaceTicks = 16'000;
+constexpr std::int64_t kRaceSlackNs = 3'000'000;
 constexpr double kStandardGravity = 9.80665;
 constexpr double kRadPerDegree = 3.14159265358979323846 / 180.0;
 
@@ -41,12 +50,14 @@ std::int64_t monotonic_ns() {
 struct Counters {
   std::atomic<std::uint64_t> frames{0}, delivered{0}, delivery_drops{0};
   std::atomic<std::uint64_t> lost_frames{0}, duplicate_frames{0}, backward_frames{0};
-  std::atomic<std::uint64_t> counter_restarts{0}, torn_frames{0};
-  std::atomic<std::uint64_t> bad_payloads{0}, short_frames{0}, oversized_frames{0};
+  std::atomic<std::uint64_t> counter_restarts{0}, torn_frames{0}, implausible_counters{0};
+  std::atomic<std::uint64_t> empty_payloads{0}, bad_payloads{0}, short_frames{0};
+  std::atomic<std::uint64_t> oversized_frames{0};
   std::atomic<std::uint64_t> error_frames{0}, corrupt_frames{0};
   std::atomic<std::uint64_t> stalls{0}, transfer_errors{0}, stream_restarts{0};
   std::atomic<std::uint64_t> imu_samples{0}, imu_bad_reports{0}, imu_duplicates{0};
-  std::atomic<std::uint64_t> imu_out_of_order{0}, imu_overflow{0};
+  std::atomic<std::uint64_t> imu_out_of_order{0}, imu_overflow{0}, imu_implausible{0};
+  std::atomic<std::uint64_t> imu_tick_clamps{0}, imu_silences{0};
   std::atomic<std::uint64_t> disconnects{0}, reconnects{0}, control_busy{0};
 };
 
@@ -130,6 +141,8 @@ class IndemindSource final : public FrameSource {
                   {"backward_frames", c.backward_frames},
                   {"counter_restarts", c.counter_restarts},
                   {"torn_frames", c.torn_frames},
+                  {"implausible_counters", c.implausible_counters},
+                  {"empty_payloads", c.empty_payloads},
                   {"bad_payloads", c.bad_payloads},
                   {"short_frames", c.short_frames},
                   {"oversized_frames", c.oversized_frames},
@@ -143,6 +156,9 @@ class IndemindSource final : public FrameSource {
                   {"imu_duplicates", c.imu_duplicates},
                   {"imu_out_of_order", c.imu_out_of_order},
                   {"imu_overflow", c.imu_overflow},
+                  {"imu_implausible", c.imu_implausible},
+                  {"imu_tick_clamps", c.imu_tick_clamps},
+                  {"imu_silences", c.imu_silences},
                   {"disconnects", c.disconnects},
                   {"reconnects", c.reconnects},
                   {"control_busy", c.control_busy}};
@@ -225,8 +241,7 @@ class IndemindSource final : public FrameSource {
       usb_speed_ = d.speed_mbps;
       // A replugged module counts frames from anywhere and runs a new time line.
       extender_.resync();
-      clock_.reset();
-      last_imu_device_ns_ = -1;
+      new_time_line();
       have_last_report_ = false;
       ++counters_.reconnects;
       state_ = SourceStatus::State::kStarting;
@@ -253,6 +268,23 @@ class IndemindSource final : public FrameSource {
     streaming_ = true;
     restart_ = false;
     last_frame_ns_ = options_.clock();
+    last_imu_report_ns_ = last_frame_ns_;
+    imu_seen_ = false;
+  }
+
+  // The device time line starts again (a replugged module, a counter that restarted): what the
+  // clock map and the IMU order learnt from the old one no longer applies.
+  void new_time_line() {
+    clock_.reset();
+    last_imu_device_ns_ = -1;
+  }
+
+  // Whether a device time maps too far ahead of (or, with `lag`, behind) the host clock `now`.
+  bool implausible(std::int64_t device_ns, std::int64_t now, std::int64_t lag) const {
+    if (clock_.buckets() == 0) return false;
+    const std::int64_t host = clock_.to_host(device_ns);
+    const std::int64_t lead = std::max(kLeadNs, 2 * frame_device_ns(1));
+    return host > now + lead || host < now - lag;
   }
 
   void stop_streaming() {
@@ -327,14 +359,22 @@ class IndemindSource final : public FrameSource {
       return;
     }
     if (!streaming_) return;
-    const bool stalled =
-        options_.clock() - last_frame_ns_ > std::int64_t{options_.stall_ms} * 1'000'000;
-    if (restart_ || stalled) {
-      if (stalled)
+    const std::int64_t stall_ns = std::int64_t{options_.stall_ms} * 1'000'000;
+    const std::int64_t after = options_.clock();
+    const bool stalled = after - last_frame_ns_ > stall_ns;
+    // Armed by a first report: a module that sends no IMU at all must not lose its video.
+    const bool imu_silent = imu_seen_ && after - last_imu_report_ns_ > stall_ns;
+    if (restart_ || stalled || imu_silent) {
+      if (stalled) {
         set_error(fmt::format("no frame for {} ms; restarting the stream", options_.stall_ms));
+      } else if (imu_silent && !restart_) {
+        ++counters_.imu_silences;
+        set_error(fmt::format("no IMU report for {} ms; restarting the stream", options_.stall_ms));
+      }
       ++counters_.stream_restarts;
       stop_streaming();
       device_->clear_halt(kVideoEndpoint);
+      if (options_.imu_hz > 0) device_->clear_halt(kImuEndpoint);
       start_streaming();
     }
   }
@@ -342,7 +382,9 @@ class IndemindSource final : public FrameSource {
   void on_video(TransferStatus status, std::span<const std::uint8_t> data) {
     switch (status) {
       case TransferStatus::kCompleted:
-        if (assembler_->feed(data) && assembler_->take_frame(spare_)) accept_frame();
+        if (std::int64_t first_ns = 0;
+            assembler_->feed(data, options_.clock()) && assembler_->take_frame(spare_, &first_ns))
+          accept_frame(first_ns);
         sync_assembler_counters();
         break;
       case TransferStatus::kStall:
@@ -368,6 +410,7 @@ class IndemindSource final : public FrameSource {
     // One assembler lives as long as the source, so its counts are totals; the atomics make them
     // readable from status().
     const AssemblerCounters& a = assembler_->counters();
+    counters_.empty_payloads = a.empty_payloads;
     counters_.bad_payloads = a.bad_payloads;
     counters_.short_frames = a.short_frames;
     counters_.oversized_frames = a.oversized_frames;
@@ -375,7 +418,8 @@ class IndemindSource final : public FrameSource {
     counters_.corrupt_frames = a.corrupt_frames;
   }
 
-  void accept_frame() {
+  // `first_ns`: host arrival of the frame's first payload.
+  void accept_frame(std::int64_t first_ns) {
     const std::size_t row = std::size_t(2) * mode_.width;
     std::span<std::uint8_t> last(spare_.data() + (mode_.height - 1) * row, row);
     const FrameMetadata meta = parse_frame_metadata(last);
@@ -383,7 +427,8 @@ class IndemindSource final : public FrameSource {
       ++counters_.torn_frames;
       return;
     }
-    const auto step = extender_.next(meta.counter);
+    const auto step = extender_.classify(meta.counter);
+    const std::int64_t now = options_.clock();
     switch (step.step) {
       case CounterExtender::Step::kDuplicate:
         ++counters_.duplicate_frames;
@@ -392,19 +437,28 @@ class IndemindSource final : public FrameSource {
         ++counters_.backward_frames;
         return;
       case CounterExtender::Step::kGap:
+        // A counter that runs ahead of the host clock is a corrupt one, not frames lost: taking
+        // it would drop the frames after it as backward and bend the clock map.
+        if (implausible(frame_device_ns(step.extended), now, kLagNs)) {
+          ++counters_.implausible_counters;
+          return;
+        }
         counters_.lost_frames += step.skipped;
         break;
       case CounterExtender::Step::kRestart:
         ++counters_.counter_restarts;
+        new_time_line();
         break;
       case CounterExtender::Step::kFirst:
       case CounterExtender::Step::kNext:
         break;
     }
+    extender_.accept(step);
     mask_frame_metadata(last, std::span<const std::uint8_t>(last.data() - row, row));
-    const std::int64_t now = options_.clock();
     const std::int64_t device_ns = frame_device_ns(step.extended);
-    clock_.add(device_ns, now);
+    // The first payload's arrival: the last one's adds a readout to the delay, and the map's
+    // lower envelope would jump by that wherever IMU samples are missing from a bucket.
+    clock_.add(device_ns, first_ns);
     last_frame_ns_ = now;
     ++counters_.frames;
     state_ = SourceStatus::State::kStreaming;
@@ -438,10 +492,19 @@ class IndemindSource final : public FrameSource {
       return;
     }
     if (status == TransferStatus::kCancelled) return;
+    if (status == TransferStatus::kStall) {
+      // The transfer rests until the halt is cleared: restart as for the video endpoint.
+      ++counters_.stalls;
+      restart_ = true;
+      return;
+    }
     if (status != TransferStatus::kCompleted) {
       ++counters_.transfer_errors;
       return;
     }
+    const std::int64_t now = options_.clock();
+    last_imu_report_ns_ = now;
+    imu_seen_ = true;
     const auto report = parse_imu_report(data);
     if (!report) {
       ++counters_.imu_bad_reports;
@@ -456,15 +519,34 @@ class IndemindSource final : public FrameSource {
     have_last_report_ = true;
     // Samples before the first frame have no place on the frame counter's time line yet.
     if (!extender_.started()) return;
-    const std::int64_t device_ns =
-        frame_device_ns(extender_.place(report->frame_counter)) +
-        static_cast<std::int64_t>(report->ticks * (1e9 / kImuTicksPerSecond));
+    const std::uint64_t placed = extender_.place(report->frame_counter);
+    auto device_ns_of = [&](std::uint32_t ticks) {
+      return frame_device_ns(placed) +
+             static_cast<std::int64_t>(ticks * (1e9 / kImuTicksPerSecond));
+    };
+    std::int64_t device_ns = device_ns_of(report->ticks);
+    // Ticks that ran on from the previous frame are below two frame periods; more is garbage.
+    const double race_ticks_max = 2.0 * kImuTicksPerSecond / mode_.fps;
+    if (last_imu_device_ns_ >= 0 && placed > last_imu_placed_ && report->ticks >= last_imu_ticks_ &&
+        report->ticks < race_ticks_max &&
+        device_ns - last_imu_device_ns_ > now - last_imu_host_ns_ + kRaceSlackNs) {
+      // The counter moved on but the ticks did not reset: the sample is near the frame start.
+      ++counters_.imu_tick_clamps;
+      device_ns = device_ns_of(kRaceTicks);
+    }
+    if (implausible(device_ns, now, kLagNs)) {
+      ++counters_.imu_implausible;
+      return;
+    }
     if (device_ns <= last_imu_device_ns_) {
       ++counters_.imu_out_of_order;
       return;
     }
     last_imu_device_ns_ = device_ns;
-    clock_.add(device_ns, options_.clock());
+    last_imu_host_ns_ = now;
+    last_imu_placed_ = placed;
+    last_imu_ticks_ = report->ticks;
+    clock_.add(device_ns, now);
     const indemind::ImuSample scaled = to_sample(*report, ranges_);
     drivers::ImuSample s;
     s.capture_ns = clock_.to_host(device_ns);
@@ -556,6 +638,11 @@ class IndemindSource final : public FrameSource {
   ImuReport last_report_;
   bool have_last_report_ = false;
   std::int64_t last_imu_device_ns_ = -1, last_frame_ns_ = 0;
+  // The last IMU sample taken (for the tick race) and the last report of any kind (for silence).
+  std::int64_t last_imu_host_ns_ = 0, last_imu_report_ns_ = 0;
+  std::uint64_t last_imu_placed_ = 0;
+  std::uint32_t last_imu_ticks_ = 0;
+  bool imu_seen_ = false;
   bool streaming_ = false, restart_ = false, gone_ = false;
 
   std::atomic<bool> hotplug_note_{false}, running_{false};

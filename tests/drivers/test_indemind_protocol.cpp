@@ -43,13 +43,38 @@ TEST(UvcPayload, ParsesFlagsPtsAndRejectsBrokenHeaders) {
 TEST(FrameAssembler, JoinsPayloadsIntoExactlySizedFrames) {
   FrameAssembler a(10);
   std::vector<std::uint8_t> out(10);
-  EXPECT_FALSE(a.feed(payload(false, false, 4, 1)));
-  EXPECT_FALSE(a.feed(payload(false, false, 4, 2)));
-  EXPECT_TRUE(a.feed(payload(false, true, 2, 3)));
-  ASSERT_TRUE(a.take_frame(out));
+  EXPECT_FALSE(a.feed(payload(false, false, 4, 1), 100));
+  EXPECT_FALSE(a.feed(payload(false, false, 4, 2), 200));
+  EXPECT_TRUE(a.feed(payload(false, true, 2, 3), 300));
+  std::int64_t first = 0;
+  ASSERT_TRUE(a.take_frame(out, &first));
   EXPECT_EQ(out, (std::vector<std::uint8_t>{1, 1, 1, 1, 2, 2, 2, 2, 3, 3}));
+  EXPECT_EQ(first, 100) << "the first payload's arrival";
   EXPECT_FALSE(a.take_frame(out));
   EXPECT_EQ(a.counters().frames, 1u);
+
+  // A frame id toggle ends one frame and starts the next in the same payload.
+  a.feed(payload(true, false, 5, 4), 400);
+  a.feed(payload(false, false, 5, 5), 500);
+  EXPECT_TRUE(a.feed(payload(false, true, 5, 5), 600));
+  ASSERT_TRUE(a.take_frame(out, &first));
+  EXPECT_EQ(out, std::vector<std::uint8_t>(10, 5));
+  EXPECT_EQ(first, 500);
+}
+
+TEST(FrameAssembler, ZeroLengthTransfersAreSkipped) {
+  FrameAssembler a(10);
+  std::vector<std::uint8_t> out(10);
+  EXPECT_FALSE(a.feed({}));
+  a.feed(payload(false, false, 4, 1));
+  EXPECT_FALSE(a.feed({}));  // after a full-sized transfer, in the middle of a frame
+  a.feed(payload(false, false, 4, 1));
+  EXPECT_TRUE(a.feed(payload(false, true, 2, 1)));
+  ASSERT_TRUE(a.take_frame(out));
+  EXPECT_EQ(out, std::vector<std::uint8_t>(10, 1));
+  EXPECT_EQ(a.counters().empty_payloads, 2u);
+  EXPECT_EQ(a.counters().bad_payloads, 0u);
+  EXPECT_EQ(a.counters().corrupt_frames, 0u);
 }
 
 TEST(FrameAssembler, CountsEveryKindOfBrokenFrame) {

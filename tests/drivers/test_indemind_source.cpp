@@ -282,7 +282,8 @@ TEST(IndemindSource, CountsAThousandInjectedFaultsAndRecovers) {
     const auto fault = static_cast<Fault>(rng() % SimulatedIndemind::kFaultKinds);
     int param = 0;
     if (fault == Fault::kSkipCounter) param = 1 + static_cast<int>(rng() % 5);
-    if (fault == Fault::kSilence) param = 500;  // longer than stall_ms: one stream restart
+    if (fault == Fault::kSilence || fault == Fault::kImuSilence)
+      param = 500;  // longer than stall_ms: one stream restart
     if (fault == Fault::kControlBusy) param = 3;
     if (fault == Fault::kUnplug) param = 200;
     ASSERT_TRUE(rig.sim->inject_and_settle(fault, param))
@@ -306,8 +307,18 @@ TEST(IndemindSource, CountsAThousandInjectedFaultsAndRecovers) {
   EXPECT_EQ(n.at("bad_payloads"), injected(Fault::kBadHeader));
   EXPECT_EQ(n.at("torn_frames"), injected(Fault::kTornMetadata));
   EXPECT_EQ(n.at("duplicate_frames"), injected(Fault::kDuplicateCounter));
-  EXPECT_EQ(n.at("stalls"), injected(Fault::kStall));
-  EXPECT_EQ(n.at("stream_restarts"), injected(Fault::kStall) + injected(Fault::kSilence));
+  EXPECT_EQ(n.at("stalls"), injected(Fault::kStall) + injected(Fault::kImuStall));
+  EXPECT_EQ(n.at("stream_restarts"), injected(Fault::kStall) + injected(Fault::kSilence) +
+                                         injected(Fault::kImuStall) + injected(Fault::kImuSilence));
+  EXPECT_EQ(n.at("imu_silences"), injected(Fault::kImuSilence));
+  EXPECT_EQ(n.at("counter_restarts"), injected(Fault::kCounterRestart));
+  EXPECT_EQ(n.at("implausible_counters"), injected(Fault::kCorruptCounter));
+  EXPECT_EQ(n.at("empty_payloads"), injected(Fault::kEmptyPayload));
+  EXPECT_EQ(n.at("imu_tick_clamps"), injected(Fault::kImuTickRace));
+  // Garbage ticks, and the few reports that carry a restarted counter before its first frame.
+  EXPECT_GE(n.at("imu_implausible"), injected(Fault::kImuBadTicks));
+  EXPECT_LE(n.at("imu_implausible"),
+            injected(Fault::kImuBadTicks) + 20 * injected(Fault::kCounterRestart));
   EXPECT_EQ(n.at("imu_bad_reports"), injected(Fault::kImuShort));
   EXPECT_EQ(n.at("imu_duplicates"), injected(Fault::kImuDuplicate));
   EXPECT_EQ(n.at("control_busy"), rec.busy_answers);

@@ -43,9 +43,11 @@ struct Completion {
 
 const char* SimulatedIndemind::name(Fault f) {
   static const char* const names[kFaultKinds] = {
-      "short transfer", "lost payload",      "extra payload",   "error bit", "bad header",
-      "torn metadata",  "duplicate counter", "skipped counter", "stall",     "silence",
-      "imu short",      "imu duplicate",     "control busy",    "unplug"};
+      "short transfer",  "lost payload",      "extra payload",   "error bit",     "bad header",
+      "torn metadata",   "duplicate counter", "skipped counter", "stall",         "silence",
+      "imu short",       "imu duplicate",     "control busy",    "unplug",        "counter restart",
+      "corrupt counter", "empty payload",     "imu bad ticks",   "imu tick race", "imu stall",
+      "imu silence"};
   return names[static_cast<int>(f)];
 }
 
@@ -78,7 +80,8 @@ struct SimulatedIndemind::State {
 
   Stream video, imu;
   int generation = 0;
-  bool halted = false;
+  bool halted = false, imu_halted = false;
+  std::int64_t imu_silent_until = 0;
   std::int64_t silence_until = 0;
 
   std::map<int, std::vector<std::uint8_t>> rendered;
@@ -94,7 +97,10 @@ struct SimulatedIndemind::State {
   int imu_hz = 1000;
   std::deque<Completion> pending;  // sorted by time
   std::deque<std::pair<Fault, int>> frame_faults;
-  int imu_short = 0, imu_duplicate = 0;
+  int imu_short = 0, imu_duplicate = 0, imu_bad_ticks = 0, imu_race = 0, imu_stall = 0;
+  int imu_silence_ms = 0;
+  std::uint16_t last_imu_counter = 0;
+  std::uint32_t last_imu_ticks = 0;
   std::map<std::uint64_t, std::int64_t> starts;
   Record rec;
 
@@ -153,6 +159,11 @@ void SimulatedIndemind::State::generate_frame() {
     has_fault = false;
   }
   ++counter;
+  if (has_fault && fault == Fault::kCounterRestart) {
+    // Extended values keep rising (they key the frame starts); the wire goes 1000 back.
+    counter += 65536 - 1000;
+    has_intact = false;  // frames lost across a restart are not counted
+  }
   if (has_fault && fault == Fault::kSkipCounter) hide_frames += param;  // captured, never sent
   if (has_fault && fault == Fault::kSilence)
     silence_until = start + std::int64_t{param} * 1'000'000;
@@ -164,7 +175,8 @@ void SimulatedIndemind::State::generate_frame() {
     ++rec.frames_hidden;
     return;
   }
-  const bool harmless = !has_fault || fault == Fault::kSkipCounter || fault == Fault::kSilence;
+  const bool harmless = !has_fault || fault == Fault::kSkipCounter || fault == Fault::kSilence ||
+                        fault == Fault::kCounterRestart || fault == Fault::kEmptyPayload;
   emit(start, has_fault, fault, param, harmless);
 }
 
@@ -173,7 +185,8 @@ void SimulatedIndemind::State::emit(std::int64_t start, bool has_fault, Fault fa
   const int w = mode.width, h = mode.height;
   frame = image(w, h);
   indemind::FrameMetadata meta;
-  meta.counter = static_cast<std::uint16_t>(counter);
+  meta.counter =
+      static_cast<std::uint16_t>(counter + (has_fault && fault == Fault::kCorruptCounter ? 50 : 0));
   meta.exposure_raw = 549;  // 5 ms
   meta.timer_raw = static_cast<std::uint32_t>(start / 125'000);
   meta.torn = has_fault && fault == Fault::kTornMetadata;
@@ -228,6 +241,14 @@ void SimulatedIndemind::State::emit(std::int64_t start, bool has_fault, Fault fa
           c.at = last_video_at = c.at + 1;
           break;
         }
+        case Fault::kEmptyPayload: {
+          Completion empty = c;
+          empty.bytes.clear();
+          empty.at = last_video_at = c.at + 1;
+          schedule(std::move(c));
+          c = std::move(empty);
+          break;
+        }
         default:
           break;
       }
@@ -246,6 +267,27 @@ void SimulatedIndemind::State::generate_imu() {
   r.frame_counter = static_cast<std::uint16_t>(counter);
   const double since = static_cast<double>(t - frame_start) / (1.0 + opt.clock_skew_ppm * 1e-6);
   r.ticks = static_cast<std::uint32_t>(std::max(0.0, since) * indemind::kImuTicksPerSecond / 1e9);
+  // Read and never sent; the IMU faults wait for a report that goes out.
+  if (t < imu_silent_until) return;
+  if (imu_silence_ms > 0) {
+    ++rec.injected[static_cast<int>(Fault::kImuSilence)];
+    imu_silent_until = t + std::int64_t{imu_silence_ms} * 1'000'000;
+    imu_silence_ms = 0;
+    return;
+  }
+  if (imu_race > 0 && r.frame_counter != last_imu_counter) {
+    // The counter is the new frame's, the ticks run on from the last report of the old one.
+    --imu_race;
+    ++rec.injected[static_cast<int>(Fault::kImuTickRace)];
+    r.ticks = last_imu_ticks + static_cast<std::uint32_t>(indemind::kImuTicksPerSecond / imu_hz);
+  }
+  last_imu_counter = r.frame_counter;
+  last_imu_ticks = r.ticks;
+  if (imu_bad_ticks > 0) {
+    --imu_bad_ticks;
+    ++rec.injected[static_cast<int>(Fault::kImuBadTicks)];
+    r.ticks = 0xFFFFFFFFu;
+  }
   r.accel_raw = {20, -41, 2048};  // ±16 g range: 2048 LSB/g
   r.gyro_raw = {8, -4, 2};        // ±2000 °/s: 16.4 LSB/(°/s)
   r.temperature_raw = 3268;       // 35 °C
@@ -256,7 +298,12 @@ void SimulatedIndemind::State::generate_imu() {
   c.generation = imu.generation;
   c.bytes.assign(bytes.begin(), bytes.end());
   ++rec.imu_reports;
-  if (imu_short > 0) {
+  if (imu_stall > 0) {
+    --imu_stall;
+    ++rec.injected[static_cast<int>(Fault::kImuStall)];
+    c.status = TransferStatus::kStall;
+    c.bytes.clear();
+  } else if (imu_short > 0) {
     --imu_short;
     ++rec.injected[static_cast<int>(Fault::kImuShort)];
     c.bytes.resize(20);
@@ -288,7 +335,8 @@ void SimulatedIndemind::State::unplug_now(std::int64_t replug_after_ns,
   }
   pending.clear();
   next_frame = next_imu = -1;
-  halted = false;
+  halted = imu_halted = false;
+  imu_silent_until = 0;
   committed = false;
   has_intact = false;
 }
@@ -353,6 +401,7 @@ class SimulatedIndemind::Device final : public drivers::UsbDevice {
     std::lock_guard lock(s_->mu);
     check_alive();
     if (endpoint == indemind::kVideoEndpoint) s_->halted = false;
+    if (endpoint == indemind::kImuEndpoint) s_->imu_halted = false;
   }
 
   void start_in_stream(std::uint8_t endpoint, drivers::EndpointType, std::size_t size,
@@ -605,8 +654,9 @@ void SimulatedIndemind::handle_events(std::chrono::milliseconds timeout) {
         }
         Stream& st = c.endpoint == indemind::kVideoEndpoint ? s.video : s.imu;
         if (!st.active || st.generation != c.generation) continue;
-        if (c.endpoint == indemind::kVideoEndpoint && s.halted) continue;
-        if (c.status == TransferStatus::kStall) s.halted = true;
+        if (c.endpoint == indemind::kVideoEndpoint ? s.halted : s.imu_halted) continue;
+        if (c.status == TransferStatus::kStall)
+          (c.endpoint == indemind::kVideoEndpoint ? s.halted : s.imu_halted) = true;
         if (c.completes_intact) {
           // Counted when its last byte is on the wire, as the driver counts it.
           const std::uint64_t counter = c.counter;
@@ -668,6 +718,18 @@ void SimulatedIndemind::inject(Fault fault, int param) {
     case Fault::kImuDuplicate:
       ++s.imu_duplicate;
       break;
+    case Fault::kImuBadTicks:
+      ++s.imu_bad_ticks;
+      break;
+    case Fault::kImuTickRace:
+      ++s.imu_race;
+      break;
+    case Fault::kImuStall:
+      ++s.imu_stall;
+      break;
+    case Fault::kImuSilence:
+      s.imu_silence_ms = param;
+      break;
     case Fault::kControlBusy:
       s.busy_left += param;
       ++s.rec.injected[static_cast<int>(fault)];
@@ -694,8 +756,13 @@ bool SimulatedIndemind::inject_and_settle(Fault fault, int param,
   // was descheduled, and a next fault would land on a frame that a silence or a skip hides.
   if (!wait_for([&](const Record& r) { return r.faults_applied() > before; })) return false;
   const Record at = record();
+  // An IMU fault has settled once reports flow again (a silence is over).
+  const bool imu = fault == Fault::kImuShort || fault == Fault::kImuDuplicate ||
+                   fault == Fault::kImuBadTicks || fault == Fault::kImuTickRace ||
+                   fault == Fault::kImuStall || fault == Fault::kImuSilence;
   return wait_for([&](const Record& r) {
-    return r.frames_sent >= at.frames_sent + 4 && r.frames_intact >= at.frames_intact + 3;
+    return r.frames_sent >= at.frames_sent + 4 && r.frames_intact >= at.frames_intact + 3 &&
+           (!imu || r.imu_reports >= at.imu_reports + 3);
   });
 }
 

@@ -43,8 +43,15 @@ class SimulatedIndemind final : public drivers::UsbTransport {
     kImuDuplicate,      // one IMU report sent twice
     kControlBusy,       // the next param extension-unit answers say busy
     kUnplug,            // gone mid-frame; back after param ms (0 = stays away)
+    kCounterRestart,    // the module counts on from 1000 frames back (no replug)
+    kCorruptCounter,    // one frame's metadata counter reads 50 ahead; the next is right again
+    kEmptyPayload,      // a zero-length transfer in the middle of a frame
+    kImuBadTicks,       // one IMU report with garbage ticks (0xFFFFFFFF)
+    kImuTickRace,       // the first report of a frame: counter moved on, ticks not reset
+    kImuStall,          // the interrupt endpoint halts until cleared
+    kImuSilence,        // no IMU report for param ms
   };
-  static constexpr int kFaultKinds = 14;
+  static constexpr int kFaultKinds = 21;
   static const char* name(Fault f);
 
   struct Options {

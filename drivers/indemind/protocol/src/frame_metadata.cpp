@@ -43,30 +43,40 @@ std::uint64_t above(std::uint64_t last, std::uint16_t counter) {
 
 }  // namespace
 
-CounterExtender::Result CounterExtender::next(std::uint16_t counter) {
+CounterExtender::Result CounterExtender::classify(std::uint16_t counter) const {
   Result r;
   if (!started_ || resync_) {
-    last_ = started_ ? above(last_, counter) : counter;
-    started_ = true;
-    resync_ = false;
     r.step = Step::kFirst;
-    r.extended = last_;
+    r.extended = started_ ? above(last_, counter) : counter;
     return r;
   }
+  r.extended = last_;
   const auto delta = static_cast<std::uint16_t>(counter - static_cast<std::uint16_t>(last_));
   if (delta == 0) {
     r.step = Step::kDuplicate;
   } else if (delta < 0x8000) {
-    last_ += delta;
+    r.extended = last_ + delta;
     r.step = delta == 1 ? Step::kNext : Step::kGap;
     r.skipped = delta - 1u;
   } else if (0x10000 - delta <= 64) {
     r.step = Step::kBackward;
   } else {
-    last_ = above(last_, counter);
+    r.extended = above(last_, counter);
     r.step = Step::kRestart;
   }
-  r.extended = last_;
+  return r;
+}
+
+void CounterExtender::accept(const Result& r) {
+  if (r.step == Step::kDuplicate || r.step == Step::kBackward) return;
+  last_ = r.extended;
+  started_ = true;
+  resync_ = false;
+}
+
+CounterExtender::Result CounterExtender::next(std::uint16_t counter) {
+  const Result r = classify(counter);
+  accept(r);
   return r;
 }
 

@@ -45,7 +45,13 @@ class CounterExtender {
     std::uint64_t skipped = 0;  // frames missing before this one (kGap)
   };
 
+  // classify() then accept().
   Result next(std::uint16_t counter);
+  // What `counter` would be, without taking it: a caller can refuse a step it finds implausible.
+  Result classify(std::uint16_t counter) const;
+  // Takes a classified step: the extended value moves on for every step but a dropped one
+  // (kDuplicate, kBackward).
+  void accept(const Result& r);
   // After a stream restart or replug the device counter starts anywhere: the next value is taken
   // as a first one, placed above everything seen so far so the time line never goes back.
   void resync() { resync_ = started_; }
