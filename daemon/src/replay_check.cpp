@@ -14,8 +14,10 @@ void ReplayCheck::check(std::uint64_t frame_seq, ImageView<const float> depth) {
   if (it == recorded_.by_frame.end()) return;
   const ::dco::depth_preview_t& want = it->second;
   std::string difference;
-  if (want.source_width != depth.width || want.source_height != depth.height || want.width < 1 ||
-      want.height < 1) {
+  // Previews read from a log are whole grids (ipc::consistent_preview); one larger than the
+  // depth map is no shrunk copy of it.
+  if (want.source_width != depth.width || want.source_height != depth.height ||
+      want.width > depth.width || want.height > depth.height) {
     difference = fmt::format("frame {}: depth of {}x{}, the headset's was {}x{}", frame_seq,
                              depth.width, depth.height, want.source_width, want.source_height);
   } else {
@@ -23,7 +25,8 @@ void ReplayCheck::check(std::uint64_t frame_seq, ImageView<const float> depth) {
     const int factor = std::max((depth.width + want.width - 1) / want.width,
                                 (depth.height + want.height - 1) / want.height);
     ipc::make_depth_preview(depth, factor, replayed_);
-    if (replayed_.width != want.width || replayed_.height != want.height) {
+    if (replayed_.width != want.width || replayed_.height != want.height ||
+        replayed_.depth_mm.size() != want.depth_mm.size()) {
       difference = fmt::format("frame {}: preview of {}x{}, the headset's was {}x{}", frame_seq,
                                replayed_.width, replayed_.height, want.width, want.height);
     } else {

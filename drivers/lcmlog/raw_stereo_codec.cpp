@@ -9,6 +9,27 @@
 #include "dco/drivers/raw_stereo.hpp"
 
 namespace dco::drivers {
+namespace {
+
+// The largest side a recorded frame may have (the depth ring's limit).
+constexpr int kMaxSide = 16384;
+
+std::uint32_t read_be32(const std::uint8_t* p) {
+  return std::uint32_t{p[0]} << 24 | std::uint32_t{p[1]} << 16 | std::uint32_t{p[2]} << 8 | p[3];
+}
+
+// Whether `bytes` start as an 8-bit PNG of width x height: read from its IHDR chunk before
+// decoding, so a small PNG that claims a huge image is refused before it is inflated.
+bool png_header_is(const std::vector<std::uint8_t>& bytes, int width, int height) {
+  static constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (bytes.size() < 33 || !std::equal(kSignature, kSignature + 8, bytes.begin()) ||
+      !std::equal(bytes.begin() + 12, bytes.begin() + 16, "IHDR"))
+    return false;
+  return read_be32(bytes.data() + 16) == static_cast<std::uint32_t>(width) &&
+         read_be32(bytes.data() + 20) == static_cast<std::uint32_t>(height) && bytes[24] == 8;
+}
+
+}  // namespace
 
 RawStereoEncoder::RawStereoEncoder(int png_level)
     : params_{cv::IMWRITE_PNG_COMPRESSION, png_level, cv::IMWRITE_PNG_STRATEGY,
@@ -57,9 +78,16 @@ void decode_raw_stereo(const ::dco::raw_stereo_t& message, Image<std::uint8_t>& 
   if (message.encoding != "png")
     throw Error(fmt::format("raw frame {}: encoding '{}' (this build reads png)", message.frame_seq,
                             message.encoding));
+  if (message.width < 1 || message.height < 1 || message.width > kMaxSide ||
+      message.height > kMaxSide)
+    throw Error(fmt::format("raw frame {}: a {}x{} frame (sides 1..{})", message.frame_seq,
+                            message.width, message.height, kMaxSide));
   int channels = 0;
   const auto expand = [&](const std::vector<std::uint8_t>& bytes, Image<std::uint8_t>& to,
                           const char* eye) {
+    if (!png_header_is(bytes, message.width, message.height))
+      throw Error(fmt::format("raw frame {}: the {} image is not an 8-bit PNG of {}x{}",
+                              message.frame_seq, eye, message.width, message.height));
     // Straight into the image when it already has the size: imdecode keeps a matching buffer.
     cv::Mat into;
     if (!to.empty()) into = as_mat(to.view());

@@ -14,7 +14,8 @@ RecordedPreviews read_recorded_previews(const std::filesystem::path& log, std::s
   std::string problem;
   while (reader.next(event)) {
     if (event.channel != ipc::channel::kDepthPreview) continue;
-    if (!ipc::decode_message(event.data.data(), event.data.size(), preview, problem)) {
+    if (!ipc::decode_message(event.data.data(), event.data.size(), preview, problem) ||
+        !ipc::consistent_preview(preview)) {
       ++out.undecodable;
       continue;
     }

@@ -18,6 +18,7 @@
 #include "dco/drivers/frame_source.hpp"
 #include "dco/drivers/lcm_log.hpp"
 #include "dco/drivers/raw_stereo.hpp"
+#include "dco/drivers/recorded_previews.hpp"
 #include "dco/ipc/lcm_messages.hpp"
 #include "support/temp_dir.hpp"
 
@@ -154,7 +155,103 @@ TEST(RawStereo, RoundTripIsLosslessForGreyAndColour) {
     bad = m;
     bad.encoding = "jpeg";
     EXPECT_THROW(decode_raw_stereo(bad, left, right), Error);
+    // A small PNG that claims a huge image is refused from its header, before it is inflated.
+    bad = m;
+    bad.left.assign(bad.left.begin(), bad.left.begin() + 33);
+    const std::uint8_t huge[8] = {0, 0, 0x4e, 0x20, 0, 0, 0x4e, 0x20};  // 20000 x 20000
+    std::copy(huge, huge + 8, bad.left.begin() + 16);
+    try {
+      decode_raw_stereo(bad, left, right);
+      ADD_FAILURE() << "decoded a PNG of another size";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("the left image is not an 8-bit PNG of 96x64"),
+                std::string::npos)
+          << e.what();
+    }
+    bad = m;
+    bad.width = 100000;
+    EXPECT_THROW(decode_raw_stereo(bad, left, right), Error);
   }
+}
+
+template <class Message>
+std::vector<std::uint8_t> encoded(const Message& m) {
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+  EXPECT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+// Messages are decoded into objects kept from one to the next (no allocation per message): an
+// array announced empty must not keep the previous message's elements.
+TEST(LcmMessages, DecodingAgainKeepsNothingOfTheLastMessage) {
+  synthetic::SceneRenderer scene(synthetic::preset("hand", 96, 64));
+  synthetic::StereoSample s;
+  scene.render(1, s);
+  RawStereoEncoder encoder;
+  ::dco::raw_stereo_t first;
+  encoder.encode(frame_of(s.left, s.right, std::vector<ImuSample>(3)), "calib", first);
+  ::dco::raw_stereo_t empty = first;
+  empty.left_size = 0;
+  empty.left.clear();
+  empty.num_imu = 0;
+  empty.imu_ns.clear();
+  empty.accel.clear();
+  empty.gyro.clear();
+  ::dco::raw_stereo_t into;
+  std::string problem;
+  const auto a = encoded(first), b = encoded(empty);
+  ASSERT_TRUE(ipc::decode_message(a.data(), a.size(), into, problem)) << problem;
+  ASSERT_TRUE(ipc::decode_message(b.data(), b.size(), into, problem)) << problem;
+  EXPECT_TRUE(into.left.empty());
+  EXPECT_EQ(into.right, first.right);
+  EXPECT_TRUE(into.imu_ns.empty());
+  Image<std::uint8_t> left, right;
+  EXPECT_THROW(decode_raw_stereo(into, left, right), Error) << "an empty image is no frame";
+
+  ::dco::depth_preview_t whole{};
+  whole.width = 2;
+  whole.height = 2;
+  whole.num_pixels = 4;
+  whole.depth_mm = {1, 2, 3, 4};
+  ::dco::depth_preview_t none = whole;
+  none.num_pixels = 0;
+  none.depth_mm.clear();
+  ::dco::depth_preview_t preview;
+  const auto c = encoded(whole), d = encoded(none);
+  ASSERT_TRUE(ipc::decode_message(c.data(), c.size(), preview, problem)) << problem;
+  EXPECT_TRUE(ipc::consistent_preview(preview));
+  ASSERT_TRUE(ipc::decode_message(d.data(), d.size(), preview, problem)) << problem;
+  EXPECT_TRUE(preview.depth_mm.empty());
+  EXPECT_FALSE(ipc::consistent_preview(preview)) << "a 2x2 preview of no pixels";
+}
+
+TEST(RecordedPreviews, OnlyWholeGridsAreKeptForTheReplayCheck) {
+  dco::testing::TempDir dir;
+  std::vector<LcmLogEvent> events;
+  auto add = [&](std::int64_t seq, std::int32_t w, std::int32_t h, std::int32_t n) {
+    ::dco::depth_preview_t p{};
+    p.frame_seq = seq;
+    p.source_width = 64;
+    p.source_height = 48;
+    p.width = w;
+    p.height = h;
+    p.num_pixels = n;
+    p.depth_mm.assign(static_cast<std::size_t>(n), 1000);
+    events.push_back(
+        event_of(static_cast<int>(events.size()), ipc::channel::kDepthPreview, encoded(p)));
+  };
+  add(1, 4, 3, 12);
+  add(2, 4, 3, 200000);  // more values than the grid: read past the replayed preview before
+  add(3, 4, 3, 0);
+  add(4, 0, 0, 0);
+  add(5, 40000, 1, 40000);
+  const auto path = dir.path() / "previews.log";
+  std::ofstream(path, std::ios::binary) << log_of(events);
+  const RecordedPreviews r = read_recorded_previews(path, 100);
+  ASSERT_EQ(r.by_frame.size(), 1u);
+  EXPECT_EQ(r.by_frame.begin()->first, 1);
+  EXPECT_EQ(r.undecodable, 4);
 }
 
 // A log as dcod records it: the scene's pairs on DCO_RAW between other channels, numbered from

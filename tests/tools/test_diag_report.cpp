@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <regex>
 #include <sstream>
@@ -214,6 +215,27 @@ TEST(LogDigest, KeyNumbersOfAKnownLog) {
   EXPECT_NE(json.find("\"frames\": 56,"), std::string::npos) << json;
   EXPECT_NE(json.find("\"dropped_at_entry\": 7,"), std::string::npos) << json;
   EXPECT_NE(json.find("\"damage\": null"), std::string::npos) << json;
+}
+
+// A log can hold any count: the totals stop at the largest long instead of wrapping negative.
+TEST(LogDigest, HugeCountsSaturate) {
+  std::ostringstream out;
+  for (int i = 0; i < 20000; ++i) {
+    ::dco::pipeline_stats_t m{};
+    m.dropped = i % 2 == 0 ? 1'000'000'000'000'000 : 0;  // each step down restarts the count
+    LcmLogEvent e;
+    e.number = i;
+    e.timestamp_us = kStartUs + i * 1000;
+    e.channel = ipc::channel::kStats;
+    e.data = encode(m);
+    drivers::write_lcm_log_event(out, e);
+  }
+  std::istringstream in(out.str());
+  const LogDigest d = digest_log(in, "huge.log", DigestOptions{});
+  const LogSummary s = summarize(d);
+  EXPECT_EQ(s.dropped_at_entry, std::numeric_limits<long>::max());
+  EXPECT_NE(text_summary(d, s, "huge.log.html").find("9223372036854775807 dropped at the entry"),
+            std::string::npos);
 }
 
 TEST(LogDigest, ALogCutAnywhereReportsWhatPrecedesTheCut) {

@@ -81,8 +81,11 @@ class Digester {
       Session& s = *it;
       const double lost = steps_skipped(s.last_index, m.publish_index);
       const double skipped = steps_skipped(s.last_seq, m.frame_seq);
-      s.missing_announcements += static_cast<long>(lost);
-      s.unpublished_frames += static_cast<long>(std::max(0.0, skipped - lost));
+      // Each step is at most 1e15, and a session's totals stay below a long's range with it.
+      s.missing_announcements =
+          static_cast<long>(std::min(static_cast<double>(s.missing_announcements) + lost, 4e18));
+      s.unpublished_frames = static_cast<long>(std::min(
+          static_cast<double>(s.unpublished_frames) + std::max(0.0, skipped - lost), 4e18));
       s.last_index = std::max(s.last_index, m.publish_index);
       s.last_seq = std::max(s.last_seq, m.frame_seq);
     }
@@ -109,9 +112,7 @@ class Digester {
   // A preview whose sides do not match its pixel count cannot be drawn.
   bool plausible_preview(const drivers::LcmLogEvent& e, ChannelTally& tally) {
     const ::dco::depth_preview_t& p = preview_;
-    if (p.width >= 1 && p.height >= 1 && p.width <= 4096 && p.height <= 4096 &&
-        static_cast<std::size_t>(p.width) * static_cast<std::size_t>(p.height) == p.depth_mm.size())
-      return true;
+    if (ipc::consistent_preview(p) && p.width <= 4096 && p.height <= 4096) return true;
     if (tally.undecodable++ == 0)
       tally.first_problem = fmt::format("event {} at byte {}: a {}x{} preview of {} pixels",
                                         e.number, e.offset, p.width, p.height, p.depth_mm.size());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include <fmt/format.h>
@@ -10,6 +11,12 @@
 
 namespace dco::diag {
 namespace {
+
+// Counts come from a log, which can say anything: a total stops at the largest long.
+void add_saturating(long& total, long n) {
+  total =
+      n > std::numeric_limits<long>::max() - total ? std::numeric_limits<long>::max() : total + n;
+}
 
 std::string human_bytes(std::uint64_t bytes) {
   if (bytes < 10 * 1024) return fmt::format("{} B", bytes);
@@ -40,8 +47,8 @@ LogSummary summarize(const LogDigest& d) {
   long intervals = 0;
   double publishing_s = 0;
   for (const Session& session : d.sessions) {
-    s.unpublished_frames += session.unpublished_frames;
-    s.missing_announcements += session.missing_announcements;
+    add_saturating(s.unpublished_frames, session.unpublished_frames);
+    add_saturating(s.missing_announcements, session.missing_announcements);
     intervals += session.frames - 1;
     publishing_s += (static_cast<double>(session.last_publish_ns) -
                      static_cast<double>(session.first_publish_ns)) *
@@ -62,7 +69,7 @@ LogSummary summarize(const LogDigest& d) {
     s.latency.max_ms = *std::max_element(latency.begin(), latency.end());
   }
 
-  for (const StatsPoint& p : d.stats) s.dropped_at_entry += p.dropped;
+  for (const StatsPoint& p : d.stats) add_saturating(s.dropped_at_entry, p.dropped);
   if (!d.stats.empty()) {
     s.last_stats = d.stats.back().stats;
     for (const StatsPoint& p : d.stats) {

@@ -16,7 +16,7 @@ namespace dco::drivers {
 
 struct RecordedPreviews {
   std::map<std::int64_t, ::dco::depth_preview_t> by_frame;
-  long undecodable = 0;    // preview messages that did not decode (not compared)
+  long undecodable = 0;    // preview messages that did not decode or hold no whole grid
   bool truncated = false;  // more previews than the limit; the first ones are kept
 };
 

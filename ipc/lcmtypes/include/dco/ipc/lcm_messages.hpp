@@ -69,31 +69,42 @@ constexpr Step strings(int count_number) {
 template <class T>
 struct Encoding;
 
+// clear_arrays: the generated decode() only touches an array whose count is non-zero, so a
+// message object decoded again would keep the last message's elements under a count of 0.
+// Clearing keeps the capacity (no allocation per message).
 template <>
 struct Encoding<::dco::depth_frame_t> {
   static constexpr const char* kName = "dco.depth_frame_t";
   static constexpr std::array steps{fixed(8 + 4 + 8 * 4 + 4 * 2)};
+  static void clear_arrays(::dco::depth_frame_t&) {}
 };
 template <>
 struct Encoding<::dco::depth_preview_t> {
   static constexpr const char* kName = "dco.depth_preview_t";
   static constexpr std::array steps{fixed(8 * 4 + 4 * 4), count(), array(2, 0)};
+  static void clear_arrays(::dco::depth_preview_t& m) { m.depth_mm.clear(); }
 };
 template <>
 struct Encoding<::dco::pipeline_stats_t> {
   static constexpr const char* kName = "dco.pipeline_stats_t";
   static constexpr std::array steps{fixed(8 + 8 * 3 + 8 * 3 + 8 * 8 + 4 * 3)};
+  static void clear_arrays(::dco::pipeline_stats_t&) {}
 };
 template <>
 struct Encoding<::dco::device_status_t> {
   static constexpr const char* kName = "dco.device_status_t";
   static constexpr std::array steps{fixed(8 + 1), string(), string(),   string(),   fixed(4),
                                     string(),     count(),  strings(0), array(8, 0)};
+  static void clear_arrays(::dco::device_status_t& m) {
+    m.counter_names.clear();
+    m.counter_values.clear();
+  }
 };
 template <>
 struct Encoding<::dco::log_event_t> {
   static constexpr const char* kName = "dco.log_event_t";
   static constexpr std::array steps{fixed(8 + 1), string(), string()};
+  static void clear_arrays(::dco::log_event_t&) {}
 };
 template <>
 struct Encoding<::dco::raw_stereo_t> {
@@ -102,6 +113,13 @@ struct Encoding<::dco::raw_stereo_t> {
       fixed(8 * 2 + 4 * 2), string(),    count(),  array(1, 0), count(),
       array(1, 1),          string(),    string(), count(),     array(8, 2),
       array(12, 2),         array(12, 2)};
+  static void clear_arrays(::dco::raw_stereo_t& m) {
+    m.left.clear();
+    m.right.clear();
+    m.imu_ns.clear();
+    m.accel.clear();
+    m.gyro.clear();
+  }
 };
 
 inline std::int64_t read_be(const unsigned char* p, int bytes) {
@@ -190,11 +208,21 @@ bool decode_message(const void* data, std::size_t size, T& out, std::string& err
     error = name + ": " + why;
     return false;
   }
+  E::clear_arrays(out);
   if (out.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) {
     error = name + ": does not decode";
     return false;
   }
   return true;
+}
+
+// Whether a decoded preview holds what it says: a width x height grid (sides 1..16384) of
+// num_pixels values. A log can hold anything; only such a preview is drawn or compared.
+inline bool consistent_preview(const ::dco::depth_preview_t& p) {
+  constexpr std::int32_t kMaxSide = 16384;
+  return p.width >= 1 && p.height >= 1 && p.width <= kMaxSide && p.height <= kMaxSide &&
+         std::int64_t{p.width} * p.height == p.num_pixels &&
+         static_cast<std::size_t>(p.num_pixels) == p.depth_mm.size();
 }
 
 }  // namespace dco::ipc
