@@ -3,10 +3,12 @@
 // and calibration_toml.cpp.
 #include "dco/core/calibration.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -67,6 +69,9 @@ std::string size_text(int w, int h) {
   return fmt::format("{}x{}", w, h);
 }
 
+// The largest image side dco takes (the depth ring's limit; remap maps stop at 32767).
+constexpr int kMaxSide = 16384;
+
 void check_rotation(const std::string& src, std::string_view what, const Mat3& r) {
   // Files carry ~7 significant digits; 1e-3 accepts those and hand-typed values, rejects mistakes.
   constexpr double kTolerance = 1e-3;
@@ -92,11 +97,12 @@ void check_camera(const std::string& src, std::string_view name, const CameraInt
   if (!std::isfinite(c.cx) || !std::isfinite(c.cy))
     fail_at(src, 0, fmt::format("{} camera: principal point is not finite", name));
   const bool size_ok =
-      (c.width > 0 && c.height > 0) || (size_unknown && c.width == 0 && c.height == 0);
+      (c.width > 0 && c.height > 0 && c.width <= kMaxSide && c.height <= kMaxSide) ||
+      (size_unknown && c.width == 0 && c.height == 0);
   if (!size_ok)
     fail_at(src, 0,
-            fmt::format("{} camera: image size {} is not positive", name,
-                        size_text(c.width, c.height)));
+            fmt::format("{} camera: image size {} is not within 1..{} px a side", name,
+                        size_text(c.width, c.height), kMaxSide));
   const std::size_t n = c.distortion.size();
   if (c.model == CameraModel::kPinhole && n != 0 && n != 4 && n != 5 && n != 8)
     fail_at(src, 0,
@@ -120,9 +126,11 @@ void check_geometry(const std::string& src, const RectifiedGeometry& g, bool siz
     fail_at(src, 0, fmt::format("rectified baseline must be positive, got {} m", g.baseline_m));
   if (!std::isfinite(g.cx_left) || !std::isfinite(g.cx_right) || !std::isfinite(g.cy))
     fail_at(src, 0, "rectified principal point is not finite");
-  if (!(g.width > 0 && g.height > 0) && !size_unknown)
+  if (!(g.width > 0 && g.height > 0 && g.width <= kMaxSide && g.height <= kMaxSide) &&
+      !size_unknown)
     fail_at(src, 0,
-            fmt::format("rectified image size {} is not positive", size_text(g.width, g.height)));
+            fmt::format("rectified image size {} is not within 1..{} px a side",
+                        size_text(g.width, g.height), kMaxSide));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -186,6 +194,17 @@ void StereoCalibration::validate() const {
             fmt::format("left images are {} but right images are {}",
                         size_text(left.width, left.height), size_text(right.width, right.height)));
   check_rotation(src, "extrinsic rotation", rotation);
+  // Two cameras that share a view look about the same way; far apart, the rectification of the
+  // pair is meaningless (a camera turned round still "rectifies").
+  constexpr double kMaxRigAngleDeg = 60;
+  const double rig_angle_deg =
+      std::acos(std::clamp((rotation[0] + rotation[4] + rotation[8] - 1) / 2, -1.0, 1.0)) * 180 /
+      std::numbers::pi;
+  if (rig_angle_deg > kMaxRigAngleDeg)
+    fail_at(src, 0,
+            fmt::format("the cameras are turned {:.1f} degrees apart (at most {:g} for a stereo "
+                        "pair)",
+                        rig_angle_deg, kMaxRigAngleDeg));
   for (double t : translation)
     if (!std::isfinite(t)) fail_at(src, 0, "translation is not finite");
   if (std::hypot(translation[0], translation[1], translation[2]) <= 0)

@@ -127,7 +127,12 @@ KeyValues parse_key_values(std::string_view text, const std::string& file, char 
     if (sep == std::string_view::npos || !is_identifier(key))
       fail_at(file, static_cast<long>(i + 1),
               fmt::format("expected 'key{} values', got '{}'", separator, line.substr(0, 40)));
-    entries[std::string(key)] = Entry{static_cast<long>(i + 1), std::string(line.substr(sep + 1))};
+    const auto [at, added] = entries.emplace(
+        std::string(key), Entry{static_cast<long>(i + 1), std::string(line.substr(sep + 1))});
+    // Which of two values was meant is unknown: the last one winning would hide the mistake.
+    if (!added)
+      fail_at(file, static_cast<long>(i + 1),
+              fmt::format("{} is given twice (first on line {})", key, at->second.line));
   }
   return KeyValues(file, std::move(entries));
 }
@@ -150,10 +155,16 @@ RectifiedGeometry geometry_from_projections(const KeyValues& kv, const std::stri
                                             const std::string& right_key) {
   const auto pl = kv.numbers(left_key, 12);
   const auto pr = kv.numbers(right_key, 12);
-  if (!nearly_equal(pl[0], pr[0]) || !nearly_equal(pl[0], pl[5]) || !nearly_equal(pl[6], pr[6]))
+  if (!nearly_equal(pl[0], pr[0]) || !nearly_equal(pl[0], pl[5]) || !nearly_equal(pr[0], pr[5]) ||
+      !nearly_equal(pl[6], pr[6]))
     fail_at(kv.file(), kv.line(right_key),
             fmt::format("{} and {} do not describe a rectified pair (f or cy differ)", left_key,
                         right_key));
+  if (!nearly_equal(pl[7], pr[7]))
+    fail_at(kv.file(), kv.line(right_key),
+            fmt::format("{} and {} place the cameras apart vertically: dco needs a side-by-side "
+                        "pair",
+                        left_key, right_key));
   RectifiedGeometry g;
   g.f = pl[0];
   g.cx_left = pl[2];
@@ -166,9 +177,10 @@ RectifiedGeometry geometry_from_projections(const KeyValues& kv, const std::stri
 CameraIntrinsics intrinsics_from(const KeyValues& kv, const std::string& k_key,
                                  const std::string& d_key) {
   const auto k = kv.numbers(k_key, 9);
-  if (k[3] != 0 || k[6] != 0 || k[7] != 0 || k[8] != 1)
+  // The camera models here have no skew: a non-zero one would be dropped without a word.
+  if (k[1] != 0 || k[3] != 0 || k[6] != 0 || k[7] != 0 || k[8] != 1)
     fail_at(kv.file(), kv.line(k_key),
-            fmt::format("{} is not a camera matrix [fx s cx; 0 fy cy; 0 0 1]", k_key));
+            fmt::format("{} is not a camera matrix [fx 0 cx; 0 fy cy; 0 0 1]", k_key));
   CameraIntrinsics c;
   c.fx = k[0];
   c.fy = k[4];
@@ -225,7 +237,7 @@ StereoCalibration parse_middlebury(std::string_view text, const std::string& fil
   if (kv.has("doffs")) {
     const double doffs = kv.number("doffs");
     // Files print cx and doffs with 3 decimals, so they agree to about 1e-3.
-    if (std::abs(doffs - g.doffs()) > 0.01)
+    if (!(std::abs(doffs - g.doffs()) <= 0.01))
       fail_at(file, kv.line("doffs"),
               fmt::format("doffs {} disagrees with cam1 cx - cam0 cx = {}", doffs, g.doffs()));
   }

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -26,6 +27,21 @@ std::string next_token(std::istream& in) {
   std::string token;
   in >> token;
   return token;
+}
+
+// Whole tokens only ("4abc" is no width); throws std::invalid_argument or std::out_of_range.
+long whole_long(const std::string& token) {
+  std::size_t used = 0;
+  const long v = std::stol(token, &used);
+  if (used != token.size()) throw std::invalid_argument(token);
+  return v;
+}
+
+double whole_double(const std::string& token) {
+  std::size_t used = 0;
+  const double v = std::stod(token, &used);
+  if (used != token.size()) throw std::invalid_argument(token);
+  return v;
 }
 
 std::uint32_t byteswap32(std::uint32_t v) {
@@ -65,9 +81,10 @@ void write_scaled_png16(const std::filesystem::path& path, ImageView<const float
     std::uint16_t* d = q.row(y);
     for (int x = 0; x < image.width; ++x) {
       const float v = s[x];
+      // Clamped before rounding: lround of a value beyond a long's range is undefined.
       d[x] = (!std::isfinite(v) || v <= 0)
                  ? 0
-                 : static_cast<std::uint16_t>(std::clamp(std::lround(v * scale), 1L, 65535L));
+                 : static_cast<std::uint16_t>(std::lround(std::clamp(v * scale, 1.0f, 65535.0f)));
     }
   }
   write_png16(path, q);
@@ -102,9 +119,9 @@ Image<float> read_pfm(const std::filesystem::path& path) {
   long width = 0, height = 0;
   double scale = 0;
   try {
-    width = std::stol(next_token(in));
-    height = std::stol(next_token(in));
-    scale = std::stod(next_token(in));
+    width = whole_long(next_token(in));
+    height = whole_long(next_token(in));
+    scale = whole_double(next_token(in));
   } catch (const std::exception&) {
     throw Error(quoted(path) + ": malformed PFM header");
   }
@@ -112,7 +129,25 @@ Image<float> read_pfm(const std::filesystem::path& path) {
       !std::isfinite(scale))
     throw Error(quoted(path) + ": bad PFM header (size " + std::to_string(width) + "x" +
                 std::to_string(height) + ", scale " + std::to_string(scale) + ")");
-  in.get();  // the single whitespace byte that ends the header
+  // The single whitespace byte that ends the header, then the data, which must be there before
+  // it is allocated: a 20-byte header can ask for gigabytes.
+  const int end_of_header = in.get();
+  const std::size_t data_bytes =
+      static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * channels * sizeof(float);
+  const std::streampos data_start = in.tellg();
+  in.seekg(0, std::ios::end);
+  std::streamoff available = in.tellg() - data_start;
+  in.seekg(data_start);
+  // A header written with CRLF: the LF belongs to it, as the size shows.
+  if (end_of_header == '\r' && in.peek() == '\n' &&
+      available == static_cast<std::streamoff>(data_bytes) + 1) {
+    in.get();
+    --available;
+  }
+  if (!in || available < static_cast<std::streamoff>(data_bytes))
+    throw Error(quoted(path) + ": PFM data is truncated (" +
+                std::to_string(std::max<std::streamoff>(available, 0)) + " of " +
+                std::to_string(data_bytes) + " bytes)");
   const bool little = scale < 0;
   const bool swap = little != (std::endian::native == std::endian::little);
 

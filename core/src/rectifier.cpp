@@ -127,6 +127,14 @@ Rectifier::Rectifier(const StereoCalibration& calib) {
                           r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0.0, in_size);
       }
       geometry_ = geometry_from(p1, p2, in_size, src);
+      // Distortion coefficients far from any lens give a rectified focal length orders of
+      // magnitude off, and every disparity then rounds to 0: say so instead.
+      const double lens_f = std::max(calib.left.fx, calib.left.fy);
+      if (!(geometry_.f > lens_f / 8 && geometry_.f < lens_f * 8))
+        throw Error(
+            fmt::format("{}: the rectification is degenerate (focal length {:.4g} px from "
+                        "a camera of {:.4g} px): check the distortion coefficients",
+                        src, geometry_.f, lens_f));
       p1 = p1.colRange(0, 3).clone();
       p2 = p2.colRange(0, 3).clone();
     }
@@ -147,14 +155,19 @@ RemapTable Rectifier::table(bool left) const {
                                          static_cast<int>(frac.step1()))};
 }
 
-void Rectifier::rectify(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                        Image<std::uint8_t>& left_out, Image<std::uint8_t>& right_out,
-                        PairRemapper* remapper) const {
+void Rectifier::check_inputs(ImageView<const std::uint8_t> left,
+                             ImageView<const std::uint8_t> right) const {
   check_input(left, "left", in_width_, in_height_);
   check_input(right, "right", in_width_, in_height_);
   if (!left.same_size(right))
     throw Error(fmt::format("rectify: left image is {}x{} but right image is {}x{}", left.width,
                             left.height, right.width, right.height));
+}
+
+void Rectifier::rectify(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                        Image<std::uint8_t>& left_out, Image<std::uint8_t>& right_out,
+                        PairRemapper* remapper) const {
+  check_inputs(left, right);
   if (!needs_remap_) {
     left_out.resize(left.width, left.height, left.channels);
     right_out.resize(right.width, right.height, right.channels);

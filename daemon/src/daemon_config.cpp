@@ -81,7 +81,10 @@ LoadedConfig load_config(const ConfigSources& sources) {
     out.config.source = *sources.source;
   }
   if (out.config.source.empty()) throw Error("source.uri: empty (e.g. synthetic://hand)");
-  const std::string where = sources.file ? sources.file->string() : std::string("configuration");
+  // The checks below look at values together: name everything they may have come from.
+  std::string where = sources.file ? sources.file->string() : std::string();
+  if (!sources.sets.empty()) where += std::string(where.empty() ? "" : " with ") + "--set";
+  if (where.empty()) where = "configuration";
   try {
     pipeline::validate(out.config.pipeline);
     pipeline::runtime::validate(out.config.runtime);

@@ -347,6 +347,25 @@ TEST(CalibrationErrors, NameTheFileAndLine) {
        "ki_garbage.txt:20: expected 'key: values'"},
       {"unknown_keys.txt", "foo: 1 2 3\n",
        "unknown_keys.txt: unrecognised 'key: numbers' calibration"},
+      // Which of two values was meant is unknown: neither wins.
+      {"mb_twice.txt", test::read_file(kMiddlebury) + "baseline=0.1\n",
+       "mb_twice.txt:13: baseline is given twice (first on line 4)"},
+      {"ki_twice.txt", test::read_file(kKitti) + "S_02: 640 480\n",
+       "ki_twice.txt:20: S_02 is given twice (first on line 4)"},
+      {"mb_doffs_nan.txt", replaced(test::read_file(kMiddlebury), "doffs=32.778", "doffs=nan"),
+       "mb_doffs_nan.txt:3: doffs nan disagrees"},
+      {"mb_huge.txt", replaced(test::read_file(kMiddlebury), "width=741", "width=100000"),
+       "mb_huge.txt: left camera: image size 100000x497 is not within 1..16384"},
+      {"ki_skew.txt",
+       std::regex_replace(test::read_file(kKitti), std::regex("K_02: (\\S+) \\S+"), "K_02: $1 5.0"),
+       "ki_skew.txt:5: K_02 is not a camera matrix [fx 0 cx; 0 fy cy; 0 0 1]"},
+      {"turned.toml",
+       replaced(kRigToml, "rotation = [1, 0, 0, 0, 1, 0, 0, 0, 1]",
+                "rotation = [-1, 0, 0, 0, 1, 0, 0, 0, -1]"),
+       "turned.toml: the cameras are turned 180.0 degrees apart (at most 60 for a stereo pair)"},
+      {"huge.toml",
+       replaced(replaced(kRigToml, "width = 640", "width = 20000"), "width = 640", "width = 20000"),
+       "huge.toml: left camera: image size 20000x480 is not within 1..16384 px a side"},
   };
   for (const Case& c : cases) {
     const std::string msg = load_error(dir, c.name, c.text);

@@ -105,8 +105,31 @@ TEST(Pfm, BadFilesThrowNamingTheFile) {
   expect_error("header.pfm", "Pf\nabc 4\n-1.0\n" + std::string(64, '\0'));
   expect_error("scale.pfm", "Pf\n2 2\n0\n" + std::string(16, '\0'));
   expect_error("size.pfm", "Pf\n-2 2\n-1\n" + std::string(16, '\0'));
+  expect_error("trailing.pfm", "Pf\n2abc 2\n-1.0\n" + std::string(16, '\0'));
+  // 64k x 64k x 3 floats announced in 20 bytes: refused before any allocation.
+  expect_error("huge.pfm", "PF\n65536 65536\n-1.0\n");
   expect_error("empty.pfm", "");
   EXPECT_THROW(read_pfm(dir / "missing.pfm"), Error);
+}
+
+// A header written with CRLF line ends: the LF is the header's, not the data's first byte.
+TEST(Pfm, ReadsAHeaderEndedByCrLf) {
+  test::TempDir dir;
+  const Image<float> img = ramp(4, 2, 1);
+  write_pfm(dir / "lf.pfm", img.cview());
+  std::string bytes = test::read_file(dir / "lf.pfm");
+  std::string crlf;
+  int newlines = 0;
+  for (const char c : bytes) {
+    if (c == '\n' && newlines < 3) {
+      crlf += "\r\n";
+      ++newlines;
+    } else {
+      crlf += c;
+    }
+  }
+  test::write_file(dir / "crlf.pfm", crlf);
+  expect_equal(read_pfm(dir / "crlf.pfm"), img);
 }
 
 TEST(Pfm, ReadsMiddleburyGroundTruth) {
@@ -181,6 +204,14 @@ TEST(DepthPng16, RoundTripInMillimetres) {
   EXPECT_TRUE(std::isinf(back.at(1, 0)));
   EXPECT_NEAR(back.at(2, 0), 65.535f, 1e-6f);
   EXPECT_TRUE(std::isinf(back.at(3, 0)));
+  // Far beyond the range: the farthest value, not a wrapped round-off to the nearest one.
+  Image<float> far(2, 1);
+  far.at(0, 0) = 1e16f;
+  far.at(1, 0) = 3e38f;
+  write_depth_png16(dir / "far.png", far.cview());
+  const Image<float> far_back = read_depth_png16(dir / "far.png");
+  EXPECT_NEAR(far_back.at(0, 0), 65.535f, 1e-6f);
+  EXPECT_NEAR(far_back.at(1, 0), 65.535f, 1e-6f);
 }
 
 TEST(DisparityPng16, RefusesEightBitAndMissingFiles) {

@@ -260,5 +260,44 @@ TEST(Rectifier, RefusesVerticalAndSwappedRigs) {
   EXPECT_THROW(Rectifier{c}, Error);
 }
 
+// Distortion far from any lens rectifies to a focal length orders of magnitude off, where every
+// disparity rounds to 0: an error, not a map of zeros.
+TEST(Rectifier, RefusesADegenerateRectification) {
+  StereoCalibration c = pinhole_rig();
+  c.left.distortion = c.right.distortion = {1e6, 0, 0, 0};
+  try {
+    Rectifier r(c);
+    ADD_FAILURE() << "rectified to f = " << r.geometry().f;
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("the rectification is degenerate"), std::string::npos)
+        << e.what();
+  }
+  c.left.distortion = c.right.distortion = {-0.1, 0.01, 0, 0};
+  EXPECT_NO_THROW(Rectifier{c});
+}
+
+// A pass-through still checks that the images are of the calibrated size.
+TEST(Rectifier, PassThroughChecksTheCalibratedSize) {
+  StereoCalibration c = pinhole_rig();
+  const Rectifier raw(c);
+  c.is_rectified = true;
+  c.rectified = raw.geometry();
+  c.left.width = c.right.width = c.rectified.width;
+  c.left.height = c.right.height = c.rectified.height;
+  c.left.distortion.clear();
+  c.right.distortion.clear();
+  const Rectifier pass(c);
+  ASSERT_FALSE(pass.needs_remap());
+  Image<std::uint8_t> half(c.rectified.width / 2, c.rectified.height / 2);
+  half.fill(0);
+  try {
+    pass.check_inputs(half.cview(), half.cview());
+    ADD_FAILURE() << "took images of half the calibrated size";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("but the calibration is for"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace dco

@@ -115,6 +115,10 @@ TEST(DaemonConfig, BadInputNamesFileLineAndReason) {
   ConfigSources invalid;  // in range on its own, refused by the stage's validation
   invalid.sets = {"stereo.census_width=8"};
   EXPECT_NE(load_error(invalid).find("census"), std::string::npos);
+  // ... and a good file is not blamed for a --set.
+  invalid.file = dir.write("good.toml", "[densify]\nlambda_s = 1.2\n");
+  EXPECT_NE(load_error(invalid).find("good.toml with --set: "), std::string::npos)
+      << load_error(invalid);
 
   ConfigSources empty_source;
   empty_source.source = "";

@@ -175,6 +175,17 @@ TEST(DcoDepthCli, SizeMismatchIsRefused) {
                1, "100x80x3");
 }
 
+// A calibration of rectified images (Middlebury's) is not applied, but its size still has to be
+// the images': its focal length and baseline are for that size.
+TEST(DcoDepthCli, RectifiedCalibrationOfAnotherSizeIsRefused) {
+  TempDir dir;
+  expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
+                               (kTsukuba / "im4.png").string(), "--calib",
+                               (kMotorcycle / "calib.txt").string(), "--out",
+                               (dir.path() / "d.pfm").string()}),
+               1, "left image is 384x288 but the calibration is for 741x497");
+}
+
 TEST(DcoDepthCli, UnreadableCalibrationIsNamed) {
   TempDir dir;
   const fs::path calib = dir.write("broken_calib.txt", "cam0=[not a matrix]\nbaseline=\n");

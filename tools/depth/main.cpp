@@ -254,6 +254,8 @@ int run_pair(const Options& opt, const dco::pipeline::PipelineParams& params) {
   std::optional<dco::Rectifier> rectifier;
   if (opt.calib) {
     rectifier.emplace(dco::load_calibration(*opt.calib));
+    // Already rectified images go through as they are, but must be of the calibrated size.
+    rectifier->check_inputs(left.cview(), right.cview());
     if (rectifier->needs_remap()) {
       dco::Image<std::uint8_t> left_rect, right_rect;
       rectifier->rectify(left.cview(), right.cview(), left_rect, right_rect);

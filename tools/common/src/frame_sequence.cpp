@@ -30,6 +30,7 @@ class PatternSequence final : public FrameSequence {
     if (end_ < 0 && !std::filesystem::exists(left)) return false;
     Image<std::uint8_t> l = load_image(left);
     Image<std::uint8_t> r = load_image(expand_pattern(right_, next_));
+    if (rectifier_) rectifier_->check_inputs(l.cview(), r.cview());
     if (rectifier_ && rectifier_->needs_remap()) {
       rectifier_->rectify(l.cview(), r.cview(), frame.left, frame.right);
     } else {

@@ -48,6 +48,10 @@ class Rectifier {
                Image<std::uint8_t>& left_out, Image<std::uint8_t>& right_out,
                PairRemapper* remapper = nullptr) const;
 
+  // Throws dco::Error unless left and right are images rectify() takes: 1 or 3 channels, one
+  // size, the calibrated one where the calibration gives it (a pass-through included).
+  void check_inputs(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right) const;
+
   // The raw image size the maps read (0 x 0 for a pass-through of unknown size).
   int input_width() const { return in_width_; }
   int input_height() const { return in_height_; }
