@@ -93,9 +93,17 @@ void Daemon::open() {
   }
   apply_source_hints(loaded_);
   const DaemonConfig& c = loaded_.config;
-  if (!loaded_.max_disparity_given && source_->info().max_disparity)
-    log_.info(fmt::format("stereo.max_disparity = {} (covers the source's nearest depth)",
-                          loaded_.config.pipeline.stereo.max_disparity));
+  if (const auto& needed = source_->info().max_disparity; !loaded_.max_disparity_given && needed) {
+    const int chosen = loaded_.config.pipeline.stereo.max_disparity;
+    if (chosen >= *needed)
+      log_.info(
+          fmt::format("stereo.max_disparity = {} (covers the source's nearest depth)", chosen));
+    else
+      log_.warning(fmt::format(
+          "the source's nearest depth needs {} px of disparity, stereo.max_disparity stops at {}: "
+          "nearer surfaces are not measured",
+          *needed, chosen));
+  }
   open_replay_check();
   calibration_toml_ = calibration_to_toml(source_->calibration());
   Rectifier rectifier(source_->calibration());

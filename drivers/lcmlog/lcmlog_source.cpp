@@ -18,7 +18,7 @@ class LcmLogSource final : public PacedSource {
  public:
   explicit LcmLogSource(SourceUri& uri) : path_(uri.path()) {
     info_.uri = uri.text();
-    info_.fps = uri.number("fps", 30, 0, 1000);
+    info_.fps = uri.fps(30, "as fast as taken");
     channel_ = uri.value("channel").value_or(ipc::channel::kRaw);
     uri.finish();
     where_ = "lcmlog://" + path_;

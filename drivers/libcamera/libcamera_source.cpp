@@ -70,7 +70,7 @@ Params read_params(SourceUri& uri) {
   Params p;
   p.width = uri.integer("width", 0, 16, 8192);
   p.height = uri.integer("height", 0, 16, 8192);
-  p.fps = uri.number("fps", 0, 0, 1000);
+  p.fps = uri.fps(0, "the cameras' own rate");
   const auto layout = uri.value("layout");
   const auto calib = uri.value("calib");
   uri.finish();
@@ -259,10 +259,25 @@ class LibcameraSource final : public FrameSource {
       // Both cameras run at the asked rate: a frame duration limit of exactly one period.
       const auto period_us = static_cast<std::int64_t>(std::llround(1e6 / fps_));
       for (const auto& d : devices_) {
-        if (!d->camera->controls().count(&lc::controls::FrameDurationLimits))
+        const auto limits = d->camera->controls().find(&lc::controls::FrameDurationLimits);
+        if (limits == d->camera->controls().end())
           throw Error(fmt::format(
               "libcamera: camera '{}' cannot set its frame rate; leave out fps= to use its own",
               d->id));
+        // A camera clamps a duration outside its range without a word, and the pairing
+        // tolerance below would then be for a rate it does not run at.
+        const lc::ControlInfo& range = limits->second;
+        if (range.min().type() == lc::ControlTypeInteger64 && !range.min().isArray() &&
+            range.max().type() == lc::ControlTypeInteger64 && !range.max().isArray()) {
+          const std::int64_t shortest = range.min().get<std::int64_t>();
+          const std::int64_t longest = range.max().get<std::int64_t>();
+          if (shortest > 0 && longest >= shortest && (period_us < shortest || period_us > longest))
+            throw Error(
+                fmt::format("libcamera: camera '{}' runs at {:.4g}..{:.4g} fps; fps={} is "
+                            "outside",
+                            d->id, 1e6 / static_cast<double>(longest),
+                            1e6 / static_cast<double>(shortest), fps_));
+        }
       }
       start_controls_.set(lc::controls::FrameDurationLimits, {period_us, period_us});
       pairer_.set_period(static_cast<std::int64_t>(std::llround(1e9 / fps_)));

@@ -1,13 +1,19 @@
 // replay://DIR: a recorded stereo sequence from image files, paced like the camera it came from.
 //
 // DIR holds either images/I1_*.png + images/I2_*.png (the Karlsruhe sequences' layout) or
-// left/* + right/* (any image files, paired in name order), and one calibration file: calib.toml
+// left/* + right/* (any image files: paired by the number in their names where every name has
+// one, else in name order), and one calibration file: calib.toml
 // (dco's format), calib.txt (Middlebury or Karlsruhe) or calib_cam_to_cam.txt (KITTI). The whole
 // recording is decoded up front, so replay never touches the disk while it streams and a looped
 // replay allocates nothing per frame.
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -45,11 +51,57 @@ std::vector<fs::path> list_images(const fs::path& dir, const std::string& prefix
   return out;
 }
 
+// The last run of digits in a file's stem ("I1_000012" -> 12, "0007_left" -> 7), if any.
+std::optional<std::uint64_t> frame_number(const fs::path& p) {
+  const std::string stem = p.stem().string();
+  const auto last = stem.find_last_of("0123456789");
+  if (last == std::string::npos) return std::nullopt;
+  auto first = last;
+  while (first > 0 && std::isdigit(static_cast<unsigned char>(stem[first - 1]))) --first;
+  if (last - first >= 18) return std::nullopt;  // no frame count has that many digits
+  return std::stoull(stem.substr(first, last - first + 1));
+}
+
+// Left and right images as pairs. Where every name carries a number the pairs are made by it, in
+// its order (a file missing on one side is named, "9" comes before "10"); else by name order.
+std::vector<std::pair<fs::path, fs::path>> pair_images(const std::vector<fs::path>& left,
+                                                       const std::vector<fs::path>& right,
+                                                       const std::string& where) {
+  std::map<std::uint64_t, fs::path> by_number[2];
+  bool numbered = true;
+  for (int side = 0; side < 2 && numbered; ++side)
+    for (const fs::path& p : side == 0 ? left : right) {
+      const auto n = frame_number(p);
+      if (!n) {
+        numbered = false;
+        break;
+      }
+      const auto [at, added] = by_number[side].emplace(*n, p);
+      if (!added)
+        throw Error(fmt::format("{}: {} and {} are both frame {}", where,
+                                at->second.filename().string(), p.filename().string(), *n));
+    }
+  std::vector<std::pair<fs::path, fs::path>> pairs;
+  if (!numbered) {
+    if (left.size() != right.size())
+      throw Error(fmt::format("{}: {} left but {} right images", where, left.size(), right.size()));
+    for (std::size_t i = 0; i < left.size(); ++i) pairs.emplace_back(left[i], right[i]);
+    return pairs;
+  }
+  for (int side = 0; side < 2; ++side)
+    for (const auto& [n, p] : by_number[side])
+      if (!by_number[1 - side].contains(n))
+        throw Error(fmt::format("{}: {} has no {} image of frame {}", where, p.filename().string(),
+                                side == 0 ? "right" : "left", n));
+  for (const auto& [n, p] : by_number[0]) pairs.emplace_back(p, by_number[1].at(n));
+  return pairs;
+}
+
 class ReplaySource final : public PacedSource {
  public:
   explicit ReplaySource(SourceUri& uri) : dir_(uri.path()) {
     info_.uri = uri.text();
-    info_.fps = uri.number("fps", 30, 0, 1000);
+    info_.fps = uri.fps(30, "as fast as taken");
     loop_ = uri.flag("loop", false);
     uri.finish();
     const std::string where = "replay://" + dir_.string();
@@ -66,23 +118,31 @@ class ReplaySource final : public PacedSource {
     if (left.empty())
       throw Error(where +
                   ": no frames (expected images/I1_*.png + images/I2_*.png, or left/ + right/)");
-    if (left.size() != right.size())
-      throw Error(fmt::format("{}: {} left but {} right images", where, left.size(), right.size()));
+    const auto pairs = pair_images(left, right, where);
 
     calibration_ = load_calibration(find_calibration(where));
     const CameraIntrinsics& cam = calibration_.left;
     std::size_t bytes = 0;
-    frames_.reserve(left.size());
-    for (std::size_t i = 0; i < left.size(); ++i) {
-      Frame f{load_image(left[i]), load_image(right[i])};
+    frames_.reserve(pairs.size());
+    for (const auto& [left_path, right_path] : pairs) {
+      Frame f{load_image(left_path), load_image(right_path)};
+      if (frames_.empty() && cam.width == 0 && cam.height == 0) {
+        // A rectified calibration without a size (Karlsruhe without roi) takes the images'.
+        for (int* w :
+             {&calibration_.left.width, &calibration_.right.width, &calibration_.rectified.width})
+          *w = f.left.width();
+        for (int* h : {&calibration_.left.height, &calibration_.right.height,
+                       &calibration_.rectified.height})
+          *h = f.left.height();
+      }
+      const int channels = frames_.empty() ? f.left.channels() : frames_.front().left.channels();
       for (const auto* img : {&f.left, &f.right}) {
-        if (img->width() != cam.width || img->height() != cam.height ||
-            img->channels() != f.left.channels())
+        if (img->width() != cam.width || img->height() != cam.height || img->channels() != channels)
           throw Error(fmt::format(
               "{}: {} is {}x{}x{}, the calibration and the first frame say "
               "{}x{}x{}",
-              where, (img == &f.left ? left[i] : right[i]).filename().string(), img->width(),
-              img->height(), img->channels(), cam.width, cam.height, f.left.channels()));
+              where, (img == &f.left ? left_path : right_path).filename().string(), img->width(),
+              img->height(), img->channels(), cam.width, cam.height, channels));
       }
       bytes +=
           2 * static_cast<std::size_t>(f.left.stride()) * static_cast<std::size_t>(f.left.height());

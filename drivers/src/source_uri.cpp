@@ -70,6 +70,16 @@ double SourceUri::number(const std::string& key, double fallback, double min, do
   return out;
 }
 
+double SourceUri::fps(double fallback, const char* zero_means) {
+  const auto v = take("fps");
+  if (!v) return fallback;
+  double out = 0;
+  if (!parse_whole(*v, out) || !(out == 0 || (out >= kMinFps && out <= kMaxFps)))
+    throw Error(fmt::format("source '{}': fps={} must be a number in [{:g}, {:g}], or 0 ({})",
+                            text_, *v, kMinFps, kMaxFps, zero_means));
+  return out;
+}
+
 bool SourceUri::flag(const std::string& key, bool fallback) {
   const auto v = take(key);
   if (!v) return fallback;

@@ -16,7 +16,7 @@ class SyntheticSource final : public PacedSource {
         calibration_(renderer_.calibration()),
         frames_(static_cast<std::uint64_t>(uri.integer("frames", 0, 0, 1 << 30))) {
     set_stall_after(static_cast<std::uint64_t>(uri.integer("stall_after", 0, 0, 1 << 30)));
-    const double fps = uri.number("fps", 30, 0, 1000);
+    const double fps = uri.fps(30, "as fast as taken");
     uri.finish();
     const auto& c = renderer_.config();
     info_.uri = uri.text();

@@ -1,6 +1,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
+#include <fstream>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -196,7 +197,30 @@ TEST(ReplaySource, BrokenRecordingsAreRefusedWithTheReason) {
   dco::testing::TempDir uneven;
   write_synthetic_recording(uneven.path(), 2, 96, 64);
   std::filesystem::remove(uneven.path() / "right" / "000001.png");
-  EXPECT_NE(error_of(uneven.path()).find("2 left but 1 right"), std::string::npos);
+  EXPECT_NE(error_of(uneven.path()).find("000001.png has no right image of frame 1"),
+            std::string::npos)
+      << error_of(uneven.path());
+
+  // As many files on each side, but not the same frames: never paired by position.
+  dco::testing::TempDir gap;
+  write_synthetic_recording(gap.path(), 4, 96, 64);
+  std::filesystem::remove(gap.path() / "left" / "000002.png");
+  std::filesystem::remove(gap.path() / "right" / "000001.png");
+  EXPECT_NE(error_of(gap.path()).find("000001.png has no right image of frame 1"),
+            std::string::npos)
+      << error_of(gap.path());
+
+  dco::testing::TempDir mixed;
+  write_synthetic_recording(mixed.path(), 2, 96, 64);
+  Image<std::uint8_t> colour(96, 64, 3);
+  colour.fill(0);
+  save_image(mixed.path() / "left" / "000001.png", colour.cview());
+  save_image(mixed.path() / "right" / "000001.png", colour.cview());
+  EXPECT_NE(error_of(mixed.path())
+                .find("000001.png is 96x64x3, the calibration and the first "
+                      "frame say 96x64x1"),
+            std::string::npos)
+      << error_of(mixed.path());
 
   dco::testing::TempDir uncalibrated;
   write_synthetic_recording(uncalibrated.path(), 1, 96, 64);
@@ -209,6 +233,51 @@ TEST(ReplaySource, BrokenRecordingsAreRefusedWithTheReason) {
   narrow.fill(0);
   save_image(wrong_size.path() / "right" / "000001.png", narrow.cview());
   EXPECT_NE(error_of(wrong_size.path()).find("000001.png is 80x64"), std::string::npos);
+
+  for (const char* rate : {"1e-10", "0.001", "1001", "-1"})
+    EXPECT_THROW(open_source(std::string("synthetic://hand?width=96&height=64&fps=") + rate), Error)
+        << rate;
+}
+
+// Numbers without leading zeros: frame 9 comes before frame 10, as the numbers say.
+TEST(ReplaySource, PairsAndOrdersByTheNumbersInTheNames) {
+  dco::testing::TempDir dir;
+  write_synthetic_recording(dir.path(), 2, 96, 64);
+  for (const char* side : {"left", "right"}) {
+    std::filesystem::rename(dir.path() / side / "000000.png", dir.path() / side / "9.png");
+    std::filesystem::rename(dir.path() / side / "000001.png", dir.path() / side / "10.png");
+  }
+  auto source = open_source("replay://" + dir.path().string() + "?fps=0");
+  RecordingSink sink;
+  source->start(sink);
+  ASSERT_TRUE(sink.wait_for_end(10s));
+  source->stop();
+  const auto frames = sink.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  synthetic::SceneRenderer renderer(synthetic::preset("hand", 96, 64));
+  synthetic::StereoSample sample;
+  renderer.render(0, sample);
+  EXPECT_TRUE(same_pixels(frames[0].left.cview(), sample.left.cview()));
+  renderer.render(1, sample);
+  EXPECT_TRUE(same_pixels(frames[1].left.cview(), sample.left.cview()));
+}
+
+// A Karlsruhe calib.txt without roi gives no image size: the images give it.
+TEST(ReplaySource, ARectifiedCalibrationWithoutSizeTakesTheImages) {
+  dco::testing::TempDir dir;
+  write_synthetic_recording(dir.path(), 2, 96, 64);
+  std::filesystem::remove(dir.path() / "calib.toml");
+  std::ofstream(dir.path() / "calib.txt")
+      << "P1_roi: 80 0 48 0 0 80 32 0 0 0 1 0\nP2_roi: 80 0 48 -8 0 80 32 0 0 0 1 0\n";
+  auto source = open_source("replay://" + dir.path().string() + "?fps=0");
+  EXPECT_EQ(source->info().width, 96);
+  EXPECT_EQ(source->info().height, 64);
+  EXPECT_EQ(source->calibration().rectified.width, 96);
+  RecordingSink sink;
+  source->start(sink);
+  ASSERT_TRUE(sink.wait_for_end(10s));
+  source->stop();
+  EXPECT_EQ(sink.frames().size(), 2u);
 }
 
 }  // namespace

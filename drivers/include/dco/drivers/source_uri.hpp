@@ -24,6 +24,10 @@ class SourceUri {
   int integer(const std::string& key, int fallback, int min, int max);
   double number(const std::string& key, double fallback, double min, double max);
   bool flag(const std::string& key, bool fallback);
+  // The frame rate "fps": kMinFps..kMaxFps, or 0, which means `zero_means` (said in errors).
+  // Below kMinFps the frame period would not fit the clock.
+  static constexpr double kMinFps = 0.01, kMaxFps = 1000;
+  double fps(double fallback, const char* zero_means);
   // The raw text of a parameter (a file name, a layout name); nullopt when absent.
   std::optional<std::string> value(const std::string& key) { return take(key); }
   // Throws dco::Error for any parameter no getter asked for.
