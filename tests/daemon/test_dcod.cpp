@@ -35,6 +35,23 @@ std::vector<std::string> base_args(const TempDir& dir, const std::string& source
 }
 const std::string kScene = "synthetic://hand?width=160&height=96&fps=30";
 
+// dcod on the small scene with `config` as its file, reporting to `notify`.
+DcodOptions configured(const TempDir& dir, const std::filesystem::path& config,
+                       NotifySocket& notify) {
+  DcodOptions o;
+  o.args = base_args(dir, kScene);
+  o.args.insert(o.args.end(), {"--config", config.string()});
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  return o;
+}
+
+dco::client::Client ring_client(const TempDir& dir) {
+  dco::client::Options co;
+  co.path = (dir / "depth.shm").string();
+  return dco::client::Client(co);
+}
+
 TEST(Dcod, ReadyWatchdogPingsAndACleanStopOnSigterm) {
   TempDir dir;
   NotifySocket notify(dir / "notify");
@@ -104,16 +121,9 @@ TEST(Dcod, SighupReloadsWhatItCanAndNamesTheRest) {
   TempDir dir;
   NotifySocket notify(dir / "notify");
   const auto config = dir.write("dcod.toml", "[densify]\nlambda_s = 1.2\n[lcm]\npreview_hz = 2\n");
-  DcodOptions o;
-  o.args = base_args(dir, kScene);
-  o.args.insert(o.args.end(), {"--config", config.string()});
-  o.log = dir / "dcod.log";
-  o.notify = &notify;
-  DcodProcess dcod(o);
+  DcodProcess dcod(configured(dir, config, notify));
   ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
-  dco::client::Options co;
-  co.path = (dir / "depth.shm").string();
-  dco::client::Client client(co);
+  dco::client::Client client = ring_client(dir);
   ASSERT_TRUE(client.wait_next(2s));
 
   dir.write("dcod.toml", "[densify]\nlambda_s = 2\n[lcm]\npreview_hz = 5\n[ring]\nslots = 6\n");
@@ -146,16 +156,9 @@ TEST(Dcod, AReloadWhoseStagesCannotStartKeepsTheRunningConfiguration) {
   TempDir dir;
   NotifySocket notify(dir / "notify");
   const auto config = dir.write("dcod.toml", "[densify]\nlambda_s = 1.2\n");
-  DcodOptions o;
-  o.args = base_args(dir, kScene);
-  o.args.insert(o.args.end(), {"--config", config.string()});
-  o.log = dir / "dcod.log";
-  o.notify = &notify;
-  DcodProcess dcod(o);
+  DcodProcess dcod(configured(dir, config, notify));
   ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
-  dco::client::Options co;
-  co.path = (dir / "depth.shm").string();
-  dco::client::Client client(co);
+  dco::client::Client client = ring_client(dir);
   ASSERT_TRUE(client.wait_next(2s));
 
   // A CPU number the checks accept (below CPU_SETSIZE) that no machine here has: only starting
@@ -189,16 +192,9 @@ TEST(Dcod, AReloadThatLowersMaxFramesBelowThePublishedCountStopsCleanly) {
   TempDir dir;
   NotifySocket notify(dir / "notify");
   const auto config = dir.write("dcod.toml", "[service]\nmax_frames = 0\n");
-  DcodOptions o;
-  o.args = base_args(dir, kScene);
-  o.args.insert(o.args.end(), {"--config", config.string()});
-  o.log = dir / "dcod.log";
-  o.notify = &notify;
-  DcodProcess dcod(o);
+  DcodProcess dcod(configured(dir, config, notify));
   ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
-  dco::client::Options co;
-  co.path = (dir / "depth.shm").string();
-  dco::client::Client client(co);
+  dco::client::Client client = ring_client(dir);
   std::uint64_t index = 0;
   while (index < 6) {
     const auto frame = client.wait_next(3s);

@@ -20,6 +20,7 @@
 #include "dco/drivers/raw_stereo.hpp"
 #include "dco/drivers/recorded_previews.hpp"
 #include "dco/ipc/lcm_messages.hpp"
+#include "support/lcm_bytes.hpp"
 #include "support/temp_dir.hpp"
 
 namespace dco::drivers {
@@ -174,14 +175,6 @@ TEST(RawStereo, RoundTripIsLosslessForGreyAndColour) {
   }
 }
 
-template <class Message>
-std::vector<std::uint8_t> encoded(const Message& m) {
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
-  EXPECT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
-            static_cast<int>(bytes.size()));
-  return bytes;
-}
-
 // Messages are decoded into objects kept from one to the next (no allocation per message): an
 // array announced empty must not keep the previous message's elements.
 TEST(LcmMessages, DecodingAgainKeepsNothingOfTheLastMessage) {
@@ -200,7 +193,7 @@ TEST(LcmMessages, DecodingAgainKeepsNothingOfTheLastMessage) {
   empty.gyro.clear();
   ::dco::raw_stereo_t into;
   std::string problem;
-  const auto a = encoded(first), b = encoded(empty);
+  const auto a = dco::testing::lcm_bytes(first), b = dco::testing::lcm_bytes(empty);
   ASSERT_TRUE(ipc::decode_message(a.data(), a.size(), into, problem)) << problem;
   ASSERT_TRUE(ipc::decode_message(b.data(), b.size(), into, problem)) << problem;
   EXPECT_TRUE(into.left.empty());
@@ -218,7 +211,7 @@ TEST(LcmMessages, DecodingAgainKeepsNothingOfTheLastMessage) {
   none.num_pixels = 0;
   none.depth_mm.clear();
   ::dco::depth_preview_t preview;
-  const auto c = encoded(whole), d = encoded(none);
+  const auto c = dco::testing::lcm_bytes(whole), d = dco::testing::lcm_bytes(none);
   ASSERT_TRUE(ipc::decode_message(c.data(), c.size(), preview, problem)) << problem;
   EXPECT_TRUE(ipc::consistent_preview(preview));
   ASSERT_TRUE(ipc::decode_message(d.data(), d.size(), preview, problem)) << problem;
@@ -238,8 +231,8 @@ TEST(RecordedPreviews, OnlyWholeGridsAreKeptForTheReplayCheck) {
     p.height = h;
     p.num_pixels = n;
     p.depth_mm.assign(static_cast<std::size_t>(n), 1000);
-    events.push_back(
-        event_of(static_cast<int>(events.size()), ipc::channel::kDepthPreview, encoded(p)));
+    events.push_back(event_of(static_cast<int>(events.size()), ipc::channel::kDepthPreview,
+                              dco::testing::lcm_bytes(p)));
   };
   add(1, 4, 3, 12);
   add(2, 4, 3, 200000);  // more values than the grid: read past the replayed preview before
@@ -274,9 +267,7 @@ std::string recorded_log(int frames, int width, int height) {
     f.seq = static_cast<std::uint64_t>(100 + i);
     ::dco::raw_stereo_t m;
     encoder.encode(f, calibration, m);
-    std::vector<std::uint8_t> data(static_cast<std::size_t>(m.getEncodedSize()));
-    m.encode(data.data(), 0, static_cast<int>(data.size()));
-    events.push_back(event_of(2 * i, "DCO_RAW", std::move(data)));
+    events.push_back(event_of(2 * i, "DCO_RAW", dco::testing::lcm_bytes(m)));
     events.push_back(event_of(2 * i + 1, "DCO_STATS", {1, 2, 3}));
   }
   return log_of(events);

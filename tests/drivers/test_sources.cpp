@@ -151,15 +151,20 @@ TEST(SyntheticSource, StallAfterStopsDeliveringWithoutEnding) {
 
 using dco::testing::write_synthetic_recording;
 
+// Every frame of a replay of `dir`, delivered as fast as taken.
+std::vector<RecordingSink::Frame> replay_all(const std::filesystem::path& dir) {
+  auto source = open_source("replay://" + dir.string() + "?fps=0");
+  RecordingSink sink;
+  source->start(sink);
+  EXPECT_TRUE(sink.wait_for_end(10s));
+  source->stop();
+  return sink.frames();
+}
+
 TEST(ReplaySource, ReplaysTheFilesInOrderAndLoops) {
   dco::testing::TempDir dir;
   write_synthetic_recording(dir.path(), 3, 96, 64);
-  auto once = open_source("replay://" + dir.path().string() + "?fps=0");
-  RecordingSink sink;
-  once->start(sink);
-  ASSERT_TRUE(sink.wait_for_end(10s));
-  once->stop();
-  const auto frames = sink.frames();
+  const auto frames = replay_all(dir.path());
   ASSERT_EQ(frames.size(), 3u);
   synthetic::SceneRenderer renderer(synthetic::preset("hand", 96, 64));
   synthetic::StereoSample sample;
@@ -247,12 +252,7 @@ TEST(ReplaySource, PairsAndOrdersByTheNumbersInTheNames) {
     std::filesystem::rename(dir.path() / side / "000000.png", dir.path() / side / "9.png");
     std::filesystem::rename(dir.path() / side / "000001.png", dir.path() / side / "10.png");
   }
-  auto source = open_source("replay://" + dir.path().string() + "?fps=0");
-  RecordingSink sink;
-  source->start(sink);
-  ASSERT_TRUE(sink.wait_for_end(10s));
-  source->stop();
-  const auto frames = sink.frames();
+  const auto frames = replay_all(dir.path());
   ASSERT_EQ(frames.size(), 2u);
   synthetic::SceneRenderer renderer(synthetic::preset("hand", 96, 64));
   synthetic::StereoSample sample;
@@ -273,11 +273,7 @@ TEST(ReplaySource, ARectifiedCalibrationWithoutSizeTakesTheImages) {
   EXPECT_EQ(source->info().width, 96);
   EXPECT_EQ(source->info().height, 64);
   EXPECT_EQ(source->calibration().rectified.width, 96);
-  RecordingSink sink;
-  source->start(sink);
-  ASSERT_TRUE(sink.wait_for_end(10s));
-  source->stop();
-  EXPECT_EQ(sink.frames().size(), 2u);
+  EXPECT_EQ(replay_all(dir.path()).size(), 2u);
 }
 
 }  // namespace

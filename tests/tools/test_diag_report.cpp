@@ -22,6 +22,7 @@
 #include "dco/diag/svg_chart.hpp"
 #include "dco/drivers/lcm_log.hpp"
 #include "dco/ipc/lcm_messages.hpp"
+#include "support/lcm_bytes.hpp"
 
 namespace dco::diag {
 namespace {
@@ -29,13 +30,7 @@ namespace {
 using drivers::LcmLogEvent;
 constexpr std::int64_t kStartUs = 1'700'000'000'000'000;
 
-template <class Message>
-std::vector<std::uint8_t> encode(const Message& m) {
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
-  EXPECT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
-            static_cast<int>(bytes.size()));
-  return bytes;
-}
+using dco::testing::lcm_bytes;
 
 // A log of two dcod runs whose every number is known.
 class KnownLog {
@@ -107,7 +102,7 @@ class KnownLog {
     m.capture_ns = m.publish_ns - std::llround(latency_ms * 1e6);
     m.width = 64;
     m.height = 48;
-    add(t, ipc::channel::kDepth, encode(m));
+    add(t, ipc::channel::kDepth, lcm_bytes(m));
   }
   void stats(double t, std::int64_t dropped) {
     ::dco::pipeline_stats_t m{};
@@ -116,7 +111,7 @@ class KnownLog {
     m.stereo_p99_ms = 2 * t;
     m.densify_p50_ms = 0.5;
     m.entry_high_water = dropped > 4 ? 2 : 1;
-    add(t, ipc::channel::kStats, encode(m));
+    add(t, ipc::channel::kStats, lcm_bytes(m));
   }
   void status(double t, std::int8_t state, const std::string& error) {
     ::dco::device_status_t m{};
@@ -126,14 +121,14 @@ class KnownLog {
     m.counter_count = 1;
     m.counter_names = {"frames"};
     m.counter_values = {static_cast<std::int64_t>(t * 30)};
-    add(t, ipc::channel::kStatus, encode(m));
+    add(t, ipc::channel::kStatus, lcm_bytes(m));
   }
   void log(double t, std::int8_t level, const std::string& text) {
     ::dco::log_event_t m{};
     m.level = level;
     m.source = "dcod";
     m.text = text;
-    add(t, ipc::channel::kLog, encode(m));
+    add(t, ipc::channel::kLog, lcm_bytes(m));
   }
   void preview(double t, std::int64_t seq) {
     ::dco::depth_preview_t m{};
@@ -142,7 +137,7 @@ class KnownLog {
     m.height = 3;
     m.num_pixels = 12;
     m.depth_mm = {0, 500, 1000, 2000, 4000, 32767, 800, 800, 800, 900, 900, 900};
-    add(t, ipc::channel::kDepthPreview, encode(m));
+    add(t, ipc::channel::kDepthPreview, lcm_bytes(m));
   }
 };
 
@@ -227,7 +222,7 @@ TEST(LogDigest, HugeCountsSaturate) {
     e.number = i;
     e.timestamp_us = kStartUs + i * 1000;
     e.channel = ipc::channel::kStats;
-    e.data = encode(m);
+    e.data = lcm_bytes(m);
     drivers::write_lcm_log_event(out, e);
   }
   std::istringstream in(out.str());
