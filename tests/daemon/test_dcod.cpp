@@ -46,6 +46,13 @@ DcodOptions configured(const TempDir& dir, const std::filesystem::path& config,
   return o;
 }
 
+// SIGHUP, then RELOADING=1 and READY=1 again, as systemd sees a reload.
+bool reloaded(DcodProcess& dcod, NotifySocket& notify) {
+  const std::size_t before = notify.messages().size();
+  dcod.signal(SIGHUP);
+  return notify.wait_for("RELOADING=1", 5s, before) && notify.wait_for("READY=1", 5s, before);
+}
+
 dco::client::Client ring_client(const TempDir& dir) {
   dco::client::Options co;
   co.path = (dir / "depth.shm").string();
@@ -127,10 +134,7 @@ TEST(Dcod, SighupReloadsWhatItCanAndNamesTheRest) {
   ASSERT_TRUE(client.wait_next(2s));
 
   dir.write("dcod.toml", "[densify]\nlambda_s = 2\n[lcm]\npreview_hz = 5\n[ring]\nslots = 6\n");
-  const std::size_t before = notify.messages().size();
-  dcod.signal(SIGHUP);
-  ASSERT_TRUE(notify.wait_for("RELOADING=1", 5s, before)) << dcod.log();
-  ASSERT_TRUE(notify.wait_for("READY=1", 5s, before)) << dcod.log();
+  ASSERT_TRUE(reloaded(dcod, notify)) << dcod.log();
   const std::string log = dcod.log();
   EXPECT_NE(log.find("applied lcm.preview_hz"), std::string::npos) << log;
   EXPECT_NE(log.find("restarted the pipeline for densify.lambda_s"), std::string::npos) << log;
@@ -164,10 +168,7 @@ TEST(Dcod, AReloadWhoseStagesCannotStartKeepsTheRunningConfiguration) {
   // A CPU number the checks accept (below CPU_SETSIZE) that no machine here has: only starting
   // the stage threads finds out.
   dir.write("dcod.toml", "[densify]\nlambda_s = 2\n[runtime]\naffinity = \"1000\"\n");
-  const std::size_t before = notify.messages().size();
-  dcod.signal(SIGHUP);
-  ASSERT_TRUE(notify.wait_for("RELOADING=1", 5s, before)) << dcod.log();
-  ASSERT_TRUE(notify.wait_for("READY=1", 5s, before)) << dcod.log();
+  ASSERT_TRUE(reloaded(dcod, notify)) << dcod.log();
   EXPECT_NE(dcod.log().find("reload failed, the running configuration stays: restarting the "
                             "pipeline: runtime.affinity: cannot run a stage thread on CPU 1000"),
             std::string::npos)
@@ -178,9 +179,7 @@ TEST(Dcod, AReloadWhoseStagesCannotStartKeepsTheRunningConfiguration) {
 
   // The next good reload compares against what runs: lambda_s = 2 is a change again.
   dir.write("dcod.toml", "[densify]\nlambda_s = 2\n");
-  const std::size_t again = notify.messages().size();
-  dcod.signal(SIGHUP);
-  ASSERT_TRUE(notify.wait_for("READY=1", 5s, again)) << dcod.log();
+  ASSERT_TRUE(reloaded(dcod, notify)) << dcod.log();
   EXPECT_NE(dcod.log().find("restarted the pipeline for densify.lambda_s"), std::string::npos)
       << dcod.log();
   EXPECT_TRUE(client.wait_next(3s).has_value());
