@@ -51,6 +51,7 @@ struct Counters {
   std::atomic<std::uint64_t> frames{0}, delivered{0}, delivery_drops{0};
   std::atomic<std::uint64_t> lost_frames{0}, duplicate_frames{0}, backward_frames{0};
   std::atomic<std::uint64_t> counter_restarts{0}, torn_frames{0}, implausible_counters{0};
+  std::atomic<std::uint64_t> clock_resets{0};
   std::atomic<std::uint64_t> empty_payloads{0}, bad_payloads{0}, short_frames{0};
   std::atomic<std::uint64_t> oversized_frames{0};
   std::atomic<std::uint64_t> error_frames{0}, corrupt_frames{0};
@@ -142,6 +143,7 @@ class IndemindSource final : public FrameSource {
                   {"counter_restarts", c.counter_restarts},
                   {"torn_frames", c.torn_frames},
                   {"implausible_counters", c.implausible_counters},
+                  {"clock_resets", c.clock_resets},
                   {"empty_payloads", c.empty_payloads},
                   {"bad_payloads", c.bad_payloads},
                   {"short_frames", c.short_frames},
@@ -279,12 +281,13 @@ class IndemindSource final : public FrameSource {
     last_imu_device_ns_ = -1;
   }
 
-  // Whether a device time maps too far ahead of (or, with `lag`, behind) the host clock `now`.
-  bool implausible(std::int64_t device_ns, std::int64_t now, std::int64_t lag) const {
-    if (clock_.buckets() == 0) return false;
-    const std::int64_t host = clock_.to_host(device_ns);
+  // Whether a device time maps too far ahead of the host clock `now`, or more than kLagNs behind.
+  bool ahead_of_host(std::int64_t device_ns, std::int64_t now) const {
     const std::int64_t lead = std::max(kLeadNs, 2 * frame_device_ns(1));
-    return host > now + lead || host < now - lag;
+    return clock_.buckets() > 0 && clock_.to_host(device_ns) > now + lead;
+  }
+  bool behind_host(std::int64_t device_ns, std::int64_t now) const {
+    return clock_.buckets() > 0 && clock_.to_host(device_ns) < now - kLagNs;
   }
 
   void stop_streaming() {
@@ -439,7 +442,7 @@ class IndemindSource final : public FrameSource {
       case CounterExtender::Step::kGap:
         // A counter that runs ahead of the host clock is a corrupt one, not frames lost: taking
         // it would drop the frames after it as backward and bend the clock map.
-        if (implausible(frame_device_ns(step.extended), now, kLagNs)) {
+        if (ahead_of_host(frame_device_ns(step.extended), now)) {
           ++counters_.implausible_counters;
           return;
         }
@@ -456,6 +459,12 @@ class IndemindSource final : public FrameSource {
     extender_.accept(step);
     mask_frame_metadata(last, std::span<const std::uint8_t>(last.data() - row, row));
     const std::int64_t device_ns = frame_device_ns(step.extended);
+    if (behind_host(device_ns, now)) {
+      // The counter stood still while the host clock ran on (a module that stops counting while
+      // it is not streaming): the map's offsets are of another time line now.
+      ++counters_.clock_resets;
+      new_time_line();
+    }
     // The first payload's arrival: the last one's adds a readout to the delay, and the map's
     // lower envelope would jump by that wherever IMU samples are missing from a bucket.
     clock_.add(device_ns, first_ns);
@@ -534,7 +543,7 @@ class IndemindSource final : public FrameSource {
       ++counters_.imu_tick_clamps;
       device_ns = device_ns_of(kRaceTicks);
     }
-    if (implausible(device_ns, now, kLagNs)) {
+    if (ahead_of_host(device_ns, now) || behind_host(device_ns, now)) {
       ++counters_.imu_implausible;
       return;
     }

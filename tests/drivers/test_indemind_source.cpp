@@ -197,6 +197,29 @@ TEST(IndemindSource, CaptureTimesFollowTheModuleClock) {
   EXPECT_GT(checked, 100);
 }
 
+// A module whose counter stands still while it sends nothing: after a 3 s silence its frames'
+// device times map 3 s into the past. The clock map starts again instead of stamping them there.
+TEST(IndemindSource, ACounterThatStoodStillStartsTheClockMapAgain) {
+  SimulatedIndemind::Options o;
+  o.counter_counts_unsent_frames = false;
+  IndemindOptions io;
+  io.stall_ms = 300;
+  Rig rig(o, io);
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(150));
+  ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kSilence, 3000));
+  const long before = rig.sink.count();
+  ASSERT_TRUE(rig.wait_frames(before + 150));
+  rig.source->stop();
+  EXPECT_EQ(counters_of(*rig.source).at("clock_resets"), 1u);
+  EXPECT_EQ(rig.sink.non_increasing, 0);
+  std::lock_guard lock(rig.sink.mutex_);
+  const auto& t = rig.sink.captures;
+  for (std::size_t i = t.size() - 100; i < t.size(); ++i)
+    EXPECT_NEAR(static_cast<double>(t[i] - rig.sim->nearest_frame_start_ns(t[i])), 0.0, 300'000.0)
+        << i;
+}
+
 TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {
   Rig rig;
   rig.source->start(rig.sink);

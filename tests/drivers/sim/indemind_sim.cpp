@@ -167,6 +167,10 @@ void SimulatedIndemind::State::generate_frame() {
   if (has_fault && fault == Fault::kSkipCounter) hide_frames += param;  // captured, never sent
   if (has_fault && fault == Fault::kSilence)
     silence_until = start + std::int64_t{param} * 1'000'000;
+  if (start < silence_until && !opt.counter_counts_unsent_frames) {
+    --counter;  // not counted: the next frame sent takes this number
+    return;
+  }
   frame_start = start;
   starts[counter] = start;
   if (starts.size() > 8192) starts.erase(starts.begin());
@@ -424,8 +428,10 @@ class SimulatedIndemind::Device final : public drivers::UsbDevice {
       // still moved the counter.
       const std::int64_t p = s.period_ns();
       const std::int64_t k = s.now > s.frame_start ? (s.now - s.frame_start) / p : 0;
-      s.counter += static_cast<std::uint64_t>(k);
-      s.rec.frames_hidden += static_cast<std::uint64_t>(k);
+      if (s.opt.counter_counts_unsent_frames) {
+        s.counter += static_cast<std::uint64_t>(k);
+        s.rec.frames_hidden += static_cast<std::uint64_t>(k);
+      }
       s.frame_start += k * p;
       s.next_frame = s.frame_start + p;
     } else {

@@ -63,6 +63,8 @@ class SimulatedIndemind final : public drivers::UsbTransport {
     std::int64_t latency_ns = 400'000;        // least transfer delay
     std::int64_t jitter_ns = 300'000;         // extra delay, uniform
     std::uint16_t first_counter = 65530;      // wraps after a few frames
+    // The counter also counts frames it never sends (stream off, silence); false: it stands still.
+    bool counter_counts_unsent_frames = true;
     bool pace_real_time = false;
     std::uint32_t seed = 1;
   };
