@@ -66,7 +66,7 @@ void Daemon::wake() {
 void Daemon::apply_source_hints(LoadedConfig& config) const {
   const auto& hint = source_->info().max_disparity;
   if (config.max_disparity_given || !hint) return;
-  config.config.pipeline.stereo.max_disparity = std::clamp(*hint, 1, 1024);
+  config.config.pipeline.stereo.max_disparity = std::clamp(*hint, 1, stereo::kMaxDisparityLimit);
   // The values say what runs (DCO_RAW records them, reloads compare them).
   for (auto& [key, value] : config.values)
     if (key == "stereo.max_disparity")

@@ -55,7 +55,7 @@ void strength_row_half_width(const float* __restrict fuse, const float* __restri
 }  // namespace
 
 void register_params(ConfigSchema& s, DensifyParams& p) {
-  s.add("densify.lambda_d", &p.lambda_d, 0.0, 1000.0, "λ_d of Eq. 20 (data term)");
+  s.add("densify.lambda_d", &p.lambda_d, 0.001, 1000.0, "λ_d of Eq. 20 (data term)");
   s.add("densify.lambda_s", &p.lambda_s, 0.0, 1000.0, "λ_s of Eq. 20 (smoothness)");
   s.add("densify.lambda_s2", &p.lambda_s2, 0.0, 1000.0, "λ_s2 of Eq. 20 (stability)");
   s.add("densify.min_edge_weight", &p.min_edge_weight, 1e-6, 1.0,

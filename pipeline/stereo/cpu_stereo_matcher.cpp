@@ -396,6 +396,10 @@ void check_stereo_input(const StereoParams& params, ImageView<const std::uint8_t
                 " is smaller than the " + std::to_string(params.census_width) + "x" +
                 std::to_string(params.census_height) + " census window");
   const int max_d = params.max_disparity / scale;
+  if (max_d < 1)
+    throw Error("stereo: max disparity " + std::to_string(params.max_disparity) +
+                " is no whole pixel at half size, where images over 640 px are matched: give at "
+                "least 2");
   if (max_d >= w)
     throw Error("stereo: max disparity " + std::to_string(params.max_disparity) +
                 (scale == 1 ? " must be smaller than the image width " + std::to_string(w)

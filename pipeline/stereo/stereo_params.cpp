@@ -15,7 +15,7 @@ void require(bool ok, const std::string& what) {
 }  // namespace
 
 void register_params(ConfigSchema& s, StereoParams& p) {
-  s.add("stereo.max_disparity", &p.max_disparity, 1, 1024,
+  s.add("stereo.max_disparity", &p.max_disparity, 1, kMaxDisparityLimit,
         "largest disparity searched, pixels of the input image");
   s.add("stereo.internal_resolution", &p.internal_resolution, {"auto", "full", "half"},
         "auto = half size when the input is wider than 640 px");

@@ -352,6 +352,10 @@ TEST(CpuStereoMatcher, BadInputThrowsErrorsThatNameTheProblem) {
       compute_error(*make_cpu_stereo_matcher(wide_max), wide_image.cview(), wide_image.cview());
   EXPECT_THAT(half_error, HasSubstr("max disparity 640 (320 px at half size)"));
   EXPECT_THAT(half_error, HasSubstr("half-size width 320 (image 641x40x1)"));
+  StereoParams one;
+  one.max_disparity = 1;  // 0 at half size: nothing would be searched
+  EXPECT_THAT(compute_error(*make_cpu_stereo_matcher(one), wide_image.cview(), wide_image.cview()),
+              HasSubstr("max disparity 1 is no whole pixel at half size"));
 
   StereoParams just_fits;
   just_fits.max_disparity = 319;

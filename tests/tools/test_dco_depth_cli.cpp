@@ -207,6 +207,15 @@ TEST(DcoDepthCli, NonPositiveMaxDisparityIsAUsageError) {
                2, "needs an integer");
 }
 
+// --max-disp has the range of stereo.max_disparity.
+TEST(DcoDepthCli, MaxDisparityAboveTheStagesLimitIsRefused) {
+  TempDir dir;
+  expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
+                               (kTsukuba / "im4.png").string(), "--max-disp", "1200", "--out",
+                               (dir.path() / "d.pfm").string()}),
+               1, "stereo.max_disparity=1200");
+}
+
 TEST(DcoDepthCli, MaxDisparityWiderThanTheImageIsRefused) {
   TempDir dir;
   expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",

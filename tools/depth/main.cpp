@@ -190,7 +190,8 @@ dco::pipeline::PipelineParams load_params(const Options& opt) {
   dco::pipeline::register_params(schema, params);
   if (opt.config) schema.load_file(*opt.config);
   for (const std::string& assignment : opt.overrides) schema.set(assignment);
-  if (opt.max_disp) params.stereo.max_disparity = *opt.max_disp;
+  // Through the schema, so --max-disp has the range of stereo.max_disparity.
+  if (opt.max_disp) schema.set("stereo.max_disparity=" + std::to_string(*opt.max_disp));
   dco::pipeline::validate(params);
   return params;
 }
@@ -316,8 +317,10 @@ int run_sequence(const Options& opt, dco::pipeline::PipelineParams params) {
                                                           opt.frames, opt.color)
                     : dco::tools::make_pattern_sequence(*opt.left_pattern, *opt.right_pattern,
                                                         opt.first, opt.count, opt.calib);
+  // A synthetic scene's nearest object, as far as the stage reaches.
   if (!opt.max_disp && frames->max_disparity())
-    params.stereo.max_disparity = *frames->max_disparity();
+    params.stereo.max_disparity =
+        std::min(*frames->max_disparity(), dco::stereo::kMaxDisparityLimit);
   dco::pipeline::validate(params);
   fs::create_directories(*opt.out_dir);
   dco::pipeline::DepthPipeline pipeline(params);
