@@ -213,7 +213,7 @@ TEST(DcoDepthCli, MaxDisparityAboveTheStagesLimitIsRefused) {
   expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
                                (kTsukuba / "im4.png").string(), "--max-disp", "1200", "--out",
                                (dir.path() / "d.pfm").string()}),
-               1, "stereo.max_disparity=1200");
+               1, "--max-disp 1200: value 1200 is outside [1, 1024]");
 }
 
 TEST(DcoDepthCli, MaxDisparityWiderThanTheImageIsRefused) {
