@@ -97,6 +97,9 @@ TEST(GapPlanes, SitInTheWidestEmptyDisparityIntervals) {
   for (int y = 0; y < 10; ++y)
     for (int x = 0; x < 30; ++x) wall.at(x, y) = 10.0f + 0.2f * x;
   EXPECT_TRUE(gap_planes(wall.view()).empty());
+  // One absurd ground-truth value is an error, not a bin count that overflows.
+  wall.at(3, 3) = 3e38f;
+  EXPECT_THROW(gap_planes(wall.view()), Error);
 }
 
 TEST(BoundaryAccuracy, GapPlanesIgnoreASlantedSurfaceAndSeeTheSilhouette) {

@@ -195,6 +195,7 @@ TEST(DcoBenchCli, BadCommandLinesExitWithTwo) {
   expect_usage({"--fps", "fast"}, "--fps");
   expect_usage({"--sequence", "kitti"}, "'kitti'");
   expect_usage({"--paced-frames", "-1"}, "--paced-frames");
+  expect_usage({"--paced-frames", "2147483647"}, "--paced-frames must be within 1..100000");
   expect_usage({"--warmup", "-1"}, "--warmup");
   expect_usage({"--rounds", "0"}, "--rounds");
   expect_usage({"--frobnicate"}, "unknown option --frobnicate");

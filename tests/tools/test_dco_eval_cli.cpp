@@ -217,6 +217,10 @@ TEST(DcoEvalCli, BadManifestIsARuntimeError) {
                              "a\tl.png\tr.png\tg.exr\texr\t1\t-\t64\n");
   expect_one_error_line(run_eval(dir, {"--scenes", tsv.string(), "--pred-dir", "/tmp"}), 1,
                         "bad.tsv:2: unknown gt_format 'exr'");
+  const auto rows = dir.write(
+      "no_rows.tsv", "scene\tleft\tright\tgt\tgt_format\tgt_divisor\tnocc_mask\tmax_disp\n");
+  expect_one_error_line(run_eval(dir, {"--scenes", rows.string(), "--pred-dir", "/tmp"}), 1,
+                        "lists no scene");
 }
 
 TEST(DcoEvalCli, HelpGoesToStdout) {

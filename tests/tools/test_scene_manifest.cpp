@@ -150,7 +150,9 @@ TEST(SceneManifest, MalformedRowsNameFileAndLine) {
       {std::string(kHeader) + "a\tl.png\tr.png\tg.png\tpng\tfour\t-\t64\n",
        "2: gt_divisor 'four' is not a number"},
       {std::string(kHeader) + "a\tl.png\tr.png\tg.png\tpng\t0\t-\t64\n",
-       "2: gt_divisor must be positive"},
+       "2: gt_divisor must be within 1e-6..1e6"},
+      {std::string(kHeader) + "a\tl.png\tr.png\tg.png\tpng\t1e-50\t-\t64\n",
+       "2: gt_divisor must be within 1e-6..1e6"},
       {std::string(kHeader) + "a\tl.png\tr.png\tg.pfm\tpfm\t4\t-\t64\n",
        "2: gt_divisor must be 1 for pfm"},
       {std::string(kHeader) + "a\tl.png\tr.png\tg.pfm\tpfm\t1\t-\t-3\n",
@@ -159,6 +161,9 @@ TEST(SceneManifest, MalformedRowsNameFileAndLine) {
        "2: max_disp '64px' is not a number"},
       {std::string(kHeader) + "a\t\tr.png\tg.pfm\tpfm\t1\t-\t64\n", "2: column 'left' is empty"},
       {std::string(kHeader) + ok_row + ok_row, "3: scene 'a' listed twice"},
+      {std::string(kHeader) + "x/y\tl.png\tr.png\tg.pfm\tpfm\t1\t-\t64\n" +
+           "x_y\tl.png\tr.png\tg.pfm\tpfm\t1\t-\t64\n",
+       "3: scenes 'x/y' and 'x_y' both have the file name 'x_y'"},
       {"# only a comment\nscene\tleft\tright\tgt\tgt_format\tgt_divisor\tmax_disp\n",
        "2: header has no column 'nocc_mask'"},
   };

@@ -44,6 +44,17 @@ TEST(FlickerMeter, RegionMovingAcrossPlanesFlipsExactlyItsPixels) {
   EXPECT_DOUBLE_EQ(meter.flip_rate(), 100.0 * (10 * 2) / (100 * 5));
 }
 
+// A first frame with no valid disparity gives no planes, so no side and no flip rate.
+TEST(FlickerMeter, NoPlanesNoFlipRate) {
+  FlickerMeter meter;
+  Image<float> empty(10, 10);
+  empty.fill(std::numeric_limits<float>::infinity());
+  meter.add(empty.view());
+  meter.add(columns().view());
+  EXPECT_TRUE(std::isnan(meter.planes()[0]));
+  EXPECT_TRUE(std::isnan(meter.flip_rate()));
+}
+
 TEST(FlickerMeter, HolesCountAsFlipsForAsLongAsTheyLast) {
   FlickerMeter meter;
   Image<float> frame = columns();

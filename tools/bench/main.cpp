@@ -177,9 +177,14 @@ Options parse_args(int argc, char** argv) {
   if (opt.sequence != "synthetic" && opt.sequence != "karlsruhe" && opt.sequence != "all")
     throw UsageError(
         fmt::format("--sequence must be synthetic, karlsruhe or all, not '{}'", opt.sequence));
-  if (opt.frames < 1) throw UsageError("--frames must be >= 1");
-  if (opt.paced_frames < 1) throw UsageError("--paced-frames must be >= 1");
-  if (opt.warmup < 0) throw UsageError("--warmup must be >= 0");
+  // Frames are held in memory and counted in int: a bound keeps both sane.
+  constexpr int kMaxFrames = 100000;
+  if (opt.frames < 1 || opt.frames > kMaxFrames)
+    throw UsageError(fmt::format("--frames must be within 1..{}", kMaxFrames));
+  if (opt.paced_frames < 1 || opt.paced_frames > kMaxFrames)
+    throw UsageError(fmt::format("--paced-frames must be within 1..{}", kMaxFrames));
+  if (opt.warmup < 0 || opt.warmup > kMaxFrames)
+    throw UsageError(fmt::format("--warmup must be within 0..{}", kMaxFrames));
   if (opt.rounds < 1) throw UsageError("--rounds must be >= 1");
 
   return opt;

@@ -207,9 +207,10 @@ std::vector<Scene> select_scenes(const Options& opt) {
   const fs::path data_root = opt.data_root.value_or(opt.scenes.parent_path());
   std::vector<Scene> scenes = dco::tools::load_scene_manifest(opt.scenes, data_root);
   std::erase_if(scenes, [&](const Scene& s) { return s.name.find(opt.only) == std::string::npos; });
-  if (scenes.empty())
-    throw UsageError(opt.only.empty() ? fmt::format("'{}' lists no scene", opt.scenes.string())
-                                      : fmt::format("no scene name contains '{}'", opt.only));
+  // A manifest without rows is bad data; --only that matches nothing, a bad command line.
+  if (scenes.empty() && opt.only.empty())
+    throw dco::Error(fmt::format("'{}' lists no scene", opt.scenes.string()));
+  if (scenes.empty()) throw UsageError(fmt::format("no scene name contains '{}'", opt.only));
   return scenes;
 }
 

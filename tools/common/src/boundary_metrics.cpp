@@ -105,6 +105,12 @@ std::vector<double> gap_planes(ImageView<const float> gt, int count, double min_
         hi = std::max(hi, double{gt.row(y)[x]});
       }
   if (!(hi > lo)) return {};
+  // Ground truth spans at most a few thousand pixels of disparity; a wider span is no depth map
+  // this can bin (and would not fit a size_t).
+  constexpr double kMaxSpan = 1e5;
+  if (hi - lo > kMaxSpan)
+    throw Error(fmt::format("ground truth disparities span {:g}..{:g} px, more than {:g}", lo, hi,
+                            kMaxSpan));
   std::vector<char> used(static_cast<std::size_t>((hi - lo) / kBin) + 1, 0);
   for (int y = 0; y < gt.height; ++y)
     for (int x = 0; x < gt.width; ++x)

@@ -95,8 +95,9 @@ Scene parse_row(const std::vector<std::string_view>& fields,
     throw Error(fmt::format("{}: unknown gt_format '{}' (expected pfm or png)", where, format));
 
   scene.gt_divisor = parse_number<double>(field(kGtDivisor), "gt_divisor", where);
-  if (!(scene.gt_divisor > 0) || !std::isfinite(scene.gt_divisor))
-    throw Error(fmt::format("{}: gt_divisor must be positive", where));
+  // As a float (the PNG decoder divides in float) it must stay a positive finite number.
+  if (!(scene.gt_divisor >= 1e-6 && scene.gt_divisor <= 1e6))
+    throw Error(fmt::format("{}: gt_divisor must be within 1e-6..1e6", where));
   // PFM holds pixels already; a divisor there would be silently ignored, so refuse it.
   if (scene.gt_format == GroundTruthFormat::kPfm && scene.gt_divisor != 1)
     throw Error(fmt::format("{}: gt_divisor must be 1 for pfm ground truth", where));
@@ -176,9 +177,15 @@ std::vector<Scene> load_scene_manifest(const std::filesystem::path& tsv,
                               fields.size(), header_fields));
     scenes.push_back(parse_row(fields, *index, data_root, where));
     const std::string& name = scenes.back().name;
-    for (std::size_t i = 0; i + 1 < scenes.size(); ++i)
+    const std::string stem = scenes.back().file_stem();
+    for (std::size_t i = 0; i + 1 < scenes.size(); ++i) {
       if (scenes[i].name == name)
         throw Error(fmt::format("{}: scene '{}' listed twice", where, name));
+      // Predictions are files named by the stem: two scenes must not share one.
+      if (scenes[i].file_stem() == stem)
+        throw Error(fmt::format("{}: scenes '{}' and '{}' both have the file name '{}'", where,
+                                scenes[i].name, name, stem));
+    }
   }
   if (!index) throw Error(fmt::format("{}: no header row", tsv.string()));
   return scenes;

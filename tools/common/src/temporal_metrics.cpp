@@ -52,6 +52,10 @@ void FlickerMeter::add(ImageView<const float> disparity) {
 }
 
 double FlickerMeter::flip_rate() const {
+  // Planes from a first frame without one valid disparity are NaN: no side is defined, so no
+  // flip rate is either (rather than a rate that counts only the holes).
+  for (const double plane : planes_)
+    if (std::isnan(plane)) return kUndefined;
   return compared_ > 0 ? 100.0 * flips_ / compared_ : kUndefined;
 }
 
