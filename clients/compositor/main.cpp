@@ -77,8 +77,11 @@ void check_pattern(const std::string& pattern, const char* option) {
   if (p == std::string::npos) return;
   std::size_t i = p + 1;
   while (i < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[i]))) ++i;
-  if (i >= pattern.size() || pattern[i] != 'd' || pattern.find('%', i) != std::string::npos)
-    throw Error(std::string(option) + " '" + pattern + "': a name with at most one %d or %0Nd");
+  // N of %0Nd: two digits at most (a frame number has no more than 20).
+  if (i >= pattern.size() || pattern[i] != 'd' || pattern.find('%', i) != std::string::npos ||
+      i - p - 1 > 2 || (i - p - 1 == 2 && std::atoi(pattern.c_str() + p + 1) > 20))
+    throw Error(std::string(option) + " '" + pattern +
+                "': a name with at most one %d or %0Nd (N up to 20)");
 }
 
 std::string frame_name(const std::string& pattern, long index) {
@@ -112,6 +115,8 @@ int run(const Args& args) {
     scene.cubes.push_back(parse_cube("0,0,1,0.3"));
     scene.spheres.push_back(parse_sphere("0.25,0,1.5,0.2"));
   }
+  if (scene.size() > kMaxObjects)
+    throw Error("more than " + std::to_string(kMaxObjects) + " objects in the scene");
 
   dco::client::Options options;
   options.path = args.ring;
@@ -122,6 +127,10 @@ int run(const Args& args) {
   // The daemon may still be starting: wait for its ring, but not for ever.
   std::optional<dco::client::Client> client;
   for (const auto until = Clock::now() + patience;;) {
+    if (g_stop) {
+      std::fprintf(stderr, "dco-compositor: stopped while waiting for %s\n", args.ring.c_str());
+      return 0;
+    }
     try {
       client.emplace(options);
       break;
@@ -178,17 +187,20 @@ int run(const Args& args) {
       announced_gone = true;
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
+    const auto no_frame_for_too_long = [&] {
+      if (Clock::now() - last_frame <= patience) return false;
+      std::fprintf(stderr, "dco-compositor: no frame from %s for %ld s%s\n", args.ring.c_str(),
+                   args.wait_s,
+                   view ? " (each was rewritten by dcod before its upload ended)" : "");
+      return true;
+    };
     if (!view) {
       // A window stays responsive (and repainted) while the daemon is quiet.
       if (renderer.windowed() && !renderer.present()) {
         std::fprintf(stderr, "dco-compositor: window closed after %ld frames\n", done);
         return 0;
       }
-      if (Clock::now() - last_frame > patience) {
-        std::fprintf(stderr, "dco-compositor: no frame from %s for %ld s\n", args.ring.c_str(),
-                     args.wait_s);
-        return 1;
-      }
+      if (no_frame_for_too_long()) return 1;
       continue;
     }
     if (announced_gone) std::fprintf(stderr, "dco-compositor: dcod is back\n");
@@ -201,8 +213,8 @@ int run(const Args& args) {
                     info.fy,
                     info.cx,
                     info.cy};
-    // Straight from the ring, no copy: the upload has taken the pixels by the time render()
-    // returns, so a slot the daemon rewrote meanwhile shows below and the frame is skipped.
+    // Straight from the ring, no copy: once the upload has taken the pixels the slot is checked,
+    // and a frame the daemon rewrote meanwhile is given up before it is drawn.
     frame.depth = view->raw.depth;
     frame.depth_stride = info.depth_stride;
     // The compositor shows grey; a colour ring is drawn without its image.
@@ -210,8 +222,12 @@ int run(const Args& args) {
       frame.image = view->raw.image;
       frame.image_stride = info.image_stride;
     }
-    const RenderTimes times = renderer.render(frame, scene, render_options);
-    if (!client->still_valid(*view)) continue;
+    const RenderTimes times =
+        renderer.render(frame, scene, render_options, [&] { return client->still_valid(*view); });
+    if (!times.drawn) {
+      if (no_frame_for_too_long()) return 1;
+      continue;
+    }
     last_frame = Clock::now();
     char gpu[32] = "n/a";
     if (times.gpu_ms >= 0) std::snprintf(gpu, sizeof gpu, "%.2f ms", times.gpu_ms);

@@ -444,7 +444,7 @@ const char* Renderer::gl_renderer() const {
 }
 
 RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
-                             const RenderOptions& options) {
+                             const RenderOptions& options, const std::function<bool()>& keep) {
   Impl& m = *impl_;
   const Camera& cam = frame.camera;
   if (!(cam.fx > 0 && cam.fy > 0 && std::isfinite(cam.cx) && std::isfinite(cam.cy)))
@@ -459,6 +459,11 @@ RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
   }
   m.resize(cam.width, cam.height);
   m.upload(frame);
+  if (keep && !keep()) {
+    RenderTimes skipped;
+    skipped.drawn = false;
+    return skipped;
+  }
 
   const double n = options.near_m, f = options.far_m;
   const float a = static_cast<float>((f + n) / (f - n));

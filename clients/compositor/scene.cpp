@@ -1,5 +1,6 @@
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -18,7 +19,8 @@ std::vector<float> numbers(std::string_view text, char separator, const std::str
   std::size_t pos = 0;
   while (pos <= s.size()) {
     while (pos < s.size() && separator == ' ' && (s[pos] == ' ' || s[pos] == '\t')) ++pos;
-    if (pos == s.size()) break;
+    // Spaces may trail; a comma must be followed by a number.
+    if (pos == s.size() && separator == ' ') break;
     std::size_t end =
         s.find_first_of(separator == ' ' ? std::string(" \t") : std::string(1, separator), pos);
     if (end == std::string::npos) end = s.size();
@@ -38,8 +40,17 @@ void check_object(const std::vector<float>& v, const std::string& what, const st
   if (v.size() != 4 && v.size() != 7)
     throw Error(where + ": a " + what + " takes X Y Z SIZE and optionally R G B, got " +
                 std::to_string(v.size()) + " numbers");
-  if (v[2] <= 0) throw Error(where + ": the " + what + " must be in front of the camera (Z > 0)");
   if (v[3] <= 0) throw Error(where + ": the " + what + "'s size must be positive");
+  // A cube's SIZE is its edge, a sphere's its radius.
+  const float nearest = v[2] - (what == "cube" ? v[3] / 2 : v[3]);
+  if (!(nearest > kNearPlaneM)) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  ": the %s reaches to Z = %g m; objects are drawn beyond %g m in front of the "
+                  "camera",
+                  what.c_str(), static_cast<double>(nearest), static_cast<double>(kNearPlaneM));
+    throw Error(where + text);
+  }
   for (std::size_t i = 4; i < v.size(); ++i)
     if (v[i] < 0 || v[i] > 1) throw Error(where + ": colours are in 0..1");
 }
@@ -77,6 +88,7 @@ Scene parse_scene(std::string_view text, const std::string& name) {
   std::istringstream in{std::string(text)};
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();  // a file written on Windows
     if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos) continue;
@@ -95,6 +107,8 @@ Scene parse_scene(std::string_view text, const std::string& name) {
     } else {
       throw Error(where + ": unknown object '" + word + "' (cube or sphere)");
     }
+    if (scene.size() > kMaxObjects)
+      throw Error(where + ": more than " + std::to_string(kMaxObjects) + " objects");
   }
   return scene;
 }

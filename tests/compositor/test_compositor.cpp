@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -52,6 +53,26 @@ TEST(Compositor, HardOcclusionMatchesTheExactMask) {
   EXPECT_EQ(e.mask[finger], 0);
   EXPECT_EQ(rgba[4 * finger], 200);
   EXPECT_EQ(rgba[4 * wall], e.image[wall]);
+}
+
+// A frame given up after its upload (its slot was rewritten meanwhile) draws nothing: the
+// framebuffer keeps the last frame drawn.
+TEST(Compositor, AFrameGivenUpAfterItsUploadLeavesTheLastOne) {
+  const ExactScene e = make_scene();
+  Renderer r;
+  ASSERT_TRUE(r.render(frame_of(e), e.scene, {}).drawn);
+  const std::vector<std::uint8_t> shown = r.read_rgba();
+  Scene other = e.scene;
+  other.cubes.clear();
+  other.spheres.clear();
+  int asked = 0;
+  const RenderTimes t = r.render(frame_of(e), other, {}, [&] {
+    ++asked;
+    return false;
+  });
+  EXPECT_FALSE(t.drawn);
+  EXPECT_EQ(asked, 1);
+  EXPECT_EQ(r.read_rgba(), shown);
 }
 
 TEST(Compositor, SoftOcclusionBlendsOnlyNearDepthContours) {
@@ -175,6 +196,35 @@ TEST(Compositor, BadInputIsOneClearLine) {
                                 " 2>&1");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.output.find("64"), std::string::npos) << r.output;
+  r = dco::testing::run_command(bin + " --cube 0,0,1,0.3, 2>&1");  // a comma and no number
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("'' is not a number"), std::string::npos) << r.output;
+  // Nothing is drawn nearer than 1 cm: an object that reaches there is refused, not half shown.
+  r = dco::testing::run_command(bin + " --sphere 0,0,0.25,0.25 2>&1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("reaches to Z = 0 m; objects are drawn beyond 0.01 m"), std::string::npos)
+      << r.output;
+  r = dco::testing::run_command(bin + " --out 'x%2000000000d.png' 2>&1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("N up to 20"), std::string::npos) << r.output;
+  // Ctrl-C while it waits for dcod to start ends it at once.
+  const auto start = std::chrono::steady_clock::now();
+  r = dco::testing::run_command("timeout --preserve-status -s INT 1 " + bin + " --wait 30 --ring " +
+                                (dir.path() / "none.shm").string() + " 2>&1");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("stopped while waiting"), std::string::npos) << r.output;
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  // Scene files: CRLF line ends are read, too many objects are not.
+  EXPECT_EQ(parse_scene("cube 0 0 1 0.3\r\nsphere 0 0 2 0.2\r\n", "crlf.txt").size(), 2u);
+  std::string many;
+  for (std::size_t i = 0; i <= kMaxObjects; ++i) many += "cube 0 0 2 0.1\n";
+  try {
+    parse_scene(many, "many.txt");
+    ADD_FAILURE() << "took more than kMaxObjects objects";
+  } catch (const Error& ex) {
+    EXPECT_NE(std::string(ex.what()).find("more than 4096 objects"), std::string::npos)
+        << ex.what();
+  }
   // Scene files name the line at fault.
   std::ofstream(dir.path() / "scene.txt") << "# objects\ncube 0 0 1 0.2\ntorus 0 0 1 1\n";
   std::string message;

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -31,7 +32,7 @@ struct RenderOptions {
   // pixel's coverage is the fraction of real depth behind it in a (2N+1)² window, so edges blend
   // over N pixels around the depth contours and nowhere else.
   int soft_radius_px = 0;
-  float near_m = 0.05f, far_m = 100.0f;
+  float near_m = kNearPlaneM, far_m = 100.0f;
 };
 
 // An on-screen window on an X display, for a desk setup or a headset driven as a display.
@@ -44,6 +45,7 @@ struct WindowOptions {
 struct RenderTimes {
   double gpu_ms = -1;  // the GPU's own time (EXT_disjoint_timer_query); < 0 where the GL has none
   double wall_ms = 0;  // from the first upload to glFinish
+  bool drawn = true;   // false: the frame was given up after its upload (see render())
 };
 
 // An EGL GLES 3 context and an offscreen framebuffer, rendering the camera image with real depth
@@ -59,8 +61,11 @@ class Renderer {
   Renderer& operator=(const Renderer&) = delete;
 
   // Renders one frame; the framebuffer follows the frame's size (a daemon restarted with another
-  // resolution just reallocates).
-  RenderTimes render(const RealFrame& frame, const Scene& scene, const RenderOptions& options);
+  // resolution just reallocates). `keep`, when given, is asked once the frame's pixels are
+  // uploaded (the GL has copied them then): false gives the frame up before anything is drawn,
+  // and the framebuffer keeps the last frame drawn.
+  RenderTimes render(const RealFrame& frame, const Scene& scene, const RenderOptions& options,
+                     const std::function<bool()>& keep = {});
 
   // The last frame, top row first: RGBA8 where alpha is the virtual objects' coverage (0 where
   // the camera shows, 255 where a virtual object is fully visible).
