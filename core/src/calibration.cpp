@@ -17,6 +17,7 @@
 
 #include "calibration_internal.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/image.hpp"
 
 namespace dco {
 namespace detail {
@@ -69,9 +70,6 @@ std::string size_text(int w, int h) {
   return fmt::format("{}x{}", w, h);
 }
 
-// The largest image side dco takes (the depth ring's limit; remap maps stop at 32767).
-constexpr int kMaxSide = 16384;
-
 void check_rotation(const std::string& src, std::string_view what, const Mat3& r) {
   // Files carry ~7 significant digits; 1e-3 accepts those and hand-typed values, rejects mistakes.
   constexpr double kTolerance = 1e-3;
@@ -97,12 +95,12 @@ void check_camera(const std::string& src, std::string_view name, const CameraInt
   if (!std::isfinite(c.cx) || !std::isfinite(c.cy))
     fail_at(src, 0, fmt::format("{} camera: principal point is not finite", name));
   const bool size_ok =
-      (c.width > 0 && c.height > 0 && c.width <= kMaxSide && c.height <= kMaxSide) ||
+      (c.width > 0 && c.height > 0 && c.width <= kMaxImageSide && c.height <= kMaxImageSide) ||
       (size_unknown && c.width == 0 && c.height == 0);
   if (!size_ok)
     fail_at(src, 0,
             fmt::format("{} camera: image size {} is not within 1..{} px a side", name,
-                        size_text(c.width, c.height), kMaxSide));
+                        size_text(c.width, c.height), kMaxImageSide));
   const std::size_t n = c.distortion.size();
   if (c.model == CameraModel::kPinhole && n != 0 && n != 4 && n != 5 && n != 8)
     fail_at(src, 0,
@@ -126,11 +124,11 @@ void check_geometry(const std::string& src, const RectifiedGeometry& g, bool siz
     fail_at(src, 0, fmt::format("rectified baseline must be positive, got {} m", g.baseline_m));
   if (!std::isfinite(g.cx_left) || !std::isfinite(g.cx_right) || !std::isfinite(g.cy))
     fail_at(src, 0, "rectified principal point is not finite");
-  if (!(g.width > 0 && g.height > 0 && g.width <= kMaxSide && g.height <= kMaxSide) &&
+  if (!(g.width > 0 && g.height > 0 && g.width <= kMaxImageSide && g.height <= kMaxImageSide) &&
       !size_unknown)
     fail_at(src, 0,
             fmt::format("rectified image size {} is not within 1..{} px a side",
-                        size_text(g.width, g.height), kMaxSide));
+                        size_text(g.width, g.height), kMaxImageSide));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -219,6 +217,12 @@ void StereoCalibration::validate() const {
             fmt::format("rectified size {} differs from the camera size {}",
                         size_text(rectified.width, rectified.height),
                         size_text(left.width, left.height)));
+}
+
+void StereoCalibration::take_size_if_unknown(int width, int height) {
+  if (left.width != 0 || left.height != 0) return;
+  for (int* w : {&left.width, &right.width, &rectified.width}) *w = width;
+  for (int* h : {&left.height, &right.height, &rectified.height}) *h = height;
 }
 
 StereoCalibration load_calibration(const std::filesystem::path& path) {

@@ -446,6 +446,13 @@ void Daemon::apply_live_settings() {
   configure_raw_recording();
 }
 
+void Daemon::restart_pipeline() {
+  source_->stop();
+  runtime_->stop();
+  start_pipeline();
+  start_source();
+}
+
 void Daemon::reload() {
   notifier_.reloading();
   LoadedConfig next;
@@ -486,10 +493,7 @@ void Daemon::reload() {
   apply_live_settings();
   if (!restarted.empty()) {
     try {
-      source_->stop();
-      runtime_->stop();
-      start_pipeline();
-      start_source();
+      restart_pipeline();
     } catch (const std::exception& e) {
       // Some values pass every check and fail only when the stages start (a CPU the process may
       // not use, a backend this machine lacks): go back to what ran.
@@ -499,10 +503,7 @@ void Daemon::reload() {
       loaded_ = std::move(previous);
       apply_live_settings();
       try {
-        source_->stop();
-        if (runtime_) runtime_->stop();
-        start_pipeline();
-        start_source();
+        restart_pipeline();
       } catch (const std::exception& again) {
         on_error(std::string("restarting the pipeline with the running configuration: ") +
                  again.what());

@@ -31,7 +31,8 @@ constexpr std::size_t kMaxQueuedImu = 8192;
 // How far before the host clock a sample's device time may map: beyond it the counter or ticks
 // that placed it are garbage (the metadata row and IMU reports carry no checksum).
 constexpr std::int64_t kLeadNs = 50'000'000;
-// How long after the host clock: an IMU report older than this did not wait in a queue.
+// How far behind it: no sample waits this long in a queue, so a device time that maps there is
+// garbage (an IMU report) or of another time line (a frame after the counter stood still).
 constexpr std::int64_t kLagNs = 1'000'000'000;
 // Protocol notes §7.1: the counter can move on before the ticks reset; the vendor SDK then
 // takes 0.1 ms into the frame.
@@ -281,7 +282,8 @@ class IndemindSource final : public FrameSource {
     last_imu_device_ns_ = -1;
   }
 
-  // Whether a device time maps too far ahead of the host clock `now`, or more than kLagNs behind.
+  // Whether a device time maps more than the lead ahead of the host clock `now`, or more than
+  // kLagNs behind it.
   bool ahead_of_host(std::int64_t device_ns, std::int64_t now) const {
     const std::int64_t lead = std::max(kLeadNs, 2 * frame_device_ns(1));
     return clock_.buckets() > 0 && clock_.to_host(device_ns) > now + lead;

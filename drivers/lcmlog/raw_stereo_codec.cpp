@@ -11,9 +11,6 @@
 namespace dco::drivers {
 namespace {
 
-// The largest side a recorded frame may have (the depth ring's limit).
-constexpr int kMaxSide = 16384;
-
 std::uint32_t read_be32(const std::uint8_t* p) {
   return std::uint32_t{p[0]} << 24 | std::uint32_t{p[1]} << 16 | std::uint32_t{p[2]} << 8 | p[3];
 }
@@ -78,10 +75,10 @@ void decode_raw_stereo(const ::dco::raw_stereo_t& message, Image<std::uint8_t>& 
   if (message.encoding != "png")
     throw Error(fmt::format("raw frame {}: encoding '{}' (this build reads png)", message.frame_seq,
                             message.encoding));
-  if (message.width < 1 || message.height < 1 || message.width > kMaxSide ||
-      message.height > kMaxSide)
+  if (message.width < 1 || message.height < 1 || message.width > kMaxImageSide ||
+      message.height > kMaxImageSide)
     throw Error(fmt::format("raw frame {}: a {}x{} frame (sides 1..{})", message.frame_seq,
-                            message.width, message.height, kMaxSide));
+                            message.width, message.height, kMaxImageSide));
   int channels = 0;
   const auto expand = [&](const std::vector<std::uint8_t>& bytes, Image<std::uint8_t>& to,
                           const char* eye) {

@@ -117,8 +117,7 @@ StereoCalibration load_checked_calibration(Params& p, const std::string& uri) {
     if (p.width == 0 || p.height == 0)
       throw Error(fmt::format("{}: {} has no image size; give width= and height=", where,
                               p.calib.string()));
-    for (int* w : {&calib.left.width, &calib.right.width, &calib.rectified.width}) *w = p.width;
-    for (int* h : {&calib.left.height, &calib.right.height, &calib.rectified.height}) *h = p.height;
+    calib.take_size_if_unknown(p.width, p.height);
     return calib;
   }
   const int width = p.width ? p.width : cam.width;

@@ -126,15 +126,7 @@ class ReplaySource final : public PacedSource {
     frames_.reserve(pairs.size());
     for (const auto& [left_path, right_path] : pairs) {
       Frame f{load_image(left_path), load_image(right_path)};
-      if (frames_.empty() && cam.width == 0 && cam.height == 0) {
-        // A rectified calibration without a size (Karlsruhe without roi) takes the images'.
-        for (int* w :
-             {&calibration_.left.width, &calibration_.right.width, &calibration_.rectified.width})
-          *w = f.left.width();
-        for (int* h : {&calibration_.left.height, &calibration_.right.height,
-                       &calibration_.rectified.height})
-          *h = f.left.height();
-      }
+      if (frames_.empty()) calibration_.take_size_if_unknown(f.left.width(), f.left.height());
       const int channels = frames_.empty() ? f.left.channels() : frames_.front().left.channels();
       for (const auto* img : {&f.left, &f.right}) {
         if (img->width() != cam.width || img->height() != cam.height || img->channels() != channels)

@@ -190,19 +190,11 @@ dco::pipeline::PipelineParams load_params(const Options& opt) {
   dco::pipeline::register_params(schema, params);
   if (opt.config) schema.load_file(*opt.config);
   for (const std::string& assignment : opt.overrides) schema.set(assignment);
-  // Through the schema, so --max-disp has the range of stereo.max_disparity.
-  if (opt.max_disp) {
-    const std::string assignment = "stereo.max_disparity=" + std::to_string(*opt.max_disp);
-    try {
-      schema.set(assignment);
-    } catch (const dco::Error& e) {
-      const std::string what = e.what();
-      const auto reason = what.find(assignment + ": ");
-      throw dco::Error(fmt::format(
-          "--max-disp {}: {}", *opt.max_disp,
-          reason == std::string::npos ? what : what.substr(reason + assignment.size() + 2)));
-    }
-  }
+  // --max-disp has the range of stereo.max_disparity (its lower end is checked with the options).
+  if (opt.max_disp && *opt.max_disp > dco::stereo::kMaxDisparityLimit)
+    throw dco::Error(fmt::format("--max-disp {}: value {} is outside [1, {}]", *opt.max_disp,
+                                 *opt.max_disp, dco::stereo::kMaxDisparityLimit));
+  if (opt.max_disp) params.stereo.max_disparity = *opt.max_disp;
   dco::pipeline::validate(params);
   return params;
 }

@@ -81,11 +81,9 @@ class Digester {
       Session& s = *it;
       const double lost = steps_skipped(s.last_index, m.publish_index);
       const double skipped = steps_skipped(s.last_seq, m.frame_seq);
-      // Each step is at most 1e15, and a session's totals stay below a long's range with it.
-      s.missing_announcements =
-          static_cast<long>(std::min(static_cast<double>(s.missing_announcements) + lost, 4e18));
-      s.unpublished_frames = static_cast<long>(std::min(
-          static_cast<double>(s.unpublished_frames) + std::max(0.0, skipped - lost), 4e18));
+      // Each step is at most 1e15, so it fits a long.
+      add_saturating(s.missing_announcements, static_cast<long>(lost));
+      add_saturating(s.unpublished_frames, static_cast<long>(std::max(0.0, skipped - lost)));
       s.last_index = std::max(s.last_index, m.publish_index);
       s.last_seq = std::max(s.last_seq, m.frame_seq);
     }

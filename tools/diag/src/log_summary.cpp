@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numeric>
 
 #include <fmt/format.h>
@@ -11,12 +10,6 @@
 
 namespace dco::diag {
 namespace {
-
-// Counts come from a log, which can say anything: a total stops at the largest long.
-void add_saturating(long& total, long n) {
-  total =
-      n > std::numeric_limits<long>::max() - total ? std::numeric_limits<long>::max() : total + n;
-}
 
 std::string human_bytes(std::uint64_t bytes) {
   if (bytes < 10 * 1024) return fmt::format("{} B", bytes);

@@ -63,6 +63,10 @@ struct StereoCalibration {
   // Throws dco::Error naming the first inconsistency (non-positive focal length, wrong number of
   // distortion coefficients, zero baseline, non-orthonormal rotation, ...).
   void validate() const;
+
+  // A rectified calibration that gives no image size (Karlsruhe without roi) takes the images':
+  // both cameras and the rectified geometry get width x height. Any other one is left alone.
+  void take_size_if_unknown(int width, int height);
 };
 
 // Loads any calibration format dco understands, chosen by content:

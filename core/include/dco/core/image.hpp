@@ -11,6 +11,9 @@
 
 namespace dco {
 
+// The largest image side dco takes anywhere (the depth ring's limit; remap maps stop at 32767).
+inline constexpr int kMaxImageSide = 16384;
+
 // A non-owning, strided view of an interleaved image. `stride` counts elements of T between the
 // starts of consecutive rows, so a view of a sub-rectangle or of a padded buffer is still a view.
 template <typename T>

@@ -63,6 +63,8 @@ class Daemon final : public drivers::FrameSink {
   void reload();
   // What a reload applies without restarting the pipeline, from loaded_.
   void apply_live_settings();
+  // The stage threads again with loaded_ (between two frames: the source stops first).
+  void restart_pipeline();
   // Starts, stops or re-creates the DCO_RAW recorder as the configuration says.
   void configure_raw_recording();
   void report_raw_recording();

@@ -8,12 +8,12 @@ class ConfigSchema;
 
 namespace dco::stereo {
 
-// Parameters of the sparse AD-census stage. Defaults follow the paper's §7.2 for the cost
-// (λ_AD, λ_census, γ_L, ε); the cross-window and voting thresholds follow Mei et al. 2011, which
-// the paper's two-stage design builds on. Lengths are in pixels of the internal resolution.
 // The largest stereo.max_disparity the stage takes (input pixels).
 inline constexpr int kMaxDisparityLimit = 1024;
 
+// Parameters of the sparse AD-census stage. Defaults follow the paper's §7.2 for the cost
+// (λ_AD, λ_census, γ_L, ε); the cross-window and voting thresholds follow Mei et al. 2011, which
+// the paper's two-stage design builds on. Lengths are in pixels of the internal resolution.
 struct StereoParams {
   // Largest disparity searched, in pixels of the input image (the search is 0..max_disparity).
   int max_disparity = 64;

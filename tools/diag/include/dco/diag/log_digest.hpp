@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <istream>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -19,6 +20,12 @@
 #include "dco/pipeline_stats_t.hpp"
 
 namespace dco::diag {
+
+// Counts come from a log, which can say anything: a total stops at the largest long. `n` >= 0.
+inline void add_saturating(long& total, long n) {
+  total =
+      n > std::numeric_limits<long>::max() - total ? std::numeric_limits<long>::max() : total + n;
+}
 
 // Times are seconds since the log's first event, by the logger's clock: the one clock every
 // channel shares.
