@@ -62,8 +62,20 @@ double det(const Mat3& a) {
          a[2] * (a[3] * a[7] - a[4] * a[6]);
 }
 
-bool finite_positive(double v) {
-  return std::isfinite(v) && v > 0;
+// What a camera can have: a focal length below a pixel would see more than a half-space, and
+// numbers far outside these ranges are typing mistakes (an exponent too many) that would
+// otherwise flow through as depth a million times off, or not survive being written out.
+constexpr double kMinFocalPx = 1, kMaxFocalPx = 1e6;
+constexpr double kMaxPrincipalPointPx = 1e6;
+constexpr double kMinBaselineM = 1e-6, kMaxBaselineM = 1e4;
+constexpr const char* kBaselineRangeText = "1 um..10 km";
+
+bool focal_in_range(double f) {
+  return f >= kMinFocalPx && f <= kMaxFocalPx;
+}
+
+bool principal_point_in_range(double c) {
+  return std::abs(c) <= kMaxPrincipalPointPx;
 }
 
 std::string size_text(int w, int h) {
@@ -88,12 +100,15 @@ void check_rotation(const std::string& src, std::string_view what, const Mat3& r
 
 void check_camera(const std::string& src, std::string_view name, const CameraIntrinsics& c,
                   bool size_unknown) {
-  if (!finite_positive(c.fx) || !finite_positive(c.fy))
+  if (!focal_in_range(c.fx) || !focal_in_range(c.fy))
+    fail_at(src, 0,
+            fmt::format("{} camera: focal lengths must be within {:.0f}..{:.0f} px (fx {}, fy {})",
+                        name, kMinFocalPx, kMaxFocalPx, c.fx, c.fy));
+  if (!principal_point_in_range(c.cx) || !principal_point_in_range(c.cy))
     fail_at(
         src, 0,
-        fmt::format("{} camera: focal lengths must be positive (fx {}, fy {})", name, c.fx, c.fy));
-  if (!std::isfinite(c.cx) || !std::isfinite(c.cy))
-    fail_at(src, 0, fmt::format("{} camera: principal point is not finite", name));
+        fmt::format("{} camera: principal point ({}, {}) is more than {:.0f} px from the origin",
+                    name, c.cx, c.cy, kMaxPrincipalPointPx));
   const bool size_ok =
       (c.width > 0 && c.height > 0 && c.width <= kMaxImageSide && c.height <= kMaxImageSide) ||
       (size_unknown && c.width == 0 && c.height == 0);
@@ -118,12 +133,19 @@ void check_camera(const std::string& src, std::string_view name, const CameraInt
 }
 
 void check_geometry(const std::string& src, const RectifiedGeometry& g, bool size_unknown) {
-  if (!finite_positive(g.f))
-    fail_at(src, 0, fmt::format("rectified focal length must be positive, got {}", g.f));
-  if (!finite_positive(g.baseline_m))
-    fail_at(src, 0, fmt::format("rectified baseline must be positive, got {} m", g.baseline_m));
-  if (!std::isfinite(g.cx_left) || !std::isfinite(g.cx_right) || !std::isfinite(g.cy))
-    fail_at(src, 0, "rectified principal point is not finite");
+  if (!focal_in_range(g.f))
+    fail_at(src, 0,
+            fmt::format("rectified focal length must be within {:.0f}..{:.0f} px, got {}",
+                        kMinFocalPx, kMaxFocalPx, g.f));
+  if (!(g.baseline_m >= kMinBaselineM && g.baseline_m <= kMaxBaselineM))
+    fail_at(src, 0,
+            fmt::format("rectified baseline must be within {}, got {} m", kBaselineRangeText,
+                        g.baseline_m));
+  if (!principal_point_in_range(g.cx_left) || !principal_point_in_range(g.cx_right) ||
+      !principal_point_in_range(g.cy))
+    fail_at(src, 0,
+            fmt::format("rectified principal point is more than {:.0f} px from the origin",
+                        kMaxPrincipalPointPx));
   if (!(g.width > 0 && g.height > 0 && g.width <= kMaxImageSide && g.height <= kMaxImageSide) &&
       !size_unknown)
     fail_at(src, 0,
@@ -205,8 +227,12 @@ void StereoCalibration::validate() const {
                         rig_angle_deg, kMaxRigAngleDeg));
   for (double t : translation)
     if (!std::isfinite(t)) fail_at(src, 0, "translation is not finite");
-  if (std::hypot(translation[0], translation[1], translation[2]) <= 0)
-    fail_at(src, 0, "baseline is zero (translation is 0, 0, 0)");
+  const double baseline = std::hypot(translation[0], translation[1], translation[2]);
+  if (baseline <= 0) fail_at(src, 0, "baseline is zero (translation is 0, 0, 0)");
+  if (!(baseline >= kMinBaselineM && baseline <= kMaxBaselineM))
+    fail_at(src, 0,
+            fmt::format("baseline {} m (the translation's length) is not within {}", baseline,
+                        kBaselineRangeText));
   if (has_rectification) {
     check_rotation(src, "left rectifying rotation", rect_rotation_left);
     check_rotation(src, "right rectifying rotation", rect_rotation_right);

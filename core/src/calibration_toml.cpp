@@ -1,6 +1,7 @@
 // dco's own TOML calibration format (docs/calibration.md): reader and writer.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <functional>
 #include <iterator>
 #include <limits>
@@ -202,6 +203,9 @@ StereoCalibration parse_toml(std::string_view text, const std::string& file) {
 namespace {
 
 std::string toml_number(double v) {
+  // toml++ reads subnormal numbers back only approximately; such a coefficient is 0 in effect,
+  // and 0 keeps the file's promise that it reads back as written.
+  if (std::fpclassify(v) == FP_SUBNORMAL) v = std::signbit(v) ? -0.0 : 0.0;
   std::string s = fmt::format("{}", v);
   if (s.find_first_of(".en") == std::string::npos) s += ".0";  // keep floats floats ("n": inf/nan)
   return s;

@@ -17,6 +17,7 @@
 #include <toml++/toml.h>
 
 #include "dco/core/error.hpp"
+#include "dco/core/utf8.hpp"
 
 namespace dco {
 namespace {
@@ -74,6 +75,8 @@ std::string problem(const E& e, const Value& v) {
   } else {
     const auto* s = std::get_if<std::string>(&v);
     if (s == nullptr) return fmt::format("expects a string, got {}", show(v));
+    // TOML files are UTF-8; a --set could bring any bytes, which no file could then hold.
+    if (!is_valid_utf8(*s)) return "the string is not valid UTF-8";
     if (!e.choices.empty() && std::find(e.choices.begin(), e.choices.end(), *s) == e.choices.end())
       return fmt::format("\"{}\" is not one of {}", *s, join(e.choices, ", "));
   }
@@ -235,10 +238,17 @@ std::string ConfigSchema::value_text(const Entry& e) {
   if (const auto* d = std::get_if<double*>(&e.target)) return fmt::format("{}", **d);
   if (const auto* i = std::get_if<int*>(&e.target)) return fmt::format("{}", **i);
   if (const auto* b = std::get_if<bool*>(&e.target)) return **b ? "true" : "false";
+  // A TOML basic string: quotes, backslashes and control characters escaped, so what is written
+  // (dcod --print-config) reads back as the same value.
   std::string quoted = "\"";
   for (const char c : *std::get<std::string*>(e.target)) {
-    if (c == '"' || c == '\\') quoted += '\\';
-    quoted += c;
+    const auto u = static_cast<unsigned char>(c);
+    if (c == '"' || c == '\\')
+      quoted += fmt::format("\\{}", c);
+    else if (u < 0x20 || u == 0x7f)
+      quoted += fmt::format("\\u{:04X}", u);
+    else
+      quoted += c;
   }
   return quoted + "\"";
 }
@@ -258,13 +268,16 @@ std::vector<std::pair<std::string, std::string>> ConfigSchema::values() const {
 }
 
 std::string ConfigSchema::to_toml() const {
-  // Sections in order of first appearance, keys in registration order within each.
+  // Sections in order of first appearance, keys in registration order within each. Keys without
+  // a section come first: after a [table] header TOML would read them as the table's.
   std::vector<std::string> sections;
   for (const Entry& e : entries_) {
     const std::string section = e.key.substr(0, e.key.rfind('.') + 1);
     if (std::find(sections.begin(), sections.end(), section) == sections.end())
       sections.push_back(section);
   }
+  std::stable_partition(sections.begin(), sections.end(),
+                        [](const std::string& section) { return section.empty(); });
   std::string out;
   for (const std::string& section : sections) {
     if (!section.empty())

@@ -14,6 +14,7 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/image_io.hpp"
 
 namespace dco {
 namespace {
@@ -49,8 +50,8 @@ std::uint32_t byteswap32(std::uint32_t v) {
 }
 
 Image<std::uint16_t> read_png16(const std::filesystem::path& path, const char* what) {
-  cv::Mat m = cv::imread(path.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
-  if (m.empty()) throw Error("cannot read " + std::string(what) + " PNG " + quoted(path));
+  const cv::Mat m =
+      read_image_file(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE, std::string(what) + " PNG");
   if (m.depth() != CV_16U)
     throw Error(quoted(path) + " is not a 16-bit PNG (" + std::string(what) + " needs 16 bits)");
   Image<std::uint16_t> out(m.cols, m.rows);

@@ -1,8 +1,15 @@
 #include "dco/core/image_io.hpp"
 
+#include <algorithm>
+#include <cstdint>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <system_error>
 #include <utility>
+#include <vector>
+
+#include <fmt/format.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -15,6 +22,19 @@ namespace {
 
 std::string quoted(const std::filesystem::path& p) {
   return "'" + p.string() + "'";
+}
+
+std::uint32_t read_be32(const std::uint8_t* p) {
+  return std::uint32_t{p[0]} << 24 | std::uint32_t{p[1]} << 16 | std::uint32_t{p[2]} << 8 | p[3];
+}
+
+// The size a PNG's IHDR chunk claims; 0 x 0 for anything that is not a PNG.
+std::pair<std::uint32_t, std::uint32_t> png_claimed_size(const std::vector<std::uint8_t>& bytes) {
+  static constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (bytes.size() < 24 || !std::equal(kSignature, kSignature + 8, bytes.begin()) ||
+      !std::equal(bytes.begin() + 12, bytes.begin() + 16, "IHDR"))
+    return {0, 0};
+  return {read_be32(bytes.data() + 16), read_be32(bytes.data() + 20)};
 }
 
 const char* depth_name(int depth) {
@@ -33,20 +53,38 @@ const char* depth_name(int depth) {
 
 }  // namespace
 
-Image<std::uint8_t> load_image(const std::filesystem::path& path, ImageColor color) {
+cv::Mat read_image_file(const std::filesystem::path& path, int flags, std::string_view what) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw Error("image " + quoted(path) + " does not exist");
+  if (!std::filesystem::exists(path, ec))
+    throw Error(fmt::format("{} {} does not exist", what, quoted(path)));
   if (!std::filesystem::is_regular_file(path, ec))
-    throw Error("image " + quoted(path) + " is not a regular file");
-  // ANYDEPTH so that 16-bit files are seen (and refused) instead of silently scaled down;
-  // ANYCOLOR keeps grey files grey and drops alpha.
+    throw Error(fmt::format("{} {} is not a regular file", what, quoted(path)));
+  std::ifstream in(path, std::ios::binary);
+  std::vector<std::uint8_t> bytes(std::istreambuf_iterator<char>(in), {});
+  if (!in && !in.eof()) throw Error(fmt::format("cannot read {} {}", what, quoted(path)));
+  const auto [width, height] = png_claimed_size(bytes);
+  if (width > static_cast<std::uint32_t>(kMaxImageSide) ||
+      height > static_cast<std::uint32_t>(kMaxImageSide))
+    throw Error(fmt::format("{} {} is a {}x{} PNG (sides at most {})", what, quoted(path), width,
+                            height, kMaxImageSide));
   cv::Mat m;
   try {
-    m = cv::imread(path.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+    if (!bytes.empty()) m = cv::imdecode(bytes, flags);
   } catch (const cv::Exception& e) {
-    throw Error("cannot decode image " + quoted(path) + ": " + e.err);
+    throw Error(fmt::format("cannot decode {} {}: {}", what, quoted(path), e.err));
   }
-  if (m.empty()) throw Error("cannot decode image " + quoted(path) + " (corrupt or unsupported)");
+  if (m.empty())
+    throw Error(fmt::format("cannot decode {} {} (corrupt or unsupported)", what, quoted(path)));
+  if (m.cols > kMaxImageSide || m.rows > kMaxImageSide)
+    throw Error(fmt::format("{} {} is {}x{} (sides at most {})", what, quoted(path), m.cols, m.rows,
+                            kMaxImageSide));
+  return m;
+}
+
+Image<std::uint8_t> load_image(const std::filesystem::path& path, ImageColor color) {
+  // ANYDEPTH so that 16-bit files are seen (and refused) instead of silently scaled down;
+  // ANYCOLOR keeps grey files grey and drops alpha.
+  cv::Mat m = read_image_file(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR, "image");
   if (m.depth() != CV_8U)
     throw Error("image " + quoted(path) + " is " + depth_name(m.depth()) +
                 "; only 8-bit images are supported");

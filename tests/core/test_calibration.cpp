@@ -244,6 +244,21 @@ TEST(Calibration, TomlRoundTripOfLoadedFormats) {
   }
 }
 
+// toml++ reads subnormal numbers back only approximately: they are written as 0, so what is saved
+// reads back to what is written.
+TEST(Calibration, TomlWritesSubnormalCoefficientsAsZero) {
+  test::TempDir dir;
+  StereoCalibration c;
+  c.left = c.right = {CameraModel::kPinhole, 64, 48, 50, 50, 32, 24, {6.05e-319, -1e-310, 0, 0}};
+  c.translation = {-0.1, 0, 0};
+  const std::string toml = calibration_to_toml(c);
+  const StereoCalibration back = calibration_from_toml(toml, "text");
+  EXPECT_EQ(back.left.distortion[0], 0.0);
+  EXPECT_EQ(back.left.distortion[1], 0.0);
+  EXPECT_TRUE(std::signbit(back.left.distortion[1]));
+  EXPECT_EQ(calibration_to_toml(back), toml);
+}
+
 TEST(Calibration, TomlKannalaBrandtAndRodrigues) {
   test::TempDir dir;
   std::string text =
@@ -317,6 +332,23 @@ TEST(CalibrationErrors, NameTheFileAndLine) {
        "baseline.toml: baseline is zero"},
       {"focal.toml", replaced(kRigToml, "fx = 500.0", "fx = -500.0"),
        "focal.toml: left camera: focal"},
+      // Beyond what a camera can have: a subnormal focal length (which would not even survive
+      // being written out), a baseline of 100 km, a principal point far off.
+      {"focal_tiny.toml", replaced(kRigToml, "fx = 500.0", "fx = 6.05e-319"),
+       "focal_tiny.toml: left camera: focal lengths must be within 1..1000000 px"},
+      {"focal_huge.toml", replaced(kRigToml, "fy = 500.0", "fy = 5e7"),
+       "focal_huge.toml: left camera: focal lengths must be within 1..1000000 px"},
+      {"baseline_far.toml",
+       replaced(kRigToml, "translation = [-0.1, 0, 0]", "translation = [-1e5, 0, 0]"),
+       "baseline_far.toml: baseline 100000 m (the translation's length) is not within 1 um..10 km"},
+      {"centre.toml", replaced(kRigToml, "cx = 320.0", "cx = 3.2e8"),
+       "centre.toml: left camera: principal point (320000000, 240) is more than 1000000 px"},
+      {"mb_baseline.txt",
+       replaced(test::read_file(kMiddlebury), "baseline=193.001", "baseline=1e-9"),
+       "mb_baseline.txt: baseline 1e-12 m (the translation's length) is not within 1 um..10 km"},
+      {"mb_focal.txt",
+       std::regex_replace(test::read_file(kMiddlebury), std::regex("999\\.421"), "0.5"),
+       "mb_focal.txt: left camera: focal lengths must be within 1..1000000 px (fx 0.5, fy 0.5)"},
       {"distortion.toml", replaced(kRigToml, "[-0.1, 0.01, 0.0, 0.0]", "[-0.1, 0.01, 0.0]"),
        "distortion.toml: left camera: the pinhole model takes 0, 4, 5 or 8"},
       {"size.toml", replaced(kRigToml, "width = 640", "width = 0"),

@@ -167,6 +167,21 @@ TEST_F(Config, LoadFile) {
   EXPECT_THROW(schema.load_file(dir / "missing.toml"), Error);
 }
 
+// What to_toml writes (dcod --print-config) reads back to the same strings: control characters
+// are escaped, and a --set cannot bring bytes that no TOML file could hold.
+TEST_F(Config, StringsReadBackFromTheirToml) {
+  const std::string awkward = "tab\there\nline \"quoted\" back\\slash \x7f \x01 caf\xc3\xa9";
+  p.name = awkward;
+  const std::string toml = schema.to_toml();
+  p.name = "changed";
+  schema.load_string(toml, "printed.toml");
+  EXPECT_EQ(p.name, awkward);
+
+  EXPECT_EQ(set_error("output.name=caf\xe9"),
+            "--set output.name=caf\xe9: the string is not valid UTF-8");
+  EXPECT_EQ(p.name, awkward);
+}
+
 TEST_F(Config, HasAndDescribe) {
   EXPECT_TRUE(schema.has("stereo.mode"));
   EXPECT_FALSE(schema.has("stereo"));

@@ -1,11 +1,15 @@
 // Runs a fuzz target without libFuzzer (g++ has none): its seeds, then mutations of them --
 // bit flips, random bytes, extreme 32- and 64-bit values (lengths, counts, offsets) at every
-// position, truncations, extensions and spliced copies -- from a fixed random seed, so a ctest run
-// is reproducible. Under the asan-ubsan preset every input runs with ASan and UBSan.
+// position, truncations, extensions, spliced copies and, for text formats, extreme numbers and
+// separators written out as text -- from a fixed random seed, so a ctest run is reproducible. Under
+// the asan-ubsan preset every input runs with ASan and UBSan.
 //
 // usage: fuzz_driver [--iterations N] [--seed S] [--write-corpus DIR] [FILE...]
-// FILE arguments are run as they are (a crash input libFuzzer found, say).
+// FILE arguments are run as they are (a crash input libFuzzer found, say). An input that aborts or
+// faults is written to fuzz-crash-input in the working directory first, to be run again that way.
 
+#include <algorithm>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -15,7 +19,11 @@
 #include <iterator>
 #include <random>
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "fuzz_target.hpp"
 
@@ -47,9 +55,59 @@ void put(Bytes& b, std::size_t at, std::uint64_t v, int bytes, bool big_endian) 
   }
 }
 
+// Tokens that text parsers (TOML, calibration files, PFM headers, manifests) must survive.
+constexpr const char* kTextTokens[] = {"0",
+                                       "-0",
+                                       "-1",
+                                       "1e308",
+                                       "-1e308",
+                                       "1e-320",
+                                       "nan",
+                                       "-nan",
+                                       "inf",
+                                       "-inf",
+                                       "2147483648",
+                                       "-2147483649",
+                                       "18446744073709551616",
+                                       "0x7fffffff",
+                                       "1.5",
+                                       "1e9999",
+                                       "\n",
+                                       "\r\n",
+                                       " ",
+                                       "\t",
+                                       "=",
+                                       ":",
+                                       ",",
+                                       ";",
+                                       "#",
+                                       "[",
+                                       "]",
+                                       "[[",
+                                       "{",
+                                       "}",
+                                       "\"",
+                                       "'",
+                                       "\\",
+                                       "\"\"\"",
+                                       "true",
+                                       "\xc3",
+                                       "\xff\xfe"};
+
+void put_text(Bytes& b, std::size_t at, std::string_view token, bool overwrite) {
+  at = std::min(at, b.size());
+  if (overwrite) {
+    const std::size_t n = std::min(token.size(), b.size() - at);
+    std::memcpy(b.data() + at, token.data(), n);
+    b.insert(b.begin() + static_cast<std::ptrdiff_t>(at + n), token.begin() + n, token.end());
+  } else {
+    b.insert(b.begin() + static_cast<std::ptrdiff_t>(at), token.begin(), token.end());
+  }
+}
+
 void mutate(Bytes& b, const std::vector<Bytes>& pool, std::mt19937_64& rng) {
   const auto pick = [&](std::size_t n) { return n == 0 ? 0 : static_cast<std::size_t>(rng() % n); };
-  switch (rng() % 7) {
+  switch (rng() % 8) {
     case 0:
       if (!b.empty()) b[pick(b.size())] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
       break;
@@ -78,10 +136,36 @@ void mutate(Bytes& b, const std::vector<Bytes>& pool, std::mt19937_64& rng) {
       for (std::size_t i = 0; i < n && to + i < b.size(); ++i) b[to + i] = other[from + i];
       break;
     }
+    case 6:
+      put_text(b, pick(b.size() + 1), kTextTokens[pick(std::size(kTextTokens))], rng() % 2 == 0);
+      break;
     default:
       if (b.size() > 1) b.erase(b.begin() + static_cast<std::ptrdiff_t>(pick(b.size())));
       break;
   }
+}
+
+// The input being run, for the fatal-signal handler (which may only make system calls).
+const Bytes* volatile g_running = nullptr;
+
+extern "C" void write_crash_input(int sig) {
+  const Bytes* input = g_running;
+  if (input != nullptr) {
+    const int fd = ::open("fuzz-crash-input", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) {
+      const ssize_t ignored = ::write(fd, input->data(), input->size());
+      (void)ignored;
+      ::close(fd);
+    }
+  }
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+void run(const Bytes& input) {
+  g_running = &input;
+  LLVMFuzzerTestOneInput(input.data(), input.size());
+  g_running = nullptr;
 }
 
 Bytes read_file(const char* path) {
@@ -116,6 +200,8 @@ int main(int argc, char** argv) {
       files.push_back(read_file(argv[i]));
     }
   }
+  for (const int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL})
+    std::signal(sig, write_crash_input);
   const std::vector<Bytes> seeds = dco::fuzz::seeds();
   if (!corpus_dir.empty()) {
     std::filesystem::create_directories(corpus_dir);
@@ -128,17 +214,17 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (!files.empty()) {
-    for (const Bytes& f : files) LLVMFuzzerTestOneInput(f.data(), f.size());
+    for (const Bytes& f : files) run(f);
     std::printf("fuzz_driver: %zu files ran\n", files.size());
     return 0;
   }
-  for (const Bytes& s : seeds) LLVMFuzzerTestOneInput(s.data(), s.size());
+  for (const Bytes& s : seeds) run(s);
   std::mt19937_64 rng(seed);
   for (long i = 0; i < iterations; ++i) {
     Bytes b = seeds[static_cast<std::size_t>(rng() % seeds.size())];
     const int rounds = 1 + static_cast<int>(rng() % 4);
     for (int r = 0; r < rounds; ++r) mutate(b, seeds, rng);
-    LLVMFuzzerTestOneInput(b.data(), b.size());
+    run(b);
   }
   std::printf("fuzz_driver: %zu seeds and %ld mutated inputs ran\n", seeds.size(), iterations);
   return 0;

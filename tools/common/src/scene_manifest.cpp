@@ -112,8 +112,7 @@ Scene parse_row(const std::vector<std::string_view>& fields,
 // PNG ground truth stores disparity * divisor in its first channel. OpenCV hands colour files over
 // as BGR(A), so the file's first channel (R) is the Mat's channel 2.
 Image<float> decode_png_disparity(const Scene& scene) {
-  const cv::Mat raw = cv::imread(scene.gt.string(), cv::IMREAD_UNCHANGED);
-  if (raw.empty()) throw Error(fmt::format("cannot read ground truth '{}'", scene.gt.string()));
+  const cv::Mat raw = read_image_file(scene.gt, cv::IMREAD_UNCHANGED, "ground truth");
   if (raw.depth() != CV_8U && raw.depth() != CV_16U)
     throw Error(fmt::format("ground truth '{}' is neither 8 nor 16 bit", scene.gt.string()));
   cv::Mat channel;

@@ -1,6 +1,9 @@
 #pragma once
 
 #include <filesystem>
+#include <string_view>
+
+#include <opencv2/core.hpp>
 
 #include "dco/core/image.hpp"
 
@@ -13,6 +16,12 @@ enum class ImageColor { kAsIs, kGray, kColor };
 // Throws dco::Error naming the file when it is missing, unreadable or not 8-bit.
 Image<std::uint8_t> load_image(const std::filesystem::path& path,
                                ImageColor color = ImageColor::kAsIs);
+
+// Reads and decodes an image file as cv::imread(path, flags) would, but every failure -- missing,
+// unreadable, corrupt, OpenCV's own exceptions -- is a dco::Error naming the file as `what`, and a
+// PNG whose header claims a side above kMaxImageSide is refused before it is inflated (a small
+// file can claim gigabytes).
+cv::Mat read_image_file(const std::filesystem::path& path, int flags, std::string_view what);
 
 // Writes an 8-bit image; the format follows the extension. Throws dco::Error on failure.
 void save_image(const std::filesystem::path& path, ImageView<const std::uint8_t> image);
