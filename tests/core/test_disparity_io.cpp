@@ -3,6 +3,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <limits>
 #include <string>
 
@@ -222,6 +223,33 @@ TEST(DisparityPng16, RefusesEightBitAndMissingFiles) {
   EXPECT_THROW(read_depth_png16(dir / "nope.png"), Error);
   Image<float> three(2, 2, 3);
   EXPECT_THROW(write_disparity_png16(dir / "x.png", three.cview()), Error);
+}
+
+// OpenCV decodes by content and throws from some decoders (a PFM of height 0 under a .png name);
+// a PNG's claimed size is checked before anything is inflated.
+TEST(DisparityPng16, CorruptAndHugeFilesAreClearErrors) {
+  test::TempDir dir;
+  test::write_file(dir / "zero_height.png", std::string("Pf\n7 0\n-1\n") + std::string(64, '\0'));
+  try {
+    read_disparity_png16(dir / "zero_height.png");
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot decode disparity PNG"), std::string::npos)
+        << e.what();
+  }
+  // 20000 x 20000 at 16 bits (800 MB) in a 33-byte file.
+  const unsigned char header[] = {0x89, 'P',  'N', 'G', '\r', '\n', 0x1a, '\n', 0,    0, 0,
+                                  13,   'I',  'H', 'D', 'R',  0,    0,    0x4e, 0x20, 0, 0,
+                                  0x4e, 0x20, 16,  0,   0,    0,    0,    0,    0,    0, 0};
+  test::write_file(dir / "huge.png", std::string(std::begin(header), std::end(header)));
+  try {
+    read_depth_png16(dir / "huge.png");
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("is a 20000x20000 PNG (sides at most 16384)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(DisparityPng16, ReadsKittiGroundTruth) {

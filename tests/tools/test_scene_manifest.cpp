@@ -277,5 +277,20 @@ TEST(GroundTruth, MissingFileIsAnError) {
   EXPECT_THROW(load_ground_truth(scene), Error);
 }
 
+// OpenCV reads by content and throws from some decoders: a corrupt file is a clear error too.
+TEST(GroundTruth, CorruptPngIsAnError) {
+  TempDir dir;
+  Scene scene;
+  scene.name = "x";
+  scene.gt = dir.write("gt.png", std::string("Pf\n7 0\n-1\n") + std::string(64, '\0'));
+  scene.gt_format = GroundTruthFormat::kPng;
+  try {
+    load_ground_truth(scene);
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("cannot decode ground truth"));
+  }
+}
+
 }  // namespace
 }  // namespace dco::tools
