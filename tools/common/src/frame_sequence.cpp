@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <regex>
 
 #include "dco/core/error.hpp"
@@ -18,18 +20,21 @@ class PatternSequence final : public FrameSequence {
       : left_(std::move(left)),
         right_(std::move(right)),
         next_(first),
-        end_(count < 0 ? -1 : first + count) {
+        end_(count < 0 ? -1 : std::int64_t{first} + count) {
+    if (first < 0) throw Error("a pattern sequence starts at frame 0 or later");
     expand_pattern(left_, first);  // validates both patterns up front
     expand_pattern(right_, first);
     if (calib) rectifier_.emplace(load_calibration(*calib));
   }
 
   bool next(StereoInput& frame) override {
-    if (end_ >= 0 && next_ >= end_) return false;
-    const std::filesystem::path left = expand_pattern(left_, next_);
+    // Numbers end at the largest int a %d field takes.
+    if ((end_ >= 0 && next_ >= end_) || next_ > std::numeric_limits<int>::max()) return false;
+    const int index = static_cast<int>(next_);
+    const std::filesystem::path left = expand_pattern(left_, index);
     if (end_ < 0 && !std::filesystem::exists(left)) return false;
     Image<std::uint8_t> l = load_image(left);
-    Image<std::uint8_t> r = load_image(expand_pattern(right_, next_));
+    Image<std::uint8_t> r = load_image(expand_pattern(right_, index));
     if (rectifier_) rectifier_->check_inputs(l.cview(), r.cview());
     if (rectifier_ && rectifier_->needs_remap()) {
       rectifier_->rectify(l.cview(), r.cview(), frame.left, frame.right);
@@ -37,7 +42,8 @@ class PatternSequence final : public FrameSequence {
       frame.left = std::move(l);
       frame.right = std::move(r);
     }
-    frame.index = next_++;
+    frame.index = index;
+    ++next_;
     return true;
   }
 
@@ -48,7 +54,7 @@ class PatternSequence final : public FrameSequence {
 
  private:
   std::string left_, right_;
-  int next_, end_;
+  std::int64_t next_, end_;  // wide enough for first + count and one past the largest int
   std::optional<Rectifier> rectifier_;
 };
 
@@ -85,12 +91,16 @@ class SyntheticSequence final : public FrameSequence {
 }  // namespace
 
 std::string expand_pattern(const std::string& pattern, int index) {
-  static const std::regex kField("%0?[0-9]*d");
-  const auto fields = std::distance(std::sregex_iterator(pattern.begin(), pattern.end(), kField),
-                                    std::sregex_iterator());
+  static const std::regex kField("%0?([0-9]*)d");
+  std::smatch field;
   const auto percents = std::count(pattern.begin(), pattern.end(), '%');
-  if (fields != 1 || percents != 1)
+  if (percents != 1 || !std::regex_search(pattern, field, kField))
     throw Error("file pattern '" + pattern + "' needs exactly one integer field such as %06d");
+  // An int has at most 11 characters; a wider field only pads (and a huge one takes seconds).
+  constexpr int kMaxFieldWidth = 20;
+  if (field[1].length() > 2 || (field[1].length() > 0 && std::stoi(field[1]) > kMaxFieldWidth))
+    throw Error("file pattern '" + pattern + "': the field is wider than " +
+                std::to_string(kMaxFieldWidth) + " characters");
   char buffer[4096];
   const int n = std::snprintf(buffer, sizeof buffer, pattern.c_str(), index);
   if (n < 0 || n >= static_cast<int>(sizeof buffer))
