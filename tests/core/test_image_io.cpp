@@ -1,5 +1,6 @@
 #include "dco/core/image_io.hpp"
 
+#include <iterator>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -101,6 +102,19 @@ TEST(ImageIo, ErrorsNameTheFile) {
   EXPECT_THROW(save_image(dir / "no" / "such" / "dir.png", img.cview()), Error);
   EXPECT_THROW(save_image(dir / "noext", img.cview()), Error);
   EXPECT_THROW(save_image(dir / "empty.png", ImageView<const std::uint8_t>()), Error);
+}
+
+// A small PNG that claims 20000 x 20000 pixels is refused from its header, before OpenCV would
+// allocate the whole image.
+TEST(ImageIo, HugePngIsRefusedFromItsHeader) {
+  test::TempDir dir;
+  const unsigned char header[] = {0x89, 'P',  'N', 'G', '\r', '\n', 0x1a, '\n', 0,    0, 0,
+                                  13,   'I',  'H', 'D', 'R',  0,    0,    0x4e, 0x20, 0, 0,
+                                  0x4e, 0x20, 8,   2,   0,    0,    0,    0,    0,    0, 0};
+  test::write_file(dir / "huge.png", std::string(std::begin(header), std::end(header)));
+  EXPECT_NE(error_of(dir / "huge.png").find("huge.png' is a 20000x20000 PNG (sides at most 16384)"),
+            std::string::npos)
+      << error_of(dir / "huge.png");
 }
 
 TEST(ImageIo, ReadsDatasetImages) {
