@@ -60,8 +60,8 @@ cv::Mat read_image_file(const std::filesystem::path& path, int flags, std::strin
   if (!std::filesystem::is_regular_file(path, ec))
     throw Error(fmt::format("{} {} is not a regular file", what, quoted(path)));
   std::ifstream in(path, std::ios::binary);
-  std::vector<std::uint8_t> bytes(std::istreambuf_iterator<char>(in), {});
-  if (!in && !in.eof()) throw Error(fmt::format("cannot read {} {}", what, quoted(path)));
+  if (!in) throw Error(fmt::format("cannot open {} {}", what, quoted(path)));
+  const std::vector<std::uint8_t> bytes(std::istreambuf_iterator<char>(in), {});
   const auto [width, height] = png_claimed_size(bytes);
   if (width > static_cast<std::uint32_t>(kMaxImageSide) ||
       height > static_cast<std::uint32_t>(kMaxImageSide))
