@@ -3,7 +3,6 @@
 // with a dco::Error; a calibration it accepts must validate, write back to the same TOML, and give
 // the rectifier either a clear error or a finite geometry it can rectify with.
 
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -19,6 +18,7 @@
 #include "dco/core/image.hpp"
 #include "dco/core/rectifier.hpp"
 #include "fuzz_target.hpp"
+#include "rectifier_check.hpp"
 #include "scratch_dir.hpp"
 
 namespace {
@@ -26,24 +26,11 @@ namespace {
 // Maps of larger images cost milliseconds per input; the parsers are what is fuzzed.
 constexpr long kMaxRectifiedPixels = 320 * 240;
 
-bool finite_geometry(const dco::RectifiedGeometry& g) {
-  return std::isfinite(g.f) && g.f > 0 && std::isfinite(g.cx_left) && std::isfinite(g.cx_right) &&
-         std::isfinite(g.cy) && std::isfinite(g.baseline_m) && g.baseline_m > 0 && g.width >= 0 &&
-         g.height >= 0;
-}
-
 void check_rectifier(const dco::StereoCalibration& c) {
   const int w = c.left.width, h = c.left.height;
   if (w <= 0 || h <= 0 || static_cast<long>(w) * h > kMaxRectifiedPixels) return;
-  std::optional<dco::Rectifier> rectifier;
-  try {
-    rectifier.emplace(c);
-  } catch (const dco::Error& e) {
-    if (e.what()[0] == '\0') std::abort();
-    return;
-  }
-  if (!finite_geometry(rectifier->geometry())) std::abort();
-  if (!rectifier->needs_remap()) return;
+  const std::optional<dco::Rectifier> rectifier = dco::fuzz::checked_rectifier(c);
+  if (!rectifier || !rectifier->needs_remap()) return;
   dco::Image<std::uint8_t> left(w, h, 1), right(w, h, 1), left_out, right_out;
   rectifier->rectify(left.cview(), right.cview(), left_out, right_out);
   const dco::RectifiedGeometry& g = rectifier->geometry();
@@ -66,7 +53,7 @@ void check(const std::function<dco::StereoCalibration()>& read) {
   } catch (const dco::Error&) {
     std::abort();  // what a reader accepts is valid and has an exact TOML form
   }
-  if (c.is_rectified && !finite_geometry(c.rectified)) std::abort();
+  if (c.is_rectified && !dco::fuzz::usable_geometry(c.rectified)) std::abort();
   check_rectifier(c);
 }
 

@@ -3,19 +3,17 @@
 // parser accepts may still be refused (with a dco::Error) for its geometry; one that is used must
 // validate and, at half size, give the rectifier either a clear error or a finite geometry.
 
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
-#include <optional>
 #include <span>
 
 #include "../../drivers/indemind/module_calibration.hpp"
 #include "dco/core/calibration.hpp"
 #include "dco/core/error.hpp"
-#include "dco/core/rectifier.hpp"
 #include "dco/indemind/calibration_blob.hpp"
 #include "fuzz_target.hpp"
+#include "rectifier_check.hpp"
 
 namespace {
 
@@ -32,19 +30,7 @@ void check(const dco::indemind::ModuleCalibration& m, int width, int height, boo
   } catch (const dco::Error&) {
     std::abort();  // what the driver would use must be valid
   }
-  if (!rectify) return;
-  std::optional<dco::Rectifier> rectifier;
-  try {
-    rectifier.emplace(c);
-  } catch (const dco::Error& e) {
-    if (e.what()[0] == '\0') std::abort();
-    return;
-  }
-  const dco::RectifiedGeometry& g = rectifier->geometry();
-  if (!(std::isfinite(g.f) && g.f > 0 && std::isfinite(g.baseline_m) && g.baseline_m > 0 &&
-        std::isfinite(g.cx_left) && std::isfinite(g.cx_right) && std::isfinite(g.cy) &&
-        g.width > 0 && g.height > 0))
-    std::abort();
+  if (rectify) dco::fuzz::checked_rectifier(c);
 }
 
 }  // namespace
