@@ -13,6 +13,14 @@
 namespace dco::compositor {
 namespace {
 
+// Text as errors quote it: on one line, control characters shown as '?'.
+std::string printable(std::string_view text) {
+  std::string out(text);
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  return out;
+}
+
 std::vector<float> numbers(std::string_view text, char separator, const std::string& where) {
   std::vector<float> out;
   std::string s(text);
@@ -29,7 +37,7 @@ std::vector<float> numbers(std::string_view text, char separator, const std::str
     errno = 0;
     const float v = std::strtof(token.c_str(), &stop);
     if (token.empty() || *stop != '\0' || errno != 0 || !std::isfinite(v))
-      throw Error(where + ": '" + token + "' is not a number");
+      throw Error(where + ": '" + printable(token) + "' is not a number");
     out.push_back(v);
     pos = end + 1;
   }
@@ -70,14 +78,14 @@ T make(const std::vector<float>& v) {
 }  // namespace
 
 Cube parse_cube(std::string_view text) {
-  const std::string where = "--cube '" + std::string(text) + "'";
+  const std::string where = "--cube '" + printable(text) + "'";
   const auto v = numbers(text, ',', where);
   check_object(v, "cube", where);
   return make<Cube>(v);
 }
 
 Sphere parse_sphere(std::string_view text) {
-  const std::string where = "--sphere '" + std::string(text) + "'";
+  const std::string where = "--sphere '" + printable(text) + "'";
   const auto v = numbers(text, ',', where);
   check_object(v, "sphere", where);
   return make<Sphere>(v);
@@ -105,7 +113,7 @@ Scene parse_scene(std::string_view text, const std::string& name) {
       check_object(v, "sphere", where);
       scene.spheres.push_back(make<Sphere>(v));
     } else {
-      throw Error(where + ": unknown object '" + word + "' (cube or sphere)");
+      throw Error(where + ": unknown object '" + printable(word) + "' (cube or sphere)");
     }
     if (scene.size() > kMaxObjects)
       throw Error(where + ": more than " + std::to_string(kMaxObjects) + " objects");

@@ -234,6 +234,13 @@ TEST(Compositor, BadInputIsOneClearLine) {
     message = ex.what();
   }
   EXPECT_NE(message.find("scene.txt:3: unknown object 'torus'"), std::string::npos) << message;
+  // An argument quoted in an error stays on one line.
+  try {
+    parse_cube("0,0\n,1,0.3");
+    ADD_FAILURE() << "took a cube with a line break in a number";
+  } catch (const Error& ex) {
+    EXPECT_EQ(std::string(ex.what()), "--cube '0,0?,1,0.3': '0?' is not a number") << ex.what();
+  }
 }
 
 }  // namespace
