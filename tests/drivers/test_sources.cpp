@@ -100,17 +100,21 @@ TEST(SyntheticSource, DeliversTheRenderersFramesAtItsPace) {
   // 50 fps for 0.5 s: about 25 frames; a loaded machine may deliver fewer, never a burst.
   EXPECT_GE(frames.size(), 10u);
   EXPECT_LE(frames.size(), 27u);
-  synthetic::SceneRenderer renderer(synthetic::preset("hand", 160, 96));
-  synthetic::StereoSample sample;
   for (std::size_t i = 0; i < frames.size(); ++i) {
     EXPECT_EQ(frames[i].seq, i);
     if (i > 0) {
       EXPECT_GT(frames[i].capture_ns, frames[i - 1].capture_ns);
     }
   }
-  renderer.render(3, sample);
+  // The scene moves in real time at the delivered rate: frame 3 shows it at 3/50 s.
+  synthetic::SceneConfig at_50 = synthetic::preset("hand", 160, 96);
+  at_50.fps = 50;
+  synthetic::StereoSample sample;
+  synthetic::SceneRenderer(at_50).render(3, sample);
   EXPECT_TRUE(same_pixels(frames[3].left.cview(), sample.left.cview()));
   EXPECT_TRUE(same_pixels(frames[3].right.cview(), sample.right.cview()));
+  synthetic::SceneRenderer(synthetic::preset("hand", 160, 96)).render(3, sample);  // at 3/30 s
+  EXPECT_FALSE(same_pixels(frames[3].left.cview(), sample.left.cview()));
 }
 
 TEST(SyntheticSource, AFiniteSourceEndsAndARestartGoesOn) {
@@ -121,6 +125,10 @@ TEST(SyntheticSource, AFiniteSourceEndsAndARestartGoesOn) {
   source->stop();
   EXPECT_EQ(sink.count(), 5u);
   EXPECT_TRUE(sink.ended());
+  // Delivered as fast as taken, the scene keeps its preset's clock (30 Hz).
+  synthetic::StereoSample sample;
+  synthetic::SceneRenderer(synthetic::preset("boxes", 96, 64)).render(3, sample);
+  EXPECT_TRUE(same_pixels(sink.frames()[3].left.cview(), sample.left.cview()));
 
   auto endless = open_source("synthetic://boxes?width=96&height=64&fps=200");
   RecordingSink first, second;
