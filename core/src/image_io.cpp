@@ -28,15 +28,6 @@ std::uint32_t read_be32(const std::uint8_t* p) {
   return std::uint32_t{p[0]} << 24 | std::uint32_t{p[1]} << 16 | std::uint32_t{p[2]} << 8 | p[3];
 }
 
-// The size a PNG's IHDR chunk claims; 0 x 0 for anything that is not a PNG.
-std::pair<std::uint32_t, std::uint32_t> png_claimed_size(const std::vector<std::uint8_t>& bytes) {
-  static constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (bytes.size() < 24 || !std::equal(kSignature, kSignature + 8, bytes.begin()) ||
-      !std::equal(bytes.begin() + 12, bytes.begin() + 16, "IHDR"))
-    return {0, 0};
-  return {read_be32(bytes.data() + 16), read_be32(bytes.data() + 20)};
-}
-
 const char* depth_name(int depth) {
   switch (depth) {
     case CV_16U:
@@ -53,6 +44,15 @@ const char* depth_name(int depth) {
 
 }  // namespace
 
+std::optional<PngHeader> png_header(std::span<const std::uint8_t> bytes) {
+  // Signature, then the IHDR chunk: length, type, 13 bytes of data, CRC.
+  static constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (bytes.size() < 33 || !std::equal(kSignature, kSignature + 8, bytes.begin()) ||
+      !std::equal(bytes.begin() + 12, bytes.begin() + 16, "IHDR"))
+    return std::nullopt;
+  return PngHeader{read_be32(bytes.data() + 16), read_be32(bytes.data() + 20), bytes[24]};
+}
+
 cv::Mat read_image_file(const std::filesystem::path& path, int flags, std::string_view what) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
@@ -62,11 +62,11 @@ cv::Mat read_image_file(const std::filesystem::path& path, int flags, std::strin
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(fmt::format("cannot open {} {}", what, quoted(path)));
   const std::vector<std::uint8_t> bytes(std::istreambuf_iterator<char>(in), {});
-  const auto [width, height] = png_claimed_size(bytes);
-  if (width > static_cast<std::uint32_t>(kMaxImageSide) ||
-      height > static_cast<std::uint32_t>(kMaxImageSide))
-    throw Error(fmt::format("{} {} is a {}x{} PNG (sides at most {})", what, quoted(path), width,
-                            height, kMaxImageSide));
+  if (const auto png = png_header(bytes);
+      png && (png->width > static_cast<std::uint32_t>(kMaxImageSide) ||
+              png->height > static_cast<std::uint32_t>(kMaxImageSide)))
+    throw Error(fmt::format("{} {} is a {}x{} PNG (sides at most {})", what, quoted(path),
+                            png->width, png->height, kMaxImageSide));
   cv::Mat m;
   try {
     if (!bytes.empty()) m = cv::imdecode(bytes, flags);

@@ -6,24 +6,17 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/image_io.hpp"
 #include "dco/drivers/raw_stereo.hpp"
 
 namespace dco::drivers {
 namespace {
 
-std::uint32_t read_be32(const std::uint8_t* p) {
-  return std::uint32_t{p[0]} << 24 | std::uint32_t{p[1]} << 16 | std::uint32_t{p[2]} << 8 | p[3];
-}
-
-// Whether `bytes` start as an 8-bit PNG of width x height: read from its IHDR chunk before
-// decoding, so a small PNG that claims a huge image is refused before it is inflated.
+// Whether `bytes` start as an 8-bit PNG of width x height, from its header alone.
 bool png_header_is(const std::vector<std::uint8_t>& bytes, int width, int height) {
-  static constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (bytes.size() < 33 || !std::equal(kSignature, kSignature + 8, bytes.begin()) ||
-      !std::equal(bytes.begin() + 12, bytes.begin() + 16, "IHDR"))
-    return false;
-  return read_be32(bytes.data() + 16) == static_cast<std::uint32_t>(width) &&
-         read_be32(bytes.data() + 20) == static_cast<std::uint32_t>(height) && bytes[24] == 8;
+  const auto png = png_header(bytes);
+  return png && png->width == static_cast<std::uint32_t>(width) &&
+         png->height == static_cast<std::uint32_t>(height) && png->bit_depth == 8;
 }
 
 }  // namespace

@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <optional>
 #include <string>
@@ -64,11 +63,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   check([&] { return dco::calibration_from_toml(text, "recording"); });
 
   static const dco::fuzz::ScratchDir dir("calibration");
-  const std::filesystem::path path = dir.path() / "calib.txt";
-  {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-  }
+  const std::filesystem::path path = dir.write("calib.txt", text);
   check([&] { return dco::load_calibration(path); });
   return 0;
 }

@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -22,11 +21,6 @@ namespace {
 using dco::daemon::ConfigSources;
 using dco::daemon::LoadedConfig;
 
-void write(const std::filesystem::path& path, std::string_view text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(text.data(), static_cast<std::streamsize>(text.size()));
-}
-
 std::optional<LoadedConfig> load(const ConfigSources& sources) {
   try {
     return dco::daemon::load_config(sources);
@@ -36,11 +30,9 @@ std::optional<LoadedConfig> load(const ConfigSources& sources) {
   }
 }
 
-void check_reads_back(const LoadedConfig& config, const std::filesystem::path& dir) {
-  const std::filesystem::path again = dir / "again.toml";
-  write(again, config.toml);
+void check_reads_back(const LoadedConfig& config, const dco::fuzz::ScratchDir& dir) {
   ConfigSources from_toml;
-  from_toml.file = again;
+  from_toml.file = dir.write("again.toml", config.toml);
   const std::optional<LoadedConfig> reread = load(from_toml);
   if (!reread || reread->values != config.values) std::abort();
 
@@ -55,15 +47,12 @@ void check_reads_back(const LoadedConfig& config, const std::filesystem::path& d
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const dco::fuzz::ScratchDir dir("daemon_config");
   const std::string_view text(reinterpret_cast<const char*>(data), size);
-  const std::filesystem::path file = dir.path() / "dcod.toml";
-  write(file, text);
-
   ConfigSources from_file;
-  from_file.file = file;
-  if (const auto config = load(from_file)) check_reads_back(*config, dir.path());
+  from_file.file = dir.write("dcod.toml", text);
+  if (const auto config = load(from_file)) check_reads_back(*config, dir);
 
   ConfigSources from_lines;
   from_lines.recorded = std::string(text);
-  if (const auto config = load(from_lines)) check_reads_back(*config, dir.path());
+  if (const auto config = load(from_lines)) check_reads_back(*config, dir);
   return 0;
 }

@@ -9,7 +9,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <optional>
 #include <string_view>
@@ -23,11 +22,6 @@
 namespace {
 
 using dco::Image;
-
-void write(const std::filesystem::path& path, std::string_view text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(text.data(), static_cast<std::streamsize>(text.size()));
-}
 
 std::optional<Image<float>> read(const std::function<Image<float>()>& reader) {
   try {
@@ -62,8 +56,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static const dco::fuzz::ScratchDir dir("disparity_file");
   const std::string_view bytes(reinterpret_cast<const char*>(data), size);
 
-  const std::filesystem::path pfm = dir.path() / "map.pfm";
-  write(pfm, bytes);
+  const std::filesystem::path pfm = dir.write("map.pfm", bytes);
   if (const auto image = read([&] { return dco::read_pfm(pfm); })) {
     if (image->channels() != 1 && image->channels() != 3) std::abort();
     const std::filesystem::path again = dir.path() / "again.pfm";
@@ -72,8 +65,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (!reread || !same_bits(*image, *reread)) std::abort();
   }
 
-  const std::filesystem::path png = dir.path() / "map.png";
-  write(png, bytes);
+  const std::filesystem::path png = dir.write("map.png", bytes);
   if (const auto disparity = read([&] { return dco::read_disparity_png16(png); })) {
     if (disparity->channels() != 1) std::abort();
     check_range(*disparity, 65535.0f / 256.0f);

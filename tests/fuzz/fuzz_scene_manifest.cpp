@@ -8,7 +8,6 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <set>
 #include <string>
 #include <string_view>
@@ -65,11 +64,8 @@ void check_ground_truth(const Scene& scene) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::filesystem::path& root = data_root().path();
-  const std::filesystem::path manifest = root / "scenes.tsv";
-  {
-    std::ofstream out(manifest, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
-  }
+  const std::filesystem::path manifest =
+      data_root().write("scenes.tsv", {reinterpret_cast<const char*>(data), size});
   std::vector<Scene> scenes;
   try {
     scenes = dco::tools::load_scene_manifest(manifest, root);

@@ -1,6 +1,9 @@
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <optional>
+#include <span>
 #include <string_view>
 
 #include <opencv2/core.hpp>
@@ -16,6 +19,14 @@ enum class ImageColor { kAsIs, kGray, kColor };
 // Throws dco::Error naming the file when it is missing, unreadable or not 8-bit.
 Image<std::uint8_t> load_image(const std::filesystem::path& path,
                                ImageColor color = ImageColor::kAsIs);
+
+// What a PNG's IHDR chunk claims, read before decoding so that a small file claiming a huge image
+// is refused before it is inflated. nullopt when the bytes do not start as a PNG.
+struct PngHeader {
+  std::uint32_t width = 0, height = 0;
+  int bit_depth = 0;
+};
+std::optional<PngHeader> png_header(std::span<const std::uint8_t> bytes);
 
 // Reads and decodes an image file as cv::imread(path, flags) would, but every failure -- missing,
 // unreadable, corrupt, OpenCV's own exceptions -- is a dco::Error naming the file as `what`, and a
