@@ -12,9 +12,11 @@ class CpuSystemSolver final : public SystemSolver {
   explicit CpuSystemSolver(const DensifyParams& params) : params_(params) {}
 
   // At half size with sweeps alone the full system is coarsened (data and weights) and swept
-  // (SweepRows works each row's diagonal out as it loads it).
+  // (SweepRows works each row's diagonal out as it loads it). The output's residual without a
+  // sweep reads the system's rows as they are, diagonal included.
   bool needs_diagonal(int width) const override {
-    return !(solves_at_half(params_, width) && params_.fine_iterations == 0);
+    if (!solves_at_half(params_, width) || params_.fine_iterations > 0) return true;
+    return params_.output_residual && params_.fine_sweeps <= 0;
   }
 
   SolverReport solve(const GridSystem& a, ImageView<const float> b, ImageView<float> x) override {

@@ -540,8 +540,9 @@ class DiagonalWatch final : public SystemSolver {
 TEST(Densifier, TheFullSizeDiagonalIsBuiltOnlyForASolveThatReadsIt) {
   // A wide frame solved at half size with full-size sweeps alone: the sweeps work each row's
   // diagonal out as they load it, so the system leaves its two diagonal images out, and the
-  // output is the bytes of a build that made them. A full-size solve, or full-size iterations
-  // after the sweeps, read them: they are built.
+  // output is the bytes of a build that made them. A full-size solve, full-size iterations
+  // after the sweeps, or the output's residual without sweeps (which reads the system's rows
+  // as they are) read them: they are built.
   const int w = 700, h = 41;
   const Problem first = random_problem(w, h, 31, 0.3);
   const Problem second = random_problem(w, h, 32, 0.3);
@@ -549,12 +550,17 @@ TEST(Densifier, TheFullSizeDiagonalIsBuiltOnlyForASolveThatReadsIt) {
     std::string resolution;
     int fine_iterations;
     bool built;
+    int fine_sweeps = DensifyParams{}.fine_sweeps;
+    bool output_residual = false;
   };
-  for (const Case& c : {Case{"auto", 0, false}, Case{"half", 0, false}, Case{"half", 2, true},
-                        Case{"full", 0, true}}) {
+  for (const Case& c :
+       {Case{"auto", 0, false}, Case{"half", 0, false}, Case{"half", 2, true},
+        Case{"full", 0, true}, Case{"half", 0, false, 4, true}, Case{"half", 0, true, 0, true}}) {
     DensifyParams params;
     params.solve_resolution = c.resolution;
     params.fine_iterations = c.fine_iterations;
+    params.fine_sweeps = c.fine_sweeps;
+    params.output_residual = c.output_residual;
     std::vector<bool> seen, forced_seen;
     Densifier d(params, [&](const DensifyParams& p) {
       return std::make_unique<DiagonalWatch>(p, false, seen);
@@ -562,7 +568,9 @@ TEST(Densifier, TheFullSizeDiagonalIsBuiltOnlyForASolveThatReadsIt) {
     Densifier forced(params, [&](const DensifyParams& p) {
       return std::make_unique<DiagonalWatch>(p, true, forced_seen);
     });
-    const std::string what = c.resolution + ", " + std::to_string(c.fine_iterations) + " fine";
+    const std::string what = c.resolution + ", " + std::to_string(c.fine_iterations) + " fine, " +
+                             std::to_string(c.fine_sweeps) + " sweeps" +
+                             (c.output_residual ? ", output residual" : "");
     Image<float> actual, expected;
     for (const Problem* frame : {&first, &second}) {
       DensifyInputs in = inputs_of(*frame);
@@ -572,6 +580,9 @@ TEST(Densifier, TheFullSizeDiagonalIsBuiltOnlyForASolveThatReadsIt) {
       forced.compute(in, expected);
       ASSERT_TRUE(testing::same_bytes(expected, actual)) << what;
       EXPECT_EQ(d.last_report().final_residual, forced.last_report().final_residual) << what;
+      if (c.output_residual) {
+        EXPECT_EQ(d.last_report().output_residual, forced.last_report().output_residual) << what;
+      }
       // Asked for, the system has its diagonal, the bytes a build would have made.
       const GridSystem& built = forced.last_system();
       const GridSystem& asked = d.last_system();
