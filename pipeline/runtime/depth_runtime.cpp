@@ -59,8 +59,8 @@ std::string size_text(ImageView<const std::uint8_t> v) {
 // 0.2 ms. Kernels before 6.12 ignore the slice, which costs only precision.
 constexpr std::uint64_t kReleaseSliceNs = 100'000;
 
-RuntimeParams with_stage_threads(RuntimeParams params, const StageFactories& stages) {
-  params.threads = stage_threads(params, stages.on_gpu);
+RuntimeParams with_stage_threads(RuntimeParams params) {
+  params.threads = stage_threads(params);
   params.opencv_threads = opencv_threads_for(params.opencv_threads, params.threads, usable_cpus());
   return params;
 }
@@ -70,7 +70,7 @@ RuntimeParams with_stage_threads(RuntimeParams params, const StageFactories& sta
 DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
                            ResultCallback on_result, StageHook hook, const StageFactories& stages)
     : pipeline_(pipeline),
-      params_(with_stage_threads(runtime, stages)),
+      params_(with_stage_threads(runtime)),
       cpus_(checked_cpus(runtime)),
       releasing_(runtime.release_latency_ms > 0 && !runtime.deterministic),
       release_latency_(std::chrono::duration_cast<Clock::duration>(

@@ -14,8 +14,7 @@ namespace dco::pipeline::runtime {
 void register_params(ConfigSchema& s, RuntimeParams& p) {
   s.add("runtime.threads", &p.threads, 0, 3,
         "stage threads: 1 all in one, 2 stereo | contour+densify, 3 stereo | contour | densify; "
-        "0 = 3 when the stages run on a GPU and 4 or more CPUs are usable or when 8 or more are, "
-        "else 2");
+        "0 = 3 where 4 or more CPUs are usable, else 2");
   s.add("runtime.affinity", &p.affinity, {},
         "CPUs for the stage threads, e.g. \"0,1\" (thread i on entry i mod n); empty = any");
   s.add("runtime.opencv_threads", &p.opencv_threads, 0, 256,
@@ -70,7 +69,7 @@ std::vector<int> parse_affinity(const std::string& text) {
 
 void validate(const RuntimeParams& p) {
   if (p.threads < 0 || p.threads > 3)
-    throw Error("runtime.threads must be 0 (chosen with the stages), 1, 2 or 3, not " +
+    throw Error("runtime.threads must be 0 (chosen by the usable CPUs), 1, 2 or 3, not " +
                 std::to_string(p.threads));
   if (p.opencv_threads < 0 || p.opencv_threads > 256)
     throw Error("runtime.opencv_threads must be in [0, 256], not " +
@@ -91,10 +90,9 @@ void validate(const RuntimeParams& p) {
     throw Error("runtime.backend must be auto, cpu or cuda, not '" + p.backend + "'");
 }
 
-int stage_threads(const RuntimeParams& p, bool stages_on_gpu) {
+int stage_threads(const RuntimeParams& p) {
   if (p.threads != 0) return p.threads;
-  const int cpus = usable_cpus();
-  return (stages_on_gpu && cpus >= 4) || cpus >= 8 ? 3 : 2;
+  return usable_cpus() >= 4 ? 3 : 2;
 }
 
 }  // namespace dco::pipeline::runtime

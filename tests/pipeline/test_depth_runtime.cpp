@@ -807,9 +807,9 @@ TEST(DepthRuntime, ZeroThreadsRunTheCountItsStagesCallFor) {
   for (bool on_gpu : {false, true}) {
     RuntimeParams rp;  // threads = 0
     rp.deterministic = true;
-    StageFactories stages;  // the CPU stages, marked as a GPU's to see the choice
+    StageFactories stages;  // the CPU stages, also marked as a GPU's: the choice is the same
     stages.on_gpu = on_gpu;
-    const int expected = (on_gpu && usable_cpus() >= 4) || usable_cpus() >= 8 ? 3 : 2;
+    const int expected = usable_cpus() >= 4 ? 3 : 2;
     Collector c;
     DepthRuntime runtime(s.params, rp, c.callback(), {}, stages);
     EXPECT_EQ(runtime.runtime_params().threads, expected);

@@ -184,19 +184,16 @@ TEST(RuntimeParams, ZeroThreadsGiveAThirdThreadWhereCpusAreFree) {
   RuntimeParams p;
   EXPECT_EQ(p.threads, 0);
   EXPECT_NO_THROW(validate(p));
-  EXPECT_EQ(stage_threads(p, false), usable_cpus() >= 8 ? 3 : 2);
-  EXPECT_EQ(stage_threads(p, true), usable_cpus() >= 4 ? 3 : 2);
+  EXPECT_EQ(stage_threads(p), usable_cpus() >= 4 ? 3 : 2);
   for (int n : {1, 2, 3}) {
     p.threads = n;
-    EXPECT_EQ(stage_threads(p, false), n);
-    EXPECT_EQ(stage_threads(p, true), n);  // an explicit count is kept
+    EXPECT_EQ(stage_threads(p), n);  // an explicit count is kept
   }
-  // The CPUs this thread may use count, not the machine's: kept to one, either stages get 2.
+  // The CPUs this thread may use count, not the machine's: kept to one, the stages get 2.
   p.threads = 0;
   const testing::OneCpu one;
   ASSERT_TRUE(one.ok());
-  EXPECT_EQ(stage_threads(p, true), 2);
-  EXPECT_EQ(stage_threads(p, false), 2);
+  EXPECT_EQ(stage_threads(p), 2);
 }
 
 TEST(RuntimeParams, BadAffinityListsNameTheEntry) {

@@ -508,7 +508,7 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
   r.max_disparity = frames.max_disparity;
   const dco::gpu::BackendChoice backend =
       dco::gpu::choose_backend(p.runtime.backend, p.pipeline.stereo);
-  r.threads = rt::stage_threads(p.runtime, backend.stages.on_gpu);
+  r.threads = rt::stage_threads(p.runtime);
   r.parallel_flow = dco::contour::parallel_flow_fields(p.pipeline.contour);
   r.opencv_threads =
       rt::opencv_threads_for(p.runtime.opencv_threads, r.threads, dco::usable_cpus());

@@ -140,7 +140,7 @@ struct StageFactories {
   stereo::StereoMatcherFactory stereo;
   contour::ContourExtractorFactory contour;
   densify::SystemSolverFactory densify_solver;  // the densifier builds its system on the CPU
-  bool on_gpu = false;  // these stages compute on a GPU (runtime::stage_threads)
+  bool on_gpu = false;  // these stages compute on a GPU (their early contour work stays with them)
 };
 
 // Stereo -> contour -> densify, one frame after the other, on the calling thread (the offline

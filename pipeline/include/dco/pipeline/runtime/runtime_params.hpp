@@ -12,7 +12,7 @@ namespace dco::pipeline::runtime {
 // How the real-time runtime runs the stages ("runtime.*").
 struct RuntimeParams {
   // Stage threads: 1 = one worker runs every stage; 2 = stereo | contour + densify;
-  // 3 = stereo | contour | densify; 0 = chosen with the stages (stage_threads).
+  // 3 = stereo | contour | densify; 0 = chosen by the usable CPUs (stage_threads).
   int threads = 0;
   // CPUs the stage threads are pinned to, e.g. "0,1": thread i runs on the (i mod n)-th entry;
   // empty = wherever the scheduler puts them.
@@ -51,12 +51,12 @@ struct RuntimeParams {
 void register_params(ConfigSchema& schema, RuntimeParams& params);
 void validate(const RuntimeParams& params);  // throws dco::Error
 
-// runtime.threads as it will run: an explicit count as it is; 0 gives 3 when the stages run on a
-// GPU and at least four CPUs are usable (the stereo thread then mostly waits, so the contour
-// stage's optical flow and the densify system, both on the CPU, each get a thread) or when at
-// least eight are (the CPU stages then share their rows with helpers, and contour + densify on
-// one thread is the longest), else 2.
-int stage_threads(const RuntimeParams& params, bool stages_on_gpu);
+// runtime.threads as it will run: an explicit count as it is; 0 gives 3 where at least four CPUs
+// are usable, else 2. With the stages on a GPU the stereo thread mostly waits while optical flow
+// and the densify system run on the CPU; on the CPU path four to eight CPUs ran a 1280x720 frame
+// 9-27 % faster with contour and densify on threads of their own, and with two threads four
+// CPUs did not keep up with a 30 fps camera (bench/RESULTS.md).
+int stage_threads(const RuntimeParams& params);
 
 // Parses runtime.affinity ("0,2,3"); throws dco::Error naming the bad entry.
 std::vector<int> parse_affinity(const std::string& text);
