@@ -254,6 +254,10 @@ struct Renderer::Impl {
   int width = 0, height = 0;
   std::vector<std::uint8_t> rgba, flipped;
   std::vector<float> vertices;
+  // Each object's box (centre, half side) of this frame and of the geometry in vbo_box: the
+  // vertices are built and uploaded again only when a box moved, came or went.
+  std::vector<float> boxes, uploaded_boxes;
+  bool uploaded = false;
 
   explicit Impl(const WindowOptions* options) {
     try {
@@ -358,21 +362,31 @@ struct Renderer::Impl {
     check_gl("creating GL objects");
   }
 
+  // GL calls act on the thread's current context, which another renderer may have made its own.
+  void make_current() {
+    if (eglGetCurrentContext() != context && !eglMakeCurrent(display, surface, surface, context))
+      egl_fail("making the renderer's context current");
+  }
+
   void release() {
     if (display == EGL_NO_DISPLAY) return;
     if (context != EGL_NO_CONTEXT) {
-      glDeleteProgram(background);
-      glDeleteProgram(object);
-      glDeleteVertexArrays(1, &vao_empty);
-      glDeleteVertexArrays(1, &vao_box);
-      glDeleteBuffers(1, &vbo_box);
-      glDeleteTextures(1, &depth_tex);
-      glDeleteTextures(1, &image_tex);
-      glDeleteFramebuffers(1, &fbo);
-      glDeleteRenderbuffers(1, &color_rb);
-      glDeleteRenderbuffers(1, &depth_rb);
-      if (stamps[0]) glDeleteQueries(2, stamps);
-      eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+      // The objects are deleted in this renderer's context only, never in another's that holds
+      // the same names; destroying the context frees them too where it cannot be made current.
+      if (eglGetCurrentContext() == context || eglMakeCurrent(display, surface, surface, context)) {
+        glDeleteProgram(background);
+        glDeleteProgram(object);
+        glDeleteVertexArrays(1, &vao_empty);
+        glDeleteVertexArrays(1, &vao_box);
+        glDeleteBuffers(1, &vbo_box);
+        glDeleteTextures(1, &depth_tex);
+        glDeleteTextures(1, &image_tex);
+        glDeleteFramebuffers(1, &fbo);
+        glDeleteRenderbuffers(1, &color_rb);
+        glDeleteRenderbuffers(1, &depth_rb);
+        if (stamps[0]) glDeleteQueries(2, stamps);
+        eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+      }
       eglDestroyContext(display, context);
       context = EGL_NO_CONTEXT;
     }
@@ -440,12 +454,14 @@ Renderer::Renderer(const WindowOptions& window) : impl_(std::make_unique<Impl>(&
 Renderer::~Renderer() = default;
 
 const char* Renderer::gl_renderer() const {
+  impl_->make_current();
   return reinterpret_cast<const char*>(glGetString(GL_RENDERER));
 }
 
 RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
                              const RenderOptions& options, const std::function<bool()>& keep) {
   Impl& m = *impl_;
+  m.make_current();
   const Camera& cam = frame.camera;
   if (!(cam.fx > 0 && cam.fy > 0 && std::isfinite(cam.cx) && std::isfinite(cam.cy)))
     throw Error("compositor: the frame carries no usable camera intrinsics");
@@ -511,13 +527,23 @@ RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
   check_gl("drawing the camera image and real depth");
 
   if (!scene.empty()) {
-    m.vertices.clear();
-    for (const Cube& c : scene.cubes) append_box(m.vertices, c.center, c.size / 2);
-    for (const Sphere& s : scene.spheres) append_box(m.vertices, s.center, s.radius);
+    m.boxes.clear();
+    for (const Cube& c : scene.cubes)
+      m.boxes.insert(m.boxes.end(), {c.center[0], c.center[1], c.center[2], c.size / 2});
+    for (const Sphere& s : scene.spheres)
+      m.boxes.insert(m.boxes.end(), {s.center[0], s.center[1], s.center[2], s.radius});
     glBindVertexArray(m.vao_box);
     glBindBuffer(GL_ARRAY_BUFFER, m.vbo_box);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(m.vertices.size() * sizeof(float)),
-                 m.vertices.data(), GL_STREAM_DRAW);
+    if (!m.uploaded || m.boxes != m.uploaded_boxes) {
+      m.vertices.clear();
+      for (std::size_t i = 0; i < m.boxes.size(); i += 4)
+        append_box(m.vertices, {m.boxes[i], m.boxes[i + 1], m.boxes[i + 2]}, m.boxes[i + 3]);
+      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(m.vertices.size() * sizeof(float)),
+                   m.vertices.data(), GL_DYNAMIC_DRAW);
+      check_gl("uploading the objects");
+      m.uploaded_boxes = m.boxes;
+      m.uploaded = true;
+    }
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
     glEnable(GL_CULL_FACE);
@@ -584,6 +610,7 @@ unsigned long Renderer::window_id() const {
 bool Renderer::present() {
   Impl& m = *impl_;
   if (!m.window || !m.window->poll()) return false;
+  m.make_current();
   const int ww = m.window->width(), wh = m.window->height();
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   glViewport(0, 0, ww, wh);
@@ -609,6 +636,7 @@ bool Renderer::present() {
 
 const std::vector<std::uint8_t>& Renderer::read_rgba() {
   Impl& m = *impl_;
+  m.make_current();
   const std::size_t row = static_cast<std::size_t>(m.width) * 4;
   m.flipped.resize(row * static_cast<std::size_t>(m.height));
   m.rgba.resize(m.flipped.size());

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 #include <vector>
@@ -73,6 +74,56 @@ TEST(Compositor, AFrameGivenUpAfterItsUploadLeavesTheLastOne) {
   EXPECT_FALSE(t.drawn);
   EXPECT_EQ(asked, 1);
   EXPECT_EQ(r.read_rgba(), shown);
+}
+
+// Two renderers on one thread (one per eye, say): each draws and reads in its own context, and
+// one going away leaves the other working.
+TEST(Compositor, TwoRenderersOnOneThreadKeepTheirOwnFrames) {
+  const ExactScene e = make_scene();
+  Scene other = e.scene;
+  other.cubes[0].center[1] -= 0.15f;
+  auto a = std::make_unique<Renderer>();
+  ASSERT_TRUE(a->render(frame_of(e), e.scene, {}).drawn);
+  const std::vector<std::uint8_t> first = a->read_rgba();
+  Renderer b;
+  ASSERT_TRUE(b.render(frame_of(e), other, {}).drawn);
+  const std::vector<std::uint8_t> second = b.read_rgba();
+  EXPECT_NE(first, second);
+  EXPECT_EQ(a->read_rgba(), first);
+  ASSERT_TRUE(a->render(frame_of(e), e.scene, {}).drawn);
+  EXPECT_EQ(b.read_rgba(), second);
+  a.reset();
+  EXPECT_EQ(b.read_rgba(), second);
+  ASSERT_TRUE(b.render(frame_of(e), other, {}).drawn);
+  EXPECT_EQ(b.read_rgba(), second);
+}
+
+// The objects' vertices are uploaded again only when a box changed: a renderer that drew one
+// scene draws a moved, grown, added or removed object exactly as a new renderer does.
+TEST(Compositor, ChangedObjectsAreDrawnAsANewRendererDrawsThem) {
+  const ExactScene e = make_scene();
+  Renderer r;
+  ASSERT_TRUE(r.render(frame_of(e), e.scene, {}).drawn);
+  const std::vector<std::uint8_t> first = r.read_rgba();
+  Scene moved = e.scene;
+  moved.cubes[0].center[0] += 0.1f;
+  Scene grown = e.scene;
+  grown.spheres[0].radius *= 1.5f;
+  Scene added = e.scene;
+  added.cubes.push_back(parse_cube("-0.2,-0.1,1.0,0.1"));
+  Scene removed = e.scene;
+  removed.spheres.clear();
+  for (const Scene* changed :
+       std::initializer_list<const Scene*>{&moved, &grown, &added, &removed, &e.scene}) {
+    ASSERT_TRUE(r.render(frame_of(e), *changed, {}).drawn);
+    Renderer fresh;
+    ASSERT_TRUE(fresh.render(frame_of(e), *changed, {}).drawn);
+    EXPECT_EQ(r.read_rgba(), fresh.read_rgba());
+    if (changed != &e.scene) {
+      EXPECT_NE(r.read_rgba(), first);
+    }
+  }
+  EXPECT_EQ(r.read_rgba(), first);
 }
 
 TEST(Compositor, SoftOcclusionBlendsOnlyNearDepthContours) {
