@@ -41,7 +41,7 @@ void usage(std::FILE* out) {
       "usage: dco-compositor [--ring FILE] [--out FILE.png] [--mask FILE.png] [--frames N]\n"
       "                      [--cube X,Y,Z,SIZE[,R,G,B]]... [--sphere X,Y,Z,R[,R,G,B]]...\n"
       "                      [--scene FILE] [--soft N] [--wait S] [--width W --height H]\n"
-      "                      [--window [--display NAME]]\n"
+      "                      [--egl auto|surfaceless|device] [--window [--display NAME]]\n"
       "  --ring FILE     depth ring of dcod (default %s)\n"
       "  --out FILE      composited frames as PNG; a printf pattern (frame_%%04d.png) keeps\n"
       "                  every frame, a plain name the last one\n"
@@ -56,6 +56,8 @@ void usage(std::FILE* out) {
       "                  hard, the default)\n"
       "  --wait S        how long to wait for the daemon, at start and after it stops (default 5)\n"
       "  --width, --height  refuse a ring of another size\n"
+      "  --egl WHICH     headless EGL display: surfaceless, device (a GPU enumerated by EGL),\n"
+      "                  or auto (default: the first that works)\n"
       "  --window        also show the frames in an X11 window, scaled to fit\n"
       "  --display NAME  the X display of the window (default $DISPLAY); implies --window\n",
       kDefaultRing);
@@ -101,6 +103,7 @@ struct Args {
   long frames = -1, soft = 0, wait_s = 5, width = 0, height = 0;  // frames -1: the default
   bool window = false;
   std::string display;
+  HeadlessDisplay egl = HeadlessDisplay::kAuto;
   Scene scene;
 };
 
@@ -158,12 +161,13 @@ int run(const Args& args) {
     }
     renderer_storage.emplace(window);
   } else {
-    renderer_storage.emplace();
+    renderer_storage.emplace(args.egl);
   }
   Renderer& renderer = *renderer_storage;
-  std::fprintf(stderr, "dco-compositor: %s, %zu cubes, %zu spheres, %s occlusion%s\n",
-               renderer.gl_renderer(), scene.cubes.size(), scene.spheres.size(),
-               args.soft ? "soft" : "hard", args.window ? ", in a window" : "");
+  std::fprintf(stderr, "dco-compositor: %s on %s, %zu cubes, %zu spheres, %s occlusion%s\n",
+               renderer.gl_renderer(), renderer.egl_display().c_str(), scene.cubes.size(),
+               scene.spheres.size(), args.soft ? "soft" : "hard",
+               args.window ? ", in a window" : "");
   const long frames = args.frames >= 0 ? args.frames : (args.window ? 0 : 1);
   RenderOptions render_options;
   render_options.soft_radius_px = static_cast<int>(args.soft);
@@ -287,7 +291,7 @@ int main(int argc, char** argv) {
       auto number = [&](long lo, long hi, long* out) {
         if (!parse_int(value, lo, hi, out))
           throw Error(std::string(a) + " takes a whole number in " + std::to_string(lo) + ".." +
-                      std::to_string(hi) + ", not '" + value + "'");
+                      std::to_string(hi) + ", not '" + printable(value) + "'");
       };
       if (a == "--ring") {
         args.ring = value;
@@ -313,6 +317,8 @@ int main(int argc, char** argv) {
         number(1, 16384, &args.width);
       else if (a == "--height")
         number(1, 16384, &args.height);
+      else if (a == "--egl")
+        args.egl = parse_headless_display(value);
       else if (a == "--display") {
         args.display = value;
         args.window = true;

@@ -252,6 +252,7 @@ struct Renderer::Impl {
     GLint proj, depth, height, width, ab, cam, soft_radius, color, sphere, sphere_cr;
   } obj{};
   int width = 0, height = 0;
+  std::string egl_display;
   std::vector<std::uint8_t> rgba, flipped;
   std::vector<float> vertices;
   // Each object's box (centre, half side) of this frame and of the geometry in vbo_box: the
@@ -259,9 +260,9 @@ struct Renderer::Impl {
   std::vector<float> boxes, uploaded_boxes;
   bool uploaded = false;
 
-  explicit Impl(const WindowOptions* options) {
+  explicit Impl(const WindowOptions* options, HeadlessDisplay headless = HeadlessDisplay::kAuto) {
     try {
-      init(options);
+      init(options, headless);
     } catch (...) {
       release();
       throw;
@@ -269,7 +270,44 @@ struct Renderer::Impl {
   }
   ~Impl() { release(); }
 
-  void init(const WindowOptions* options) {
+  // Headless: the first display of those `which` allows that initialises.
+  void open_headless(HeadlessDisplay which) {
+    std::string tried;
+    if (which != HeadlessDisplay::kDevice) {
+      display = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+      if (display != EGL_NO_DISPLAY && eglInitialize(display, nullptr, nullptr)) {
+        egl_display = "surfaceless";
+        return;
+      }
+      tried = std::string("surfaceless: ") + egl_error_name(eglGetError());
+      if (which == HeadlessDisplay::kSurfaceless)
+        throw Error("EGL: opening the surfaceless display failed: " + tried);
+    }
+    display = EGL_NO_DISPLAY;
+    const auto query_devices =
+        reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+    std::array<EGLDeviceEXT, 16> devices{};
+    EGLint count = 0;
+    if (query_devices == nullptr) {
+      tried += (tried.empty() ? "" : "; ") + std::string("no EGL device enumeration");
+    } else if (!query_devices(static_cast<EGLint>(devices.size()), devices.data(), &count) ||
+               count == 0) {
+      tried += (tried.empty() ? "" : "; ") + std::string("no EGL device");
+    }
+    for (EGLint i = 0; i < count; ++i) {
+      const EGLDisplay d = eglGetPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
+      if (d != EGL_NO_DISPLAY && eglInitialize(d, nullptr, nullptr)) {
+        display = d;
+        egl_display = "EGL device " + std::to_string(i) + " of " + std::to_string(count);
+        return;
+      }
+      tried += (tried.empty() ? "" : "; ") + std::string("EGL device ") + std::to_string(i) + ": " +
+               egl_error_name(eglGetError());
+    }
+    throw Error("EGL: no headless display: " + tried);
+  }
+
+  void init(const WindowOptions* options, HeadlessDisplay headless) {
     if (options) {
       if (options->width <= 0 || options->height <= 0 || options->width > 16384 ||
           options->height > 16384)
@@ -278,12 +316,11 @@ struct Renderer::Impl {
       window = std::make_unique<X11Window>(options->display);
       display = eglGetPlatformDisplay(EGL_PLATFORM_X11_KHR, window->native_display(), nullptr);
       if (display == EGL_NO_DISPLAY) egl_fail("opening the X11 display");
+      if (!eglInitialize(display, nullptr, nullptr)) egl_fail("eglInitialize");
+      egl_display = "X11";
     } else {
-      display = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-      if (display == EGL_NO_DISPLAY) egl_fail("opening the surfaceless display");
+      open_headless(headless);
     }
-    EGLint major = 0, minor = 0;
-    if (!eglInitialize(display, &major, &minor)) egl_fail("eglInitialize");
     if (!eglBindAPI(EGL_OPENGL_ES_API)) egl_fail("binding GLES");
     const EGLint config_attribs[] = {EGL_SURFACE_TYPE,
                                      window ? EGL_WINDOW_BIT : EGL_PBUFFER_BIT,
@@ -450,8 +487,20 @@ struct Renderer::Impl {
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>(nullptr)) {}
+Renderer::Renderer(HeadlessDisplay headless) : impl_(std::make_unique<Impl>(nullptr, headless)) {}
 Renderer::Renderer(const WindowOptions& window) : impl_(std::make_unique<Impl>(&window)) {}
 Renderer::~Renderer() = default;
+
+const std::string& Renderer::egl_display() const {
+  return impl_->egl_display;
+}
+
+HeadlessDisplay parse_headless_display(const std::string& name) {
+  if (name == "auto") return HeadlessDisplay::kAuto;
+  if (name == "surfaceless") return HeadlessDisplay::kSurfaceless;
+  if (name == "device") return HeadlessDisplay::kDevice;
+  throw Error("--egl takes auto, surfaceless or device, not '" + printable(name) + "'");
+}
 
 const char* Renderer::gl_renderer() const {
   impl_->make_current();

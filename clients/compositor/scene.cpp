@@ -11,15 +11,15 @@
 #include "dco/compositor/scene.hpp"
 
 namespace dco::compositor {
-namespace {
 
-// Text as errors quote it: on one line, control characters shown as '?'.
 std::string printable(std::string_view text) {
   std::string out(text);
   for (char& c : out)
     if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
   return out;
 }
+
+namespace {
 
 std::vector<float> numbers(std::string_view text, char separator, const std::string& where) {
   std::vector<float> out;

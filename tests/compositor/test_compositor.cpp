@@ -56,6 +56,39 @@ TEST(Compositor, HardOcclusionMatchesTheExactMask) {
   EXPECT_EQ(rgba[4 * wall], e.image[wall]);
 }
 
+// Either headless EGL display draws the same composite: the surfaceless platform and the EGL
+// device platform. Mesa (here, CI) has both, enumerating its software device; so do NVIDIA's
+// recent drivers, and where a driver lacks the surfaceless platform auto takes a device.
+TEST(Compositor, EachHeadlessDisplayDrawsTheExactMask) {
+  const ExactScene e = make_scene();
+  Renderer automatic;
+  const bool on_device = automatic.egl_display().rfind("EGL device ", 0) == 0;
+  EXPECT_TRUE(on_device || automatic.egl_display() == "surfaceless") << automatic.egl_display();
+  ASSERT_TRUE(automatic.render(frame_of(e), e.scene, {}).drawn);
+  const std::vector<std::uint8_t> expected = automatic.read_rgba();
+  for (HeadlessDisplay which : {HeadlessDisplay::kSurfaceless, HeadlessDisplay::kDevice}) {
+    const bool device = which == HeadlessDisplay::kDevice;
+    std::unique_ptr<Renderer> r;
+    try {
+      r = std::make_unique<Renderer>(which);
+    } catch (const Error& error) {
+      // Only where auto had to take a device may the surfaceless platform be missing.
+      EXPECT_TRUE(on_device && !device) << error.what();
+      std::printf("%s\n", error.what());
+      continue;
+    }
+    std::printf("%s: %s\n", r->egl_display().c_str(), r->gl_renderer());
+    EXPECT_EQ(r->egl_display().rfind(device ? "EGL device " : "surfaceless", 0), 0u);
+    ASSERT_TRUE(r->render(frame_of(e), e.scene, {}).drawn);
+    EXPECT_GE(score(e.mask, alpha_of(r->read_rgba(), 128)).iou, 0.99);
+    EXPECT_EQ(r->read_rgba(), expected);
+  }
+  EXPECT_EQ(parse_headless_display("device"), HeadlessDisplay::kDevice);
+  EXPECT_EQ(parse_headless_display("surfaceless"), HeadlessDisplay::kSurfaceless);
+  EXPECT_EQ(parse_headless_display("auto"), HeadlessDisplay::kAuto);
+  EXPECT_THROW(parse_headless_display("wayland"), Error);
+}
+
 // A frame given up after its upload (its slot was rewritten meanwhile) draws nothing: the
 // framebuffer keeps the last frame drawn.
 TEST(Compositor, AFrameGivenUpAfterItsUploadLeavesTheLastOne) {
@@ -237,6 +270,14 @@ TEST(Compositor, BadInputIsOneClearLine) {
   EXPECT_NE(r.output.find("one %d"), std::string::npos) << r.output;
   EXPECT_NE(dco::testing::run_command(bin + " --bogus 1 2>&1").output.find("unknown option"),
             std::string::npos);
+  r = dco::testing::run_command(bin + " --egl wayland 2>&1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("--egl takes auto, surfaceless or device, not 'wayland'"),
+            std::string::npos)
+      << r.output;
+  r = dco::testing::run_command(bin + " --frames \"$(printf '1\\n2')\" 2>&1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("not '1?2'"), std::string::npos) << r.output;
   // A ring of another size than asked for.
   const std::string ring = (dir.path() / "depth.shm").string();
   ipc::RingOptions o;

@@ -42,6 +42,15 @@ struct WindowOptions {
   std::string title = "dco-compositor";
 };
 
+// Where a headless renderer gets its EGL display: the surfaceless platform
+// (EGL_MESA_platform_surfaceless: Mesa, llvmpipe included, and NVIDIA's recent drivers), or a
+// GPU enumerated as an EGL device (EGL_EXT_platform_device: NVIDIA's drivers, including those
+// without the surfaceless platform, and Mesa). Auto tries surfaceless, then each device in turn.
+enum class HeadlessDisplay { kAuto, kSurfaceless, kDevice };
+
+// "auto", "surfaceless" or "device" (dco-compositor --egl); throws Error for anything else.
+HeadlessDisplay parse_headless_display(const std::string& name);
+
 struct RenderTimes {
   double gpu_ms = -1;  // the GPU's own time (EXT_disjoint_timer_query); < 0 where the GL has none
   double wall_ms = 0;  // from the first upload to glFinish
@@ -49,12 +58,14 @@ struct RenderTimes {
 };
 
 // An EGL GLES 3 context and an offscreen framebuffer, rendering the camera image with real depth
-// in the depth buffer and virtual objects depth-tested against it. Headless (Mesa surfaceless)
-// by default; with WindowOptions the frames are also shown in an X11 window. Every GL call is
-// checked; a failure throws Error naming the step.
+// in the depth buffer and virtual objects depth-tested against it. Headless by default (see
+// HeadlessDisplay); with WindowOptions the frames are also shown in an X11 window. Every GL call
+// is checked; a failure throws Error naming the step. Each call makes the renderer's own context
+// current, so several renderers may share a thread.
 class Renderer {
  public:
   Renderer();
+  explicit Renderer(HeadlessDisplay headless);
   explicit Renderer(const WindowOptions& window);
   ~Renderer();
   Renderer(const Renderer&) = delete;
@@ -79,6 +90,8 @@ class Renderer {
   unsigned long window_id() const;
 
   const char* gl_renderer() const;
+  // The EGL display it renders on: "X11", "surfaceless" or "EGL device N of M".
+  const std::string& egl_display() const;
 
  private:
   struct Impl;

@@ -15,6 +15,9 @@ class Error : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Text as errors quote it: on one line, control characters shown as '?'.
+std::string printable(std::string_view text);
+
 using Vec3 = std::array<float, 3>;
 
 // The near plane objects are drawn from (metres); every object lies wholly beyond it, since a
