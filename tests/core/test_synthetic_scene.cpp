@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
 
 #include "dco/core/error.hpp"
 #include "support/same_bytes.hpp"
@@ -270,6 +271,22 @@ TEST(SyntheticScene, DeterministicIncludingNoise) {
   const StereoSample clean = render(quiet(c), 12);
   EXPECT_FALSE(same_bytes(a.left, clean.left));
   EXPECT_FALSE(same_bytes(a.right, clean.right));
+}
+
+// The rows are shared out over OpenCV's threads: any number of them renders the same bytes.
+TEST(SyntheticScene, RowsOnAnyNumberOfThreadsGiveTheSameBytes) {
+  const int original = cv::getNumThreads();
+  for (const char* name : {"hand", "boxes"}) {
+    SceneConfig c = preset(name, 320, 180);
+    c.color = std::string(name) == "boxes";
+    cv::setNumThreads(1);
+    const StereoSample one = render(c, 9);
+    for (int threads : {2, 3, 8}) {
+      cv::setNumThreads(threads);
+      EXPECT_TRUE(same_sample(render(c, 9), one)) << name << " on " << threads << " threads";
+    }
+  }
+  cv::setNumThreads(original);
 }
 
 TEST(SyntheticScene, NoiseHasTheConfiguredSigma) {
