@@ -215,8 +215,11 @@ TEST(IndemindSource, ACounterThatStoodStillStartsTheClockMapAgain) {
   EXPECT_EQ(rig.sink.non_increasing, 0);
   std::lock_guard lock(rig.sink.mutex_);
   const auto& t = rig.sink.captures;
+  // The failure guarded against puts frames 3 s off. The restarted map has had 150 frames, not
+  // the few seconds the settled bound (0.3 ms, above) needs: with both CPUs of a test run busy its
+  // estimate was seen 0.304 ms off, so 1 ms here.
   for (std::size_t i = t.size() - 100; i < t.size(); ++i)
-    EXPECT_NEAR(static_cast<double>(t[i] - rig.sim->nearest_frame_start_ns(t[i])), 0.0, 300'000.0)
+    EXPECT_NEAR(static_cast<double>(t[i] - rig.sim->nearest_frame_start_ns(t[i])), 0.0, 1'000'000.0)
         << i;
 }
 
