@@ -255,10 +255,10 @@ struct Renderer::Impl {
   std::string egl_display;
   std::vector<std::uint8_t> rgba, flipped;
   std::vector<float> vertices;
-  // Each object's box (centre, half side) of this frame and of the geometry in vbo_box: the
-  // vertices are built and uploaded again only when a box moved, came or went.
+  // Each object's box (centre, half side) of this frame and of the geometry in vbo_box (empty
+  // until the first upload): the vertices are built and uploaded again only when a box moved,
+  // came or went.
   std::vector<float> boxes, uploaded_boxes;
-  bool uploaded = false;
 
   explicit Impl(const WindowOptions* options, HeadlessDisplay headless = HeadlessDisplay::kAuto) {
     try {
@@ -273,13 +273,16 @@ struct Renderer::Impl {
   // Headless: the first display of those `which` allows that initialises.
   void open_headless(HeadlessDisplay which) {
     std::string tried;
+    const auto note = [&](const std::string& failure) {
+      tried += (tried.empty() ? "" : "; ") + failure;
+    };
     if (which != HeadlessDisplay::kDevice) {
       display = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
       if (display != EGL_NO_DISPLAY && eglInitialize(display, nullptr, nullptr)) {
         egl_display = "surfaceless";
         return;
       }
-      tried = std::string("surfaceless: ") + egl_error_name(eglGetError());
+      note(std::string("surfaceless: ") + egl_error_name(eglGetError()));
       if (which == HeadlessDisplay::kSurfaceless)
         throw Error("EGL: opening the surfaceless display failed: " + tried);
     }
@@ -288,12 +291,11 @@ struct Renderer::Impl {
         reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
     std::array<EGLDeviceEXT, 16> devices{};
     EGLint count = 0;
-    if (query_devices == nullptr) {
-      tried += (tried.empty() ? "" : "; ") + std::string("no EGL device enumeration");
-    } else if (!query_devices(static_cast<EGLint>(devices.size()), devices.data(), &count) ||
-               count == 0) {
-      tried += (tried.empty() ? "" : "; ") + std::string("no EGL device");
-    }
+    if (query_devices == nullptr)
+      note("no EGL device enumeration");
+    else if (!query_devices(static_cast<EGLint>(devices.size()), devices.data(), &count) ||
+             count == 0)
+      note("no EGL device");
     for (EGLint i = 0; i < count; ++i) {
       const EGLDisplay d = eglGetPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
       if (d != EGL_NO_DISPLAY && eglInitialize(d, nullptr, nullptr)) {
@@ -301,8 +303,7 @@ struct Renderer::Impl {
         egl_display = "EGL device " + std::to_string(i) + " of " + std::to_string(count);
         return;
       }
-      tried += (tried.empty() ? "" : "; ") + std::string("EGL device ") + std::to_string(i) + ": " +
-               egl_error_name(eglGetError());
+      note("EGL device " + std::to_string(i) + ": " + egl_error_name(eglGetError()));
     }
     throw Error("EGL: no headless display: " + tried);
   }
@@ -583,7 +584,7 @@ RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
       m.boxes.insert(m.boxes.end(), {s.center[0], s.center[1], s.center[2], s.radius});
     glBindVertexArray(m.vao_box);
     glBindBuffer(GL_ARRAY_BUFFER, m.vbo_box);
-    if (!m.uploaded || m.boxes != m.uploaded_boxes) {
+    if (m.boxes != m.uploaded_boxes) {
       m.vertices.clear();
       for (std::size_t i = 0; i < m.boxes.size(); i += 4)
         append_box(m.vertices, {m.boxes[i], m.boxes[i + 1], m.boxes[i + 2]}, m.boxes[i + 3]);
@@ -591,7 +592,6 @@ RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
                    m.vertices.data(), GL_DYNAMIC_DRAW);
       check_gl("uploading the objects");
       m.uploaded_boxes = m.boxes;
-      m.uploaded = true;
     }
     glDepthFunc(GL_LESS);
     glDepthMask(GL_TRUE);
