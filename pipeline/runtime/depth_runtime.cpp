@@ -235,6 +235,8 @@ void DepthRuntime::push(ImageView<const std::uint8_t> left, ImageView<const std:
   in.capture = capture;
   in.entry = Clock::now();
   std::lock_guard lock(mutex_);
+  if (next_index_ == 0) frame_interval_.clear();
+  frame_interval_.add(capture);
   in.index = next_index_++;
   if (waiting_input_ >= 0) {  // newest wins
     input_free_[static_cast<std::size_t>(waiting_input_)] = true;
@@ -293,7 +295,9 @@ void DepthRuntime::release_slot(int slot, int fallback_model) {
 bool DepthRuntime::is_late(const Input& input) const {
   // Nothing newer comes after the end of a sequence, and a deterministic run drops nothing.
   if (params_.entry_deadline_ms <= 0 || params_.deterministic || end_requested_) return false;
-  return ms_between(input.entry, Clock::now()) > params_.entry_deadline_ms;
+  const double deadline =
+      std::max(params_.entry_deadline_ms, params_.entry_deadline_share * frame_interval_.ms());
+  return ms_between(input.entry, Clock::now()) > deadline;
 }
 
 void DepthRuntime::stereo_loop(std::stop_token stop) {

@@ -24,7 +24,12 @@ void register_params(ConfigSchema& s, RuntimeParams& p) {
         "frames each queue between stage threads holds (each one is a frame of latency)");
   s.add("runtime.entry_deadline_ms", &p.entry_deadline_ms, 0.0, 1000.0,
         "a frame that waited longer than this at the entry only lends its image to its "
-        "neighbours' flow, so every depth map starts this soon after its entry; 0 = no deadline");
+        "neighbours' flow, so every depth map starts this soon after its entry (or "
+        "entry_deadline_share of the frame interval, when that is longer); 0 = no deadline");
+  s.add("runtime.entry_deadline_share", &p.entry_deadline_share, 0.0, 1.0,
+        "the entry deadline is at least this share of the camera's frame interval (the median of "
+        "the last 8 capture intervals), so a stage a little slower than the camera still gives "
+        "depth for most frames; 0 = entry_deadline_ms alone");
   s.add("runtime.release_latency_ms", &p.release_latency_ms, 0.0, 1000.0,
         "hand every depth map on this long after its capture, a constant age; one ready later "
         "goes at once (overdue); 0 = as soon as it is ready");
@@ -79,6 +84,9 @@ void validate(const RuntimeParams& p) {
   if (!(p.entry_deadline_ms >= 0 && p.entry_deadline_ms <= 1000))
     throw Error("runtime.entry_deadline_ms must be in [0, 1000], not " +
                 std::to_string(p.entry_deadline_ms));
+  if (!(p.entry_deadline_share >= 0 && p.entry_deadline_share <= 1))
+    throw Error("runtime.entry_deadline_share must be in [0, 1], not " +
+                std::to_string(p.entry_deadline_share));
   if (!(p.release_latency_ms >= 0 && p.release_latency_ms <= 1000))
     throw Error("runtime.release_latency_ms must be in [0, 1000], not " +
                 std::to_string(p.release_latency_ms));

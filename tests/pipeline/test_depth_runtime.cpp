@@ -404,6 +404,7 @@ TEST(DepthRuntime, AFrameLateAtTheEntryGetsNoDepthButStaysItsNeighboursFlowFrame
     RuntimeParams rp;
     rp.threads = threads;
     rp.entry_deadline_ms = 5;
+    rp.entry_deadline_share = 0;  // the fixed deadline alone (the next test takes the share)
     std::mutex mutex;
     std::vector<std::pair<int, Clock::time_point>> taken;  // (index, when its stereo began)
     Collector c;
@@ -497,6 +498,63 @@ struct PacedProducer {
     runtime.push(f.left.cview(), f.right.cview());
   }
 };
+
+TEST(DepthRuntime, AFrameThatWaitedLessThanItsShareOfTheFrameIntervalStillGetsDepth) {
+  Sequence s = make_sequence("hand", 4);
+  s.params.contour.use_flow = false;
+  // The camera's frames are 500 ms apart (their capture times say so), so with a share of 0.4 a
+  // frame may wait 200 ms. Each frame arrives as the stereo stage starts on the one before, and
+  // that stage takes 15 ms more than its work: every frame waits 15 ms and more at the entry.
+  constexpr auto kInterval = 500ms;
+  constexpr int kPushed = 8;
+  for (const double share : {0.4, 0.0}) {
+    for (int threads : {1, 2}) {
+      SCOPED_TRACE("share " + std::to_string(share) + ", " + std::to_string(threads) +
+                   " thread(s)");
+      RuntimeParams rp;
+      rp.threads = threads;
+      rp.entry_deadline_ms = 5;
+      rp.entry_deadline_share = share;
+      Collector c;
+      PacedProducer producer;
+      DepthRuntime runtime(s.params, rp, c.callback(), producer.hook([](Stage stage, int) {
+        if (stage == Stage::kStereo) std::this_thread::sleep_for(15ms);
+      }));
+      runtime.start();
+      const Clock::time_point first_capture = Clock::now() - kPushed * kInterval;
+      for (int i = 0; i < kPushed; ++i) {
+        // Once frame i - 1 was taken (or found late: then nothing takes it, so wait for the
+        // count instead).
+        const auto until = Clock::now() + 60s;
+        while (Clock::now() < until) {
+          {
+            std::lock_guard lock(producer.mutex);
+            if (producer.took == i - 1) break;
+          }
+          if (runtime.stats().late + runtime.stats().published >= i) break;
+          std::this_thread::sleep_for(1ms);
+        }
+        ASSERT_LT(Clock::now(), until) << "frame " << i - 1 << " was never taken";
+        const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
+        runtime.push(f.left.cview(), f.right.cview(), first_capture + i * kInterval);
+        std::this_thread::sleep_for(2ms);
+      }
+      runtime.drain();
+      const RuntimeStats st = runtime.stats();
+      EXPECT_EQ(st.pushed, kPushed);
+      EXPECT_EQ(st.published + st.dropped, st.pushed);
+      if (share > 0) {
+        // 15 ms and the work of a frame of 160x96 are far below 200 ms.
+        EXPECT_EQ(st.late, 0);
+        EXPECT_EQ(st.published, kPushed);
+      } else {
+        // The 5 ms deadline alone: whatever arrived during a stereo run is late, the frame after
+        // it meets a free stage (and the last one never is late: nothing newer comes).
+        EXPECT_GE(st.late, kPushed / 2 - 1);
+      }
+    }
+  }
+}
 
 TEST(DepthRuntime, WithAReleaseLatencyEveryResultIsHandedOnAtItsCaptureTimePlusThatLatency) {
   Sequence s = make_sequence("hand", 4);

@@ -12,6 +12,7 @@
 #include "dco/core/error.hpp"
 #include "dco/core/usable_cpus.hpp"
 #include "dco/pipeline/runtime/bounded_queue.hpp"
+#include "dco/pipeline/runtime/frame_interval.hpp"
 #include "dco/pipeline/runtime/histogram.hpp"
 #include "dco/pipeline/runtime/opencv_threads.hpp"
 #include "dco/pipeline/runtime/runtime_params.hpp"
@@ -21,6 +22,7 @@ namespace dco::pipeline::runtime {
 namespace {
 
 using ::testing::HasSubstr;
+using namespace std::chrono_literals;
 
 TEST(Histogram, PercentilesOfAUniformSpreadAreWithinOneBucket) {
   Histogram h;
@@ -93,19 +95,57 @@ TEST(BoundedQueue, KeepsOrderAndRefusesToGrow) {
   EXPECT_EQ(q.capacity(), 2u);
 }
 
+TEST(FrameInterval, IsTheMedianOfTheLastCaptureIntervals) {
+  using Clock = FrameInterval::Clock;
+  FrameInterval f;
+  const Clock::time_point t0 = Clock::now();
+  EXPECT_EQ(f.ms(), 0.0);
+  f.add(t0);
+  EXPECT_EQ(f.ms(), 0.0);  // one frame: no interval yet
+  f.add(t0 + 20ms);
+  EXPECT_DOUBLE_EQ(f.ms(), 20.0);
+  // A camera at 50 fps that lost a frame now and then, and one late delivery.
+  Clock::time_point t = t0 + 20ms;
+  for (const auto gap : {20ms, 40ms, 20ms, 20ms, 35ms, 20ms, 40ms, 20ms}) f.add(t += gap);
+  EXPECT_DOUBLE_EQ(f.ms(), 20.0);
+  // Only the last kSamples count: the camera changed to 30 fps.
+  for (std::size_t i = 0; i < FrameInterval::kSamples / 2 + 1; ++i) f.add(t += 33ms);
+  EXPECT_DOUBLE_EQ(f.ms(), 33.0);
+}
+
+TEST(FrameInterval, IgnoresRepeatedAndBackwardTimesAndPauses) {
+  using Clock = FrameInterval::Clock;
+  FrameInterval f;
+  Clock::time_point t = Clock::now();
+  f.add(t);
+  f.add(t);           // the same timestamp twice
+  f.add(t - 10ms);    // a clock that went back
+  f.add(t += 990ms);  // measured from the last time given: 1000 ms, a pause
+  EXPECT_EQ(f.ms(), 0.0);
+  f.add(t += 25ms);
+  EXPECT_DOUBLE_EQ(f.ms(), 25.0);
+  f.clear();
+  EXPECT_EQ(f.ms(), 0.0);
+  f.add(t += 5s);  // the first time of a new sequence: no interval from the old one
+  EXPECT_EQ(f.ms(), 0.0);
+  f.add(t += 16ms);
+  EXPECT_DOUBLE_EQ(f.ms(), 16.0);
+}
+
 TEST(RuntimeParams, AreSetThroughTheSchema) {
   RuntimeParams p;
   ConfigSchema schema;
   register_params(schema, p);
   schema.load_string(
       "[runtime]\nthreads = 3\naffinity = \"0, 1\"\nqueue_depth = 2\ndeterministic = true\n"
-      "entry_deadline_ms = 4.5\nrelease_latency_ms = 120\n",
+      "entry_deadline_ms = 4.5\nentry_deadline_share = 0.25\nrelease_latency_ms = 120\n",
       "test");
   EXPECT_EQ(p.threads, 3);
   EXPECT_EQ(p.affinity, "0, 1");
   EXPECT_EQ(p.queue_depth, 2);
   EXPECT_TRUE(p.deterministic);
   EXPECT_EQ(p.entry_deadline_ms, 4.5);
+  EXPECT_EQ(p.entry_deadline_share, 0.25);
   EXPECT_EQ(p.release_latency_ms, 120);
   EXPECT_NO_THROW(validate(p));
   EXPECT_EQ(parse_affinity(p.affinity), (std::vector<int>{0, 1}));
@@ -122,6 +162,8 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   EXPECT_THROW(schema.set("runtime.deterministic=maybe"), Error);
   EXPECT_THROW(schema.set("runtime.entry_deadline_ms=-1"), Error);
   EXPECT_THROW(schema.set("runtime.entry_deadline_ms=1001"), Error);
+  EXPECT_THROW(schema.set("runtime.entry_deadline_share=-0.1"), Error);
+  EXPECT_THROW(schema.set("runtime.entry_deadline_share=1.5"), Error);
   EXPECT_THROW(schema.set("runtime.release_latency_ms=-5"), Error);
   EXPECT_THROW(schema.set("runtime.release_latency_ms=1000.5"), Error);
   EXPECT_THROW(schema.set("runtime.opencv_threads=-1"), Error);
@@ -137,6 +179,9 @@ TEST(RuntimeParams, OutOfRangeValuesAreRejected) {
   EXPECT_THROW(validate(direct), Error);
   direct = {};
   direct.entry_deadline_ms = -0.5;
+  EXPECT_THROW(validate(direct), Error);
+  direct = {};
+  direct.entry_deadline_share = std::nan("");
   EXPECT_THROW(validate(direct), Error);
   direct = {};
   direct.release_latency_ms = 2000;

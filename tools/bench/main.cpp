@@ -64,8 +64,10 @@ OpenCV StereoSGBM (3-way) + WLS. Per sequence:
               the pipeline's period once it is full); how long a new runtime took to its first
               result;
   latency     frames pushed at --fps (capture time = the frame's due time), newest wins at the
-              entry and a frame that waited past runtime.entry_deadline_ms is late (no depth):
-              capture-to-result latency p50 / p99 and the frames dropped (late ones included);
+              entry and a frame that waited past its entry deadline is late (no depth):
+              capture-to-result latency p50 / p99, the frames dropped (late ones included),
+              the mean time between results and the mean age of the newest depth over the
+              run (what a renderer holds: its latency plus how long it is held);
               with runtime.release_latency_ms also the capture-to-ready latency and the
               results that were overdue or handed on early;
   peer        SGBM 3-way + WLS ms per frame; ratio = peer / dco.
@@ -417,6 +419,10 @@ double ms_between(rt::Clock::time_point from, rt::Clock::time_point to) {
 // runtime measures them.
 struct PassFigures {
   rt::DurationSummary latency, ready, stereo, contour, densify;
+  // The age of the newest depth a renderer holds (now - its capture time), averaged over the
+  // time from the first result to the last, and the mean time between results: fewer results
+  // can still mean younger depth, when each one starts sooner.
+  double depth_age_ms = 0, result_interval_ms = 0;
 };
 
 rt::DurationSummary summary_of(const rt::Histogram& h) {
@@ -432,8 +438,25 @@ PassFigures figures_of(const std::vector<rt::FrameTimes>& times) {
     contour.record(ms_between(t.contour_start, t.contour_end));
     densify.record(ms_between(t.densify_start, t.densify_end));
   }
-  return {summary_of(latency), summary_of(ready), summary_of(stereo), summary_of(contour),
-          summary_of(densify)};
+  PassFigures f{summary_of(latency), summary_of(ready), summary_of(stereo), summary_of(contour),
+                summary_of(densify)};
+  // Between two results the held depth ages linearly from the earlier one's latency: the area
+  // under that sawtooth over the time it spans.
+  double area = 0;
+  for (std::size_t k = 1; k < times.size(); ++k) {
+    const rt::FrameTimes& held = times[k - 1];
+    const double from = ms_between(held.capture, held.release);
+    const double to = ms_between(held.capture, times[k].release);
+    area += (to - from) * (from + to) / 2;
+  }
+  if (times.size() >= 2) {
+    const double span = ms_between(times.front().release, times.back().release);
+    if (span > 0) {
+      f.depth_age_ms = area / span;
+      f.result_interval_ms = span / static_cast<double>(times.size() - 1);
+    }
+  }
+  return f;
 }
 
 // The counts of `after` less those of `before`: what one pass of a runtime added.
@@ -664,6 +687,8 @@ void print_text(const Result& r) {
       "{} of {} frames dropped ({} late), {} published\n",
       ls.latency.p50_ms, ls.latency.p99_ms, ls.latency.p99_ms - ls.latency.p50_ms, r.fps, l.dropped,
       l.pushed, l.late, l.published);
+  fmt::print("  age      the newest depth {:.1f} ms old on average; a result every {:.1f} ms\n",
+             ls.depth_age_ms, ls.result_interval_ms);
   if (r.release_latency_ms > 0)
     fmt::print(
         "  release  at capture + {:g} ms (the latest {:.2f} ms after); ready p50 {:.1f} ms  p99 "
@@ -738,7 +763,7 @@ std::string json_fields(const Result& r) {
              "\"ms_per_frame\": {}, \"fps\": {}, \"steady_ms\": {}, \"stereo_ms\": {}, "
              "\"contour_ms\": {}, \"densify_ms\": {}, \"input_fps\": {}, \"latency_p50_ms\": {}, "
              "\"latency_p99_ms\": {}, \"latency_max_ms\": {}, \"ready_p50_ms\": {}, "
-             "\"ready_p99_ms\": {}, "
+             "\"ready_p99_ms\": {}, \"depth_age_ms\": {}, \"result_interval_ms\": {}, "
              "\"release_latency_ms\": {}, \"release_realtime\": {}, \"overdue\": {}, "
              "\"early\": {}, "
              "\"paced_frames\": {}, \"dropped\": {}, \"late\": {}, "
@@ -753,7 +778,8 @@ std::string json_fields(const Result& r) {
              json_number(t.contour.mean_ms), json_number(t.densify.mean_ms), json_number(r.fps),
              json_number(ls.latency.p50_ms), json_number(ls.latency.p99_ms),
              json_number(ls.latency.max_ms), json_number(ls.ready.p50_ms),
-             json_number(ls.ready.p99_ms), json_number(r.release_latency_ms),
+             json_number(ls.ready.p99_ms), json_number(ls.depth_age_ms),
+             json_number(ls.result_interval_ms), json_number(r.release_latency_ms),
              l.release_realtime ? "true" : "false", l.overdue, l.early, l.pushed, l.dropped, l.late,
              l.published, json_number(r.planes_share()), json_number(r.early_contour_share()),
              json_number(r.next_contour_share()), json_number(r.peer_ms_per_frame),

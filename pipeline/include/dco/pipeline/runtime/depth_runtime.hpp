@@ -16,6 +16,7 @@
 #include "dco/core/image.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/bounded_queue.hpp"
+#include "dco/pipeline/runtime/frame_interval.hpp"
 #include "dco/pipeline/runtime/histogram.hpp"
 #include "dco/pipeline/runtime/opencv_threads.hpp"
 #include "dco/pipeline/runtime/runtime_params.hpp"
@@ -91,13 +92,14 @@ struct RuntimeStats {
 // while t+1's stereo does.
 //
 // When the input outruns the pipeline, a frame still waiting at the entry is replaced by the
-// newer one and counted as dropped (newest wins). A frame that waited there longer than
-// runtime.entry_deadline_ms is late: the stereo thread only prepares its grey image, the flow
-// neighbour of the frames around it, and takes the next frame as it arrives. So every depth map
-// starts within the deadline of its entry, and its contour window still holds the camera frames
-// next to it. Nothing else ever waits in a queue longer than its capacity, so the latency stays
-// fixed. With runtime.release_latency_ms a release thread hands each result on at its capture time
-// plus that latency, so its age no longer depends on how long the stages took. With
+// newer one and counted as dropped (newest wins). A frame that waited there longer than its
+// deadline (runtime.entry_deadline_ms, or runtime.entry_deadline_share of the camera's frame
+// interval when that is longer) is late: the stereo thread only prepares its grey image, the
+// flow neighbour of the frames around it, and takes the next frame as it arrives. So every depth
+// map starts within the deadline of its entry, and its contour window still holds the camera
+// frames next to it. Nothing else ever waits in a queue longer than its capacity, so the latency
+// stays fixed. With runtime.release_latency_ms a release thread hands each result on at its capture
+// time plus that latency, so its age no longer depends on how long the stages took. With
 // runtime.deterministic, push waits instead and the results are bit for bit those of DepthPipeline
 // on the same frames.
 class DepthRuntime {
@@ -259,6 +261,7 @@ class DepthRuntime {
   int next_index_ = 0;  // index of the next pushed frame of the sequence
   int width_ = 0, height_ = 0, channels_ = 0;
   std::size_t entry_high_water_ = 0;
+  FrameInterval frame_interval_;  // of the sequence's capture times
 
   // Stereo -> contour.
   std::vector<SlotEntry> slots_;

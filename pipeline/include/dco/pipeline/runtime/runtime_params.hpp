@@ -24,11 +24,19 @@ struct RuntimeParams {
   int opencv_threads = 0;
   // Frames each queue between two stage threads holds. Every queued frame is a frame of latency.
   int queue_depth = 1;
-  // A frame that waited at the entry longer than this (ms) gets no depth of its own: its grey
+  // A frame that waited at the entry longer than its deadline gets no depth of its own: its grey
   // image still serves its neighbours' flow, and the stereo stage waits for the next frame
-  // instead. Every depth map then starts within this of its entry, so the latency does not depend
-  // on when the stage happened to be free. 0 = hold the newest frame however long.
+  // instead. Every depth map then starts within the deadline of its entry, so the latency does
+  // not depend on when the stage happened to be free. The deadline is this (ms) or
+  // entry_deadline_share of the camera's frame interval, whichever is longer. 0 = no deadline:
+  // hold the newest frame however long.
   double entry_deadline_ms = 2;
+  // The deadline's share of the frame interval (the median of the last capture intervals). A
+  // frame that waited less than this share is still worth its depth: the next one would come
+  // later than the wait saved. A stage a little slower than the camera then gives depth for most
+  // frames, not for every second one, and the depth a renderer holds is no older (bench/
+  // RESULTS.md). 0 = entry_deadline_ms alone.
+  double entry_deadline_share = 0.4;
   // Hand each depth map to the result callback this long (ms) after its capture, however early it
   // is ready, so a renderer gets depth (and the passthrough image it belongs to) at a constant
   // age. A map ready later than that goes out at once and counts as overdue. 0 = as soon as it
