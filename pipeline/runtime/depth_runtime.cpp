@@ -102,6 +102,7 @@ DepthRuntime::~DepthRuntime() {
 }
 
 void DepthRuntime::reset_state() {
+  held_up_since_ = held_up_until_ = {};
   input_free_.fill(true);
   waiting_input_ = -1;
   end_requested_ = false;
@@ -294,10 +295,12 @@ void DepthRuntime::release_slot(int slot, int fallback_model) {
 
 bool DepthRuntime::is_late(const Input& input) const {
   // Nothing newer comes after the end of a sequence, and a deterministic run drops nothing.
-  if (params_.entry_deadline_ms <= 0 || params_.deterministic || end_requested_) return false;
-  const double deadline =
-      std::max(params_.entry_deadline_ms, params_.entry_deadline_share * frame_interval_.ms());
-  return ms_between(input.entry, Clock::now()) > deadline;
+  if (params_.deterministic || end_requested_) return false;
+  const Clock::time_point now = Clock::now();
+  const double held_up =
+      ms_between(std::max(input.entry, held_up_since_), std::min(now, held_up_until_));
+  return late_at_entry(ms_between(input.entry, now), held_up, params_.entry_deadline_ms,
+                       params_.entry_deadline_share, frame_interval_.ms());
 }
 
 void DepthRuntime::stereo_loop(std::stop_token stop) {

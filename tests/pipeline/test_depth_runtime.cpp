@@ -564,6 +564,54 @@ TEST(DepthRuntime, AFrameThatWaitedLessThanItsShareOfTheFrameIntervalStillGetsDe
   }
 }
 
+TEST(DepthRuntime, AFrameThatWaitedForTheLaterStagesIsLateWhateverTheShare) {
+  Sequence s = make_sequence("hand", 4);
+  s.params.contour.use_flow = false;
+  RuntimeParams rp;
+  rp.threads = 2;
+  rp.entry_deadline_ms = 5;
+  rp.entry_deadline_share = 0.9;  // of 990 ms: 891 ms
+  std::mutex mutex;
+  int took = -1;
+  Collector c;
+  // The contour + densify thread takes 500 ms a frame, so the stereo thread soon waits for room
+  // in the queue to it before each frame's stereo.
+  DepthRuntime runtime(s.params, rp, c.callback(), [&](Stage stage, int index) {
+    if (stage == Stage::kStereo) {
+      std::lock_guard lock(mutex);
+      took = index;
+    }
+    if (stage == Stage::kContour) std::this_thread::sleep_for(500ms);
+  });
+  runtime.start();
+  constexpr int kPushed = 8;
+  const Clock::time_point first_capture = Clock::now() - kPushed * 990ms;
+  long late = 0;
+  for (int i = 0; i < kPushed; ++i) {
+    // Each frame arrives 20 ms after the one before was taken (or found late), while the stereo
+    // thread prepares that one and then waits for the contour + densify thread.
+    const auto until = Clock::now() + 60s;
+    while (Clock::now() < until) {
+      {
+        std::lock_guard lock(mutex);
+        if (took == i - 1) break;
+      }
+      if (runtime.stats().late > late) break;
+      std::this_thread::sleep_for(1ms);
+    }
+    ASSERT_LT(Clock::now(), until) << "frame " << i - 1 << " was never taken";
+    late = runtime.stats().late;
+    std::this_thread::sleep_for(20ms);
+    const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
+    runtime.push(f.left.cview(), f.right.cview(), first_capture + i * 990ms);
+  }
+  runtime.drain();
+  const RuntimeStats st = runtime.stats();
+  EXPECT_EQ(st.published + st.dropped, st.pushed);
+  // Far inside the share, but held up by the later stages: a fresher frame will be as soon.
+  EXPECT_GE(st.late, 2);
+}
+
 TEST(DepthRuntime, WithAReleaseLatencyEveryResultIsHandedOnAtItsCaptureTimePlusThatLatency) {
   Sequence s = make_sequence("hand", 4);
   s.params.contour.use_flow = false;

@@ -12,7 +12,7 @@
 #include "dco/core/error.hpp"
 #include "dco/core/usable_cpus.hpp"
 #include "dco/pipeline/runtime/bounded_queue.hpp"
-#include "dco/pipeline/runtime/frame_interval.hpp"
+#include "dco/pipeline/runtime/entry_deadline.hpp"
 #include "dco/pipeline/runtime/histogram.hpp"
 #include "dco/pipeline/runtime/opencv_threads.hpp"
 #include "dco/pipeline/runtime/runtime_params.hpp"
@@ -130,6 +130,19 @@ TEST(FrameInterval, IgnoresRepeatedAndBackwardTimesAndPauses) {
   EXPECT_EQ(f.ms(), 0.0);
   f.add(t += 16ms);
   EXPECT_DOUBLE_EQ(f.ms(), 16.0);
+}
+
+TEST(EntryDeadline, AFrameIsLateBeyondTheFixedDeadlineOnlyPastItsShareOrWhenHeldUp) {
+  // 30 fps, deadline 2 ms, share 0.4: 13.3 ms.
+  EXPECT_FALSE(late_at_entry(1.9, 0.0, 2.0, 0.4, 33.3));
+  EXPECT_FALSE(late_at_entry(5.0, 0.0, 2.0, 0.4, 33.3));  // waited for the stereo stage's work
+  EXPECT_FALSE(late_at_entry(13.0, 1.5, 2.0, 0.4, 33.3));
+  EXPECT_TRUE(late_at_entry(14.0, 0.0, 2.0, 0.4, 33.3));
+  EXPECT_TRUE(late_at_entry(5.0, 3.0, 2.0, 0.4, 33.3));  // held up by the later stages
+  EXPECT_TRUE(late_at_entry(5.0, 0.0, 2.0, 0.0, 33.3));  // no share: the fixed deadline alone
+  EXPECT_TRUE(late_at_entry(5.0, 0.0, 2.0, 0.4, 0.0));   // no interval known yet
+  EXPECT_FALSE(late_at_entry(2.0, 2.0, 2.0, 0.0, 33.3));
+  EXPECT_FALSE(late_at_entry(1000.0, 1000.0, 0.0, 0.4, 33.3));  // no deadline at all
 }
 
 TEST(RuntimeParams, AreSetThroughTheSchema) {

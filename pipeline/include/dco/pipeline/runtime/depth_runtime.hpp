@@ -16,7 +16,7 @@
 #include "dco/core/image.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/bounded_queue.hpp"
-#include "dco/pipeline/runtime/frame_interval.hpp"
+#include "dco/pipeline/runtime/entry_deadline.hpp"
 #include "dco/pipeline/runtime/histogram.hpp"
 #include "dco/pipeline/runtime/opencv_threads.hpp"
 #include "dco/pipeline/runtime/runtime_params.hpp"
@@ -94,14 +94,14 @@ struct RuntimeStats {
 // When the input outruns the pipeline, a frame still waiting at the entry is replaced by the
 // newer one and counted as dropped (newest wins). A frame that waited there longer than its
 // deadline (runtime.entry_deadline_ms, or runtime.entry_deadline_share of the camera's frame
-// interval when that is longer) is late: the stereo thread only prepares its grey image, the
-// flow neighbour of the frames around it, and takes the next frame as it arrives. So every depth
-// map starts within the deadline of its entry, and its contour window still holds the camera
-// frames next to it. Nothing else ever waits in a queue longer than its capacity, so the latency
-// stays fixed. With runtime.release_latency_ms a release thread hands each result on at its capture
-// time plus that latency, so its age no longer depends on how long the stages took. With
-// runtime.deterministic, push waits instead and the results are bit for bit those of DepthPipeline
-// on the same frames.
+// interval when that is longer and the frame did not wait for the later stages) is late: the stereo
+// thread only prepares its grey image, the flow neighbour of the frames around it, and takes the
+// next frame as it arrives. So every depth map starts within the deadline of its entry, and its
+// contour window still holds the camera frames next to it. Nothing else ever waits in a queue
+// longer than its capacity, so the latency stays fixed. With runtime.release_latency_ms a release
+// thread hands each result on at its capture time plus that latency, so its age no longer depends
+// on how long the stages took. With runtime.deterministic, push waits instead and the results are
+// bit for bit those of DepthPipeline on the same frames.
 class DepthRuntime {
  public:
   // Called for every result, in order, on the last stage's thread (on the release thread with
@@ -191,14 +191,22 @@ class DepthRuntime {
   // `ready` is called once per wake-up and may take what it waits for.
   template <class Ready>
   bool stereo_wait(std::unique_lock<std::mutex>& lock, std::stop_token stop, Ready&& ready) {
+    if (ready()) return true;
+    // Held up by the later stages: the entry deadline's share does not cover this wait.
+    held_up_since_ = Clock::now();
+    held_up_until_ = Clock::time_point::max();
+    const auto until_now = [this](bool result) {
+      held_up_until_ = Clock::now();
+      return result;
+    };
     while (true) {
       bool is_ready = false;
       const auto go_on = [&] {
         is_ready = ready();
         return is_ready || (next_contour_ == NextContour::kReady && !contour_waiting_);
       };
-      if (!changed_.wait(lock, stop, go_on)) return false;
-      if (is_ready) return true;
+      if (!changed_.wait(lock, stop, go_on)) return until_now(false);
+      if (is_ready) return until_now(true);
       claim_next_contour();
       lock.unlock();
       prepare_next_contour();
@@ -262,6 +270,9 @@ class DepthRuntime {
   int width_ = 0, height_ = 0, channels_ = 0;
   std::size_t entry_high_water_ = 0;
   FrameInterval frame_interval_;  // of the sequence's capture times
+  // The stereo thread's last wait for the later stages (a slot, room in the queue); until is
+  // max() while it lasts.
+  Clock::time_point held_up_since_{}, held_up_until_{};
 
   // Stereo -> contour.
   std::vector<SlotEntry> slots_;

@@ -32,10 +32,12 @@ struct RuntimeParams {
   // hold the newest frame however long.
   double entry_deadline_ms = 2;
   // The deadline's share of the frame interval (the median of the last capture intervals). A
-  // frame that waited less than this share is still worth its depth: the next one would come
-  // later than the wait saved. A stage a little slower than the camera then gives depth for most
-  // frames, not for every second one, and the depth a renderer holds is no older (bench/
-  // RESULTS.md). 0 = entry_deadline_ms alone.
+  // frame that waited less than this share for the stereo stage's own work is still worth its
+  // depth: the next one would come later than the wait saved. One that waited longer than
+  // entry_deadline_ms for the later stages (the stereo thread waiting for a slot or room in the
+  // queue) is late all the same (late_at_entry). A stereo stage a little slower than the camera
+  // then gives depth for most frames, not for every second one, and the depth a renderer holds
+  // is no older (bench/RESULTS.md). 0 = entry_deadline_ms alone.
   double entry_deadline_share = 0.4;
   // Hand each depth map to the result callback this long (ms) after its capture, however early it
   // is ready, so a renderer gets depth (and the passthrough image it belongs to) at a constant

@@ -32,4 +32,14 @@ class FrameInterval {
   bool has_last_ = false;
 };
 
+// Whether the stereo stage should take a frame from the entry as a flow neighbour only (late):
+// when it waited there longer than deadline_ms and either waited longer than `share` of the
+// frame interval or spent more than deadline_ms of its wait while the stereo thread waited for
+// the later stages (held_up_ms). Waiting for the stereo stage's own work, a frame is worth its
+// depth up to a share of the interval: the next one would start later than its wait saved.
+// Waiting for the later stages, it is not: a fresher frame will be taken as soon as they let it.
+// deadline_ms <= 0: never late.
+bool late_at_entry(double waited_ms, double held_up_ms, double deadline_ms, double share,
+                   double interval_ms);
+
 }  // namespace dco::pipeline::runtime

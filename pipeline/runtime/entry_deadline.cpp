@@ -1,4 +1,4 @@
-#include "dco/pipeline/runtime/frame_interval.hpp"
+#include "dco/pipeline/runtime/entry_deadline.hpp"
 
 #include <algorithm>
 
@@ -29,6 +29,13 @@ double FrameInterval::ms() const {
   const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(count_ / 2);
   std::nth_element(sorted.begin(), middle, end);
   return *middle;
+}
+
+bool late_at_entry(double waited_ms, double held_up_ms, double deadline_ms, double share,
+                   double interval_ms) {
+  if (deadline_ms <= 0 || waited_ms <= deadline_ms) return false;
+  if (held_up_ms > deadline_ms) return true;
+  return waited_ms > share * interval_ms;
 }
 
 }  // namespace dco::pipeline::runtime
