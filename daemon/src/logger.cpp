@@ -10,6 +10,7 @@
 #include <string>
 
 #include "dco/core/error.hpp"
+#include "dco/core/printable.hpp"
 
 namespace dco::daemon {
 namespace {
@@ -77,7 +78,8 @@ void Logger::set_forward(Forward forward) {
 void Logger::log(LogLevel level, std::string_view text) {
   std::lock_guard lock(mutex_);
   if (level < level_) return;
-  const std::string line(text);
+  // One line each, whatever a message quotes (a URI, an argument, a device's string).
+  const std::string line = printable(text);
   if (journal_)
     sd_journal_send("MESSAGE=%s", line.c_str(), "PRIORITY=%i", priority(level),
                     "SYSLOG_IDENTIFIER=dcod", nullptr);
@@ -85,7 +87,7 @@ void Logger::log(LogLevel level, std::string_view text) {
     std::fprintf(stderr, "dcod: %s: %s\n", name(level), line.c_str());
   if (forward_) {
     try {
-      forward_(level, text);
+      forward_(level, line);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "dcod: error: DCO_LOG: %s\n", e.what());
     }

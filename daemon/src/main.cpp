@@ -9,6 +9,7 @@
 
 #include "dco/core/error.hpp"
 #include "dco/core/memory_policy.hpp"
+#include "dco/core/printable.hpp"
 #include "dco/daemon/daemon.hpp"
 #include "dco/daemon/daemon_config.hpp"
 #include "dco/daemon/logger.hpp"
@@ -61,7 +62,7 @@ int main(int argc, char** argv) {
     } else if (arg == "--config" || arg == "--set" || arg == "--source") {
       return usage_error(std::string(arg) + " needs a value");
     } else {
-      return usage_error("unknown argument '" + std::string(arg) + "'");
+      return usage_error("unknown argument '" + dco::printable(arg) + "'");
     }
   }
 
@@ -71,7 +72,7 @@ int main(int argc, char** argv) {
     config = dco::daemon::load_config(sources);
     log.set_level(dco::daemon::parse_log_level(config.config.log_level));
   } catch (const dco::Error& e) {
-    std::fprintf(stderr, "dcod: %s\n", e.what());
+    std::fprintf(stderr, "dcod: %s\n", dco::printable(e.what()).c_str());
     return 2;
   }
   if (print_config) {

@@ -177,5 +177,16 @@ TEST(Logger, LevelsParseAndFilter) {
   EXPECT_EQ(seen, (std::vector<std::string>{"loud", "louder"}));
 }
 
+TEST(Logger, AMessageStaysOneLineWithoutEscapes) {
+  Logger log;
+  std::vector<std::string> seen;
+  log.set_forward([&](LogLevel, std::string_view text) { seen.emplace_back(text); });
+  // A source URI as a user might paste it, with a line break and a terminal colour code.
+  log.error("source 'synthetic://hand?fps=3\x1b[31mX\nY': fps must be a number");
+  log.warning(std::string_view("a\0b\tc\x7f", 6));
+  EXPECT_EQ(seen, (std::vector<std::string>{
+                      "source 'synthetic://hand?fps=3?[31mX?Y': fps must be a number", "a?b?c?"}));
+}
+
 }  // namespace
 }  // namespace dco::daemon

@@ -235,6 +235,21 @@ TEST(Dcod, BadConfigurationsFailWithFileLineAndReason) {
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "r.shm"));
 
+  // Line breaks and terminal escapes in what a user typed stay out of the (one-line) messages.
+  r = run_command(exe + " --set \"$(printf 'log.level=x\\ny')\"");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("\"x?y\" is not one of"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  r = run_command(exe + " \"$(printf -- '--frob\\033[2J')\"");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("unknown argument '--frob?[2J'"), std::string::npos) << r.output;
+  r = run_command(exe + " --source \"$(printf 'synthetic://hand?fps=3\\033[31m\\nX')\"" +
+                  " --set lcm.url=memq:// --set ring.path=" + (dir / "u.shm").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("fps=3?[31m?X must be a number"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_EQ(r.output.find('\033'), std::string::npos) << r.output;
+
   r = run_command(exe + " --print-config --set service.max_frames=9");
   EXPECT_EQ(r.status, 0);
   EXPECT_NE(r.output.find("[service]"), std::string::npos);
