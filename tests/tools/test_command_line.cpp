@@ -31,5 +31,11 @@ TEST(ParseImageSize, RefusesMalformedAndTooSmallSizes) {
   }
 }
 
+TEST(OneLine, KeepsAMessageOnOneLineWithoutEscapes) {
+  EXPECT_EQ(one_line("cannot read 'a\nb.png'\n"), "cannot read 'a b.png'");
+  EXPECT_EQ(one_line("x\r\ty\x1b[2J\x7f"), "x  y?[2J?");
+  EXPECT_EQ(one_line("plain"), "plain");
+}
+
 }  // namespace
 }  // namespace dco::tools

@@ -1,12 +1,13 @@
 #include "dco/tools/command_line.hpp"
 
-#include <algorithm>
 #include <charconv>
 #include <stdexcept>
 #include <string>
 
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
+
+#include "dco/core/printable.hpp"
 
 namespace dco::tools {
 
@@ -62,9 +63,10 @@ ImageSize parse_image_size(std::string_view option, const std::string& text, int
 }
 
 std::string one_line(std::string text) {
-  std::replace(text.begin(), text.end(), '\n', ' ');
+  for (char& c : text)
+    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
   while (!text.empty() && text.back() == ' ') text.pop_back();
-  return text;
+  return printable(text);
 }
 
 int run_tool(std::string_view tool, const std::function<int()>& body) {

@@ -44,7 +44,8 @@ struct ImageSize {
 // side is below `minimum`.
 ImageSize parse_image_size(std::string_view option, const std::string& text, int minimum = 1);
 
-// Errors are reported on exactly one line, whatever the message carried.
+// Errors are reported on exactly one line, whatever the message carried: line breaks and tabs
+// become spaces, other control characters (a terminal escape in a file name) '?'.
 std::string one_line(std::string text);
 
 // Runs a tool's body and turns exceptions into "TOOL: error: ..." on stderr and an exit status:
