@@ -497,6 +497,23 @@ struct PacedProducer {
     const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
     runtime.push(f.left.cview(), f.right.cview());
   }
+  // Waits until the stereo stage took frame i - 1, or found a frame late since the last wait (a
+  // late frame never reaches the hook); false when neither happened within 60 s.
+  long late_seen = 0;
+  bool wait_for_previous(DepthRuntime& runtime, int i) {
+    const auto until = Clock::now() + 60s;
+    bool seen = false;
+    while (!seen && Clock::now() < until) {
+      {
+        std::lock_guard lock(mutex);
+        seen = took == i - 1;
+      }
+      seen = seen || runtime.stats().late > late_seen;
+      if (!seen) std::this_thread::sleep_for(1ms);
+    }
+    late_seen = runtime.stats().late;
+    return seen;
+  }
 };
 
 TEST(DepthRuntime, AFrameThatWaitedLessThanItsShareOfTheFrameIntervalStillGetsDepth) {
@@ -525,18 +542,8 @@ TEST(DepthRuntime, AFrameThatWaitedLessThanItsShareOfTheFrameIntervalStillGetsDe
       runtime.start();
       const Clock::time_point first_capture = Clock::now() - kPushed * kInterval;
       for (int i = 0; i < kPushed; ++i) {
-        // Once frame i - 1 was taken (or found late: then nothing takes it, so wait for the
-        // count instead).
-        const auto until = Clock::now() + 60s;
-        while (Clock::now() < until) {
-          {
-            std::lock_guard lock(producer.mutex);
-            if (producer.took == i - 1) break;
-          }
-          if (runtime.stats().late + runtime.stats().published >= i) break;
-          std::this_thread::sleep_for(1ms);
-        }
-        ASSERT_LT(Clock::now(), until) << "frame " << i - 1 << " was never taken";
+        ASSERT_TRUE(producer.wait_for_previous(runtime, i))
+            << "frame " << i - 1 << " was never taken";
         const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
         runtime.push(f.left.cview(), f.right.cview(), first_capture + i * kInterval);
         std::this_thread::sleep_for(2ms);
@@ -571,36 +578,20 @@ TEST(DepthRuntime, AFrameThatWaitedForTheLaterStagesIsLateWhateverTheShare) {
   rp.threads = 2;
   rp.entry_deadline_ms = 5;
   rp.entry_deadline_share = 0.9;  // of 990 ms: 891 ms
-  std::mutex mutex;
-  int took = -1;
   Collector c;
+  PacedProducer producer;
   // The contour + densify thread takes 500 ms a frame, so the stereo thread soon waits for room
   // in the queue to it before each frame's stereo.
-  DepthRuntime runtime(s.params, rp, c.callback(), [&](Stage stage, int index) {
-    if (stage == Stage::kStereo) {
-      std::lock_guard lock(mutex);
-      took = index;
-    }
+  DepthRuntime runtime(s.params, rp, c.callback(), producer.hook([](Stage stage, int) {
     if (stage == Stage::kContour) std::this_thread::sleep_for(500ms);
-  });
+  }));
   runtime.start();
   constexpr int kPushed = 8;
   const Clock::time_point first_capture = Clock::now() - kPushed * 990ms;
-  long late = 0;
   for (int i = 0; i < kPushed; ++i) {
     // Each frame arrives 20 ms after the one before was taken (or found late), while the stereo
     // thread prepares that one and then waits for the contour + densify thread.
-    const auto until = Clock::now() + 60s;
-    while (Clock::now() < until) {
-      {
-        std::lock_guard lock(mutex);
-        if (took == i - 1) break;
-      }
-      if (runtime.stats().late > late) break;
-      std::this_thread::sleep_for(1ms);
-    }
-    ASSERT_LT(Clock::now(), until) << "frame " << i - 1 << " was never taken";
-    late = runtime.stats().late;
+    ASSERT_TRUE(producer.wait_for_previous(runtime, i)) << "frame " << i - 1 << " was never taken";
     std::this_thread::sleep_for(20ms);
     const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
     runtime.push(f.left.cview(), f.right.cview(), first_capture + i * 990ms);
