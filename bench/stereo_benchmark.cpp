@@ -14,6 +14,7 @@
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/image.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
+#include "dco/pipeline/stereo/exposure_balance.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 #include "ratio_reporter.hpp"
 
@@ -109,6 +110,33 @@ void run_sgbm(benchmark::State& state, bool color, int threads) {
   cv::setNumThreads(previous_threads);
 }
 
+// The exposure balance's work per frame (stereo.exposure_balance) on the same grey pair: the fit
+// to the stage's sparse map, and the right image through a table that changes its levels.
+void BM_DcoExposureBalance_Gray(benchmark::State& state) {
+  const Pair& p = test_pair();
+  if (!p.ok) {
+    state.SkipWithError("stereo data not found under " DCO_DATA_DIR);
+    return;
+  }
+  dco::stereo::StereoParams params;
+  params.max_disparity = kDisparities - 1;
+  const auto left = dco::as_view<std::uint8_t>(p.left_gray);
+  const auto right = dco::as_view<std::uint8_t>(p.right_gray);
+  dco::Image<float> disparity;
+  dco::stereo::make_cpu_stereo_matcher(params)->compute(left, right, disparity);
+  dco::stereo::ExposureMap map;
+  dco::stereo::ExposureTable table;
+  dco::Image<std::uint8_t> balanced;
+  for (auto _ : state) {
+    const bool fitted = dco::stereo::fit_exposure(left, right, disparity.cview(), map);
+    map.channels[0].offset += 3;  // a map that moves levels, as a pair that differs gets
+    table.build(map);
+    table.apply(right, balanced);
+    benchmark::DoNotOptimize(fitted);
+    benchmark::DoNotOptimize(balanced.data());
+  }
+}
+
 void BM_DcoSparseStereo_Gray(benchmark::State& s) {
   run_dco(s, false);
 }
@@ -127,6 +155,7 @@ void BM_SGBM3Way_Gray_2Threads(benchmark::State& s) {
 
 BENCHMARK(BM_DcoSparseStereo_Gray)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DcoSparseStereo_Color)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DcoExposureBalance_Gray)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SGBM3Way_Gray_1Thread)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SGBM3Way_Color_1Thread)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SGBM3Way_Gray_2Threads)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -460,6 +460,14 @@ void add_noise_row(Image<std::uint8_t>& img, double sigma, int index, int view, 
   }
 }
 
+void scale_row(Image<std::uint8_t>& img, double gain, double offset, int y) {
+  const auto g = static_cast<float>(gain), o = static_cast<float>(offset);
+  const int n = img.width() * img.channels();
+  std::uint8_t* row = img.row(y);
+  for (int i = 0; i < n; ++i)
+    row[i] = static_cast<std::uint8_t>(std::clamp(g * row[i] + o, 0.0f, 255.0f) + 0.5f);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Validation.
 
@@ -504,6 +512,10 @@ void validate(const SceneConfig& c) {
   if (!finite(c.fps) || c.fps <= 0) fail(fmt::format("fps {} must be positive", c.fps));
   if (!finite(c.noise_sigma) || c.noise_sigma < 0)
     fail(fmt::format("noise_sigma {} must be >= 0", c.noise_sigma));
+  if (!finite(c.right_gain) || c.right_gain < 0.25 || c.right_gain > 4)
+    fail(fmt::format("right_gain {} must be within [0.25, 4]", c.right_gain));
+  if (!finite(c.right_offset) || std::abs(c.right_offset) > 128)
+    fail(fmt::format("right_offset {} must be within [-128, 128]", c.right_offset));
   if (!finite(c.background_z_m) || c.background_z_m <= 0.1)
     fail(fmt::format("background_z_m {} must be more than 0.1 m", c.background_z_m));
   if (!finite(c.background_slope_x) || !finite(c.background_slope_y))
@@ -587,6 +599,8 @@ void SceneRenderer::render(int index, StereoSample& out) const {
         else
           render_row<3>(fr, y, right, img, out.disparity, out.depth_m);
         if (c.noise_sigma > 0) add_noise_row(img, c.noise_sigma, index, right ? 1 : 0, y);
+        if (right && (c.right_gain != 1.0 || c.right_offset != 0.0))
+          scale_row(img, c.right_gain, c.right_offset, y);
       }
     }
   });

@@ -41,6 +41,8 @@ class SyntheticSource final : public PacedSource {
     const int height = uri.integer("height", 360, 32, 8192);
     synthetic::SceneConfig c = synthetic::preset(uri.path(), width, height);
     c.color = uri.flag("color", false);
+    c.right_gain = uri.number("right_gain", 1.0, 0.25, 4.0);
+    c.right_offset = uri.number("right_offset", 0.0, -128.0, 128.0);
     if (fps > 0) c.fps = fps;
     return c;
   }

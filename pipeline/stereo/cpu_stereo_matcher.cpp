@@ -410,7 +410,9 @@ void check_stereo_input(const StereoParams& params, ImageView<const std::uint8_t
 
 std::unique_ptr<StereoMatcher> make_stereo_matcher(const StereoMatcherFactory& factory,
                                                    const StereoParams& params) {
-  return factory ? factory(params) : make_cpu_stereo_matcher(params);
+  std::unique_ptr<StereoMatcher> stage =
+      factory ? factory(params) : make_cpu_stereo_matcher(params);
+  return params.exposure_balance ? with_exposure_balance(std::move(stage)) : std::move(stage);
 }
 
 int internal_scale(const StereoParams& params, int input_width) {

@@ -29,6 +29,11 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "bands, boundary refinement), the stage's own included (0 = auto: 1 below 4 usable "
         "CPUs, else half of them, at most 4)");
   s.add("stereo.use_color", &p.use_color, "AD cost and arms on colour when the input has it");
+  s.add("stereo.exposure_balance", &p.exposure_balance,
+        "map the right camera's levels onto the left's before matching (a gain and offset per "
+        "channel, fitted to the matches)");
+  s.add("stereo.exposure_balance_levels", &p.exposure_balance_levels, 1, 255,
+        "a new fit replaces the map when it moves some grey level by this many or more");
   s.add("stereo.lambda_ad", &p.lambda_ad, 0.01, 1000.0, "λ_AD of Eq. 1");
   s.add("stereo.lambda_census", &p.lambda_census, 0.01, 1000.0,
         "λ_census of Eq. 1 (the paper: 40)");

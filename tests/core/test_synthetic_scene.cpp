@@ -386,6 +386,21 @@ TEST(SyntheticScene, ColorModeHasThreeChannelsAndSameGeometry) {
   EXPECT_GT(differing, c.width * c.height / 4);  // really coloured, not grey copied thrice
 }
 
+TEST(SyntheticScene, TheRightCamerasGainAndOffsetScaleOnlyItsLevels) {
+  const SceneConfig c = preset("boxes", 320, 180);  // with its sensor noise
+  SceneConfig scaled = c;
+  scaled.right_gain = 1.2;
+  scaled.right_offset = -7;
+  const StereoSample plain = render(c, 3), other = render(scaled, 3);
+  EXPECT_TRUE(same_bytes(plain.left, other.left));
+  EXPECT_TRUE(same_bytes(plain.disparity, other.disparity));
+  for (int y = 0; y < c.height; ++y)
+    for (int x = 0; x < c.width; ++x) {
+      const double v = 1.2 * plain.right.at(x, y) - 7;
+      ASSERT_EQ(other.right.at(x, y), std::clamp(std::lround(v), 0L, 255L)) << x << "," << y;
+    }
+}
+
 TEST(SyntheticScene, PresetsRenderAtBothResolutions) {
   for (const char* name : {"hand", "boxes", "static"}) {
     const SceneConfig small = preset(name, 640, 360), big = preset(name, 1280, 720);
@@ -439,6 +454,9 @@ TEST(SyntheticScene, InvalidConfigsThrowNamingTheProblem) {
   expect_error(with([](SceneConfig& c) { c.fps = 0; }), "fps");
   expect_error(with([](SceneConfig& c) { c.noise_sigma = -1; }), "noise_sigma");
   expect_error(with([](SceneConfig& c) { c.noise_sigma = NAN; }), "noise_sigma");
+  expect_error(with([](SceneConfig& c) { c.right_gain = 0.1; }), "right_gain");
+  expect_error(with([](SceneConfig& c) { c.right_gain = NAN; }), "right_gain");
+  expect_error(with([](SceneConfig& c) { c.right_offset = 200; }), "right_offset");
   expect_error(with([](SceneConfig& c) { c.background_z_m = 0.05; }), "background_z_m");
   expect_error(with([](SceneConfig& c) { c.background_slope_y = 0.5; }), "background disparity");
   expect_error(with([](SceneConfig& c) { c.background_slope_x = 1; }), "background_slope_x");

@@ -145,6 +145,25 @@ TEST(SyntheticSource, AFiniteSourceEndsAndARestartGoesOn) {
   EXPECT_EQ(second.frames().front().seq, n) << "a restart continues the sequence";
 }
 
+TEST(SyntheticSource, TheRightCameraCanRunAnotherGainAndBlackLevel) {
+  auto source = open_source(
+      "synthetic://boxes?width=96&height=64&fps=0&frames=2&right_gain=1.1&right_offset=-3");
+  RecordingSink sink;
+  source->start(sink);
+  ASSERT_TRUE(sink.wait_for_end(10s));
+  source->stop();
+  synthetic::SceneConfig config = synthetic::preset("boxes", 96, 64);
+  config.right_gain = 1.1;
+  config.right_offset = -3;
+  synthetic::StereoSample sample;
+  synthetic::SceneRenderer(config).render(1, sample);
+  EXPECT_TRUE(same_pixels(sink.frames()[1].left.cview(), sample.left.cview()));
+  EXPECT_TRUE(same_pixels(sink.frames()[1].right.cview(), sample.right.cview()));
+  for (const char* bad : {"right_gain=0.1", "right_gain=5", "right_offset=-200", "right_gain=x"})
+    EXPECT_THROW(open_source(std::string("synthetic://boxes?width=96&height=64&") + bad), Error)
+        << bad;
+}
+
 TEST(SyntheticSource, StallAfterStopsDeliveringWithoutEnding) {
   auto source = open_source("synthetic://hand?width=96&height=64&fps=0&stall_after=4");
   RecordingSink sink;

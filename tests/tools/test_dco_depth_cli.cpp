@@ -233,6 +233,10 @@ TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
   expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png", "--out", "d.pfm",
                                "--depth-out", "z.pfm"}),
                2, "--depth-out needs --calib");
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--right-gain", "9", "--out-dir", "o"}), 2,
+               "--right-gain needs a number in [0.25, 4]");
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--right-offset", "1x", "--out-dir", "o"}), 2,
+               "--right-offset needs a number");
 }
 
 TEST(DcoDepthCli, UnknownParameterIsRefused) {

@@ -43,6 +43,17 @@ int ArgCursor::int_value() {
   return v;
 }
 
+double ArgCursor::number_value(double min, double max) {
+  const std::string_view option = name_;
+  const std::string text = value();
+  double v = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || end != text.data() + text.size() || !(v >= min && v <= max))
+    throw UsageError(
+        fmt::format("option {} needs a number in [{}, {}], not '{}'", option, min, max, text));
+  return v;
+}
+
 ImageSize parse_image_size(std::string_view option, const std::string& text, int minimum) {
   ImageSize size;
   const auto x = text.find('x');

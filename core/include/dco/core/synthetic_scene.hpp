@@ -47,6 +47,10 @@ struct SceneConfig {
   std::vector<Object> objects;
   double noise_sigma = 1.0;  // Gaussian sensor noise (grey levels), deterministic per frame
   bool color = false;        // BGR output instead of grey
+  // The right camera's levels against the left's, as a cheap pair's two sensors differ: a level
+  // v of the right view becomes right_gain * v + right_offset (rounded, clamped to 0..255).
+  double right_gain = 1.0;
+  double right_offset = 0.0;
 };
 
 // Named scenes: "hand" (four finger capsules and a palm disc sweeping across a box in front of

@@ -20,6 +20,11 @@ struct StereoParams {
   // "auto": half width and height when the input is wider than 640 px, else full; "full"; "half".
   std::string internal_resolution = "auto";
   bool use_color = true;  // AD and arms on colour when the input has three channels
+  // Map the right camera's grey levels onto the left's before matching (exposure_balance.hpp):
+  // a gain and offset per channel, fitted to the matches of the frames before; a new fit is
+  // taken when it moves some level by exposure_balance_levels or more.
+  bool exposure_balance = true;
+  int exposure_balance_levels = 6;
   // Which disparities each row searches. "full": all of 0..max. "guided": a pass at half the
   // internal size first, then each internal row searches only the 16-disparity batches that its
   // map reaches near the row (search_guide.hpp); images too small for that pass search all.

@@ -28,6 +28,8 @@ class ArgCursor {
   bool flag() const;
   // Parses value() as an int; throws UsageError when it is not one.
   int int_value();
+  // Parses value() as a number within [min, max]; throws UsageError otherwise.
+  double number_value(double min, double max);
 
  private:
   int argc_;

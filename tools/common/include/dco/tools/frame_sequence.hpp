@@ -37,9 +37,12 @@ std::unique_ptr<FrameSequence> make_pattern_sequence(
     const std::string& left_pattern, const std::string& right_pattern, int first, int count,
     const std::optional<std::filesystem::path>& calib);
 
-// A synthetic scene ("hand", "boxes", "static") with exact ground truth.
+// A synthetic scene ("hand", "boxes", "static") with exact ground truth; the right camera's
+// levels scaled as synthetic::SceneConfig::right_gain and right_offset say.
 std::unique_ptr<FrameSequence> make_synthetic_sequence(const std::string& name, int width,
-                                                       int height, int frames, bool color);
+                                                       int height, int frames, bool color,
+                                                       double right_gain = 1.0,
+                                                       double right_offset = 0.0);
 
 // Expands a pattern for one index; throws dco::Error unless it holds exactly one %d-like field.
 std::string expand_pattern(const std::string& pattern, int index);

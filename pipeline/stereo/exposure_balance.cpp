@@ -1,0 +1,184 @@
+#include "dco/pipeline/stereo/exposure_balance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+namespace dco::stereo {
+namespace {
+
+constexpr int kLevels = 256;
+constexpr double kSamples = 16384;  // pixels a fit looks at first (every fourth row and
+                                    // column of 640x360; every eighth at 1280x720)
+constexpr int kFlatRange = 6;       // levels three row neighbours may span to count as flat
+constexpr int kMinSpread = 16;      // levels between the darkest and brightest left level used
+constexpr int kMinBinPairs = 4;     // pairs a left level needs to count towards the spread
+constexpr double kOutlier = 3.0;    // levels off the first line that drop a left level's mean
+constexpr double kMinGain = 0.5, kMaxGain = 2.0;
+
+// The level at (x, y) of channel k when it and its row neighbours are within kFlatRange levels
+// and unsaturated, else -1. Where the row is flat, a match a pixel off along it (the only way a
+// rectified match can be off) still reads the same level, so the pairs carry the cameras'
+// difference and not the matcher's sub-pixel error.
+int flat_level(ImageView<const std::uint8_t> image, int x, int y, int k) {
+  const int c = image.channels;
+  const std::uint8_t* row = image.row(y);
+  const int a = row[(x - 1) * c + k], v = row[x * c + k], b = row[(x + 1) * c + k];
+  const int low = std::min({a, v, b}), high = std::max({a, v, b});
+  if (high - low > kFlatRange || low == 0 || high == kLevels - 1) return -1;
+  return v;
+}
+
+// The right level's mean at each left level, over one channel's pairs.
+struct LevelMeans {
+  std::array<std::uint32_t, kLevels> count{};
+  std::array<double, kLevels> sum{};
+};
+
+// Weighted least squares of right = a * left + b over the left levels' means; levels whose mean
+// lies more than kOutlier off `previous` (when given) stay out.
+bool fit_line(const LevelMeans& m, const double* previous, double& a, double& b) {
+  double n = 0, sl = 0, sr = 0, sll = 0, slr = 0;
+  for (int l = 0; l < kLevels; ++l) {
+    const double count = m.count[static_cast<std::size_t>(l)];
+    if (count == 0) continue;
+    const double r = m.sum[static_cast<std::size_t>(l)] / count;
+    if (previous != nullptr && std::abs(r - (previous[0] * l + previous[1])) > kOutlier) continue;
+    n += count, sl += count * l, sr += count * r, sll += count * l * l, slr += count * l * r;
+  }
+  const double det = n * sll - sl * sl;
+  if (!(n > 0 && det > 0)) return false;
+  a = (n * slr - sl * sr) / det;
+  b = (sr - a * sl) / n;
+  return true;
+}
+
+bool fit_channel(const LevelMeans& m, ChannelLevels& out) {
+  std::uint32_t pairs = 0;
+  int low = kLevels, high = -1;
+  for (int l = 0; l < kLevels; ++l) {
+    const std::uint32_t count = m.count[static_cast<std::size_t>(l)];
+    pairs += count;
+    if (count >= kMinBinPairs) low = std::min(low, l), high = std::max(high, l);
+  }
+  if (pairs < kMinExposurePairs || high - low < kMinSpread) return false;
+  double first[2];
+  double a = 0, b = 0;
+  if (!fit_line(m, nullptr, first[0], first[1]) || !fit_line(m, first, a, b)) return false;
+  // right = a * left + b, so a right level v is matched as (v - b) / a.
+  if (!(a > 0)) return false;
+  const double gain = 1.0 / a;
+  if (!(gain >= kMinGain && gain <= kMaxGain)) return false;
+  out = {gain, -b / a};
+  return true;
+}
+
+long mapped_level(const ChannelLevels& c, int v) {
+  return std::clamp<long>(std::lround(c.gain * v + c.offset), 0, kLevels - 1);
+}
+
+// The pairs of every `step`-th row and column into each channel's level means.
+void collect_pairs(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                   ImageView<const float> disparity, int step, std::array<LevelMeans, 3>& means) {
+  const int c = std::min(left.channels, 3);
+  const int w = left.width;
+  for (int y = 0; y < left.height; y += step) {
+    const float* d = disparity.row(y);
+    for (int x = 1; x + 1 < w; x += step) {
+      // +inf (no match) and NaN fail this test; the match's row neighbours must lie inside the
+      // right image. Disparities are never negative, so adding a half rounds.
+      const float at = static_cast<float>(x) - d[x];
+      if (!(at >= 0.5f && at < static_cast<float>(w) - 1.5f)) continue;
+      const int xr = static_cast<int>(at + 0.5f);
+      for (int k = 0; k < c; ++k) {
+        const int lv = flat_level(left, x, y, k);
+        if (lv < 0) continue;
+        const int rv = flat_level(right, xr, y, k);
+        if (rv < 0) continue;
+        LevelMeans& m = means[static_cast<std::size_t>(k)];
+        ++m.count[static_cast<std::size_t>(lv)];
+        m.sum[static_cast<std::size_t>(lv)] += rv;
+      }
+    }
+  }
+}
+
+std::uint32_t fewest_pairs(const std::array<LevelMeans, 3>& means, int channels) {
+  std::uint32_t fewest = ~0u;
+  for (int k = 0; k < channels; ++k) {
+    std::uint32_t pairs = 0;
+    for (const std::uint32_t n : means[static_cast<std::size_t>(k)].count) pairs += n;
+    fewest = std::min(fewest, pairs);
+  }
+  return fewest;
+}
+
+}  // namespace
+
+bool fit_exposure(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                  ImageView<const float> disparity, ExposureMap& map) {
+  const int c = std::min(left.channels, 3);
+  const double pixels = static_cast<double>(left.width) * left.height;
+  const int step = std::max(2, static_cast<int>(std::ceil(std::sqrt(pixels / kSamples))));
+  std::array<LevelMeans, 3> means;
+  collect_pairs(left, right, disparity, step, means);
+  // Cameras that differ leave few matches on flat ground (a tenth of a matched pair's): those
+  // frames look at four times the pixels, so that the map that brings the matches back is found.
+  const int dense_step = std::max(1, step / 2);
+  if (fewest_pairs(means, c) < kMinExposurePairs && dense_step < step) {
+    means = {};
+    collect_pairs(left, right, disparity, dense_step, means);
+  }
+  ExposureMap fitted;
+  fitted.count = c;
+  for (int k = 0; k < c; ++k)
+    if (!fit_channel(means[static_cast<std::size_t>(k)],
+                     fitted.channels[static_cast<std::size_t>(k)]))
+      return false;
+  map = fitted;
+  return true;
+}
+
+int exposure_difference(const ExposureMap& a, const ExposureMap& b) {
+  long most = 0;
+  for (int k = 0; k < std::max(a.count, b.count); ++k) {
+    const auto ks = static_cast<std::size_t>(k);
+    const ChannelLevels ca = k < a.count ? a.channels[ks] : ChannelLevels{};
+    const ChannelLevels cb = k < b.count ? b.channels[ks] : ChannelLevels{};
+    for (int v = 0; v < kLevels; ++v)
+      most = std::max(most, std::abs(mapped_level(ca, v) - mapped_level(cb, v)));
+  }
+  return static_cast<int>(most);
+}
+
+void ExposureTable::build(const ExposureMap& map) {
+  count_ = map.count;
+  identity_ = true;
+  for (int k = 0; k < count_; ++k)
+    for (int v = 0; v < kLevels; ++v) {
+      const auto out = static_cast<std::uint8_t>(mapped_level(map.channels[std::size_t(k)], v));
+      table_[std::size_t(k)][std::size_t(v)] = out;
+      identity_ = identity_ && out == v;
+    }
+}
+
+void ExposureTable::apply(ImageView<const std::uint8_t> right, Image<std::uint8_t>& out) const {
+  out.resize(right.width, right.height, right.channels);
+  const int c = right.channels;
+  const int n = right.width * c;
+  for (int y = 0; y < right.height; ++y) {
+    const std::uint8_t* in = right.row(y);
+    std::uint8_t* o = out.view().row(y);
+    if (c == 3 && count_ == 3) {
+      for (int i = 0; i < n; i += 3) {
+        o[i] = table_[0][in[i]];
+        o[i + 1] = table_[1][in[i + 1]];
+        o[i + 2] = table_[2][in[i + 2]];
+      }
+    } else {
+      for (int i = 0; i < n; ++i) o[i] = table_[0][in[i]];
+    }
+  }
+}
+
+}  // namespace dco::stereo
