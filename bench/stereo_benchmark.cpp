@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include <opencv2/calib3d.hpp>
@@ -50,15 +51,26 @@ const Pair& test_pair() {
   return pair;
 }
 
-void run_dco(benchmark::State& state, bool color) {
+// The pair, or nullptr after marking the benchmark skipped.
+const Pair* pair_or_skip(benchmark::State& state) {
   const Pair& p = test_pair();
-  if (!p.ok) {
-    state.SkipWithError("stereo data not found under " DCO_DATA_DIR);
-    return;
-  }
+  if (p.ok) return &p;
+  state.SkipWithError("stereo data not found under " DCO_DATA_DIR);
+  return nullptr;
+}
+
+// The stage on the pair's disparities, as every dco benchmark here runs it.
+std::unique_ptr<dco::stereo::StereoMatcher> bench_matcher() {
   dco::stereo::StereoParams params;
   params.max_disparity = kDisparities - 1;
-  const auto matcher = dco::stereo::make_cpu_stereo_matcher(params);
+  return dco::stereo::make_cpu_stereo_matcher(params);
+}
+
+void run_dco(benchmark::State& state, bool color) {
+  const Pair* pair = pair_or_skip(state);
+  if (pair == nullptr) return;
+  const Pair& p = *pair;
+  const auto matcher = bench_matcher();
   const cv::Mat& l = color ? p.left : p.left_gray;
   const cv::Mat& r = color ? p.right : p.right_gray;
   dco::Image<float> disparity;
@@ -90,11 +102,9 @@ void run_dco(benchmark::State& state, bool color) {
 }
 
 void run_sgbm(benchmark::State& state, bool color, int threads) {
-  const Pair& p = test_pair();
-  if (!p.ok) {
-    state.SkipWithError("stereo data not found under " DCO_DATA_DIR);
-    return;
-  }
+  const Pair* pair = pair_or_skip(state);
+  if (pair == nullptr) return;
+  const Pair& p = *pair;
   const int previous_threads = cv::getNumThreads();
   cv::setNumThreads(threads);
   const int cn = color ? 3 : 1;
@@ -113,17 +123,12 @@ void run_sgbm(benchmark::State& state, bool color, int threads) {
 // The exposure balance's work per frame (stereo.exposure_balance) on the same grey pair: the fit
 // to the stage's sparse map, and the right image through a table that changes its levels.
 void BM_DcoExposureBalance_Gray(benchmark::State& state) {
-  const Pair& p = test_pair();
-  if (!p.ok) {
-    state.SkipWithError("stereo data not found under " DCO_DATA_DIR);
-    return;
-  }
-  dco::stereo::StereoParams params;
-  params.max_disparity = kDisparities - 1;
-  const auto left = dco::as_view<std::uint8_t>(p.left_gray);
-  const auto right = dco::as_view<std::uint8_t>(p.right_gray);
+  const Pair* p = pair_or_skip(state);
+  if (p == nullptr) return;
+  const auto left = dco::as_view<std::uint8_t>(p->left_gray);
+  const auto right = dco::as_view<std::uint8_t>(p->right_gray);
   dco::Image<float> disparity;
-  dco::stereo::make_cpu_stereo_matcher(params)->compute(left, right, disparity);
+  bench_matcher()->compute(left, right, disparity);
   dco::stereo::ExposureMap map;
   dco::stereo::ExposureTable table;
   dco::Image<std::uint8_t> balanced;
