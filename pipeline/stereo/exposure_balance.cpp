@@ -86,7 +86,7 @@ void collect_pairs(ImageView<const std::uint8_t> left, ImageView<const std::uint
     const float* d = disparity.row(y);
     for (int x = 1; x + 1 < w; x += step) {
       // +inf (no match) and NaN fail this test; the match's row neighbours must lie inside the
-      // right image. Disparities are never negative, so adding a half rounds.
+      // right image. `at` is positive here, so adding a half rounds it.
       const float at = static_cast<float>(x) - d[x];
       if (!(at >= 0.5f && at < static_cast<float>(w) - 1.5f)) continue;
       const int xr = static_cast<int>(at + 0.5f);
