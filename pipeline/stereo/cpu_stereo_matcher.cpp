@@ -412,7 +412,9 @@ std::unique_ptr<StereoMatcher> make_stereo_matcher(const StereoMatcherFactory& f
                                                    const StereoParams& params) {
   std::unique_ptr<StereoMatcher> stage =
       factory ? factory(params) : make_cpu_stereo_matcher(params);
-  return params.exposure_balance ? with_exposure_balance(std::move(stage)) : std::move(stage);
+  return params.exposure_balance || params.vertical_alignment
+             ? with_camera_alignment(std::move(stage))
+             : std::move(stage);
 }
 
 int internal_scale(const StereoParams& params, int input_width) {

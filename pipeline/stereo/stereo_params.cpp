@@ -34,6 +34,9 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "channel, fitted to the matches)");
   s.add("stereo.exposure_balance_levels", &p.exposure_balance_levels, 1, 255,
         "a new fit replaces the map when it moves some grey level by this many or more");
+  s.add("stereo.vertical_alignment", &p.vertical_alignment,
+        "move the right image by the vertical offset between the cameras' rows (fitted to the "
+        "matches) before matching");
   s.add("stereo.lambda_ad", &p.lambda_ad, 0.01, 1000.0, "λ_AD of Eq. 1");
   s.add("stereo.lambda_census", &p.lambda_census, 0.01, 1000.0,
         "λ_census of Eq. 1 (the paper: 40)");

@@ -17,8 +17,9 @@ struct StereoTimings {
   double refine_ms = 0;    // left-right and uniqueness checks, histogram vote
   double sparse_ms = 0;    // subpixel fit and the map at input resolution
   double boundary_ms = 0;  // boundary refinement at input resolution (half-size matching only)
-  // The right image through the exposure map, the map's fit to the matches, and on a sequence's
-  // first frame whose map moved, the matches before the last (stereo.exposure_balance).
+  // The right image moved and through the exposure map, the fits of both to the matches, and on
+  // a sequence's first frame whose corrections moved, the matches before the last
+  // (with_camera_alignment).
   double balance_ms = 0;
   double total_ms = 0;
   // Share of the (internal row, 16-disparity batch) pairs searched: 1 for a full search, less
@@ -66,16 +67,18 @@ void check_stereo_input(const StereoParams& params, ImageView<const std::uint8_t
 // Throws dco::Error when the params are invalid.
 std::unique_ptr<StereoMatcher> make_cpu_stereo_matcher(const StereoParams& params);
 
-// The stage with the right image's levels mapped onto the left's before it matches
-// (exposure_balance.hpp). Each frame is matched through the map fitted to the frames before it,
-// and its own matches give the next fit; a sequence's first frame is matched again through the
-// map its own matches give, while that map still moves (four times at most). A fit replaces the
-// map only when it moves some level by stereo.exposure_balance_levels or more, so a pair that
-// agrees keeps its bytes and the map does not follow the fit's noise.
-std::unique_ptr<StereoMatcher> with_exposure_balance(std::unique_ptr<StereoMatcher> stage);
+// The stage with the right image brought to the left's before it matches: moved by the vertical
+// offset a drifted calibration leaves (vertical_alignment.hpp, stereo.vertical_alignment), its
+// levels mapped onto the left's (exposure_balance.hpp, stereo.exposure_balance). Each frame is
+// matched through the corrections fitted to the frames before it, and its own matches give the
+// next fits; a sequence's first frame is matched again through the corrections its own matches
+// give, while they still move (four times at most). A fit replaces a correction only when it
+// moves it enough (some level by stereo.exposure_balance_levels, the offset by 1/8 row), so a
+// pair that agrees keeps its bytes and the corrections do not follow the fits' noise.
+std::unique_ptr<StereoMatcher> with_camera_alignment(std::unique_ptr<StereoMatcher> stage);
 
-// Makes the stage of a backend (CPU, CUDA), with the exposure balance when its params ask for it;
-// an empty factory means the CPU one.
+// Makes the stage of a backend (CPU, CUDA), with the camera alignment when its params ask for
+// it; an empty factory means the CPU one.
 using StereoMatcherFactory = std::function<std::unique_ptr<StereoMatcher>(const StereoParams&)>;
 std::unique_ptr<StereoMatcher> make_stereo_matcher(const StereoMatcherFactory& factory,
                                                    const StereoParams& params);

@@ -25,6 +25,9 @@ struct StereoParams {
   // taken when it moves some level by exposure_balance_levels or more.
   bool exposure_balance = true;
   int exposure_balance_levels = 6;
+  // Move the right image by the vertical offset between the cameras' rows, fitted to the matches
+  // of the frames before (vertical_alignment.hpp): what a drifted calibration leaves.
+  bool vertical_alignment = true;
   // Which disparities each row searches. "full": all of 0..max. "guided": a pass at half the
   // internal size first, then each internal row searches only the 16-disparity batches that its
   // map reaches near the row (search_guide.hpp); images too small for that pass search all.

@@ -1,0 +1,135 @@
+#include <cmath>
+#include <memory>
+#include <utility>
+
+#include "dco/core/image.hpp"
+#include "dco/core/stopwatch.hpp"
+#include "dco/pipeline/stereo/exposure_balance.hpp"
+#include "dco/pipeline/stereo/stereo_matcher.hpp"
+#include "dco/pipeline/stereo/vertical_alignment.hpp"
+
+namespace dco::stereo {
+namespace {
+
+constexpr int kFirstFrameRounds = 4;
+// A fitted vertical offset replaces the one in force when they differ by this many rows.
+constexpr double kOffsetStep = 0.125;
+
+class CameraAlignmentMatcher final : public StereoMatcher {
+ public:
+  explicit CameraAlignmentMatcher(std::unique_ptr<StereoMatcher> stage)
+      : stage_(std::move(stage)) {}
+
+  void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+               Image<float>& disparity) override {
+    // First, so that a bad pair is refused before anything reads it.
+    check_stereo_input(stage_->params(), left, right);
+    Stopwatch t;
+    if (map_.count != left.channels) forget(left.channels);  // another kind of camera
+    // Sized on the first frame, so that a correction found later allocates nothing.
+    aligned_.resize(right.width, right.height, right.channels);
+    balanced_.resize(right.width, right.height, right.channels);
+    stage_->compute(left, corrected(right), disparity);
+    timings_ = stage_->last_timings();
+    // A sequence's first frame has no correction from frames before: its own matches give one,
+    // and it is matched again through it while the correction still moves (a few times at most).
+    const int rounds = first_ ? kFirstFrameRounds : 0;
+    for (int round = 0; refit(left, right, disparity) && round < rounds; ++round) {
+      stage_->reset();  // matched again as a new sequence
+      stage_->compute(left, corrected(right), disparity);
+      timings_ = stage_->last_timings();
+    }
+    first_ = false;
+    t.lap_ms();
+    timings_.balance_ms = t.total_ms() - timings_.total_ms;
+    timings_.total_ms = t.total_ms();
+  }
+
+  void reset() override {
+    stage_->reset();
+    forget(map_.count);
+  }
+
+  const StereoTimings& last_timings() const override { return timings_; }
+  int last_scale() const override { return stage_->last_scale(); }
+  ImageView<const std::uint8_t> internal_left_gray() const override {
+    return stage_->internal_left_gray();
+  }
+  ImageView<const float> internal_raw_disparity() const override {
+    return stage_->internal_raw_disparity();
+  }
+  ImageView<const float> internal_sparse_disparity() const override {
+    return stage_->internal_sparse_disparity();
+  }
+  const StereoParams& params() const override { return stage_->params(); }
+
+ private:
+  // The right image moved by the vertical offset, then through the exposure table; either step
+  // only when it changes something.
+  ImageView<const std::uint8_t> corrected(ImageView<const std::uint8_t> right) {
+    shifted_ = offset_ != 0.0;
+    if (shifted_) {
+      shift_rows(right, offset_, aligned_);
+      right = aligned_.cview();
+    }
+    if (table_.identity()) return right;
+    table_.apply(right, balanced_);
+    return balanced_.cview();
+  }
+
+  // Fits the corrections to the matches; takes each that moves enough (the exposure map some
+  // level by stereo.exposure_balance_levels, the offset by kOffsetStep rows) and then says so.
+  bool refit(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+             const Image<float>& disparity) {
+    const StereoParams& p = stage_->params();
+    bool moved = false;
+    if (p.exposure_balance) {
+      ExposureMap fitted = map_;
+      // The right levels as matched, before their table: moved by the offset in force.
+      const ImageView<const std::uint8_t> levels = shifted_ ? aligned_.cview() : right;
+      if (fit_exposure(left, levels, disparity.cview(), fitted) &&
+          exposure_difference(fitted, map_) >= p.exposure_balance_levels) {
+        map_ = fitted;
+        table_.build(map_);
+        moved = true;
+      }
+    }
+    if (p.vertical_alignment) {
+      double fitted = offset_;
+      // A sequence's first frame searches the whole range: its matches improve with each round.
+      if (fit_vertical_offset(left, right, disparity.cview(), map_, first_, fitted) &&
+          std::abs(fitted - offset_) >= kOffsetStep) {
+        offset_ = fitted;
+        moved = true;
+      }
+    }
+    return moved;
+  }
+
+  // The next frame starts a sequence of its own: no correction, and a second match when it finds
+  // one.
+  void forget(int channels) {
+    map_ = ExposureMap{};
+    map_.count = channels;
+    table_.build(map_);
+    offset_ = 0.0;
+    first_ = true;
+  }
+
+  std::unique_ptr<StereoMatcher> stage_;
+  ExposureMap map_;
+  ExposureTable table_;
+  double offset_ = 0.0;  // rows the right image's scene lies below the left's
+  bool shifted_ = false;
+  Image<std::uint8_t> aligned_, balanced_;
+  StereoTimings timings_;
+  bool first_ = true;
+};
+
+}  // namespace
+
+std::unique_ptr<StereoMatcher> with_camera_alignment(std::unique_ptr<StereoMatcher> stage) {
+  return std::make_unique<CameraAlignmentMatcher>(std::move(stage));
+}
+
+}  // namespace dco::stereo
