@@ -37,21 +37,38 @@ Image<float> dense_disparity(const pipeline::PipelineParams& params,
   return std::move(out.dense);
 }
 
+// A shared scene's pair, ground truth and the default parameters with its search range.
+struct LoadedScene {
+  std::string name;
+  pipeline::PipelineParams params;
+  Image<std::uint8_t> left, right;
+  tools::GroundTruth gt;
+};
+
+std::vector<LoadedScene> shared_scenes() {
+  std::vector<LoadedScene> scenes;
+  for (const tools::Scene& scene :
+       tools::load_scene_manifest(kDataDir / "stereo_scenes.tsv", kDataDir)) {
+    LoadedScene& s = scenes.emplace_back();
+    s.name = scene.name;
+    s.params.stereo.max_disparity = scene.max_disp;
+    s.left = load_image(scene.left);
+    s.right = load_image(scene.right);
+    s.gt = tools::load_ground_truth(scene);
+  }
+  return scenes;
+}
+
 TEST(DenseDepthAccuracy, SharedScenesMeetTheOcclusionTargetAndBeatSgbmWls) {
   ASSERT_TRUE(std::filesystem::exists(kDataDir / "stereo_scenes.tsv"))
       << "no stereo data at " << kDataDir;
   std::vector<tools::SceneMetrics> ours, peer;
-  for (const tools::Scene& scene :
-       tools::load_scene_manifest(kDataDir / "stereo_scenes.tsv", kDataDir)) {
-    pipeline::PipelineParams params;
-    params.stereo.max_disparity = scene.max_disp;
-    const Image<std::uint8_t> left = load_image(scene.left);
-    const Image<std::uint8_t> right = load_image(scene.right);
-    const tools::GroundTruth gt = tools::load_ground_truth(scene);
+  for (const LoadedScene& s : shared_scenes()) {
     ours.push_back(
-        tools::evaluate_disparity(scene.name, dense_disparity(params, left, right).view(), gt));
-    const tools::BaselineResult b = tools::run_sgbm_wls(left.view(), right.view(), scene.max_disp);
-    peer.push_back(tools::evaluate_disparity(scene.name, b.disparity.view(), gt));
+        tools::evaluate_disparity(s.name, dense_disparity(s.params, s.left, s.right).view(), s.gt));
+    const tools::BaselineResult b =
+        tools::run_sgbm_wls(s.left.view(), s.right.view(), s.params.stereo.max_disparity);
+    peer.push_back(tools::evaluate_disparity(s.name, b.disparity.view(), s.gt));
   }
   ASSERT_EQ(ours.size(), 8u);
   std::printf("%s", tools::format_metrics_table(ours).c_str());
@@ -81,18 +98,14 @@ TEST(DenseDepthAccuracy, MoreGainOrARowOfDriftOnOneCameraCostsLittleWithTheCamer
   ASSERT_TRUE(std::filesystem::exists(kDataDir / "stereo_scenes.tsv"))
       << "no stereo data at " << kDataDir;
   std::vector<tools::SceneMetrics> equal, balanced, unbalanced, aligned, unaligned;
-  for (const tools::Scene& scene :
-       tools::load_scene_manifest(kDataDir / "stereo_scenes.tsv", kDataDir)) {
-    pipeline::PipelineParams params;
-    params.stereo.max_disparity = scene.max_disp;
-    const Image<std::uint8_t> left = load_image(scene.left);
-    const Image<std::uint8_t> right = load_image(scene.right);
+  for (const LoadedScene& s : shared_scenes()) {
+    const pipeline::PipelineParams& params = s.params;
+    const Image<std::uint8_t>& right = s.right;
     const Image<std::uint8_t> bright = brighter(right, 1.1);
     Image<std::uint8_t> lower;  // the right camera's scene a row lower
     stereo::shift_rows(right.cview(), -1.0, lower);
-    const tools::GroundTruth gt = tools::load_ground_truth(scene);
     const auto score = [&](const pipeline::PipelineParams& p, const Image<std::uint8_t>& r) {
-      return tools::evaluate_disparity(scene.name, dense_disparity(p, left, r).view(), gt);
+      return tools::evaluate_disparity(s.name, dense_disparity(p, s.left, r).view(), s.gt);
     };
     equal.push_back(score(params, right));
     balanced.push_back(score(params, bright));

@@ -14,10 +14,13 @@
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/stereo/exposure_balance.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
+#include "support/good_matches.hpp"
 #include "support/same_bytes.hpp"
 
 namespace dco::stereo {
 namespace {
+
+using dco::testing::good_matches;
 
 using dco::testing::same_bytes;
 
@@ -144,17 +147,6 @@ TEST(ExposureTable, DifferenceIsTheLargestLevelApart) {
   EXPECT_EQ(exposure_difference(b, a), 3);
   b.channels[0] = {1.04, 0.0};  // 10 levels apart at 245 (254.8), none at 0
   EXPECT_EQ(exposure_difference(a, b), 10);
-}
-
-// Matches of the stage within 1 px of the ground truth.
-int good_matches(const Image<float>& disparity, const Image<float>& truth) {
-  int n = 0;
-  for (int y = 0; y < truth.height(); ++y)
-    for (int x = 0; x < truth.width(); ++x) {
-      const float d = disparity.view().at(x, y);
-      n += std::isfinite(d) && std::abs(d - truth.view().at(x, y)) <= 1.0f;
-    }
-  return n;
 }
 
 struct Stage {

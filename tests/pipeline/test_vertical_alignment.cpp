@@ -12,9 +12,12 @@
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 #include "dco/pipeline/stereo/vertical_alignment.hpp"
+#include "support/good_matches.hpp"
 
 namespace dco::stereo {
 namespace {
+
+using dco::testing::good_matches;
 
 TEST(ShiftRows, MovesTheImageUpByTheOffsetAndRepeatsTheLastRows) {
   Image<std::uint8_t> right(3, 4), out;
@@ -70,16 +73,6 @@ TEST(FitVerticalOffset, NoMatchesLeaveTheOffset) {
   EXPECT_FALSE(fit_vertical_offset(p.sample.left.cview(), p.moved.cview(), none.cview(),
                                    ExposureMap{}, false, offset));
   EXPECT_DOUBLE_EQ(offset, 0.5);
-}
-
-int good_matches(const Image<float>& disparity, const Image<float>& truth) {
-  int n = 0;
-  for (int y = 0; y < truth.height(); ++y)
-    for (int x = 0; x < truth.width(); ++x) {
-      const float d = disparity.view().at(x, y);
-      n += std::isfinite(d) && std::abs(d - truth.view().at(x, y)) <= 1.0f;
-    }
-  return n;
 }
 
 TEST(CameraAlignmentMatcher, ARowAndAHalfBetweenTheCamerasCostsFewMatches) {
