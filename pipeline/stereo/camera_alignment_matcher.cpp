@@ -12,6 +12,9 @@ namespace dco::stereo {
 namespace {
 
 constexpr int kFirstFrameRounds = 4;
+// After a sequence's first frame the corrections are fitted again on every kRefitEvery-th frame:
+// a camera's drift and exposure steps are followed within a few frames, at a quarter of the cost.
+constexpr int kRefitEvery = 4;
 // A fitted vertical offset replaces the one in force when they differ by this many rows.
 constexpr double kOffsetStep = 0.125;
 
@@ -34,12 +37,14 @@ class CameraAlignmentMatcher final : public StereoMatcher {
     // A sequence's first frame has no correction from frames before: its own matches give one,
     // and it is matched again through it while the correction still moves (a few times at most).
     const int rounds = first_ ? kFirstFrameRounds : 0;
-    for (int round = 0; refit(left, right, disparity) && round < rounds; ++round) {
+    const bool fit = first_ || frames_ % kRefitEvery == 0;
+    for (int round = 0; fit && refit(left, right, disparity) && round < rounds; ++round) {
       stage_->reset();  // matched again as a new sequence
       stage_->compute(left, corrected(right), disparity);
       timings_ = stage_->last_timings();
     }
     first_ = false;
+    ++frames_;
     t.lap_ms();
     timings_.balance_ms = t.total_ms() - timings_.total_ms;
     timings_.total_ms = t.total_ms();
@@ -114,6 +119,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
     table_.build(map_);
     offset_ = 0.0;
     first_ = true;
+    frames_ = 0;
   }
 
   std::unique_ptr<StereoMatcher> stage_;
@@ -124,6 +130,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   Image<std::uint8_t> aligned_, balanced_;
   StereoTimings timings_;
   bool first_ = true;
+  long frames_ = 0;  // of the sequence
 };
 
 }  // namespace

@@ -9,11 +9,13 @@
 namespace dco::stereo {
 namespace {
 
-constexpr double kSamples = 16384;     // pixels looked at (as fit_exposure's first pass)
-constexpr int kMinStep = 8;            // vertical grey step (levels over two rows) a pair needs
-constexpr double kOutlier = 40.0;      // levels apart that leave a pair out
-constexpr int kSteps = 3;              // Gauss-Newton steps
-constexpr int kMinSearchSamples = 50;  // samples a search needs
+constexpr double kSamples = 4096;         // pixels a step looks at: one offset needs few
+constexpr double kSearchSamples = 16384;  // and a search (a sequence's first frame only)
+constexpr int kMinStep = 8;               // vertical grey step (levels over two rows) a pair needs
+constexpr double kOutlier = 40.0;         // levels apart that leave a pair out
+constexpr int kSearchSteps = 3;           // Gauss-Newton steps after a search
+constexpr int kTrackSteps = 1;            // and from the offset in force (one per frame)
+constexpr int kMinSearchSamples = 50;     // samples a search needs
 
 struct Sampler {
   ImageView<const std::uint8_t> left, right;
@@ -37,6 +39,14 @@ struct Sampler {
     const ChannelLevels& m =
         levels.channels[static_cast<std::size_t>(std::min(k, levels.count - 1))];
     return m.gain * (top + ty * (bottom - top)) + m.offset;
+  }
+
+  // Right level of channel k at a whole pixel, clamped to the image.
+  double right_level(int x, int y, int k) const {
+    const int xc = std::clamp(x, 0, right.width - 1), yc = std::clamp(y, 0, right.height - 1);
+    const ChannelLevels& m =
+        levels.channels[static_cast<std::size_t>(std::min(k, levels.count - 1))];
+    return m.gain * right.row(yc)[xc * right.channels + k] + m.offset;
   }
 
   // Calls pair(x_right, y, left level, channel) for every sampled matched pixel with a vertical
@@ -94,7 +104,7 @@ std::vector<double> best_rows(const Sampler& s) {
           for (int j = -kRadius; j <= kRadius; ++j)
             for (int i = -kRadius; i <= kRadius; ++i) {
               const double l = s.left.row(y + j)[(x + i) * c + g];
-              sum += std::abs(l - s.right_at(xr + dx + i, y + j + dy, g));
+              sum += std::abs(l - s.right_level(xr + dx + i, y + j + dy, g));
             }
           if (best < 0 || sum < best) best = sum;
         }
@@ -138,18 +148,21 @@ bool fit_vertical_offset(ImageView<const std::uint8_t> left, ImageView<const std
                          ImageView<const float> disparity, const ExposureMap& levels, bool search,
                          double& offset) {
   const double pixels = static_cast<double>(left.width) * left.height;
-  const int step = std::max(2, static_cast<int>(std::ceil(std::sqrt(pixels / kSamples))));
-  const Sampler s{left, right, disparity, levels, step};
+  const auto step_for = [&](double samples) {
+    return std::max(2, static_cast<int>(std::ceil(std::sqrt(pixels / samples))));
+  };
+  const Sampler s{left, right, disparity, levels, step_for(kSamples)};
   double v = offset;
   if (search) {
     // Each sample's own best row in a small window, then the most common one: the matches of a pair
     // that is off vertically fit the offset they were made at, so they cannot tell the way out
     // by themselves (bench/RESULTS.md).
-    const std::vector<double> rows = best_rows(s);
+    const Sampler wide{left, right, disparity, levels, step_for(kSearchSamples)};
+    const std::vector<double> rows = best_rows(wide);
     if (static_cast<int>(rows.size()) < kMinSearchSamples) return false;
     v = mode(rows);
   }
-  for (int i = 0; i < kSteps; ++i) {
+  for (int i = 0; i < (search ? kSearchSteps : kTrackSteps); ++i) {
     double jr = 0, jj = 0;
     int used = 0;
     s.each([&](double xr, int y, double l, int k) {

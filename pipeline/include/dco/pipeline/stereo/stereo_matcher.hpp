@@ -70,11 +70,11 @@ std::unique_ptr<StereoMatcher> make_cpu_stereo_matcher(const StereoParams& param
 // The stage with the right image brought to the left's before it matches: moved by the vertical
 // offset a drifted calibration leaves (vertical_alignment.hpp, stereo.vertical_alignment), its
 // levels mapped onto the left's (exposure_balance.hpp, stereo.exposure_balance). Each frame is
-// matched through the corrections fitted to the frames before it, and its own matches give the
-// next fits; a sequence's first frame is matched again through the corrections its own matches
-// give, while they still move (four times at most). A fit replaces a correction only when it
-// moves it enough (some level by stereo.exposure_balance_levels, the offset by 1/8 row), so a
-// pair that agrees keeps its bytes and the corrections do not follow the fits' noise.
+// matched through the corrections fitted to the frames before it; the matches of every fourth
+// frame give the next fits; a sequence's first frame is matched again through the corrections its
+// own matches give, while they still move (four times at most). A fit replaces a correction only
+// when it moves it enough (some level by stereo.exposure_balance_levels, the offset by 1/8 row), so
+// a pair that agrees keeps its bytes and the corrections do not follow the fits' noise.
 std::unique_ptr<StereoMatcher> with_camera_alignment(std::unique_ptr<StereoMatcher> stage);
 
 // Makes the stage of a backend (CPU, CUDA), with the camera alignment when its params ask for
