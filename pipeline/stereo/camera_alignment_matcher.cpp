@@ -30,8 +30,9 @@ class CameraAlignmentMatcher final : public StereoMatcher {
     Stopwatch t;
     if (map_.count != left.channels) forget(left.channels);  // another kind of camera
     // Sized on the first frame, so that a correction found later allocates nothing.
-    aligned_.resize(right.width, right.height, right.channels);
-    balanced_.resize(right.width, right.height, right.channels);
+    const StereoParams& p = stage_->params();
+    if (p.vertical_alignment) aligned_.resize(right.width, right.height, right.channels);
+    if (p.exposure_balance) balanced_.resize(right.width, right.height, right.channels);
     stage_->compute(left, corrected(right), disparity);
     timings_ = stage_->last_timings();
     // A sequence's first frame has no correction from frames before: its own matches give one,
@@ -72,8 +73,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   // The right image moved by the vertical offset, then through the exposure table; either step
   // only when it changes something.
   ImageView<const std::uint8_t> corrected(ImageView<const std::uint8_t> right) {
-    shifted_ = offset_ != 0.0;
-    if (shifted_) {
+    if (offset_ != 0.0) {
       shift_rows(right, offset_, aligned_);
       right = aligned_.cview();
     }
@@ -90,8 +90,9 @@ class CameraAlignmentMatcher final : public StereoMatcher {
     bool moved = false;
     if (p.exposure_balance) {
       ExposureMap fitted = map_;
-      // The right levels as matched, before their table: moved by the offset in force.
-      const ImageView<const std::uint8_t> levels = shifted_ ? aligned_.cview() : right;
+      // The right levels as matched, before their table: moved by the offset in force (which
+      // the vertical fit below has not changed yet, so aligned_ holds this frame's shift).
+      const ImageView<const std::uint8_t> levels = offset_ != 0.0 ? aligned_.cview() : right;
       if (fit_exposure(left, levels, disparity.cview(), fitted) &&
           exposure_difference(fitted, map_) >= p.exposure_balance_levels) {
         map_ = fitted;
@@ -126,7 +127,6 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   ExposureMap map_;
   ExposureTable table_;
   double offset_ = 0.0;  // rows the right image's scene lies below the left's
-  bool shifted_ = false;
   Image<std::uint8_t> aligned_, balanced_;
   StereoTimings timings_;
   bool first_ = true;

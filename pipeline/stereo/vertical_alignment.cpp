@@ -23,6 +23,11 @@ struct Sampler {
   const ExposureMap& levels;
   int step;
 
+  // The exposure map of channel k (a grey map serves every channel).
+  const ChannelLevels& map_of(int k) const {
+    return levels.channels[static_cast<std::size_t>(std::min(k, levels.count - 1))];
+  }
+
   // Right level of channel k at (x, y), bilinear, rows and columns clamped to the image.
   double right_at(double x, double y, int k) const {
     const int c = right.channels;
@@ -36,25 +41,22 @@ struct Sampler {
     const std::uint8_t* r1 = right.row(y1);
     const double top = r0[x0 * c + k] + tx * (r0[x1 * c + k] - r0[x0 * c + k]);
     const double bottom = r1[x0 * c + k] + tx * (r1[x1 * c + k] - r1[x0 * c + k]);
-    const ChannelLevels& m =
-        levels.channels[static_cast<std::size_t>(std::min(k, levels.count - 1))];
+    const ChannelLevels& m = map_of(k);
     return m.gain * (top + ty * (bottom - top)) + m.offset;
   }
 
   // Right level of channel k at a whole pixel, clamped to the image.
   double right_level(int x, int y, int k) const {
     const int xc = std::clamp(x, 0, right.width - 1), yc = std::clamp(y, 0, right.height - 1);
-    const ChannelLevels& m =
-        levels.channels[static_cast<std::size_t>(std::min(k, levels.count - 1))];
+    const ChannelLevels& m = map_of(k);
     return m.gain * right.row(yc)[xc * right.channels + k] + m.offset;
   }
 
   // Calls pair(x_right, y, left level, channel) for every sampled matched pixel with a vertical
-  // grey step; returns how many.
+  // grey step.
   template <class Pair>
-  int each(Pair&& pair) const {
+  void each(Pair&& pair) const {
     const int c = std::min(left.channels, 3);
-    int n = 0;
     for (int y = 1; y + 1 < left.height; y += step) {
       const float* d = disparity.row(y);
       const std::uint8_t* up = left.row(y - 1);
@@ -67,11 +69,9 @@ struct Sampler {
           const int i = x * c + k;
           if (std::abs(down[i] - up[i]) < kMinStep) continue;
           pair(at, y, static_cast<double>(row[i]), k);
-          ++n;
         }
       }
     }
-    return n;
   }
 };
 
