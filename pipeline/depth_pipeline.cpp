@@ -48,6 +48,7 @@ void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> 
                   ImageView<const std::uint8_t> right, StereoSlot& slot) {
   matcher.compute(left, right, slot.sparse);
   slot.stereo_timings = matcher.last_timings();
+  slot.camera_correction = matcher.last_correction();
   slot.stereo_scale = matcher.last_scale();
   const ImageView<const float> raw = matcher.internal_raw_disparity();
   slot.raw_disparity.resize(raw.width, raw.height);
@@ -137,6 +138,7 @@ void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
   out.early_contour_done = centre.early_contour_done;
   out.densify_timings.planes_ms = centre.planes_ms;
   out.stereo_timings = centre.stereo_timings;
+  out.camera_correction = centre.camera_correction;
   out.stereo_scale = centre.stereo_scale;
   out.flow_cue = flow;
 }

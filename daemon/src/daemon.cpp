@@ -339,6 +339,13 @@ void Daemon::tick(std::int64_t now_ns) {
   last_rate_ns_ = now_ns;
   last_pushed_ = stats.pushed;
   last_published_ = stats.published;
+  // A field engineer's first question about a cheap stereo pair: how far apart its two cameras'
+  // exposure and rows are. Logged when it changes (a restarted pipeline fits it anew).
+  if (std::string correction = stereo::describe(stats.camera_correction);
+      stats.published > 0 && correction != logged_correction_) {
+    logged_correction_ = std::move(correction);
+    log_.info("camera alignment: " + logged_correction_);
+  }
   drivers::SourceStatus source = source_->status();
   ipc::DeviceStatus status;
   using State = ipc::DeviceStatus::State;

@@ -138,6 +138,7 @@ void DepthRuntime::start() {
     contour_ms_.clear();
     densify_ms_.clear();
     pushed_ = dropped_ = late_ = published_ = overdue_ = early_ = 0;
+    camera_correction_ = {};
     stereo_work_ms_ = other_work_ms_ = planes_work_ms_ = early_contour_work_ms_ = 0;
     work_samples_ = planes_on_stereo_ = early_contour_on_stereo_ = next_contour_on_stereo_ = 0;
     entry_high_water_ = 0;
@@ -635,6 +636,7 @@ void DepthRuntime::deliver(int result, bool early) {
   early_contour_work_ms_ += weight * (early_ms - early_contour_work_ms_);
   ++work_samples_;
   ++published_;
+  camera_correction_ = r.result.camera_correction;
   if (releasing_ && t.densify_end - t.capture > release_latency_) ++overdue_;
   early_ += early;
   // Every free result gets this one's room, so none allocates when it is first taken, however
@@ -694,6 +696,7 @@ RuntimeStats DepthRuntime::stats() const {
   s.planes_on_stereo_thread = planes_on_stereo_;
   s.early_contour_on_stereo_thread = early_contour_on_stereo_;
   s.next_contour_on_stereo_thread = next_contour_on_stereo_;
+  s.camera_correction = camera_correction_;
   return s;
 }
 

@@ -1,5 +1,7 @@
 #include <cmath>
+#include <cstdio>
 #include <memory>
+#include <string>
 #include <utility>
 
 #include "dco/core/image.hpp"
@@ -57,6 +59,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   }
 
   const StereoTimings& last_timings() const override { return timings_; }
+  CameraCorrection last_correction() const override { return {map_, offset_}; }
   int last_scale() const override { return stage_->last_scale(); }
   ImageView<const std::uint8_t> internal_left_gray() const override {
     return stage_->internal_left_gray();
@@ -134,6 +137,31 @@ class CameraAlignmentMatcher final : public StereoMatcher {
 };
 
 }  // namespace
+
+bool CameraCorrection::identity() const {
+  ExposureMap none;
+  none.count = levels.count;
+  return levels == none && row_offset == 0;
+}
+
+std::string describe(const CameraCorrection& correction) {
+  if (correction.identity()) return "right camera as the left";
+  const ExposureMap& m = correction.levels;
+  std::string text = "right camera levels";
+  char part[96];
+  for (int c = 0; c < m.count; ++c) {
+    const ChannelLevels& l = m.channels[static_cast<std::size_t>(c)];
+    std::snprintf(part, sizeof part, "%s%s %.3f v %c %.1f", c > 0 ? "," : "",
+                  m.count == 3 ? (c == 0   ? " B"
+                                  : c == 1 ? " G"
+                                           : " R")
+                               : "",
+                  l.gain, l.offset < 0 ? '-' : '+', std::abs(l.offset));
+    text += part;
+  }
+  std::snprintf(part, sizeof part, ", rows %+.2f", correction.row_offset);
+  return text + part;
+}
 
 std::unique_ptr<StereoMatcher> with_camera_alignment(std::unique_ptr<StereoMatcher> stage) {
   return std::make_unique<CameraAlignmentMatcher>(std::move(stage));

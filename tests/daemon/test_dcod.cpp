@@ -101,6 +101,29 @@ TEST(Dcod, ReadyWatchdogPingsAndACleanStopOnSigterm) {
   EXPECT_NE(dcod.log().find("stopping on SIGTERM"), std::string::npos) << dcod.log();
 }
 
+TEST(Dcod, LogsHowItCorrectsTheRightCamera) {
+  // A right camera 15 % brighter with 4 levels more black: its levels are matched as
+  // (v - 4) / 1.15 = 0.870 v - 3.5.
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o;
+  o.args = base_args(dir,
+                     "synthetic://boxes?width=320&height=180&fps=30&right_gain=1.15&"
+                     "right_offset=4");
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  const auto until = SteadyClock::now() + 10s;
+  while (dcod.log().find("camera alignment: ") == std::string::npos && SteadyClock::now() < until)
+    std::this_thread::sleep_for(50ms);
+  const std::string log = dcod.log();
+  EXPECT_NE(log.find("camera alignment: right camera levels 0.87"), std::string::npos) << log;
+  EXPECT_NE(log.find(", rows +0.00"), std::string::npos) << log;
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+}
+
 TEST(Dcod, AStalledSourceStopsTheWatchdogPings) {
   TempDir dir;
   NotifySocket notify(dir / "notify");

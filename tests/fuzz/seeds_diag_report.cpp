@@ -45,6 +45,9 @@ std::vector<std::vector<std::uint8_t>> seeds() {
   ::dco::pipeline_stats_t stats{};
   stats.dropped = 2;
   stats.stereo_p50_ms = 3;
+  stats.right_channels = 3;
+  stats.right_gain[0] = stats.right_gain[1] = stats.right_gain[2] = 0.97;
+  stats.right_row_offset = 0.5;
   add(all, n, ipc::channel::kStats, stats);
   ::dco::depth_preview_t preview{};
   preview.width = 3;

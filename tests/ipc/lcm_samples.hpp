@@ -58,6 +58,11 @@ inline dco::pipeline_stats_t sample_stats() {
   m.entry_high_water = 1;
   m.stereo_queue_high_water = 2;
   m.densify_queue_high_water = 2;
+  m.right_channels = 1;
+  m.right_gain[0] = 0.976;
+  m.right_level_offset[0] = 0.1;
+  m.right_gain[1] = m.right_gain[2] = 1;
+  m.right_row_offset = 0.25;
   return m;
 }
 

@@ -282,6 +282,9 @@ TEST(Publisher, StatsStatusAndLog) {
   s.entry_high_water = 1;
   s.stereo_queue_high_water = 2;
   s.densify_queue_high_water = 3;
+  s.camera_correction.levels.count = 3;
+  s.camera_correction.levels.channels = {{{0.97, 1.5}, {0.98, -0.5}, {1.01, 2.0}}};
+  s.camera_correction.row_offset = 0.375;
   // The first interval runs from construction, which the test does not control; the second is
   // exactly 2 s.
   const std::int64_t t0 = 1'000'000'000'000;
@@ -313,6 +316,12 @@ TEST(Publisher, StatsStatusAndLog) {
   EXPECT_DOUBLE_EQ(m.contour_p50_ms, 8.0);
   EXPECT_DOUBLE_EQ(m.densify_p99_ms, 30.0);
   EXPECT_EQ(m.densify_queue_high_water, 3);
+  EXPECT_EQ(m.right_channels, 3);
+  EXPECT_DOUBLE_EQ(m.right_gain[0], 0.97);
+  EXPECT_DOUBLE_EQ(m.right_level_offset[1], -0.5);
+  EXPECT_DOUBLE_EQ(m.right_gain[2], 1.01);
+  EXPECT_DOUBLE_EQ(m.right_level_offset[2], 2.0);
+  EXPECT_DOUBLE_EQ(m.right_row_offset, 0.375);
   ASSERT_EQ(got.status.size(), 1u);
   EXPECT_EQ(got.status[0].state, std::int8_t{dco::device_status_t::STATE_STREAMING});
   ASSERT_EQ(got.status[0].counter_count, 2);

@@ -186,6 +186,12 @@ TEST(ExposureBalancedMatcher, AGainBetweenTheCamerasCostsFewMatches) {
   EXPECT_LT(without, 0.8 * ref);  // the gain costs the plain stage matches
   EXPECT_GT(with, 0.97 * ref);    // the balance wins them back on the first frame
   EXPECT_GT(balanced.matcher->last_timings().balance_ms, 0.0);
+  // The map it found, for the log: right levels v matched as (v - 4) / 1.15.
+  const CameraCorrection found = balanced.matcher->last_correction();
+  EXPECT_NEAR(found.levels.channels[0].gain, 1 / 1.15, 0.01);
+  EXPECT_NEAR(found.levels.channels[0].offset, -4 / 1.15, 1.0);
+  EXPECT_EQ(found.row_offset, 0.0);
+  EXPECT_TRUE(plain.matcher->last_correction().identity());
 
   // A later frame of the sequence is matched through the map at once.
   unequal.render(1, differ);

@@ -97,6 +97,37 @@ TEST(CameraAlignmentMatcher, ARowAndAHalfBetweenTheCamerasCostsFewMatches) {
       ref, off, on);
   EXPECT_LT(off, 0.8 * ref);
   EXPECT_GT(on, 0.95 * ref);
+  // What it found is what a field engineer reads in dcod's log and DCO_STATS.
+  // The exposure map was fitted to the first round's matches, made 1.5 rows apart, and a later
+  // round moves it only by stereo.exposure_balance_levels: it may stay a few levels off.
+  const CameraCorrection found = aligned->last_correction();
+  std::printf("found: %s\n", describe(found).c_str());
+  EXPECT_NEAR(found.row_offset, 1.5, 0.15);
+  EXPECT_LT(exposure_difference(found.levels, ExposureMap{}), params.exposure_balance_levels);
+  EXPECT_EQ(plain->last_correction().row_offset, 0.0);
+}
+
+TEST(CameraCorrection, ReadsAsALogLine) {
+  CameraCorrection c;
+  EXPECT_TRUE(c.identity());
+  EXPECT_EQ(describe(c), "right camera as the left");
+  c.levels.count = 3;  // a colour camera with equal cameras
+  EXPECT_TRUE(c.identity());
+  c.levels.count = 1;
+  c.levels.channels[0] = {0.9756, 0.14};
+  c.row_offset = 0.3125;
+  EXPECT_FALSE(c.identity());
+  EXPECT_EQ(describe(c), "right camera levels 0.976 v + 0.1, rows +0.31");
+  c.levels.count = 3;
+  c.levels.channels[1] = {1.02, -2.0};
+  c.levels.channels[2] = {1.0, 0.0};
+  c.row_offset = -1.0;
+  EXPECT_EQ(describe(c),
+            "right camera levels B 0.976 v + 0.1, G 1.020 v - 2.0, R 1.000 v + 0.0, rows -1.00");
+  c = CameraCorrection{};
+  c.row_offset = 0.25;
+  EXPECT_FALSE(c.identity());
+  EXPECT_EQ(describe(c), "right camera levels 1.000 v + 0.0, rows +0.25");
 }
 
 }  // namespace

@@ -213,6 +213,12 @@ void run_single(dco::pipeline::DepthPipeline& pipeline, const dco::Image<std::ui
   if (!pipeline.push(left.cview(), right.cview(), result)) pipeline.finish(result);
 }
 
+// The stereo stage's correction of the right camera, for a frame's line: empty while it has none.
+std::string correction_text(const dco::pipeline::DepthResult& r) {
+  return r.camera_correction.identity() ? std::string()
+                                        : "; " + dco::stereo::describe(r.camera_correction);
+}
+
 double total_ms(const dco::pipeline::DepthResult& r, bool sparse) {
   return r.stereo_timings.total_ms +
          (sparse ? 0.0 : r.contour_timings.total_ms + r.densify_timings.total_ms);
@@ -290,8 +296,8 @@ int run_pair(const Options& opt, const dco::pipeline::PipelineParams& params) {
   if (opt.overlay_dir)
     write_overlays(*opt.overlay_dir, "", result, opt.sparse,
                    static_cast<float>(params.stereo.max_disparity), median_disparity(map));
-  fmt::print("{}: {}x{}, {}\n", opt.out->string(), map.width(), map.height(),
-             timing_text(result, opt.sparse));
+  fmt::print("{}: {}x{}, {}{}\n", opt.out->string(), map.width(), map.height(),
+             timing_text(result, opt.sparse), correction_text(result));
   return 0;
 }
 
@@ -315,8 +321,9 @@ int run_batch(const Options& opt, dco::pipeline::PipelineParams params) {
     else
       dco::write_pfm(sparse, result.sparse.view());
     std::ofstream(*opt.out_dir / (stem + ".time_ms")) << total_ms(result, opt.sparse) << '\n';
-    fmt::print("{:<40} {}x{} max-disp {:3}  {}\n", scene.name, left.width(), left.height(),
-               params.stereo.max_disparity, timing_text(result, opt.sparse));
+    fmt::print("{:<40} {}x{} max-disp {:3}  {}{}\n", scene.name, left.width(), left.height(),
+               params.stereo.max_disparity, timing_text(result, opt.sparse),
+               correction_text(result));
   }
   return 0;
 }
@@ -340,6 +347,7 @@ int run_sequence(const Options& opt, dco::pipeline::PipelineParams params) {
   float plane = 0.0f;
   int written = 0;
   double sum_ms = 0;
+  dco::stereo::CameraCorrection correction;  // as last printed
   const auto emit = [&] {
     const dco::Image<float>& map = opt.sparse ? result.sparse : result.dense;
     const std::string suffix = fmt::format("_{:06d}", result.index);
@@ -349,8 +357,11 @@ int run_sequence(const Options& opt, dco::pipeline::PipelineParams params) {
       write_overlays(*opt.out_dir / "overlay", suffix, result, opt.sparse,
                      static_cast<float>(params.stereo.max_disparity), plane);
     sum_ms += total_ms(result, opt.sparse);
-    fmt::print("frame {:6d}  {}{}\n", result.index, timing_text(result, opt.sparse),
-               result.flow_cue ? "" : "  (no flow cue)");
+    // The correction only when it changes: the frames after it are matched through it.
+    fmt::print("frame {:6d}  {}{}{}\n", result.index, timing_text(result, opt.sparse),
+               result.flow_cue ? "" : "  (no flow cue)",
+               result.camera_correction == correction ? std::string() : correction_text(result));
+    correction = result.camera_correction;
     ++written;
   };
   while (frames->next(input)) {

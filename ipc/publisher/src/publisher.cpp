@@ -168,6 +168,13 @@ void DepthPublisher::publish_stats(const pipeline::runtime::RuntimeStats& stats,
   m.entry_high_water = static_cast<std::int32_t>(stats.entry_high_water);
   m.stereo_queue_high_water = static_cast<std::int32_t>(stats.stereo_queue_high_water);
   m.densify_queue_high_water = static_cast<std::int32_t>(stats.densify_queue_high_water);
+  const stereo::CameraCorrection& c = stats.camera_correction;
+  m.right_channels = static_cast<std::int8_t>(c.levels.count);
+  for (std::size_t i = 0; i < c.levels.channels.size(); ++i) {
+    m.right_gain[i] = c.levels.channels[i].gain;
+    m.right_level_offset[i] = c.levels.channels[i].offset;
+  }
+  m.right_row_offset = c.row_offset;
   send(channel::kStats, m);
   stats_since_ns_ = now_ns;
   stats_pushed_ = stats.pushed;

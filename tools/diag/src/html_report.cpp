@@ -50,7 +50,8 @@ std::string charts(const LogDigest& d) {
       densify{"densify p50", "#af7ac5", {}}, p99{"latency p99", "#c0392b", {}},
       fps_in{"in", "#2e86c1", {}}, fps_out{"out", "#28b463", {}},
       drops{"dropped at the entry", "#c0392b", {}}, entry{"entry", "#2e86c1", {}},
-      stereo_q{"stereo queue", "#28b463", {}}, densify_q{"densify queue", "#af7ac5", {}};
+      stereo_q{"stereo queue", "#28b463", {}}, densify_q{"densify queue", "#af7ac5", {}},
+      rows{"rows below the left's", "#2e86c1", {}}, gain{"gain - 1, %", "#c0392b", {}};
   for (const StatsPoint& p : d.stats) {
     const ::dco::pipeline_stats_t& s = p.stats;
     stereo.xy.emplace_back(p.t_s, s.stereo_p50_ms);
@@ -63,6 +64,11 @@ std::string charts(const LogDigest& d) {
     entry.xy.emplace_back(p.t_s, s.entry_high_water);
     stereo_q.xy.emplace_back(p.t_s, s.stereo_queue_high_water);
     densify_q.xy.emplace_back(p.t_s, s.densify_queue_high_water);
+    if (s.right_channels == 1 || s.right_channels == 3) {
+      rows.xy.emplace_back(p.t_s, s.right_row_offset);
+      // The first channel's: B of a colour camera, whose three gains move together.
+      gain.xy.emplace_back(p.t_s, 100 * (s.right_gain[0] - 1));
+    }
   }
   out += line_chart_svg({"Stage times over the run so far (DCO_STATS)", "log time (s)", "ms"},
                         {stereo, contour, densify, p99});
@@ -72,6 +78,10 @@ std::string charts(const LogDigest& d) {
       {drops});
   out += line_chart_svg({"Queue high water (DCO_STATS)", "log time (s)", "frames"},
                         {entry, stereo_q, densify_q});
+  out += line_chart_svg(
+      {"The right camera against the left, as the stereo stage corrects it (DCO_STATS)",
+       "log time (s)", "rows; %"},
+      {rows, gain});
   std::vector<float> values(d.frames.size());
   std::transform(d.frames.begin(), d.frames.end(), values.begin(),
                  [](const FramePoint& f) { return f.latency_ms; });

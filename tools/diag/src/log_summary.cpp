@@ -19,6 +19,17 @@ std::string human_bytes(std::uint64_t bytes) {
 
 }  // namespace
 
+std::string right_camera_text(const ::dco::pipeline_stats_t& t) {
+  if (t.right_channels != 1 && t.right_channels != 3) return "none reported";
+  static const char* const names[] = {"B ", "G ", "R "};
+  std::string out;
+  for (int c = 0; c < t.right_channels; ++c)
+    out += fmt::format("{}{}gain {:.3f}, offset {:+.1f}", c > 0 ? "; " : "",
+                       t.right_channels == 3 ? names[c] : "", t.right_gain[c],
+                       t.right_level_offset[c]);
+  return out + fmt::format("; rows {:+.2f}", t.right_row_offset);
+}
+
 const char* device_state_name(std::int8_t state) {
   static const char* const names[] = {"disconnected", "starting", "streaming", "error"};
   return state >= 0 && state <= 3 ? names[state] : "unknown";
@@ -65,7 +76,10 @@ LogSummary summarize(const LogDigest& d) {
   for (const StatsPoint& p : d.stats) add_saturating(s.dropped_at_entry, p.dropped);
   if (!d.stats.empty()) {
     s.last_stats = d.stats.back().stats;
+    s.row_offset_min = s.row_offset_max = d.stats.front().stats.right_row_offset;
     for (const StatsPoint& p : d.stats) {
+      s.row_offset_min = std::min(s.row_offset_min, p.stats.right_row_offset);
+      s.row_offset_max = std::max(s.row_offset_max, p.stats.right_row_offset);
       s.entry_high_water = std::max(s.entry_high_water, p.stats.entry_high_water);
       s.stereo_queue_high_water =
           std::max(s.stereo_queue_high_water, p.stats.stereo_queue_high_water);
@@ -128,6 +142,8 @@ std::string text_summary(const LogDigest& d, const LogSummary& s, const std::str
         "  queues    {} dropped at the entry; high water: entry {}, stereo {}, densify {}\n",
         s.dropped_at_entry, s.entry_high_water, s.stereo_queue_high_water,
         s.densify_queue_high_water);
+    out += fmt::format("  right cam {} (last DCO_STATS); rows {:+.2f} to {:+.2f} over the log\n",
+                       right_camera_text(t), s.row_offset_min, s.row_offset_max);
   }
   if (d.has_status)
     out += fmt::format("  device    {} ({}){}; {} state changes, {} faults, {} disconnects\n",
@@ -151,6 +167,20 @@ std::string json_summary(const LogDigest& d, const LogSummary& s) {
   // Stage times are null in a log without DCO_STATS.
   const ::dco::pipeline_stats_t t = s.last_stats.value_or(::dco::pipeline_stats_t{});
   const auto stage = [&](double ms) { return s.last_stats ? json_number(ms) : "null"; };
+  // The right camera's correction: null without DCO_STATS or with a channel count dcod never sends.
+  std::string right_camera = "null";
+  if (s.last_stats && (t.right_channels == 1 || t.right_channels == 3)) {
+    std::string gain, offset;
+    for (int c = 0; c < t.right_channels; ++c) {
+      gain += (c > 0 ? ", " : "") + json_number(t.right_gain[c]);
+      offset += (c > 0 ? ", " : "") + json_number(t.right_level_offset[c]);
+    }
+    right_camera = fmt::format(
+        "{{\"gain\": [{}], \"level_offset\": [{}], \"row_offset\": {}, \"row_offset_min\": {}, "
+        "\"row_offset_max\": {}}}",
+        gain, offset, json_number(t.right_row_offset), json_number(s.row_offset_min),
+        json_number(s.row_offset_max));
+  }
   std::string channels;
   for (const auto& [name, tally] : d.channels)
     channels += fmt::format("{}{}: {{\"events\": {}, \"bytes\": {}, \"undecodable\": {}}}",
@@ -164,6 +194,7 @@ std::string json_summary(const LogDigest& d, const LogSummary& s) {
       " \"latency_ms\": {{\"mean\": {}, \"p50\": {}, \"p90\": {}, \"p99\": {}, \"max\": {}}},\n"
       " \"stage_ms\": {{\"stereo_p50\": {}, \"stereo_p99\": {}, \"contour_p50\": {}, "
       "\"contour_p99\": {}, \"densify_p50\": {}, \"densify_p99\": {}}},\n"
+      " \"right_camera\": {},\n"
       " \"state_changes\": {}, \"device_errors\": {}, \"disconnects\": {}, \"log_errors\": {}, "
       "\"log_warnings\": {}, \"previews\": {}, \"raw_pairs\": {}, \"undecodable\": {}}}\n",
       json_string(d.name), d.events, d.bytes, d.file_bytes, json_number(d.span_s),
@@ -172,9 +203,9 @@ std::string json_summary(const LogDigest& d, const LogSummary& s) {
       s.dropped_at_entry, json_number(s.latency.mean_ms), json_number(s.latency.p50_ms),
       json_number(s.latency.p90_ms), json_number(s.latency.p99_ms), json_number(s.latency.max_ms),
       stage(t.stereo_p50_ms), stage(t.stereo_p99_ms), stage(t.contour_p50_ms),
-      stage(t.contour_p99_ms), stage(t.densify_p50_ms), stage(t.densify_p99_ms), s.state_changes,
-      s.device_errors, s.disconnects, s.log_errors, s.log_warnings, d.previews_seen, d.raw_pairs,
-      s.undecodable);
+      stage(t.contour_p99_ms), stage(t.densify_p50_ms), stage(t.densify_p99_ms), right_camera,
+      s.state_changes, s.device_errors, s.disconnects, s.log_errors, s.log_warnings,
+      d.previews_seen, d.raw_pairs, s.undecodable);
 }
 
 }  // namespace dco::diag

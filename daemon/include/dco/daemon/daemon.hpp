@@ -116,6 +116,8 @@ class Daemon final : public drivers::FrameSink {
   long last_pushed_ = 0, last_published_ = 0;
   std::int64_t last_rate_ns_ = 0;
   double fps_in_ = 0, fps_out_ = 0;
+  // The stereo stage's correction of the right camera as last written to the log.
+  std::string logged_correction_ = stereo::describe(stereo::CameraCorrection{});
 };
 
 }  // namespace dco::daemon

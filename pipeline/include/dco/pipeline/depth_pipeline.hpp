@@ -40,6 +40,7 @@ struct DepthResult {
   Image<float> m_intensity;         // input resolution, [0, 1]
   Image<std::uint8_t> contours;     // input resolution, 255 on depth contours
   stereo::StereoTimings stereo_timings;
+  stereo::CameraCorrection camera_correction;  // the stereo stage's, after this frame
   int stereo_scale = 1;  // the stereo stage's internal downscale (its matches' grid)
   contour::ContourTimings contour_timings;
   densify::DensifyTimings densify_timings;
@@ -63,6 +64,7 @@ struct StereoSlot {
   Image<std::uint8_t> canny_classes;
   Image<float> stereo_cue;
   stereo::StereoTimings stereo_timings;
+  stereo::CameraCorrection camera_correction;
   int stereo_scale = 1;  // internal downscale of the stage
   bool planes_done = false;
   double planes_ms = 0;  // the time smooth_matches took

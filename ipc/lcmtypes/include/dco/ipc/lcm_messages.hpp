@@ -87,7 +87,8 @@ struct Encoding<::dco::depth_preview_t> {
 template <>
 struct Encoding<::dco::pipeline_stats_t> {
   static constexpr const char* kName = "dco.pipeline_stats_t";
-  static constexpr std::array steps{fixed(8 + 8 * 3 + 8 * 3 + 8 * 8 + 4 * 3)};
+  static constexpr std::array steps{
+      fixed(8 + 8 * 3 + 8 * 3 + 8 * 8 + 4 * 3 + 1 + 8 * 3 + 8 * 3 + 8)};
   static void clear_arrays(::dco::pipeline_stats_t&) {}
 };
 template <>

@@ -83,6 +83,9 @@ struct RuntimeStats {
   // does it. With two stage threads
   // and a CPU contour stage only.
   long next_contour_on_stereo_thread = 0;
+  // The stereo stage's correction of the right camera as of the last result handed on
+  // (stereo.exposure_balance, stereo.vertical_alignment): identity before the first.
+  stereo::CameraCorrection camera_correction;
 };
 
 // The depth pipeline in real time: the stereo, contour and densify steps of DepthPipeline on their
@@ -306,6 +309,7 @@ class DepthRuntime {
 
   Histogram latency_, ready_, stereo_ms_, contour_ms_, densify_ms_;
   long pushed_ = 0, dropped_ = 0, late_ = 0, published_ = 0, overdue_ = 0, early_ = 0;
+  stereo::CameraCorrection camera_correction_;
   // Running means of each thread's work per frame, the match planes and the early contour work
   // left out: the stereo thread's, and the contour + densify steps' (the densify thread's alone
   // with three threads); and of those two steps.

@@ -15,11 +15,13 @@ namespace dco::stereo {
 struct ChannelLevels {
   double gain = 1.0;
   double offset = 0.0;
+  bool operator==(const ChannelLevels&) const = default;
 };
 
 struct ExposureMap {
   std::array<ChannelLevels, 3> channels{};
   int count = 1;  // channels in use: 1 (grey) or 3 (BGR)
+  bool operator==(const ExposureMap&) const = default;
 };
 
 // Fits the map from the pairs a disparity map gives: matched left pixels (16,384 looked at, four

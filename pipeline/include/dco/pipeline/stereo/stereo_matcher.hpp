@@ -3,8 +3,10 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 
 #include "dco/core/image.hpp"
+#include "dco/pipeline/stereo/exposure_balance.hpp"
 #include "dco/pipeline/stereo/stereo_params.hpp"
 
 namespace dco::stereo {
@@ -28,6 +30,21 @@ struct StereoTimings {
   double guide_ms = 0;  // that pass and the mask it gives, a part of initial_ms
 };
 
+// What the stage does to the right image before it matches (with_camera_alignment): the levels
+// map and the vertical offset in force, fitted to the frames so far (the next frame is matched
+// through them). A field engineer reads a camera's state from them: "the right camera reads 2.5 %
+// brighter, its rows lie 0.3 below the left's". Both identity without the alignment.
+struct CameraCorrection {
+  ExposureMap levels;
+  double row_offset = 0;  // rows the right image's scene lies below the left's
+  bool operator==(const CameraCorrection&) const = default;
+  bool identity() const;
+};
+
+// For a log line: "right camera levels 0.976 v + 0.1, rows +0.31" (per channel B, G, R in
+// colour); "right camera as the left" for the identity.
+std::string describe(const CameraCorrection& correction);
+
 // The sparse stage: a rectified pair in, a disparity map out that carries values only where
 // the checks trust them.
 class StereoMatcher {
@@ -44,6 +61,7 @@ class StereoMatcher {
   // frame starts a new, unrelated sequence.
   virtual void reset() {}
   virtual const StereoTimings& last_timings() const = 0;
+  virtual CameraCorrection last_correction() const { return {}; }
 
   // What the last frame left at the internal resolution, for the stages that follow (valid until
   // the next compute; disparities in internal pixels): the internal downscale factor, the grey

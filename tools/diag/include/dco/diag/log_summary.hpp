@@ -26,12 +26,20 @@ struct LogSummary {
   // The last DCO_STATS: stage times over that run so far.
   std::optional<::dco::pipeline_stats_t> last_stats;
   int entry_high_water = 0, stereo_queue_high_water = 0, densify_queue_high_water = 0;
+  // The right camera's rows below the left's, as the stereo stage fitted them, over the log's
+  // DCO_STATS: a calibration that drifts while the headset warms up shows as a spread.
+  double row_offset_min = 0, row_offset_max = 0;
   long state_changes = 0;
   long device_errors = 0;  // status changes into ERROR or with a new fault
   long disconnects = 0;
   long log_errors = 0, log_warnings = 0;
   long undecodable = 0;
 };
+
+// The stereo stage's correction of the right camera in a DCO_STATS message: "gain 0.976, offset
+// +0.1; rows +0.31" (per channel B, G, R for a colour camera); "none reported" when the message
+// names no channel count dcod sends (1 or 3).
+std::string right_camera_text(const ::dco::pipeline_stats_t& stats);
 
 // DCO_STATUS's state as a word ("streaming"); "unknown" for values the type does not define.
 const char* device_state_name(std::int8_t state);
