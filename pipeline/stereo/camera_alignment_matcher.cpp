@@ -96,11 +96,20 @@ class CameraAlignmentMatcher final : public StereoMatcher {
       // The right levels as matched, before their table: moved by the offset in force (which
       // the vertical fit below has not changed yet, so aligned_ holds this frame's shift).
       const ImageView<const std::uint8_t> levels = offset_ != 0.0 ? aligned_.cview() : right;
-      if (fit_exposure(left, levels, disparity.cview(), fitted) &&
-          exposure_difference(fitted, map_) >= p.exposure_balance_levels) {
-        map_ = fitted;
-        table_.build(map_);
-        moved = true;
+      if (fit_exposure(left, levels, disparity.cview(), fitted)) {
+        // A map fitted to matches made at an offset found wrong since is no reference to keep:
+        // the new fit is taken unless it lies within the threshold of no map, then no map.
+        ExposureMap none;
+        none.count = map_.count;
+        if (map_suspect_ && exposure_difference(fitted, none) < p.exposure_balance_levels)
+          fitted = none;
+        if (map_suspect_ ? exposure_difference(fitted, map_) > 0
+                         : exposure_difference(fitted, map_) >= p.exposure_balance_levels) {
+          map_ = fitted;
+          table_.build(map_);
+          moved = true;
+        }
+        map_suspect_ = false;
       }
     }
     if (p.vertical_alignment) {
@@ -110,6 +119,8 @@ class CameraAlignmentMatcher final : public StereoMatcher {
           std::abs(fitted - offset_) >= kOffsetStep) {
         offset_ = fitted;
         moved = true;
+        // The map in force was fitted to matches made at the old offset.
+        map_suspect_ = !table_.identity();
       }
     }
     return moved;
@@ -122,6 +133,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
     map_.count = channels;
     table_.build(map_);
     offset_ = 0.0;
+    map_suspect_ = false;
     first_ = true;
     frames_ = 0;
   }
@@ -129,7 +141,8 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   std::unique_ptr<StereoMatcher> stage_;
   ExposureMap map_;
   ExposureTable table_;
-  double offset_ = 0.0;  // rows the right image's scene lies below the left's
+  double offset_ = 0.0;       // rows the right image's scene lies below the left's
+  bool map_suspect_ = false;  // map_ was fitted at an offset found wrong since
   Image<std::uint8_t> aligned_, balanced_;
   StereoTimings timings_;
   bool first_ = true;
@@ -139,17 +152,22 @@ class CameraAlignmentMatcher final : public StereoMatcher {
 }  // namespace
 
 bool CameraCorrection::identity() const {
+  return same_levels() && row_offset == 0;
+}
+
+bool CameraCorrection::same_levels() const {
   ExposureMap none;
   none.count = levels.count;
-  return levels == none && row_offset == 0;
+  return levels == none;
 }
 
 std::string describe(const CameraCorrection& correction) {
   if (correction.identity()) return "right camera as the left";
   const ExposureMap& m = correction.levels;
-  std::string text = "right camera levels";
+  std::string text = "right camera";
   char part[96];
-  for (int c = 0; c < m.count; ++c) {
+  if (!correction.same_levels()) text += " levels";
+  for (int c = 0; !correction.same_levels() && c < m.count; ++c) {
     const ChannelLevels& l = m.channels[static_cast<std::size_t>(c)];
     std::snprintf(part, sizeof part, "%s%s %.3f v %c %.1f", c > 0 ? "," : "",
                   m.count == 3 ? (c == 0   ? " B"
@@ -159,7 +177,9 @@ std::string describe(const CameraCorrection& correction) {
                   l.gain, l.offset < 0 ? '-' : '+', std::abs(l.offset));
     text += part;
   }
-  std::snprintf(part, sizeof part, ", rows %+.2f", correction.row_offset);
+  if (correction.row_offset == 0) return text;
+  std::snprintf(part, sizeof part, "%s rows %+.2f", correction.same_levels() ? "" : ",",
+                correction.row_offset);
   return text + part;
 }
 

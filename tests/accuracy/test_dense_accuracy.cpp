@@ -126,9 +126,9 @@ TEST(DenseDepthAccuracy, MoreGainOrARowOfDriftOnOneCameraCostsLittleWithTheCamer
       "exposure balance, %.2f %% without; right scene a row lower: %.2f %% with the "
       "vertical alignment, %.2f %% without\n",
       e, bad2(balanced), bad2(unbalanced), bad2(aligned), bad2(unaligned));
-  EXPECT_LT(bad2(balanced), e + 1.0);                 // 15.67 against 15.55 % on 2026-11-30
+  EXPECT_LT(bad2(balanced), e + 1.0);                 // 15.70 against 15.55 % on 2026-11-30
   EXPECT_GT(bad2(unbalanced), bad2(balanced) + 4.0);  // 23.96 %
-  EXPECT_LT(bad2(aligned), e + 1.0);                  // 15.97 %
+  EXPECT_LT(bad2(aligned), e + 1.0);                  // 15.95 %
   EXPECT_GT(bad2(unaligned), bad2(aligned) + 4.0);    // 25.45 %
 }
 

@@ -39,10 +39,12 @@ struct CameraCorrection {
   double row_offset = 0;  // rows the right image's scene lies below the left's
   bool operator==(const CameraCorrection&) const = default;
   bool identity() const;
+  bool same_levels() const;  // the levels map is the identity
 };
 
 // For a log line: "right camera levels 0.976 v + 0.1, rows +0.31" (per channel B, G, R in
-// colour); "right camera as the left" for the identity.
+// colour; either part only when it corrects something); "right camera as the left" for the
+// identity.
 std::string describe(const CameraCorrection& correction);
 
 // The sparse stage: a rectified pair in, a disparity map out that carries values only where
