@@ -94,7 +94,9 @@ std::unique_ptr<StereoMatcher> make_cpu_stereo_matcher(const StereoParams& param
 // frame give the next fits; a sequence's first frame is matched again through the corrections its
 // own matches give, while they still move (four times at most). A fit replaces a correction only
 // when it moves it enough (some level by stereo.exposure_balance_levels, the offset by 1/8 row), so
-// a pair that agrees keeps its bytes and the corrections do not follow the fits' noise.
+// a pair that agrees keeps its bytes and the corrections do not follow the fits' noise; an
+// exposure map in force when the offset moves was fitted to misaligned matches and is judged
+// afresh by the next fit (kept only if that fit lies the threshold or more from no map).
 std::unique_ptr<StereoMatcher> with_camera_alignment(std::unique_ptr<StereoMatcher> stage);
 
 // Makes the stage of a backend (CPU, CUDA), with the camera alignment when its params ask for
