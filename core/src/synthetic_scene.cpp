@@ -346,8 +346,9 @@ struct Frame {
 };
 
 // The background row of one view; the ground-truth rows are written for the left view only.
+// y: the scene row (fractional in a right view whose rows are off, SceneConfig::right_rows).
 template <int C>
-void background_row(const Frame& fr, int y, bool right, std::uint8_t* out, float* disp,
+void background_row(const Frame& fr, double y, bool right, std::uint8_t* out, float* disp,
                     float* depth) {
   const Rig& r = fr.rig;
   const float cx = static_cast<float>(r.cx), yc = static_cast<float>(y - r.cy);
@@ -380,7 +381,7 @@ void background_row(const Frame& fr, int y, bool right, std::uint8_t* out, float
 }
 
 template <int C>
-void object_row(const Frame& fr, const Surface& s, int y, bool right, std::uint8_t* out,
+void object_row(const Frame& fr, const Surface& s, double y, bool right, std::uint8_t* out,
                 float* disp, float* depth) {
   double a = 0, b = 0;
   if (!row_span(s, y, a, b)) return;
@@ -406,15 +407,20 @@ void object_row(const Frame& fr, const Surface& s, int y, bool right, std::uint8
   std::fill(depth + first, depth + last + 1, s.depth);
 }
 
+// Row y of a view, which shows the scene row y - rows (rows: 0 in the left view).
 template <int C>
-void render_row(const Frame& fr, int y, bool right, Image<std::uint8_t>& img, Image<float>& disp,
-                Image<float>& depth) {
+void render_row(const Frame& fr, int y, bool right, double rows, Image<std::uint8_t>& img,
+                Image<float>& disp, Image<float>& depth) {
   std::uint8_t* row = img.row(y);
   float* drow = right ? nullptr : disp.row(y);
   float* zrow = right ? nullptr : depth.row(y);
-  background_row<C>(fr, y, right, row, drow, zrow);
+  const double scene_y = y - rows;
+  background_row<C>(fr, scene_y, right, row, drow, zrow);
+  // The rows a surface touches are clipped to the image: a moved view may reach a row beyond.
+  const double reach = std::ceil(std::abs(rows));
   for (const Surface& s : fr.order)
-    if (y >= s.y0 && y <= s.y1) object_row<C>(fr, s, y, right, row, drow, zrow);
+    if (scene_y >= s.y0 - reach && scene_y <= s.y1 + reach)
+      object_row<C>(fr, s, scene_y, right, row, drow, zrow);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -516,6 +522,8 @@ void validate(const SceneConfig& c) {
     fail(fmt::format("right_gain {} must be within [0.25, 4]", c.right_gain));
   if (!finite(c.right_offset) || std::abs(c.right_offset) > 128)
     fail(fmt::format("right_offset {} must be within [-128, 128]", c.right_offset));
+  if (!finite(c.right_rows) || std::abs(c.right_rows) > 8)
+    fail(fmt::format("right_rows {} must be within [-8, 8]", c.right_rows));
   if (!finite(c.background_z_m) || c.background_z_m <= 0.1)
     fail(fmt::format("background_z_m {} must be more than 0.1 m", c.background_z_m));
   if (!finite(c.background_slope_x) || !finite(c.background_slope_y))
@@ -594,10 +602,11 @@ void SceneRenderer::render(int index, StereoSample& out) const {
     for (const bool right : {false, true}) {
       Image<std::uint8_t>& img = right ? out.right : out.left;
       for (int y = rows.start; y < rows.end; ++y) {
+        const double moved_rows = right ? c.right_rows : 0.0;
         if (channels == 1)
-          render_row<1>(fr, y, right, img, out.disparity, out.depth_m);
+          render_row<1>(fr, y, right, moved_rows, img, out.disparity, out.depth_m);
         else
-          render_row<3>(fr, y, right, img, out.disparity, out.depth_m);
+          render_row<3>(fr, y, right, moved_rows, img, out.disparity, out.depth_m);
         if (c.noise_sigma > 0) add_noise_row(img, c.noise_sigma, index, right ? 1 : 0, y);
         if (right && (c.right_gain != 1.0 || c.right_offset != 0.0))
           scale_row(img, c.right_gain, c.right_offset, y);

@@ -386,6 +386,27 @@ TEST(SyntheticScene, ColorModeHasThreeChannelsAndSameGeometry) {
   EXPECT_GT(differing, c.width * c.height / 4);  // really coloured, not grey copied thrice
 }
 
+TEST(SyntheticScene, TheRightCamerasRowsAreRenderedThatManyRowsLower) {
+  SceneConfig c = preset("hand", 320, 180);
+  c.noise_sigma = 0;  // the sensor's noise stays on the sensor's rows
+  SceneConfig lower = c, half = c;
+  lower.right_rows = 1;
+  half.right_rows = 0.5;
+  const StereoSample plain = render(c, 4), moved = render(lower, 4), between = render(half, 4);
+  EXPECT_TRUE(same_bytes(plain.left, moved.left));
+  EXPECT_TRUE(same_bytes(plain.disparity, moved.disparity));
+  long differ_plain = 0, differ_moved = 0;
+  for (int y = 1; y < c.height; ++y)
+    for (int x = 0; x < c.width; ++x) {
+      ASSERT_EQ(moved.right.at(x, y), plain.right.at(x, y - 1)) << x << "," << y;
+      differ_plain += between.right.at(x, y) != plain.right.at(x, y);
+      differ_moved += between.right.at(x, y) != moved.right.at(x, y);
+    }
+  // Half a row is rendered there, neither of the whole-row images.
+  EXPECT_GT(differ_plain, c.width * c.height / 20);
+  EXPECT_GT(differ_moved, c.width * c.height / 20);
+}
+
 TEST(SyntheticScene, TheRightCamerasGainAndOffsetScaleOnlyItsLevels) {
   const SceneConfig c = preset("boxes", 320, 180);  // with its sensor noise
   SceneConfig scaled = c;
@@ -457,6 +478,7 @@ TEST(SyntheticScene, InvalidConfigsThrowNamingTheProblem) {
   expect_error(with([](SceneConfig& c) { c.right_gain = 0.1; }), "right_gain");
   expect_error(with([](SceneConfig& c) { c.right_gain = NAN; }), "right_gain");
   expect_error(with([](SceneConfig& c) { c.right_offset = 200; }), "right_offset");
+  expect_error(with([](SceneConfig& c) { c.right_rows = 9; }), "right_rows");
   expect_error(with([](SceneConfig& c) { c.background_z_m = 0.05; }), "background_z_m");
   expect_error(with([](SceneConfig& c) { c.background_slope_y = 0.5; }), "background disparity");
   expect_error(with([](SceneConfig& c) { c.background_slope_x = 1; }), "background_slope_x");

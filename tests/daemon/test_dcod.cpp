@@ -102,14 +102,14 @@ TEST(Dcod, ReadyWatchdogPingsAndACleanStopOnSigterm) {
 }
 
 TEST(Dcod, LogsHowItCorrectsTheRightCamera) {
-  // A right camera 15 % brighter with 4 levels more black: its levels are matched as
-  // (v - 4) / 1.15 = 0.870 v - 3.5.
+  // A right camera 15 % brighter with 4 levels more black, whose rows lie 0.75 below the left's:
+  // its levels are matched as (v - 4) / 1.15 = 0.870 v - 3.5.
   TempDir dir;
   NotifySocket notify(dir / "notify");
   DcodOptions o;
   o.args = base_args(dir,
                      "synthetic://boxes?width=320&height=180&fps=30&right_gain=1.15&"
-                     "right_offset=4");
+                     "right_offset=4&right_rows=0.75");
   o.log = dir / "dcod.log";
   o.notify = &notify;
   DcodProcess dcod(o);
@@ -118,8 +118,9 @@ TEST(Dcod, LogsHowItCorrectsTheRightCamera) {
   while (dcod.log().find("camera alignment: ") == std::string::npos && SteadyClock::now() < until)
     std::this_thread::sleep_for(50ms);
   const std::string log = dcod.log();
-  EXPECT_NE(log.find("camera alignment: right camera levels 0.87"), std::string::npos) << log;
-  EXPECT_EQ(log.find("rows"), std::string::npos) << log;  // the rows meet
+  // 0.88 v - 5.0 at 320x180 with the rows apart: the same levels within one over the middle.
+  EXPECT_NE(log.find("camera alignment: right camera levels 0.8"), std::string::npos) << log;
+  EXPECT_NE(log.find(", rows +0."), std::string::npos) << log;  // found 0.75 to 1/8 row
   dcod.signal(SIGTERM);
   EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
 }

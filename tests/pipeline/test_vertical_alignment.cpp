@@ -107,6 +107,37 @@ TEST(CameraAlignmentMatcher, ARowAndAHalfBetweenTheCamerasCostsFewMatches) {
   EXPECT_EQ(plain->last_correction().row_offset, 0.0);
 }
 
+TEST(CameraAlignmentMatcher, FindsTheRowsOfARenderedPairAndFollowsThemThroughASequence) {
+  // The right camera rendered 0.75 row lower: no interpolation in the test's images.
+  synthetic::SceneConfig config = synthetic::preset("hand", 480, 270);
+  const synthetic::SceneRenderer met(config);
+  config.right_rows = 0.75;
+  const synthetic::SceneRenderer scene(config);
+  StereoParams params;
+  params.max_disparity = synthetic::covering_max_disparity(config);
+  const auto aligned = make_stereo_matcher({}, params);
+  params.vertical_alignment = false;
+  const auto plain = make_stereo_matcher({}, params), reference = make_stereo_matcher({}, params);
+  synthetic::StereoSample s, r;
+  Image<float> with, without, rows_met;
+  int on = 0, off = 0, ref = 0;
+  for (int i = 0; i < 5; ++i) {
+    scene.render(i, s);
+    met.render(i, r);
+    aligned->compute(s.left.cview(), s.right.cview(), with);
+    plain->compute(s.left.cview(), s.right.cview(), without);
+    reference->compute(r.left.cview(), r.right.cview(), rows_met);
+    on = good_matches(with, s.disparity);
+    off = good_matches(without, s.disparity);
+    ref = good_matches(rows_met, r.disparity);
+    EXPECT_NEAR(aligned->last_correction().row_offset, 0.75, 0.15) << "frame " << i;
+    EXPECT_GT(on, 1.1 * off) << "frame " << i;
+    EXPECT_GT(on, 0.97 * ref) << "frame " << i;
+  }
+  std::printf("frame 4: %s; good matches %d with the alignment, %d without, %d rows met\n",
+              describe(aligned->last_correction()).c_str(), on, off, ref);
+}
+
 TEST(CameraCorrection, ReadsAsALogLine) {
   CameraCorrection c;
   EXPECT_TRUE(c.identity());

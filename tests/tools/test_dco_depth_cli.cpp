@@ -237,6 +237,8 @@ TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
                "--right-gain needs a number in [0.25, 4]");
   expect_error(run_depth(dir, {"--synthetic", "hand", "--right-offset", "1x", "--out-dir", "o"}), 2,
                "--right-offset needs a number");
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--right-rows", "9", "--out-dir", "o"}), 2,
+               "--right-rows needs a number in [-8, 8]");
 }
 
 TEST(DcoDepthCli, UnknownParameterIsRefused) {

@@ -40,7 +40,8 @@ constexpr std::string_view kUsage =
        dco-depth --left-pattern P --right-pattern P [--first N] [--count N] [--calib FILE]
                  [--max-disp N] --out-dir DIR [--overlays] [--sparse] [options]
        dco-depth --synthetic NAME [--size WxH] [--frames N] [--color] [--right-gain G]
-                 [--right-offset O] [--max-disp N] --out-dir DIR [--overlays] [--sparse] [options]
+                 [--right-offset O] [--right-rows R] [--max-disp N] --out-dir DIR [--overlays]
+                 [--sparse] [options]
        dco-depth --list-params
 
 Computes disparity with the depth pipeline (stereo -> contours -> densify) and writes it in
@@ -68,6 +69,8 @@ A sequence (frame_000000.pfm, ... in --out-dir; synthetic scenes add gt_000000.p
   --color              synthetic colour images (default grey, like the headset camera)
   --right-gain G       the right camera's levels times G (0.25..4, default 1) and plus O
   --right-offset O     (-128..128, default 0): two sensors that differ, as a cheap pair's do
+  --right-rows R       the right camera's scene R rows lower (-8..8, default 0): a drifted
+                       rectification
   --overlays           also write overlay/depth_*.png, contours_*.png, occlusion_*.png
 Common:
   --max-disp N         largest disparity searched, input pixels
@@ -88,7 +91,7 @@ struct Options {
   std::optional<std::string> left_pattern, right_pattern, synthetic;
   int first = 0, count = -1, frames = 30, width = 1280, height = 720;
   bool color = false, overlays = false;
-  double right_gain = 1.0, right_offset = 0.0;
+  dco::tools::SyntheticRightCamera right_camera;
   std::optional<int> max_disp;
   std::optional<fs::path> config;
   std::vector<std::string> overrides;
@@ -141,9 +144,11 @@ Options parse_args(int argc, char** argv) {
     else if (arg == "--color")
       opt.color = args.flag();
     else if (arg == "--right-gain")
-      opt.right_gain = args.number_value(0.25, 4.0);
+      opt.right_camera.gain = args.number_value(0.25, 4.0);
     else if (arg == "--right-offset")
-      opt.right_offset = args.number_value(-128.0, 128.0);
+      opt.right_camera.offset = args.number_value(-128.0, 128.0);
+    else if (arg == "--right-rows")
+      opt.right_camera.rows = args.number_value(-8.0, 8.0);
     else if (arg == "--overlays")
       opt.overlays = args.flag();
     else if (arg == "--max-disp")
@@ -330,11 +335,10 @@ int run_batch(const Options& opt, dco::pipeline::PipelineParams params) {
 
 int run_sequence(const Options& opt, dco::pipeline::PipelineParams params) {
   std::unique_ptr<dco::tools::FrameSequence> frames =
-      opt.synthetic
-          ? dco::tools::make_synthetic_sequence(*opt.synthetic, opt.width, opt.height, opt.frames,
-                                                opt.color, opt.right_gain, opt.right_offset)
-          : dco::tools::make_pattern_sequence(*opt.left_pattern, *opt.right_pattern, opt.first,
-                                              opt.count, opt.calib);
+      opt.synthetic ? dco::tools::make_synthetic_sequence(*opt.synthetic, opt.width, opt.height,
+                                                          opt.frames, opt.color, opt.right_camera)
+                    : dco::tools::make_pattern_sequence(*opt.left_pattern, *opt.right_pattern,
+                                                        opt.first, opt.count, opt.calib);
   // A synthetic scene's nearest object, as far as the stage reaches.
   if (!opt.max_disp && frames->max_disparity())
     params.stereo.max_disparity =

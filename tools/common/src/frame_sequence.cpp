@@ -116,11 +116,12 @@ std::unique_ptr<FrameSequence> make_pattern_sequence(
 
 std::unique_ptr<FrameSequence> make_synthetic_sequence(const std::string& name, int width,
                                                        int height, int frames, bool color,
-                                                       double right_gain, double right_offset) {
+                                                       const SyntheticRightCamera& right) {
   synthetic::SceneConfig config = synthetic::preset(name, width, height);
   config.color = color;
-  config.right_gain = right_gain;
-  config.right_offset = right_offset;
+  config.right_gain = right.gain;
+  config.right_offset = right.offset;
+  config.right_rows = right.rows;
   return std::make_unique<SyntheticSequence>(std::move(config), frames);
 }
 

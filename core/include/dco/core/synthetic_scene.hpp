@@ -51,6 +51,10 @@ struct SceneConfig {
   // v of the right view becomes right_gain * v + right_offset (rounded, clamped to 0..255).
   double right_gain = 1.0;
   double right_offset = 0.0;
+  // The right camera's scene lies right_rows rows below the left's (within [-8, 8]), as a
+  // cheap module's rectification drifts: its row y shows the scene row y - right_rows, rendered
+  // there (not interpolated). The ground truth, of the left view, does not change.
+  double right_rows = 0.0;
 };
 
 // Named scenes: "hand" (four finger capsules and a palm disc sweeping across a box in front of

@@ -37,12 +37,16 @@ std::unique_ptr<FrameSequence> make_pattern_sequence(
     const std::string& left_pattern, const std::string& right_pattern, int first, int count,
     const std::optional<std::filesystem::path>& calib);
 
-// A synthetic scene ("hand", "boxes", "static") with exact ground truth; the right camera's
-// levels scaled as synthetic::SceneConfig::right_gain and right_offset say.
+// How a synthetic right camera differs from the left, as a cheap pair's does
+// (synthetic::SceneConfig::right_gain, right_offset, right_rows).
+struct SyntheticRightCamera {
+  double gain = 1.0, offset = 0.0, rows = 0.0;
+};
+
+// A synthetic scene ("hand", "boxes", "static") with exact ground truth.
 std::unique_ptr<FrameSequence> make_synthetic_sequence(const std::string& name, int width,
                                                        int height, int frames, bool color,
-                                                       double right_gain = 1.0,
-                                                       double right_offset = 0.0);
+                                                       const SyntheticRightCamera& right = {});
 
 // Expands a pattern for one index; throws dco::Error unless it holds exactly one %d-like field.
 std::string expand_pattern(const std::string& pattern, int index);
