@@ -601,8 +601,8 @@ void SceneRenderer::render(int index, StereoSample& out) const {
   cv::parallel_for_(cv::Range(0, c.height), [&](const cv::Range& rows) {
     for (const bool right : {false, true}) {
       Image<std::uint8_t>& img = right ? out.right : out.left;
+      const double moved_rows = right ? c.right_rows : 0.0;
       for (int y = rows.start; y < rows.end; ++y) {
-        const double moved_rows = right ? c.right_rows : 0.0;
         if (channels == 1)
           render_row<1>(fr, y, right, moved_rows, img, out.disparity, out.depth_m);
         else

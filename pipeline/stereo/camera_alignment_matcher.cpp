@@ -99,8 +99,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
       if (fit_exposure(left, levels, disparity.cview(), fitted)) {
         // A map fitted to matches made at an offset found wrong since is no reference to keep:
         // the new fit is taken unless it lies within the threshold of no map, then no map.
-        ExposureMap none;
-        none.count = map_.count;
+        const ExposureMap none = no_exposure_map(map_.count);
         if (map_suspect_ && exposure_difference(fitted, none) < p.exposure_balance_levels)
           fitted = none;
         if (map_suspect_ ? exposure_difference(fitted, map_) > 0
@@ -129,8 +128,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   // The next frame starts a sequence of its own: no correction, and a second match when it finds
   // one.
   void forget(int channels) {
-    map_ = ExposureMap{};
-    map_.count = channels;
+    map_ = no_exposure_map(channels);
     table_.build(map_);
     offset_ = 0.0;
     map_suspect_ = false;
@@ -156,25 +154,21 @@ bool CameraCorrection::identity() const {
 }
 
 bool CameraCorrection::same_levels() const {
-  ExposureMap none;
-  none.count = levels.count;
-  return levels == none;
+  return levels == no_exposure_map(levels.count);
 }
 
 std::string describe(const CameraCorrection& correction) {
   if (correction.identity()) return "right camera as the left";
   const ExposureMap& m = correction.levels;
+  static const char* const kNames[] = {" B", " G", " R"};
   std::string text = "right camera";
   char part[96];
   if (!correction.same_levels()) text += " levels";
   for (int c = 0; !correction.same_levels() && c < m.count; ++c) {
     const ChannelLevels& l = m.channels[static_cast<std::size_t>(c)];
     std::snprintf(part, sizeof part, "%s%s %.3f v %c %.1f", c > 0 ? "," : "",
-                  m.count == 3 ? (c == 0   ? " B"
-                                  : c == 1 ? " G"
-                                           : " R")
-                               : "",
-                  l.gain, l.offset < 0 ? '-' : '+', std::abs(l.offset));
+                  m.count == 3 ? kNames[c] : "", l.gain, l.offset < 0 ? '-' : '+',
+                  std::abs(l.offset));
     text += part;
   }
   if (correction.row_offset == 0) return text;

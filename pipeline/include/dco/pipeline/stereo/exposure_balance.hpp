@@ -24,6 +24,13 @@ struct ExposureMap {
   bool operator==(const ExposureMap&) const = default;
 };
 
+// The map that changes no level, over `count` channels.
+inline ExposureMap no_exposure_map(int count) {
+  ExposureMap m;
+  m.count = count;
+  return m;
+}
+
 // Fits the map from the pairs a disparity map gives: matched left pixels (16,384 looked at, four
 // times as many when those give too few pairs) against the right image at x - d, per channel,
 // where both lie on flat ground along their rows (the pixel and its row neighbours within 6
