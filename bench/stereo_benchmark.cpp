@@ -1,19 +1,25 @@
 // The sparse stereo stage next to OpenCV's StereoSGBM (3-way) on the same 640x360 real stereo
-// pair with 64 disparities, in one run; prints the time ratios at the end.
+// pair with 64 disparities, and the stage's corrections of the right camera next to OpenCV's
+// ways of doing them, in one run; prints the time ratios at the end.
 
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
+#include <numbers>
 #include <string>
+#include <vector>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/image.hpp"
+#include "dco/core/synthetic_scene.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
 #include "dco/pipeline/stereo/exposure_balance.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
@@ -195,6 +201,93 @@ void BM_OpenCVRightCorrection_Color_1280x720(benchmark::State& state) {
   }
 }
 
+// The synthetic hand at the headset's 1280x720 with its right camera turned 0.2 degrees and its
+// scene 0.5 rows lower: a known answer for both ways of finding the rows.
+constexpr double kTurnDeg = 0.2, kTurnRows = 0.5;
+const dco::synthetic::StereoSample& turned_hand() {
+  static const dco::synthetic::StereoSample sample = [] {
+    dco::synthetic::SceneConfig config = dco::synthetic::preset("hand", 1280, 720);
+    config.right_roll_deg = kTurnDeg;
+    config.right_rows = kTurnRows;
+    dco::synthetic::StereoSample s;
+    dco::synthetic::SceneRenderer(config).render(3, s);
+    return s;
+  }();
+  return sample;
+}
+
+void report_rows(benchmark::State& state, double offset, double roll_deg) {
+  state.counters["offset_err_rows"] = std::abs(offset - kTurnRows);
+  state.counters["roll_err_deg"] = std::abs(roll_deg - kTurnDeg);
+}
+
+// The stage's search for the rows of a sequence's first frame, from the pair's matches (here the
+// ground truth's disparities: the search's own cost, not the matcher's).
+void BM_DcoRowAlignmentSearch_1280x720(benchmark::State& state) {
+  const dco::synthetic::StereoSample& s = turned_hand();
+  dco::stereo::RowAlignment found;
+  for (auto _ : state) {
+    found = {};
+    dco::stereo::fit_row_alignment(s.left.cview(), s.right.cview(), s.disparity.cview(), {}, true,
+                                   found);
+    benchmark::DoNotOptimize(found);
+  }
+  report_rows(state, found.offset, found.roll * 180.0 / std::numbers::pi);
+}
+
+// The way one would find them with OpenCV: SIFT features of both views, their nearest
+// neighbours with Lowe's ratio test, and a least-squares line through the matches' row
+// differences across the columns, refitted without those 0.5 rows off it.
+void BM_OpenCVSiftRowAlignment_1280x720(benchmark::State& state) {
+  const dco::synthetic::StereoSample& s = turned_hand();
+  const cv::Mat left = dco::as_mat(s.left.cview()), right = dco::as_mat(s.right.cview());
+  const auto sift = cv::SIFT::create(4000);
+  const cv::BFMatcher matcher(cv::NORM_L2);
+  const double xc = 0.5 * (left.cols - 1);
+  double offset = 0, slope = 0;
+  for (auto _ : state) {
+    std::vector<cv::KeyPoint> kl, kr;
+    cv::Mat dl, dr;
+    sift->detectAndCompute(left, cv::noArray(), kl, dl);
+    sift->detectAndCompute(right, cv::noArray(), kr, dr);
+    std::vector<std::vector<cv::DMatch>> knn;
+    matcher.knnMatch(dl, dr, knn, 2);
+    std::vector<cv::Point2d> rows;  // (u, row difference)
+    for (const auto& k : knn) {
+      if (k.size() < 2 || k[0].distance > 0.7f * k[1].distance) continue;
+      const cv::Point2f a = kl[static_cast<std::size_t>(k[0].queryIdx)].pt;
+      const cv::Point2f b = kr[static_cast<std::size_t>(k[0].trainIdx)].pt;
+      if (std::abs(b.y - a.y) <= 4 && a.x >= b.x) rows.emplace_back((a.x - xc) / xc, b.y - a.y);
+    }
+    for (int round = 0; round < 3; ++round) {
+      double n = 0, su = 0, sv = 0, suu = 0, suv = 0;
+      for (const cv::Point2d& r : rows) {
+        if (round > 0 && std::abs(r.y - (offset + slope * r.x)) > 0.5) continue;
+        n += 1, su += r.x, sv += r.y, suu += r.x * r.x, suv += r.x * r.y;
+      }
+      slope = (suv * n - su * sv) / (suu * n - su * su);
+      offset = (sv - slope * su) / n;
+    }
+    benchmark::DoNotOptimize(offset);
+  }
+  report_rows(state, offset, std::atan(slope / xc) * 180.0 / std::numbers::pi);
+}
+
+// The right image turned back and through the exposure tables, as the stage does once a roll is
+// in force (align_rows is cv::warpAffine then; without a roll, shift_rows above).
+void BM_DcoRightCorrectionTurned_Color_1280x720(benchmark::State& state) {
+  if (pair_or_skip(state) == nullptr) return;
+  const auto right = dco::as_view<std::uint8_t>(headset_right());
+  dco::stereo::ExposureTable table;
+  table.build(brighter_map());
+  dco::Image<std::uint8_t> moved, balanced;
+  for (auto _ : state) {
+    dco::stereo::align_rows(right, {0.4, 0.002}, moved);
+    table.apply(moved.cview(), balanced);
+    benchmark::DoNotOptimize(balanced.data());
+  }
+}
+
 void BM_DcoSparseStereo_Gray(benchmark::State& s) {
   run_dco(s, false);
 }
@@ -216,6 +309,9 @@ BENCHMARK(BM_DcoSparseStereo_Color)->Unit(benchmark::kMillisecond)->UseRealTime(
 BENCHMARK(BM_DcoExposureBalance_Gray)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DcoRightCorrection_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_OpenCVRightCorrection_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DcoRightCorrectionTurned_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DcoRowAlignmentSearch_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_OpenCVSiftRowAlignment_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SGBM3Way_Gray_1Thread)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SGBM3Way_Color_1Thread)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SGBM3Way_Gray_2Threads)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -228,5 +324,6 @@ int main(int argc, char** argv) {
       {{"BM_DcoSparseStereo_Gray", "BM_SGBM3Way_Gray_1Thread"},
        {"BM_DcoSparseStereo_Color", "BM_SGBM3Way_Color_1Thread"},
        {"BM_DcoSparseStereo_Gray", "BM_SGBM3Way_Gray_2Threads"},
-       {"BM_DcoRightCorrection_Color_1280x720", "BM_OpenCVRightCorrection_Color_1280x720"}});
+       {"BM_DcoRightCorrection_Color_1280x720", "BM_OpenCVRightCorrection_Color_1280x720"},
+       {"BM_DcoRowAlignmentSearch_1280x720", "BM_OpenCVSiftRowAlignment_1280x720"}});
 }

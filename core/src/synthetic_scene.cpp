@@ -14,7 +14,9 @@
 
 #include <fmt/format.h>
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 
+#include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/synthetic_scene.hpp"
 
@@ -474,6 +476,18 @@ void scale_row(Image<std::uint8_t>& img, double gain, double offset, int y) {
     row[i] = static_cast<std::uint8_t>(std::clamp(g * row[i] + o, 0.0f, 255.0f) + 0.5f);
 }
 
+// out = `view` turned by `degrees` about the image centre: the scene at `view`'s pixel p lies at
+// centre + R(degrees) (p - centre) in `out` (bilinear, borders repeated).
+void turn_view(ImageView<const std::uint8_t> view, double degrees, Image<std::uint8_t>& out) {
+  const double a = degrees * std::numbers::pi / 180.0, co = std::cos(a), si = std::sin(a);
+  const double xc = 0.5 * (view.width - 1), yc = 0.5 * (view.height - 1);
+  // out(q) = view(R(-a) (q - centre) + centre), given to OpenCV as that inverse map.
+  const cv::Matx23d from_out(co, si, xc - co * xc - si * yc, -si, co, yc + si * xc - co * yc);
+  cv::Mat dst = as_mat(out.view());
+  cv::warpAffine(as_mat(view), dst, from_out, dst.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                 cv::BORDER_REPLICATE);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Validation.
 
@@ -524,6 +538,8 @@ void validate(const SceneConfig& c) {
     fail(fmt::format("right_offset {} must be within [-128, 128]", c.right_offset));
   if (!finite(c.right_rows) || std::abs(c.right_rows) > 8)
     fail(fmt::format("right_rows {} must be within [-8, 8]", c.right_rows));
+  if (!finite(c.right_roll_deg) || std::abs(c.right_roll_deg) > 1)
+    fail(fmt::format("right_roll_deg {} must be within [-1, 1]", c.right_roll_deg));
   if (!finite(c.background_z_m) || c.background_z_m <= 0.1)
     fail(fmt::format("background_z_m {} must be more than 0.1 m", c.background_z_m));
   if (!finite(c.background_slope_x) || !finite(c.background_slope_y))
@@ -598,20 +614,36 @@ void SceneRenderer::render(int index, StereoSample& out) const {
   // OpenCV's threads (one where the runtime keeps OpenCV to one): a 1280x720 pair takes about
   // 30 ms on one core, more than a 60 fps source's period.
   gaussian_table();  // made once, before any thread reads it
+  // A turned right view is rendered upright into a frame of its own and turned into out.right;
+  // its noise and levels come after the turn, as a sensor's do.
+  const bool turned = c.right_roll_deg != 0.0;
+  // The calling thread's frame, named by reference: inside the workers' lambda a thread_local
+  // would be each worker's own.
+  thread_local Image<std::uint8_t> upright_frame;
+  Image<std::uint8_t>& upright = upright_frame;
+  if (turned) upright.resize(c.width, c.height, channels);
+  const auto sensor_rows = [&](Image<std::uint8_t>& img, bool right, int y) {
+    if (c.noise_sigma > 0) add_noise_row(img, c.noise_sigma, index, right ? 1 : 0, y);
+    if (right && (c.right_gain != 1.0 || c.right_offset != 0.0))
+      scale_row(img, c.right_gain, c.right_offset, y);
+  };
   cv::parallel_for_(cv::Range(0, c.height), [&](const cv::Range& rows) {
     for (const bool right : {false, true}) {
-      Image<std::uint8_t>& img = right ? out.right : out.left;
+      Image<std::uint8_t>& img = right ? (turned ? upright : out.right) : out.left;
       const double moved_rows = right ? c.right_rows : 0.0;
       for (int y = rows.start; y < rows.end; ++y) {
         if (channels == 1)
           render_row<1>(fr, y, right, moved_rows, img, out.disparity, out.depth_m);
         else
           render_row<3>(fr, y, right, moved_rows, img, out.disparity, out.depth_m);
-        if (c.noise_sigma > 0) add_noise_row(img, c.noise_sigma, index, right ? 1 : 0, y);
-        if (right && (c.right_gain != 1.0 || c.right_offset != 0.0))
-          scale_row(img, c.right_gain, c.right_offset, y);
+        if (!(right && turned)) sensor_rows(img, right, y);
       }
     }
+  });
+  if (!turned) return;
+  turn_view(upright.cview(), c.right_roll_deg, out.right);
+  cv::parallel_for_(cv::Range(0, c.height), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) sensor_rows(out.right, true, y);
   });
 }
 

@@ -44,6 +44,7 @@ class SyntheticSource final : public PacedSource {
     c.right_gain = uri.number("right_gain", 1.0, 0.25, 4.0);
     c.right_offset = uri.number("right_offset", 0.0, -128.0, 128.0);
     c.right_rows = uri.number("right_rows", 0.0, -8.0, 8.0);
+    c.right_roll_deg = uri.number("right_roll_deg", 0.0, -1.0, 1.0);
     if (fps > 0) c.fps = fps;
     return c;
   }

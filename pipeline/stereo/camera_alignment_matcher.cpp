@@ -1,6 +1,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <numbers>
 #include <string>
 #include <utility>
 
@@ -17,7 +18,8 @@ constexpr int kFirstFrameRounds = 4;
 // After a sequence's first frame the corrections are fitted again on every kRefitEvery-th frame:
 // a camera's drift and exposure steps are followed within a few frames, at a quarter of the cost.
 constexpr int kRefitEvery = 4;
-// A fitted vertical offset replaces the one in force when they differ by this many rows.
+// A fitted vertical offset replaces the one in force when they differ by this many rows, and so
+// does a fitted roll, in rows at the side edges.
 constexpr double kOffsetStep = 0.125;
 
 class CameraAlignmentMatcher final : public StereoMatcher {
@@ -59,7 +61,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   }
 
   const StereoTimings& last_timings() const override { return timings_; }
-  CameraCorrection last_correction() const override { return {map_, offset_}; }
+  CameraCorrection last_correction() const override { return {map_, rows_.offset, rows_.roll}; }
   int last_scale() const override { return stage_->last_scale(); }
   ImageView<const std::uint8_t> internal_left_gray() const override {
     return stage_->internal_left_gray();
@@ -73,11 +75,11 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   const StereoParams& params() const override { return stage_->params(); }
 
  private:
-  // The right image moved by the vertical offset, then through the exposure table; either step
+  // The right image brought onto the left's rows, then through the exposure table; either step
   // only when it changes something.
   ImageView<const std::uint8_t> corrected(ImageView<const std::uint8_t> right) {
-    if (offset_ != 0.0) {
-      shift_rows(right, offset_, aligned_);
+    if (!rows_.identity()) {
+      align_rows(right, rows_, aligned_);
       right = aligned_.cview();
     }
     if (table_.identity()) return right;
@@ -86,18 +88,19 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   }
 
   // Fits the corrections to the matches; takes each that moves enough (the exposure map some
-  // level by stereo.exposure_balance_levels, the offset by kOffsetStep rows) and then says so.
+  // level by stereo.exposure_balance_levels, the offset or the roll at the side edges by
+  // kOffsetStep rows) and then says so.
   bool refit(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
              const Image<float>& disparity) {
     const StereoParams& p = stage_->params();
     bool moved = false;
     if (p.exposure_balance) {
       ExposureMap fitted = map_;
-      // The right levels as matched, before their table: moved by the offset in force (which
-      // the vertical fit below has not changed yet, so aligned_ holds this frame's shift).
-      const ImageView<const std::uint8_t> levels = offset_ != 0.0 ? aligned_.cview() : right;
+      // The right levels as matched, before their table: on the rows in force (which the
+      // vertical fit below has not changed yet, so aligned_ holds this frame's).
+      const ImageView<const std::uint8_t> levels = rows_.identity() ? right : aligned_.cview();
       if (fit_exposure(left, levels, disparity.cview(), fitted)) {
-        // A map fitted to matches made at an offset found wrong since is no reference to keep:
+        // A map fitted to matches made on rows found wrong since is no reference to keep:
         // the new fit is taken unless it lies within the threshold of no map, then no map.
         const ExposureMap none = no_exposure_map(map_.count);
         if (map_suspect_ && exposure_difference(fitted, none) < p.exposure_balance_levels)
@@ -112,14 +115,20 @@ class CameraAlignmentMatcher final : public StereoMatcher {
       }
     }
     if (p.vertical_alignment) {
-      double fitted = offset_;
+      RowAlignment fitted = rows_;
       // A sequence's first frame searches the whole range: its matches improve with each round.
-      if (fit_vertical_offset(left, right, disparity.cview(), map_, first_, fitted) &&
-          std::abs(fitted - offset_) >= kOffsetStep) {
-        offset_ = fitted;
-        moved = true;
-        // The map in force was fitted to matches made at the old offset.
-        map_suspect_ = !table_.identity();
+      if (fit_row_alignment(left, right, disparity.cview(), map_, first_, fitted)) {
+        RowAlignment next = rows_;
+        if (std::abs(fitted.offset - rows_.offset) >= kOffsetStep) next.offset = fitted.offset;
+        const double half = 0.5 * (left.width - 1);
+        if (std::abs(std::tan(fitted.roll) - std::tan(rows_.roll)) * half >= kOffsetStep)
+          next.roll = fitted.roll;
+        if (next != rows_) {
+          rows_ = next;
+          moved = true;
+          // The map in force was fitted to matches made on the old rows.
+          map_suspect_ = !table_.identity();
+        }
       }
     }
     return moved;
@@ -130,7 +139,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   void forget(int channels) {
     map_ = no_exposure_map(channels);
     table_.build(map_);
-    offset_ = 0.0;
+    rows_ = {};
     map_suspect_ = false;
     first_ = true;
     frames_ = 0;
@@ -139,8 +148,8 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   std::unique_ptr<StereoMatcher> stage_;
   ExposureMap map_;
   ExposureTable table_;
-  double offset_ = 0.0;       // rows the right image's scene lies below the left's
-  bool map_suspect_ = false;  // map_ was fitted at an offset found wrong since
+  RowAlignment rows_;         // of the right image's scene against the left's
+  bool map_suspect_ = false;  // map_ was fitted on rows found wrong since
   Image<std::uint8_t> aligned_, balanced_;
   StereoTimings timings_;
   bool first_ = true;
@@ -150,7 +159,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
 }  // namespace
 
 bool CameraCorrection::identity() const {
-  return same_levels() && row_offset == 0;
+  return same_levels() && row_offset == 0 && roll == 0;
 }
 
 bool CameraCorrection::same_levels() const {
@@ -171,9 +180,15 @@ std::string describe(const CameraCorrection& correction) {
                   std::abs(l.offset));
     text += part;
   }
-  if (correction.row_offset == 0) return text;
-  std::snprintf(part, sizeof part, "%s rows %+.2f", correction.same_levels() ? "" : ",",
-                correction.row_offset);
+  const char* sep = correction.same_levels() ? "" : ",";
+  if (correction.row_offset != 0) {
+    std::snprintf(part, sizeof part, "%s rows %+.2f", sep, correction.row_offset);
+    text += part;
+    sep = ",";
+  }
+  if (correction.roll == 0) return text;
+  std::snprintf(part, sizeof part, "%s roll %+.3f deg", sep,
+                correction.roll * 180.0 / std::numbers::pi);
   return text + part;
 }
 

@@ -6,6 +6,10 @@
 #include <cstddef>
 #include <vector>
 
+#include <opencv2/imgproc.hpp>
+
+#include "dco/core/cv_interop.hpp"
+
 namespace dco::stereo {
 namespace {
 
@@ -13,9 +17,30 @@ constexpr double kSamples = 4096;         // pixels a step looks at: one offset 
 constexpr double kSearchSamples = 16384;  // and a search (a sequence's first frame only)
 constexpr int kMinStep = 8;               // vertical grey step (levels over two rows) a pair needs
 constexpr double kOutlier = 40.0;         // levels apart that leave a pair out
-constexpr int kSearchSteps = 3;           // Gauss-Newton steps after a search
-constexpr int kTrackSteps = 1;            // and from the offset in force (one per frame)
+constexpr int kTrackSteps = 1;            // Gauss-Newton steps from the rows in force
 constexpr int kMinSearchSamples = 50;     // samples a search needs
+constexpr int kQuarters = 4;              // column bands of a search, for the roll
+constexpr int kMinQuarterSamples = 12;    // samples a band's mode needs
+constexpr int kRefineSteps = 3;           // Lucas-Kanade steps of a searched window
+constexpr int kLineRounds = 2;            // least-squares lines through the samples near the last
+constexpr double kLineBand = 0.25;        // rows from the line that make a sample near it
+// Share of the samples' squared column spread (in half widths) below which the roll is not fitted.
+constexpr double kMinRollSpread = 0.05;
+
+// Where a pixel of the right image brought onto the left's rows lies in the right image as it
+// came (the inverse of align_rows), with u = (x - xc) / xc in [-1, 1] across the columns.
+struct Geometry {
+  double xc, yc, c, s, offset;
+  Geometry(int width, int height, const RowAlignment& a)
+      : xc(0.5 * (width - 1)),
+        yc(0.5 * (height - 1)),
+        c(std::cos(a.roll)),
+        s(std::sin(a.roll)),
+        offset(a.offset) {}
+  double x(double x, double y) const { return xc + c * (x - xc) - s * (y - yc); }
+  double y(double x, double y) const { return yc + s * (x - xc) + c * (y - yc) + offset; }
+  double u(double x) const { return xc > 0 ? (x - xc) / xc : 0.0; }
+};
 
 struct Sampler {
   ImageView<const std::uint8_t> left, right;
@@ -75,11 +100,62 @@ struct Sampler {
   }
 };
 
-// For sampled matched pixels with grey steps both ways, the row offset (-3 .. +3, to a tenth by
-// a parabola) at which a 5x5 window of the right image, within two columns of the match, differs
-// least from the left's.
-std::vector<double> best_rows(const Sampler& s) {
-  std::vector<double> rows;
+struct BestRow {
+  double u, row;
+};
+
+// The window's place (px, py) in the right image refined from a whole-pixel start by
+// Lucas-Kanade steps on its bilinear samples: unbiased between whole rows, where a parabola
+// through whole-row costs leans towards them. False when the steps leave the pixel around the
+// start or the window's gradients do not fix both ways.
+template <int kRadius>
+bool refine_window(const Sampler& s, int x, int y, int g, double& px, double& py) {
+  constexpr int kSide = 2 * kRadius + 3;  // the window and a pixel around it, for the gradients
+  const int c = std::min(s.left.channels, 3);
+  const double x0 = px, y0 = py;
+  std::array<double, kSide * kSide> r{};
+  for (int step = 0; step < kRefineSteps; ++step) {
+    for (int j = 0; j < kSide; ++j)
+      for (int i = 0; i < kSide; ++i)
+        r[std::size_t(j * kSide + i)] = s.right_at(px + i - kRadius - 1, py + j - kRadius - 1, g);
+    // The left window brought to the right one's mean and spread: levels that differ between
+    // the cameras (no exposure map yet) would otherwise pull the window along its gradients.
+    const auto at = [&](int a, int b) { return r[std::size_t(b * kSide + a)]; };
+    const auto left_at = [&](int a, int b) {
+      return static_cast<double>(s.left.row(y + b - kRadius - 1)[(x + a - kRadius - 1) * c + g]);
+    };
+    double ls = 0, lss = 0, rs = 0, rss = 0;
+    for (int j = 1; j + 1 < kSide; ++j)
+      for (int i = 1; i + 1 < kSide; ++i) {
+        ls += left_at(i, j), lss += left_at(i, j) * left_at(i, j);
+        rs += at(i, j), rss += at(i, j) * at(i, j);
+      }
+    constexpr double n = (kSide - 2) * (kSide - 2);
+    const double lvar = lss / n - (ls / n) * (ls / n), rvar = rss / n - (rs / n) * (rs / n);
+    if (!(lvar > 0) || !(rvar > 0)) return false;
+    const double scale = std::sqrt(rvar / lvar);
+    double gxx = 0, gxy = 0, gyy = 0, bx = 0, by = 0;
+    for (int j = 1; j + 1 < kSide; ++j)
+      for (int i = 1; i + 1 < kSide; ++i) {
+        const double gx = 0.5 * (at(i + 1, j) - at(i - 1, j));
+        const double gy = 0.5 * (at(i, j + 1) - at(i, j - 1));
+        const double e = (left_at(i, j) - ls / n) * scale + rs / n - at(i, j);
+        gxx += gx * gx, gxy += gx * gy, gyy += gy * gy, bx += gx * e, by += gy * e;
+      }
+    const double det = gxx * gyy - gxy * gxy;
+    if (!(det > 1e-6 * (gxx * gyy)) || !(gxx > 0) || !(gyy > 0)) return false;
+    px += (gyy * bx - gxy * by) / det;
+    py += (gxx * by - gxy * bx) / det;
+    if (!(std::abs(px - x0) <= 1.0 && std::abs(py - y0) <= 1.0)) return false;
+  }
+  return true;
+}
+
+// For sampled matched pixels with grey steps both ways, the row offset (-3 .. +3) at which a 5x5
+// window of the right image, within two columns of the match (as the roll in force places it),
+// differs least from the left's: the best whole row and column, then refine_window.
+std::vector<BestRow> best_rows(const Sampler& s, const Geometry& g0) {
+  std::vector<BestRow> rows;
   const int c = std::min(s.left.channels, 3);
   const int w = s.left.width, h = s.left.height;
   constexpr int kRadius = 2, kColumns = 2, kRows = 3;
@@ -95,10 +171,10 @@ std::vector<double> best_rows(const Sampler& s) {
       if (std::abs(down[x * c + g] - up[x * c + g]) < kMinStep ||
           std::abs(row[(x + 1) * c + g] - row[(x - 1) * c + g]) < kMinStep)
         continue;
-      const int xr = static_cast<int>(std::lround(at));
-      std::array<double, 2 * kRows + 1> cost{};
-      for (int dy = -kRows; dy <= kRows; ++dy) {
-        double best = -1;
+      const int xr = static_cast<int>(std::lround(g0.x(at, y)));
+      double best = -1;
+      int best_dx = 0, best_dy = 0;
+      for (int dy = -kRows; dy <= kRows; ++dy)
         for (int dx = -kColumns; dx <= kColumns; ++dx) {
           double sum = 0;
           for (int j = -kRadius; j <= kRadius; ++j)
@@ -106,18 +182,12 @@ std::vector<double> best_rows(const Sampler& s) {
               const double l = s.left.row(y + j)[(x + i) * c + g];
               sum += std::abs(l - s.right_level(xr + dx + i, y + j + dy, g));
             }
-          if (best < 0 || sum < best) best = sum;
+          if (best < 0 || sum < best) best = sum, best_dx = dx, best_dy = dy;
         }
-        cost[static_cast<std::size_t>(dy + kRows)] = best;
-      }
-      const auto lowest = std::min_element(cost.begin(), cost.end());
-      const int k = static_cast<int>(lowest - cost.begin());
-      if (k == 0 || k == 2 * kRows) continue;  // at the window's edge: no minimum inside it
-      const double a = cost[std::size_t(k - 1)], b = cost[std::size_t(k)],
-                   e = cost[std::size_t(k + 1)];
-      const double curve = a - 2 * b + e;
-      const double sub = curve > 0 ? 0.5 * (a - e) / curve : 0.0;
-      rows.push_back(k - kRows + std::clamp(sub, -0.5, 0.5));
+      if (std::abs(best_dy) == kRows) continue;  // at the window's edge: no minimum inside it
+      double px = xr + best_dx, py = y + best_dy;
+      if (!refine_window<kRadius>(s, x, y, g, px, py)) continue;
+      rows.push_back({g0.u(at), py - y});
     }
   }
   return rows;
@@ -142,40 +212,102 @@ double mode(const std::vector<double>& values) {
   return sum / n;
 }
 
+// The offset and roll of a line through the most common best row of each quarter of the columns
+// (weighted by their samples); the offset alone from all of them when fewer than two quarters
+// have enough. False when too few samples.
+bool search_rows(const std::vector<BestRow>& rows, int width, RowAlignment& a) {
+  if (static_cast<int>(rows.size()) < kMinSearchSamples) return false;
+  std::array<std::vector<double>, kQuarters> band;
+  std::array<double, kQuarters> u_sum{};
+  for (const BestRow& r : rows) {
+    const int q = std::clamp(static_cast<int>((r.u + 1.0) * 0.5 * kQuarters), 0, kQuarters - 1);
+    band[static_cast<std::size_t>(q)].push_back(r.row);
+    u_sum[static_cast<std::size_t>(q)] += r.u;
+  }
+  double sw = 0, su = 0, sv = 0, suu = 0, suv = 0;
+  int used = 0;
+  for (std::size_t q = 0; q < band.size(); ++q) {
+    const double n = static_cast<double>(band[q].size());
+    if (n < kMinQuarterSamples) continue;
+    const double u = u_sum[q] / n, v = mode(band[q]);
+    sw += n, su += n * u, sv += n * v, suu += n * u * u, suv += n * u * v, ++used;
+  }
+  const double spread = suu * sw - su * su;
+  if (used < 2 || !(spread > 0)) {
+    std::vector<double> all;
+    all.reserve(rows.size());
+    for (const BestRow& r : rows) all.push_back(r.row);
+    a.offset = mode(all);
+    return true;
+  }
+  double slope = (suv * sw - su * sv) / spread;  // rows per half width
+  double offset = (sv - slope * su) / sw;
+  // Then every sample near that line, not only the modes: a least-squares line through them.
+  for (int i = 0; i < kLineRounds; ++i) {
+    double n = 0, u1 = 0, v1 = 0, uu = 0, uv = 0;
+    for (const BestRow& r : rows) {
+      if (std::abs(r.row - (offset + slope * r.u)) > kLineBand) continue;
+      n += 1, u1 += r.u, v1 += r.row, uu += r.u * r.u, uv += r.u * r.row;
+    }
+    const double d = uu * n - u1 * u1;
+    if (n < kMinSearchSamples || !(d > 0)) break;
+    slope = (uv * n - u1 * v1) / d;
+    offset = (v1 - slope * u1) / n;
+  }
+  a.offset = offset;
+  a.roll = std::atan(slope / (0.5 * (width - 1)));
+  return true;
+}
+
 }  // namespace
 
-bool fit_vertical_offset(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                         ImageView<const float> disparity, const ExposureMap& levels, bool search,
-                         double& offset) {
+bool fit_row_alignment(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                       ImageView<const float> disparity, const ExposureMap& levels, bool search,
+                       RowAlignment& alignment) {
   const double pixels = static_cast<double>(left.width) * left.height;
   const auto step_for = [&](double samples) {
     return std::max(2, static_cast<int>(std::ceil(std::sqrt(pixels / samples))));
   };
-  const Sampler s{left, right, disparity, levels, step_for(kSamples)};
-  double v = offset;
+  RowAlignment a = alignment;
+  const double half = 0.5 * (left.width - 1);
   if (search) {
-    // Each sample's own best row in a small window, then the most common one: the matches of a pair
-    // that is off vertically fit the offset they were made at, so they cannot tell the way out
-    // by themselves (bench/RESULTS.md).
+    // Each sample's own best row in a small window, then the most common ones: the matches of a
+    // pair that is off vertically fit the rows they were made on, so they cannot tell the way
+    // out by themselves, and steps from the search would pull it back there (bench/RESULTS.md).
     const Sampler wide{left, right, disparity, levels, step_for(kSearchSamples)};
-    const std::vector<double> rows = best_rows(wide);
-    if (static_cast<int>(rows.size()) < kMinSearchSamples) return false;
-    v = mode(rows);
+    if (!search_rows(best_rows(wide, Geometry(left.width, left.height, alignment)), left.width, a))
+      return false;
+  } else {
+    const Sampler s{left, right, disparity, levels, step_for(kSamples)};
+    for (int i = 0; i < kTrackSteps; ++i) {
+      // Unknowns: the offset and the roll as rows at the side edges (edge = tan(roll) * half).
+      const Geometry g(left.width, left.height, a);
+      double jj = 0, jju = 0, jjuu = 0, jr = 0, jru = 0;
+      int used = 0;
+      s.each([&](double at, int y, double l, int k) {
+        const double xr = g.x(at, y), yr = g.y(at, y);
+        const double r = l - s.right_at(xr, yr, k);
+        if (std::abs(r) > kOutlier) return;
+        // The roll's own column shift is left out: the next matches take it up.
+        const double j = 0.5 * (s.right_at(xr, yr + 1, k) - s.right_at(xr, yr - 1, k));
+        const double u = g.u(at);
+        jj += j * j, jju += j * j * u, jjuu += j * j * u * u, jr += j * r, jru += j * r * u;
+        ++used;
+      });
+      if (used < kMinAlignmentPairs || !(jj > 0)) return false;
+      const double det = jj * jjuu - jju * jju;
+      double d_offset = jr / jj, d_edge = 0;
+      if (jjuu > kMinRollSpread * jj && det > 1e-9 * jj * jjuu) {
+        d_offset = (jjuu * jr - jju * jru) / det;
+        d_edge = (jj * jru - jju * jr) / det;
+      }
+      a.offset += std::clamp(d_offset, -1.0, 1.0);  // one row at most per step
+      a.roll = std::atan(std::tan(a.roll) + std::clamp(d_edge, -1.0, 1.0) / half);
+    }
   }
-  for (int i = 0; i < (search ? kSearchSteps : kTrackSteps); ++i) {
-    double jr = 0, jj = 0;
-    int used = 0;
-    s.each([&](double xr, int y, double l, int k) {
-      const double r = l - s.right_at(xr, y + v, k);
-      if (std::abs(r) > kOutlier) return;
-      const double j = 0.5 * (s.right_at(xr, y + v + 1, k) - s.right_at(xr, y + v - 1, k));
-      jr += j * r, jj += j * j, ++used;
-    });
-    if (used < kMinAlignmentPairs || !(jj > 0)) return false;
-    v += std::clamp(jr / jj, -1.0, 1.0);  // one row at most per step
-  }
-  if (!(std::abs(v) <= kMaxVerticalOffset)) return false;
-  offset = v;
+  const double edge = std::abs(std::tan(a.roll)) * half;
+  if (!(std::abs(a.offset) <= kMaxVerticalOffset) || !(edge <= kMaxVerticalOffset)) return false;
+  alignment = a;
   return true;
 }
 
@@ -191,6 +323,22 @@ void shift_rows(ImageView<const std::uint8_t> right, double offset, Image<std::u
     for (int i = 0; i < n; ++i)
       o[i] = static_cast<std::uint8_t>((a[i] * (256 - w1) + b[i] * w1 + 128) >> 8);
   }
+}
+
+void align_rows(ImageView<const std::uint8_t> right, const RowAlignment& alignment,
+                Image<std::uint8_t>& out) {
+  if (alignment.roll == 0) {
+    shift_rows(right, alignment.offset, out);
+    return;
+  }
+  out.resize(right.width, right.height, right.channels);
+  const Geometry g(right.width, right.height, alignment);
+  // out(x, y) = right(g.x(x, y), g.y(x, y)), an affine map written as its inverse.
+  const cv::Matx23d to_right(g.c, -g.s, g.xc - g.c * g.xc + g.s * g.yc, g.s, g.c,
+                             g.yc - g.s * g.xc - g.c * g.yc + g.offset);
+  cv::Mat dst = as_mat(out.view());
+  cv::warpAffine(as_mat(right), dst, to_right, dst.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                 cv::BORDER_REPLICATE);
 }
 
 }  // namespace dco::stereo

@@ -407,6 +407,34 @@ TEST(SyntheticScene, TheRightCamerasRowsAreRenderedThatManyRowsLower) {
   EXPECT_GT(differ_moved, c.width * c.height / 20);
 }
 
+TEST(SyntheticScene, TheRightCameraTurnedShowsItsSceneLowerTowardsTheRightEdge) {
+  SceneConfig c = preset("boxes", 320, 180);
+  c.noise_sigma = 0;
+  SceneConfig turned = c;
+  turned.right_roll_deg = 0.5;  // tan(0.5 deg) * 159.5 = 1.39 rows at the side edges
+  const StereoSample plain = render(c, 2), other = render(turned, 2);
+  EXPECT_TRUE(same_bytes(plain.left, other.left));
+  EXPECT_TRUE(same_bytes(plain.disparity, other.disparity));
+  // A column's scene lies lower by tan(roll) * (x - xc) rows: near the right edge the turned
+  // view's 7x7 windows agree best with the upright view about 1.3 rows up, near the left edge
+  // about 1.3 rows down, in the middle where they are.
+  const auto best_row = [&](int x0) {
+    double best = -1;
+    int best_dy = 0;
+    for (int dy = -3; dy <= 3; ++dy) {
+      double sum = 0;
+      for (int y = 40; y < 140; ++y)
+        for (int x = x0 - 3; x <= x0 + 3; ++x)
+          sum += std::abs(other.right.at(x, y) - plain.right.at(x, y - dy));
+      if (best < 0 || sum < best) best = sum, best_dy = dy;
+    }
+    return best_dy;
+  };
+  EXPECT_EQ(best_row(10), -1);
+  EXPECT_EQ(best_row(160), 0);
+  EXPECT_EQ(best_row(309), 1);
+}
+
 TEST(SyntheticScene, TheRightCamerasGainAndOffsetScaleOnlyItsLevels) {
   const SceneConfig c = preset("boxes", 320, 180);  // with its sensor noise
   SceneConfig scaled = c;
@@ -479,6 +507,8 @@ TEST(SyntheticScene, InvalidConfigsThrowNamingTheProblem) {
   expect_error(with([](SceneConfig& c) { c.right_gain = NAN; }), "right_gain");
   expect_error(with([](SceneConfig& c) { c.right_offset = 200; }), "right_offset");
   expect_error(with([](SceneConfig& c) { c.right_rows = 9; }), "right_rows");
+  expect_error(with([](SceneConfig& c) { c.right_roll_deg = -1.5; }), "right_roll_deg");
+  expect_error(with([](SceneConfig& c) { c.right_roll_deg = NAN; }), "right_roll_deg");
   expect_error(with([](SceneConfig& c) { c.background_z_m = 0.05; }), "background_z_m");
   expect_error(with([](SceneConfig& c) { c.background_slope_y = 0.5; }), "background disparity");
   expect_error(with([](SceneConfig& c) { c.background_slope_x = 1; }), "background_slope_x");

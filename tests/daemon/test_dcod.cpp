@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <string>
 #include <thread>
 
 #include "dco/client.hpp"
@@ -102,14 +103,14 @@ TEST(Dcod, ReadyWatchdogPingsAndACleanStopOnSigterm) {
 }
 
 TEST(Dcod, LogsHowItCorrectsTheRightCamera) {
-  // A right camera 15 % brighter with 4 levels more black, whose rows lie 0.75 below the left's:
-  // its levels are matched as (v - 4) / 1.15 = 0.870 v - 3.5.
+  // A right camera 15 % brighter with 4 levels more black, whose rows lie 0.75 below the left's,
+  // turned 0.4 degrees: its levels are matched as (v - 4) / 1.15 = 0.870 v - 3.5.
   TempDir dir;
   NotifySocket notify(dir / "notify");
   DcodOptions o;
   o.args = base_args(dir,
                      "synthetic://boxes?width=320&height=180&fps=30&right_gain=1.15&"
-                     "right_offset=4&right_rows=0.75");
+                     "right_offset=4&right_rows=0.75&right_roll_deg=0.4");
   o.log = dir / "dcod.log";
   o.notify = &notify;
   DcodProcess dcod(o);
@@ -121,6 +122,9 @@ TEST(Dcod, LogsHowItCorrectsTheRightCamera) {
   // 0.88 v - 5.0 at 320x180 with the rows apart: the same levels within one over the middle.
   EXPECT_NE(log.find("camera alignment: right camera levels 0.8"), std::string::npos) << log;
   EXPECT_NE(log.find(", rows +0."), std::string::npos) << log;  // found 0.75 to 1/8 row
+  const std::size_t roll = log.find(", roll ");
+  ASSERT_NE(roll, std::string::npos) << log;
+  EXPECT_NEAR(std::stod(log.substr(roll + 7)), 0.4, 0.03) << log;  // degrees
   dcod.signal(SIGTERM);
   EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
 }

@@ -145,7 +145,7 @@ TEST(SyntheticSource, AFiniteSourceEndsAndARestartGoesOn) {
   EXPECT_EQ(second.frames().front().seq, n) << "a restart continues the sequence";
 }
 
-TEST(SyntheticSource, TheRightCameraCanRunAnotherGainBlackLevelAndRow) {
+TEST(SyntheticSource, TheRightCameraCanRunAnotherGainBlackLevelRowAndRoll) {
   auto source = open_source(
       "synthetic://boxes?width=96&height=64&fps=0&frames=2&right_gain=1.1&right_offset=-3");
   RecordingSink sink;
@@ -168,8 +168,18 @@ TEST(SyntheticSource, TheRightCameraCanRunAnotherGainBlackLevelAndRow) {
   config.right_rows = -0.75;
   synthetic::SceneRenderer(config).render(1, sample);
   EXPECT_TRUE(same_pixels(moved_sink.frames()[1].right.cview(), sample.right.cview()));
-  for (const char* bad :
-       {"right_gain=0.1", "right_gain=5", "right_offset=-200", "right_gain=x", "right_rows=9"})
+  auto turned =
+      open_source("synthetic://boxes?width=96&height=64&fps=0&frames=2&right_roll_deg=0.3");
+  RecordingSink turned_sink;
+  turned->start(turned_sink);
+  ASSERT_TRUE(turned_sink.wait_for_end(10s));
+  turned->stop();
+  config = synthetic::preset("boxes", 96, 64);
+  config.right_roll_deg = 0.3;
+  synthetic::SceneRenderer(config).render(1, sample);
+  EXPECT_TRUE(same_pixels(turned_sink.frames()[1].right.cview(), sample.right.cview()));
+  for (const char* bad : {"right_gain=0.1", "right_gain=5", "right_offset=-200", "right_gain=x",
+                          "right_rows=9", "right_roll_deg=2"})
     EXPECT_THROW(open_source(std::string("synthetic://boxes?width=96&height=64&") + bad), Error)
         << bad;
 }

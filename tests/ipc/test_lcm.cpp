@@ -285,6 +285,7 @@ TEST(Publisher, StatsStatusAndLog) {
   s.camera_correction.levels.count = 3;
   s.camera_correction.levels.channels = {{{0.97, 1.5}, {0.98, -0.5}, {1.01, 2.0}}};
   s.camera_correction.row_offset = 0.375;
+  s.camera_correction.roll = -0.001;  // radians in the stage, degrees on the wire
   // The first interval runs from construction, which the test does not control; the second is
   // exactly 2 s.
   const std::int64_t t0 = 1'000'000'000'000;
@@ -322,6 +323,7 @@ TEST(Publisher, StatsStatusAndLog) {
   EXPECT_DOUBLE_EQ(m.right_gain[2], 1.01);
   EXPECT_DOUBLE_EQ(m.right_level_offset[2], 2.0);
   EXPECT_DOUBLE_EQ(m.right_row_offset, 0.375);
+  EXPECT_NEAR(m.right_roll_deg, -0.0572958, 1e-7);
   ASSERT_EQ(got.status.size(), 1u);
   EXPECT_EQ(got.status[0].state, std::int8_t{dco::device_status_t::STATE_STREAMING});
   ASSERT_EQ(got.status[0].counter_count, 2);

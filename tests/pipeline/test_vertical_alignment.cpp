@@ -1,11 +1,13 @@
-// The vertical alignment between the two cameras: the offset fitted from a pair's matches, the
-// rows moved by it, and the stereo stage matched through it.
+// The vertical alignment between the two cameras: the offset and roll fitted from a pair's
+// matches, the right image brought back by them, and the stereo stage matched through them.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <numbers>
 
 #include <gtest/gtest.h>
 
@@ -45,34 +47,102 @@ MovedPair moved_pair(double offset, int width = 480, int height = 270) {
   return p;
 }
 
-TEST(FitVerticalOffset, FindsTheRowsBetweenTheCamerasFromTheMatches) {
+TEST(FitRowAlignment, FindsTheRowsBetweenTheCamerasFromTheMatches) {
   const MovedPair p = moved_pair(1.25);
   const ExposureMap same_levels;
-  double offset = 0;
-  ASSERT_TRUE(fit_vertical_offset(p.sample.left.cview(), p.moved.cview(),
-                                  p.sample.disparity.cview(), same_levels, true, offset));
-  EXPECT_NEAR(offset, 1.25, 0.1);
+  RowAlignment a;
+  ASSERT_TRUE(fit_row_alignment(p.sample.left.cview(), p.moved.cview(), p.sample.disparity.cview(),
+                                same_levels, true, a));
+  EXPECT_NEAR(a.offset, 1.25, 0.05);
+  EXPECT_NEAR(a.roll, 0.0, 0.0002);  // under 0.05 rows at the side edges
   // From near the answer, the steps alone get there too.
-  offset = 1.0;
-  ASSERT_TRUE(fit_vertical_offset(p.sample.left.cview(), p.moved.cview(),
-                                  p.sample.disparity.cview(), same_levels, false, offset));
-  EXPECT_NEAR(offset, 1.25, 0.1);
+  a = {1.0, 0.0};
+  ASSERT_TRUE(fit_row_alignment(p.sample.left.cview(), p.moved.cview(), p.sample.disparity.cview(),
+                                same_levels, false, a));
+  EXPECT_NEAR(a.offset, 1.25, 0.1);
   // An aligned pair: no offset.
-  ASSERT_TRUE(fit_vertical_offset(p.sample.left.cview(), p.sample.right.cview(),
-                                  p.sample.disparity.cview(), same_levels, true, offset));
-  EXPECT_NEAR(offset, 0.0, 0.1);
+  ASSERT_TRUE(fit_row_alignment(p.sample.left.cview(), p.sample.right.cview(),
+                                p.sample.disparity.cview(), same_levels, true, a));
+  EXPECT_NEAR(a.offset, 0.0, 0.05);
 }
 
-TEST(FitVerticalOffset, NoMatchesLeaveTheOffset) {
+TEST(FitRowAlignment, NoMatchesLeaveTheAlignment) {
   const MovedPair p = moved_pair(1.0);
   Image<float> none(p.moved.width(), p.moved.height());
   none.fill(std::numeric_limits<float>::infinity());
-  double offset = 0.5;
-  EXPECT_FALSE(fit_vertical_offset(p.sample.left.cview(), p.moved.cview(), none.cview(),
-                                   ExposureMap{}, true, offset));
-  EXPECT_FALSE(fit_vertical_offset(p.sample.left.cview(), p.moved.cview(), none.cview(),
-                                   ExposureMap{}, false, offset));
-  EXPECT_DOUBLE_EQ(offset, 0.5);
+  RowAlignment a{0.5, 0.001};
+  EXPECT_FALSE(fit_row_alignment(p.sample.left.cview(), p.moved.cview(), none.cview(),
+                                 ExposureMap{}, true, a));
+  EXPECT_FALSE(fit_row_alignment(p.sample.left.cview(), p.moved.cview(), none.cview(),
+                                 ExposureMap{}, false, a));
+  EXPECT_EQ(a, (RowAlignment{0.5, 0.001}));
+}
+
+// The right camera of a rendered pair turned by `degrees` (and its scene `offset` rows lower).
+synthetic::StereoSample turned_pair(double degrees, double offset = 0.0) {
+  synthetic::SceneConfig config = synthetic::preset("boxes", 480, 270);
+  config.right_rows = offset;
+  config.right_roll_deg = degrees;
+  synthetic::StereoSample s;
+  synthetic::SceneRenderer(config).render(2, s);
+  return s;
+}
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+
+TEST(FitRowAlignment, FindsTheRollBetweenTheCamerasFromTheMatches) {
+  // 0.3 degrees: the side edges 1.25 rows above and below the centre's, which is 0.5 lower.
+  const synthetic::StereoSample s = turned_pair(0.3, 0.5);
+  RowAlignment a;
+  ASSERT_TRUE(fit_row_alignment(s.left.cview(), s.right.cview(), s.disparity.cview(), {}, true, a));
+  EXPECT_NEAR(a.roll / kDegree, 0.3, 0.01);
+  EXPECT_NEAR(a.offset, 0.5, 0.05);
+  // The steps from half the roll get most of the way.
+  a = {0.5, 0.15 * kDegree};
+  for (int i = 0; i < 3; ++i)
+    ASSERT_TRUE(
+        fit_row_alignment(s.left.cview(), s.right.cview(), s.disparity.cview(), {}, false, a));
+  EXPECT_NEAR(a.roll / kDegree, 0.3, 0.03);
+  EXPECT_NEAR(a.offset, 0.5, 0.1);
+  // Turned the other way, no offset.
+  const synthetic::StereoSample q = turned_pair(-0.2);
+  a = {};
+  ASSERT_TRUE(fit_row_alignment(q.left.cview(), q.right.cview(), q.disparity.cview(), {}, true, a));
+  EXPECT_NEAR(a.roll / kDegree, -0.2, 0.01);
+  EXPECT_NEAR(a.offset, 0.0, 0.05);
+}
+
+TEST(AlignRows, TurnsTheRightImageBackOntoTheLeftsRows) {
+  synthetic::SceneConfig config = synthetic::preset("boxes", 480, 270);
+  config.noise_sigma = 0;
+  synthetic::StereoSample upright;
+  synthetic::SceneRenderer(config).render(1, upright);
+  config.right_roll_deg = 0.5;
+  config.right_rows = 1.0;
+  synthetic::StereoSample turned;
+  synthetic::SceneRenderer(config).render(1, turned);
+  Image<std::uint8_t> back;
+  align_rows(turned.right.cview(), {1.0, 0.5 * kDegree}, back);
+  // Away from the borders, the turned view brought back differs from the upright one by the
+  // blur of two bilinear passes; the turned one itself, by the rows.
+  double back_diff = 0, turned_diff = 0;
+  int n = 0;
+  for (int y = 20; y < 250; ++y)
+    for (int x = 20; x < 460; ++x, ++n) {
+      back_diff += std::abs(back.view().at(x, y) - upright.right.view().at(x, y));
+      turned_diff += std::abs(turned.right.view().at(x, y) - upright.right.view().at(x, y));
+    }
+  std::printf("mean level difference to the upright view: turned %.2f, brought back %.2f\n",
+              turned_diff / n, back_diff / n);
+  EXPECT_LT(back_diff / n, 0.25 * turned_diff / n);
+  // Without a roll it is shift_rows, byte for byte.
+  Image<std::uint8_t> shifted;
+  align_rows(turned.right.cview(), {0.75, 0.0}, back);
+  shift_rows(turned.right.cview(), 0.75, shifted);
+  for (int y = 0; y < back.height(); ++y)
+    ASSERT_TRUE(
+        std::equal(back.view().row(y), back.view().row(y) + back.width(), shifted.view().row(y)))
+        << "row " << y;
 }
 
 TEST(CameraAlignmentMatcher, ARowAndAHalfBetweenTheCamerasCostsFewMatches) {
@@ -138,6 +208,34 @@ TEST(CameraAlignmentMatcher, FindsTheRowsOfARenderedPairAndFollowsThemThroughASe
               describe(aligned->last_correction()).c_str(), on, off, ref);
 }
 
+TEST(CameraAlignmentMatcher, ARollBetweenTheCamerasCostsFewMatches) {
+  // 0.4 degrees: the side edges 1.7 rows apart from the centre's.
+  synthetic::SceneConfig config = synthetic::preset("hand", 480, 270);
+  StereoParams params;
+  params.max_disparity = synthetic::covering_max_disparity(config);
+  const auto aligned = make_stereo_matcher({}, params);
+  params.vertical_alignment = false;
+  const auto plain = make_stereo_matcher({}, params), reference = make_stereo_matcher({}, params);
+  synthetic::StereoSample met;
+  synthetic::SceneRenderer(config).render(3, met);
+  config.right_roll_deg = 0.4;
+  synthetic::StereoSample s;
+  synthetic::SceneRenderer(config).render(3, s);
+  Image<float> with, without, rows_met;
+  aligned->compute(s.left.cview(), s.right.cview(), with);
+  plain->compute(s.left.cview(), s.right.cview(), without);
+  reference->compute(met.left.cview(), met.right.cview(), rows_met);
+  const int on = good_matches(with, s.disparity), off = good_matches(without, s.disparity),
+            ref = good_matches(rows_met, met.disparity);
+  const CameraCorrection found = aligned->last_correction();
+  std::printf("%s; good matches %d with the alignment, %d without, %d with the rows met\n",
+              describe(found).c_str(), on, off, ref);
+  EXPECT_NEAR(found.roll / kDegree, 0.4, 0.02);
+  EXPECT_NEAR(found.row_offset, 0.0, 0.125);
+  EXPECT_LT(off, 0.8 * ref);
+  EXPECT_GT(on, 0.95 * ref);
+}
+
 TEST(CameraCorrection, ReadsAsALogLine) {
   CameraCorrection c;
   EXPECT_TRUE(c.identity());
@@ -163,6 +261,16 @@ TEST(CameraCorrection, ReadsAsALogLine) {
   c.row_offset = 0;
   c.levels.channels[0].offset = 2;
   EXPECT_EQ(describe(c), "right camera levels B 1.000 v + 2.0, G 1.000 v + 0.0, R 1.000 v + 0.0");
+  c.roll = -0.05 * kDegree;
+  EXPECT_EQ(
+      describe(c),
+      "right camera levels B 1.000 v + 2.0, G 1.000 v + 0.0, R 1.000 v + 0.0, roll -0.050 deg");
+  c = CameraCorrection{};
+  c.roll = 0.125 * kDegree;  // turned, no more
+  EXPECT_FALSE(c.identity());
+  EXPECT_EQ(describe(c), "right camera roll +0.125 deg");
+  c.row_offset = -0.5;
+  EXPECT_EQ(describe(c), "right camera rows -0.50, roll +0.125 deg");
 }
 
 }  // namespace

@@ -239,6 +239,8 @@ TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
                "--right-offset needs a number");
   expect_error(run_depth(dir, {"--synthetic", "hand", "--right-rows", "9", "--out-dir", "o"}), 2,
                "--right-rows needs a number in [-8, 8]");
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--right-roll", "1.5", "--out-dir", "o"}), 2,
+               "--right-roll needs a number in [-1, 1]");
 }
 
 TEST(DcoDepthCli, UnknownParameterIsRefused) {

@@ -111,11 +111,13 @@ class KnownLog {
     m.stereo_p99_ms = 2 * t;
     m.densify_p50_ms = 0.5;
     m.entry_high_water = dropped > 4 ? 2 : 1;
-    // A right camera 2.4 % brighter whose rows drift from 0.25 above the left's to 1 below.
+    // A right camera 2.4 % brighter, turned 0.02 degrees, whose rows drift from 0.25 above the
+    // left's to 1 below.
     m.right_channels = 1;
     m.right_gain[0] = 0.976;
     m.right_level_offset[0] = 0.1;
     m.right_row_offset = t / 2 - 0.5;
+    m.right_roll_deg = 0.02;
     add(t, ipc::channel::kStats, lcm_bytes(m));
   }
   void status(double t, std::int8_t state, const std::string& error) {
@@ -211,13 +213,14 @@ TEST(LogDigest, KeyNumbersOfAKnownLog) {
   EXPECT_NE(text.find("3 camera frames not published, 1 announcements missing"), std::string::npos)
       << text;
   EXPECT_NE(text.find("BAD       DCO_STATS: 1 messages do not decode"), std::string::npos) << text;
-  EXPECT_NE(text.find("right cam gain 0.976, offset +0.1; rows +1.00 (last DCO_STATS); rows -0.25 "
-                      "to +1.00 over the log"),
+  EXPECT_NE(text.find("right cam gain 0.976, offset +0.1; rows +1.00; roll +0.020 deg (last "
+                      "DCO_STATS); rows -0.25 to +1.00 over the log"),
             std::string::npos)
       << text;
   const std::string json = json_summary(d, s);
   EXPECT_NE(json.find("\"right_camera\": {\"gain\": [0.976], \"level_offset\": [0.1], "
-                      "\"row_offset\": 1, \"row_offset_min\": -0.25, \"row_offset_max\": 1}"),
+                      "\"row_offset\": 1, \"row_offset_min\": -0.25, \"row_offset_max\": 1, "
+                      "\"roll_deg\": 0.02}"),
             std::string::npos)
       << json;
   EXPECT_NE(json.find("\"frames\": 56,"), std::string::npos) << json;
@@ -234,9 +237,10 @@ TEST(LogSummary, TheRightCameraNamesEachChannelOfAColourCamera) {
   m.right_gain[2] = 1.0;
   m.right_level_offset[1] = -2;
   m.right_row_offset = -0.5;
+  m.right_roll_deg = -0.125;
   EXPECT_EQ(right_camera_text(m),
             "B gain 0.980, offset +0.0; G gain 0.990, offset -2.0; R gain 1.000, offset +0.0; "
-            "rows -0.50");
+            "rows -0.50; roll -0.125 deg");
 }
 
 // A log can hold any count: the totals stop at the largest long instead of wrapping negative.

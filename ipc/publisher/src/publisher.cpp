@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -175,6 +176,7 @@ void DepthPublisher::publish_stats(const pipeline::runtime::RuntimeStats& stats,
     m.right_level_offset[i] = c.levels.channels[i].offset;
   }
   m.right_row_offset = c.row_offset;
+  m.right_roll_deg = c.roll * 180.0 / std::numbers::pi;
   send(channel::kStats, m);
   stats_since_ns_ = now_ns;
   stats_pushed_ = stats.pushed;

@@ -122,6 +122,7 @@ std::unique_ptr<FrameSequence> make_synthetic_sequence(const std::string& name, 
   config.right_gain = right.gain;
   config.right_offset = right.offset;
   config.right_rows = right.rows;
+  config.right_roll_deg = right.roll_deg;
   return std::make_unique<SyntheticSequence>(std::move(config), frames);
 }
 

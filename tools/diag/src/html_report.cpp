@@ -51,7 +51,8 @@ std::string charts(const LogDigest& d) {
       fps_in{"in", "#2e86c1", {}}, fps_out{"out", "#28b463", {}},
       drops{"dropped at the entry", "#c0392b", {}}, entry{"entry", "#2e86c1", {}},
       stereo_q{"stereo queue", "#28b463", {}}, densify_q{"densify queue", "#af7ac5", {}},
-      rows{"rows below the left's", "#2e86c1", {}}, gain{"gain - 1, %", "#c0392b", {}};
+      rows{"rows below the left's", "#2e86c1", {}}, gain{"gain - 1, %", "#c0392b", {}},
+      roll{"roll, 1/100 degree", "#28b463", {}};
   for (const StatsPoint& p : d.stats) {
     const ::dco::pipeline_stats_t& s = p.stats;
     stereo.xy.emplace_back(p.t_s, s.stereo_p50_ms);
@@ -66,6 +67,7 @@ std::string charts(const LogDigest& d) {
     densify_q.xy.emplace_back(p.t_s, s.densify_queue_high_water);
     if (s.right_channels == 1 || s.right_channels == 3) {
       rows.xy.emplace_back(p.t_s, s.right_row_offset);
+      roll.xy.emplace_back(p.t_s, 100 * s.right_roll_deg);
       // The first channel's: B of a colour camera, whose three gains move together.
       gain.xy.emplace_back(p.t_s, 100 * (s.right_gain[0] - 1));
     }
@@ -80,8 +82,8 @@ std::string charts(const LogDigest& d) {
                         {entry, stereo_q, densify_q});
   out += line_chart_svg(
       {"The right camera against the left, as the stereo stage corrects it (DCO_STATS)",
-       "log time (s)", "rows; %"},
-      {rows, gain});
+       "log time (s)", "rows; %; 1/100 degree"},
+      {rows, gain, roll});
   std::vector<float> values(d.frames.size());
   std::transform(d.frames.begin(), d.frames.end(), values.begin(),
                  [](const FramePoint& f) { return f.latency_ms; });

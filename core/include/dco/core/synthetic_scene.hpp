@@ -55,6 +55,11 @@ struct SceneConfig {
   // cheap module's rectification drifts: its row y shows the scene row y - right_rows, rendered
   // there (not interpolated). The ground truth, of the left view, does not change.
   double right_rows = 0.0;
+  // The right camera turned by right_roll_deg degrees (within [-1, 1]) about the image centre
+  // against the left, as a module's mount flexes: its scene at column x lies tan(roll) * (x - xc)
+  // rows lower (and a row's scene tan(roll) * (y - yc) columns further left). Rendered upright,
+  // then turned (bilinear), then its noise and levels.
+  double right_roll_deg = 0.0;
 };
 
 // Named scenes: "hand" (four finger capsules and a palm disc sweeping across a box in front of

@@ -31,20 +31,22 @@ struct StereoTimings {
 };
 
 // What the stage does to the right image before it matches (with_camera_alignment): the levels
-// map and the vertical offset in force, fitted to the frames so far (the next frame is matched
-// through them). A field engineer reads a camera's state from them: "the right camera reads 2.5 %
-// brighter, its rows lie 0.3 below the left's". Both identity without the alignment.
+// map, the vertical offset and the roll in force, fitted to the frames so far (the next frame is
+// matched through them). A field engineer reads a camera's state from them: "the right camera
+// reads 2.5 % brighter, its rows lie 0.3 below the left's, it is turned 0.05 degrees". All
+// identity without the alignment.
 struct CameraCorrection {
   ExposureMap levels;
-  double row_offset = 0;  // rows the right image's scene lies below the left's
+  double row_offset = 0;  // rows the right image's scene lies below the left's (centre column)
+  double roll = 0;        // radians it is turned about the centre (RowAlignment)
   bool operator==(const CameraCorrection&) const = default;
   bool identity() const;
   bool same_levels() const;  // the levels map is the identity
 };
 
-// For a log line: "right camera levels 0.976 v + 0.1, rows +0.31" (per channel B, G, R in
-// colour; either part only when it corrects something); "right camera as the left" for the
-// identity.
+// For a log line: "right camera levels 0.976 v + 0.1, rows +0.31, roll +0.050 deg" (per channel
+// B, G, R in colour; each part only when it corrects something); "right camera as the left" for
+// the identity.
 std::string describe(const CameraCorrection& correction);
 
 // The sparse stage: a rectified pair in, a disparity map out that carries values only where
@@ -88,14 +90,16 @@ void check_stereo_input(const StereoParams& params, ImageView<const std::uint8_t
 std::unique_ptr<StereoMatcher> make_cpu_stereo_matcher(const StereoParams& params);
 
 // The stage with the right image brought to the left's before it matches: moved by the vertical
-// offset a drifted calibration leaves (vertical_alignment.hpp, stereo.vertical_alignment), its
+// offset and turned back by the roll a drifted calibration leaves (vertical_alignment.hpp,
+// stereo.vertical_alignment), its
 // levels mapped onto the left's (exposure_balance.hpp, stereo.exposure_balance). Each frame is
 // matched through the corrections fitted to the frames before it; the matches of every fourth
 // frame give the next fits; a sequence's first frame is matched again through the corrections its
 // own matches give, while they still move (four times at most). A fit replaces a correction only
-// when it moves it enough (some level by stereo.exposure_balance_levels, the offset by 1/8 row), so
+// when it moves it enough (some level by stereo.exposure_balance_levels, the offset or the roll
+// at the side edges by 1/8 row), so
 // a pair that agrees keeps its bytes and the corrections do not follow the fits' noise; an
-// exposure map in force when the offset moves was fitted to misaligned matches and is judged
+// exposure map in force when the rows move was fitted to misaligned matches and is judged
 // afresh by the next fit (kept only if that fit lies the threshold or more from no map).
 std::unique_ptr<StereoMatcher> with_camera_alignment(std::unique_ptr<StereoMatcher> stage);
 
