@@ -169,17 +169,27 @@ dco::stereo::ExposureMap brighter_map() {
   return map;
 }
 
-void BM_DcoRightCorrection_Color_1280x720(benchmark::State& state) {
+// The right image brought onto the left's rows and through the exposure tables, as the stage does
+// before it matches: a row shift without a roll, cv::warpAffine with one (align_rows).
+void run_right_correction(benchmark::State& state, const dco::stereo::RowAlignment& rows) {
   if (pair_or_skip(state) == nullptr) return;
   const auto right = dco::as_view<std::uint8_t>(headset_right());
   dco::stereo::ExposureTable table;
   table.build(brighter_map());
   dco::Image<std::uint8_t> moved, balanced;
   for (auto _ : state) {
-    dco::stereo::shift_rows(right, 0.4, moved);
+    dco::stereo::align_rows(right, rows, moved);
     table.apply(moved.cview(), balanced);
     benchmark::DoNotOptimize(balanced.data());
   }
+}
+
+void BM_DcoRightCorrection_Color_1280x720(benchmark::State& state) {
+  run_right_correction(state, {0.4, 0.0});
+}
+
+void BM_DcoRightCorrectionTurned_Color_1280x720(benchmark::State& state) {
+  run_right_correction(state, {0.4, 0.002});
 }
 
 void BM_OpenCVRightCorrection_Color_1280x720(benchmark::State& state) {
@@ -271,21 +281,6 @@ void BM_OpenCVSiftRowAlignment_1280x720(benchmark::State& state) {
     benchmark::DoNotOptimize(offset);
   }
   report_rows(state, offset, std::atan(slope / xc) * 180.0 / std::numbers::pi);
-}
-
-// The right image turned back and through the exposure tables, as the stage does once a roll is
-// in force (align_rows is cv::warpAffine then; without a roll, shift_rows above).
-void BM_DcoRightCorrectionTurned_Color_1280x720(benchmark::State& state) {
-  if (pair_or_skip(state) == nullptr) return;
-  const auto right = dco::as_view<std::uint8_t>(headset_right());
-  dco::stereo::ExposureTable table;
-  table.build(brighter_map());
-  dco::Image<std::uint8_t> moved, balanced;
-  for (auto _ : state) {
-    dco::stereo::align_rows(right, {0.4, 0.002}, moved);
-    table.apply(moved.cview(), balanced);
-    benchmark::DoNotOptimize(balanced.data());
-  }
 }
 
 void BM_DcoSparseStereo_Gray(benchmark::State& s) {
