@@ -208,6 +208,42 @@ TEST(CameraAlignmentMatcher, FindsTheRowsOfARenderedPairAndFollowsThemThroughASe
               describe(aligned->last_correction()).c_str(), on, off, ref);
 }
 
+TEST(CameraAlignmentMatcher, FollowsACameraKnockedOutOfLineWithinTwoRefits) {
+  // Four frames with the rows met, then the right camera knocked: its scene 2 rows lower and
+  // turned 0.3 degree. The tracking steps (one per refit, every fourth frame) take at most a
+  // row each and get there by the second refit after the knock, frame 12; the exposure map that
+  // the misaligned matches gave on the way is dropped once the rows move.
+  synthetic::SceneConfig config = synthetic::preset("hand", 480, 270);
+  const synthetic::SceneRenderer met(config);
+  config.right_rows = 2.0;
+  config.right_roll_deg = 0.3;
+  const synthetic::SceneRenderer knocked(config);
+  StereoParams params;
+  params.max_disparity = synthetic::covering_max_disparity(config);
+  const auto aligned = make_stereo_matcher({}, params);
+  params.vertical_alignment = false;
+  const auto reference = make_stereo_matcher({}, params);
+  synthetic::StereoSample s, r;
+  Image<float> with, rows_met;
+  for (int i = 0; i <= 12; ++i) {
+    (i < 4 ? met : knocked).render(i, s);
+    aligned->compute(s.left.cview(), s.right.cview(), with);
+    if (i < 4) {
+      EXPECT_TRUE(aligned->last_correction().identity()) << "frame " << i;
+    }
+  }
+  met.render(12, r);
+  reference->compute(r.left.cview(), r.right.cview(), rows_met);
+  const int on = good_matches(with, s.disparity), ref = good_matches(rows_met, r.disparity);
+  const CameraCorrection found = aligned->last_correction();
+  std::printf("frame 12: %s; %d good matches, %d with the rows met\n", describe(found).c_str(), on,
+              ref);
+  EXPECT_NEAR(found.row_offset, 2.0, 0.15);
+  EXPECT_NEAR(found.roll / kDegree, 0.3, 0.03);
+  EXPECT_TRUE(found.same_levels());
+  EXPECT_GT(on, 0.95 * ref);
+}
+
 TEST(CameraAlignmentMatcher, ARollBetweenTheCamerasCostsFewMatches) {
   // 0.4 degrees: the side edges 1.7 rows apart from the centre's.
   synthetic::SceneConfig config = synthetic::preset("hand", 480, 270);
