@@ -177,17 +177,30 @@ TEST(CameraAlignmentMatcher, ARowAndAHalfBetweenTheCamerasCostsFewMatches) {
   EXPECT_EQ(plain->last_correction().row_offset, 0.0);
 }
 
+// The stage with the alignment, and two without it (one for the pair, one for a reference pair
+// whose rows meet), searching a scene's whole disparity range.
+struct Matchers {
+  std::unique_ptr<StereoMatcher> aligned, plain, reference;
+};
+
+Matchers matchers_for(const synthetic::SceneConfig& config) {
+  StereoParams params;
+  params.max_disparity = synthetic::covering_max_disparity(config);
+  Matchers m;
+  m.aligned = make_stereo_matcher({}, params);
+  params.vertical_alignment = false;
+  m.plain = make_stereo_matcher({}, params);
+  m.reference = make_stereo_matcher({}, params);
+  return m;
+}
+
 TEST(CameraAlignmentMatcher, FindsTheRowsOfARenderedPairAndFollowsThemThroughASequence) {
   // The right camera rendered 0.75 row lower: no interpolation in the test's images.
   synthetic::SceneConfig config = synthetic::preset("hand", 480, 270);
   const synthetic::SceneRenderer met(config);
   config.right_rows = 0.75;
   const synthetic::SceneRenderer scene(config);
-  StereoParams params;
-  params.max_disparity = synthetic::covering_max_disparity(config);
-  const auto aligned = make_stereo_matcher({}, params);
-  params.vertical_alignment = false;
-  const auto plain = make_stereo_matcher({}, params), reference = make_stereo_matcher({}, params);
+  const auto [aligned, plain, reference] = matchers_for(config);
   synthetic::StereoSample s, r;
   Image<float> with, without, rows_met;
   int on = 0, off = 0, ref = 0;
@@ -209,22 +222,18 @@ TEST(CameraAlignmentMatcher, FindsTheRowsOfARenderedPairAndFollowsThemThroughASe
 }
 
 TEST(CameraAlignmentMatcher, FollowsACameraKnockedOutOfLineWithinTwoRefits) {
-  // Four frames with the rows met, then the right camera knocked: its scene 2 rows lower and
-  // turned 0.3 degree. The tracking steps (one per refit, every fourth frame) take at most a
-  // row each and get there by the second refit after the knock, frame 12; the exposure map that
-  // the misaligned matches gave on the way is dropped once the rows move.
-  synthetic::SceneConfig config = synthetic::preset("hand", 480, 270);
-  const synthetic::SceneRenderer met(config);
-  config.right_rows = 2.0;
-  config.right_roll_deg = 0.3;
-  const synthetic::SceneRenderer knocked(config);
-  StereoParams params;
-  params.max_disparity = synthetic::covering_max_disparity(config);
-  const auto aligned = make_stereo_matcher({}, params);
-  params.vertical_alignment = false;
-  const auto reference = make_stereo_matcher({}, params);
+  const synthetic::SceneConfig config = synthetic::preset("hand", 480, 270);
+  synthetic::SceneConfig knock = config;  // the right camera's scene 2 rows lower, 0.3 deg turned
+  knock.right_rows = 2.0;
+  knock.right_roll_deg = 0.3;
+  const synthetic::SceneRenderer met(config), knocked(knock);
+  const Matchers m = matchers_for(knock);
+  const auto& aligned = m.aligned;
   synthetic::StereoSample s, r;
   Image<float> with, rows_met;
+  // Four frames with the rows met, then the knock. The tracking steps (one per refit, every
+  // fourth frame) take at most a row each and get there by the second refit after it, frame 12;
+  // the exposure map that the misaligned matches gave on the way is dropped once the rows move.
   for (int i = 0; i <= 12; ++i) {
     (i < 4 ? met : knocked).render(i, s);
     aligned->compute(s.left.cview(), s.right.cview(), with);
@@ -233,7 +242,7 @@ TEST(CameraAlignmentMatcher, FollowsACameraKnockedOutOfLineWithinTwoRefits) {
     }
   }
   met.render(12, r);
-  reference->compute(r.left.cview(), r.right.cview(), rows_met);
+  m.reference->compute(r.left.cview(), r.right.cview(), rows_met);
   const int on = good_matches(with, s.disparity), ref = good_matches(rows_met, r.disparity);
   const CameraCorrection found = aligned->last_correction();
   std::printf("frame 12: %s; %d good matches, %d with the rows met\n", describe(found).c_str(), on,
@@ -247,11 +256,7 @@ TEST(CameraAlignmentMatcher, FollowsACameraKnockedOutOfLineWithinTwoRefits) {
 TEST(CameraAlignmentMatcher, ARollBetweenTheCamerasCostsFewMatches) {
   // 0.4 degrees: the side edges 1.7 rows apart from the centre's.
   synthetic::SceneConfig config = synthetic::preset("hand", 480, 270);
-  StereoParams params;
-  params.max_disparity = synthetic::covering_max_disparity(config);
-  const auto aligned = make_stereo_matcher({}, params);
-  params.vertical_alignment = false;
-  const auto plain = make_stereo_matcher({}, params), reference = make_stereo_matcher({}, params);
+  const auto [aligned, plain, reference] = matchers_for(config);
   synthetic::StereoSample met;
   synthetic::SceneRenderer(config).render(3, met);
   config.right_roll_deg = 0.4;
