@@ -172,15 +172,16 @@ std::string describe(const CameraCorrection& correction) {
   static const char* const kNames[] = {" B", " G", " R"};
   std::string text = "right camera";
   char part[96];
-  if (!correction.same_levels()) text += " levels";
-  for (int c = 0; !correction.same_levels() && c < m.count; ++c) {
+  const bool same_levels = correction.same_levels();
+  if (!same_levels) text += " levels";
+  for (int c = 0; !same_levels && c < m.count; ++c) {
     const ChannelLevels& l = m.channels[static_cast<std::size_t>(c)];
     std::snprintf(part, sizeof part, "%s%s %.3f v %c %.1f", c > 0 ? "," : "",
                   m.count == 3 ? kNames[c] : "", l.gain, l.offset < 0 ? '-' : '+',
                   std::abs(l.offset));
     text += part;
   }
-  const char* sep = correction.same_levels() ? "" : ",";
+  const char* sep = same_levels ? "" : ",";
   if (correction.row_offset != 0) {
     std::snprintf(part, sizeof part, "%s rows %+.2f", sep, correction.row_offset);
     text += part;

@@ -111,35 +111,42 @@ struct BestRow {
 template <int kRadius>
 bool refine_window(const Sampler& s, int x, int y, int g, double& px, double& py) {
   constexpr int kSide = 2 * kRadius + 3;  // the window and a pixel around it, for the gradients
+  constexpr int kWindow = 2 * kRadius + 1;
+  constexpr double n = kWindow * kWindow;
   const int c = std::min(s.left.channels, 3);
   const double x0 = px, y0 = py;
+  // The left window, its mean and spread: it is brought to the right one's, since levels that
+  // differ between the cameras (no exposure map yet) would otherwise pull the window along its
+  // gradients.
+  std::array<double, kWindow * kWindow> l{};
+  double ls = 0, lss = 0;
+  for (int j = 0; j < kWindow; ++j)
+    for (int i = 0; i < kWindow; ++i) {
+      const double v = s.left.row(y + j - kRadius)[(x + i - kRadius) * c + g];
+      l[std::size_t(j * kWindow + i)] = v;
+      ls += v, lss += v * v;
+    }
+  const double lvar = lss / n - (ls / n) * (ls / n);
+  if (!(lvar > 0)) return false;
   std::array<double, kSide * kSide> r{};
   for (int step = 0; step < kRefineSteps; ++step) {
     for (int j = 0; j < kSide; ++j)
       for (int i = 0; i < kSide; ++i)
         r[std::size_t(j * kSide + i)] = s.right_at(px + i - kRadius - 1, py + j - kRadius - 1, g);
-    // The left window brought to the right one's mean and spread: levels that differ between
-    // the cameras (no exposure map yet) would otherwise pull the window along its gradients.
     const auto at = [&](int a, int b) { return r[std::size_t(b * kSide + a)]; };
-    const auto left_at = [&](int a, int b) {
-      return static_cast<double>(s.left.row(y + b - kRadius - 1)[(x + a - kRadius - 1) * c + g]);
-    };
-    double ls = 0, lss = 0, rs = 0, rss = 0;
+    double rs = 0, rss = 0;
     for (int j = 1; j + 1 < kSide; ++j)
-      for (int i = 1; i + 1 < kSide; ++i) {
-        ls += left_at(i, j), lss += left_at(i, j) * left_at(i, j);
-        rs += at(i, j), rss += at(i, j) * at(i, j);
-      }
-    constexpr double n = (kSide - 2) * (kSide - 2);
-    const double lvar = lss / n - (ls / n) * (ls / n), rvar = rss / n - (rs / n) * (rs / n);
-    if (!(lvar > 0) || !(rvar > 0)) return false;
+      for (int i = 1; i + 1 < kSide; ++i) rs += at(i, j), rss += at(i, j) * at(i, j);
+    const double rvar = rss / n - (rs / n) * (rs / n);
+    if (!(rvar > 0)) return false;
     const double scale = std::sqrt(rvar / lvar);
     double gxx = 0, gxy = 0, gyy = 0, bx = 0, by = 0;
     for (int j = 1; j + 1 < kSide; ++j)
       for (int i = 1; i + 1 < kSide; ++i) {
         const double gx = 0.5 * (at(i + 1, j) - at(i - 1, j));
         const double gy = 0.5 * (at(i, j + 1) - at(i, j - 1));
-        const double e = (left_at(i, j) - ls / n) * scale + rs / n - at(i, j);
+        const double left = l[std::size_t((j - 1) * kWindow + i - 1)];
+        const double e = (left - ls / n) * scale + rs / n - at(i, j);
         gxx += gx * gx, gxy += gx * gy, gyy += gy * gy, bx += gx * e, by += gy * e;
       }
     const double det = gxx * gyy - gxy * gxy;
@@ -212,6 +219,22 @@ double mode(const std::vector<double>& values) {
   return sum / n;
 }
 
+// A weighted least-squares line v = offset + slope * u.
+struct LineFit {
+  double n = 0, su = 0, sv = 0, suu = 0, suv = 0;
+  void add(double u, double v, double w = 1) {
+    n += w, su += w * u, sv += w * v, suu += w * u * u, suv += w * u * v;
+  }
+  // False when the points do not spread along u.
+  bool solve(double& offset, double& slope) const {
+    const double spread = suu * n - su * su;
+    if (!(spread > 0)) return false;
+    slope = (suv * n - su * sv) / spread;
+    offset = (sv - slope * su) / n;
+    return true;
+  }
+};
+
 // The offset and roll of a line through the most common best row of each quarter of the columns
 // (weighted by their samples); the offset alone from all of them when fewer than two quarters
 // have enough. False when too few samples.
@@ -224,35 +247,28 @@ bool search_rows(const std::vector<BestRow>& rows, int width, RowAlignment& a) {
     band[static_cast<std::size_t>(q)].push_back(r.row);
     u_sum[static_cast<std::size_t>(q)] += r.u;
   }
-  double sw = 0, su = 0, sv = 0, suu = 0, suv = 0;
+  LineFit modes;
   int used = 0;
   for (std::size_t q = 0; q < band.size(); ++q) {
     const double n = static_cast<double>(band[q].size());
     if (n < kMinQuarterSamples) continue;
-    const double u = u_sum[q] / n, v = mode(band[q]);
-    sw += n, su += n * u, sv += n * v, suu += n * u * u, suv += n * u * v, ++used;
+    modes.add(u_sum[q] / n, mode(band[q]), n);
+    ++used;
   }
-  const double spread = suu * sw - su * su;
-  if (used < 2 || !(spread > 0)) {
+  double offset = 0, slope = 0;  // slope: rows per half width
+  if (used < 2 || !modes.solve(offset, slope)) {
     std::vector<double> all;
     all.reserve(rows.size());
     for (const BestRow& r : rows) all.push_back(r.row);
     a.offset = mode(all);
     return true;
   }
-  double slope = (suv * sw - su * sv) / spread;  // rows per half width
-  double offset = (sv - slope * su) / sw;
   // Then every sample near that line, not only the modes: a least-squares line through them.
   for (int i = 0; i < kLineRounds; ++i) {
-    double n = 0, u1 = 0, v1 = 0, uu = 0, uv = 0;
-    for (const BestRow& r : rows) {
-      if (std::abs(r.row - (offset + slope * r.u)) > kLineBand) continue;
-      n += 1, u1 += r.u, v1 += r.row, uu += r.u * r.u, uv += r.u * r.row;
-    }
-    const double d = uu * n - u1 * u1;
-    if (n < kMinSearchSamples || !(d > 0)) break;
-    slope = (uv * n - u1 * v1) / d;
-    offset = (v1 - slope * u1) / n;
+    LineFit near;
+    for (const BestRow& r : rows)
+      if (std::abs(r.row - (offset + slope * r.u)) <= kLineBand) near.add(r.u, r.row);
+    if (near.n < kMinSearchSamples || !near.solve(offset, slope)) break;
   }
   a.offset = offset;
   a.roll = std::atan(slope / (0.5 * (width - 1)));
