@@ -141,6 +141,7 @@ void DepthRuntime::start() {
     camera_correction_ = {};
     stereo_work_ms_ = other_work_ms_ = planes_work_ms_ = early_contour_work_ms_ = 0;
     work_samples_ = planes_on_stereo_ = early_contour_on_stereo_ = next_contour_on_stereo_ = 0;
+    sequence_recorded_ = false;
     entry_high_water_ = 0;
     // Fresh queues: their high-water marks are statistics too.
     stereo_queue_ = BoundedQueue<int>(stereo_queue_.capacity());
@@ -628,13 +629,19 @@ void DepthRuntime::deliver(int result, bool early) {
       params_.threads >= 3
           ? densify_ms - (planes_ms - planes_stereo)
           : contour_ms + densify_ms - (planes_ms - planes_stereo) - (early_ms - early_stereo);
-  constexpr double kWeight = 0.125;  // about the last eight frames
-  const double weight = work_samples_ == 0 ? 1.0 : kWeight;
-  stereo_work_ms_ += weight * (stereo_own - stereo_work_ms_);
-  other_work_ms_ += weight * (other_own - other_work_ms_);
-  planes_work_ms_ += weight * (planes_ms - planes_work_ms_);
-  early_contour_work_ms_ += weight * (early_ms - early_contour_work_ms_);
-  ++work_samples_;
+  // A sequence's first frame is no sample of the work per frame: the stages search the whole
+  // disparity range and the camera alignment, and the solver starts cold (on the 160x96 hand its
+  // stereo step's own work is about ten times the next frames', its solve twice).
+  if (sequence_recorded_) {
+    constexpr double kWeight = 0.125;  // about the last eight frames
+    const double weight = work_samples_ == 0 ? 1.0 : kWeight;
+    stereo_work_ms_ += weight * (stereo_own - stereo_work_ms_);
+    other_work_ms_ += weight * (other_own - other_work_ms_);
+    planes_work_ms_ += weight * (planes_ms - planes_work_ms_);
+    early_contour_work_ms_ += weight * (early_ms - early_contour_work_ms_);
+    ++work_samples_;
+  }
+  sequence_recorded_ = true;
   ++published_;
   camera_correction_ = r.result.camera_correction;
   if (releasing_ && t.densify_end - t.capture > release_latency_) ++overdue_;
@@ -650,6 +657,7 @@ void DepthRuntime::deliver(int result, bool early) {
 void DepthRuntime::end_sequence() {
   std::lock_guard lock(mutex_);
   ++drained_;
+  sequence_recorded_ = false;
   changed_.notify_all();
 }
 

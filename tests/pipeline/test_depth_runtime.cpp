@@ -14,6 +14,7 @@
 #include <cstring>
 #include <functional>
 #include <iostream>
+#include <memory>
 #include <mutex>
 #include <new>
 #include <string>
@@ -186,12 +187,13 @@ struct DeterministicRun {
   std::vector<DepthResult> results;
   RuntimeStats stats;
 };
-DeterministicRun run_deterministic(const Sequence& s, int threads) {
+DeterministicRun run_deterministic(const Sequence& s, int threads,
+                                   const StageFactories& stages = {}) {
   RuntimeParams rp;
   rp.deterministic = true;
   rp.threads = threads;
   Collector c;
-  DepthRuntime runtime(s.params, rp, c.callback());
+  DepthRuntime runtime(s.params, rp, c.callback(), {}, stages);
   runtime.start();
   for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
   runtime.drain();
@@ -229,6 +231,54 @@ TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) 
     EXPECT_EQ(planes, st.planes_on_stereo_thread);
     EXPECT_EQ(early, st.early_contour_on_stereo_thread);
   }
+}
+
+// The CPU stereo stage, its first match slower by kExtra: the search of the whole disparity range
+// and of the camera alignment that a sequence's first frame makes, made long enough to show.
+class SlowFirstMatch final : public stereo::StereoMatcher {
+ public:
+  static constexpr auto kExtra = 100ms;
+  explicit SlowFirstMatch(const stereo::StereoParams& params)
+      : stage_(stereo::make_cpu_stereo_matcher(params)) {}
+  void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+               Image<float>& disparity) override {
+    if (first_) std::this_thread::sleep_for(kExtra);
+    first_ = false;
+    stage_->compute(left, right, disparity);
+  }
+  void reset() override { stage_->reset(); }
+  const stereo::StereoTimings& last_timings() const override { return stage_->last_timings(); }
+  int last_scale() const override { return stage_->last_scale(); }
+  ImageView<const std::uint8_t> internal_left_gray() const override {
+    return stage_->internal_left_gray();
+  }
+  ImageView<const float> internal_raw_disparity() const override {
+    return stage_->internal_raw_disparity();
+  }
+  ImageView<const float> internal_sparse_disparity() const override {
+    return stage_->internal_sparse_disparity();
+  }
+  const stereo::StereoParams& params() const override { return stage_->params(); }
+
+ private:
+  std::unique_ptr<stereo::StereoMatcher> stage_;
+  bool first_ = true;
+};
+
+// Which thread takes the movable steps follows the work per frame, and a sequence's first frame
+// is no sample of it: taken as one, a first stereo step 100 ms long would have kept them off the
+// stereo thread for about twenty frames, though the solve takes several times its later steps.
+TEST(DepthRuntime, ASequencesFirstFrameIsNoSampleOfTheWorkPerFrame) {
+  Sequence s = make_sequence("hand", 12);
+  s.params.contour.use_flow = false;
+  make_one_stage_heavy(s.params, /*heavy_densify=*/true);
+  StageFactories stages;
+  stages.stereo = [](const stereo::StereoParams& p) { return std::make_unique<SlowFirstMatch>(p); };
+  const DeterministicRun run = run_deterministic(s, 2, stages);
+  ASSERT_EQ(run.results.size(), 12u);
+  EXPECT_GE(run.stats.stereo.max_ms, 100.0) << "the slow first frame was timed";
+  EXPECT_EQ(run.stats.planes_on_stereo_thread, 12);
+  EXPECT_EQ(run.stats.early_contour_on_stereo_thread, 12);
 }
 
 // The work that a frame's contour results allow for the next frame's (the reused flow field

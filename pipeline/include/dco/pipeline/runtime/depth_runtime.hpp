@@ -316,6 +316,7 @@ class DepthRuntime {
   double stereo_work_ms_ = 0, other_work_ms_ = 0, planes_work_ms_ = 0, early_contour_work_ms_ = 0;
   long work_samples_ = 0, planes_on_stereo_ = 0, early_contour_on_stereo_ = 0;
   long next_contour_on_stereo_ = 0;
+  bool sequence_recorded_ = false;  // a result of the sequence going on was recorded
 
   std::optional<OpenCvThreadsLease> opencv_threads_;  // while running, with opencv_threads > 0
   std::vector<std::jthread> threads_;
