@@ -22,31 +22,31 @@ constexpr int kRefitEvery = 4;
 // does a fitted roll, in rows at the side edges.
 constexpr double kOffsetStep = 0.125;
 
-class CameraAlignmentMatcher final : public StereoMatcher {
+class CameraAlignmentMatcher final : public StereoStageWrapper {
  public:
   explicit CameraAlignmentMatcher(std::unique_ptr<StereoMatcher> stage)
-      : stage_(std::move(stage)) {}
+      : StereoStageWrapper(std::move(stage)) {}
 
   void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                Image<float>& disparity) override {
     // First, so that a bad pair is refused before anything reads it.
-    check_stereo_input(stage_->params(), left, right);
+    check_stereo_input(params(), left, right);
     Stopwatch t;
     if (map_.count != left.channels) forget(left.channels);  // another kind of camera
     // Sized on the first frame, so that a correction found later allocates nothing.
-    const StereoParams& p = stage_->params();
+    const StereoParams& p = params();
     if (p.vertical_alignment) aligned_.resize(right.width, right.height, right.channels);
     if (p.exposure_balance) balanced_.resize(right.width, right.height, right.channels);
-    stage_->compute(left, corrected(right), disparity);
-    timings_ = stage_->last_timings();
+    inner().compute(left, corrected(right), disparity);
+    timings_ = inner().last_timings();
     // A sequence's first frame has no correction from frames before: its own matches give one,
     // and it is matched again through it while the correction still moves (a few times at most).
     const int rounds = first_ ? kFirstFrameRounds : 0;
     const bool fit = first_ || frames_ % kRefitEvery == 0;
     for (int round = 0; fit && refit(left, right, disparity) && round < rounds; ++round) {
-      stage_->reset();  // matched again as a new sequence
-      stage_->compute(left, corrected(right), disparity);
-      timings_ = stage_->last_timings();
+      inner().reset();  // matched again as a new sequence
+      inner().compute(left, corrected(right), disparity);
+      timings_ = inner().last_timings();
     }
     first_ = false;
     ++frames_;
@@ -56,23 +56,12 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   }
 
   void reset() override {
-    stage_->reset();
+    inner().reset();
     forget(map_.count);
   }
 
   const StereoTimings& last_timings() const override { return timings_; }
   CameraCorrection last_correction() const override { return {map_, rows_.offset, rows_.roll}; }
-  int last_scale() const override { return stage_->last_scale(); }
-  ImageView<const std::uint8_t> internal_left_gray() const override {
-    return stage_->internal_left_gray();
-  }
-  ImageView<const float> internal_raw_disparity() const override {
-    return stage_->internal_raw_disparity();
-  }
-  ImageView<const float> internal_sparse_disparity() const override {
-    return stage_->internal_sparse_disparity();
-  }
-  const StereoParams& params() const override { return stage_->params(); }
 
  private:
   // The right image brought onto the left's rows, then through the exposure table; either step
@@ -92,7 +81,7 @@ class CameraAlignmentMatcher final : public StereoMatcher {
   // kOffsetStep rows) and then says so.
   bool refit(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
              const Image<float>& disparity) {
-    const StereoParams& p = stage_->params();
+    const StereoParams& p = params();
     bool moved = false;
     if (p.exposure_balance) {
       ExposureMap fitted = map_;
@@ -145,7 +134,6 @@ class CameraAlignmentMatcher final : public StereoMatcher {
     frames_ = 0;
   }
 
-  std::unique_ptr<StereoMatcher> stage_;
   ExposureMap map_;
   ExposureTable table_;
   RowAlignment rows_;         // of the right image's scene against the left's

@@ -235,33 +235,19 @@ TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) 
 
 // The CPU stereo stage, its first match slower by kExtra: the search of the whole disparity range
 // and of the camera alignment that a sequence's first frame makes, made long enough to show.
-class SlowFirstMatch final : public stereo::StereoMatcher {
+class SlowFirstMatch final : public stereo::StereoStageWrapper {
  public:
   static constexpr auto kExtra = 100ms;
   explicit SlowFirstMatch(const stereo::StereoParams& params)
-      : stage_(stereo::make_cpu_stereo_matcher(params)) {}
+      : StereoStageWrapper(stereo::make_cpu_stereo_matcher(params)) {}
   void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                Image<float>& disparity) override {
     if (first_) std::this_thread::sleep_for(kExtra);
     first_ = false;
-    stage_->compute(left, right, disparity);
+    inner().compute(left, right, disparity);
   }
-  void reset() override { stage_->reset(); }
-  const stereo::StereoTimings& last_timings() const override { return stage_->last_timings(); }
-  int last_scale() const override { return stage_->last_scale(); }
-  ImageView<const std::uint8_t> internal_left_gray() const override {
-    return stage_->internal_left_gray();
-  }
-  ImageView<const float> internal_raw_disparity() const override {
-    return stage_->internal_raw_disparity();
-  }
-  ImageView<const float> internal_sparse_disparity() const override {
-    return stage_->internal_sparse_disparity();
-  }
-  const stereo::StereoParams& params() const override { return stage_->params(); }
 
  private:
-  std::unique_ptr<stereo::StereoMatcher> stage_;
   bool first_ = true;
 };
 

@@ -4,6 +4,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "dco/core/image.hpp"
 #include "dco/pipeline/stereo/exposure_balance.hpp"
@@ -76,6 +77,34 @@ class StereoMatcher {
   virtual ImageView<const float> internal_raw_disparity() const = 0;
   virtual ImageView<const float> internal_sparse_disparity() const = 0;
   virtual const StereoParams& params() const = 0;
+};
+
+// A stage around another one that changes what goes in or when (the camera alignment below):
+// what a frame leaves at the internal resolution, the timings and the params are the inner
+// stage's unless the wrapper says otherwise.
+class StereoStageWrapper : public StereoMatcher {
+ public:
+  explicit StereoStageWrapper(std::unique_ptr<StereoMatcher> stage) : stage_(std::move(stage)) {}
+  void reset() override { stage_->reset(); }
+  const StereoTimings& last_timings() const override { return stage_->last_timings(); }
+  CameraCorrection last_correction() const override { return stage_->last_correction(); }
+  int last_scale() const override { return stage_->last_scale(); }
+  ImageView<const std::uint8_t> internal_left_gray() const override {
+    return stage_->internal_left_gray();
+  }
+  ImageView<const float> internal_raw_disparity() const override {
+    return stage_->internal_raw_disparity();
+  }
+  ImageView<const float> internal_sparse_disparity() const override {
+    return stage_->internal_sparse_disparity();
+  }
+  const StereoParams& params() const override { return stage_->params(); }
+
+ protected:
+  StereoMatcher& inner() { return *stage_; }
+
+ private:
+  std::unique_ptr<StereoMatcher> stage_;
 };
 
 // Internal downscale factor (1 or 2) for an input width under the params.
