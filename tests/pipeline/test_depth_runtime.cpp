@@ -213,13 +213,14 @@ TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) 
     expect_identical(expected, run.results, heavy_densify ? "heavy densify" : "heavy stereo");
     const RuntimeStats& st = run.stats;
     // Decided from the published frames' times: the first frames go to the stereo thread before
-    // any is known.
+    // the second result is known (the first is no sample of the work per frame): 3 here, one or
+    // two more when a busy machine holds the other thread's results back.
     if (heavy_densify) {
       EXPECT_EQ(st.planes_on_stereo_thread, 16);
       EXPECT_EQ(st.early_contour_on_stereo_thread, 16);
     } else {
-      EXPECT_LE(st.planes_on_stereo_thread, 4);
-      EXPECT_LE(st.early_contour_on_stereo_thread, 4);
+      EXPECT_LE(st.planes_on_stereo_thread, 5);
+      EXPECT_LE(st.early_contour_on_stereo_thread, 5);
     }
     long planes = 0, early = 0;
     for (const DepthResult& r : run.results) {
