@@ -14,10 +14,9 @@
 
 #include <fmt/format.h>
 #include <opencv2/core/utility.hpp>
-#include <opencv2/imgproc.hpp>
 
-#include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/image_turn.hpp"
 #include "dco/core/synthetic_scene.hpp"
 
 namespace dco::synthetic {
@@ -476,18 +475,6 @@ void scale_row(Image<std::uint8_t>& img, double gain, double offset, int y) {
     row[i] = static_cast<std::uint8_t>(std::clamp(g * row[i] + o, 0.0f, 255.0f) + 0.5f);
 }
 
-// out = `view` turned by `degrees` about the image centre: the scene at `view`'s pixel p lies at
-// centre + R(degrees) (p - centre) in `out` (bilinear, borders repeated).
-void turn_view(ImageView<const std::uint8_t> view, double degrees, Image<std::uint8_t>& out) {
-  const double a = degrees * std::numbers::pi / 180.0, co = std::cos(a), si = std::sin(a);
-  const double xc = 0.5 * (view.width - 1), yc = 0.5 * (view.height - 1);
-  // out(q) = view(R(-a) (q - centre) + centre), given to OpenCV as that inverse map.
-  const cv::Matx23d from_out(co, si, xc - co * xc - si * yc, -si, co, yc + si * xc - co * yc);
-  cv::Mat dst = as_mat(out.view());
-  cv::warpAffine(as_mat(view), dst, from_out, dst.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
-                 cv::BORDER_REPLICATE);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Validation.
 
@@ -641,7 +628,8 @@ void SceneRenderer::render(int index, StereoSample& out) const {
     }
   });
   if (!turned) return;
-  turn_view(upright.cview(), c.right_roll_deg, out.right);
+  // The scene at the upright view's pixel p lies at centre + R(roll) (p - centre) in out.right.
+  turn_about_centre(upright.cview(), -c.right_roll_deg * std::numbers::pi / 180.0, 0.0, out.right);
   cv::parallel_for_(cv::Range(0, c.height), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y) sensor_rows(out.right, true, y);
   });

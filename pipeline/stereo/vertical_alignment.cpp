@@ -6,9 +6,7 @@
 #include <cstddef>
 #include <vector>
 
-#include <opencv2/imgproc.hpp>
-
-#include "dco/core/cv_interop.hpp"
+#include "dco/core/image_turn.hpp"
 
 namespace dco::stereo {
 namespace {
@@ -347,14 +345,7 @@ void align_rows(ImageView<const std::uint8_t> right, const RowAlignment& alignme
     shift_rows(right, alignment.offset, out);
     return;
   }
-  out.resize(right.width, right.height, right.channels);
-  const Geometry g(right.width, right.height, alignment);
-  // out(x, y) = right(g.x(x, y), g.y(x, y)), an affine map written as its inverse.
-  const cv::Matx23d to_right(g.c, -g.s, g.xc - g.c * g.xc + g.s * g.yc, g.s, g.c,
-                             g.yc - g.s * g.xc - g.c * g.yc + g.offset);
-  cv::Mat dst = as_mat(out.view());
-  cv::warpAffine(as_mat(right), dst, to_right, dst.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
-                 cv::BORDER_REPLICATE);
+  turn_about_centre(right, alignment.roll, alignment.offset, out);
 }
 
 }  // namespace dco::stereo
