@@ -3,7 +3,9 @@
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
+#include "dco/pipeline/stereo/exposure_balance.hpp"
 #include "dco/pipeline/stereo/image_ops.hpp"
+#include "dco/pipeline/stereo/vertical_alignment.hpp"
 
 namespace dco::pipeline {
 
@@ -44,8 +46,45 @@ void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint
   }
 }
 
+void corrected_right_grey(ImageView<const std::uint8_t> right,
+                          const stereo::CameraCorrection& correction, Image<std::uint8_t>& scratch,
+                          Image<std::uint8_t>& out) {
+  ImageView<const std::uint8_t> grey = right;
+  if (right.channels == 3) {
+    scratch.resize(right.width, right.height);
+    stereo::bgr_to_gray(right, scratch.view());
+    grey = scratch.cview();
+  }
+  const stereo::RowAlignment rows{correction.row_offset, correction.roll};
+  if (rows.identity()) {
+    out.resize(grey.width, grey.height);
+    out.copy_from(grey);
+  } else {
+    stereo::align_rows(grey, rows, out);
+  }
+  if (correction.same_levels()) return;
+  // The grey of gain_c * v_c + offset_c is near the grey's own line with the channels' gains and
+  // offsets weighted as bgr_to_gray weighs the channels (the cameras' gains differ alike).
+  stereo::ExposureMap grey_map = stereo::no_exposure_map(1);
+  const stereo::ExposureMap& m = correction.levels;
+  if (m.count == 3) {
+    constexpr double kWeight[3] = {0.114, 0.587, 0.299};  // B, G, R
+    grey_map.channels[0] = {0.0, 0.0};
+    for (int c = 0; c < 3; ++c) {
+      grey_map.channels[0].gain += kWeight[c] * m.channels[static_cast<std::size_t>(c)].gain;
+      grey_map.channels[0].offset += kWeight[c] * m.channels[static_cast<std::size_t>(c)].offset;
+    }
+  } else {
+    grey_map.channels[0] = m.channels[0];
+  }
+  stereo::ExposureTable table;
+  table.build(grey_map);
+  table.apply(out.cview(), scratch);
+  out.swap(scratch);
+}
+
 void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> left,
-                  ImageView<const std::uint8_t> right, StereoSlot& slot) {
+                  ImageView<const std::uint8_t> right, StereoSlot& slot, bool keep_right) {
   matcher.compute(left, right, slot.sparse);
   slot.stereo_timings = matcher.last_timings();
   slot.camera_correction = matcher.last_correction();
@@ -53,6 +92,10 @@ void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> 
   const ImageView<const float> raw = matcher.internal_raw_disparity();
   slot.raw_disparity.resize(raw.width, raw.height);
   slot.raw_disparity.copy_from(raw);
+  if (keep_right)
+    corrected_right_grey(right, slot.camera_correction, slot.right_scratch, slot.right);
+  else
+    slot.right.resize(0, 0);
 }
 
 void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmoother& planes,
@@ -154,6 +197,8 @@ void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centr
   }
   out.image.resize(centre.image.width(), centre.image.height());
   out.image.copy_from(centre.image.cview());
+  out.right.resize(centre.right.width(), centre.right.height());
+  out.right.copy_from(centre.right.cview());
   out.sparse.resize(centre.sparse.width(), centre.sparse.height());
   out.sparse.copy_from(centre.sparse.cview());
   out.planar.resize(centre.planar.width(), centre.planar.height());
@@ -168,9 +213,11 @@ void contour_frame_moving_maps(contour::ContourExtractor& extractor, StereoSlot&
   // thread. The slot keeps maps of its own size (only the first frames allocate): the next frame
   // in it, and whatever sizes other slots like it, find their room.
   out.image.resize(centre.image.width(), centre.image.height());
+  out.right.resize(centre.right.width(), centre.right.height());
   out.sparse.resize(centre.sparse.width(), centre.sparse.height());
   out.planar.resize(centre.planar.width(), centre.planar.height());
   out.image.swap(centre.image);
+  out.right.swap(centre.right);
   out.sparse.swap(centre.sparse);
   out.planar.swap(centre.planar);
   if (centre.early_contour_done) {
@@ -186,6 +233,7 @@ densify::DensifyInputs densify_inputs(const DepthResult& r, ImageView<const floa
   d.m_intensity = r.m_intensity.cview();
   d.contours = r.contours.cview();
   d.image = r.image.cview();
+  d.right = r.right.cview();
   d.previous = previous;
   d.match_step = r.stereo_scale;
   if (r.planes_done) d.planar = r.planar.cview();
@@ -218,6 +266,8 @@ void size_like(const StereoSlot& model, StereoSlot& out) {
   size_image_like(model.image, out.image);
   size_image_like(model.small, out.small);
   size_image_like(model.small_colour, out.small_colour);
+  size_image_like(model.right, out.right);
+  size_image_like(model.right_scratch, out.right_scratch);
   size_image_like(model.raw_disparity, out.raw_disparity);
   size_image_like(model.sparse, out.sparse);
   size_image_like(model.planar, out.planar);
@@ -229,6 +279,7 @@ void size_like(const StereoSlot& model, StereoSlot& out) {
 
 void size_like(const DepthResult& model, DepthResult& out) {
   size_image_like(model.image, out.image);
+  size_image_like(model.right, out.right);
   size_image_like(model.sparse, out.sparse);
   size_image_like(model.planar, out.planar);
   size_image_like(model.dense, out.dense);
@@ -278,7 +329,8 @@ bool DepthPipeline::push(ImageView<const std::uint8_t> left, ImageView<const std
   // With lookahead 1 the slot being overwritten (t-3) has been finished already.
   const int t = next_index_;
   StereoSlot& slot = slot_of(t);
-  stereo_frame(*stereo_, left, right, slot);  // first: it rejects bad input
+  stereo_frame(*stereo_, left, right, slot,  // first: it rejects bad input
+               densify::refines(params_.densify.photometric, left.width, left.height));
   plane_frame(params_.densify, planes_, slot);
   prepare_frame(params_.stereo, left, t, slot);
   early_contour_frame(params_.contour, early_contour_, slot, early_contour_apart_);

@@ -95,6 +95,19 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.median_size", &p.median_size, 0, 5,
         "median filter of the dense output, px: 0 (off), 3 or 5; removes one- and two-pixel "
         "specks between two surfaces");
+  s.add("densify.photometric_iterations", &p.photometric.iterations, 0, 20,
+        "fixed-point iterations of the photometric refinement: the output fitted to the grey "
+        "levels and gradients of both images (0 = off)");
+  s.add("densify.photometric_sweeps", &p.photometric.sweeps, 1, 50,
+        "SOR sweeps of the photometric refinement per iteration");
+  s.add("densify.photometric_alpha", &p.photometric.alpha, 0.0, 1000.0,
+        "smoothness weight of the photometric refinement (robust, on the disparity's gradient)");
+  s.add("densify.photometric_delta", &p.photometric.delta, 0.0, 1000.0,
+        "grey-level constancy weight of the photometric refinement");
+  s.add("densify.photometric_gamma", &p.photometric.gamma, 0.0, 1000.0,
+        "gradient constancy weight of the photometric refinement");
+  s.add("densify.photometric_max_pixels", &p.photometric.max_pixels, 0, 100000000,
+        "frames with more pixels skip the photometric refinement (0: all of them)");
   s.add("densify.row_threads", &p.row_threads, 0, 16,
         "threads sharing the row-wise steps (building the system, the clamp and the median), the "
         "stage's own included (0 = auto: 1 below 4 usable CPUs, else half of them, at most 4)");
@@ -119,6 +132,11 @@ void validate(const DensifyParams& p) {
   require(p.plane_rms > 0, "plane_rms must be positive");
   require(p.median_size == 0 || p.median_size == 3 || p.median_size == 5,
           "median_size must be 0, 3 or 5, not " + std::to_string(p.median_size));
+  require(p.photometric.iterations >= 0 && p.photometric.sweeps >= 1,
+          "photometric_iterations must be >= 0 and photometric_sweeps >= 1");
+  require(p.photometric.alpha >= 0 && p.photometric.delta >= 0 && p.photometric.gamma >= 0 &&
+              p.photometric.delta + p.photometric.gamma > 0,
+          "photometric_alpha, _delta and _gamma must be >= 0, delta + gamma > 0");
   require(p.row_threads >= 0 && p.row_threads <= 16,
           "row_threads must be in 0..16 (0 = auto), not " + std::to_string(p.row_threads));
 }
@@ -404,6 +422,7 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   check(in.planar, "the planar sparse map");
   check(in.contours, "the contour mask");
   check(in.previous, "the previous frame");
+  check(in.right, "the right image");
 
   if (in.match_step < 1)
     throw Error("densify: match_step is " + std::to_string(in.match_step) + ", not >= 1");
@@ -438,6 +457,9 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   timings_.solve_ms = t.lap_ms();
   finish(dense);
   timings_.median_ms = t.lap_ms();
+  if (refines(params_.photometric, w, h) && !in.right.empty() && !in.image.empty())
+    refiner_.refine(in.image, in.right, params_.photometric, dense.view());
+  timings_.refine_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();
 }
 

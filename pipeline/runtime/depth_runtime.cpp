@@ -357,7 +357,9 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
         entry.times.stereo_blocked = Clock::now() - waiting;
       }
       if (!late) {
-        stereo_frame(*stereo_, in.left.cview(), in.right.cview(), entry.slot);
+        stereo_frame(
+            *stereo_, in.left.cview(), in.right.cview(), entry.slot,
+            densify::refines(pipeline_.densify.photometric, in.left.width(), in.left.height()));
         plane_frame(pipeline_.densify, planes_, entry.slot, planes_here);
         early_contour_frame(pipeline_.contour, early_contour_, entry.slot, early_contour_here);
       }

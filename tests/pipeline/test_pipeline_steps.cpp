@@ -9,7 +9,9 @@
 #include "dco/core/error.hpp"
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
+#include "dco/pipeline/stereo/exposure_balance.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
+#include "dco/pipeline/stereo/vertical_alignment.hpp"
 #include "support/same_bytes.hpp"
 
 namespace dco::pipeline {
@@ -31,7 +33,7 @@ TEST(PrepareFrame, InternalGreyEqualsTheStereoStagesOwn) {
       const auto matcher = stereo::make_cpu_stereo_matcher(params);
       StereoSlot slot;
       prepare_frame(params, s.left.cview(), 7, slot);
-      stereo_frame(*matcher, s.left.cview(), s.right.cview(), slot);
+      stereo_frame(*matcher, s.left.cview(), s.right.cview(), slot, true);
       SCOPED_TRACE(std::string(color ? "colour" : "grey") + ", " + resolution);
       EXPECT_EQ(slot.index, 7);
       EXPECT_TRUE(same_bytes(slot.small.cview(), matcher->internal_left_gray()));
@@ -53,7 +55,7 @@ TEST(PlaneFrame, TheStereoThreadsPlanesAreTheDensifiersOwnFirstStep) {
   const auto matcher = stereo::make_cpu_stereo_matcher(params.stereo);
   StereoSlot slot;
   prepare_frame(params.stereo, s.left.cview(), 0, slot);
-  stereo_frame(*matcher, s.left.cview(), s.right.cview(), slot);
+  stereo_frame(*matcher, s.left.cview(), s.right.cview(), slot, true);
   densify::MatchPlaneSmoother planes;
   plane_frame(params.densify, planes, slot);
   ASSERT_TRUE(slot.planar.view().same_size(slot.sparse.view()));
@@ -121,7 +123,7 @@ TEST(ContourFrame, MovingTheMapsGivesTheCopysResultAndLeavesTheSlotItsSizes) {
     synthetic::StereoSample s;
     scene.render(i, s);
     prepare_frame(params.stereo, s.left.cview(), i, slots[i]);
-    stereo_frame(*matcher, s.left.cview(), s.right.cview(), slots[i]);
+    stereo_frame(*matcher, s.left.cview(), s.right.cview(), slots[i], true);
     plane_frame(params.densify, planes, slots[i]);
   }
   const auto extractor = contour::make_cpu_contour_extractor(params.contour);
@@ -139,6 +141,9 @@ TEST(ContourFrame, MovingTheMapsGivesTheCopysResultAndLeavesTheSlotItsSizes) {
     EXPECT_TRUE(r->planes_done);
   }
   EXPECT_TRUE(same_bytes(moved.image.cview(), copied.image.cview()));
+  EXPECT_EQ(copied.right.width(), 320);
+  EXPECT_TRUE(same_bytes(moved.right.cview(), copied.right.cview()));
+  EXPECT_TRUE(centre.right.view().same_size(copied.right.view()));
   EXPECT_TRUE(same_bytes(moved.sparse.cview(), copied.sparse.cview()));
   EXPECT_TRUE(same_bytes(moved.planar.cview(), copied.planar.cview()));
   EXPECT_TRUE(same_bytes(moved.contours.cview(), copied.contours.cview()));
@@ -151,6 +156,91 @@ TEST(ContourFrame, MovingTheMapsGivesTheCopysResultAndLeavesTheSlotItsSizes) {
   densify_frame(a, copied);
   densify_frame(b, moved);
   EXPECT_TRUE(same_bytes(moved.dense.cview(), copied.dense.cview()));
+}
+
+TEST(StereoFrame, KeepsTheRightImageForThePhotometricRefinementOnlyWhenAsked) {
+  synthetic::SceneConfig config = synthetic::preset("boxes", 160, 96);
+  config.color = true;
+  const synthetic::SceneRenderer scene(config);
+  synthetic::StereoSample s;
+  scene.render(0, s);
+  PipelineParams params;
+  params.stereo.max_disparity = synthetic::covering_max_disparity(config);
+  const auto matcher = stereo::make_cpu_stereo_matcher(params.stereo);
+  StereoSlot slot;
+  stereo_frame(*matcher, s.left.cview(), s.right.cview(), slot, true);
+  ASSERT_EQ(slot.right.width(), 160);
+  EXPECT_EQ(slot.right.channels(), 1);
+  Image<std::uint8_t> scratch, expected;
+  corrected_right_grey(s.right.cview(), slot.camera_correction, scratch, expected);
+  EXPECT_TRUE(same_bytes(slot.right.cview(), expected.cview()));
+  stereo_frame(*matcher, s.left.cview(), s.right.cview(), slot, false);
+  EXPECT_TRUE(slot.right.view().empty());
+  // The refinement reads it through the result: a densifier without it gives another map.
+  DepthResult with, without;
+  stereo_frame(*matcher, s.left.cview(), s.right.cview(), slot, true);
+  prepare_frame(params.stereo, s.left.cview(), 0, slot);
+  const auto extractor = contour::make_cpu_contour_extractor(params.contour);
+  contour_frame(*extractor, slot, nullptr, nullptr, with);
+  contour_frame(*extractor, slot, nullptr, nullptr, without);
+  without.right.resize(0, 0);
+  densify::Densifier a(params.densify), b(params.densify);
+  densify_frame(a, with);
+  densify_frame(b, without);
+  EXPECT_FALSE(same_bytes(with.dense.cview(), without.dense.cview()));
+  EXPECT_GT(with.densify_timings.refine_ms, 0.0);
+  // ... and refuses one of another size.
+  Image<std::uint8_t> small(80, 96);
+  densify::DensifyInputs in = densify_inputs(with, {});
+  in.right = small.cview();
+  Image<float> dense;
+  try {
+    a.compute(in, dense);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("the right image"));
+  }
+}
+
+TEST(CorrectedRightGrey, TakesTheRowsAndLevelsOfTheCameraCorrection) {
+  Image<std::uint8_t> right(64, 40);
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 64; ++x)
+      right.view().row(y)[x] = static_cast<std::uint8_t>((x * 7 + y * 13) % 200 + 20);
+  Image<std::uint8_t> scratch, out;
+  stereo::CameraCorrection none;
+  none.levels = stereo::no_exposure_map(1);
+  corrected_right_grey(right.cview(), none, scratch, out);
+  EXPECT_TRUE(same_bytes(out.cview(), right.cview()));
+
+  stereo::CameraCorrection levels = none;
+  levels.levels.channels[0] = {1.1, -3.0};
+  corrected_right_grey(right.cview(), levels, scratch, out);
+  stereo::ExposureTable table;
+  table.build(levels.levels);
+  Image<std::uint8_t> expected;
+  table.apply(right.cview(), expected);
+  EXPECT_TRUE(same_bytes(out.cview(), expected.cview()));
+
+  stereo::CameraCorrection rows = none;
+  rows.row_offset = 1.0;
+  corrected_right_grey(right.cview(), rows, scratch, out);
+  stereo::align_rows(right.cview(), {1.0, 0.0}, expected);
+  EXPECT_TRUE(same_bytes(out.cview(), expected.cview()));
+
+  // Colour: the channels' maps weighted as the grey weighs the channels.
+  Image<std::uint8_t> colour(8, 4, 3);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 8; ++x) {
+      std::uint8_t* p = colour.view().row(y) + 3 * x;
+      p[0] = 100, p[1] = 100, p[2] = 100;
+    }
+  stereo::CameraCorrection colour_levels;
+  colour_levels.levels = stereo::no_exposure_map(3);
+  colour_levels.levels.channels[1] = {1.2, 0.0};  // green, 0.587 of the grey
+  corrected_right_grey(colour.cview(), colour_levels, scratch, out);
+  EXPECT_EQ(out.channels(), 1);
+  EXPECT_NEAR(out.cview().row(2)[3], 100 * (1 + 0.2 * 0.587), 1.0);
 }
 
 TEST(ContourWindows, CentredWindowTrailsByOneAndCausalWindowLooksBack) {

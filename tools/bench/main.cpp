@@ -345,7 +345,9 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
     const auto& f = frames.pairs[i];
     pl::StereoSlot& slot = slots[i % 3];
     pl::prepare_frame(params.stereo, f.left.cview(), static_cast<int>(i), slot);
-    pl::stereo_frame(*cpu_stage, f.left.cview(), f.right.cview(), slot);
+    pl::stereo_frame(
+        *cpu_stage, f.left.cview(), f.right.cview(), slot,
+        dco::densify::refines(params.densify.photometric, f.left.width(), f.left.height()));
     cuda_stage->compute(f.left.cview(), f.right.cview(), cuda_sparse);
     if (i > 0 || frames.pairs.size() == 1) {
       c.cpu_stereo_ms += cpu_stage->last_timings().total_ms;

@@ -30,7 +30,10 @@ void validate(const PipelineParams& params);  // throws dco::Error
 // Everything the pipeline knows about one frame once it is done.
 struct DepthResult {
   int index = -1;
-  Image<std::uint8_t> image;        // grey left image, input resolution
+  Image<std::uint8_t> image;  // grey left image, input resolution
+  // Grey right image, input resolution, on the left's rows and levels (the stereo stage's camera
+  // correction); empty unless the densifier's photometric refinement reads it.
+  Image<std::uint8_t> right;
   Image<float> sparse;              // input px, +inf where the stereo checks left no value
   Image<float> planar;              // sparse after densify::smooth_matches, when planes_done
   bool planes_done = false;         // the stereo thread ran smooth_matches (else the densify step)
@@ -51,12 +54,14 @@ struct DepthResult {
 // What the stereo step leaves of one frame for the contour and densify steps.
 struct StereoSlot {
   int index = -1;
-  Image<std::uint8_t> image;         // grey left image, input resolution
-  Image<std::uint8_t> small;         // grey left image at the stereo stage's internal resolution
-  Image<std::uint8_t> small_colour;  // scratch: the colour image downscaled before its grey
-  Image<float> raw_disparity;        // internal px, every pixel
-  Image<float> sparse;               // input px
-  Image<float> planar;               // sparse after densify::smooth_matches, when planes_done
+  Image<std::uint8_t> image;          // grey left image, input resolution
+  Image<std::uint8_t> small;          // grey left image at the stereo stage's internal resolution
+  Image<std::uint8_t> small_colour;   // scratch: the colour image downscaled before its grey
+  Image<std::uint8_t> right;          // as DepthResult::right
+  Image<std::uint8_t> right_scratch;  // the right image's grey before its correction
+  Image<float> raw_disparity;         // internal px, every pixel
+  Image<float> sparse;                // input px
+  Image<float> planar;                // sparse after densify::smooth_matches, when planes_done
   // When early_contour_done: the image's M_I, gradient directions and Canny classes, and (with
   // contour.use_stereo) the stereo cue of raw_disparity.
   Image<float> m_intensity;
@@ -85,10 +90,16 @@ struct EarlyContourScratch {
 //    Cheap, and with lookahead 1 all the previous frame's contour step needs of this frame.
 void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint8_t> left,
                    int index, StereoSlot& slot);
-// 2. The sparse stage: sparse and raw disparity, timings (independent of step 1). Throws
-//    dco::Error on bad input.
+// 2. The sparse stage: sparse and raw disparity, timings (independent of step 1), and with
+//    `keep_right` the corrected grey right image. Throws dco::Error on bad input.
 void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> left,
-                  ImageView<const std::uint8_t> right, StereoSlot& slot);
+                  ImageView<const std::uint8_t> right, StereoSlot& slot, bool keep_right);
+// The right view as the photometric refinement reads it: grey, brought onto the left's rows and
+// levels by `correction` (a colour map's channels weighted as in the grey). `scratch` holds the
+// grey before the correction.
+void corrected_right_grey(ImageView<const std::uint8_t> right,
+                          const stereo::CameraCorrection& correction, Image<std::uint8_t>& scratch,
+                          Image<std::uint8_t>& out);
 // 2b. The densify stage's first step, which needs only the sparse map: its matches along local
 //    planes (densify::smooth_matches), run after step 2 when `here`, so that the stereo thread
 //    can carry it when the contour and densify steps take longer. Without `here` the densify

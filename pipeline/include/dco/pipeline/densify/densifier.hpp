@@ -11,6 +11,7 @@
 #include "dco/pipeline/densify/grid_system.hpp"
 #include "dco/pipeline/densify/match_planes.hpp"
 #include "dco/pipeline/densify/multigrid.hpp"
+#include "dco/pipeline/densify/photometric_refiner.hpp"
 #include "dco/pipeline/densify/system_solver.hpp"
 #include "dco/pipeline/row_team.hpp"
 
@@ -81,6 +82,9 @@ struct DensifyParams {
   // solver's own solution stays unfiltered: it is the next frame's warm start and previous
   // frame (Eq. 18).
   int median_size = 5;
+  // The output fitted to the images themselves after the median (PhotometricRefiner), where
+  // DensifyInputs::right is given; iterations 0 = off.
+  PhotometricParams photometric;
   // Threads that share the stage's row-wise steps (building the system, the clamp and the
   // median), the stage's own included: 0 = auto, 1 where fewer than 4 CPUs are usable (the two
   // stage threads have them), else half of them, at most 4. Same output however many.
@@ -99,6 +103,9 @@ struct DensifyInputs {
   ImageView<const std::uint8_t> contours;  // B_dp, non-zero on a depth contour, optional
   ImageView<const float> previous;         // last frame's dense disparity, optional
   ImageView<const std::uint8_t> image;     // grey input image, optional (colour guidance)
+  // Grey right image on the left's rows and levels, optional: with `image`, the photometric
+  // refinement's second view.
+  ImageView<const std::uint8_t> right;
   // The sparse map after smooth_matches with these params, optional: compute then skips that
   // step (it needs only the sparse map, so the stereo thread runs it).
   ImageView<const float> planar;
@@ -108,8 +115,9 @@ struct DensifyInputs {
 };
 
 struct DensifyTimings {
-  // median_ms: the clamp of the solution to the data range and the median filter.
-  double planes_ms = 0, build_ms = 0, solve_ms = 0, median_ms = 0, total_ms = 0;
+  // median_ms: the clamp of the solution to the data range and the median filter; refine_ms: the
+  // photometric refinement.
+  double planes_ms = 0, build_ms = 0, solve_ms = 0, median_ms = 0, refine_ms = 0, total_ms = 0;
 };
 
 // Solves Eq. 20 in disparity (a plane in the scene is affine in disparity, so smoothness in
@@ -175,6 +183,7 @@ class Densifier {
   bool has_solution_ = false;
   SolverReport report_;
   DensifyTimings timings_;
+  PhotometricRefiner refiner_;
 };
 
 // Closes diagonal gaps of a contour mask so that it separates regions under 4-connectivity

@@ -1,0 +1,101 @@
+#include "dco/pipeline/densify/photometric_refiner.hpp"
+
+#include <algorithm>
+#include <string>
+
+#include "dco/core/error.hpp"
+#include "dco/kernels/photometric_kernels.hpp"
+
+namespace dco::densify {
+namespace {
+
+kernels::DerivativeRows derivative_rows(Image<float>& rows, int first) {
+  return {rows.row(first),     rows.row(first + 1), rows.row(first + 2),
+          rows.row(first + 3), rows.row(first + 4), rows.row(first + 5)};
+}
+
+// The derivative rows of `img` at row y (rows y - 2 .. y + 2, clamped).
+void derivatives_of(ImageView<const std::uint8_t> img, int y, const kernels::DerivativeRows& out) {
+  const std::uint8_t* rows[5];
+  for (int k = 0; k < 5; ++k) rows[k] = img.row(std::clamp(y + k - 2, 0, img.height - 1));
+  kernels::derivative_row(rows, img.width, out);
+}
+
+}  // namespace
+
+void PhotometricRefiner::refine(ImageView<const std::uint8_t> left,
+                                ImageView<const std::uint8_t> right,
+                                const PhotometricParams& params, ImageView<float> disparity) {
+  const int w = disparity.width;
+  const int h = disparity.height;
+  if (!left.same_size(w, h) || !right.same_size(w, h) || left.channels != 1 || right.channels != 1)
+    throw Error("photometric refinement: the images must be grey and " + std::to_string(w) + "x" +
+                std::to_string(h) + " like the disparity map, not " + std::to_string(left.width) +
+                "x" + std::to_string(left.height) + "x" + std::to_string(left.channels) + " and " +
+                std::to_string(right.width) + "x" + std::to_string(right.height) + "x" +
+                std::to_string(right.channels));
+  if (params.iterations <= 0 || params.sweeps <= 0 || w == 0 || h == 0) return;
+  const int stages = 2 * params.sweeps;  // half-sweeps, red then black
+  // At step t the terms of row t are made, the couplings of row t - 1, and half-sweep k runs on
+  // row t - 1 - k, which reads the couplings of the row above it: rows t - stages - 1 .. t.
+  const int ring = stages + 2;
+  derivatives_.resize(w, 12);
+  for (Image<float>* rows : {&a_, &rhs_, &smooth_, &wx_, &wy_, &inverse_diagonal_})
+    rows->resize(w, ring);
+  scratch_.resize(static_cast<std::size_t>(w));
+  const kernels::DerivativeRows left_rows = derivative_rows(derivatives_, 0);
+  const kernels::DerivativeRows right_rows = derivative_rows(derivatives_, 6);
+  kernels::PhotometricTermRows terms{};
+  for (int k = 0; k < 6; ++k) {
+    terms.left[k] = derivatives_.row(k);
+    terms.right[k] = derivatives_.row(6 + k);
+  }
+  terms.width = w;
+  const kernels::pixel::PhotometricWeights weights{static_cast<float>(params.alpha),
+                                                   static_cast<float>(params.delta),
+                                                   static_cast<float>(params.gamma)};
+  const auto slot = [ring](int row) { return row % ring; };
+  for (int iteration = 0; iteration < params.iterations; ++iteration) {
+    const bool last_iteration = iteration + 1 == params.iterations;
+    for (int t = 0; t < h + stages; ++t) {
+      if (t < h) {
+        // Row t's terms read rows t - 1 .. t + 1 of the map before any half-sweep of this
+        // iteration reaches them: the first one is a row behind.
+        derivatives_of(left, t, left_rows);
+        derivatives_of(right, t, right_rows);
+        terms.d = disparity.row(t);
+        terms.d_up = disparity.row(std::max(t - 1, 0));
+        terms.d_down = disparity.row(std::min(t + 1, h - 1));
+        kernels::photometric_terms_row(terms, weights, a_.row(slot(t)), rhs_.row(slot(t)),
+                                       smooth_.row(slot(t)));
+      }
+      if (const int r = t - 1; r >= 0 && r < h) {
+        const kernels::CouplingRow row{a_.row(slot(r)), smooth_.row(slot(r)),
+                                       r + 1 < h ? smooth_.row(slot(r + 1)) : nullptr,
+                                       r > 0 ? wy_.row(slot(r - 1)) : nullptr, w};
+        kernels::photometric_couplings_row(row, wx_.row(slot(r)), wy_.row(slot(r)),
+                                           inverse_diagonal_.row(slot(r)));
+      }
+      for (int stage = 0; stage < stages; ++stage) {
+        const int r = t - 1 - stage;
+        if (r < 0 || r >= h) continue;
+        const kernels::SorRow row{rhs_.row(slot(r)),
+                                  inverse_diagonal_.row(slot(r)),
+                                  wx_.row(slot(r)),
+                                  wy_.row(slot(r)),
+                                  r > 0 ? wy_.row(slot(r - 1)) : nullptr,
+                                  r > 0 ? disparity.row(r - 1) : nullptr,
+                                  r + 1 < h ? disparity.row(r + 1) : nullptr,
+                                  w};
+        // Red: the pixels with x + y even; black the others.
+        const int first = (r + stage) & 1;
+        float* d = disparity.row(r);
+        kernels::sor_row(row, first, kPhotometricOmega, d, scratch_.data());
+        if (last_iteration && stage + 1 == stages)
+          for (int x = 0; x < w; ++x) d[x] = std::max(d[x], 0.0f);
+      }
+    }
+  }
+}
+
+}  // namespace dco::densify

@@ -1,0 +1,65 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "dco/core/image.hpp"
+
+namespace dco::densify {
+
+// Weights of the photometric refinement (DIS's variational refinement, Kroeger et al. 2016, with
+// the flow held to the rows: u = -d, v = 0). Its energy over the disparity d:
+//   sum_p  delta Psi(E_I) + gamma Psi(E_Gx) + gamma Psi(E_Gy) + alpha Psi(|grad d|^2)
+// E_I: the grey level of the right image at x - d against the left's, E_Gx / E_Gy: the same for
+// the two image derivatives, each normalised by its own gradient's square (+ zeta^2) so that
+// strong and weak texture weigh alike; Psi(s) = sqrt(s + eps^2), the robust penaliser that lets
+// occlusions and depth edges go.
+struct PhotometricParams {
+  int iterations = 2;  // fixed-point iterations (each relinearises about the current map); 0 = off
+  int sweeps = 3;      // SOR sweeps (red then black) per iteration
+  double alpha = 20;   // smoothness
+  double delta = 2;    // grey-level constancy
+  double gamma = 20;   // gradient constancy
+  // Frames with more pixels are left as the solve gives them: the refinement costs 16-20 ms per
+  // 1280x720 frame on one core of the 2-core machine, which that size's real-time budget (25 ms
+  // a frame on two cores) has no room for. 0: every frame skips it.
+  int max_pixels = 600000;
+};
+
+// Whether a width x height frame is refined under `params`.
+inline bool refines(const PhotometricParams& params, int width, int height) {
+  return params.iterations > 0 &&
+         static_cast<long long>(width) * height <= static_cast<long long>(params.max_pixels);
+}
+
+// Fits a dense disparity map to the images themselves: a few fixed-point iterations of the
+// energy above, each linearised about the current map (grey levels and derivatives of the right
+// image sampled at x - d along the row, linear interpolation; the derivatives the mean of both
+// images') and relaxed by red-black SOR sweeps. The map's sub-pixel values on textured surfaces
+// then come from the image alignment rather than from the smoothness between sparse matches;
+// depth edges and occlusions stay where they are, because the robust penalisers give their large
+// residuals and gradients little weight.
+//
+// One pass over the rows per iteration: row t's terms, then each half-sweep one row behind the
+// one before it (the red one of sweep 1 on row t - 1, the black one on t - 2, ...), in a ring of
+// rows that stays in cache. Every pixel sees the values it would see in the plain order (all
+// terms, then each half-sweep over the whole image), so the result is that order's, bit for bit.
+// Allocates only when the size or the number of sweeps grows.
+class PhotometricRefiner {
+ public:
+  // left, right: grey, rectified (the right camera's rows and levels corrected), the map's size.
+  // disparity: refined in place; values below 0 end at 0. Throws dco::Error on a size mismatch.
+  void refine(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+              const PhotometricParams& params, ImageView<float> disparity);
+
+ private:
+  Image<float> derivatives_;  // 12 rows: the left image's six derivative rows, then the right's
+  // Rings of rows: the data terms, smoothness weights, couplings and inverse diagonals.
+  Image<float> a_, rhs_, smooth_, wx_, wy_, inverse_diagonal_;
+  std::vector<float> scratch_;  // one row of steps
+};
+
+// The over-relaxation factor of the sweeps (DIS's).
+inline constexpr float kPhotometricOmega = 1.6f;
+
+}  // namespace dco::densify
