@@ -1,5 +1,6 @@
 #include "dco/kernels/densify_kernels.hpp"
 #include "for_each_target.hpp"
+#include "kernel_test_rows.hpp"
 #include "occlusion_reference.hpp"
 
 #include <algorithm>
@@ -21,13 +22,6 @@ namespace {
 // Widths around the lane counts of every target (4 .. 16 float lanes, SVE up to 64), odd ones,
 // and the one- and two-column rows that have no interior.
 const std::vector<int> kWidths = {1, 2, 3, 5, 8, 15, 16, 17, 18, 31, 33, 64, 65, 66, 130, 257};
-
-std::vector<float> random_floats(std::mt19937& rng, int n, float lo, float hi) {
-  std::uniform_real_distribution<float> dist(lo, hi);
-  std::vector<float> v(static_cast<std::size_t>(n));
-  for (float& e : v) e = dist(rng);
-  return v;
-}
 
 // A row of a diagonally dominant system, with or without the rows above and below.
 struct RowData {

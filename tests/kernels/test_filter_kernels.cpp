@@ -1,5 +1,6 @@
 #include "dco/kernels/filter_kernels.hpp"
 #include "for_each_target.hpp"
+#include "kernel_test_rows.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,17 +15,7 @@
 namespace dco::kernels {
 namespace {
 
-// Widths around the lane counts of every target (4 .. 16 float lanes, SVE up to 64), odd ones,
-// and rows too short for an interior.
-const std::vector<int> kWidths = {1,  2,  3,  4,  5,  8,  9,  15, 16,  17, 18,
-                                  31, 32, 33, 34, 47, 64, 65, 66, 130, 257};
-
-std::vector<float> random_floats(std::mt19937& rng, int n, float lo, float hi) {
-  std::uniform_real_distribution<float> dist(lo, hi);
-  std::vector<float> v(static_cast<std::size_t>(n));
-  for (float& e : v) e = dist(rng);
-  return v;
-}
+const std::vector<int>& kWidths = kLaneWidths;
 
 TEST(FilterKernels, RepeatPairsPutsEveryValueTwice) {
   for (const int width : {0, 1, 2, 7, 8, 33, 64, 1281}) {
@@ -69,17 +60,12 @@ TEST(FilterKernels, Median5RowMatchesScalarAndTheSortedWindow) {
 
 TEST(FilterKernels, GaussianVerticalRowMatchesScalarAndThePixelMath) {
   std::mt19937 rng(1);
-  std::uniform_int_distribution<int> grey(0, 255);
   const float taps[3] = {0.1201f, 0.2339f, 0.2920f};
   for_each_target([&] {
     for (const int w : kWidths) {
-      std::vector<std::uint8_t> rows[5];
-      const std::uint8_t* pointers[5];
-      for (int k = 0; k < 5; ++k) {
-        rows[k].resize(static_cast<std::size_t>(w));
-        for (auto& e : rows[k]) e = static_cast<std::uint8_t>(grey(rng));
-        pointers[k] = rows[k].data();
-      }
+      const RandomGreyRows input(rng, w);
+      const auto& rows = input.rows;
+      const auto& pointers = input.pointers;
       std::vector<float> expected(static_cast<std::size_t>(w)), actual(expected.size());
       scalar::gaussian5_vertical_row(pointers, taps, w, expected.data());
       gaussian5_vertical_row(pointers, taps, w, actual.data());

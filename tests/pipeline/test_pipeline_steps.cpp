@@ -19,6 +19,18 @@ namespace {
 
 using dco::testing::same_bytes;
 
+// The densifier refuses `in` with an error that names `what`.
+void expect_refused(densify::Densifier& densifier, const densify::DensifyInputs& in,
+                    const char* what) {
+  Image<float> dense;
+  try {
+    densifier.compute(in, dense);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr(what));
+  }
+}
+
 TEST(PrepareFrame, InternalGreyEqualsTheStereoStagesOwn) {
   for (const bool color : {false, true})
     for (const char* resolution : {"full", "half"}) {
@@ -101,13 +113,7 @@ TEST(PlaneFrame, TheStereoThreadsPlanesAreTheDensifiersOwnFirstStep) {
   Image<float> small(320, 180);
   densify::DensifyInputs in = densify_inputs(with, {});
   in.planar = small.cview();
-  Image<float> dense;
-  try {
-    own.compute(in, dense);
-    ADD_FAILURE() << "no error";
-  } catch (const Error& e) {
-    EXPECT_THAT(e.what(), ::testing::HasSubstr("planar"));
-  }
+  expect_refused(own, in, "planar");
 }
 
 TEST(ContourFrame, MovingTheMapsGivesTheCopysResultAndLeavesTheSlotItsSizes) {
@@ -193,13 +199,7 @@ TEST(StereoFrame, KeepsTheRightImageForThePhotometricRefinementOnlyWhenAsked) {
   Image<std::uint8_t> small(80, 96);
   densify::DensifyInputs in = densify_inputs(with, {});
   in.right = small.cview();
-  Image<float> dense;
-  try {
-    a.compute(in, dense);
-    ADD_FAILURE() << "no error";
-  } catch (const Error& e) {
-    EXPECT_THAT(e.what(), ::testing::HasSubstr("the right image"));
-  }
+  expect_refused(a, in, "the right image");
 }
 
 TEST(CorrectedRightGrey, TakesTheRowsAndLevelsOfTheCameraCorrection) {
