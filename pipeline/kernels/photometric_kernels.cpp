@@ -3,6 +3,7 @@
 // tails go to the scalar range functions, so the results equal dco::kernels::scalar bit for bit
 // (the file is built without floating-point contraction).
 
+#include <algorithm>
 #include <cstdint>
 
 #include "dco/kernels/photometric_kernels.hpp"
@@ -62,13 +63,15 @@ void PhotometricTermsRow(const PhotometricTermRows& in, const pixel::Photometric
   const auto delta = hn::Set(df, w.delta), gamma = hn::Set(df, w.gamma),
              alpha = hn::Set(df, w.alpha);
   const auto zero_i = hn::Zero(di), last_i = hn::Set(di, width - 1), one_i = hn::Set(di, 1);
+  const auto lanes = hn::Iota(di, 0);
   // Columns whose row neighbours lie inside the row (the sampled columns are clamped anyway).
   const int begin = width < 3 ? width : 1;
   const int end = width < 3 ? width : width - 1;
   detail::photometric_terms_range(in, w, 0, begin, a, rhs, smooth);
   const auto vector = [&](int x) {
     const auto d = hn::LoadU(df, in.d + x);
-    const auto xs = hn::Sub(hn::ConvertTo(df, hn::Iota(di, x)), d);
+    const auto column = hn::Add(lanes, hn::Set(di, x));
+    const auto xs = hn::Sub(hn::ConvertTo(df, column), d);
     const auto floor = hn::Floor(xs);
     const auto t = hn::Sub(xs, floor);
     const auto j = hn::ConvertTo(di, floor);
@@ -76,7 +79,7 @@ void PhotometricTermsRow(const PhotometricTermRows& in, const pixel::Photometric
     const auto j1 = hn::Min(hn::Max(hn::Add(j, one_i), zero_i), last_i);
     // Where the vector's columns j lie within one of each other and inside the row (a smooth
     // map, most of the image), three loads and two selects per row instead of two gathers.
-    const auto shift = hn::Sub(j, hn::Iota(di, x));
+    const auto shift = hn::Sub(j, column);
     const int low = hn::GetLane(hn::MinOfLanes(di, shift));
     const int high = hn::GetLane(hn::MaxOfLanes(di, shift));
     const bool contiguous = high - low <= 1 && x + low >= 0 && x + low + n + 1 <= width - 1;
@@ -165,15 +168,23 @@ void PhotometricCouplingsRow(const CouplingRow& row, float* wx, float* wy,
 }
 
 template <bool kUp, bool kDown>
-void SorSteps(const SorRow& row, float omega, const float* d, float* stepped, int begin, int end) {
+void SorInterior(const SorRow& row, int first, float omega, const float* old, float* d) {
   const hn::ScalableTag<float> df;
+  const hn::RebindToSigned<decltype(df)> di;
   const int n = static_cast<int>(hn::Lanes(df));
   const auto om = hn::Set(df, omega);
+  // Which lanes are of this colour, for a vector that starts on an even and on an odd column.
+  const auto odd_lane = hn::And(hn::Iota(di, 0), hn::Set(di, 1));
+  const auto mine_from_even = hn::RebindMask(df, hn::Eq(odd_lane, hn::Set(di, first)));
+  const auto mine_from_odd = hn::RebindMask(df, hn::Eq(odd_lane, hn::Set(di, 1 - first)));
+  // The neighbours come from `old`, the row before this half-sweep: a pixel of this colour reads
+  // only the other colour, which the half-sweep leaves as it is, so `old` holds the same values
+  // as d, and the stores into d never feed a load.
   const auto vector = [&](int x) {
-    const auto dc = hn::LoadU(df, d + x);
+    const auto dc = hn::LoadU(df, old + x);
     auto num = hn::Add(hn::LoadU(df, row.rhs + x),
-                       hn::Mul(hn::LoadU(df, row.wx + x - 1), hn::LoadU(df, d + x - 1)));
-    num = hn::Add(num, hn::Mul(hn::LoadU(df, row.wx + x), hn::LoadU(df, d + x + 1)));
+                       hn::Mul(hn::LoadU(df, row.wx + x - 1), hn::LoadU(df, old + x - 1)));
+    num = hn::Add(num, hn::Mul(hn::LoadU(df, row.wx + x), hn::LoadU(df, old + x + 1)));
     if constexpr (kUp)
       num = hn::Add(num, hn::Mul(hn::LoadU(df, row.wy_up + x), hn::LoadU(df, row.d_up + x)));
     else
@@ -183,32 +194,25 @@ void SorSteps(const SorRow& row, float omega, const float* d, float* stepped, in
     else
       num = hn::Add(num, hn::Mul(hn::LoadU(df, row.wy + x), hn::Zero(df)));
     const auto v = hn::Mul(num, hn::LoadU(df, row.inverse_diagonal + x));
-    hn::StoreU(hn::Add(dc, hn::Mul(om, hn::Sub(v, dc))), df, stepped + x);
+    const auto stepped = hn::Add(dc, hn::Mul(om, hn::Sub(v, dc)));
+    hn::StoreU(hn::IfThenElse((x & 1) ? mine_from_odd : mine_from_even, stepped, dc), df, d + x);
   };
-  detail::cover_with_vectors(begin, end, n, vector);  // stepped is not an input
+  // A pixel done twice gets the same bits: every input is in `old` or the row's terms.
+  detail::cover_with_vectors(1, row.width - 1, n, vector);
 }
 
 void SorColourRow(const SorRow& row, int first, float omega, float* d, float* scratch) {
   const hn::ScalableTag<float> df;
-  const hn::RebindToSigned<decltype(df)> di;
   const int n = static_cast<int>(hn::Lanes(df));
   const int width = row.width;
   if (width - 2 < n) {
     detail::sor_range(row, first, width, omega, d);
     return;
   }
-  // Every interior pixel's step into scratch first, from d as it is; then the pixels of this
-  // colour take theirs. Stores into d while its neighbours are loaded would stall the loads.
+  std::copy(d, d + width, scratch);
   detail::with_rows_next_to(row.d_down != nullptr, row.d_up != nullptr, [&](auto down, auto up) {
-    SorSteps<decltype(up)::value, decltype(down)::value>(row, omega, d, scratch, 1, width - 1);
+    SorInterior<decltype(up)::value, decltype(down)::value>(row, first, omega, scratch, d);
   });
-  const auto colour = hn::Set(di, first), odd = hn::Set(di, 1);
-  const auto take = [&](int x) {
-    const auto mine = hn::RebindMask(df, hn::Eq(hn::And(hn::Iota(di, x), odd), colour));
-    hn::StoreU(hn::IfThenElse(mine, hn::LoadU(df, scratch + x), hn::LoadU(df, d + x)), df, d + x);
-  };
-  // Taking a pixel twice gives the same bits: the overlapping last vector is harmless.
-  detail::cover_with_vectors(1, width - 1, n, take);
   detail::sor_range(row, first, 1, omega, d);  // column 0 when it is of this colour
   const int last = width - 1;
   if ((last & 1) == first) detail::sor_range(row, last, width, omega, d);

@@ -20,7 +20,7 @@ struct PhotometricParams {
   double alpha = 20;   // smoothness
   double delta = 2;    // grey-level constancy
   double gamma = 20;   // gradient constancy
-  // Frames with more pixels are left as the solve gives them: the refinement costs 16-20 ms per
+  // Frames with more pixels are left as the solve gives them: the refinement costs 11-12 ms per
   // 1280x720 frame on one core of the 2-core machine, which that size's real-time budget (25 ms
   // a frame on two cores) has no room for. 0: every frame skips it.
   int max_pixels = 600000;
