@@ -71,7 +71,6 @@ void run_dco(benchmark::State& state, const char* solve_resolution, bool photome
   state.counters["build_ms"] = densifier.last_timings().build_ms;
   state.counters["median_ms"] = densifier.last_timings().median_ms;
   state.counters["refine_ms"] = densifier.last_timings().refine_ms;
-  state.counters["refine_ms"] = densifier.last_timings().refine_ms;
 }
 
 void BM_DcoDensify_Full(benchmark::State& state) {
