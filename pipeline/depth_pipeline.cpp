@@ -49,38 +49,36 @@ void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint
 void corrected_right_grey(ImageView<const std::uint8_t> right,
                           const stereo::CameraCorrection& correction, Image<std::uint8_t>& scratch,
                           Image<std::uint8_t>& out) {
-  ImageView<const std::uint8_t> grey = right;
-  if (right.channels == 3) {
-    scratch.resize(right.width, right.height);
-    stereo::bgr_to_gray(right, scratch.view());
-    grey = scratch.cview();
-  }
+  // The camera alignment's own steps, in its order: the rows, then the levels table; then the
+  // grey. Each step writes the buffer the one before did not, so that the last ends in `out`.
   const stereo::RowAlignment rows{correction.row_offset, correction.roll};
-  if (rows.identity()) {
-    out.resize(grey.width, grey.height);
-    out.copy_from(grey);
-  } else {
-    stereo::align_rows(grey, rows, out);
+  const bool align = !rows.identity(), levels = !correction.same_levels();
+  const bool colour = right.channels == 3;
+  int steps_left = int{align} + int{levels} + int{colour};
+  const auto next = [&]() -> Image<std::uint8_t>& { return --steps_left % 2 == 0 ? out : scratch; };
+  ImageView<const std::uint8_t> v = right;
+  if (align) {
+    Image<std::uint8_t>& to = next();
+    stereo::align_rows(v, rows, to);
+    v = to.cview();
   }
-  if (correction.same_levels()) return;
-  // The grey of gain_c * v_c + offset_c is near the grey's own line with the channels' gains and
-  // offsets weighted as bgr_to_gray weighs the channels (the cameras' gains differ alike).
-  stereo::ExposureMap grey_map = stereo::no_exposure_map(1);
-  const stereo::ExposureMap& m = correction.levels;
-  if (m.count == 3) {
-    constexpr double kWeight[3] = {0.114, 0.587, 0.299};  // B, G, R
-    grey_map.channels[0] = {0.0, 0.0};
-    for (int c = 0; c < 3; ++c) {
-      grey_map.channels[0].gain += kWeight[c] * m.channels[static_cast<std::size_t>(c)].gain;
-      grey_map.channels[0].offset += kWeight[c] * m.channels[static_cast<std::size_t>(c)].offset;
-    }
-  } else {
-    grey_map.channels[0] = m.channels[0];
+  if (levels) {
+    stereo::ExposureTable table;
+    table.build(correction.levels);
+    Image<std::uint8_t>& to = next();
+    table.apply(v, to);
+    v = to.cview();
   }
-  stereo::ExposureTable table;
-  table.build(grey_map);
-  table.apply(out.cview(), scratch);
-  out.swap(scratch);
+  if (colour) {
+    Image<std::uint8_t>& to = next();
+    to.resize(v.width, v.height);
+    stereo::bgr_to_gray(v, to.view());
+    return;
+  }
+  if (!align && !levels) {
+    out.resize(v.width, v.height);
+    out.copy_from(v);
+  }
 }
 
 void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> left,

@@ -58,7 +58,7 @@ struct StereoSlot {
   Image<std::uint8_t> small;          // grey left image at the stereo stage's internal resolution
   Image<std::uint8_t> small_colour;   // scratch: the colour image downscaled before its grey
   Image<std::uint8_t> right;          // as DepthResult::right
-  Image<std::uint8_t> right_scratch;  // the right image's grey before its correction
+  Image<std::uint8_t> right_scratch;  // working memory of corrected_right_grey
   Image<float> raw_disparity;         // internal px, every pixel
   Image<float> sparse;                // input px
   Image<float> planar;                // sparse after densify::smooth_matches, when planes_done
@@ -94,9 +94,9 @@ void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint
 //    `keep_right` the corrected grey right image. Throws dco::Error on bad input.
 void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> left,
                   ImageView<const std::uint8_t> right, StereoSlot& slot, bool keep_right);
-// The right view as the photometric refinement reads it: grey, brought onto the left's rows and
-// levels by `correction` (a colour map's channels weighted as in the grey). `scratch` holds the
-// grey before the correction.
+// The right view as the photometric refinement reads it: brought onto the left's rows and levels
+// by `correction` as the stereo stage's camera alignment does it, then grey. `scratch` is working
+// memory.
 void corrected_right_grey(ImageView<const std::uint8_t> right,
                           const stereo::CameraCorrection& correction, Image<std::uint8_t>& scratch,
                           Image<std::uint8_t>& out);
