@@ -301,7 +301,7 @@ DepthPipeline::DepthPipeline(const PipelineParams& params, const StageFactories&
     : params_(params),
       stereo_(stereo::make_stereo_matcher(stages.stereo, params.stereo)),
       contour_(contour::make_contour_extractor(stages.contour, params.contour)),
-      densifier_(params.densify, stages.densify_solver),
+      densifier_(params.densify, stages.densify_solver, stages.photometric_refinement),
       early_contour_apart_(!stages.on_gpu) {
   validate(params_);
 }
@@ -328,7 +328,7 @@ bool DepthPipeline::push(ImageView<const std::uint8_t> left, ImageView<const std
   const int t = next_index_;
   StereoSlot& slot = slot_of(t);
   stereo_frame(*stereo_, left, right, slot,  // first: it rejects bad input
-               densify::refines(params_.densify.photometric, left.width, left.height));
+               densifier_.refines(left.width, left.height));
   plane_frame(params_.densify, planes_, slot);
   prepare_frame(params_.stereo, left, t, slot);
   early_contour_frame(params_.contour, early_contour_, slot, early_contour_apart_);

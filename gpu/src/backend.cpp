@@ -63,6 +63,14 @@ std::unique_ptr<densify::SystemSolver> make_cuda_densify_solver(
 #endif
 }
 
+std::unique_ptr<densify::PhotometricRefinement> make_cuda_photometric_refinement() {
+#ifdef DCO_HAVE_CUDA
+  return detail::cuda_photometric_refinement();
+#else
+  throw Error("cuda: " + probe_cuda().why);
+#endif
+}
+
 std::unique_ptr<PairRemapper> make_cuda_pair_remapper(const Rectifier& rectifier) {
   if (!rectifier.needs_remap())
     throw Error("cuda: the calibration is already rectified; there is nothing to remap");
@@ -89,8 +97,9 @@ BackendChoice choose_backend(const std::string& requested, const stereo::StereoP
       make_cuda_stereo_matcher(params);  // initialises the context and the stream once
       c.backend = "cuda";
       c.message = "backend cuda on " + device.describe() +
-                  ": rectification, sparse stereo, the contour image passes and the densify "
-                  "solver on the GPU, optical flow and the densify system on the CPU";
+                  ": rectification, sparse stereo, the contour image passes, the densify "
+                  "solver and the photometric refinement on the GPU, optical flow and the "
+                  "densify system on the CPU";
       c.stages.stereo = [](const stereo::StereoParams& p) { return make_cuda_stereo_matcher(p); };
       c.stages.contour = [](const contour::ContourParams& p) {
         return make_cuda_contour_extractor(p);
@@ -98,6 +107,7 @@ BackendChoice choose_backend(const std::string& requested, const stereo::StereoP
       c.stages.densify_solver = [](const densify::DensifyParams& p) {
         return make_cuda_densify_solver(p);
       };
+      c.stages.photometric_refinement = [] { return make_cuda_photometric_refinement(); };
       c.stages.on_gpu = true;
       c.remapper = [](const Rectifier& r) { return make_cuda_pair_remapper(r); };
       return c;

@@ -12,6 +12,7 @@ std::unique_ptr<stereo::StereoMatcher> cuda_stereo_matcher(const stereo::StereoP
 std::unique_ptr<contour::ContourExtractor> cuda_contour_extractor(
     const contour::ContourParams& params);
 std::unique_ptr<densify::SystemSolver> cuda_densify_solver(const densify::DensifyParams& params);
+std::unique_ptr<densify::PhotometricRefinement> cuda_photometric_refinement();
 std::unique_ptr<PairRemapper> cuda_pair_remapper(const Rectifier& rectifier);
 
 }  // namespace dco::gpu::detail

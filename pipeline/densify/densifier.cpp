@@ -107,7 +107,8 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.photometric_gamma", &p.photometric.gamma, 0.0, 1000.0,
         "gradient constancy weight of the photometric refinement");
   s.add("densify.photometric_max_pixels", &p.photometric.max_pixels, 0, 100000000,
-        "frames with more pixels skip the photometric refinement (0: all of them)");
+        "where the photometric refinement runs on the CPU, frames with more pixels skip it (0: all "
+        "of them); on the CUDA backend it refines every frame");
   s.add("densify.row_threads", &p.row_threads, 0, 16,
         "threads sharing the row-wise steps (building the system, the clamp and the median), the "
         "stage's own included (0 = auto: 1 below 4 usable CPUs, else half of them, at most 4)");
@@ -176,12 +177,14 @@ void close_diagonal_gap_rows(ImageView<const std::uint8_t> contours, int begin, 
   }
 }
 
-Densifier::Densifier(const DensifyParams& params, const SystemSolverFactory& solver)
+Densifier::Densifier(const DensifyParams& params, const SystemSolverFactory& solver,
+                     const PhotometricRefinementFactory& refinement)
     : params_((validate(params), params)),
       rows_(pipeline::RowTeam::threads_for(params_.row_threads)) {
   median_columns_.resize(static_cast<std::size_t>(rows_.threads()));
   part_range_.resize(static_cast<std::size_t>(rows_.threads()));
   solver_ = make_system_solver(solver, params_);
+  refiner_ = make_photometric_refinement(refinement);
   // Grey-level differences are integers: one table instead of two exp() per pixel.
   for (std::size_t diff = 0; diff < color_weight_.size(); ++diff)
     color_weight_[diff] =
@@ -457,8 +460,8 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   timings_.solve_ms = t.lap_ms();
   finish(dense);
   timings_.median_ms = t.lap_ms();
-  if (refines(params_.photometric, w, h) && !in.right.empty() && !in.image.empty())
-    refiner_.refine(in.image, in.right, params_.photometric, dense.view());
+  if (refines(w, h) && !in.right.empty() && !in.image.empty())
+    refiner_->refine(in.image, in.right, params_.photometric, dense.view());
   timings_.refine_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();
 }

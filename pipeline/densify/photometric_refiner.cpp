@@ -21,11 +21,15 @@ void derivatives_of(ImageView<const std::uint8_t> img, int y, const kernels::Der
   kernels::derivative_row(rows, img.width, out);
 }
 
+void clamp_row(float* d, int w) {
+  for (int x = 0; x < w; ++x) d[x] = std::max(d[x], 0.0f);
+}
+
 }  // namespace
 
-void PhotometricRefiner::refine(ImageView<const std::uint8_t> left,
-                                ImageView<const std::uint8_t> right,
-                                const PhotometricParams& params, ImageView<float> disparity) {
+void PhotometricRefinement::refine(ImageView<const std::uint8_t> left,
+                                   ImageView<const std::uint8_t> right,
+                                   const PhotometricParams& params, ImageView<float> disparity) {
   const int w = disparity.width;
   const int h = disparity.height;
   if (!left.same_size(w, h) || !right.same_size(w, h) || left.channels != 1 || right.channels != 1)
@@ -35,6 +39,20 @@ void PhotometricRefiner::refine(ImageView<const std::uint8_t> left,
                 std::to_string(right.width) + "x" + std::to_string(right.height) + "x" +
                 std::to_string(right.channels));
   if (params.iterations <= 0 || params.sweeps <= 0 || w == 0 || h == 0) return;
+  fit(left, right, params, disparity);
+}
+
+std::unique_ptr<PhotometricRefinement> make_photometric_refinement(
+    const PhotometricRefinementFactory& factory) {
+  if (factory) return factory();
+  return std::make_unique<PhotometricRefiner>();
+}
+
+void PhotometricRefiner::fit(ImageView<const std::uint8_t> left,
+                             ImageView<const std::uint8_t> right, const PhotometricParams& params,
+                             ImageView<float> disparity) {
+  const int w = disparity.width;
+  const int h = disparity.height;
   const int stages = 2 * params.sweeps;  // half-sweeps, red then black
   // At step t the terms of row t are made, the couplings of row t - 1, and half-sweep k runs on
   // row t - 1 - k, which reads the couplings of the row above it: rows t - stages - 1 .. t.
@@ -89,10 +107,13 @@ void PhotometricRefiner::refine(ImageView<const std::uint8_t> left,
                                   w};
         // Red: the pixels with x + y even; black the others.
         const int first = (r + stage) & 1;
-        float* d = disparity.row(r);
-        kernels::sor_row(row, first, kPhotometricOmega, d, scratch_.data());
-        if (last_iteration && stage + 1 == stages)
-          for (int x = 0; x < w; ++x) d[x] = std::max(d[x], 0.0f);
+        kernels::sor_row(row, first, kPhotometricOmega, disparity.row(r), scratch_.data());
+        // The clamp comes after every sweep, as in the plain order: row r - 1 once row r's last
+        // half-sweep has read it, the last row at the end.
+        if (last_iteration && stage + 1 == stages) {
+          if (r > 0) clamp_row(disparity.row(r - 1), w);
+          if (r + 1 == h) clamp_row(disparity.row(r), w);
+        }
       }
     }
   }

@@ -79,7 +79,7 @@ DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& 
       hook_(std::move(hook)),
       stereo_(stereo::make_stereo_matcher(stages.stereo, pipeline.stereo)),
       contour_(contour::make_contour_extractor(stages.contour, pipeline.contour)),
-      densifier_(pipeline.densify, stages.densify_solver),
+      densifier_(pipeline.densify, stages.densify_solver, stages.photometric_refinement),
       early_contour_moves_(params_.threads == 2 && !stages.on_gpu),
       // In flight at once: the contour window (3 frames), a full stereo queue and the frame in
       // the stereo stage.
@@ -357,9 +357,8 @@ void DepthRuntime::stereo_loop(std::stop_token stop) {
         entry.times.stereo_blocked = Clock::now() - waiting;
       }
       if (!late) {
-        stereo_frame(
-            *stereo_, in.left.cview(), in.right.cview(), entry.slot,
-            densify::refines(pipeline_.densify.photometric, in.left.width(), in.left.height()));
+        stereo_frame(*stereo_, in.left.cview(), in.right.cview(), entry.slot,
+                     densifier_.refines(in.left.width(), in.left.height()));
         plane_frame(pipeline_.densify, planes_, entry.slot, planes_here);
         early_contour_frame(pipeline_.contour, early_contour_, entry.slot, early_contour_here);
       }

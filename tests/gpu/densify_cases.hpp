@@ -17,12 +17,15 @@
 
 namespace dco::gpu::testing {
 
-// Two consecutive results of the CPU pipeline (sparse map, contours, cues, image) of a moving
-// synthetic scene: what the densifier is given for frames t and t+1.
-inline std::vector<pipeline::DepthResult> densify_frames(const std::string& scene, int width,
-                                                         int height) {
+// Two consecutive results of the CPU pipeline (sparse map, contours, cues, image and, where
+// `photometric` refines the frame size, the corrected right image) of a moving synthetic scene:
+// what the densifier is given for frames t and t+1.
+inline std::vector<pipeline::DepthResult> densify_frames(
+    const std::string& scene, int width, int height,
+    const densify::PhotometricParams& photometric = {}) {
   const synthetic::SceneRenderer renderer(synthetic::preset(scene, width, height));
   pipeline::PipelineParams params;
+  params.densify.photometric = photometric;
   params.stereo.max_disparity = synthetic::covering_max_disparity(renderer.config());
   pipeline::DepthPipeline cpu(params);
   std::vector<pipeline::DepthResult> frames;

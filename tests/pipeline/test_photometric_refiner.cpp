@@ -128,9 +128,10 @@ TEST(PhotometricRefiner, DefaultsMoveASlantedSurfaceTowardsTheTruthAndKeepItsSte
 }
 
 // The plain order the fused pass must reproduce: every row's terms, then the couplings, then
-// each half-sweep over the whole image; the scalar kernels throughout.
-void refine_plainly(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
-                    const PhotometricParams& params, ImageView<float> d) {
+// each half-sweep over the whole image; the scalar kernels throughout; the clamp at 0 last.
+// Returns how many values the clamp raised.
+int refine_plainly(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                   const PhotometricParams& params, ImageView<float> d) {
   const int w = d.width, h = d.height;
   Image<float> a(w, h), rhs(w, h), s(w, h), wx(w, h), wy(w, h), inv(w, h), deriv(w, 12);
   const auto rows_of = [&](int first) {
@@ -176,38 +177,54 @@ void refine_plainly(ImageView<const std::uint8_t> left, ImageView<const std::uin
         kernels::scalar::sor_row(row, (y + half) & 1, kPhotometricOmega, d.row(y));
       }
   }
+  int raised = 0;
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) d.row(y)[x] = std::max(d.row(y)[x], 0.0f);
+    for (int x = 0; x < w; ++x) {
+      raised += d.row(y)[x] < 0.0f;
+      d.row(y)[x] = std::max(d.row(y)[x], 0.0f);
+    }
+  return raised;
 }
 
 TEST(PhotometricRefiner, OnePassOverTheRowsGivesThePlainOrdersBits) {
-  const auto truth = [](double x, double y) {
+  // A surface with a step, and one that starts at disparity 0, where the sweeps go below 0 and
+  // the clamp must come after all of them.
+  const auto stepped = [](double x, double y) {
     return 3.0 + 0.05 * x + ((x > 30 && y > 12) ? 5 : 0);
   };
-  for (const int w : {1, 2, 7, 33, 70})
-    for (const int h : {1, 3, 9, 25}) {
-      Image<std::uint8_t> left, right;
-      render_pair(w, h, truth, left, right);
-      Image<float> start(w, h);
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x)
-          start.view().row(y)[x] =
-              static_cast<float>(std::round(truth(x, y))) - 0.4f * ((x + y) % 3 == 0);
-      for (const int sweeps : {1, 3}) {
-        PhotometricParams params;
-        params.sweeps = sweeps;
-        params.iterations = 2;
-        Image<float> fused(w, h), plain(w, h);
-        fused.copy_from(start.cview());
-        plain.copy_from(start.cview());
-        PhotometricRefiner refiner;
-        refiner.refine(left.cview(), right.cview(), params, fused.view());
-        refine_plainly(left.cview(), right.cview(), params, plain.view());
+  const auto from_zero = [](double x, double) { return 0.02 * x; };
+  int raised_from_zero = 0;
+  for (const bool zero : {false, true})
+    for (const int w : {1, 2, 7, 33, 70})
+      for (const int h : {1, 3, 9, 25}) {
+        const auto truth = [&](double x, double y) {
+          return zero ? from_zero(x, y) : stepped(x, y);
+        };
+        Image<std::uint8_t> left, right;
+        render_pair(w, h, truth, left, right);
+        Image<float> start(w, h);
         for (int y = 0; y < h; ++y)
-          ASSERT_EQ(std::memcmp(fused.cview().row(y), plain.cview().row(y), sizeof(float) * w), 0)
-              << w << "x" << h << " sweeps " << sweeps << " row " << y;
+          for (int x = 0; x < w; ++x)
+            start.view().row(y)[x] =
+                static_cast<float>(std::round(truth(x, y))) - 0.4f * ((x + y) % 3 == 0);
+        for (const int sweeps : {1, 3}) {
+          PhotometricParams params;
+          params.sweeps = sweeps;
+          params.iterations = 2;
+          Image<float> fused(w, h), plain(w, h);
+          fused.copy_from(start.cview());
+          plain.copy_from(start.cview());
+          PhotometricRefiner refiner;
+          refiner.refine(left.cview(), right.cview(), params, fused.view());
+          const int raised = refine_plainly(left.cview(), right.cview(), params, plain.view());
+          if (zero) raised_from_zero += raised;
+          for (int y = 0; y < h; ++y)
+            ASSERT_EQ(std::memcmp(fused.cview().row(y), plain.cview().row(y), sizeof(float) * w), 0)
+                << (zero ? "from zero " : "stepped ") << w << "x" << h << " sweeps " << sweeps
+                << " row " << y;
+        }
       }
-    }
+  EXPECT_GT(raised_from_zero, 0);
 }
 
 TEST(PhotometricRefiner, RefusesImagesOfAnotherSizeOrColourAndLeavesTheMapWithoutIterations) {

@@ -246,6 +246,8 @@ struct BackendCheck {
   double cpu_contour_ms = 0, cuda_contour_ms = 0;
   long differing_contour_pixels = 0;           // of the contour maps, M_fuse and M_I together
   double cpu_solve_ms = 0, cuda_solve_ms = 0;  // the densify solver on the CPU's contour results
+  bool refined = false;  // whether the frames went through the photometric refinement
+  double cpu_refine_ms = 0, cuda_refine_ms = 0;  // its time, after the solve
   long differing_dense_pixels = 0;
   double cpu_rectify_ms = 0, cuda_rectify_ms = 0;  // per pair, the frames taken as raw images
   long differing_rectified_bytes = 0;
@@ -333,8 +335,17 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
   const auto cuda_stage = cuda.stereo(params.stereo);
   const auto cpu_contour = dco::contour::make_cpu_contour_extractor(params.contour);
   const auto cuda_contour = cuda.contour(params.contour);
-  dco::densify::Densifier cpu_densifier(params.densify),
-      cuda_densifier(params.densify, cuda.densify_solver);
+  dco::densify::Densifier cuda_densifier(params.densify, cuda.densify_solver,
+                                         cuda.photometric_refinement);
+  // The GPU refines frames that the CPU's pixel budget skips: here the CPU refines them too, so
+  // the two compare like with like.
+  dco::densify::DensifyParams cpu_densify = params.densify;
+  const int width = frames.pairs.front().left.width(), height = frames.pairs.front().left.height();
+  c.refined = cuda_densifier.refines(width, height);
+  if (c.refined)
+    cpu_densify.photometric.max_pixels =
+        std::max(cpu_densify.photometric.max_pixels, width * height);
+  dco::densify::Densifier cpu_densifier(cpu_densify);
   dco::Image<float> cuda_dense;
   // The CPU stage's slots of frames i - 2, i - 1 and i: the contours of i - 1 use all three.
   std::array<pl::StereoSlot, 3> slots;
@@ -345,9 +356,7 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
     const auto& f = frames.pairs[i];
     pl::StereoSlot& slot = slots[i % 3];
     pl::prepare_frame(params.stereo, f.left.cview(), static_cast<int>(i), slot);
-    pl::stereo_frame(
-        *cpu_stage, f.left.cview(), f.right.cview(), slot,
-        dco::densify::refines(params.densify.photometric, f.left.width(), f.left.height()));
+    pl::stereo_frame(*cpu_stage, f.left.cview(), f.right.cview(), slot, c.refined);
     cuda_stage->compute(f.left.cview(), f.right.cview(), cuda_sparse);
     if (i > 0 || frames.pairs.size() == 1) {
       c.cpu_stereo_ms += cpu_stage->last_timings().total_ms;
@@ -371,10 +380,13 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
     pl::densify_frame(cuda_densifier, a);
     std::swap(a.dense, cuda_dense);
     const double cuda_solve_ms = a.densify_timings.solve_ms;
+    const double cuda_refine_ms = a.densify_timings.refine_ms;
     pl::densify_frame(cpu_densifier, a);
     if (i > 2 || frames.pairs.size() == 3) {
       c.cpu_solve_ms += a.densify_timings.solve_ms;
       c.cuda_solve_ms += cuda_solve_ms;
+      c.cpu_refine_ms += a.densify_timings.refine_ms;
+      c.cuda_refine_ms += cuda_refine_ms;
     }
     c.differing_dense_pixels += differing(a.dense.cview(), cuda_dense.cview(), nullptr);
   }
@@ -385,6 +397,8 @@ BackendCheck compare_with_cpu(const dco::pipeline::PipelineParams& params, const
     c.cuda_contour_ms /= contour_timed;
     c.cpu_solve_ms /= contour_timed;
     c.cuda_solve_ms /= contour_timed;
+    c.cpu_refine_ms /= contour_timed;
+    c.cuda_refine_ms /= contour_timed;
   }
   return c;
 }
@@ -729,6 +743,12 @@ void print_text(const Result& r) {
         "on the CPU in both); {} output pixels differ\n",
         r.check->cpu_solve_ms, r.check->cuda_solve_ms,
         r.check->cpu_solve_ms / r.check->cuda_solve_ms, r.check->differing_dense_pixels);
+  if (r.check && r.check->refined)
+    fmt::print(
+        "  densify  photometric refinement CPU {:.2f} ms, CUDA {:.2f} ms per frame (ratio {:.1f}, "
+        "with transfers; the CPU refines every frame size here)\n",
+        r.check->cpu_refine_ms, r.check->cuda_refine_ms,
+        r.check->cpu_refine_ms / r.check->cuda_refine_ms);
   if (r.check)
     fmt::print(
         "  rectify  CPU {:.2f} ms, CUDA {:.2f} ms per pair with transfers (ratio {:.1f}, the "
@@ -793,16 +813,19 @@ std::string json_fields(const Result& r) {
                         "\"cuda_differing_pixels\": {}, \"cuda_max_abs_diff\": {}, "
                         "\"cpu_contour_ms\": {}, \"cuda_contour_ms\": {}, "
                         "\"cuda_contour_differing_pixels\": {}, \"cpu_solve_ms\": {}, "
-                        "\"cuda_solve_ms\": {}, \"cuda_dense_differing_pixels\": {}, "
+                        "\"cuda_solve_ms\": {}, \"refined\": {}, \"cpu_refine_ms\": {}, "
+                        "\"cuda_refine_ms\": {}, "
+                        "\"cuda_dense_differing_pixels\": {}, "
                         "\"cpu_rectify_ms\": {}, \"cuda_rectify_ms\": {}, "
                         "\"cuda_rectify_differing_bytes\": {}",
                         json_number(r.check->cpu_stereo_ms), json_number(r.check->cuda_stereo_ms),
                         r.check->differing_pixels, json_number(r.check->max_abs_diff),
                         json_number(r.check->cpu_contour_ms), json_number(r.check->cuda_contour_ms),
                         r.check->differing_contour_pixels, json_number(r.check->cpu_solve_ms),
-                        json_number(r.check->cuda_solve_ms), r.check->differing_dense_pixels,
-                        json_number(r.check->cpu_rectify_ms), json_number(r.check->cuda_rectify_ms),
-                        r.check->differing_rectified_bytes)
+                        json_number(r.check->cuda_solve_ms), r.check->refined ? "true" : "false",
+                        json_number(r.check->cpu_refine_ms), json_number(r.check->cuda_refine_ms),
+                        r.check->differing_dense_pixels, json_number(r.check->cpu_rectify_ms),
+                        json_number(r.check->cuda_rectify_ms), r.check->differing_rectified_bytes)
                   : std::string());
 }
 

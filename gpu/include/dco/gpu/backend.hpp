@@ -10,9 +10,9 @@
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 
 // Where the stages run. The CUDA path (built when nvcc was found) computes the rectification,
-// the sparse stereo stage, the image side of the contour stage and the densify solver on the GPU
-// with the same per-pixel math as the CPU path; DIS optical flow and building the densify system
-// stay on the CPU.
+// the sparse stereo stage, the image side of the contour stage, the densify solver and the
+// photometric refinement on the GPU with the same per-pixel math as the CPU path; DIS optical
+// flow and building the densify system stay on the CPU.
 namespace dco::gpu {
 
 // What the CUDA runtime reports about device 0.
@@ -40,6 +40,9 @@ std::unique_ptr<contour::ContourExtractor> make_cuda_contour_extractor(
 // The densify solver on the GPU (GridSystemSolver). Throws like make_cuda_stereo_matcher.
 std::unique_ptr<densify::SystemSolver> make_cuda_densify_solver(
     const densify::DensifyParams& params);
+// The densifier's photometric refinement on the GPU (GridPhotometricRefiner). Throws like
+// make_cuda_stereo_matcher.
+std::unique_ptr<densify::PhotometricRefinement> make_cuda_photometric_refinement();
 
 // Rectification of raw pairs on the GPU (GridPairRemapper): the rectifier's maps, cv::remap's
 // bytes. Throws like make_cuda_stereo_matcher, and when the rectifier is a pass-through.

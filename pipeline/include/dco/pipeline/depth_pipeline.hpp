@@ -153,6 +153,7 @@ struct StageFactories {
   stereo::StereoMatcherFactory stereo;
   contour::ContourExtractorFactory contour;
   densify::SystemSolverFactory densify_solver;  // the densifier builds its system on the CPU
+  densify::PhotometricRefinementFactory photometric_refinement;
   bool on_gpu = false;  // these stages compute on a GPU (their early contour work stays with them)
 };
 
@@ -164,7 +165,8 @@ struct StageFactories {
 // frame's dense map.
 class DepthPipeline {
  public:
-  // `stages` makes the stereo and contour stages and the densify solver (empty: the CPU ones).
+  // `stages` makes the stereo and contour stages, the densify solver and the photometric
+  // refinement (empty: the CPU ones).
   explicit DepthPipeline(const PipelineParams& params, const StageFactories& stages = {});
 
   // left/right: a rectified pair (8-bit, 1 or 3 channels). Returns true when `out` was filled.

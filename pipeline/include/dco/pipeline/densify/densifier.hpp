@@ -131,8 +131,10 @@ void smooth_matches(const DensifyParams& params, MatchPlaneSmoother& planes,
 
 class Densifier {
  public:
-  // `solver` makes the solver of the system (empty: the CPU one).
-  explicit Densifier(const DensifyParams& params, const SystemSolverFactory& solver = {});
+  // `solver` makes the solver of the system, `refinement` the photometric refinement (empty: the
+  // CPU ones).
+  explicit Densifier(const DensifyParams& params, const SystemSolverFactory& solver = {},
+                     const PhotometricRefinementFactory& refinement = {});
 
   void compute(const DensifyInputs& in, Image<float>& dense);
 
@@ -150,6 +152,11 @@ class Densifier {
   ImageView<const float> last_rhs() const { return rhs_.cview(); }
   // Whether a frame `width` pixels wide is solved at half resolution.
   bool solves_at_half(int width) const;
+  // Whether a width x height frame is fitted to its images by the photometric refinement (which
+  // needs DensifyInputs::right then). Any thread may ask.
+  bool refines(int width, int height) const {
+    return refiner_->refines(params_.photometric, width, height);
+  }
   // Forgets the previous solution (a scene cut, a new sequence).
   void reset() { has_solution_ = false; }
 
@@ -183,7 +190,7 @@ class Densifier {
   bool has_solution_ = false;
   SolverReport report_;
   DensifyTimings timings_;
-  PhotometricRefiner refiner_;
+  std::unique_ptr<PhotometricRefinement> refiner_;
 };
 
 // Closes diagonal gaps of a contour mask so that it separates regions under 4-connectivity

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <vector>
 
 #include "dco/core/image.hpp"
@@ -20,13 +22,14 @@ struct PhotometricParams {
   double alpha = 20;   // smoothness
   double delta = 2;    // grey-level constancy
   double gamma = 20;   // gradient constancy
-  // Frames with more pixels are left as the solve gives them: the refinement costs 11-12 ms per
-  // 1280x720 frame on one core of the 2-core machine, which that size's real-time budget (25 ms
-  // a frame on two cores) has no room for. 0: every frame skips it.
+  // Where the refinement runs on the CPU, frames with more pixels are left as the solve gives
+  // them: it costs 11-12 ms per 1280x720 frame on one core of the 2-core machine, which that
+  // size's real-time budget (25 ms a frame on two cores) has no room for. 0: every frame skips it
+  // there. A GPU refinement (1.8 ms at 1280x720 on an H200) refines every frame.
   int max_pixels = 600000;
 };
 
-// Whether a width x height frame is refined under `params`.
+// Whether the CPU refines a width x height frame under `params`.
 inline bool refines(const PhotometricParams& params, int width, int height) {
   return params.iterations > 0 &&
          static_cast<long long>(width) * height <= static_cast<long long>(params.max_pixels);
@@ -35,22 +38,47 @@ inline bool refines(const PhotometricParams& params, int width, int height) {
 // Fits a dense disparity map to the images themselves: a few fixed-point iterations of the
 // energy above, each linearised about the current map (grey levels and derivatives of the right
 // image sampled at x - d along the row, linear interpolation; the derivatives the mean of both
-// images') and relaxed by red-black SOR sweeps. The map's sub-pixel values on textured surfaces
-// then come from the image alignment rather than from the smoothness between sparse matches;
-// depth edges and occlusions stay where they are, because the robust penalisers give their large
-// residuals and gradients little weight.
+// images') and relaxed by red-black SOR sweeps, then every value below 0 set to 0. The map's
+// sub-pixel values on textured surfaces then come from the image alignment rather than from the
+// smoothness between sparse matches; depth edges and occlusions stay where they are, because the
+// robust penalisers give their large residuals and gradients little weight.
 //
-// One pass over the rows per iteration: row t's terms, then each half-sweep one row behind the
-// one before it (the red one of sweep 1 on row t - 1, the black one on t - 2, ...), in a ring of
-// rows that stays in cache. Every pixel sees the values it would see in the plain order (all
-// terms, then each half-sweep over the whole image), so the result is that order's, bit for bit.
-// Allocates only when the size or the number of sweeps grows.
-class PhotometricRefiner {
+// The plain order defines the result: all pixels' terms, then all couplings, then each
+// half-sweep over the whole image, the clamp last. Backends (the CPU below, a GPU grid in
+// dco/gpu) give its bits.
+class PhotometricRefinement {
  public:
+  virtual ~PhotometricRefinement() = default;
   // left, right: grey, rectified (the right camera's rows and levels corrected), the map's size.
-  // disparity: refined in place; values below 0 end at 0. Throws dco::Error on a size mismatch.
+  // disparity: refined in place. Throws dco::Error on a size mismatch or colour images.
   void refine(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
               const PhotometricParams& params, ImageView<float> disparity);
+  // Whether the densifier refines its width x height frames with this backend under `params`
+  // (the CPU's rule, densify::refines, unless the backend says otherwise).
+  virtual bool refines(const PhotometricParams& params, int width, int height) const {
+    return densify::refines(params, width, height);
+  }
+
+ protected:
+  // After the checks, with iterations and sweeps > 0 and a map of at least one pixel.
+  virtual void fit(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                   const PhotometricParams& params, ImageView<float> disparity) = 0;
+};
+
+// Makes a backend's refinement (CPU, CUDA); an empty factory means the CPU one.
+using PhotometricRefinementFactory = std::function<std::unique_ptr<PhotometricRefinement>()>;
+std::unique_ptr<PhotometricRefinement> make_photometric_refinement(
+    const PhotometricRefinementFactory& factory);
+
+// The CPU's: one pass over the rows per iteration, row t's terms, then each half-sweep one row
+// behind the one before it (the red one of sweep 1 on row t - 1, the black one on t - 2, ...),
+// in a ring of rows that stays in cache, with the vector row kernels. Every pixel sees the values
+// it would see in the plain order, so the result is that order's, bit for bit. Allocates only
+// when the size or the number of sweeps grows.
+class PhotometricRefiner final : public PhotometricRefinement {
+ protected:
+  void fit(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+           const PhotometricParams& params, ImageView<float> disparity) override;
 
  private:
   Image<float> derivatives_;  // 12 rows: the left image's six derivative rows, then the right's
