@@ -13,6 +13,7 @@ TEST(Backend, CpuIsTheCpuStage) {
   EXPECT_FALSE(c.stages.stereo);
   EXPECT_FALSE(c.stages.contour);
   EXPECT_FALSE(c.stages.densify_solver);
+  EXPECT_FALSE(c.stages.photometric_refinement);
   EXPECT_FALSE(c.remapper);
   EXPECT_FALSE(c.fell_back);
 }
@@ -25,6 +26,9 @@ TEST(Backend, AutoTakesCudaExactlyWhenADeviceWorks) {
     ASSERT_TRUE(c.stages.stereo);
     ASSERT_TRUE(c.stages.contour);
     ASSERT_TRUE(c.stages.densify_solver);
+    ASSERT_TRUE(c.stages.photometric_refinement);
+    // The GPU refinement is not held to the CPU's pixel budget: the camera's full size too.
+    EXPECT_TRUE(c.stages.photometric_refinement()->refines({}, 1280, 720));
     ASSERT_TRUE(c.remapper);
     EXPECT_NE(c.message.find(device.name), std::string::npos) << c.message;
   } else {
@@ -32,6 +36,7 @@ TEST(Backend, AutoTakesCudaExactlyWhenADeviceWorks) {
     EXPECT_FALSE(c.stages.stereo);
     EXPECT_FALSE(c.stages.contour);
     EXPECT_FALSE(c.stages.densify_solver);
+    EXPECT_FALSE(c.stages.photometric_refinement);
     EXPECT_FALSE(c.remapper);
     EXPECT_EQ(c.fell_back, built_with_cuda());
     // The log line says why.
@@ -53,6 +58,7 @@ TEST(Backend, CudaWithoutADeviceIsOneClearError) {
   EXPECT_THROW(make_cuda_stereo_matcher({}), Error);
   EXPECT_THROW(make_cuda_contour_extractor({}), Error);
   EXPECT_THROW(make_cuda_densify_solver({}), Error);
+  EXPECT_THROW(make_cuda_photometric_refinement(), Error);
   EXPECT_THROW(make_cuda_pair_remapper(Rectifier(test::pinhole_rig())), Error);
 }
 
