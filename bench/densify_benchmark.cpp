@@ -48,10 +48,12 @@ const Frames& frames() {
 
 // One frame as the pipeline runs it: warm-started from, and stabilised towards, the previous
 // frame's solution (computed outside the timed region).
-void run_dco(benchmark::State& state, const char* solve_resolution, bool photometric = false) {
+void run_dco(benchmark::State& state, const char* solve_resolution, bool photometric = false,
+             int row_threads = 0) {
   const Frames& f = frames();
   densify::DensifyParams params;
   params.solve_resolution = solve_resolution;
+  params.row_threads = row_threads;
   // The photometric refinement is off at this size by default (densify.photometric_max_pixels):
   // this variant measures what it would cost.
   if (photometric) params.photometric.max_pixels = 1280 * 720;
@@ -82,6 +84,18 @@ void BM_DcoDensify_Half(benchmark::State& state) {
 }
 void BM_DcoDensify_HalfPhotometric(benchmark::State& state) {
   run_dco(state, "half", true);
+}
+// The same with the stage's row-wise steps, the refinement's passes among them, on one, two and
+// four threads (densify.row_threads; 0, the default, takes one on a machine of fewer than 4 CPUs
+// and half of them, at most 4, elsewhere).
+void BM_DcoDensify_HalfPhotometricOneThread(benchmark::State& state) {
+  run_dco(state, "half", true, 1);
+}
+void BM_DcoDensify_HalfPhotometricTwoThreads(benchmark::State& state) {
+  run_dco(state, "half", true, 2);
+}
+void BM_DcoDensify_HalfPhotometricFourThreads(benchmark::State& state) {
+  run_dco(state, "half", true, 4);
 }
 
 // Eigen CG on the system the full solve builds, from the same warm start, to the same
@@ -134,13 +148,18 @@ void BM_EigenCg_Jacobi(benchmark::State& state) {
 BENCHMARK(BM_DcoDensify_Full)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DcoDensify_Half)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DcoDensify_HalfPhotometric)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DcoDensify_HalfPhotometricOneThread)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DcoDensify_HalfPhotometricTwoThreads)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DcoDensify_HalfPhotometricFourThreads)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_EigenCg_Jacobi)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  return dco::bench::run_with_ratios(argc, argv,
-                                     {{"BM_DcoDensify_Full", "BM_EigenCg_Jacobi"},
-                                      {"BM_DcoDensify_Half", "BM_EigenCg_Jacobi"},
-                                      {"BM_DcoDensify_HalfPhotometric", "BM_EigenCg_Jacobi"}});
+  return dco::bench::run_with_ratios(
+      argc, argv,
+      {{"BM_DcoDensify_Full", "BM_EigenCg_Jacobi"},
+       {"BM_DcoDensify_Half", "BM_EigenCg_Jacobi"},
+       {"BM_DcoDensify_HalfPhotometric", "BM_EigenCg_Jacobi"},
+       {"BM_DcoDensify_HalfPhotometricTwoThreads", "BM_EigenCg_Jacobi"}});
 }

@@ -184,7 +184,7 @@ Densifier::Densifier(const DensifyParams& params, const SystemSolverFactory& sol
   median_columns_.resize(static_cast<std::size_t>(rows_.threads()));
   part_range_.resize(static_cast<std::size_t>(rows_.threads()));
   solver_ = make_system_solver(solver, params_);
-  refiner_ = make_photometric_refinement(refinement);
+  refiner_ = make_photometric_refinement(refinement, &rows_);
   // Grey-level differences are integers: one table instead of two exp() per pixel.
   for (std::size_t diff = 0; diff < color_weight_.size(); ++diff)
     color_weight_[diff] =

@@ -43,14 +43,99 @@ void PhotometricRefinement::refine(ImageView<const std::uint8_t> left,
 }
 
 std::unique_ptr<PhotometricRefinement> make_photometric_refinement(
-    const PhotometricRefinementFactory& factory) {
+    const PhotometricRefinementFactory& factory, pipeline::RowTeam* rows) {
   if (factory) return factory();
-  return std::make_unique<PhotometricRefiner>();
+  return std::make_unique<PhotometricRefiner>(rows);
 }
 
 void PhotometricRefiner::fit(ImageView<const std::uint8_t> left,
                              ImageView<const std::uint8_t> right, const PhotometricParams& params,
                              ImageView<float> disparity) {
+  if (rows_ != nullptr && rows_->threads() > 1)
+    fit_by_rows(left, right, params, disparity);
+  else
+    fit_in_one_pass(left, right, params, disparity);
+}
+
+void PhotometricRefiner::fit_by_rows(ImageView<const std::uint8_t> left,
+                                     ImageView<const std::uint8_t> right,
+                                     const PhotometricParams& params, ImageView<float> disparity) {
+  const int w = disparity.width;
+  const int h = disparity.height;
+  for (Image<float>* image : {&a_, &rhs_, &smooth_, &wx_, &wy_, &inverse_diagonal_})
+    image->resize(w, h);
+  part_rows_.resize(static_cast<std::size_t>(rows_->threads()));
+  for (Image<float>& rows : part_rows_) rows.resize(w, 16);
+  const kernels::pixel::PhotometricWeights weights{static_cast<float>(params.alpha),
+                                                   static_cast<float>(params.delta),
+                                                   static_cast<float>(params.gamma)};
+  // A pass's body over one thread's block of rows; every pass reads only what the passes before
+  // it wrote (the half-sweeps also the other colour of their own pass, which it leaves alone).
+  const auto terms = [&](int part, int begin, int end) {
+    Image<float>& own = part_rows_[static_cast<std::size_t>(part)];
+    kernels::PhotometricTermRows t{};
+    for (int k = 0; k < 6; ++k) {
+      t.left[k] = own.row(k);
+      t.right[k] = own.row(6 + k);
+    }
+    t.width = w;
+    for (int y = begin; y < end; ++y) {
+      derivatives_of(left, y, derivative_rows(own, 0));
+      derivatives_of(right, y, derivative_rows(own, 6));
+      t.d = disparity.row(y);
+      t.d_up = disparity.row(std::max(y - 1, 0));
+      t.d_down = disparity.row(std::min(y + 1, h - 1));
+      kernels::photometric_terms_row(t, weights, a_.row(y), rhs_.row(y), smooth_.row(y));
+    }
+  };
+  const auto coupling_row = [&](int y, const float* wy_up) {
+    return kernels::CouplingRow{a_.row(y), smooth_.row(y), y + 1 < h ? smooth_.row(y + 1) : nullptr,
+                                wy_up, w};
+  };
+  const auto couplings = [&](int part, int begin, int end) {
+    if (begin >= end) return;
+    Image<float>& own = part_rows_[static_cast<std::size_t>(part)];
+    const float* wy_up = nullptr;
+    if (begin > 0) {
+      // The row above's wy, as its own block computes it (its other outputs go unused).
+      kernels::photometric_couplings_row(coupling_row(begin - 1, nullptr), own.row(13), own.row(14),
+                                         own.row(15));
+      wy_up = own.row(14);
+    }
+    for (int y = begin; y < end; ++y) {
+      kernels::photometric_couplings_row(coupling_row(y, wy_up), wx_.row(y), wy_.row(y),
+                                         inverse_diagonal_.row(y));
+      wy_up = wy_.row(y);
+    }
+  };
+  for (int iteration = 0; iteration < params.iterations; ++iteration) {
+    rows_->run(h, terms);
+    rows_->run(h, couplings);
+    for (int half = 0; half < 2 * params.sweeps; ++half)
+      rows_->run(h, [&](int part, int begin, int end) {
+        float* steps = part_rows_[static_cast<std::size_t>(part)].row(12);
+        for (int y = begin; y < end; ++y) {
+          const kernels::SorRow row{rhs_.row(y),
+                                    inverse_diagonal_.row(y),
+                                    wx_.row(y),
+                                    wy_.row(y),
+                                    y > 0 ? wy_.row(y - 1) : nullptr,
+                                    y > 0 ? disparity.row(y - 1) : nullptr,
+                                    y + 1 < h ? disparity.row(y + 1) : nullptr,
+                                    w};
+          kernels::sor_row(row, (y + half) & 1, kPhotometricOmega, disparity.row(y), steps);
+        }
+      });
+  }
+  rows_->run(h, [&](int, int begin, int end) {
+    for (int y = begin; y < end; ++y) clamp_row(disparity.row(y), w);
+  });
+}
+
+void PhotometricRefiner::fit_in_one_pass(ImageView<const std::uint8_t> left,
+                                         ImageView<const std::uint8_t> right,
+                                         const PhotometricParams& params,
+                                         ImageView<float> disparity) {
   const int w = disparity.width;
   const int h = disparity.height;
   const int stages = 2 * params.sweeps;  // half-sweeps, red then black

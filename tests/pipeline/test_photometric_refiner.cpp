@@ -11,6 +11,7 @@
 #include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
 #include "dco/kernels/photometric_kernels.hpp"
+#include "dco/pipeline/row_team.hpp"
 
 namespace dco::densify {
 namespace {
@@ -225,6 +226,49 @@ TEST(PhotometricRefiner, OnePassOverTheRowsGivesThePlainOrdersBits) {
         }
       }
   EXPECT_GT(raised_from_zero, 0);
+}
+
+// With a row team of several threads the passes of the plain order are shared out by rows: the
+// single pass's bits on every thread count, on maps that step and that go below 0, with blocks
+// of one row and fewer rows than threads, one refiner going from size to size.
+TEST(PhotometricRefiner, RowTeamsGiveTheBitsOfTheSinglePass) {
+  const auto stepped = [](double x, double y) {
+    return 3.0 + 0.05 * x + ((x > 30 && y > 12) ? 5 : 0);
+  };
+  const auto from_zero = [](double x, double) { return 0.02 * x; };
+  for (const int threads : {2, 3, 4}) {
+    pipeline::RowTeam team(threads);
+    PhotometricRefiner shared(&team), single;
+    for (const auto& [w, h] :
+         {std::pair{70, 25}, std::pair{33, 3}, std::pair{7, 1}, std::pair{64, 9}}) {
+      for (const bool zero : {false, true}) {
+        const auto truth = [&](double x, double y) {
+          return zero ? from_zero(x, y) : stepped(x, y);
+        };
+        Image<std::uint8_t> left, right;
+        render_pair(w, h, truth, left, right);
+        Image<float> start(w, h);
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x)
+            start.view().row(y)[x] =
+                static_cast<float>(std::round(truth(x, y))) - 0.4f * ((x + y) % 3 == 0);
+        for (const int sweeps : {1, 3}) {
+          PhotometricParams params;
+          params.sweeps = sweeps;
+          Image<float> expected(w, h), actual(w, h);
+          expected.copy_from(start.cview());
+          actual.copy_from(start.cview());
+          single.refine(left.cview(), right.cview(), params, expected.view());
+          shared.refine(left.cview(), right.cview(), params, actual.view());
+          for (int y = 0; y < h; ++y)
+            ASSERT_EQ(
+                std::memcmp(expected.cview().row(y), actual.cview().row(y), sizeof(float) * w), 0)
+                << threads << " threads, " << w << "x" << h << (zero ? " from zero" : " stepped")
+                << ", sweeps " << sweeps << ", row " << y;
+        }
+      }
+    }
+  }
 }
 
 TEST(PhotometricRefiner, RefusesImagesOfAnotherSizeOrColourAndLeavesTheMapWithoutIterations) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "dco/core/image.hpp"
+#include "dco/pipeline/row_team.hpp"
 
 namespace dco::densify {
 
@@ -65,26 +66,45 @@ class PhotometricRefinement {
                    const PhotometricParams& params, ImageView<float> disparity) = 0;
 };
 
-// Makes a backend's refinement (CPU, CUDA); an empty factory means the CPU one.
+// Makes a backend's refinement (CPU, CUDA); an empty factory means the CPU one, sharing its
+// passes with `rows` (see PhotometricRefiner).
 using PhotometricRefinementFactory = std::function<std::unique_ptr<PhotometricRefinement>()>;
 std::unique_ptr<PhotometricRefinement> make_photometric_refinement(
-    const PhotometricRefinementFactory& factory);
+    const PhotometricRefinementFactory& factory, pipeline::RowTeam* rows = nullptr);
 
-// The CPU's: one pass over the rows per iteration, row t's terms, then each half-sweep one row
-// behind the one before it (the red one of sweep 1 on row t - 1, the black one on t - 2, ...),
-// in a ring of rows that stays in cache, with the vector row kernels. Every pixel sees the values
-// it would see in the plain order, so the result is that order's, bit for bit. Allocates only
-// when the size or the number of sweeps grows.
+// The CPU's, with the vector row kernels. On one thread: one pass over the rows per iteration,
+// row t's terms, then each half-sweep one row behind the one before it (the red one of sweep 1
+// on row t - 1, the black one on t - 2, ...), in a ring of rows that stays in cache; every pixel
+// sees the values it would see in the plain order, so the result is that order's, bit for bit.
+// With a row team of more threads: the plain order itself, each of its passes (terms, couplings,
+// half-sweeps, clamp) shared out by rows, whose rows within a pass are independent; the same
+// bits however many threads. Allocates only when the size, the number of sweeps or the threads
+// grow.
 class PhotometricRefiner final : public PhotometricRefinement {
+ public:
+  // `rows`: the threads that share the passes (the densifier's row team); none or one thread:
+  // the single pass over the rows. It must outlive the refiner.
+  explicit PhotometricRefiner(pipeline::RowTeam* rows = nullptr) : rows_(rows) {}
+
  protected:
   void fit(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
            const PhotometricParams& params, ImageView<float> disparity) override;
 
  private:
+  void fit_in_one_pass(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                       const PhotometricParams& params, ImageView<float> disparity);
+  void fit_by_rows(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+                   const PhotometricParams& params, ImageView<float> disparity);
+
+  pipeline::RowTeam* rows_;
   Image<float> derivatives_;  // 12 rows: the left image's six derivative rows, then the right's
-  // Rings of rows: the data terms, smoothness weights, couplings and inverse diagonals.
+  // Rings of rows (one pass), or whole images (by rows): the data terms, smoothness weights,
+  // couplings and inverse diagonals.
   Image<float> a_, rhs_, smooth_, wx_, wy_, inverse_diagonal_;
   std::vector<float> scratch_;  // one row of steps
+  // By rows, per thread: 12 derivative rows, a row of steps, and the couplings of the row above
+  // its first row (wx, wy, inverse diagonal), which another thread's block holds.
+  std::vector<Image<float>> part_rows_;
 };
 
 // The over-relaxation factor of the sweeps (DIS's).
