@@ -187,37 +187,43 @@ int refine_plainly(ImageView<const std::uint8_t> left, ImageView<const std::uint
   return raised;
 }
 
-TEST(PhotometricRefiner, OnePassOverTheRowsGivesThePlainOrdersBits) {
-  // A surface with a step, and one that starts at disparity 0, where the sweeps go below 0 and
-  // the clamp must come after all of them.
-  const auto stepped = [](double x, double y) {
-    return 3.0 + 0.05 * x + ((x > 30 && y > 12) ? 5 : 0);
+// A pair and a start map for the order tests: a surface with a step, or one that starts at
+// disparity 0, where the sweeps go below 0 and the clamp must come after all of them; the start
+// is the truth rounded, a third of it 0.4 px lower.
+struct OrderCase {
+  Image<std::uint8_t> left, right;
+  Image<float> start;
+};
+OrderCase order_case(int w, int h, bool from_zero) {
+  const auto truth = [from_zero](double x, double y) {
+    return from_zero ? 0.02 * x : 3.0 + 0.05 * x + ((x > 30 && y > 12) ? 5 : 0);
   };
-  const auto from_zero = [](double x, double) { return 0.02 * x; };
+  OrderCase c;
+  render_pair(w, h, truth, c.left, c.right);
+  c.start.resize(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      c.start.view().row(y)[x] =
+          static_cast<float>(std::round(truth(x, y))) - 0.4f * ((x + y) % 3 == 0);
+  return c;
+}
+
+TEST(PhotometricRefiner, OnePassOverTheRowsGivesThePlainOrdersBits) {
   int raised_from_zero = 0;
   for (const bool zero : {false, true})
     for (const int w : {1, 2, 7, 33, 70})
       for (const int h : {1, 3, 9, 25}) {
-        const auto truth = [&](double x, double y) {
-          return zero ? from_zero(x, y) : stepped(x, y);
-        };
-        Image<std::uint8_t> left, right;
-        render_pair(w, h, truth, left, right);
-        Image<float> start(w, h);
-        for (int y = 0; y < h; ++y)
-          for (int x = 0; x < w; ++x)
-            start.view().row(y)[x] =
-                static_cast<float>(std::round(truth(x, y))) - 0.4f * ((x + y) % 3 == 0);
+        const OrderCase c = order_case(w, h, zero);
         for (const int sweeps : {1, 3}) {
           PhotometricParams params;
           params.sweeps = sweeps;
           params.iterations = 2;
           Image<float> fused(w, h), plain(w, h);
-          fused.copy_from(start.cview());
-          plain.copy_from(start.cview());
+          fused.copy_from(c.start.cview());
+          plain.copy_from(c.start.cview());
           PhotometricRefiner refiner;
-          refiner.refine(left.cview(), right.cview(), params, fused.view());
-          const int raised = refine_plainly(left.cview(), right.cview(), params, plain.view());
+          refiner.refine(c.left.cview(), c.right.cview(), params, fused.view());
+          const int raised = refine_plainly(c.left.cview(), c.right.cview(), params, plain.view());
           if (zero) raised_from_zero += raised;
           for (int y = 0; y < h; ++y)
             ASSERT_EQ(std::memcmp(fused.cview().row(y), plain.cview().row(y), sizeof(float) * w), 0)
@@ -232,34 +238,21 @@ TEST(PhotometricRefiner, OnePassOverTheRowsGivesThePlainOrdersBits) {
 // single pass's bits on every thread count, on maps that step and that go below 0, with blocks
 // of one row and fewer rows than threads, one refiner going from size to size.
 TEST(PhotometricRefiner, RowTeamsGiveTheBitsOfTheSinglePass) {
-  const auto stepped = [](double x, double y) {
-    return 3.0 + 0.05 * x + ((x > 30 && y > 12) ? 5 : 0);
-  };
-  const auto from_zero = [](double x, double) { return 0.02 * x; };
   for (const int threads : {2, 3, 4}) {
     pipeline::RowTeam team(threads);
     PhotometricRefiner shared(&team), single;
     for (const auto& [w, h] :
          {std::pair{70, 25}, std::pair{33, 3}, std::pair{7, 1}, std::pair{64, 9}}) {
       for (const bool zero : {false, true}) {
-        const auto truth = [&](double x, double y) {
-          return zero ? from_zero(x, y) : stepped(x, y);
-        };
-        Image<std::uint8_t> left, right;
-        render_pair(w, h, truth, left, right);
-        Image<float> start(w, h);
-        for (int y = 0; y < h; ++y)
-          for (int x = 0; x < w; ++x)
-            start.view().row(y)[x] =
-                static_cast<float>(std::round(truth(x, y))) - 0.4f * ((x + y) % 3 == 0);
+        const OrderCase c = order_case(w, h, zero);
         for (const int sweeps : {1, 3}) {
           PhotometricParams params;
           params.sweeps = sweeps;
           Image<float> expected(w, h), actual(w, h);
-          expected.copy_from(start.cview());
-          actual.copy_from(start.cview());
-          single.refine(left.cview(), right.cview(), params, expected.view());
-          shared.refine(left.cview(), right.cview(), params, actual.view());
+          expected.copy_from(c.start.cview());
+          actual.copy_from(c.start.cview());
+          single.refine(c.left.cview(), c.right.cview(), params, expected.view());
+          shared.refine(c.left.cview(), c.right.cview(), params, actual.view());
           for (int y = 0; y < h; ++y)
             ASSERT_EQ(
                 std::memcmp(expected.cview().row(y), actual.cview().row(y), sizeof(float) * w), 0)
