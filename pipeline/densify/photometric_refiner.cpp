@@ -111,21 +111,26 @@ void PhotometricRefiner::fit_by_rows(ImageView<const std::uint8_t> left,
   for (int iteration = 0; iteration < params.iterations; ++iteration) {
     rows_->run(h, terms);
     rows_->run(h, couplings);
+    // The row kernel of a half-sweep stores whole vectors, rewriting the other colour's pixels
+    // unchanged, and the rows above and below read those: so each half-sweep runs on the even
+    // rows, then on the odd ones, and no thread reads a row while another writes it. A colour's
+    // pixels read only the other colour's, so the split changes no bit.
     for (int half = 0; half < 2 * params.sweeps; ++half)
-      rows_->run(h, [&](int part, int begin, int end) {
-        float* steps = part_rows_[static_cast<std::size_t>(part)].row(12);
-        for (int y = begin; y < end; ++y) {
-          const kernels::SorRow row{rhs_.row(y),
-                                    inverse_diagonal_.row(y),
-                                    wx_.row(y),
-                                    wy_.row(y),
-                                    y > 0 ? wy_.row(y - 1) : nullptr,
-                                    y > 0 ? disparity.row(y - 1) : nullptr,
-                                    y + 1 < h ? disparity.row(y + 1) : nullptr,
-                                    w};
-          kernels::sor_row(row, (y + half) & 1, kPhotometricOmega, disparity.row(y), steps);
-        }
-      });
+      for (const int parity : {0, 1})
+        rows_->run(h, [&](int part, int begin, int end) {
+          float* steps = part_rows_[static_cast<std::size_t>(part)].row(12);
+          for (int y = begin + ((begin & 1) != parity); y < end; y += 2) {
+            const kernels::SorRow row{rhs_.row(y),
+                                      inverse_diagonal_.row(y),
+                                      wx_.row(y),
+                                      wy_.row(y),
+                                      y > 0 ? wy_.row(y - 1) : nullptr,
+                                      y > 0 ? disparity.row(y - 1) : nullptr,
+                                      y + 1 < h ? disparity.row(y + 1) : nullptr,
+                                      w};
+            kernels::sor_row(row, (y + half) & 1, kPhotometricOmega, disparity.row(y), steps);
+          }
+        });
   }
   rows_->run(h, [&](int, int begin, int end) {
     for (int y = begin; y < end; ++y) clamp_row(disparity.row(y), w);

@@ -77,9 +77,9 @@ std::unique_ptr<PhotometricRefinement> make_photometric_refinement(
 // on row t - 1, the black one on t - 2, ...), in a ring of rows that stays in cache; every pixel
 // sees the values it would see in the plain order, so the result is that order's, bit for bit.
 // With a row team of more threads: the plain order itself, each of its passes (terms, couplings,
-// half-sweeps, clamp) shared out by rows, whose rows within a pass are independent; the same
-// bits however many threads. Allocates only when the size, the number of sweeps or the threads
-// grow.
+// half-sweeps, on the even rows and then on the odd ones, clamp) shared out by rows, whose rows
+// within a pass are independent; the same bits however many threads. Allocates only when the size,
+// the number of sweeps or the threads grow.
 class PhotometricRefiner final : public PhotometricRefinement {
  public:
   // `rows`: the threads that share the passes (the densifier's row team); none or one thread:
