@@ -143,6 +143,37 @@ TEST(Metrics, TheSparseMapSplitsTheErrorIntoMatchedAndFilledPixels) {
   EXPECT_THROW(evaluate_disparity("filled", dense.view(), gt, smaller.view()), Error);
 }
 
+// The band error splits the same way: column 3, the fattened one, has a match on rows 0..3 only.
+TEST(Metrics, TheSparseMapSplitsTheBandErrorIntoMatchedAndFilledPixels) {
+  const GroundTruth gt = step_edge_gt();
+  const Image<float> pred = shifted_prediction(gt);
+  Image<float> sparse(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) sparse.at(x, y) = x == 3 && y >= 4 ? kInf : pred.at(x, y);
+  const SceneMetrics m = evaluate_disparity("step", pred.view(), gt, sparse.view());
+  EXPECT_DOUBLE_EQ(m.band_err, 100.0 * 10 / 70);
+  EXPECT_DOUBLE_EQ(m.band_matched, 100.0 * 4 / 70);
+  EXPECT_DOUBLE_EQ(m.band_filled, 100.0 * 6 / 70);
+
+  // The missing predictions of column 19 lie outside the band; moved into it (column 5), they
+  // count as wrong where the sparse map has no value there.
+  Image<float> holes = pred;
+  for (int y = 0; y < kH; ++y) holes.at(5, y) = kInf;
+  sparse.at(5, 0) = kInf;
+  const SceneMetrics h = evaluate_disparity("step", holes.view(), gt, sparse.view());
+  EXPECT_DOUBLE_EQ(h.band_err, 100.0 * 20 / 70);
+  EXPECT_DOUBLE_EQ(h.band_matched, 100.0 * (4 + 9) / 70);
+  EXPECT_DOUBLE_EQ(h.band_filled, 100.0 * (6 + 1) / 70);
+
+  const SceneMetrics plain = evaluate_disparity("step", pred.view(), gt);
+  EXPECT_TRUE(std::isnan(plain.band_matched));
+  EXPECT_TRUE(std::isnan(plain.band_filled));
+  const std::vector<SceneMetrics> both = {m, plain};
+  const SceneMetrics mean = mean_metrics(both);
+  EXPECT_DOUBLE_EQ(mean.band_matched, m.band_matched);  // over the scenes that have it
+  EXPECT_DOUBLE_EQ(mean.band_filled, m.band_filled);
+}
+
 // A ramp (0.2 px of disparity per column: no depth edge) with a foreground block beside it. The
 // prediction is the ramp 1 px too near, so every plane crosses it 5 columns early, and the block
 // fattened by one column onto the ramp.

@@ -33,6 +33,7 @@ std::vector<SceneMetrics> two_scenes() {
   a.filled = 30;
   a.matched = {252415, 4, 2, 1, 0.25};
   a.filled_err = {108178, 24, 12, 6, 1.5};
+  a.band_matched = 4.5, a.band_filled = 7.5;
   b.scene = "odd \"name\"";
   b.width = 4, b.height = 3;
   b.gt_pixels = 12;
@@ -58,6 +59,9 @@ TEST(MetricsFormat, TableHasFixedWidthRowsAndAMeanRow) {
   EXPECT_THAT(rows[0], HasSubstr("bandSurf"));
   EXPECT_THAT(rows[0], HasSubstr("fill%"));
   EXPECT_THAT(rows[0], HasSubstr("bad2F"));
+  EXPECT_THAT(rows[0], HasSubstr("bandM"));
+  EXPECT_THAT(rows[0], HasSubstr("bandF"));
+  EXPECT_THAT(rows[1], HasSubstr("4.50"));
   EXPECT_EQ(rows[1].rfind("middlebury2014/Motorcycle", 0), 0u);
   EXPECT_EQ(rows[3].rfind("mean ", 0), 0u);
   for (int i = 1; i <= 3; ++i) EXPECT_EQ(rows[i].size(), rows[0].size()) << rows[i];
@@ -81,6 +85,7 @@ TEST(MetricsFormat, JsonHoldsEveryScenePlusTheMean) {
   EXPECT_THAT(json, HasSubstr(R"("time_ms": null)"));
   EXPECT_THAT(json, HasSubstr(R"("filled": 30, "matched": {"pixels": 252415, "bad1": 4, "bad2": )"
                               R"(2, "bad4": 1, "avgerr": 0.25}, "filled_err": {"pixels": 108178)"));
+  EXPECT_THAT(json, HasSubstr(R"("band_matched": 4.5, "band_filled": 7.5})"));
   EXPECT_THAT(json, HasSubstr(R"("matches": null)"));  // the second scene has no sparse map
   EXPECT_THAT(json, HasSubstr(R"("band_err_pred": 12, "band_front": 9, "band_behind": 3, )"
                               R"("band_edge": 7, "band_surface": 5})"));

@@ -98,21 +98,25 @@ cv::Mat depth_edge_zone(ImageView<const float> gt) {
 }
 
 struct PlaneErrors {
-  double occ, occ_pred, band, band_pred, band_front, band_behind, band_edge, band_surface;
+  double occ, occ_pred, band, band_pred, band_front, band_behind, band_edge, band_surface,
+      band_matched, band_filled;
 };
 
+// `matches` may be empty (no sparse map): every band error then counts as filled, and the caller
+// leaves both shares undefined.
 PlaneErrors plane_errors(ImageView<const float> prediction, ImageView<const float> gt,
-                         const cv::Mat& edge_zone, double plane) {
+                         ImageView<const float> matches, const cv::Mat& edge_zone, double plane) {
   const cv::Mat sides = detail::plane_sides(gt, plane);
   const cv::Mat band = occlusion_band(sides);
   std::int64_t n = 0, wrong = 0, n_pred = 0, wrong_pred = 0;
   std::int64_t n_band = 0, wrong_band = 0, n_band_pred = 0, wrong_band_pred = 0;
-  std::int64_t band_front = 0, band_behind = 0, band_edge = 0;
+  std::int64_t band_front = 0, band_behind = 0, band_edge = 0, band_matched = 0;
   for (int y = 0; y < gt.height; ++y) {
     const float* p = prediction.row(y);
     const auto* s = sides.ptr<std::uint8_t>(y);
     const auto* in_band = band.ptr<std::uint8_t>(y);
     const auto* near_edge = edge_zone.ptr<std::uint8_t>(y);
+    const float* match = matches.empty() ? nullptr : matches.row(y);
     for (int x = 0; x < gt.width; ++x) {
       if (s[x] == kNoGt) continue;
       const bool predicted = is_valid_disparity(p[x]);
@@ -125,32 +129,40 @@ PlaneErrors plane_errors(ImageView<const float> prediction, ImageView<const floa
         band_front += predicted && is_wrong && s[x] != kFront;
         band_behind += predicted && is_wrong && s[x] == kFront;
         band_edge += is_wrong && near_edge[x];
+        band_matched += is_wrong && match != nullptr && is_valid_disparity(match[x]);
       }
     }
   }
-  return {percent(wrong, n),           percent(wrong_pred, n_pred),
-          percent(wrong_band, n_band), percent(wrong_band_pred, n_band_pred),
-          percent(band_front, n_band), percent(band_behind, n_band),
-          percent(band_edge, n_band),  percent(wrong_band - band_edge, n_band)};
+  return {percent(wrong, n),
+          percent(wrong_pred, n_pred),
+          percent(wrong_band, n_band),
+          percent(wrong_band_pred, n_band_pred),
+          percent(band_front, n_band),
+          percent(band_behind, n_band),
+          percent(band_edge, n_band),
+          percent(wrong_band - band_edge, n_band),
+          percent(band_matched, n_band),
+          percent(wrong_band - band_matched, n_band)};
 }
 
 void add_occlusion_metrics(ImageView<const float> prediction, ImageView<const float> gt,
-                           SceneMetrics& m) {
+                           ImageView<const float> matches, SceneMetrics& m) {
   m.planes = occlusion_planes(gt);
   constexpr std::size_t kPlanes = kOcclusionPlaneQuantiles.size();
   std::array<double, kPlanes> occ{}, occ_pred{}, band{}, band_pred{}, front{}, behind{}, edge{},
-      surface{};
+      surface{}, matched{}, filled{};
   const cv::Mat edge_zone = depth_edge_zone(gt);
   for (std::size_t i = 0; i < kPlanes; ++i) {
     if (std::isnan(m.planes[i])) {
       occ[i] = occ_pred[i] = band[i] = band_pred[i] = front[i] = behind[i] = edge[i] = surface[i] =
-          kUndefined;
+          matched[i] = filled[i] = kUndefined;
       continue;
     }
-    const PlaneErrors e = plane_errors(prediction, gt, edge_zone, m.planes[i]);
+    const PlaneErrors e = plane_errors(prediction, gt, matches, edge_zone, m.planes[i]);
     occ[i] = e.occ, occ_pred[i] = e.occ_pred, band[i] = e.band, band_pred[i] = e.band_pred;
     front[i] = e.band_front, behind[i] = e.band_behind;
-    edge[i] = e.band_edge, surface[i] = e.band_surface;
+    edge[i] = e.band_edge, surface[i] = e.band_surface, matched[i] = e.band_matched;
+    filled[i] = e.band_filled;
   }
   m.occ_err = mean_of_defined(occ);
   m.occ_err_pred = mean_of_defined(occ_pred);
@@ -160,6 +172,10 @@ void add_occlusion_metrics(ImageView<const float> prediction, ImageView<const fl
   m.band_behind = mean_of_defined(behind);
   m.band_edge = mean_of_defined(edge);
   m.band_surface = mean_of_defined(surface);
+  if (!matches.empty()) {
+    m.band_matched = mean_of_defined(matched);
+    m.band_filled = mean_of_defined(filled);
+  }
 }
 
 // Scenes without the numbers (e.g. no nocc mask) hold NaN and drop out of the mean by themselves.
@@ -272,7 +288,7 @@ SceneMetrics evaluate_disparity(std::string scene, ImageView<const float> predic
     m.matched = matched.stats();
     m.filled_err = filled.stats();
   }
-  add_occlusion_metrics(prediction, truth, m);
+  add_occlusion_metrics(prediction, truth, matches, m);
   return m;
 }
 
@@ -296,6 +312,8 @@ SceneMetrics mean_metrics(std::span<const SceneMetrics> scenes) {
     mean.filled = mean_field(scenes, &SceneMetrics::filled);
     mean.matched = mean_stats(scenes, &SceneMetrics::matched);
     mean.filled_err = mean_stats(scenes, &SceneMetrics::filled_err);
+    mean.band_matched = mean_field(scenes, &SceneMetrics::band_matched);
+    mean.band_filled = mean_field(scenes, &SceneMetrics::band_filled);
   }
   mean.planes.fill(kUndefined);
   mean.occ_err = mean_field(scenes, &SceneMetrics::occ_err);

@@ -42,6 +42,8 @@ constexpr Column kColumns[] = {
     {"fill%",    2, [](const SceneMetrics& m) { return m.filled; }},
     {"bad2M",    2, [](const SceneMetrics& m) { return m.matched.bad2; }},
     {"bad2F",    2, [](const SceneMetrics& m) { return m.filled_err.bad2; }},
+    {"bandM",    2, [](const SceneMetrics& m) { return m.band_matched; }},
+    {"bandF",    2, [](const SceneMetrics& m) { return m.band_filled; }},
     {"ms",       1, [](const SceneMetrics& m) { return m.time_ms; }},
 };
 // clang-format on
@@ -81,8 +83,10 @@ std::string scene_json(const SceneMetrics& m) {
       json_number(m.band_err_pred), json_number(m.band_front), json_number(m.band_behind),
       json_number(m.band_edge), json_number(m.band_surface),
       m.has_matches
-          ? fmt::format(R"({{"filled": {}, "matched": {}, "filled_err": {}}})",
-                        json_number(m.filled), stats_json(m.matched), stats_json(m.filled_err))
+          ? fmt::format(R"({{"filled": {}, "matched": {}, "filled_err": {}, "band_matched": {}, )"
+                        R"("band_filled": {}}})",
+                        json_number(m.filled), stats_json(m.matched), stats_json(m.filled_err),
+                        json_number(m.band_matched), json_number(m.band_filled))
           : "null",
       json_number(m.time_ms));
 }
@@ -111,7 +115,8 @@ std::string format_metrics_table(std::span<const SceneMetrics> scenes) {
       "boundary, bandFr/bandBh = of it, predicted in front/behind, bandEdge/bandSurf = of it, "
       "within 3 px of a GT depth edge / where a plane crosses a smooth surface; fill% = left "
       "empty by the sparse map given with the prediction, bad2M/bad2F = bad-2 on the matched / "
-      "filled pixels; - = not defined)\n";
+      "filled pixels, bandM/bandF = of bandErr, on the matched / filled pixels; - = not "
+      "defined)\n";
   return out;
 }
 

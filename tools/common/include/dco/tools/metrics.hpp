@@ -42,7 +42,8 @@
 //       it is defined (a plane with nothing in front of it has no boundary and no band).
 //   - Matches: when the sparse map the prediction was densified from comes with it, the GT
 //     pixels that map left empty are "filled" (fill%), and bad-N runs separately over the matched
-//     and the filled ones (bad2M, bad2F): whether the error comes from the matcher or the fill.
+//     and the filled ones (bad2M, bad2F): whether the error comes from the matcher or the fill;
+//     bandErr splits the same way (bandM, bandF: they add up to bandErr).
 //   - Rates are percentages. A number over zero pixels is NaN ("not defined"); means over scenes
 //     skip NaN entries.
 namespace dco::tools {
@@ -83,9 +84,11 @@ struct SceneMetrics {
   double band_edge = kUndefined;     // of bandErr: near a GT depth edge
   double band_surface = kUndefined;  // of bandErr: elsewhere (planes crossing smooth surfaces)
 
-  bool has_matches = false;        // the sparse map was given
-  double filled = kUndefined;      // % of GT pixels the sparse map left empty
-  ErrorStats matched, filled_err;  // of the prediction, over GT pixels with / without a match
+  bool has_matches = false;          // the sparse map was given
+  double filled = kUndefined;        // % of GT pixels the sparse map left empty
+  ErrorStats matched, filled_err;    // of the prediction, over GT pixels with / without a match
+  double band_matched = kUndefined;  // of bandErr: where the sparse map has a value
+  double band_filled = kUndefined;   // of bandErr: where it has none (the rest)
 
   double time_ms = kUndefined;  // filled by whoever timed the method; NaN when unknown
 };
