@@ -22,6 +22,7 @@
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/kernels/stereo_kernels.hpp"
 #include "dco/pipeline/stereo/exposure_balance.hpp"
+#include "dco/pipeline/stereo/lens_falloff.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 #include "dco/pipeline/stereo/vertical_alignment.hpp"
 #include "ratio_reporter.hpp"
@@ -211,6 +212,20 @@ void BM_OpenCVRightCorrection_Color_1280x720(benchmark::State& state) {
   }
 }
 
+// One view through a lens fall-off correction (k 0.3), as the stage does to both before it matches
+// once it has found one: OpenCV's multiply by a float map of gains (no peer: it is OpenCV's own).
+void BM_DcoLensFalloff_Color_1280x720(benchmark::State& state) {
+  if (pair_or_skip(state) == nullptr) return;
+  const auto right = dco::as_view<std::uint8_t>(headset_right());
+  dco::stereo::FalloffCorrection correction;
+  correction.build({0.3}, right.width, right.height, right.channels);
+  dco::Image<std::uint8_t> out;
+  for (auto _ : state) {
+    correction.apply(right, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+}
+
 // The synthetic hand at the headset's 1280x720 with its right camera turned 0.2 degrees and its
 // scene 0.5 rows lower: a known answer for both ways of finding the rows.
 constexpr double kTurnDeg = 0.2, kTurnRows = 0.5;
@@ -305,6 +320,7 @@ BENCHMARK(BM_DcoExposureBalance_Gray)->Unit(benchmark::kMillisecond)->UseRealTim
 BENCHMARK(BM_DcoRightCorrection_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_OpenCVRightCorrection_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DcoRightCorrectionTurned_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DcoLensFalloff_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DcoRowAlignmentSearch_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_OpenCVSiftRowAlignment_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SGBM3Way_Gray_1Thread)->Unit(benchmark::kMillisecond)->UseRealTime();

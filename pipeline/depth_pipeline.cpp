@@ -47,14 +47,16 @@ void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint
 }
 
 void corrected_right_grey(ImageView<const std::uint8_t> right,
-                          const stereo::CameraCorrection& correction, Image<std::uint8_t>& scratch,
+                          const stereo::CameraCorrection& correction,
+                          stereo::FalloffCorrection& falloff, Image<std::uint8_t>& scratch,
                           Image<std::uint8_t>& out) {
   // The camera alignment's own steps, in its order: the rows, then the levels table; then the
-  // grey. Each step writes the buffer the one before did not, so that the last ends in `out`.
+  // grey, then the lens fall-off. Each step writes the buffer the one before did not, so that the
+  // last ends in `out`.
   const stereo::RowAlignment rows{correction.row_offset, correction.roll};
   const bool align = !rows.identity(), levels = !correction.same_levels();
-  const bool colour = right.channels == 3;
-  int steps_left = int{align} + int{levels} + int{colour};
+  const bool colour = right.channels == 3, flat = correction.falloff != 0;
+  int steps_left = int{align} + int{levels} + int{colour} + int{flat};
   const auto next = [&]() -> Image<std::uint8_t>& { return --steps_left % 2 == 0 ? out : scratch; };
   ImageView<const std::uint8_t> v = right;
   if (align) {
@@ -73,12 +75,35 @@ void corrected_right_grey(ImageView<const std::uint8_t> right,
     Image<std::uint8_t>& to = next();
     to.resize(v.width, v.height);
     stereo::bgr_to_gray(v, to.view());
+    v = to.cview();
+  }
+  if (flat) {
+    falloff.build(stereo::LensFalloff{correction.falloff}, v.width, v.height, 1);
+    falloff.apply(v, next());
     return;
   }
-  if (!align && !levels) {
+  if (!align && !levels && !colour) {
     out.resize(v.width, v.height);
     out.copy_from(v);
   }
+}
+
+void corrected_left_grey(ImageView<const std::uint8_t> left,
+                         const stereo::CameraCorrection& correction,
+                         stereo::FalloffCorrection& falloff, Image<std::uint8_t>& scratch,
+                         Image<std::uint8_t>& out) {
+  if (correction.falloff == 0) {
+    out.resize(0, 0);
+    return;
+  }
+  ImageView<const std::uint8_t> v = left;
+  if (left.channels == 3) {
+    scratch.resize(left.width, left.height);
+    stereo::bgr_to_gray(left, scratch.view());
+    v = scratch.cview();
+  }
+  falloff.build(stereo::LensFalloff{correction.falloff}, v.width, v.height, 1);
+  falloff.apply(v, out);
 }
 
 void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> left,
@@ -90,10 +115,15 @@ void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> 
   const ImageView<const float> raw = matcher.internal_raw_disparity();
   slot.raw_disparity.resize(raw.width, raw.height);
   slot.raw_disparity.copy_from(raw);
-  if (keep_right)
-    corrected_right_grey(right, slot.camera_correction, slot.right_scratch, slot.right);
-  else
+  if (keep_right) {
+    corrected_right_grey(right, slot.camera_correction, slot.falloff, slot.right_scratch,
+                         slot.right);
+    corrected_left_grey(left, slot.camera_correction, slot.falloff, slot.right_scratch,
+                        slot.photometric_left);
+  } else {
     slot.right.resize(0, 0);
+    slot.photometric_left.resize(0, 0);
+  }
 }
 
 void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmoother& planes,
@@ -197,6 +227,8 @@ void contour_frame(contour::ContourExtractor& extractor, const StereoSlot& centr
   out.image.copy_from(centre.image.cview());
   out.right.resize(centre.right.width(), centre.right.height());
   out.right.copy_from(centre.right.cview());
+  out.photometric_left.resize(centre.photometric_left.width(), centre.photometric_left.height());
+  out.photometric_left.copy_from(centre.photometric_left.cview());
   out.sparse.resize(centre.sparse.width(), centre.sparse.height());
   out.sparse.copy_from(centre.sparse.cview());
   out.planar.resize(centre.planar.width(), centre.planar.height());
@@ -212,10 +244,12 @@ void contour_frame_moving_maps(contour::ContourExtractor& extractor, StereoSlot&
   // in it, and whatever sizes other slots like it, find their room.
   out.image.resize(centre.image.width(), centre.image.height());
   out.right.resize(centre.right.width(), centre.right.height());
+  out.photometric_left.resize(centre.photometric_left.width(), centre.photometric_left.height());
   out.sparse.resize(centre.sparse.width(), centre.sparse.height());
   out.planar.resize(centre.planar.width(), centre.planar.height());
   out.image.swap(centre.image);
   out.right.swap(centre.right);
+  out.photometric_left.swap(centre.photometric_left);
   out.sparse.swap(centre.sparse);
   out.planar.swap(centre.planar);
   if (centre.early_contour_done) {
@@ -232,6 +266,7 @@ densify::DensifyInputs densify_inputs(const DepthResult& r, ImageView<const floa
   d.contours = r.contours.cview();
   d.image = r.image.cview();
   d.right = r.right.cview();
+  d.photometric_left = r.photometric_left.cview();
   d.previous = previous;
   d.match_step = r.stereo_scale;
   if (r.planes_done) d.planar = r.planar.cview();
@@ -266,6 +301,7 @@ void size_like(const StereoSlot& model, StereoSlot& out) {
   size_image_like(model.small_colour, out.small_colour);
   size_image_like(model.right, out.right);
   size_image_like(model.right_scratch, out.right_scratch);
+  size_image_like(model.photometric_left, out.photometric_left);
   size_image_like(model.raw_disparity, out.raw_disparity);
   size_image_like(model.sparse, out.sparse);
   size_image_like(model.planar, out.planar);
@@ -278,6 +314,7 @@ void size_like(const StereoSlot& model, StereoSlot& out) {
 void size_like(const DepthResult& model, DepthResult& out) {
   size_image_like(model.image, out.image);
   size_image_like(model.right, out.right);
+  size_image_like(model.photometric_left, out.photometric_left);
   size_image_like(model.sparse, out.sparse);
   size_image_like(model.planar, out.planar);
   size_image_like(model.dense, out.dense);

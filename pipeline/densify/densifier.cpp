@@ -426,6 +426,7 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   check(in.contours, "the contour mask");
   check(in.previous, "the previous frame");
   check(in.right, "the right image");
+  check(in.photometric_left, "the refinement's left image");
 
   if (in.match_step < 1)
     throw Error("densify: match_step is " + std::to_string(in.match_step) + ", not >= 1");
@@ -461,7 +462,8 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   finish(dense);
   timings_.median_ms = t.lap_ms();
   if (refines(w, h) && !in.right.empty() && !in.image.empty())
-    refiner_->refine(in.image, in.right, params_.photometric, dense.view());
+    refiner_->refine(in.photometric_left.empty() ? in.image : in.photometric_left, in.right,
+                     params_.photometric, dense.view());
   timings_.refine_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();
 }

@@ -8,6 +8,7 @@
 #include "dco/core/image.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/pipeline/stereo/exposure_balance.hpp"
+#include "dco/pipeline/stereo/lens_falloff.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 #include "dco/pipeline/stereo/vertical_alignment.hpp"
 
@@ -37,7 +38,12 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
     const StereoParams& p = params();
     if (p.vertical_alignment) aligned_.resize(right.width, right.height, right.channels);
     if (p.exposure_balance) balanced_.resize(right.width, right.height, right.channels);
-    inner().compute(left, corrected(right), disparity);
+    if (p.lens_falloff) {
+      flat_left_.resize(left.width, left.height, left.channels);
+      flat_right_.resize(right.width, right.height, right.channels);
+    }
+    falloff_table_.build(falloff_, left.width, left.height, left.channels);
+    inner().compute(corrected_left(left), corrected(right), disparity);
     timings_ = inner().last_timings();
     // A sequence's first frame has no correction from frames before: its own matches give one,
     // and it is matched again through it while the correction still moves (a few times at most).
@@ -45,7 +51,8 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
     const bool fit = first_ || frames_ % kRefitEvery == 0;
     for (int round = 0; fit && refit(left, right, disparity) && round < rounds; ++round) {
       inner().reset();  // matched again as a new sequence
-      inner().compute(left, corrected(right), disparity);
+      falloff_table_.build(falloff_, left.width, left.height, left.channels);
+      inner().compute(corrected_left(left), corrected(right), disparity);
       timings_ = inner().last_timings();
     }
     first_ = false;
@@ -61,19 +68,32 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
   }
 
   const StereoTimings& last_timings() const override { return timings_; }
-  CameraCorrection last_correction() const override { return {map_, rows_.offset, rows_.roll}; }
+  CameraCorrection last_correction() const override {
+    return {map_, rows_.offset, rows_.roll, falloff_.k};
+  }
 
  private:
-  // The right image brought onto the left's rows, then through the exposure table; either step
-  // only when it changes something.
+  // The right image brought onto the left's rows, then through the exposure table, then the
+  // lens fall-off's correction; each step only when it changes something.
   ImageView<const std::uint8_t> corrected(ImageView<const std::uint8_t> right) {
     if (!rows_.identity()) {
       align_rows(right, rows_, aligned_);
       right = aligned_.cview();
     }
-    if (table_.identity()) return right;
-    table_.apply(right, balanced_);
-    return balanced_.cview();
+    if (!table_.identity()) {
+      table_.apply(right, balanced_);
+      right = balanced_.cview();
+    }
+    if (falloff_table_.identity()) return right;
+    falloff_table_.apply(right, flat_right_);
+    return flat_right_.cview();
+  }
+
+  // The left image through the lens fall-off's correction, when there is one.
+  ImageView<const std::uint8_t> corrected_left(ImageView<const std::uint8_t> left) {
+    if (falloff_table_.identity()) return left;
+    falloff_table_.apply(left, flat_left_);
+    return flat_left_.cview();
   }
 
   // Fits the corrections to the matches; takes each that moves enough (the exposure map some
@@ -103,6 +123,17 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
         map_suspect_ = false;
       }
     }
+    if (p.lens_falloff) {
+      // Fitted with its own gain and black level on the levels as the cameras gave them (on the
+      // rows in force), so that the exposure map does not feed it.
+      const ImageView<const std::uint8_t> levels = rows_.identity() ? right : aligned_.cview();
+      double k = falloff_.k;
+      if (fit_lens_falloff(left, levels, disparity.cview(), k) &&
+          falloff_difference(LensFalloff{k}, falloff_) >= p.exposure_balance_levels) {
+        falloff_ = LensFalloff{k};
+        moved = true;
+      }
+    }
     if (p.vertical_alignment) {
       RowAlignment fitted = rows_;
       // A sequence's first frame searches the whole range: its matches improve with each round.
@@ -129,6 +160,7 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
     map_ = no_exposure_map(channels);
     table_.build(map_);
     rows_ = {};
+    falloff_ = {};
     map_suspect_ = false;
     first_ = true;
     frames_ = 0;
@@ -136,9 +168,11 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
 
   ExposureMap map_;
   ExposureTable table_;
-  RowAlignment rows_;         // of the right image's scene against the left's
+  RowAlignment rows_;    // of the right image's scene against the left's
+  LensFalloff falloff_;  // of both lenses
+  FalloffCorrection falloff_table_;
   bool map_suspect_ = false;  // map_ was fitted on rows found wrong since
-  Image<std::uint8_t> aligned_, balanced_;
+  Image<std::uint8_t> aligned_, balanced_, flat_left_, flat_right_;
   StereoTimings timings_;
   bool first_ = true;
   long frames_ = 0;  // of the sequence
@@ -147,7 +181,7 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
 }  // namespace
 
 bool CameraCorrection::identity() const {
-  return same_levels() && row_offset == 0 && roll == 0;
+  return same_levels() && row_offset == 0 && roll == 0 && falloff == 0;
 }
 
 bool CameraCorrection::same_levels() const {
@@ -175,9 +209,15 @@ std::string describe(const CameraCorrection& correction) {
     text += part;
     sep = ",";
   }
-  if (correction.roll == 0) return text;
-  std::snprintf(part, sizeof part, "%s roll %+.3f deg", sep,
-                correction.roll * 180.0 / std::numbers::pi);
+  if (correction.roll != 0) {
+    std::snprintf(part, sizeof part, "%s roll %+.3f deg", sep,
+                  correction.roll * 180.0 / std::numbers::pi);
+    text += part;
+    sep = ",";
+  }
+  if (correction.falloff == 0) return text;
+  if (*sep == '\0') text += " as the left", sep = ",";  // the fall-off is both lenses'
+  std::snprintf(part, sizeof part, "%s lens fall-off k %+.3f", sep, correction.falloff);
   return text + part;
 }
 

@@ -4,30 +4,16 @@
 #include <cmath>
 #include <cstddef>
 
+#include "flat_pairs.hpp"
+
 namespace dco::stereo {
 namespace {
 
 constexpr int kLevels = 256;
-constexpr double kSamples = 16384;  // pixels a fit looks at first (every fourth row and
-                                    // column of 640x360; every eighth at 1280x720)
-constexpr int kFlatRange = 6;       // levels three row neighbours may span to count as flat
-constexpr int kMinSpread = 16;      // levels between the darkest and brightest left level used
-constexpr int kMinBinPairs = 4;     // pairs a left level needs to count towards the spread
-constexpr double kOutlier = 3.0;    // levels off the first line that drop a left level's mean
+constexpr int kMinSpread = 16;    // levels between the darkest and brightest left level used
+constexpr int kMinBinPairs = 4;   // pairs a left level needs to count towards the spread
+constexpr double kOutlier = 3.0;  // levels off the first line that drop a left level's mean
 constexpr double kMinGain = 0.5, kMaxGain = 2.0;
-
-// The level at (x, y) of channel k when it and its row neighbours are within kFlatRange levels
-// and unsaturated, else -1. Where the row is flat, a match a pixel off along it (the only way a
-// rectified match can be off) still reads the same level, so the pairs carry the cameras'
-// difference and not the matcher's sub-pixel error.
-int flat_level(ImageView<const std::uint8_t> image, int x, int y, int k) {
-  const int c = image.channels;
-  const std::uint8_t* row = image.row(y);
-  const int a = row[(x - 1) * c + k], v = row[x * c + k], b = row[(x + 1) * c + k];
-  const int low = std::min({a, v, b}), high = std::max({a, v, b});
-  if (high - low > kFlatRange || low == 0 || high == kLevels - 1) return -1;
-  return v;
-}
 
 // The right level's mean at each left level, over one channel's pairs.
 struct LevelMeans {
@@ -80,27 +66,12 @@ long mapped_level(const ChannelLevels& c, int v) {
 // The pairs of every `step`-th row and column into each channel's level means.
 void collect_pairs(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                    ImageView<const float> disparity, int step, std::array<LevelMeans, 3>& means) {
-  const int c = std::min(left.channels, 3);
-  const int w = left.width;
-  for (int y = 0; y < left.height; y += step) {
-    const float* d = disparity.row(y);
-    for (int x = 1; x + 1 < w; x += step) {
-      // +inf (no match) and NaN fail this test; the match's row neighbours must lie inside the
-      // right image. `at` is positive here, so adding a half rounds it.
-      const float at = static_cast<float>(x) - d[x];
-      if (!(at >= 0.5f && at < static_cast<float>(w) - 1.5f)) continue;
-      const int xr = static_cast<int>(at + 0.5f);
-      for (int k = 0; k < c; ++k) {
-        const int lv = flat_level(left, x, y, k);
-        if (lv < 0) continue;
-        const int rv = flat_level(right, xr, y, k);
-        if (rv < 0) continue;
-        LevelMeans& m = means[static_cast<std::size_t>(k)];
-        ++m.count[static_cast<std::size_t>(lv)];
-        m.sum[static_cast<std::size_t>(lv)] += rv;
-      }
-    }
-  }
+  detail::for_each_flat_pair(left, right, disparity, step,
+                             [&](int k, int, int, int, int lv, int rv) {
+                               LevelMeans& m = means[static_cast<std::size_t>(k)];
+                               ++m.count[static_cast<std::size_t>(lv)];
+                               m.sum[static_cast<std::size_t>(lv)] += rv;
+                             });
 }
 
 std::uint32_t fewest_pairs(const std::array<LevelMeans, 3>& means, int channels) {
@@ -118,8 +89,7 @@ std::uint32_t fewest_pairs(const std::array<LevelMeans, 3>& means, int channels)
 bool fit_exposure(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                   ImageView<const float> disparity, ExposureMap& map) {
   const int c = std::min(left.channels, 3);
-  const double pixels = static_cast<double>(left.width) * left.height;
-  const int step = std::max(2, static_cast<int>(std::ceil(std::sqrt(pixels / kSamples))));
+  const int step = detail::fit_step(left.width, left.height);
   std::array<LevelMeans, 3> means;
   collect_pairs(left, right, disparity, step, means);
   // Cameras that differ leave few matches on flat ground (a tenth of a matched pair's): those

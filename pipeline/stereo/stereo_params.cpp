@@ -33,7 +33,11 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "map the right camera's levels onto the left's before matching (a gain and offset per "
         "channel, fitted to the matches)");
   s.add("stereo.exposure_balance_levels", &p.exposure_balance_levels, 1, 255,
-        "a new fit replaces the map when it moves some grey level by this many or more");
+        "a new fit replaces the map (or the lens fall-off) when it moves some grey level by this "
+        "many or more");
+  s.add("stereo.lens_falloff", &p.lens_falloff,
+        "correct both images for a brightness fall-off towards the corners shared by the two "
+        "lenses (1 - k r^2, fitted to the matches) before matching");
   s.add("stereo.vertical_alignment", &p.vertical_alignment,
         "move the right image by the vertical offset between the cameras' rows (fitted to the "
         "matches) before matching");

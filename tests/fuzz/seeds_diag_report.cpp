@@ -49,6 +49,7 @@ std::vector<std::vector<std::uint8_t>> seeds() {
   stats.right_gain[0] = stats.right_gain[1] = stats.right_gain[2] = 0.97;
   stats.right_row_offset = 0.5;
   stats.right_roll_deg = 0.1;
+  stats.lens_falloff = 0.2;
   add(all, n, ipc::channel::kStats, stats);
   ::dco::depth_preview_t preview{};
   preview.width = 3;

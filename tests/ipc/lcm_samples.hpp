@@ -64,6 +64,7 @@ inline dco::pipeline_stats_t sample_stats() {
   m.right_gain[1] = m.right_gain[2] = 1;
   m.right_row_offset = 0.25;
   m.right_roll_deg = -0.05;
+  m.lens_falloff = 0.12;
   return m;
 }
 

@@ -286,6 +286,7 @@ TEST(Publisher, StatsStatusAndLog) {
   s.camera_correction.levels.channels = {{{0.97, 1.5}, {0.98, -0.5}, {1.01, 2.0}}};
   s.camera_correction.row_offset = 0.375;
   s.camera_correction.roll = -0.001;  // radians in the stage, degrees on the wire
+  s.camera_correction.falloff = 0.125;
   // The first interval runs from construction, which the test does not control; the second is
   // exactly 2 s.
   const std::int64_t t0 = 1'000'000'000'000;
@@ -324,6 +325,7 @@ TEST(Publisher, StatsStatusAndLog) {
   EXPECT_DOUBLE_EQ(m.right_level_offset[2], 2.0);
   EXPECT_DOUBLE_EQ(m.right_row_offset, 0.375);
   EXPECT_NEAR(m.right_roll_deg, -0.0572958, 1e-7);
+  EXPECT_DOUBLE_EQ(m.lens_falloff, 0.125);
   ASSERT_EQ(got.status.size(), 1u);
   EXPECT_EQ(got.status[0].state, std::int8_t{dco::device_status_t::STATE_STREAMING});
   ASSERT_EQ(got.status[0].counter_count, 2);

@@ -16,6 +16,7 @@
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 #include "support/good_matches.hpp"
 #include "support/same_bytes.hpp"
+#include "support/stereo_stage.hpp"
 
 namespace dco::stereo {
 namespace {
@@ -149,16 +150,10 @@ TEST(ExposureTable, DifferenceIsTheLargestLevelApart) {
   EXPECT_EQ(exposure_difference(a, b), 10);
 }
 
-struct Stage {
-  std::unique_ptr<StereoMatcher> matcher;
-  Image<float> disparity;
-};
+using Stage = dco::testing::StereoStage;
 
 Stage stage_for(const synthetic::SceneConfig& config, bool balance) {
-  StereoParams params;
-  params.max_disparity = synthetic::covering_max_disparity(config);
-  params.exposure_balance = balance;
-  return {make_stereo_matcher({}, params), {}};
+  return dco::testing::stereo_stage(config, &StereoParams::exposure_balance, balance);
 }
 
 TEST(ExposureBalancedMatcher, AGainBetweenTheCamerasCostsFewMatches) {

@@ -178,7 +178,8 @@ TEST(StereoFrame, KeepsTheRightImageForThePhotometricRefinementOnlyWhenAsked) {
   ASSERT_EQ(slot.right.width(), 160);
   EXPECT_EQ(slot.right.channels(), 1);
   Image<std::uint8_t> scratch, expected;
-  corrected_right_grey(s.right.cview(), slot.camera_correction, scratch, expected);
+  stereo::FalloffCorrection falloff;
+  corrected_right_grey(s.right.cview(), slot.camera_correction, falloff, scratch, expected);
   EXPECT_TRUE(same_bytes(slot.right.cview(), expected.cview()));
   stereo_frame(*matcher, s.left.cview(), s.right.cview(), slot, false);
   EXPECT_TRUE(slot.right.view().empty());
@@ -202,20 +203,21 @@ TEST(StereoFrame, KeepsTheRightImageForThePhotometricRefinementOnlyWhenAsked) {
   expect_refused(a, in, "the right image");
 }
 
-TEST(CorrectedRightGrey, TakesTheRowsAndLevelsOfTheCameraCorrection) {
+TEST(CorrectedRightGrey, TakesTheRowsLevelsAndFalloffOfTheCameraCorrection) {
   Image<std::uint8_t> right(64, 40);
   for (int y = 0; y < 40; ++y)
     for (int x = 0; x < 64; ++x)
       right.view().row(y)[x] = static_cast<std::uint8_t>((x * 7 + y * 13) % 200 + 20);
   Image<std::uint8_t> scratch, out;
+  stereo::FalloffCorrection falloff;
   stereo::CameraCorrection none;
   none.levels = stereo::no_exposure_map(1);
-  corrected_right_grey(right.cview(), none, scratch, out);
+  corrected_right_grey(right.cview(), none, falloff, scratch, out);
   EXPECT_TRUE(same_bytes(out.cview(), right.cview()));
 
   stereo::CameraCorrection levels = none;
   levels.levels.channels[0] = {1.1, -3.0};
-  corrected_right_grey(right.cview(), levels, scratch, out);
+  corrected_right_grey(right.cview(), levels, falloff, scratch, out);
   stereo::ExposureTable table;
   table.build(levels.levels);
   Image<std::uint8_t> expected;
@@ -224,9 +226,28 @@ TEST(CorrectedRightGrey, TakesTheRowsAndLevelsOfTheCameraCorrection) {
 
   stereo::CameraCorrection rows = none;
   rows.row_offset = 1.0;
-  corrected_right_grey(right.cview(), rows, scratch, out);
+  corrected_right_grey(right.cview(), rows, falloff, scratch, out);
   stereo::align_rows(right.cview(), {1.0, 0.0}, expected);
   EXPECT_TRUE(same_bytes(out.cview(), expected.cview()));
+
+  // The lens fall-off last, on the grey: both views through the same table.
+  stereo::CameraCorrection lens = levels;
+  lens.falloff = 0.3;
+  corrected_right_grey(right.cview(), lens, falloff, scratch, out);
+  stereo::FalloffCorrection own;
+  own.build(stereo::LensFalloff{0.3}, 64, 40, 1);
+  Image<std::uint8_t> levelled;
+  table.apply(right.cview(), levelled);
+  own.apply(levelled.cview(), expected);
+  EXPECT_TRUE(same_bytes(out.cview(), expected.cview()));
+  EXPECT_GT(out.cview().row(0)[0], levelled.cview().row(0)[0]);      // a corner is brightened
+  EXPECT_EQ(out.cview().row(20)[32], levelled.cview().row(20)[32]);  // the centre is not
+  Image<std::uint8_t> left_out;
+  corrected_left_grey(right.cview(), lens, falloff, scratch, left_out);
+  own.apply(right.cview(), expected);
+  EXPECT_TRUE(same_bytes(left_out.cview(), expected.cview()));
+  corrected_left_grey(right.cview(), levels, falloff, scratch, left_out);
+  EXPECT_TRUE(left_out.view().empty());  // no fall-off: the refinement reads the image itself
 
   // Colour: the channels' maps weighted as the grey weighs the channels.
   Image<std::uint8_t> colour(8, 4, 3);
@@ -238,7 +259,7 @@ TEST(CorrectedRightGrey, TakesTheRowsAndLevelsOfTheCameraCorrection) {
   stereo::CameraCorrection colour_levels;
   colour_levels.levels = stereo::no_exposure_map(3);
   colour_levels.levels.channels[1] = {1.2, 0.0};  // green, 0.587 of the grey
-  corrected_right_grey(colour.cview(), colour_levels, scratch, out);
+  corrected_right_grey(colour.cview(), colour_levels, falloff, scratch, out);
   EXPECT_EQ(out.channels(), 1);
   EXPECT_NEAR(out.cview().row(2)[3], 100 * (1 + 0.2 * 0.587), 1.0);
 }

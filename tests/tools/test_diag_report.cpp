@@ -220,7 +220,7 @@ TEST(LogDigest, KeyNumbersOfAKnownLog) {
   const std::string json = json_summary(d, s);
   EXPECT_NE(json.find("\"right_camera\": {\"gain\": [0.976], \"level_offset\": [0.1], "
                       "\"row_offset\": 1, \"row_offset_min\": -0.25, \"row_offset_max\": 1, "
-                      "\"roll_deg\": 0.02}"),
+                      "\"roll_deg\": 0.02, \"lens_falloff\": 0}"),
             std::string::npos)
       << json;
   EXPECT_NE(json.find("\"frames\": 56,"), std::string::npos) << json;
@@ -241,6 +241,10 @@ TEST(LogSummary, TheRightCameraNamesEachChannelOfAColourCamera) {
   EXPECT_EQ(right_camera_text(m),
             "B gain 0.980, offset +0.0; G gain 0.990, offset -2.0; R gain 1.000, offset +0.0; "
             "rows -0.50; roll -0.125 deg");
+  m.lens_falloff = 0.15;  // shown once the stage corrects one
+  EXPECT_EQ(right_camera_text(m),
+            "B gain 0.980, offset +0.0; G gain 0.990, offset -2.0; R gain 1.000, offset +0.0; "
+            "rows -0.50; roll -0.125 deg; lens fall-off k +0.150");
 }
 
 // A log can hold any count: the totals stop at the largest long instead of wrapping negative.

@@ -177,6 +177,7 @@ void DepthPublisher::publish_stats(const pipeline::runtime::RuntimeStats& stats,
   }
   m.right_row_offset = c.row_offset;
   m.right_roll_deg = c.roll * 180.0 / std::numbers::pi;
+  m.lens_falloff = c.falloff;
   send(channel::kStats, m);
   stats_since_ns_ = now_ns;
   stats_pushed_ = stats.pushed;

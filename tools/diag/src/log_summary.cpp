@@ -27,8 +27,9 @@ std::string right_camera_text(const ::dco::pipeline_stats_t& t) {
     out += fmt::format("{}{}gain {:.3f}, offset {:+.1f}", c > 0 ? "; " : "",
                        t.right_channels == 3 ? names[c] : "", t.right_gain[c],
                        t.right_level_offset[c]);
-  return out +
-         fmt::format("; rows {:+.2f}; roll {:+.3f} deg", t.right_row_offset, t.right_roll_deg);
+  out += fmt::format("; rows {:+.2f}; roll {:+.3f} deg", t.right_row_offset, t.right_roll_deg);
+  if (t.lens_falloff != 0) out += fmt::format("; lens fall-off k {:+.3f}", t.lens_falloff);
+  return out;
 }
 
 const char* device_state_name(std::int8_t state) {
@@ -178,9 +179,9 @@ std::string json_summary(const LogDigest& d, const LogSummary& s) {
     }
     right_camera = fmt::format(
         "{{\"gain\": [{}], \"level_offset\": [{}], \"row_offset\": {}, \"row_offset_min\": {}, "
-        "\"row_offset_max\": {}, \"roll_deg\": {}}}",
+        "\"row_offset_max\": {}, \"roll_deg\": {}, \"lens_falloff\": {}}}",
         gain, offset, json_number(t.right_row_offset), json_number(s.row_offset_min),
-        json_number(s.row_offset_max), json_number(t.right_roll_deg));
+        json_number(s.row_offset_max), json_number(t.right_roll_deg), json_number(t.lens_falloff));
   }
   std::string channels;
   for (const auto& [name, tally] : d.channels)

@@ -9,6 +9,7 @@
 #include "dco/pipeline/contour/gated_canny.hpp"
 #include "dco/pipeline/contour/stereo_cue.hpp"
 #include "dco/pipeline/densify/densifier.hpp"
+#include "dco/pipeline/stereo/lens_falloff.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 
 namespace dco {
@@ -34,6 +35,9 @@ struct DepthResult {
   // Grey right image, input resolution, on the left's rows and levels (the stereo stage's camera
   // correction); empty unless the densifier's photometric refinement reads it.
   Image<std::uint8_t> right;
+  // Grey left image through the stereo stage's lens fall-off correction, as the refinement
+  // compares it with `right`; empty where the stage has no such correction (then `image`).
+  Image<std::uint8_t> photometric_left;
   Image<float> sparse;              // input px, +inf where the stereo checks left no value
   Image<float> planar;              // sparse after densify::smooth_matches, when planes_done
   bool planes_done = false;         // the stereo thread ran smooth_matches (else the densify step)
@@ -59,9 +63,11 @@ struct StereoSlot {
   Image<std::uint8_t> small_colour;   // scratch: the colour image downscaled before its grey
   Image<std::uint8_t> right;          // as DepthResult::right
   Image<std::uint8_t> right_scratch;  // working memory of corrected_right_grey
-  Image<float> raw_disparity;         // internal px, every pixel
-  Image<float> sparse;                // input px
-  Image<float> planar;                // sparse after densify::smooth_matches, when planes_done
+  Image<std::uint8_t> photometric_left;  // as DepthResult::photometric_left
+  stereo::FalloffCorrection falloff;     // the fall-off's table for both
+  Image<float> raw_disparity;            // internal px, every pixel
+  Image<float> sparse;                   // input px
+  Image<float> planar;                   // sparse after densify::smooth_matches, when planes_done
   // When early_contour_done: the image's M_I, gradient directions and Canny classes, and (with
   // contour.use_stereo) the stereo cue of raw_disparity.
   Image<float> m_intensity;
@@ -91,15 +97,23 @@ struct EarlyContourScratch {
 void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint8_t> left,
                    int index, StereoSlot& slot);
 // 2. The sparse stage: sparse and raw disparity, timings (independent of step 1), and with
-//    `keep_right` the corrected grey right image. Throws dco::Error on bad input.
+//    `keep_right` the corrected grey right image (and, with a lens fall-off correction, the
+//    corrected grey left one). Throws dco::Error on bad input.
 void stereo_frame(stereo::StereoMatcher& matcher, ImageView<const std::uint8_t> left,
                   ImageView<const std::uint8_t> right, StereoSlot& slot, bool keep_right);
 // The right view as the photometric refinement reads it: brought onto the left's rows and levels
-// by `correction` as the stereo stage's camera alignment does it, then grey. `scratch` is working
-// memory.
+// by `correction` as the stereo stage's camera alignment does it, then grey, then through the
+// lens fall-off correction (`falloff`, built for it here). `scratch` is working memory.
 void corrected_right_grey(ImageView<const std::uint8_t> right,
-                          const stereo::CameraCorrection& correction, Image<std::uint8_t>& scratch,
+                          const stereo::CameraCorrection& correction,
+                          stereo::FalloffCorrection& falloff, Image<std::uint8_t>& scratch,
                           Image<std::uint8_t>& out);
+// The left view as the refinement reads it beside that: grey (`scratch` holds it for colour),
+// then through the lens fall-off correction; `out` is emptied where `correction` has none.
+void corrected_left_grey(ImageView<const std::uint8_t> left,
+                         const stereo::CameraCorrection& correction,
+                         stereo::FalloffCorrection& falloff, Image<std::uint8_t>& scratch,
+                         Image<std::uint8_t>& out);
 // 2b. The densify stage's first step, which needs only the sparse map: its matches along local
 //    planes (densify::smooth_matches), run after step 2 when `here`, so that the stereo thread
 //    can carry it when the contour and densify steps take longer. Without `here` the densify

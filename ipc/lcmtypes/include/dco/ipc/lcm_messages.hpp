@@ -88,7 +88,7 @@ template <>
 struct Encoding<::dco::pipeline_stats_t> {
   static constexpr const char* kName = "dco.pipeline_stats_t";
   static constexpr std::array steps{
-      fixed(8 + 8 * 3 + 8 * 3 + 8 * 8 + 4 * 3 + 1 + 8 * 3 + 8 * 3 + 8 + 8)};
+      fixed(8 + 8 * 3 + 8 * 3 + 8 * 8 + 4 * 3 + 1 + 8 * 3 + 8 * 3 + 8 + 8 + 8)};
   static void clear_arrays(::dco::pipeline_stats_t&) {}
 };
 template <>

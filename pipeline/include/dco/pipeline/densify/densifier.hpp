@@ -106,6 +106,9 @@ struct DensifyInputs {
   // Grey right image on the left's rows and levels, optional: with `image`, the photometric
   // refinement's second view.
   ImageView<const std::uint8_t> right;
+  // The grey left image as the refinement compares it with `right`, optional: `image` through
+  // the stereo stage's lens fall-off correction, where it has one (else `image` itself).
+  ImageView<const std::uint8_t> photometric_left;
   // The sparse map after smooth_matches with these params, optional: compute then skips that
   // step (it needs only the sparse map, so the stereo thread runs it).
   ImageView<const float> planar;

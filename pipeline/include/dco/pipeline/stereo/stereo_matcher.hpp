@@ -40,6 +40,7 @@ struct CameraCorrection {
   ExposureMap levels;
   double row_offset = 0;  // rows the right image's scene lies below the left's (centre column)
   double roll = 0;        // radians it is turned about the centre (RowAlignment)
+  double falloff = 0;     // k of both lenses' fall-off (LensFalloff), corrected in both images
   bool operator==(const CameraCorrection&) const = default;
   bool identity() const;
   bool same_levels() const;  // the levels map is the identity

@@ -25,6 +25,10 @@ struct StereoParams {
   // taken when it moves some level by exposure_balance_levels or more.
   bool exposure_balance = true;
   int exposure_balance_levels = 6;
+  // Correct both images for a lens fall-off towards the corners shared by the two cameras
+  // (lens_falloff.hpp), fitted to the matches of the frames before; a new fit is taken when it
+  // moves some level by exposure_balance_levels or more.
+  bool lens_falloff = true;
   // Move the right image by the vertical offset between the cameras' rows, fitted to the matches
   // of the frames before (vertical_alignment.hpp): what a drifted calibration leaves.
   bool vertical_alignment = true;
