@@ -14,7 +14,7 @@ namespace dco::stereo {
 // another distance from the centre in each view (by its disparity), so the two cameras read it
 // at levels that differ by V(r_right) / V(r_left), which the AD term of Eq. 1 and the arms'
 // thresholds take for a difference of the scene. The shared scenes' real pairs show k of
-// 0.04-0.36 (KITTI's the most); bench/RESULTS.md, "Lens fall-off".
+// 0.03-0.33 (KITTI's the most); bench/RESULTS.md, "Lens fall-off shared by the two cameras".
 struct LensFalloff {
   double k = 0.0;
   bool identity() const { return k == 0.0; }
@@ -28,9 +28,9 @@ double falloff_radius_squared(int width, int height, double x, double y);
 // fit): right = a left + b - a k u left per channel, u = r^2 at the right pixel - r^2 at the
 // left one, by least squares (a pair's gain and black level are fitted with it); k is the
 // channels' mean weighted by their pairs. `right` is the right image as on the left's rows,
-// before any level correction. Returns false, leaving `k` as it was, with fewer than 500 pairs
-// in a channel, too narrow a spread of u to tell a fall-off (near scenes give a wide one), or a
-// k outside [-0.5, 0.75].
+// before any level correction. A k below 0 (corners brighter than the centre) comes out as 0.
+// Returns false, leaving `k` as it was, with fewer than 500 pairs in a channel, too narrow a
+// spread of u to tell a fall-off (near scenes give a wide one), or a fit outside [-0.5, 0.75].
 bool fit_lens_falloff(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                       ImageView<const float> disparity, double& k);
 
