@@ -467,6 +467,18 @@ void add_noise_row(Image<std::uint8_t>& img, double sigma, int index, int view, 
   }
 }
 
+// Row y of a view darkened by 1 - k r^2 (r = 1 at the half-diagonal from the centre).
+void fall_off_row(Image<std::uint8_t>& img, double k, int y) {
+  const double cx = 0.5 * (img.width() - 1), cy = 0.5 * (img.height() - 1);
+  const double inverse = 1.0 / (cx * cx + cy * cy), dy2 = (y - cy) * (y - cy);
+  const int c = img.channels();
+  std::uint8_t* row = img.row(y);
+  for (int x = 0; x < img.width(); ++x) {
+    const auto v = static_cast<float>(1.0 - k * ((x - cx) * (x - cx) + dy2) * inverse);
+    for (int i = x * c; i < (x + 1) * c; ++i) row[i] = static_cast<std::uint8_t>(v * row[i] + 0.5f);
+  }
+}
+
 void scale_row(Image<std::uint8_t>& img, double gain, double offset, int y) {
   const auto g = static_cast<float>(gain), o = static_cast<float>(offset);
   const int n = img.width() * img.channels();
@@ -527,6 +539,8 @@ void validate(const SceneConfig& c) {
     fail(fmt::format("right_rows {} must be within [-8, 8]", c.right_rows));
   if (!finite(c.right_roll_deg) || std::abs(c.right_roll_deg) > 1)
     fail(fmt::format("right_roll_deg {} must be within [-1, 1]", c.right_roll_deg));
+  if (!finite(c.lens_falloff) || c.lens_falloff < 0 || c.lens_falloff > 0.75)
+    fail(fmt::format("lens_falloff {} must be within [0, 0.75]", c.lens_falloff));
   if (!finite(c.background_z_m) || c.background_z_m <= 0.1)
     fail(fmt::format("background_z_m {} must be more than 0.1 m", c.background_z_m));
   if (!finite(c.background_slope_x) || !finite(c.background_slope_y))
@@ -610,6 +624,7 @@ void SceneRenderer::render(int index, StereoSample& out) const {
   Image<std::uint8_t>& upright = upright_frame;
   if (turned) upright.resize(c.width, c.height, channels);
   const auto sensor_rows = [&](Image<std::uint8_t>& img, bool right, int y) {
+    if (c.lens_falloff > 0) fall_off_row(img, c.lens_falloff, y);
     if (c.noise_sigma > 0) add_noise_row(img, c.noise_sigma, index, right ? 1 : 0, y);
     if (right && (c.right_gain != 1.0 || c.right_offset != 0.0))
       scale_row(img, c.right_gain, c.right_offset, y);

@@ -45,6 +45,7 @@ class SyntheticSource final : public PacedSource {
     c.right_offset = uri.number("right_offset", 0.0, -128.0, 128.0);
     c.right_rows = uri.number("right_rows", 0.0, -8.0, 8.0);
     c.right_roll_deg = uri.number("right_roll_deg", 0.0, -1.0, 1.0);
+    c.lens_falloff = uri.number("lens_falloff", 0.0, 0.0, 0.75);
     if (fps > 0) c.fps = fps;
     return c;
   }

@@ -435,6 +435,25 @@ TEST(SyntheticScene, TheRightCameraTurnedShowsItsSceneLowerTowardsTheRightEdge) 
   EXPECT_EQ(best_row(309), 1);
 }
 
+TEST(SyntheticScene, BothLensesFallOffTowardsTheCorners) {
+  SceneConfig c = preset("boxes", 320, 180);
+  c.noise_sigma = 0;
+  SceneConfig dark = c;
+  dark.lens_falloff = 0.4;
+  const StereoSample plain = render(c, 2), other = render(dark, 2);
+  EXPECT_TRUE(same_bytes(plain.disparity, other.disparity));
+  // Each view about its own centre (159.5, 89.5): V = 0.6 at a corner, 1 at the centre, and at
+  // (80, 45), a quarter of the diagonal in, 1 - 0.4 / 4.
+  for (const bool right : {false, true}) {
+    const Image<std::uint8_t>& p = right ? plain.right : plain.left;
+    const Image<std::uint8_t>& o = right ? other.right : other.left;
+    EXPECT_NEAR(o.at(0, 0), 0.6 * p.at(0, 0), 0.51) << right;
+    EXPECT_NEAR(o.at(319, 179), 0.6 * p.at(319, 179), 0.51) << right;
+    EXPECT_NEAR(o.at(80, 45), 0.9 * p.at(80, 45), 0.6) << right;
+    EXPECT_EQ(o.at(160, 90), p.at(160, 90)) << right;
+  }
+}
+
 TEST(SyntheticScene, TheRightCamerasGainAndOffsetScaleOnlyItsLevels) {
   const SceneConfig c = preset("boxes", 320, 180);  // with its sensor noise
   SceneConfig scaled = c;
@@ -509,6 +528,8 @@ TEST(SyntheticScene, InvalidConfigsThrowNamingTheProblem) {
   expect_error(with([](SceneConfig& c) { c.right_rows = 9; }), "right_rows");
   expect_error(with([](SceneConfig& c) { c.right_roll_deg = -1.5; }), "right_roll_deg");
   expect_error(with([](SceneConfig& c) { c.right_roll_deg = NAN; }), "right_roll_deg");
+  expect_error(with([](SceneConfig& c) { c.lens_falloff = 0.8; }), "lens_falloff");
+  expect_error(with([](SceneConfig& c) { c.lens_falloff = -0.1; }), "lens_falloff");
   expect_error(with([](SceneConfig& c) { c.background_z_m = 0.05; }), "background_z_m");
   expect_error(with([](SceneConfig& c) { c.background_slope_y = 0.5; }), "background disparity");
   expect_error(with([](SceneConfig& c) { c.background_slope_x = 1; }), "background_slope_x");

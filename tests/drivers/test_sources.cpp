@@ -178,8 +178,19 @@ TEST(SyntheticSource, TheRightCameraCanRunAnotherGainBlackLevelRowAndRoll) {
   config.right_roll_deg = 0.3;
   synthetic::SceneRenderer(config).render(1, sample);
   EXPECT_TRUE(same_pixels(turned_sink.frames()[1].right.cview(), sample.right.cview()));
-  for (const char* bad : {"right_gain=0.1", "right_gain=5", "right_offset=-200", "right_gain=x",
-                          "right_rows=9", "right_roll_deg=2"})
+  auto dark = open_source("synthetic://boxes?width=96&height=64&fps=0&frames=2&lens_falloff=0.3");
+  RecordingSink dark_sink;
+  dark->start(dark_sink);
+  ASSERT_TRUE(dark_sink.wait_for_end(10s));
+  dark->stop();
+  config = synthetic::preset("boxes", 96, 64);
+  config.lens_falloff = 0.3;
+  synthetic::SceneRenderer(config).render(1, sample);
+  EXPECT_TRUE(same_pixels(dark_sink.frames()[1].left.cview(), sample.left.cview()));
+  EXPECT_TRUE(same_pixels(dark_sink.frames()[1].right.cview(), sample.right.cview()));
+  for (const char* bad :
+       {"right_gain=0.1", "right_gain=5", "right_offset=-200", "right_gain=x", "right_rows=9",
+        "right_roll_deg=2", "lens_falloff=0.9", "lens_falloff=-0.1"})
     EXPECT_THROW(open_source(std::string("synthetic://boxes?width=96&height=64&") + bad), Error)
         << bad;
 }

@@ -241,6 +241,8 @@ TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
                "--right-rows needs a number in [-8, 8]");
   expect_error(run_depth(dir, {"--synthetic", "hand", "--right-roll", "1.5", "--out-dir", "o"}), 2,
                "--right-roll needs a number in [-1, 1]");
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--lens-falloff", "0.8", "--out-dir", "o"}),
+               2, "--lens-falloff needs a number in [0, 0.75]");
 }
 
 TEST(DcoDepthCli, UnknownParameterIsRefused) {

@@ -40,8 +40,8 @@ constexpr std::string_view kUsage =
        dco-depth --left-pattern P --right-pattern P [--first N] [--count N] [--calib FILE]
                  [--max-disp N] --out-dir DIR [--overlays] [--sparse] [options]
        dco-depth --synthetic NAME [--size WxH] [--frames N] [--color] [--right-gain G]
-                 [--right-offset O] [--right-rows R] [--right-roll DEG] [--max-disp N]
-                 --out-dir DIR [--overlays] [--sparse] [options]
+                 [--right-offset O] [--right-rows R] [--right-roll DEG] [--lens-falloff K]
+                 [--max-disp N] --out-dir DIR [--overlays] [--sparse] [options]
        dco-depth --list-params
 
 Computes disparity with the depth pipeline (stereo -> contours -> densify) and writes it in
@@ -73,6 +73,8 @@ A sequence (frame_000000.pfm, ... in --out-dir; synthetic scenes add gt_000000.p
                        rectification
   --right-roll DEG     the right camera turned DEG degrees about the image centre (-1..1,
                        default 0; positive: its scene lower towards the right edge)
+  --lens-falloff K      both lenses darker towards the corners by 1 - K r^2 (0..0.75, default
+                       0; r = 1 at the half-diagonal)
   --overlays           also write overlay/depth_*.png, contours_*.png, occlusion_*.png
 Common:
   --max-disp N         largest disparity searched, input pixels
@@ -153,6 +155,8 @@ Options parse_args(int argc, char** argv) {
       opt.right_camera.rows = args.number_value(-8.0, 8.0);
     else if (arg == "--right-roll")
       opt.right_camera.roll_deg = args.number_value(-1.0, 1.0);
+    else if (arg == "--lens-falloff")
+      opt.right_camera.lens_falloff = args.number_value(0.0, 0.75);
     else if (arg == "--overlays")
       opt.overlays = args.flag();
     else if (arg == "--max-disp")

@@ -123,6 +123,7 @@ std::unique_ptr<FrameSequence> make_synthetic_sequence(const std::string& name, 
   config.right_offset = right.offset;
   config.right_rows = right.rows;
   config.right_roll_deg = right.roll_deg;
+  config.lens_falloff = right.lens_falloff;
   return std::make_unique<SyntheticSequence>(std::move(config), frames);
 }
 

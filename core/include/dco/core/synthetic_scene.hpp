@@ -60,6 +60,10 @@ struct SceneConfig {
   // rows lower (and a row's scene tan(roll) * (y - yc) columns further left). Rendered upright,
   // then turned (bilinear), then its noise and levels.
   double right_roll_deg = 0.0;
+  // Both lenses darken towards the corners, as one lens model does: a level v at radius r becomes
+  // v (1 - lens_falloff r^2), r = 1 at the half-diagonal from the image centre (within
+  // [0, 0.75]; each view about its own centre, before the sensor's noise and levels).
+  double lens_falloff = 0.0;
 };
 
 // Named scenes: "hand" (four finger capsules and a palm disc sweeping across a box in front of

@@ -38,9 +38,11 @@ std::unique_ptr<FrameSequence> make_pattern_sequence(
     const std::optional<std::filesystem::path>& calib);
 
 // How a synthetic right camera differs from the left, as a cheap pair's does
-// (synthetic::SceneConfig::right_gain, right_offset, right_rows, right_roll_deg).
+// (synthetic::SceneConfig::right_gain, right_offset, right_rows, right_roll_deg), and the lens
+// fall-off both cameras share (lens_falloff).
 struct SyntheticRightCamera {
   double gain = 1.0, offset = 0.0, rows = 0.0, roll_deg = 0.0;
+  double lens_falloff = 0.0;
 };
 
 // A synthetic scene ("hand", "boxes", "static") with exact ground truth.
