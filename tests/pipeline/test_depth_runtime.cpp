@@ -282,9 +282,11 @@ TEST(DepthRuntime, NextContourWorkGoesToTheStereoThreadOnlyWhileTheOtherIsBusy) 
     const long on_stereo = run.stats.next_contour_on_stereo_thread;
     std::printf("%s: the stereo thread did %ld of the next contour steps' shares\n",
                 heavy_densify ? "heavy densify" : "heavy stereo", on_stereo);
-    // Eleven contour steps have a previous one; some find the stereo thread still busy.
+    // Eleven contour steps have a previous one; some find the stereo thread still busy. How many
+    // depends on the two threads' timing: 4 to 9 on a loaded two-CPU machine, never above 2
+    // with the stereo stage the heavy one.
     if (heavy_densify)
-      EXPECT_GE(on_stereo, 6);
+      EXPECT_GE(on_stereo, 3);
     else
       EXPECT_LE(on_stereo, 2);
   }
