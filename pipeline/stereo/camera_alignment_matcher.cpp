@@ -41,8 +41,8 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
     if (p.lens_falloff) {
       flat_left_.resize(left.width, left.height, left.channels);
       flat_right_.resize(right.width, right.height, right.channels);
+      falloff_table_.build(falloff_, left.width, left.height, left.channels);
     }
-    falloff_table_.build(falloff_, left.width, left.height, left.channels);
     inner().compute(corrected_left(left), corrected(right), disparity);
     timings_ = inner().last_timings();
     // A sequence's first frame has no correction from frames before: its own matches give one,
@@ -51,7 +51,6 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
     const bool fit = first_ || frames_ % kRefitEvery == 0;
     for (int round = 0; fit && refit(left, right, disparity) && round < rounds; ++round) {
       inner().reset();  // matched again as a new sequence
-      falloff_table_.build(falloff_, left.width, left.height, left.channels);
       inner().compute(corrected_left(left), corrected(right), disparity);
       timings_ = inner().last_timings();
     }
@@ -103,11 +102,12 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
              const Image<float>& disparity) {
     const StereoParams& p = params();
     bool moved = false;
+    // The right levels as the camera gave them, before the table and the fall-off's correction:
+    // on the rows in force (which the vertical fit below has not changed yet, so aligned_ holds
+    // this frame's).
+    const ImageView<const std::uint8_t> levels = rows_.identity() ? right : aligned_.cview();
     if (p.exposure_balance) {
       ExposureMap fitted = map_;
-      // The right levels as matched, before their table: on the rows in force (which the
-      // vertical fit below has not changed yet, so aligned_ holds this frame's).
-      const ImageView<const std::uint8_t> levels = rows_.identity() ? right : aligned_.cview();
       if (fit_exposure(left, levels, disparity.cview(), fitted)) {
         // A map fitted to matches made on rows found wrong since is no reference to keep:
         // the new fit is taken unless it lies within the threshold of no map, then no map.
@@ -124,13 +124,12 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
       }
     }
     if (p.lens_falloff) {
-      // Fitted with its own gain and black level on the levels as the cameras gave them (on the
-      // rows in force), so that the exposure map does not feed it.
-      const ImageView<const std::uint8_t> levels = rows_.identity() ? right : aligned_.cview();
+      // Fitted with its own gain and black level, so that the exposure map does not feed it.
       double k = falloff_.k;
       if (fit_lens_falloff(left, levels, disparity.cview(), k) &&
           falloff_difference(LensFalloff{k}, falloff_) >= p.exposure_balance_levels) {
         falloff_ = LensFalloff{k};
+        falloff_table_.build(falloff_, left.width, left.height, left.channels);
         moved = true;
       }
     }

@@ -113,14 +113,20 @@ bool fit_lens_falloff(ImageView<const std::uint8_t> left, ImageView<const std::u
                       ImageView<const float> disparity, double& k) {
   const int channels = std::min(left.channels, 3);
   int step = detail::fit_step(left.width, left.height);
-  if (fewest_pairs(collect(left, right, disparity, step, 0.0), channels) < kMinPairs && step > 2)
-    step = std::max(1, step / 2);
+  std::array<Normals, 3> normals = collect(left, right, disparity, step, 0.0);
+  // As the exposure fit: four times the pixels where the first look gives too few pairs.
+  if (const int dense = std::max(1, step / 2);
+      fewest_pairs(normals, channels) < kMinPairs && dense < step) {
+    step = dense;
+    normals = collect(left, right, disparity, step, 0.0);
+  }
   // The model is linear in k only about a k known already: a few steps from 0, each about the
   // last (a rendered pair darkened by k 0.35 reads 0.384 after one step, 0.338 after three).
   double fitted = 0;
   for (int round = 0; round < kRounds; ++round) {
+    if (round > 0) normals = collect(left, right, disparity, step, fitted);
     double dk = 0;
-    if (!fit_step_about(collect(left, right, disparity, step, fitted), channels, dk)) return false;
+    if (!fit_step_about(normals, channels, dk)) return false;
     fitted += dk;
     if (!(fitted >= kMinK && fitted <= kMaxK)) return false;
   }
@@ -145,6 +151,7 @@ void FalloffCorrection::build(const LensFalloff& falloff, int width, int height,
   built_ = true, falloff_ = falloff, width_ = width, height_ = height, channels_ = channels;
   gain_.create(height, width, CV_32FC(channels));  // allocates when the size changes
   identity_ = falloff.identity();
+  if (identity_) return;  // only sized, for a fall-off found later: apply copies
   for (int y = 0; y < height; ++y) {
     float* row = gain_.ptr<float>(y);
     for (int x = 0; x < width; ++x) {
@@ -162,6 +169,10 @@ void FalloffCorrection::apply(ImageView<const std::uint8_t> image, Image<std::ui
                 std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
                 std::to_string(image.channels));
   out.resize(image.width, image.height, image.channels);
+  if (identity_) {  // its map was only sized
+    out.copy_from(image);
+    return;
+  }
   cv::Mat to = as_mat(out.view());
   // Rounded and saturated to 8 bits by OpenCV; into `out`'s own memory.
   cv::multiply(as_mat(image), gain_, to, 1.0, CV_8U);

@@ -14,21 +14,12 @@
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
 #include "dco/tools/metrics.hpp"
 #include "dco/tools/scene_manifest.hpp"
+#include "support/fall_off.hpp"
 
 namespace dco {
 namespace {
 
 const std::filesystem::path kDataDir = DCO_DATA_DIR;
-
-void fall_off(Image<std::uint8_t>& image, double k) {
-  ImageView<std::uint8_t> v = image.view();
-  for (int y = 0; y < v.height; ++y)
-    for (int x = 0; x < v.width; ++x) {
-      const double gain = 1.0 - k * stereo::falloff_radius_squared(v.width, v.height, x, y);
-      for (int c = 0; c < v.channels; ++c)
-        v.at(x, y, c) = static_cast<std::uint8_t>(std::lround(v.at(x, y, c) * gain));
-    }
-}
 
 struct FalloffRun {
   double bad2 = 0;  // of the sparse map, over every GT pixel (a missing value counts as bad)
@@ -59,8 +50,8 @@ TEST(LensFalloffAccuracy, TheCorrectionWinsBackTheMatchesAFalloffCosts) {
     ++checked;
     const Image<std::uint8_t> left = load_image(scene.left), right = load_image(scene.right);
     Image<std::uint8_t> dark_left = left, dark_right = right;
-    fall_off(dark_left, kFalloff);
-    fall_off(dark_right, kFalloff);
+    testing::fall_off(dark_left, kFalloff);
+    testing::fall_off(dark_right, kFalloff);
     const FalloffRun given = sparse_run(scene, left, right, true);
     const FalloffRun plain = sparse_run(scene, dark_left, dark_right, false);
     const FalloffRun corrected = sparse_run(scene, dark_left, dark_right, true);

@@ -199,20 +199,7 @@ TEST(ExposureBalancedMatcher, AGainBetweenTheCamerasCostsFewMatches) {
 }
 
 TEST(ExposureBalancedMatcher, APairThatAgreesKeepsItsBytes) {
-  for (const bool color : {false, true}) {
-    synthetic::SceneConfig config = synthetic::preset("hand", 320, 180);
-    config.color = color;
-    const synthetic::SceneRenderer scene(config);
-    Stage plain = stage_for(config, false), balanced = stage_for(config, true);
-    synthetic::StereoSample s;
-    for (int i = 0; i < 3; ++i) {
-      scene.render(i, s);
-      plain.matcher->compute(s.left.cview(), s.right.cview(), plain.disparity);
-      balanced.matcher->compute(s.left.cview(), s.right.cview(), balanced.disparity);
-      EXPECT_TRUE(same_bytes(plain.disparity.cview(), balanced.disparity.cview()))
-          << (color ? "colour" : "grey") << " frame " << i;
-    }
-  }
+  dco::testing::expect_step_keeps_the_bytes(&StereoParams::exposure_balance);
 }
 
 TEST(ExposureBalancedMatcher, AResetStartsTheSequenceAfresh) {

@@ -14,6 +14,7 @@
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/stereo/lens_falloff.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
+#include "support/fall_off.hpp"
 #include "support/good_matches.hpp"
 #include "support/same_bytes.hpp"
 #include "support/stereo_stage.hpp"
@@ -21,19 +22,9 @@
 namespace dco::stereo {
 namespace {
 
+using dco::testing::fall_off;
 using dco::testing::good_matches;
 using dco::testing::same_bytes;
-
-// Both views darkened towards their corners by V = 1 - k r^2, as one lens model would.
-void fall_off(Image<std::uint8_t>& image, double k) {
-  ImageView<std::uint8_t> v = image.view();
-  for (int y = 0; y < v.height; ++y)
-    for (int x = 0; x < v.width; ++x) {
-      const double gain = 1.0 - k * falloff_radius_squared(v.width, v.height, x, y);
-      for (int c = 0; c < v.channels; ++c)
-        v.at(x, y, c) = static_cast<std::uint8_t>(std::lround(v.at(x, y, c) * gain));
-    }
-}
 
 synthetic::StereoSample falling_off(const synthetic::StereoSample& s, double k) {
   synthetic::StereoSample out;
@@ -150,21 +141,9 @@ TEST(LensFalloffMatcher, FindsTheFalloffOnTheFirstFrame) {
 }
 
 TEST(LensFalloffMatcher, APairWithoutFalloffKeepsItsBytes) {
-  for (const bool color : {false, true}) {
-    synthetic::SceneConfig config = synthetic::preset("hand", 320, 180);
-    config.color = color;
-    const synthetic::SceneRenderer scene(config);
-    Stage plain = stage_for(config, false), corrected = stage_for(config, true);
-    synthetic::StereoSample s;
-    for (int i = 0; i < 3; ++i) {
-      scene.render(i, s);
-      plain.matcher->compute(s.left.cview(), s.right.cview(), plain.disparity);
-      corrected.matcher->compute(s.left.cview(), s.right.cview(), corrected.disparity);
-      EXPECT_TRUE(same_bytes(plain.disparity.cview(), corrected.disparity.cview()))
-          << (color ? "colour" : "grey") << " frame " << i;
-      EXPECT_EQ(corrected.matcher->last_correction().falloff, 0.0);
-    }
-  }
+  dco::testing::expect_step_keeps_the_bytes(
+      &StereoParams::lens_falloff,
+      [](const StereoMatcher& m) { EXPECT_EQ(m.last_correction().falloff, 0.0); });
 }
 
 TEST(LensFalloffMatcher, AResetForgetsTheFalloff) {
