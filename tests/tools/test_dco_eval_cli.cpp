@@ -189,6 +189,39 @@ TEST(DcoEvalCli, GroundTruthAlignmentFindsEachScenesOffsetAndScoresAgainstTheMov
                         "--gt-alignment goes with --scenes");
 }
 
+TEST(DcoEvalCli, NoiseFloorScoresTheGroundTruthWithGaussianNoise) {
+  TempDir dir;
+  const std::vector<std::string> base = {"--scenes",        kManifest.string(), "--data-root",
+                                         kDataDir.string(), "--only",           "middlebury2003"};
+  std::vector<std::string> args = base;
+  for (const char* a : {"--noise-floor", "0.25", "--noise-floor", "1"}) args.push_back(a);
+  const EvalRun text = run_eval(dir, args);
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_THAT(text.out, HasSubstr("noise floor"));
+  EXPECT_THAT(text.out, HasSubstr("sigma 0.25 px"));
+  EXPECT_THAT(text.out, HasSubstr("sigma 1.00 px"));
+
+  args.push_back("--json");
+  const EvalRun json = run_eval(dir, args);
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const std::size_t floors = json.out.find(R"("noise_floor": [{"sigma_px": 0.25)");
+  ASSERT_NE(floors, std::string::npos) << json.out;
+  // Teddy's band error for each sigma, in order: noise alone puts band pixels on the wrong
+  // side, the more the larger it is, long before bad-2 counts an error.
+  std::vector<double> band;
+  for (std::size_t at = json.out.find(R"("band_err": )", floors); at != std::string::npos;
+       at = json.out.find(R"("band_err": )", at + 1))
+    band.push_back(std::stod(json.out.substr(at + 12)));
+  ASSERT_EQ(band.size(), 4u);  // the scene and the mean, per sigma
+  EXPECT_GT(band[0], 2.0);
+  EXPECT_GT(band[2], band[0] + 2.0);
+
+  expect_one_error_line(run_eval(dir, {"--scenes", kManifest.string(), "--noise-floor", "-1"}), 2,
+                        "--noise-floor");
+  expect_one_error_line(run_eval(dir, {"--sequence", dir.path().string(), "--noise-floor", "1"}), 2,
+                        "--noise-floor goes with --scenes");
+}
+
 TEST(DcoEvalCli, UsageErrorsExitWithTwo) {
   TempDir dir;
   const std::string scenes = kManifest.string();

@@ -26,6 +26,7 @@
 #include "dco/tools/command_line.hpp"
 #include "dco/tools/flow_eval.hpp"
 #include "dco/tools/gt_alignment.hpp"
+#include "dco/tools/gt_noise.hpp"
 #include "dco/tools/json.hpp"
 #include "dco/tools/metrics.hpp"
 #include "dco/tools/scene_manifest.hpp"
@@ -45,7 +46,8 @@ using dco::tools::UsageError;
 
 constexpr std::string_view kUsage =
     R"(usage: dco-eval --scenes TSV [--data-root DIR] [--pred-dir DIR]
-                [--baseline sgbm-wls] [--only SUBSTRING] [--gt-alignment] [--json]
+                [--baseline sgbm-wls] [--only SUBSTRING] [--gt-alignment]
+                [--noise-floor SIGMA]... [--json]
        dco-eval --sequence DIR [--gt-dir DIR] [--json]
        dco-eval --flow-sintel DIR [--dis-preset NAME] [--json]
 
@@ -67,7 +69,10 @@ Scenes:
                       which the right image sampled at x - (GT + d) matches the left image best on
                       textured pixels (from the images and the GT alone), and score the prediction
                       and the baseline once more against GT + d
-  At least one of --pred-dir and --baseline is needed.
+  --noise-floor SIGMA also score the ground truth plus Gaussian noise of SIGMA px (0..10, a fixed
+                      seed per scene) as a prediction: what a matcher whose only error is that
+                      noise scores, chiefly on the occlusion metrics; may be given several times
+  At least one of --pred-dir, --baseline and --noise-floor is needed.
 
 Sequence:
   --sequence DIR      predicted frames DIR/frame_000000.pfm, frame_000001.pfm, ... (from 0 up to
@@ -121,6 +126,7 @@ struct Options {
   std::optional<fs::path> pred_dir;
   bool baseline = false;
   bool gt_alignment = false;
+  std::vector<double> noise_floor;  // sigmas in px
   std::string only;
   // --sequence
   fs::path sequence;
@@ -164,6 +170,8 @@ Options parse_args(int argc, char** argv) {
       belongs_to(Mode::kScenes), opt.only = value();
     else if (arg == "--gt-alignment")
       belongs_to(Mode::kScenes), opt.gt_alignment = flag();
+    else if (arg == "--noise-floor")
+      belongs_to(Mode::kScenes), opt.noise_floor.push_back(args.number_value(0, 10));
     else if (arg == "--baseline") {
       belongs_to(Mode::kScenes);
       const std::string name = value();
@@ -195,8 +203,8 @@ Options parse_args(int argc, char** argv) {
     if (mode != opt.mode)
       throw UsageError(fmt::format("{} goes with {}, not with {}", name, mode_option(mode),
                                    mode_option(opt.mode)));
-  if (opt.mode == Mode::kScenes && !opt.pred_dir && !opt.baseline)
-    throw UsageError("give --pred-dir, --baseline or both");
+  if (opt.mode == Mode::kScenes && !opt.pred_dir && !opt.baseline && opt.noise_floor.empty())
+    throw UsageError("give --pred-dir, --baseline or --noise-floor (or several)");
   return opt;
 }
 
@@ -308,6 +316,55 @@ std::vector<SceneMetrics> evaluate_baseline(const std::vector<Scene>& scenes, co
   return results;
 }
 
+// --noise-floor: the GT plus N(0, sigma²) scored as a prediction, per sigma.
+struct NoiseFloor {
+  double sigma_px = 0;
+  std::vector<SceneMetrics> metrics;  // one per scene
+};
+
+std::vector<NoiseFloor> evaluate_noise_floor(const std::vector<Scene>& scenes,
+                                             const std::vector<double>& sigmas) {
+  std::vector<NoiseFloor> floors;
+  for (const double sigma : sigmas) floors.push_back({sigma, {}});
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const dco::tools::GroundTruth gt = dco::tools::load_ground_truth(scenes[i]);
+    for (NoiseFloor& f : floors) {
+      const dco::Image<float> noisy =
+          dco::tools::noisy_ground_truth(gt.disparity.view(), f.sigma_px, i + 1);
+      f.metrics.push_back(dco::tools::evaluate_disparity(scenes[i].name, noisy.view(), gt));
+    }
+  }
+  return floors;
+}
+
+void print_noise_floor_text(const std::vector<NoiseFloor>& floors) {
+  fmt::print(
+      "\nnoise floor: the ground truth plus Gaussian noise of sigma px scored as a prediction "
+      "(a matcher whose only error is that noise)\n");
+  for (const NoiseFloor& f : floors) {
+    fmt::print("sigma {:.2f} px\n{:<40}{:>9}{:>9}{:>9}{:>9}{:>9}{:>9}{:>9}{:>9}\n", f.sigma_px,
+               "scene", "bad1", "bad2", "occErr", "bandErr", "bandFr", "bandBh", "bandEdge",
+               "bandSurf");
+    const auto row = [](const SceneMetrics& m) {
+      fmt::print("{:<40}{:>9.2f}{:>9.2f}{:>9.2f}{:>9.2f}{:>9.2f}{:>9.2f}{:>9.2f}{:>9.2f}\n",
+                 m.scene, m.all.bad1, m.all.bad2, m.occ_err, m.band_err, m.band_front,
+                 m.band_behind, m.band_edge, m.band_surface);
+    };
+    for (const SceneMetrics& m : f.metrics) row(m);
+    SceneMetrics mean = dco::tools::mean_metrics(f.metrics);
+    mean.scene = "mean";
+    row(mean);
+  }
+}
+
+std::string noise_floor_json(const std::vector<NoiseFloor>& floors) {
+  std::vector<std::string> items;
+  for (const NoiseFloor& f : floors)
+    items.push_back(fmt::format(R"({{"sigma_px": {}, "metrics": {}}})", json_number(f.sigma_px),
+                                dco::tools::format_metrics_json(f.metrics)));
+  return fmt::format(R"("noise_floor": [{}])", fmt::join(items, ", "));
+}
+
 // One method's bad-2, occErr and bandErr against the GT as given and moved by its offset.
 std::string given_and_moved(const SceneMetrics& given, const SceneMetrics& moved) {
   return fmt::format("{:>8.2f}{:>8.2f}{:>8.2f}{:>8.2f}{:>8.2f}{:>8.2f}", given.all.bad2,
@@ -387,7 +444,8 @@ void print_scenes_text(const Options& opt, const std::vector<SceneMetrics>& pred
 
 void print_scenes_json(const Options& opt, const std::vector<Scene>& scenes,
                        const std::vector<SceneMetrics>& predicted,
-                       const std::vector<SceneMetrics>& baseline, const Alignment* alignment) {
+                       const std::vector<SceneMetrics>& baseline, const Alignment* alignment,
+                       const std::vector<NoiseFloor>& floors) {
   std::vector<std::string> members;
   if (opt.pred_dir) {
     members.push_back(fmt::format(R"("prediction": {{"pred_dir": {}, "metrics": {}}})",
@@ -406,6 +464,7 @@ void print_scenes_json(const Options& opt, const std::vector<Scene>& scenes,
                                                              rows, "prediction", kBaselineName)));
   }
   if (alignment != nullptr) members.push_back(alignment_json(opt, scenes, *alignment));
+  if (!floors.empty()) members.push_back(noise_floor_json(floors));
   fmt::print("{{\n{}\n}}\n", fmt::join(members, ",\n"));
 }
 
@@ -420,11 +479,13 @@ int run_scenes(const Options& opt) {
                                      a ? Scorer{&a->offsets, &a->predicted} : Scorer{});
   if (opt.baseline)
     baseline = evaluate_baseline(scenes, a ? Scorer{&a->offsets, &a->baseline} : Scorer{});
+  const std::vector<NoiseFloor> floors = evaluate_noise_floor(scenes, opt.noise_floor);
   if (opt.json) {
-    print_scenes_json(opt, scenes, predicted, baseline, a);
+    print_scenes_json(opt, scenes, predicted, baseline, a, floors);
   } else {
     print_scenes_text(opt, predicted, baseline);
     if (a != nullptr) print_alignment_text(opt, scenes, predicted, baseline, *a);
+    if (!floors.empty()) print_noise_floor_text(floors);
   }
   return 0;
 }
