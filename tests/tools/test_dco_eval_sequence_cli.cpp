@@ -102,6 +102,40 @@ TEST(DcoEvalSequenceCli, GroundTruthAsPredictionIsPerfectAndFlickersAlike) {
   EXPECT_THAT(mean, HasSubstr(R"("occ_err": 0)"));
 }
 
+TEST(DcoEvalSequenceCli, NoiseFloorScoresTheGroundTruthFramesWithNoise) {
+  TempDir dir;
+  write_frames(dir, "frame_", 4);
+  const std::string seq = write_frames(dir, "gt_", 4).string();
+  const std::vector<std::string> args = {"--sequence",    seq, "--gt-dir",      seq,
+                                         "--noise-floor", "0", "--noise-floor", "4"};
+  const CliRun text = run_eval(dir, args);
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_THAT(text.out, HasSubstr("noise floor"));
+
+  std::vector<std::string> json_args = args;
+  json_args.push_back("--json");
+  const CliRun json = run_eval(dir, json_args);
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const std::size_t floors = json.out.find(R"("noise_floor": [{"sigma_px": 0, "flicker": )");
+  ASSERT_NE(floors, std::string::npos) << json.out;
+  // No noise: the GT's own flicker. Noise of 4 px moves pixels across the planes from frame to
+  // frame, and puts some off by more than 2 px.
+  std::vector<double> flicker;
+  for (std::size_t at = json.out.find(R"("flicker": )", floors); at != std::string::npos;
+       at = json.out.find(R"("flicker": )", at + 1))
+    flicker.push_back(std::stod(json.out.substr(at + 11)));
+  ASSERT_EQ(flicker.size(), 2u);
+  EXPECT_DOUBLE_EQ(flicker[0], 0.3125);
+  EXPECT_GT(flicker[1], 5.0);
+  EXPECT_THAT(json.out.substr(floors),
+              HasSubstr(R"("bad1": 0, "bad2": 0, "bad4": 0, "avgerr": 0})"));
+
+  expect_one_error_line(run_eval(dir, {"--sequence", seq, "--noise-floor", "1"}), 2,
+                        "--noise-floor needs --gt-dir");
+  expect_one_error_line(run_eval(dir, {"--flow-sintel", seq, "--noise-floor", "1"}), 2,
+                        "--noise-floor goes with --scenes or --sequence");
+}
+
 TEST(DcoEvalSequenceCli, PredictionIsMeasuredAgainstTheGroundTruthPlanes) {
   // A frozen prediction does not flicker, the moving GT does; its edge drifts out of tolerance.
   TempDir dir;

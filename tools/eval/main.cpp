@@ -48,7 +48,7 @@ constexpr std::string_view kUsage =
     R"(usage: dco-eval --scenes TSV [--data-root DIR] [--pred-dir DIR]
                 [--baseline sgbm-wls] [--only SUBSTRING] [--gt-alignment]
                 [--noise-floor SIGMA]... [--json]
-       dco-eval --sequence DIR [--gt-dir DIR] [--json]
+       dco-eval --sequence DIR [--gt-dir DIR] [--noise-floor SIGMA]... [--json]
        dco-eval --flow-sintel DIR [--dis-preset NAME] [--json]
 
 Scores disparity maps per scene against the manifest's ground truth (--scenes), over time on a
@@ -72,6 +72,7 @@ Scenes:
   --noise-floor SIGMA also score the ground truth plus Gaussian noise of SIGMA px (0..10, a fixed
                       seed per scene) as a prediction: what a matcher whose only error is that
                       noise scores, chiefly on the occlusion metrics; may be given several times
+                      (also with --sequence and --gt-dir, on the GT frames)
   At least one of --pred-dir, --baseline and --noise-floor is needed.
 
 Sequence:
@@ -171,7 +172,7 @@ Options parse_args(int argc, char** argv) {
     else if (arg == "--gt-alignment")
       belongs_to(Mode::kScenes), opt.gt_alignment = flag();
     else if (arg == "--noise-floor")
-      belongs_to(Mode::kScenes), opt.noise_floor.push_back(args.number_value(0, 10));
+      opt.noise_floor.push_back(args.number_value(0, 10));
     else if (arg == "--baseline") {
       belongs_to(Mode::kScenes);
       const std::string name = value();
@@ -203,6 +204,10 @@ Options parse_args(int argc, char** argv) {
     if (mode != opt.mode)
       throw UsageError(fmt::format("{} goes with {}, not with {}", name, mode_option(mode),
                                    mode_option(opt.mode)));
+  if (!opt.noise_floor.empty() && opt.mode == Mode::kFlowSintel)
+    throw UsageError("--noise-floor goes with --scenes or --sequence, not with --flow-sintel");
+  if (!opt.noise_floor.empty() && opt.mode == Mode::kSequence && !opt.gt_dir)
+    throw UsageError("--noise-floor needs --gt-dir with --sequence");
   if (opt.mode == Mode::kScenes && !opt.pred_dir && !opt.baseline && opt.noise_floor.empty())
     throw UsageError("give --pred-dir, --baseline or --noise-floor (or several)");
   return opt;
@@ -527,7 +532,8 @@ std::string boundary_json(const BoundaryAccuracy& b) {
                      json_number(b.precision));
 }
 
-void print_sequence_json(const Options& opt, const SequenceReport& r) {
+void print_sequence_json(const Options& opt, const SequenceReport& r,
+                         const std::string& noise_floor) {
   std::vector<std::string> planes, members, frames;
   for (const double p : r.planes) planes.push_back(json_number(p));
   members.push_back(fmt::format(
@@ -546,15 +552,51 @@ void print_sequence_json(const Options& opt, const SequenceReport& r) {
     members.push_back(
         fmt::format(R"("metrics": {})", dco::tools::format_metrics_json(r.frame_metrics)));
   }
+  if (!noise_floor.empty()) members.push_back(noise_floor);
   fmt::print("{{\n{}\n}}\n", fmt::join(members, ",\n"));
+}
+
+// --noise-floor with --sequence: the GT frames plus noise as the predicted frames, per sigma.
+struct SequenceNoiseFloor {
+  double sigma_px = 0;
+  SequenceReport report;
+};
+
+void print_sequence_noise_floor_text(const std::vector<SequenceNoiseFloor>& floors) {
+  fmt::print(
+      "\nnoise floor: the ground-truth frames plus Gaussian noise of sigma px as the predicted "
+      "frames (means over frames)\n{:<12}{:>9}{:>9}{:>9}{:>9}{:>9}{:>9}{:>11}{:>11}\n",
+      "sigma px", "flicker", "bad2", "occErr", "bandErr", "bandEdge", "bandSurf", "sil. rec.",
+      "sil. prec.");
+  for (const SequenceNoiseFloor& f : floors) {
+    const SceneMetrics m = dco::tools::mean_metrics(f.report.frame_metrics);
+    fmt::print("{:<12.2f}{:>9.2f}{:>9.2f}{:>9.2f}{:>9.2f}{:>9.2f}{:>9.2f}{:>11.2f}{:>11.2f}\n",
+               f.sigma_px, f.report.flicker, m.all.bad2, m.occ_err, m.band_err, m.band_edge,
+               m.band_surface, f.report.silhouette.recall, f.report.silhouette.precision);
+  }
+}
+
+std::string sequence_noise_floor_json(const std::vector<SequenceNoiseFloor>& floors) {
+  std::vector<std::string> items;
+  for (const SequenceNoiseFloor& f : floors)
+    items.push_back(fmt::format(
+        R"({{"sigma_px": {}, "flicker": {}, "silhouette": {}, "metrics": {}}})",
+        json_number(f.sigma_px), json_number(f.report.flicker), boundary_json(f.report.silhouette),
+        dco::tools::format_metrics_json(f.report.frame_metrics)));
+  return fmt::format(R"("noise_floor": [{}])", fmt::join(items, ", "));
 }
 
 int run_sequence(const Options& opt) {
   const SequenceReport report = dco::tools::evaluate_sequence(opt.sequence, opt.gt_dir);
-  if (opt.json)
-    print_sequence_json(opt, report);
-  else
+  std::vector<SequenceNoiseFloor> floors;
+  for (const double sigma : opt.noise_floor)
+    floors.push_back({sigma, dco::tools::evaluate_noisy_gt_sequence(*opt.gt_dir, sigma)});
+  if (opt.json) {
+    print_sequence_json(opt, report, floors.empty() ? "" : sequence_noise_floor_json(floors));
+  } else {
     print_sequence_text(opt, report);
+    if (!floors.empty()) print_sequence_noise_floor_text(floors);
+  }
   return 0;
 }
 

@@ -1,9 +1,12 @@
 #include "dco/tools/sequence_eval.hpp"
 
+#include <functional>
+
 #include <fmt/format.h>
 
 #include "dco/core/disparity_io.hpp"
 #include "dco/core/error.hpp"
+#include "dco/tools/gt_noise.hpp"
 
 namespace dco::tools {
 namespace {
@@ -26,41 +29,28 @@ Image<float> read_frame(const fs::path& path, ImageView<const float> like) {
   return frame;
 }
 
-}  // namespace
+// Prediction frame `index`, checked against the first one (`like`, empty for frame 0).
+using PredictionReader = std::function<Image<float>(int index, ImageView<const float> like)>;
 
-fs::path sequence_frame_path(const fs::path& dir, std::string_view prefix, int index) {
-  return dir / fmt::format("{}{:06d}.pfm", prefix, index);
+void require_gt_frames(const fs::path& gt_dir, int frames, std::string_view against) {
+  require_directory(gt_dir, "ground-truth");
+  const int gt_frames = count_sequence_frames(gt_dir, kGroundTruthFramePrefix);
+  if (gt_frames != frames)
+    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}, {} {}", gt_dir.string(),
+                            gt_frames, sequence_frame_path({}, kGroundTruthFramePrefix, 0).string(),
+                            against, frames));
 }
 
-int count_sequence_frames(const fs::path& dir, std::string_view prefix) {
-  int n = 0;
-  while (fs::exists(sequence_frame_path(dir, prefix, n))) ++n;
-  return n;
-}
-
-SequenceReport evaluate_sequence(const fs::path& pred_dir, const std::optional<fs::path>& gt_dir,
-                                 int boundary_tolerance) {
+SequenceReport evaluate_frames(int frames, const PredictionReader& read_prediction,
+                               const std::optional<fs::path>& gt_dir, int boundary_tolerance) {
   constexpr auto frame = sequence_frame_path;
-  require_directory(pred_dir, "sequence");
   SequenceReport report;
-  report.frames = count_sequence_frames(pred_dir, kPredictionFramePrefix);
-  if (report.frames < 2)
-    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}; a sequence needs at least 2",
-                            pred_dir.string(), report.frames,
-                            frame({}, kPredictionFramePrefix, 0).string()));
+  report.frames = frames;
   report.has_gt = gt_dir.has_value();
   report.boundary_tolerance = boundary_tolerance;
-  if (gt_dir) {
-    require_directory(*gt_dir, "ground-truth");
-    const int gt_frames = count_sequence_frames(*gt_dir, kGroundTruthFramePrefix);
-    if (gt_frames != report.frames)
-      throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}, the prediction {}",
-                              gt_dir->string(), gt_frames,
-                              frame({}, kGroundTruthFramePrefix, 0).string(), report.frames));
-  }
 
   // With GT, its first frame fixes the planes for both meters, so the two flicker rates compare.
-  const Image<float> first = read_frame(frame(pred_dir, kPredictionFramePrefix, 0), {});
+  const Image<float> first = read_prediction(0, {});
   GroundTruth truth;
   if (gt_dir)
     truth.disparity = read_frame(frame(*gt_dir, kGroundTruthFramePrefix, 0), first.view());
@@ -69,8 +59,7 @@ SequenceReport evaluate_sequence(const fs::path& pred_dir, const std::optional<f
   FlickerMeter gt_flicker(flicker.planes());  // used with GT only
 
   for (int i = 0; i < report.frames; ++i) {
-    const Image<float> pred =
-        i == 0 ? first : read_frame(frame(pred_dir, kPredictionFramePrefix, i), first.view());
+    const Image<float> pred = i == 0 ? first : read_prediction(i, first.view());
     flicker.add(pred.view());
     if (!gt_dir) continue;
     if (i > 0)
@@ -92,6 +81,49 @@ SequenceReport evaluate_sequence(const fs::path& pred_dir, const std::optional<f
     report.silhouette = mean_boundary_accuracy(report.frame_silhouette);
   }
   return report;
+}
+
+}  // namespace
+
+fs::path sequence_frame_path(const fs::path& dir, std::string_view prefix, int index) {
+  return dir / fmt::format("{}{:06d}.pfm", prefix, index);
+}
+
+int count_sequence_frames(const fs::path& dir, std::string_view prefix) {
+  int n = 0;
+  while (fs::exists(sequence_frame_path(dir, prefix, n))) ++n;
+  return n;
+}
+
+SequenceReport evaluate_sequence(const fs::path& pred_dir, const std::optional<fs::path>& gt_dir,
+                                 int boundary_tolerance) {
+  require_directory(pred_dir, "sequence");
+  const int frames = count_sequence_frames(pred_dir, kPredictionFramePrefix);
+  if (frames < 2)
+    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}; a sequence needs at least 2",
+                            pred_dir.string(), frames,
+                            sequence_frame_path({}, kPredictionFramePrefix, 0).string()));
+  if (gt_dir) require_gt_frames(*gt_dir, frames, "the prediction");
+  const PredictionReader read = [&](int i, ImageView<const float> like) {
+    return read_frame(sequence_frame_path(pred_dir, kPredictionFramePrefix, i), like);
+  };
+  return evaluate_frames(frames, read, gt_dir, boundary_tolerance);
+}
+
+SequenceReport evaluate_noisy_gt_sequence(const fs::path& gt_dir, double sigma_px,
+                                          int boundary_tolerance) {
+  require_directory(gt_dir, "ground-truth");
+  const int frames = count_sequence_frames(gt_dir, kGroundTruthFramePrefix);
+  if (frames < 2)
+    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}; a sequence needs at least 2",
+                            gt_dir.string(), frames,
+                            sequence_frame_path({}, kGroundTruthFramePrefix, 0).string()));
+  const PredictionReader read = [&](int i, ImageView<const float> like) {
+    const Image<float> gt =
+        read_frame(sequence_frame_path(gt_dir, kGroundTruthFramePrefix, i), like);
+    return noisy_ground_truth(gt.view(), sigma_px, static_cast<std::uint64_t>(i) + 1);
+  };
+  return evaluate_frames(frames, read, gt_dir, boundary_tolerance);
 }
 
 }  // namespace dco::tools

@@ -46,4 +46,10 @@ SequenceReport evaluate_sequence(const std::filesystem::path& pred_dir,
                                  const std::optional<std::filesystem::path>& gt_dir,
                                  int boundary_tolerance = kBoundaryTolerance);
 
+// The same with GT + N(0, sigma_px²) (noisy_ground_truth, seeded by the frame number) as the
+// prediction: what a matcher whose only error is that noise scores on the sequence. Throws
+// dco::Error as above, and for fewer than 2 GT frames or a bad sigma.
+SequenceReport evaluate_noisy_gt_sequence(const std::filesystem::path& gt_dir, double sigma_px,
+                                          int boundary_tolerance = kBoundaryTolerance);
+
 }  // namespace dco::tools
