@@ -9,11 +9,13 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "cli_runner.hpp"
 #include "dco/core/disparity_io.hpp"
+#include "dco/core/image_io.hpp"
 #include "dco/tools/scene_manifest.hpp"
 #include "support/temp_dir.hpp"
 
@@ -220,6 +222,46 @@ TEST(DcoEvalCli, NoiseFloorScoresTheGroundTruthWithGaussianNoise) {
                         "--noise-floor");
   expect_one_error_line(run_eval(dir, {"--scenes", kManifest.string(), "--noise-floor", "x"}), 2,
                         "--noise-floor");
+}
+
+TEST(DcoEvalCli, ErrorMapsPicturePerSceneAndPlane) {
+  TempDir dir;
+  const auto pred_dir = write_gt_predictions(dir);
+  // Teddy's prediction: the GT with its left half moved 3 px nearer.
+  const Scene teddy = load_scene_manifest(kManifest, kDataDir)[1];
+  ASSERT_EQ(teddy.name, "middlebury2003/Teddy");
+  Image<float> nearer = load_ground_truth(teddy).disparity;
+  for (int y = 0; y < nearer.height(); ++y)
+    for (int x = 0; x < nearer.width() / 2; ++x) nearer.at(x, y) += 3.0f;
+  write_pfm(pred_dir / (teddy.file_stem() + ".pfm"), nearer.view());
+
+  std::vector<std::string> args = eval_args(pred_dir);
+  const auto maps = dir.path() / "maps";
+  for (const std::string& a :
+       std::vector<std::string>{"--only", "middlebury200", "--error-maps", maps.string()})
+    args.push_back(a);
+  const EvalRun r = run_eval(dir, args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("error maps: "));
+  // Red (predicted in front) pixels: none where the prediction is the GT, many on Teddy.
+  const auto red_pixels = [](const std::filesystem::path& png) {
+    const Image<std::uint8_t> map = load_image(png);
+    EXPECT_EQ(map.channels(), 3);
+    int red = 0;
+    for (int y = 0; y < map.height(); ++y)
+      for (int x = 0; x < map.width(); ++x)
+        red += map.at(x, y, 2) >= 150 && map.at(x, y, 0) == 0 && map.at(x, y, 1) == 0;
+    return red;
+  };
+  for (const char* q : {"20", "35", "50", "65", "80"}) {
+    EXPECT_EQ(red_pixels(maps / fmt::format("middlebury2001_Tsukuba.plane{}.png", q)), 0) << q;
+    EXPECT_GT(red_pixels(maps / fmt::format("middlebury2003_Teddy.plane{}.png", q)), 500) << q;
+  }
+  EXPECT_FALSE(std::filesystem::exists(maps / "middlebury2014_Motorcycle.plane50.png"));
+
+  expect_one_error_line(run_eval(dir, {"--scenes", kManifest.string(), "--baseline", "sgbm-wls",
+                                       "--error-maps", maps.string()}),
+                        2, "--error-maps needs --pred-dir");
 }
 
 TEST(DcoEvalCli, UsageErrorsExitWithTwo) {

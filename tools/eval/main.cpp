@@ -29,6 +29,7 @@
 #include "dco/tools/gt_noise.hpp"
 #include "dco/tools/json.hpp"
 #include "dco/tools/metrics.hpp"
+#include "dco/tools/occlusion_error_map.hpp"
 #include "dco/tools/scene_manifest.hpp"
 #include "dco/tools/sequence_eval.hpp"
 #include "dco/tools/sgbm_wls.hpp"
@@ -47,7 +48,7 @@ using dco::tools::UsageError;
 constexpr std::string_view kUsage =
     R"(usage: dco-eval --scenes TSV [--data-root DIR] [--pred-dir DIR]
                 [--baseline sgbm-wls] [--only SUBSTRING] [--gt-alignment]
-                [--noise-floor SIGMA]... [--json]
+                [--noise-floor SIGMA]... [--error-maps DIR] [--json]
        dco-eval --sequence DIR [--gt-dir DIR] [--noise-floor SIGMA]... [--json]
        dco-eval --flow-sintel DIR [--dis-preset NAME] [--json]
 
@@ -69,6 +70,11 @@ Scenes:
                       which the right image sampled at x - (GT + d) matches the left image best on
                       textured pixels (from the images and the GT alone), and score the prediction
                       and the baseline once more against GT + d
+  --error-maps DIR    also write, per scene and plane, DIR/<scene>.plane<NN>.png (NN = the
+                      plane's GT quantile in %): the left image in grey, the band in green where
+                      the prediction is right, wrong pixels red (predicted in front) or blue
+                      (behind), bright where matched and dark where filled (with a sparse map),
+                      yellow where there is no prediction; outside the band at half strength
   --noise-floor SIGMA also score the ground truth plus Gaussian noise of SIGMA px (0..10, a fixed
                       seed per scene) as a prediction: what a matcher whose only error is that
                       noise scores, chiefly on the occlusion metrics; may be given several times
@@ -128,6 +134,7 @@ struct Options {
   bool baseline = false;
   bool gt_alignment = false;
   std::vector<double> noise_floor;  // sigmas in px
+  std::optional<fs::path> error_maps;
   std::string only;
   // --sequence
   fs::path sequence;
@@ -171,6 +178,8 @@ Options parse_args(int argc, char** argv) {
       belongs_to(Mode::kScenes), opt.only = value();
     else if (arg == "--gt-alignment")
       belongs_to(Mode::kScenes), opt.gt_alignment = flag();
+    else if (arg == "--error-maps")
+      belongs_to(Mode::kScenes), opt.error_maps = value();
     else if (arg == "--noise-floor")
       opt.noise_floor.push_back(args.number_value(0, 10));
     else if (arg == "--baseline") {
@@ -208,6 +217,7 @@ Options parse_args(int argc, char** argv) {
     throw UsageError("--noise-floor goes with --scenes or --sequence, not with --flow-sintel");
   if (!opt.noise_floor.empty() && opt.mode == Mode::kSequence && !opt.gt_dir)
     throw UsageError("--noise-floor needs --gt-dir with --sequence");
+  if (opt.error_maps && !opt.pred_dir) throw UsageError("--error-maps needs --pred-dir");
   if (opt.mode == Mode::kScenes && !opt.pred_dir && !opt.baseline && opt.noise_floor.empty())
     throw UsageError("give --pred-dir, --baseline or --noise-floor (or several)");
   return opt;
@@ -277,8 +287,31 @@ struct Scorer {
   }
 };
 
-std::vector<SceneMetrics> evaluate_predictions(const std::vector<Scene>& scenes,
+// --error-maps: one picture per plane of the scene's occlusion errors.
+void write_error_maps(const fs::path& dir, const Scene& scene,
+                      dco::ImageView<const float> prediction, const dco::tools::GroundTruth& gt,
+                      dco::ImageView<const float> matches) {
+  const dco::Image<std::uint8_t> left = dco::load_image(scene.left);
+  const auto planes = dco::tools::occlusion_planes(gt.disparity.view());
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    if (std::isnan(planes[i])) continue;
+    const fs::path path =
+        dir /
+        fmt::format("{}.plane{:02d}.png", scene.file_stem(),
+                    static_cast<int>(std::lround(100 * dco::tools::kOcclusionPlaneQuantiles[i])));
+    try {
+      dco::save_image(path, dco::tools::occlusion_error_map(left.view(), prediction,
+                                                            gt.disparity.view(), planes[i], matches)
+                                .view());
+    } catch (const dco::Error& e) {
+      throw dco::Error(fmt::format("scene '{}': {}", scene.name, e.what()));
+    }
+  }
+}
+
+std::vector<SceneMetrics> evaluate_predictions(const Options& opt, const std::vector<Scene>& scenes,
                                                const fs::path& pred_dir, const Scorer& score) {
+  if (opt.error_maps) fs::create_directories(*opt.error_maps);
   if (!fs::is_directory(pred_dir))
     throw dco::Error(fmt::format("prediction directory '{}' does not exist", pred_dir.string()));
   std::vector<SceneMetrics> results;
@@ -299,6 +332,8 @@ std::vector<SceneMetrics> evaluate_predictions(const std::vector<Scene>& scenes,
     const dco::Image<float> matches =
         fs::exists(sparse_pfm) ? dco::read_pfm(sparse_pfm) : dco::Image<float>();
     SceneMetrics m = score(i, scene, prediction.view(), gt, matches.view());
+    if (opt.error_maps)
+      write_error_maps(*opt.error_maps, scene, prediction.view(), gt, matches.view());
     m.time_ms = read_time_ms(pred_dir / (scene.file_stem() + ".time_ms"));
     results.push_back(std::move(m));
   }
@@ -480,7 +515,7 @@ int run_scenes(const Options& opt) {
   if (opt.gt_alignment) alignment = Alignment{align_scenes(scenes), {}, {}};
   Alignment* a = alignment ? &*alignment : nullptr;
   if (opt.pred_dir)
-    predicted = evaluate_predictions(scenes, *opt.pred_dir,
+    predicted = evaluate_predictions(opt, scenes, *opt.pred_dir,
                                      a ? Scorer{&a->offsets, &a->predicted} : Scorer{});
   if (opt.baseline)
     baseline = evaluate_baseline(scenes, a ? Scorer{&a->offsets, &a->baseline} : Scorer{});
@@ -489,6 +524,8 @@ int run_scenes(const Options& opt) {
     print_scenes_json(opt, scenes, predicted, baseline, a, floors);
   } else {
     print_scenes_text(opt, predicted, baseline);
+    if (opt.error_maps)
+      fmt::print("\nerror maps: {}/<scene>.plane<NN>.png\n", opt.error_maps->string());
     if (a != nullptr) print_alignment_text(opt, scenes, predicted, baseline, *a);
     if (!floors.empty()) print_noise_floor_text(floors);
   }

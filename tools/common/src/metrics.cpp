@@ -57,37 +57,11 @@ double mean_of_defined(std::span<const double> values) {
   return n > 0 ? sum / n : kUndefined;
 }
 
+using detail::band_around;
 using detail::kBehind;
 using detail::kFront;
+using detail::occlusion_band;
 constexpr auto kNoGt = detail::kNoValue;
-
-// Pixels within Chebyshev distance kOcclusionBandRadius of a pair of 4-neighbours for which
-// `marks(x0, y0, x1, y1)` holds (both pixels of a marked pair are marked).
-template <class Marks>
-cv::Mat band_around(int width, int height, const Marks& marks) {
-  cv::Mat marked = cv::Mat::zeros(height, width, CV_8U);
-  for (int y = 0; y < height; ++y) {
-    auto* m = marked.ptr<std::uint8_t>(y);
-    auto* m_below = y + 1 < height ? marked.ptr<std::uint8_t>(y + 1) : nullptr;
-    for (int x = 0; x < width; ++x) {
-      if (x + 1 < width && marks(x, y, x + 1, y)) m[x] = m[x + 1] = 1;
-      if (m_below && marks(x, y, x, y + 1)) m[x] = m_below[x] = 1;
-    }
-  }
-  const int size = 2 * kOcclusionBandRadius + 1;
-  cv::Mat band;
-  cv::dilate(marked, band, cv::getStructuringElement(cv::MORPH_RECT, {size, size}));
-  return band;
-}
-
-// Around the GT occlusion boundary: pairs whose GT sides differ (pixels without GT neither make
-// nor break a boundary).
-cv::Mat occlusion_band(const cv::Mat& sides) {
-  return band_around(sides.cols, sides.rows, [&sides](int x0, int y0, int x1, int y1) {
-    const std::uint8_t a = sides.at<std::uint8_t>(y0, x0), b = sides.at<std::uint8_t>(y1, x1);
-    return a != kNoGt && b != kNoGt && a != b;
-  });
-}
 
 // Around the GT depth edges: pairs with GT whose disparities differ by more than kDepthEdgeJump.
 cv::Mat depth_edge_zone(ImageView<const float> gt) {
