@@ -95,14 +95,23 @@ int count_sequence_frames(const fs::path& dir, std::string_view prefix) {
   return n;
 }
 
+namespace {
+
+// count_sequence_frames, refusing a sequence of fewer than 2 frames.
+int count_sequence_of_two_or_more(const fs::path& dir, std::string_view prefix) {
+  const int frames = count_sequence_frames(dir, prefix);
+  if (frames < 2)
+    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}; a sequence needs at least 2",
+                            dir.string(), frames, sequence_frame_path({}, prefix, 0).string()));
+  return frames;
+}
+
+}  // namespace
+
 SequenceReport evaluate_sequence(const fs::path& pred_dir, const std::optional<fs::path>& gt_dir,
                                  int boundary_tolerance) {
   require_directory(pred_dir, "sequence");
-  const int frames = count_sequence_frames(pred_dir, kPredictionFramePrefix);
-  if (frames < 2)
-    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}; a sequence needs at least 2",
-                            pred_dir.string(), frames,
-                            sequence_frame_path({}, kPredictionFramePrefix, 0).string()));
+  const int frames = count_sequence_of_two_or_more(pred_dir, kPredictionFramePrefix);
   if (gt_dir) require_gt_frames(*gt_dir, frames, "the prediction");
   const PredictionReader read = [&](int i, ImageView<const float> like) {
     return read_frame(sequence_frame_path(pred_dir, kPredictionFramePrefix, i), like);
@@ -113,11 +122,7 @@ SequenceReport evaluate_sequence(const fs::path& pred_dir, const std::optional<f
 SequenceReport evaluate_noisy_gt_sequence(const fs::path& gt_dir, double sigma_px,
                                           int boundary_tolerance) {
   require_directory(gt_dir, "ground-truth");
-  const int frames = count_sequence_frames(gt_dir, kGroundTruthFramePrefix);
-  if (frames < 2)
-    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}; a sequence needs at least 2",
-                            gt_dir.string(), frames,
-                            sequence_frame_path({}, kGroundTruthFramePrefix, 0).string()));
+  const int frames = count_sequence_of_two_or_more(gt_dir, kGroundTruthFramePrefix);
   const PredictionReader read = [&](int i, ImageView<const float> like) {
     const Image<float> gt =
         read_frame(sequence_frame_path(gt_dir, kGroundTruthFramePrefix, i), like);
