@@ -262,6 +262,11 @@ TEST(DcoEvalCli, ErrorMapsPicturePerSceneAndPlane) {
   expect_one_error_line(run_eval(dir, {"--scenes", kManifest.string(), "--baseline", "sgbm-wls",
                                        "--error-maps", maps.string()}),
                         2, "--error-maps needs --pred-dir");
+  const auto file = dir.write("not_a_dir", "");
+  std::vector<std::string> into_file = eval_args(pred_dir);
+  for (const std::string& a : std::vector<std::string>{"--error-maps", file.string()})
+    into_file.push_back(a);
+  expect_one_error_line(run_eval(dir, into_file), 1, "not_a_dir");
 }
 
 TEST(DcoEvalCli, UsageErrorsExitWithTwo) {
