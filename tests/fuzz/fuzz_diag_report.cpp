@@ -50,7 +50,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (std::size_t at = html.find("</svg>"); at != std::string::npos;
        at = html.find("</svg>", at + 1))
     ++close;
-  if (open != 7 || close != 7) std::abort();
+  if (open != 8 || close != 8) std::abort();
   if (text_summary(d, s, "").empty() || json_summary(d, s).empty()) std::abort();
   return 0;
 }

@@ -112,12 +112,13 @@ class KnownLog {
     m.densify_p50_ms = 0.5;
     m.entry_high_water = dropped > 4 ? 2 : 1;
     // A right camera 2.4 % brighter, turned 0.02 degrees, whose rows drift from 0.25 above the
-    // left's to 1 below.
+    // left's to 1 below; both lenses darken by 15 % at the corners.
     m.right_channels = 1;
     m.right_gain[0] = 0.976;
     m.right_level_offset[0] = 0.1;
     m.right_row_offset = t / 2 - 0.5;
     m.right_roll_deg = 0.02;
+    m.lens_falloff = 0.15;
     add(t, ipc::channel::kStats, lcm_bytes(m));
   }
   void status(double t, std::int8_t state, const std::string& error) {
@@ -213,14 +214,14 @@ TEST(LogDigest, KeyNumbersOfAKnownLog) {
   EXPECT_NE(text.find("3 camera frames not published, 1 announcements missing"), std::string::npos)
       << text;
   EXPECT_NE(text.find("BAD       DCO_STATS: 1 messages do not decode"), std::string::npos) << text;
-  EXPECT_NE(text.find("right cam gain 0.976, offset +0.1; rows +1.00; roll +0.020 deg (last "
-                      "DCO_STATS); rows -0.25 to +1.00 over the log"),
+  EXPECT_NE(text.find("right cam gain 0.976, offset +0.1; rows +1.00; roll +0.020 deg; lens "
+                      "fall-off k +0.150 (last DCO_STATS); rows -0.25 to +1.00 over the log"),
             std::string::npos)
       << text;
   const std::string json = json_summary(d, s);
   EXPECT_NE(json.find("\"right_camera\": {\"gain\": [0.976], \"level_offset\": [0.1], "
                       "\"row_offset\": 1, \"row_offset_min\": -0.25, \"row_offset_max\": 1, "
-                      "\"roll_deg\": 0.02, \"lens_falloff\": 0}"),
+                      "\"roll_deg\": 0.02, \"lens_falloff\": 0.15}"),
             std::string::npos)
       << json;
   EXPECT_NE(json.find("\"frames\": 56,"), std::string::npos) << json;
@@ -324,9 +325,10 @@ TEST(HtmlReport, IsSelfContainedEscapedAndHoldsChartsAndThumbnails) {
       ++n;
     return n;
   };
-  EXPECT_EQ(count("<svg "), 7);
-  EXPECT_EQ(count("</svg>"), 7);
+  EXPECT_EQ(count("<svg "), 8);
+  EXPECT_EQ(count("</svg>"), 8);
   EXPECT_EQ(count("The right camera against the left"), 1);
+  EXPECT_EQ(count("Lens fall-off of both cameras"), 1);
   EXPECT_EQ(count("data:image/png;base64,"), static_cast<long>(d.previews.size()));
   // Nothing to fetch: no scripts, no outside addresses other than SVG's namespace name.
   EXPECT_EQ(count("<script"), 0);

@@ -52,7 +52,7 @@ std::string charts(const LogDigest& d) {
       drops{"dropped at the entry", "#c0392b", {}}, entry{"entry", "#2e86c1", {}},
       stereo_q{"stereo queue", "#28b463", {}}, densify_q{"densify queue", "#af7ac5", {}},
       rows{"rows below the left's", "#2e86c1", {}}, gain{"gain - 1, %", "#c0392b", {}},
-      roll{"roll, 1/100 degree", "#28b463", {}};
+      roll{"roll, 1/100 degree", "#28b463", {}}, falloff{"k", "#af7ac5", {}};
   for (const StatsPoint& p : d.stats) {
     const ::dco::pipeline_stats_t& s = p.stats;
     stereo.xy.emplace_back(p.t_s, s.stereo_p50_ms);
@@ -70,6 +70,7 @@ std::string charts(const LogDigest& d) {
       roll.xy.emplace_back(p.t_s, 100 * s.right_roll_deg);
       // The first channel's: B of a colour camera, whose three gains move together.
       gain.xy.emplace_back(p.t_s, 100 * (s.right_gain[0] - 1));
+      falloff.xy.emplace_back(p.t_s, s.lens_falloff);
     }
   }
   out += line_chart_svg({"Stage times over the run so far (DCO_STATS)", "log time (s)", "ms"},
@@ -84,6 +85,8 @@ std::string charts(const LogDigest& d) {
       {"The right camera against the left, as the stereo stage corrects it (DCO_STATS)",
        "log time (s)", "rows; %; 1/100 degree"},
       {rows, gain, roll});
+  out += line_chart_svg(
+      {"Lens fall-off of both cameras, V = 1 - k r^2 (DCO_STATS)", "log time (s)", "k"}, {falloff});
   std::vector<float> values(d.frames.size());
   std::transform(d.frames.begin(), d.frames.end(), values.begin(),
                  [](const FramePoint& f) { return f.latency_ms; });
