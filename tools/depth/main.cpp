@@ -73,7 +73,7 @@ A sequence (frame_000000.pfm, ... in --out-dir; synthetic scenes add gt_000000.p
                        rectification
   --right-roll DEG     the right camera turned DEG degrees about the image centre (-1..1,
                        default 0; positive: its scene lower towards the right edge)
-  --lens-falloff K      both lenses darker towards the corners by 1 - K r^2 (0..0.75, default
+  --lens-falloff K     both lenses darker towards the corners by 1 - K r^2 (0..0.75, default
                        0; r = 1 at the half-diagonal)
   --overlays           also write overlay/depth_*.png, contours_*.png, occlusion_*.png
 Common:

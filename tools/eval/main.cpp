@@ -391,9 +391,7 @@ void print_noise_floor_text(const std::vector<NoiseFloor>& floors) {
                  m.band_behind, m.band_edge, m.band_surface);
     };
     for (const SceneMetrics& m : f.metrics) row(m);
-    SceneMetrics mean = dco::tools::mean_metrics(f.metrics);
-    mean.scene = "mean";
-    row(mean);
+    row(dco::tools::mean_metrics(f.metrics));
   }
 }
 

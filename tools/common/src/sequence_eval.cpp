@@ -9,9 +9,20 @@
 #include "dco/tools/gt_noise.hpp"
 
 namespace dco::tools {
-namespace {
 
 namespace fs = std::filesystem;
+
+fs::path sequence_frame_path(const fs::path& dir, std::string_view prefix, int index) {
+  return dir / fmt::format("{}{:06d}.pfm", prefix, index);
+}
+
+int count_sequence_frames(const fs::path& dir, std::string_view prefix) {
+  int n = 0;
+  while (fs::exists(sequence_frame_path(dir, prefix, n))) ++n;
+  return n;
+}
+
+namespace {
 
 void require_directory(const fs::path& dir, std::string_view what) {
   if (!fs::is_directory(dir))
@@ -32,13 +43,23 @@ Image<float> read_frame(const fs::path& path, ImageView<const float> like) {
 // Prediction frame `index`, checked against the first one (`like`, empty for frame 0).
 using PredictionReader = std::function<Image<float>(int index, ImageView<const float> like)>;
 
-void require_gt_frames(const fs::path& gt_dir, int frames, std::string_view against) {
+// count_sequence_frames, refusing a sequence of fewer than 2 frames.
+int count_sequence_of_two_or_more(const fs::path& dir, std::string_view prefix) {
+  const int frames = count_sequence_frames(dir, prefix);
+  if (frames < 2)
+    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}; a sequence needs at least 2",
+                            dir.string(), frames, sequence_frame_path({}, prefix, 0).string()));
+  return frames;
+}
+
+// The GT frames must be as many as the prediction's.
+void require_gt_frames(const fs::path& gt_dir, int frames) {
   require_directory(gt_dir, "ground-truth");
   const int gt_frames = count_sequence_frames(gt_dir, kGroundTruthFramePrefix);
   if (gt_frames != frames)
-    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}, {} {}", gt_dir.string(),
-                            gt_frames, sequence_frame_path({}, kGroundTruthFramePrefix, 0).string(),
-                            against, frames));
+    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}, the prediction {}",
+                            gt_dir.string(), gt_frames,
+                            sequence_frame_path({}, kGroundTruthFramePrefix, 0).string(), frames));
 }
 
 SequenceReport evaluate_frames(int frames, const PredictionReader& read_prediction,
@@ -85,34 +106,11 @@ SequenceReport evaluate_frames(int frames, const PredictionReader& read_predicti
 
 }  // namespace
 
-fs::path sequence_frame_path(const fs::path& dir, std::string_view prefix, int index) {
-  return dir / fmt::format("{}{:06d}.pfm", prefix, index);
-}
-
-int count_sequence_frames(const fs::path& dir, std::string_view prefix) {
-  int n = 0;
-  while (fs::exists(sequence_frame_path(dir, prefix, n))) ++n;
-  return n;
-}
-
-namespace {
-
-// count_sequence_frames, refusing a sequence of fewer than 2 frames.
-int count_sequence_of_two_or_more(const fs::path& dir, std::string_view prefix) {
-  const int frames = count_sequence_frames(dir, prefix);
-  if (frames < 2)
-    throw Error(fmt::format("'{}' holds {} frame(s) numbered from {}; a sequence needs at least 2",
-                            dir.string(), frames, sequence_frame_path({}, prefix, 0).string()));
-  return frames;
-}
-
-}  // namespace
-
 SequenceReport evaluate_sequence(const fs::path& pred_dir, const std::optional<fs::path>& gt_dir,
                                  int boundary_tolerance) {
   require_directory(pred_dir, "sequence");
   const int frames = count_sequence_of_two_or_more(pred_dir, kPredictionFramePrefix);
-  if (gt_dir) require_gt_frames(*gt_dir, frames, "the prediction");
+  if (gt_dir) require_gt_frames(*gt_dir, frames);
   const PredictionReader read = [&](int i, ImageView<const float> like) {
     return read_frame(sequence_frame_path(pred_dir, kPredictionFramePrefix, i), like);
   };
