@@ -3,7 +3,9 @@
 #include "plane_sides.hpp"
 
 #include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
 
+#include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "dco/tools/metrics.hpp"
 
@@ -33,21 +35,24 @@ Image<std::uint8_t> occlusion_error_map(ImageView<const std::uint8_t> left,
   require_fits(prediction, gt, "the prediction");
   if (!matches.empty()) require_fits(matches, gt, "the sparse map");
 
+  cv::Mat grey;  // the caller's pixels are only read
+  if (left.channels == 3)
+    cv::cvtColor(as_mat(left), grey, cv::COLOR_BGR2GRAY);
+  else
+    grey = as_mat(left);
   const cv::Mat truth = detail::plane_sides(gt, plane);
   const cv::Mat band = detail::occlusion_band(truth);
   using C = ErrorMapColors;
   Image<std::uint8_t> out(gt.width, gt.height, 3);
   for (int y = 0; y < gt.height; ++y) {
-    const std::uint8_t* l = left.row(y);
+    const auto* l = grey.ptr<std::uint8_t>(y);
     const float* p = prediction.row(y);
     const float* m = matches.empty() ? nullptr : matches.row(y);
     const auto* t = truth.ptr<std::uint8_t>(y);
     const auto* b = band.ptr<std::uint8_t>(y);
     std::uint8_t* o = out.row(y);
     for (int x = 0; x < gt.width; ++x, o += 3) {
-      const int grey =
-          left.channels == 1 ? l[x] : (l[3 * x] * 29 + l[3 * x + 1] * 150 + l[3 * x + 2] * 77) >> 8;
-      o[0] = o[1] = o[2] = static_cast<std::uint8_t>(grey / 2);
+      o[0] = o[1] = o[2] = static_cast<std::uint8_t>(l[x] / 2);
       if (t[x] == detail::kNoValue) continue;
       const bool in_band = b[x] != 0;
       if (!is_valid_disparity(p[x])) {
