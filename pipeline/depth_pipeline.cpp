@@ -24,6 +24,7 @@ void validate(const PipelineParams& params) {
 void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint8_t> left,
                    int index, StereoSlot& slot) {
   slot.index = index;
+  slot.flow_cue_done = false;
   slot.image.resize(left.width, left.height);
   if (left.channels == 3)
     stereo::bgr_to_gray(left, slot.image.view());
@@ -172,6 +173,16 @@ void early_contour_frame(const contour::ContourParams& params, EarlyContourScrat
   slot.stereo_cue_ms = t.lap_ms();
 }
 
+void flow_cue_frame(contour::ContourExtractor& extractor, StereoSlot& centre,
+                    const StereoSlot& neighbour_a, const StereoSlot& neighbour_b) {
+  contour::ContourInputs in;
+  in.centre = centre.small.cview();
+  in.neighbour_a = neighbour_a.small.cview();
+  in.neighbour_b = neighbour_b.small.cview();
+  extractor.flow_cue(in, centre.flow_cue, centre.flow_timings);
+  centre.flow_cue_done = true;
+}
+
 namespace {
 
 // The contour step proper and the result's fields other than the image, sparse and planar maps.
@@ -192,6 +203,7 @@ void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
     in.canny_classes = centre.canny_classes.cview();
   }
   if (centre.stereo_cue_done) in.stereo_cue = centre.stereo_cue.cview();
+  if (flow && centre.flow_cue_done) in.flow_cue = centre.flow_cue.cview();
   contour::ContourOutputs contours{std::move(out.m_fuse), std::move(out.m_intensity),
                                    std::move(out.contours)};
   extractor.compute(in, contours);
@@ -202,6 +214,13 @@ void contours_of(contour::ContourExtractor& extractor, const StereoSlot& centre,
   if (centre.early_contour_done) {
     out.contour_timings.gaussian_ms = centre.gradients_ms;
     out.contour_timings.stereo_cue_ms += centre.stereo_cue_ms;  // and the extractor's max with it
+  }
+  if (!in.flow_cue.empty()) {  // the flow steps' times are the early run's
+    const contour::ContourTimings& f = centre.flow_timings;
+    contour::ContourTimings& c = out.contour_timings;
+    c.flow_ms = f.flow_ms, c.amplitude_ms = f.amplitude_ms, c.fusion_ms = f.fusion_ms;
+    c.box_ms = f.box_ms, c.normalise_ms = f.normalise_ms, c.dis_fields = f.dis_fields;
+    c.total_ms += f.total_ms;
   }
 
   out.index = centre.index;
@@ -309,6 +328,7 @@ void size_like(const StereoSlot& model, StereoSlot& out) {
   size_image_like(model.direction, out.direction);
   size_image_like(model.canny_classes, out.canny_classes);
   size_image_like(model.stereo_cue, out.stereo_cue);
+  size_image_like(model.flow_cue, out.flow_cue);
 }
 
 void size_like(const DepthResult& model, DepthResult& out) {

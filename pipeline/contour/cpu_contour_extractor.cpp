@@ -1,3 +1,4 @@
+#include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 #include "dco/pipeline/contour/flow_cue.hpp"
@@ -26,14 +27,19 @@ class CpuContourExtractor final : public ContourExtractor {
 
   void compute(const ContourInputs& in, ContourOutputs& out) override {
     check_contour_input(in);
+    if (!in.flow_cue.empty() && !params_.use_flow)
+      throw Error("contour: a flow cue was given with use_flow off");
     const bool flow = params_.use_flow && !in.neighbour_a.empty() && !in.neighbour_b.empty();
-    if (flow) flow_cue_.check_size(in.centre);
+    const bool given_flow = !in.flow_cue.empty();
+    if (flow && !given_flow) flow_cue_.check_size(in.centre);
     Stopwatch t;
     timings_ = {};
     prepare(in, out);
 
     const bool stereo = params_.use_stereo && (!in.disparity.empty() || !in.stereo_cue.empty());
-    if (flow) {
+    if (given_flow) {
+      out.m_fuse.copy_from(in.flow_cue);
+    } else if (flow) {
       flow_cue_.compute(in, out.m_fuse.view(), timings_, t);
     } else if (!stereo) {
       out.m_fuse.fill(0.0f);  // no cue at all: the gate rejects everything when t_depth > 0
@@ -76,6 +82,16 @@ class CpuContourExtractor final : public ContourExtractor {
   const ContourTimings& last_timings() const override { return timings_; }
 
   bool prepare_next() override { return params_.use_flow && flow_cue_.prepare_next(); }
+
+  void flow_cue(const ContourInputs& in, Image<float>& out, ContourTimings& timings) override {
+    check_flow_window(params_, in);
+    flow_cue_.check_size(in.centre);
+    out.resize(in.centre.width, in.centre.height);
+    timings = {};
+    Stopwatch t;
+    flow_cue_.compute(in, out.view(), timings, t);
+    timings.total_ms = t.total_ms();
+  }
 
  private:
   // Sizes every buffer; after the first frame of a given size nothing here allocates.

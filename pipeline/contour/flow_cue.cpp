@@ -88,11 +88,25 @@ void check_contour_input(const ContourInputs& in) {
   check_optional(in.neighbour_b, in.centre, "neighbour_b");
   check_optional(in.disparity, in.centre, "disparity");
   check_optional(in.stereo_cue, in.centre, "stereo_cue");
+  check_optional(in.flow_cue, in.centre, "flow_cue");
+  if (!in.flow_cue.empty() && (in.neighbour_a.empty() || in.neighbour_b.empty()))
+    throw Error("contour: a flow cue was given for a window without both neighbours");
   if (in.m_intensity.empty() != in.direction.empty())
     throw Error("contour: m_intensity and direction come together or not at all");
   check_optional(in.m_intensity, in.image, "m_intensity");
   check_optional(in.direction, in.image, "direction");
   check_optional(in.canny_classes, in.image, "canny_classes");
+}
+
+void check_flow_window(const ContourParams& params, const ContourInputs& in) {
+  if (!params.use_flow) throw Error("contour: a flow cue was asked for with use_flow off");
+  if (in.centre.empty() || in.centre.channels != 1)
+    throw Error("contour: the centre frame must be a non-empty grey image, got " +
+                size_text(in.centre));
+  if (in.neighbour_a.empty() || in.neighbour_b.empty())
+    throw Error("contour: the flow cue needs both neighbours of the centre frame");
+  check_optional(in.neighbour_a, in.centre, "neighbour_a");
+  check_optional(in.neighbour_b, in.centre, "neighbour_b");
 }
 
 struct FlowCue::State {

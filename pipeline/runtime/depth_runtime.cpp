@@ -412,9 +412,29 @@ void DepthRuntime::contour_receive(std::stop_token stop, int slot) {
   const int t = received_++;
   window_[static_cast<std::size_t>(t) % window_.size()] = slot;
   const ContourWindow w = window_on_arrival(pipeline_.contour.lookahead, t);
-  if (has_depth(w.centre))
+  if (has_depth(w.centre)) {
+    // The causal window's flow cue needs only the grey images, which came before the centre's
+    // stereo: made here, the contour step after the stereo is left the short part.
+    if (pipeline_.contour.lookahead == 0 && pipeline_.contour.use_flow && w.neighbour_b >= 0 &&
+        params_.threads > 1) {
+      const auto slot_of = [this](int frame) -> StereoSlot& {
+        return slots_[static_cast<std::size_t>(window_slot(frame))].slot;
+      };
+      try {
+        if (hook_) hook_(Stage::kFlowCue, slot_of(w.centre).index);
+        const Clock::time_point start = Clock::now();
+        flow_cue_frame(*contour_, slot_of(w.centre), slot_of(w.neighbour_a),
+                       slot_of(w.neighbour_b));
+        slots_[static_cast<std::size_t>(window_slot(w.centre))].times.contour_early =
+            Clock::now() - start;
+      } catch (...) {
+        fail(std::current_exception());
+        return;
+      }
+    }
     run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a), window_slot(w.neighbour_b),
                 /*last=*/false);
+  }
   // In no later window, either lookahead.
   if (t >= 2) release_slot(window_slot(t - 2), window_slot(w.centre));
 }
@@ -468,7 +488,9 @@ void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a
     fail(std::current_exception());
     return;
   }
-  if (early_contour_moves_ && !last) {  // the sequence's last step has no next one
+  // The sequence's last step has no next one, and the causal window's has none to prepare (its
+  // flow cue is made by this thread, which must not meet prepare_next).
+  if (early_contour_moves_ && !last && pipeline_.contour.lookahead == 1) {
     std::lock_guard lock(mutex_);
     next_contour_ = NextContour::kReady;
   }
@@ -613,7 +635,8 @@ void DepthRuntime::deliver(int result, bool early) {
   latency_.record(ms_between(t.capture, t.release));
   ready_.record(ms_between(t.capture, t.densify_end));
   const double stereo_ms = ms_between(t.stereo_start + t.stereo_blocked, t.stereo_end);
-  const double contour_ms = ms_between(t.contour_start, t.contour_end);
+  const double contour_ms = ms_between(t.contour_start, t.contour_end) +
+                            std::chrono::duration<double, std::milli>(t.contour_early).count();
   const double densify_ms = ms_between(t.densify_start, t.densify_end);
   stereo_ms_.record(stereo_ms);
   contour_ms_.record(contour_ms);

@@ -75,7 +75,7 @@ TEST(DaemonConfig, ALogsRecordedPipelineComesBeforeTheFileAndTheSets) {
 TEST(DaemonConfig, PrintedConfigLoadsBackToTheSameValues) {
   dco::testing::TempDir dir;
   ConfigSources s;
-  s.sets = {"service.max_frames=12", "log.level=warning", "contour.lookahead=0",
+  s.sets = {"service.max_frames=12", "log.level=warning", "contour.lookahead=1",
             "ring.path=/tmp/a \"quoted\" path"};
   const LoadedConfig first = load_config(s);
   ConfigSources again;

@@ -447,8 +447,9 @@ TEST(Dcod, AReleaseLatencyPublishesEveryFrameAtItsCaptureTimePlusThatLatency) {
   DcodOptions o;
   o.args = base_args(dir, "synthetic://hand?width=160&height=96&fps=15&frames=24");
   // The latency must sit above the slowest frame's stages (docs: above the pipeline's p99), here
-  // also under the sanitizers with other tests running beside this one.
-  o.args.insert(o.args.end(), {"--set", "runtime.release_latency_ms=300"});
+  // also under the sanitizers with other tests running beside this one, and within the results
+  // the release thread holds (4 at 15 fps: up to about 4 x 67 ms after the stages).
+  o.args.insert(o.args.end(), {"--set", "runtime.release_latency_ms=240"});
   o.log = dir / "dcod.log";
   NotifySocket notify(dir / "notify");
   o.notify = &notify;
@@ -474,7 +475,7 @@ TEST(Dcod, AReleaseLatencyPublishesEveryFrameAtItsCaptureTimePlusThatLatency) {
   std::sort(age_ms.begin(), age_ms.end());
   // Never before its time, and all at one age: the stages' own times vary far more than this.
   // One release may wake a scheduler slice late when the sanitizer suite loads both CPUs.
-  EXPECT_GE(age_ms.front(), 300.0);
+  EXPECT_GE(age_ms.front(), 240.0);
   EXPECT_LT(age_ms[age_ms.size() - 2] - age_ms.front(), 20.0);
   // The log says whether the release thread got real-time priority (runtime.release_priority 1).
   const std::string log = dcod.log();

@@ -159,6 +159,24 @@ void expect_same_contours_as_cpu(const ContourCase& c, const Make& make) {
         EXPECT_TRUE(same_bytes(o->contours, expected.contours));
         EXPECT_TRUE(o->m_intensity.empty());
       }
+      if (neighbours && params.use_flow) {
+        // The flow cue made ahead (as the runtime does with lookahead 0) and handed back: the
+        // same cue from both stages, and the same outputs.
+        Image<float> cpu_cue, stage_cue;
+        contour::ContourTimings cpu_times, stage_times;
+        cpu->flow_cue(given, cpu_cue, cpu_times);
+        stage->flow_cue(given, stage_cue, stage_times);
+        EXPECT_TRUE(same_bytes(stage_cue, cpu_cue));
+        EXPECT_EQ(stage_times.dis_fields, 2);
+        given.flow_cue = stage_cue.cview();
+        cpu->compute(given, by_cpu);
+        stage->compute(given, by_stage);
+        for (const contour::ContourOutputs* o : {&by_cpu, &by_stage}) {
+          EXPECT_TRUE(same_bytes(o->m_fuse, expected.m_fuse));
+          EXPECT_TRUE(same_bytes(o->contours, expected.contours));
+        }
+        EXPECT_EQ(stage->last_timings().dis_fields, 0);
+      }
       if (variant == "defaults") {
         // Not trivially equal: contours were found, and not everywhere.
         long on = 0;

@@ -33,7 +33,9 @@ inline std::vector<pipeline::DepthResult> densify_frames(
   for (int i = 0; i < 3; ++i) {
     renderer.render(i, s);
     pipeline::DepthResult r;
-    if (cpu.push(s.left.cview(), s.right.cview(), r)) frames.push_back(std::move(r));
+    // Frames 1 and 2: the second with the causal window's flow cue.
+    if (cpu.push(s.left.cview(), s.right.cview(), r) && r.index >= 1)
+      frames.push_back(std::move(r));
   }
   return frames;
 }

@@ -202,7 +202,9 @@ TEST_F(ContourAllocationsOneThread, WithFlowOnlyInsideDis) {
 // A window that follows the last runs DIS once and turns the kept field round in place.
 TEST_F(ContourAllocationsOneThread, WithAReusedFieldOnlyInsideOneDisCall) {
   const Scene scene(320, 240);
-  const auto extractor = make_cpu_contour_extractor({});
+  ContourParams centred;  // the window that reuses a field
+  centred.lookahead = 1;
+  const auto extractor = make_cpu_contour_extractor(centred);
   ContourOutputs out;
   extractor->compute(scene.window(0), out);
   extractor->compute(scene.window(1), out);

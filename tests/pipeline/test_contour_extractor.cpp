@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <string>
 #include <tuple>
@@ -460,9 +461,11 @@ TEST(ContourExtractor, ReusesTheLastFieldWhenTheWindowMovesOn) {
   const MovingSquare scene;
   const Frame earlier = frame_at(-2);
   const ContourInputs first = window_before(scene, earlier);
-  ContourParams fresh_params;
+  ContourParams centred;  // the field is reused with the centred window
+  centred.lookahead = 1;
+  ContourParams fresh_params = centred;
   fresh_params.reuse_flow = false;
-  const auto reusing = make_cpu_contour_extractor({});
+  const auto reusing = make_cpu_contour_extractor(centred);
   const auto fresh = make_cpu_contour_extractor(fresh_params);
   ContourOutputs out, expected;
   reusing->compute(first, out);
@@ -526,8 +529,10 @@ TEST(ContourExtractor, PreparedNextStepsGiveTheSameOutputs) {
     return dco::testing::same_bytes(a.m_fuse, b.m_fuse) &&
            dco::testing::same_bytes(a.contours, b.contours);
   };
-  const auto plain = make_cpu_contour_extractor({});
-  const auto prepared = make_cpu_contour_extractor({});
+  ContourParams centred;  // prepare_next has work with the centred window
+  centred.lookahead = 1;
+  const auto plain = make_cpu_contour_extractor(centred);
+  const auto prepared = make_cpu_contour_extractor(centred);
   ContourOutputs expected, actual;
   EXPECT_FALSE(prepared->prepare_next()) << "nothing before the first window";
   plain->compute(first, expected);
@@ -705,6 +710,100 @@ TEST(ContourExtractor, TakesTheGradientsAndStereoCueTheCallerMade) {
     EXPECT_GT(edges, 0) << flow;
     EXPECT_EQ(none, 0) << flow;
   }
+}
+
+// The flow cue of a window made on its own (flow_cue, which reads no disparity) and handed to
+// compute() gives compute()'s own outputs, with the flow steps' times reported by the first call.
+TEST(ContourExtractor, AFlowCueMadeAheadGivesTheSameOutputs) {
+  const MovingSquare scene;
+  Image<float> disparity(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) disparity.at(x, y) = x < kW / 3 ? 20.0f : 8.0f;
+  for (const int lookahead : {0, 1}) {
+    for (const bool stereo : {true, false}) {
+      SCOPED_TRACE("lookahead " + std::to_string(lookahead) + (stereo ? ", stereo cue" : ""));
+      ContourParams params;
+      params.lookahead = lookahead;
+      ContourInputs in = scene.inputs();
+      if (stereo) in.disparity = disparity.cview();
+      const auto plain = make_cpu_contour_extractor(params);
+      const auto ahead = make_cpu_contour_extractor(params);
+      ContourOutputs expected, actual;
+      plain->compute(in, expected);
+      Image<float> cue;
+      ContourTimings times;
+      ContourInputs window;  // the images alone: no input image, no disparity
+      window.centre = in.centre;
+      window.neighbour_a = in.neighbour_a;
+      window.neighbour_b = in.neighbour_b;
+      ahead->flow_cue(window, cue, times);
+      EXPECT_EQ(times.dis_fields, 2);
+      EXPECT_GT(times.flow_ms, 0.0);
+      EXPECT_GE(times.total_ms, times.flow_ms + times.fusion_ms);
+      in.flow_cue = cue.cview();
+      ahead->compute(in, actual);
+      EXPECT_TRUE(dco::testing::same_bytes(actual.m_fuse, expected.m_fuse));
+      EXPECT_TRUE(dco::testing::same_bytes(actual.contours, expected.contours));
+      EXPECT_EQ(ahead->last_timings().dis_fields, 0);
+      EXPECT_EQ(ahead->last_timings().flow_ms, 0.0);
+      if (!stereo) {
+        EXPECT_TRUE(dco::testing::same_bytes(actual.m_fuse, cue));
+      }
+    }
+  }
+  // Not trivially equal: the cue marks the moving square's outline.
+  Image<float> cue;
+  ContourTimings times;
+  make_cpu_contour_extractor({})->flow_cue(scene.inputs(), cue, times);
+  const Means m = region_means(cue, 24);
+  EXPECT_GT(m.outline, 4 * m.outside);
+}
+
+TEST(ContourExtractor, RejectsAFlowCueItCannotMakeOrUse) {
+  const MovingSquare scene;
+  const auto error_of = [](const std::function<void()>& f) -> std::string {
+    try {
+      f();
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  Image<float> cue, short_cue(kW, kH - 1);
+  short_cue.fill(0.0f);
+  ContourTimings times;
+  ContourOutputs out;
+  ContourParams no_flow;
+  no_flow.use_flow = false;
+  const auto extractor = make_cpu_contour_extractor({});
+  const auto without_flow = make_cpu_contour_extractor(no_flow);
+  EXPECT_THAT(error_of([&] { without_flow->flow_cue(scene.inputs(), cue, times); }),
+              HasSubstr("use_flow off"));
+  ContourInputs in = scene.inputs();
+  in.neighbour_b = {};
+  EXPECT_THAT(error_of([&] { extractor->flow_cue(in, cue, times); }),
+              HasSubstr("needs both neighbours"));
+  in = scene.inputs();
+  in.centre = {};
+  EXPECT_THAT(error_of([&] { extractor->flow_cue(in, cue, times); }), HasSubstr("centre frame"));
+  Image<std::uint8_t> odd(kW + 1, kH);
+  odd.fill(0);
+  in = scene.inputs();
+  in.neighbour_a = odd.view();
+  EXPECT_THAT(error_of([&] { extractor->flow_cue(in, cue, times); }),
+              HasSubstr("neighbour_a is 257x192x1"));
+  // Given to compute(): of the internal size, with both neighbours, and only with use_flow.
+  in = scene.inputs();
+  in.flow_cue = short_cue.cview();
+  EXPECT_THAT(error_of([&] { extractor->compute(in, out); }), HasSubstr("flow_cue is"));
+  extractor->flow_cue(scene.inputs(), cue, times);
+  in.flow_cue = cue.cview();
+  in.neighbour_a = {};
+  EXPECT_THAT(error_of([&] { extractor->compute(in, out); }), HasSubstr("without both neighbours"));
+  in = scene.inputs();
+  in.flow_cue = cue.cview();
+  EXPECT_THAT(error_of([&] { without_flow->compute(in, out); }), HasSubstr("use_flow off"));
+  EXPECT_EQ(error_of([&] { extractor->compute(in, out); }), "");
 }
 
 // DIS cannot build its pyramid on small frames; the extractor says so instead of returning garbage.

@@ -25,7 +25,9 @@ PipelineParams params_for(const synthetic::SceneRenderer& scene) {
 
 TEST(DepthPipeline, CentredWindowReleasesEachFrameOneLate) {
   const auto scene = small_scene("hand");
-  DepthPipeline pipeline(params_for(scene));
+  PipelineParams p = params_for(scene);
+  p.contour.lookahead = 1;
+  DepthPipeline pipeline(p);
   synthetic::StereoSample s;
   DepthResult r;
   scene.render(0, s);
@@ -44,9 +46,7 @@ TEST(DepthPipeline, CentredWindowReleasesEachFrameOneLate) {
 
 TEST(DepthPipeline, CausalWindowReleasesEveryFrameAtOnce) {
   const auto scene = small_scene("hand");
-  PipelineParams p = params_for(scene);
-  p.contour.lookahead = 0;
-  DepthPipeline pipeline(p);
+  DepthPipeline pipeline(params_for(scene));  // the default window
   synthetic::StereoSample s;
   DepthResult r;
   for (int i = 0; i < 4; ++i) {
@@ -93,9 +93,10 @@ TEST(DepthPipeline, RefusesASizeChangeWithinASequence) {
   pipeline.push(a.left.cview(), a.right.cview(), r);
   EXPECT_THROW(pipeline.push(b.left.cview(), b.right.cview(), r), Error);
   pipeline.reset();
-  EXPECT_FALSE(pipeline.push(b.left.cview(), b.right.cview(), r));  // a new sequence
-  ASSERT_TRUE(pipeline.finish(r));
+  ASSERT_TRUE(pipeline.push(b.left.cview(), b.right.cview(), r));  // a new sequence
   EXPECT_EQ(r.index, 0);
+  EXPECT_EQ(r.dense.width(), 352);
+  EXPECT_FALSE(pipeline.finish(r));
 }
 
 // After reset() the pipeline owes nothing to the frames before: the stereo stage's temporal

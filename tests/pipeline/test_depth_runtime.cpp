@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -275,6 +276,7 @@ TEST(DepthRuntime, ASequencesFirstFrameIsNoSampleOfTheWorkPerFrame) {
 TEST(DepthRuntime, NextContourWorkGoesToTheStereoThreadOnlyWhileTheOtherIsBusy) {
   for (const bool heavy_densify : {true, false}) {
     Sequence s = make_sequence("hand", 12);
+    s.params.contour.lookahead = 1;  // the window whose next step has a share to prepare
     make_one_stage_heavy(s.params, heavy_densify);
     const std::vector<DepthResult> expected = offline(s);
     const DeterministicRun run = run_deterministic(s, 2);
@@ -363,6 +365,121 @@ TEST(DepthRuntime, FramesCarryTheirTimesInStageOrder) {
   EXPECT_GT(st.densify.max_ms, 0.0);
 }
 
+// The CPU stereo stage, whose frame k (k >= first) does not end before the stage hook has seen
+// the contour thread begin frame k's flow cue, or 10 s have passed. Frames are counted from 0.
+class StereoWaitingForTheFlowCue final : public stereo::StereoMatcher {
+ public:
+  StereoWaitingForTheFlowCue(const stereo::StereoParams& params, int first)
+      : inner_(stereo::make_cpu_stereo_matcher(params)), first_(first) {}
+
+  void flow_cue_began(int index) {
+    std::lock_guard lock(mutex_);
+    flow_cue_began_.push_back(index);
+    changed_.notify_all();
+  }
+  // The frames whose stereo the flow cue began during.
+  std::vector<int> overlapped() {
+    std::lock_guard lock(mutex_);
+    return overlapped_;
+  }
+
+  void compute(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
+               Image<float>& disparity) override {
+    const int k = frame_++;
+    inner_->compute(left, right, disparity);
+    if (k < first_) return;
+    std::unique_lock lock(mutex_);
+    const auto began = [&] {
+      return std::find(flow_cue_began_.begin(), flow_cue_began_.end(), k) != flow_cue_began_.end();
+    };
+    if (changed_.wait_for(lock, 10s, began)) overlapped_.push_back(k);
+  }
+  void reset() override { inner_->reset(); }
+  const stereo::StereoTimings& last_timings() const override { return inner_->last_timings(); }
+  stereo::CameraCorrection last_correction() const override { return inner_->last_correction(); }
+  int last_scale() const override { return inner_->last_scale(); }
+  ImageView<const std::uint8_t> internal_left_gray() const override {
+    return inner_->internal_left_gray();
+  }
+  ImageView<const float> internal_raw_disparity() const override {
+    return inner_->internal_raw_disparity();
+  }
+  ImageView<const float> internal_sparse_disparity() const override {
+    return inner_->internal_sparse_disparity();
+  }
+  const stereo::StereoParams& params() const override { return inner_->params(); }
+
+ private:
+  std::unique_ptr<stereo::StereoMatcher> inner_;
+  const int first_;
+  int frame_ = 0;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<int> flow_cue_began_, overlapped_;
+};
+
+// The causal window's flow cue (lookahead 0) needs no disparity: the contour thread makes it
+// while the frame's stereo runs, and only the rest of the contour step waits for the stereo.
+TEST(DepthRuntime, TheCausalWindowsFlowCueIsMadeWhileTheFramesStereoRuns) {
+  Sequence s = make_sequence("hand", 6);
+  s.params.contour.lookahead = 0;
+  RuntimeParams rp;
+  rp.deterministic = true;
+  rp.threads = 2;
+  Collector c;
+  StereoWaitingForTheFlowCue* stereo = nullptr;
+  StageFactories stages;
+  stages.stereo = [&](const stereo::StereoParams& p) {
+    auto made = std::make_unique<StereoWaitingForTheFlowCue>(p, 2);  // 0 and 1 have no cue
+    stereo = made.get();
+    return made;
+  };
+  DepthRuntime runtime(
+      s.params, rp, c.callback(),
+      [&](Stage stage, int index) {
+        if (stage == Stage::kFlowCue) stereo->flow_cue_began(index);
+      },
+      stages);
+  runtime.start();
+  for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+  runtime.drain();
+  ASSERT_EQ(c.times.size(), s.frames.size());
+  EXPECT_THAT(stereo->overlapped(), ::testing::ElementsAre(2, 3, 4, 5));
+  double contour_ms = 0;
+  for (std::size_t k = 0; k < c.times.size(); ++k) {
+    const FrameTimes& t = c.times[k];
+    EXPECT_EQ(c.results[k].flow_cue, k >= 2);
+    EXPECT_EQ(t.contour_early > Clock::duration::zero(), k >= 2) << k;
+    contour_ms +=
+        std::chrono::duration<double, std::milli>(t.contour_end - t.contour_start + t.contour_early)
+            .count();
+  }
+  // The stage's time holds the flow cue made ahead.
+  EXPECT_NEAR(runtime.stats().contour.mean_ms, contour_ms / static_cast<double>(c.times.size()),
+              0.01);
+  // And the outputs are the offline pipeline's.
+  expect_identical(offline(s), c.results, "flow cue made ahead");
+}
+
+// With the centred window the flow cue waits for the frame after it: nothing is made ahead.
+TEST(DepthRuntime, TheCentredWindowMakesNoFlowCueAhead) {
+  Sequence s = make_sequence("hand", 5);
+  s.params.contour.lookahead = 1;
+  RuntimeParams rp;
+  rp.deterministic = true;
+  rp.threads = 2;
+  Collector c;
+  int flow_cue_hooks = 0;
+  DepthRuntime runtime(s.params, rp, c.callback(),
+                       [&](Stage stage, int) { flow_cue_hooks += stage == Stage::kFlowCue; });
+  runtime.start();
+  for (const auto& f : s.frames) runtime.push(f.left.cview(), f.right.cview());
+  runtime.drain();
+  ASSERT_EQ(c.times.size(), s.frames.size());
+  EXPECT_EQ(flow_cue_hooks, 0);
+  for (const FrameTimes& t : c.times) EXPECT_EQ(t.contour_early, Clock::duration::zero());
+}
+
 TEST(DepthRuntime, TheStereoStagesTimeLeavesOutItsWaitForASlowContourThread) {
   Sequence s = make_sequence("hand", 8);
   s.params.contour.use_flow = false;
@@ -434,9 +551,11 @@ TEST(DepthRuntime, WhenTheInputOutrunsItFramesAreDroppedAtTheEntryOnly) {
 DepthResult offline_window(const Sequence& s, int centre) {
   DepthPipeline pipeline(s.params);
   DepthResult r;
-  for (int i = centre - 1; i <= centre + 1; ++i) {
+  const bool causal = s.params.contour.lookahead == 0;
+  const int first = causal ? centre - 2 : centre - 1;
+  for (int i = first; i <= first + 2; ++i) {
     const auto& f = s.frames[static_cast<std::size_t>(i) % s.frames.size()];
-    if (pipeline.push(f.left.cview(), f.right.cview(), r) && r.index == 1) return r;
+    if (pipeline.push(f.left.cview(), f.right.cview(), r) && r.index == centre - first) return r;
   }
   ADD_FAILURE() << "no result for the window's centre";
   return r;
@@ -444,8 +563,11 @@ DepthResult offline_window(const Sequence& s, int centre) {
 
 TEST(DepthRuntime, AFrameLateAtTheEntryGetsNoDepthButStaysItsNeighboursFlowFrame) {
   Sequence s = make_sequence("hand", 4);
-  for (int threads : {1, 2}) {
-    SCOPED_TRACE(std::to_string(threads) + " thread(s)");
+  for (const auto& [lookahead, threads] :
+       {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 1}, std::pair{1, 2}}) {
+    SCOPED_TRACE("lookahead " + std::to_string(lookahead) + ", " + std::to_string(threads) +
+                 " thread(s)");
+    s.params.contour.lookahead = lookahead;
     RuntimeParams rp;
     rp.threads = threads;
     rp.entry_deadline_ms = 5;
@@ -495,13 +617,16 @@ TEST(DepthRuntime, AFrameLateAtTheEntryGetsNoDepthButStaysItsNeighboursFlowFrame
       const DepthResult& r = c.results[k];
       SCOPED_TRACE("frame " + std::to_string(r.index));
       ASSERT_EQ(taken[k].first, r.index);
-      // The last frame waits however long: drain() said no newer one comes.
-      if (r.index == kPushed - 1) continue;
-      // Without the deadline the frame pushed 10 ms into a 60 ms stereo run would wait 50 ms.
-      EXPECT_LT(taken[k].second - c.times[k].entry, 15ms);
-      if (r.index == 0) continue;
+      // The last frame waits however long: drain() said no newer one comes. Without the
+      // deadline the frame pushed 10 ms into a 60 ms stereo run would wait 50 ms.
+      if (r.index != kPushed - 1) {
+        EXPECT_LT(taken[k].second - c.times[k].entry, 15ms);
+      }
       // Its flow neighbours were the camera frames next to it, late or not.
-      EXPECT_TRUE(r.flow_cue);
+      const bool whole_window =
+          lookahead == 0 ? r.index >= 2 : r.index >= 1 && r.index < kPushed - 1;
+      EXPECT_EQ(r.flow_cue, whole_window);
+      if (!whole_window) continue;
       const DepthResult expected = offline_window(s, r.index);
       EXPECT_TRUE(same_bytes(r.m_fuse, expected.m_fuse));
       EXPECT_TRUE(same_bytes(r.contours, expected.contours));

@@ -451,7 +451,8 @@ PassFigures figures_of(const std::vector<rt::FrameTimes>& times) {
     latency.record(ms_between(t.capture, t.release));
     ready.record(ms_between(t.capture, t.densify_end));
     stereo.record(ms_between(t.stereo_start + t.stereo_blocked, t.stereo_end));
-    contour.record(ms_between(t.contour_start, t.contour_end));
+    contour.record(ms_between(t.contour_start, t.contour_end) +
+                   std::chrono::duration<double, std::milli>(t.contour_early).count());
     densify.record(ms_between(t.densify_start, t.densify_end));
   }
   PassFigures f{summary_of(latency), summary_of(ready), summary_of(stereo), summary_of(contour),

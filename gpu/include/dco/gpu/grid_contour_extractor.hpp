@@ -4,6 +4,7 @@
 #include <cstring>
 #include <utility>
 
+#include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/gpu/contour_passes.hpp"
@@ -36,8 +37,11 @@ class GridContourExtractor final : public contour::ContourExtractor {
 
   void compute(const contour::ContourInputs& in, contour::ContourOutputs& out) override {
     contour::check_contour_input(in);
+    if (!in.flow_cue.empty() && !params_.use_flow)
+      throw Error("contour: a flow cue was given with use_flow off");
     const bool flow = params_.use_flow && !in.neighbour_a.empty() && !in.neighbour_b.empty();
-    if (flow) flow_cue_.check_size(in.centre);
+    const bool given_flow = !in.flow_cue.empty();
+    if (flow && !given_flow) flow_cue_.check_size(in.centre);
     Stopwatch t;
     timings_ = {};
     const int cw = in.centre.width, ch = in.centre.height;
@@ -74,7 +78,9 @@ class GridContourExtractor final : public contour::ContourExtractor {
 
     fuse_.resize(internal);
     const bool stereo = params_.use_stereo && (!in.disparity.empty() || !in.stereo_cue.empty());
-    if (flow) {
+    if (given_flow) {
+      upload_rows(grid_, in.flow_cue, staging_fuse_, fuse_);
+    } else if (flow) {
       flow_cue_.compute(in, out.m_fuse.view(), timings_, t);
       upload_rows(grid_, out.m_fuse.cview(), staging_fuse_, fuse_);
     } else if (!stereo) {
@@ -115,6 +121,18 @@ class GridContourExtractor final : public contour::ContourExtractor {
   }
 
   const contour::ContourTimings& last_timings() const override { return timings_; }
+
+  // The flow cue is the CPU's (DIS and its fusion): the same steps as the CPU stage's.
+  void flow_cue(const contour::ContourInputs& in, Image<float>& out,
+                contour::ContourTimings& timings) override {
+    contour::check_flow_window(params_, in);
+    flow_cue_.check_size(in.centre);
+    out.resize(in.centre.width, in.centre.height);
+    timings = {};
+    Stopwatch t;
+    flow_cue_.compute(in, out.view(), timings, t);
+    timings.total_ms = t.total_ms();
+  }
 
  private:
   template <class T>

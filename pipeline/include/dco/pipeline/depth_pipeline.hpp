@@ -82,6 +82,10 @@ struct StereoSlot {
   bool early_contour_done = false;
   bool stereo_cue_done = false;
   double gradients_ms = 0, stereo_cue_ms = 0;  // the times they took
+  // When flow_cue_done: the flow cue of the causal window this frame ends, and its steps' times.
+  Image<float> flow_cue;
+  contour::ContourTimings flow_timings;
+  bool flow_cue_done = false;
 };
 
 // Working memory of early_contour_frame.
@@ -129,6 +133,11 @@ void plane_frame(const densify::DensifyParams& params, densify::MatchPlaneSmooth
 //    and `scratch` are still sized. The output is the same bytes either way.
 void early_contour_frame(const contour::ContourParams& params, EarlyContourScratch& scratch,
                          StereoSlot& slot, bool here = true);
+// 2d. With lookahead 0: the flow cue of the window `centre` ends (contour::ContourExtractor::
+//    flow_cue), which needs only the grey images of step 1, so a thread can make it while the
+//    centre's stereo runs; the contour step then takes it. The output is the same bytes either way.
+void flow_cue_frame(contour::ContourExtractor& extractor, StereoSlot& centre,
+                    const StereoSlot& neighbour_a, const StereoSlot& neighbour_b);
 // 3. Contours of `centre` given its flow neighbours (the flow cue needs both; nullptr when
 //    missing). Fills the contour fields of `out` and copies the centre's index, image, sparse and
 //    planar maps and stereo timings into it.

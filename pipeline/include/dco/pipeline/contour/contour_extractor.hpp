@@ -40,8 +40,10 @@ struct ContourParams {
   // scene still has depth contours.
   bool use_stereo = true;
   double stereo_jump = 2.0;  // disparity jump (internal px) that counts as a full-strength edge
-  // Window: 1 = (t-1, t, t+1), output one frame late; 0 = causal (t-2, t-1, t).
-  int lookahead = 1;
+  // Window: 0 = causal (t-2, t-1, t); 1 = (t-1, t, t+1), output one frame late. The causal window
+  // is the default: on the synthetic sequences and the Karlsruhe clip it scores as the centred
+  // one, and a headset needs the frame interval it saves (bench/RESULTS.md).
+  int lookahead = 0;
   // Gated Canny (§5.3).
   double t_high = 0.06;
   double t_low = 0.03;
@@ -77,6 +79,10 @@ struct ContourInputs {
   // when the caller made them: then compute() gates those (gated_canny_classified) instead of
   // classifying the gradients. A stage may also ignore them: the edges are the same bytes.
   ImageView<const std::uint8_t> canny_classes;
+  // The flow cue of this window (ContourExtractor::flow_cue) when the caller made it, e.g. while
+  // the frame's disparity was still being computed: then compute() takes it instead of running
+  // the flow. Only with use_flow and both neighbours.
+  ImageView<const float> flow_cue;
 };
 
 // Milliseconds per step of the last compute(), named after Table 2: flow = both fields (DIS or
@@ -114,6 +120,13 @@ class ContourExtractor {
   // the last field to the next frame turned round, with its speed, amplitude and projection
   // contrast, under reuse_flow with lookahead 1).
   virtual bool prepare_next() { return false; }
+  // The flow cue of the window of `in` alone, as compute() makes it (the centre and both
+  // neighbours are read, nothing else): into `out`, sized here, with the times of its steps
+  // (flow, amplitude, fusion, box, normalise, dis_fields) in `timings`. It needs no disparity, so
+  // a caller can run it while the centre's stereo runs and hand the result to compute() as
+  // ContourInputs::flow_cue; never concurrently with compute() or prepare_next(). Throws
+  // dco::Error as compute() does, and when use_flow is off or a neighbour is missing.
+  virtual void flow_cue(const ContourInputs& in, Image<float>& out, ContourTimings& timings) = 0;
 };
 
 std::unique_ptr<ContourExtractor> make_cpu_contour_extractor(const ContourParams& params);

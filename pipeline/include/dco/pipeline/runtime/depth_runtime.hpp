@@ -25,7 +25,9 @@ namespace dco::pipeline::runtime {
 
 using Clock = std::chrono::steady_clock;
 
-enum class Stage { kStereo, kContour, kDensify };
+// kFlowCue: the contour stage's flow cue of the causal window (contour.lookahead 0), which the
+// contour thread makes while the frame's stereo runs.
+enum class Stage { kStereo, kFlowCue, kContour, kDensify };
 
 // When one frame passed each point of the runtime.
 struct FrameTimes {
@@ -36,6 +38,9 @@ struct FrameTimes {
   // stage's time (RuntimeStats::stereo) leaves it out, it is the contour thread's slowness.
   Clock::duration stereo_blocked{};
   Clock::time_point contour_start, contour_end;
+  // Before contour_start, while the frame's stereo ran: the contour thread's work on the frame's
+  // flow cue (contour.lookahead 0). Part of the contour stage's time (RuntimeStats::contour).
+  Clock::duration contour_early{};
   Clock::time_point densify_start, densify_end;
   Clock::time_point release;  // handed to the result callback
 };
