@@ -22,8 +22,9 @@ void register_params(ConfigSchema& s, ContourParams& p) {
         "the two flow fields on two threads at once (same output); auto = on with 4 or more "
         "usable CPUs");
   s.add("contour.reuse_flow", &p.reuse_flow,
-        "lookahead 1: the field t -> t-1 is the previous frame's field t-1 -> t inverted, one DIS "
-        "run per frame instead of two");
+        "one DIS run per frame instead of two: with lookahead 0 the field t -> t-2 is the fresh "
+        "t -> t-1 carried on by the previous frame's t-1 -> t-2, with lookahead 1 the field "
+        "t -> t-1 is the previous frame's t-1 -> t inverted");
   s.add("contour.row_threads", &p.row_threads, 0, 16,
         "threads sharing the flow cue's row-wise steps after DIS, the stage's own included (0 = "
         "auto: 1 below 4 usable CPUs, else half of them, at most 4)");

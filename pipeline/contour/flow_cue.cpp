@@ -117,11 +117,12 @@ struct FlowCue::State {
   std::vector<float> part_largest;  // per thread of `rows`: the largest value of its rows
   cv::Ptr<cv::DISOpticalFlow> dis;
   cv::Mat flow_a, flow_b;  // CV_32FC2, kept so DIS writes into the same memory every frame
-  // With reuse_flow: the last call's field centre -> neighbour_b and its two images.
-  cv::Mat last_b;
-  Image<std::uint8_t> last_centre, last_neighbour_b;
+  // With reuse_flow: the last call's field the next window can use and the two images it joins,
+  // centre -> neighbour_b (t -> t+1) with lookahead 1, centre -> neighbour_a (t -> t-1) with 0.
+  cv::Mat last_field;
+  Image<std::uint8_t> last_centre, last_neighbour;
   bool has_last = false;
-  // prepare_next made flow_a, speed, amplitude_a and contrast_a from last_b.
+  // prepare_next made flow_a, speed, amplitude_a and contrast_a from last_field.
   bool next_prepared = false;
   cv::Mat centre_copy, neighbour_copy, neighbour_b_copy;  // continuous copies of padded views
   std::unique_ptr<FlowFieldWorker> field_b;  // with parallel_flow: computes flow_b meanwhile
@@ -142,12 +143,12 @@ FlowCue::~FlowCue() = default;
 bool FlowCue::prepare_next() {
   State& s = *s_;
   s.next_prepared = false;
-  if (!s.has_last) return false;
-  // The sizes of the call that made last_b: the next one resizes nothing if it reuses it.
+  if (!s.has_last || s.params.lookahead != 1) return false;
+  // The sizes of the call that made last_field: the next one resizes nothing if it reuses it.
   const int cw = s.last_centre.width(), ch = s.last_centre.height();
   for (Image<float>* img : {&s.speed, &s.amplitude_a, &s.contrast_a}) img->resize(cw, ch);
   s.flow_a.create(ch, cw, CV_32FC2);
-  invert_flow(as_view<float>(static_cast<const cv::Mat&>(s.last_b)), s.inversion,
+  invert_flow(as_view<float>(static_cast<const cv::Mat&>(s.last_field)), s.inversion,
               as_view<float>(s.flow_a));
   // compute()'s steps of that field, as it makes them.
   const ImageView<const float> fa = as_view<float>(static_cast<const cv::Mat&>(s.flow_a));
@@ -181,23 +182,29 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
   s.flow_b.create(ch, cw, CV_32FC2);
 
   const cv::Mat centre = continuous(in.centre, s.centre_copy);
-  // The previous frame's field t-1 -> t is this frame's t -> t-1 turned round when it joined the
-  // same two images (lookahead 1); the window's content, not frame numbers, decides.
+  // The window's content, not frame numbers, decides whether the last call's field serves. With
+  // lookahead 1 the previous frame's field t-1 -> t is this frame's t -> t-1 turned round; with
+  // lookahead 0 the previous frame's t-1 -> t-2 carries this frame's fresh t -> t-1 on to t-2.
+  const bool centred = s.params.lookahead == 1;
   const bool reuse = s.params.reuse_flow && s.has_last &&
-                     same_pixels(in.neighbour_a, s.last_centre) &&
-                     same_pixels(in.centre, s.last_neighbour_b);
+                     (centred ? same_pixels(in.neighbour_a, s.last_centre) &&
+                                    same_pixels(in.centre, s.last_neighbour)
+                              : same_pixels(in.neighbour_a, s.last_centre) &&
+                                    same_pixels(in.neighbour_b, s.last_neighbour));
   timings.dis_fields = reuse ? 1 : 2;
   // The field to the previous frame and its steps up to the fusion, when prepare_next made them.
-  const bool prepared = std::exchange(s.next_prepared, false) && reuse;
+  const bool prepared = std::exchange(s.next_prepared, false) && reuse && centred;
   // A flow Mat of the right size is taken by DIS as a candidate initial flow; zero what DIS
   // writes so that frame t's result depends on its window only, not on the previous call.
-  if (!reuse) zero(s.flow_a);  // otherwise invert_flow writes every pixel
-  zero(s.flow_b);
-  if (reuse) {
+  if (!reuse || !centred) zero(s.flow_a);  // otherwise invert_flow writes every pixel
+  if (!reuse || centred) zero(s.flow_b);   // otherwise compose_flow does
+  const auto view_of = [](const cv::Mat& m) { return as_view<float>(m); };
+  if (reuse && centred) {
     s.dis->calc(centre, continuous(in.neighbour_b, s.neighbour_copy), s.flow_b);
-    if (!prepared)
-      invert_flow(as_view<float>(static_cast<const cv::Mat&>(s.last_b)), s.inversion,
-                  as_view<float>(s.flow_a));
+    if (!prepared) invert_flow(view_of(s.last_field), s.inversion, as_view<float>(s.flow_a));
+  } else if (reuse) {
+    s.dis->calc(centre, continuous(in.neighbour_a, s.neighbour_copy), s.flow_a);
+    compose_flow(view_of(s.flow_a), view_of(s.last_field), as_view<float>(s.flow_b));
   } else if (s.field_b) {
     const cv::Mat neighbour_a = continuous(in.neighbour_a, s.neighbour_copy);
     const cv::Mat neighbour_b = continuous(in.neighbour_b, s.neighbour_b_copy);
@@ -243,14 +250,15 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
   });
   timings.fusion_ms = t.lap_ms();
 
-  if (s.params.reuse_flow && s.params.lookahead == 1) {
+  if (s.params.reuse_flow) {
     // Kept for the next frame: the field and the two images it joins (swapped, not copied, so
     // the next frame's DIS writes into the buffer this one read).
-    std::swap(s.flow_b, s.last_b);
+    std::swap(centred ? s.flow_b : s.flow_a, s.last_field);
+    const ImageView<const std::uint8_t> neighbour = centred ? in.neighbour_b : in.neighbour_a;
     s.last_centre.resize(cw, ch);
     s.last_centre.copy_from(in.centre);
-    s.last_neighbour_b.resize(cw, ch);
-    s.last_neighbour_b.copy_from(in.neighbour_b);
+    s.last_neighbour.resize(cw, ch);
+    s.last_neighbour.copy_from(neighbour);
     s.has_last = true;
   }
   const int box = s.params.box_size;

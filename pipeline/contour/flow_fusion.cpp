@@ -72,6 +72,35 @@ void fuse_amplitude_rows(ImageView<const float> amplitude_a, ImageView<const flo
   }
 }
 
+void compose_flow(ImageView<const float> near, ImageView<const float> onward,
+                  ImageView<float> composed) {
+  assert(near.channels == 2 && onward.channels == 2 && composed.channels == 2 &&
+         onward.same_size(near) && composed.same_size(near));
+  const int w = near.width, h = near.height;
+  const float x_max = static_cast<float>(w - 1), y_max = static_cast<float>(h - 1);
+  for (int y = 0; y < h; ++y) {
+    const float* n = near.row(y);
+    float* c = composed.row(y);
+    for (int x = 0; x < w; ++x) {
+      // Clamped first, so that past the edge the border's value is taken (and a NaN goes to 0).
+      float fx = static_cast<float>(x) + n[2 * x];
+      float fy = static_cast<float>(y) + n[2 * x + 1];
+      fx = fx >= 0.0f ? (fx <= x_max ? fx : x_max) : 0.0f;
+      fy = fy >= 0.0f ? (fy <= y_max ? fy : y_max) : 0.0f;
+      const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+      const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+      const float ax = fx - static_cast<float>(x0), ay = fy - static_cast<float>(y0);
+      const float* top = onward.row(y0);
+      const float* bottom = onward.row(y1);
+      for (int k = 0; k < 2; ++k) {
+        const float upper = top[2 * x0 + k] + ax * (top[2 * x1 + k] - top[2 * x0 + k]);
+        const float lower = bottom[2 * x0 + k] + ax * (bottom[2 * x1 + k] - bottom[2 * x0 + k]);
+        c[2 * x + k] = n[2 * x + k] + upper + ay * (lower - upper);
+      }
+    }
+  }
+}
+
 void invert_flow(ImageView<const float> forward, FlowInversionScratch& scratch,
                  ImageView<float> backward) {
   assert(forward.channels == 2 && backward.channels == 2 && backward.same_size(forward));

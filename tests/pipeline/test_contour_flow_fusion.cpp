@@ -146,6 +146,55 @@ TEST(ContourFlowFusion, InvertedFlowRoundsSubPixelMotionAndFillsWhatNothingReach
     for (int x = 0; x < kW; ++x) ASSERT_EQ(backward.at(x, y, 0), 0.0f);
 }
 
+// A pixel follows the near field, then the onward field where it lands: the object's pixels
+// (3 px right) meet the onward field's object (2 px right, where the object went), the still
+// pixels the onward field where they are.
+TEST(ContourFlowFusion, ComposedFlowFollowsBothFieldsOneAfterTheOther) {
+  const Image<float> near = object_flow(3.0f);
+  Image<float> onward(kW, kH, 2), composed(kW, kH, 2);
+  onward.fill(0.0f);
+  for (int y = 0; y < kH; ++y)
+    for (int x = kObjBegin + 3; x < kObjEnd + 3; ++x) onward.at(x, y, 0) = 2.0f;
+  compose_flow(near.cview(), onward.cview(), composed.view());
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const bool object = x >= kObjBegin && x < kObjEnd;
+      const bool under_onward_object = x >= kObjBegin + 3 && x < kObjEnd + 3;
+      EXPECT_EQ(composed.at(x, y, 0), object                ? 5.0f
+                                      : under_onward_object ? 2.0f
+                                                            : 0.0f)
+          << x << "," << y;
+      EXPECT_EQ(composed.at(x, y, 1), 0.0f) << x << "," << y;
+    }
+}
+
+TEST(ContourFlowFusion, ComposedFlowSamplesBilinearlyAndTakesTheBorderPastTheEdge) {
+  Image<float> near(kW, kH, 2), onward(kW, kH, 2), composed(kW, kH, 2);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      onward.at(x, y, 0) = static_cast<float>(x);  // a ramp in each direction
+      onward.at(x, y, 1) = static_cast<float>(10 * y);
+    }
+  near.fill(0.0f);
+  near.at(4, 2, 0) = 0.25f;  // lands at (4.25, 2.5)
+  near.at(4, 2, 1) = 0.5f;
+  near.at(1, 1, 0) = -5.0f;  // past the left and top edges: the corner's value
+  near.at(1, 1, 1) = -5.0f;
+  near.at(kW - 2, kH - 2, 0) = 9.0f;  // past the right and bottom edges
+  near.at(kW - 2, kH - 2, 1) = 9.0f;
+  near.at(6, 3, 0) = std::numeric_limits<float>::quiet_NaN();  // no number: the column 0
+  compose_flow(near.cview(), onward.cview(), composed.view());
+  EXPECT_FLOAT_EQ(composed.at(4, 2, 0), 0.25f + 4.25f);
+  EXPECT_FLOAT_EQ(composed.at(4, 2, 1), 0.5f + 25.0f);
+  EXPECT_FLOAT_EQ(composed.at(1, 1, 0), -5.0f + 0.0f);
+  EXPECT_FLOAT_EQ(composed.at(1, 1, 1), -5.0f + 0.0f);
+  EXPECT_FLOAT_EQ(composed.at(kW - 2, kH - 2, 0), 9.0f + static_cast<float>(kW - 1));
+  EXPECT_FLOAT_EQ(composed.at(kW - 2, kH - 2, 1), 9.0f + static_cast<float>(10 * (kH - 1)));
+  EXPECT_FLOAT_EQ(composed.at(6, 3, 1), 30.0f);
+  EXPECT_FLOAT_EQ(composed.at(0, 0, 0), 0.0f);  // a still pixel takes the onward field's own
+  EXPECT_FLOAT_EQ(composed.at(7, 3, 0), 7.0f);
+}
+
 TEST(ContourFlowFusion, NormaliseDividesByTheMaximumOrTheFloor) {
   Image<float> v(3, 1);
   v.at(0, 0) = 0;

@@ -23,9 +23,10 @@ struct ContourParams {
   // The two flow fields (t -> t-1, t -> t+1) on two threads at once: "on", "off", or "auto" = on
   // where at least four CPUs are usable. Same output either way.
   std::string parallel_flow = "auto";
-  // With lookahead 1 frame t's field t -> t-1 is the previous frame's field t-1 -> t inverted
-  // (invert_flow) when that frame was computed with the same two images, so DIS runs once per
-  // frame instead of twice.
+  // DIS runs once per frame instead of twice where the previous frame's window shares two images
+  // with this one: with lookahead 1 frame t's field t -> t-1 is the previous frame's field
+  // t-1 -> t inverted (invert_flow); with lookahead 0 its field t -> t-2 is the fresh t -> t-1
+  // followed by the previous frame's t-1 -> t-2 (compose_flow).
   bool reuse_flow = true;
   // Threads that share the flow cue's row-wise steps after DIS (amplitudes, projection test,
   // fusion, box filter, normalisation), the stage's own included (RowTeam::threads_for: 0 =

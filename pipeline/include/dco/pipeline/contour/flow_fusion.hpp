@@ -58,6 +58,14 @@ struct FlowInversionScratch {
 void invert_flow(ImageView<const float> forward, FlowInversionScratch& scratch,
                  ImageView<float> backward);
 
+// The field centre -> far from `near` (centre -> neighbour) and `onward` (neighbour -> far): each
+// pixel p goes to p + near(p) in the neighbour and on by `onward` there, sampled bilinearly (the
+// border's value past the edge): composed(p) = near(p) + onward(p + near(p)). All 2-channel fields
+// of one size; `composed` may not alias either input. Our own loop, since cv::remap allocates on
+// every call.
+void compose_flow(ImageView<const float> near, ImageView<const float> onward,
+                  ImageView<float> composed);
+
 // Divides every value by max(largest value, floor) so the result lies in [0, 1]; returns that
 // divisor. An all-zero image (with floor 0) is left as it is and 0 is returned.
 float normalise_by_max(ImageView<float> values, float floor);
