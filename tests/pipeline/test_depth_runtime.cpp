@@ -568,6 +568,9 @@ TEST(DepthRuntime, AFrameLateAtTheEntryGetsNoDepthButStaysItsNeighboursFlowFrame
     SCOPED_TRACE("lookahead " + std::to_string(lookahead) + ", " + std::to_string(threads) +
                  " thread(s)");
     s.params.contour.lookahead = lookahead;
+    // Each frame's flow cue from its own two DIS runs, as offline_window makes it: with reuse a
+    // window after an on-time one would carry that one's field on.
+    s.params.contour.reuse_flow = false;
     RuntimeParams rp;
     rp.threads = threads;
     rp.entry_deadline_ms = 5;
