@@ -84,13 +84,7 @@ class CpuContourExtractor final : public ContourExtractor {
   bool prepare_next() override { return params_.use_flow && flow_cue_.prepare_next(); }
 
   void flow_cue(const ContourInputs& in, Image<float>& out, ContourTimings& timings) override {
-    check_flow_window(params_, in);
-    flow_cue_.check_size(in.centre);
-    out.resize(in.centre.width, in.centre.height);
-    timings = {};
-    Stopwatch t;
-    flow_cue_.compute(in, out.view(), timings, t);
-    timings.total_ms = t.total_ms();
+    flow_cue_.compute_alone(in, out, timings);
   }
 
  private:

@@ -171,6 +171,16 @@ void FlowCue::check_size(ImageView<const std::uint8_t> centre) const {
                 "' preset (use a larger internal resolution, another preset or use_flow=false)");
 }
 
+void FlowCue::compute_alone(const ContourInputs& in, Image<float>& out, ContourTimings& timings) {
+  check_flow_window(s_->params, in);
+  check_size(in.centre);
+  out.resize(in.centre.width, in.centre.height);
+  timings = {};
+  Stopwatch t;
+  compute(in, out.view(), timings, t);
+  timings.total_ms = t.total_ms();
+}
+
 void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimings& timings,
                       Stopwatch& t) {
   State& s = *s_;

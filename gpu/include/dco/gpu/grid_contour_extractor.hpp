@@ -125,13 +125,7 @@ class GridContourExtractor final : public contour::ContourExtractor {
   // The flow cue is the CPU's (DIS and its fusion): the same steps as the CPU stage's.
   void flow_cue(const contour::ContourInputs& in, Image<float>& out,
                 contour::ContourTimings& timings) override {
-    contour::check_flow_window(params_, in);
-    flow_cue_.check_size(in.centre);
-    out.resize(in.centre.width, in.centre.height);
-    timings = {};
-    Stopwatch t;
-    flow_cue_.compute(in, out.view(), timings, t);
-    timings.total_ms = t.total_ms();
+    flow_cue_.compute_alone(in, out, timings);
   }
 
  private:

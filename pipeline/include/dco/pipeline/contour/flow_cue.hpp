@@ -24,6 +24,9 @@ class FlowCue {
   // M_fuse from the flow into `dst` (the centre's size); fills the flow steps of `timings`.
   void compute(const ContourInputs& in, ImageView<float> dst, ContourTimings& timings,
                Stopwatch& t);
+  // The same for a window alone (ContourExtractor::flow_cue): checks it (check_flow_window, the
+  // frame size), sizes `out`, and gives every step's time and their total in `timings`.
+  void compute_alone(const ContourInputs& in, Image<float>& out, ContourTimings& timings);
   // With reuse_flow and lookahead 1: the steps of the next call's field to the previous frame
   // that this call's results allow (this call's field turned round, its speed, amplitude and
   // projection contrast), done now. The next call takes them if its window is the one they were
