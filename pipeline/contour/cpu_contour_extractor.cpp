@@ -1,4 +1,3 @@
-#include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 #include "dco/pipeline/contour/flow_cue.hpp"
@@ -26,9 +25,7 @@ class CpuContourExtractor final : public ContourExtractor {
   }
 
   void compute(const ContourInputs& in, ContourOutputs& out) override {
-    check_contour_input(in);
-    if (!in.flow_cue.empty() && !params_.use_flow)
-      throw Error("contour: a flow cue was given with use_flow off");
+    check_contour_input(params_, in);
     const bool flow = params_.use_flow && !in.neighbour_a.empty() && !in.neighbour_b.empty();
     const bool given_flow = !in.flow_cue.empty();
     if (flow && !given_flow) flow_cue_.check_size(in.centre);

@@ -74,7 +74,7 @@ void zero(cv::Mat& m) {
 
 }  // namespace
 
-void check_contour_input(const ContourInputs& in) {
+void check_contour_input(const ContourParams& params, const ContourInputs& in) {
   if (in.image.empty() || in.image.channels != 1)
     throw Error("contour: the input image must be a non-empty grey image, got " +
                 size_text(in.image));
@@ -89,6 +89,8 @@ void check_contour_input(const ContourInputs& in) {
   check_optional(in.disparity, in.centre, "disparity");
   check_optional(in.stereo_cue, in.centre, "stereo_cue");
   check_optional(in.flow_cue, in.centre, "flow_cue");
+  if (!in.flow_cue.empty() && !params.use_flow)
+    throw Error("contour: a flow cue was given with use_flow off");
   if (!in.flow_cue.empty() && (in.neighbour_a.empty() || in.neighbour_b.empty()))
     throw Error("contour: a flow cue was given for a window without both neighbours");
   if (in.m_intensity.empty() != in.direction.empty())
@@ -196,11 +198,11 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
   // lookahead 1 the previous frame's field t-1 -> t is this frame's t -> t-1 turned round; with
   // lookahead 0 the previous frame's t-1 -> t-2 carries this frame's fresh t -> t-1 on to t-2.
   const bool centred = s.params.lookahead == 1;
+  // The last call's neighbour is this window's centre (lookahead 1) or its neighbour_b (0).
+  const ImageView<const std::uint8_t> last_neighbour_now = centred ? in.centre : in.neighbour_b;
   const bool reuse = s.params.reuse_flow && s.has_last &&
-                     (centred ? same_pixels(in.neighbour_a, s.last_centre) &&
-                                    same_pixels(in.centre, s.last_neighbour)
-                              : same_pixels(in.neighbour_a, s.last_centre) &&
-                                    same_pixels(in.neighbour_b, s.last_neighbour));
+                     same_pixels(in.neighbour_a, s.last_centre) &&
+                     same_pixels(last_neighbour_now, s.last_neighbour);
   timings.dis_fields = reuse ? 1 : 2;
   // The field to the previous frame and its steps up to the fusion, when prepare_next made them.
   const bool prepared = std::exchange(s.next_prepared, false) && reuse && centred;

@@ -67,6 +67,15 @@ RuntimeParams with_stage_threads(RuntimeParams params) {
 
 }  // namespace
 
+double stereo_stage_ms(const FrameTimes& t) {
+  return ms_between(t.stereo_start + t.stereo_blocked, t.stereo_end);
+}
+
+double contour_stage_ms(const FrameTimes& t) {
+  return ms_between(t.contour_start, t.contour_end) +
+         std::chrono::duration<double, std::milli>(t.contour_early).count();
+}
+
 DepthRuntime::DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
                            ResultCallback on_result, StageHook hook, const StageFactories& stages)
     : pipeline_(pipeline),
@@ -417,16 +426,16 @@ void DepthRuntime::contour_receive(std::stop_token stop, int slot) {
     // stereo: made here, the contour step after the stereo is left the short part.
     if (pipeline_.contour.lookahead == 0 && pipeline_.contour.use_flow && w.neighbour_b >= 0 &&
         params_.threads > 1) {
-      const auto slot_of = [this](int frame) -> StereoSlot& {
-        return slots_[static_cast<std::size_t>(window_slot(frame))].slot;
+      const auto entry_of = [this](int frame) -> SlotEntry& {
+        return slots_[static_cast<std::size_t>(window_slot(frame))];
       };
+      SlotEntry& centre = entry_of(w.centre);
       try {
-        if (hook_) hook_(Stage::kFlowCue, slot_of(w.centre).index);
+        if (hook_) hook_(Stage::kFlowCue, centre.slot.index);
         const Clock::time_point start = Clock::now();
-        flow_cue_frame(*contour_, slot_of(w.centre), slot_of(w.neighbour_a),
-                       slot_of(w.neighbour_b));
-        slots_[static_cast<std::size_t>(window_slot(w.centre))].times.contour_early =
-            Clock::now() - start;
+        flow_cue_frame(*contour_, centre.slot, entry_of(w.neighbour_a).slot,
+                       entry_of(w.neighbour_b).slot);
+        centre.times.contour_early = Clock::now() - start;
       } catch (...) {
         fail(std::current_exception());
         return;
@@ -634,9 +643,8 @@ void DepthRuntime::deliver(int result, bool early) {
   const FrameTimes& t = r.times;
   latency_.record(ms_between(t.capture, t.release));
   ready_.record(ms_between(t.capture, t.densify_end));
-  const double stereo_ms = ms_between(t.stereo_start + t.stereo_blocked, t.stereo_end);
-  const double contour_ms = ms_between(t.contour_start, t.contour_end) +
-                            std::chrono::duration<double, std::milli>(t.contour_early).count();
+  const double stereo_ms = stereo_stage_ms(t);
+  const double contour_ms = contour_stage_ms(t);
   const double densify_ms = ms_between(t.densify_start, t.densify_end);
   stereo_ms_.record(stereo_ms);
   contour_ms_.record(contour_ms);

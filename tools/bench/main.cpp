@@ -450,9 +450,8 @@ PassFigures figures_of(const std::vector<rt::FrameTimes>& times) {
   for (const rt::FrameTimes& t : times) {
     latency.record(ms_between(t.capture, t.release));
     ready.record(ms_between(t.capture, t.densify_end));
-    stereo.record(ms_between(t.stereo_start + t.stereo_blocked, t.stereo_end));
-    contour.record(ms_between(t.contour_start, t.contour_end) +
-                   std::chrono::duration<double, std::milli>(t.contour_early).count());
+    stereo.record(rt::stereo_stage_ms(t));
+    contour.record(rt::contour_stage_ms(t));
     densify.record(ms_between(t.densify_start, t.densify_end));
   }
   PassFigures f{summary_of(latency), summary_of(ready), summary_of(stereo), summary_of(contour),

@@ -4,7 +4,6 @@
 #include <cstring>
 #include <utility>
 
-#include "dco/core/error.hpp"
 #include "dco/core/image.hpp"
 #include "dco/core/stopwatch.hpp"
 #include "dco/gpu/contour_passes.hpp"
@@ -36,9 +35,7 @@ class GridContourExtractor final : public contour::ContourExtractor {
   }
 
   void compute(const contour::ContourInputs& in, contour::ContourOutputs& out) override {
-    contour::check_contour_input(in);
-    if (!in.flow_cue.empty() && !params_.use_flow)
-      throw Error("contour: a flow cue was given with use_flow off");
+    contour::check_contour_input(params_, in);
     const bool flow = params_.use_flow && !in.neighbour_a.empty() && !in.neighbour_b.empty();
     const bool given_flow = !in.flow_cue.empty();
     if (flow && !given_flow) flow_cue_.check_size(in.centre);

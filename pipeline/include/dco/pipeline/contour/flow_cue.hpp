@@ -39,8 +39,9 @@ class FlowCue {
   std::unique_ptr<State> s_;
 };
 
-// Throws dco::Error unless the inputs are consistent (see ContourInputs).
-void check_contour_input(const ContourInputs& in);
+// Throws dco::Error unless the inputs are consistent with each other and with `params` (see
+// ContourInputs).
+void check_contour_input(const ContourParams& params, const ContourInputs& in);
 // Throws dco::Error unless `in` is a window the flow cue can be made of alone
 // (ContourExtractor::flow_cue): use_flow on, a grey centre and both neighbours of its size.
 void check_flow_window(const ContourParams& params, const ContourInputs& in);

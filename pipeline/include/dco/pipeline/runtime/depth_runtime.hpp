@@ -45,6 +45,11 @@ struct FrameTimes {
   Clock::time_point release;  // handed to the result callback
 };
 
+// The stages' own times of a frame, in ms, as RuntimeStats records them: the stereo stage without
+// its wait to hand the frame on, the contour stage with the flow cue it made ahead.
+double stereo_stage_ms(const FrameTimes& t);
+double contour_stage_ms(const FrameTimes& t);
+
 struct DurationSummary {
   long count = 0;
   double p50_ms = 0, p99_ms = 0, mean_ms = 0, max_ms = 0;
