@@ -1289,17 +1289,18 @@ TEST(DepthRuntime, WarmFramesDoNotAllocate) {
     DepthRuntime runtime(s.params, rp,
                          [&](const DepthResult&, const FrameTimes&) { published.fetch_add(1); });
     runtime.start();
-    // Three frames in, two published: the first result gave every pooled result its room, and
-    // frame 0's slot, freed when frame 2 arrived, gave every free slot its room. Most entries
-    // of both pools have not been used yet.
-    for (int i = 0; i < 3; ++i) {
+    // Four frames in and published: the first result gave every pooled result its room, and
+    // frame 0's slot, freed when frame 2 was received, gave every free slot its room. That
+    // happened before frame 3 was received, so before its result; a wait of fixed length
+    // instead was too short for a debug build. Most entries of both pools have not been used yet.
+    constexpr int kWarm = 4;
+    for (int i = 0; i < kWarm; ++i) {
       const auto& f = s.frames[static_cast<std::size_t>(i)];
       runtime.push(f.left.cview(), f.right.cview());
     }
-    while (published.load() < 2) std::this_thread::sleep_for(1ms);
-    std::this_thread::sleep_for(20ms);  // the slot is freed just after frame 1 is handed on
+    while (published.load() < kWarm) std::this_thread::sleep_for(1ms);
     testing::start_counting_allocations();
-    for (int i = 3; i < 24; ++i) {
+    for (int i = kWarm; i < 24; ++i) {
       const auto& f = s.frames[static_cast<std::size_t>(i)];
       runtime.push(f.left.cview(), f.right.cview());
     }
