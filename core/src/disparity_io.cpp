@@ -126,29 +126,32 @@ Image<float> read_pfm(const std::filesystem::path& path) {
   } catch (const std::exception&) {
     throw Error(quoted(path) + ": malformed PFM header");
   }
-  if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16 || scale == 0 ||
+  if (width <= 0 || height <= 0 || width > kMaxImageSide || height > kMaxImageSide || scale == 0 ||
       !std::isfinite(scale))
     throw Error(quoted(path) + ": bad PFM header (size " + std::to_string(width) + "x" +
                 std::to_string(height) + ", scale " + std::to_string(scale) + ")");
-  // The single whitespace byte that ends the header, then the data, which must be there before
-  // it is allocated: a 20-byte header can ask for gigabytes.
-  const int end_of_header = in.get();
+  // The header ends in whitespace (one byte by the format, but writers add a space or a CR), and
+  // the data fills the rest of the file exactly: anything else would be read shifted. It must be
+  // there before it is allocated: a 20-byte header can ask for gigabytes.
+  constexpr std::streamoff kMostHeaderPadding = 8;
   const std::size_t data_bytes =
       static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * channels * sizeof(float);
-  const std::streampos data_start = in.tellg();
+  const std::streampos header_end = in.tellg();
   in.seekg(0, std::ios::end);
-  std::streamoff available = in.tellg() - data_start;
-  in.seekg(data_start);
-  // A header written with CRLF: the LF belongs to it, as the size shows.
-  if (end_of_header == '\r' && in.peek() == '\n' &&
-      available == static_cast<std::streamoff>(data_bytes) + 1) {
-    in.get();
-    --available;
-  }
-  if (!in || available < static_cast<std::streamoff>(data_bytes))
+  const std::streamoff after_header = in.tellg() - header_end;
+  in.seekg(header_end);
+  const std::streamoff padding = after_header - static_cast<std::streamoff>(data_bytes);
+  if (!in || padding < 1)
     throw Error(quoted(path) + ": PFM data is truncated (" +
-                std::to_string(std::max<std::streamoff>(available, 0)) + " of " +
+                std::to_string(std::max<std::streamoff>(after_header - 1, 0)) + " of " +
                 std::to_string(data_bytes) + " bytes)");
+  for (std::streamoff i = 0; i < std::min(padding, kMostHeaderPadding + 1); ++i) {
+    const int c = in.get();
+    if (i == kMostHeaderPadding || (c != ' ' && c != '\t' && c != '\r' && c != '\n'))
+      throw Error(quoted(path) + ": PFM holds " + std::to_string(padding - 1) +
+                  " bytes more than its " + std::to_string(width) + "x" + std::to_string(height) +
+                  " data and the byte that ends its header");
+  }
   const bool little = scale < 0;
   const bool swap = little != (std::endian::native == std::endian::little);
 

@@ -1,9 +1,13 @@
 #include "dco/core/calibration.hpp"
 
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <regex>
+#include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -191,6 +195,43 @@ TEST(Calibration, LoadsKittiCamToCam) {
   EXPECT_NEAR(c.translation[2], -0.006234079, 2e-6);
   EXPECT_NEAR(c.rotation[1], 0.006935632, 2e-6);
   EXPECT_NEAR(c.rotation[5], 0.006919492, 2e-6);
+}
+
+// KITTI's published colour pairs sit a few millimetres off the line between their centres: the
+// last columns of P_rect_02 / P_rect_03 carry f ty + cy tz and tz, as here (sizes of the
+// 2011_09_26 drive's file).
+TEST(Calibration, KittiColourPairSlightlyOffItsBaselineLoads) {
+  test::TempDir dir;
+  std::string text = test::read_file(kKitti);
+  // Sets numbers i (0-based) of a "key: numbers" line.
+  const auto set_numbers = [&text](const std::string& key,
+                                   const std::vector<std::pair<int, std::string>>& values) {
+    const std::size_t begin = text.find(key + ": ") + key.size() + 2;
+    const std::size_t end = text.find('\n', begin);
+    std::istringstream in(text.substr(begin, end - begin));
+    std::vector<std::string> numbers{std::istream_iterator<std::string>(in), {}};
+    for (const auto& [i, v] : values) numbers[static_cast<std::size_t>(i)] = v;
+    std::string line;
+    for (const std::string& n : numbers) line += (line.empty() ? "" : " ") + n;
+    text.replace(begin, end - begin, line);
+  };
+  set_numbers("P_rect_02", {{7, "2.163791e-01"}, {11, "2.745884e-03"}});
+  set_numbers("P_rect_03", {{7, "2.199936e+00"}, {11, "2.729905e-03"}});
+  ASSERT_NE(text.find("2.729905e-03"), std::string::npos);
+  test::write_file(dir / "cam_to_cam.txt", text);
+  const StereoCalibration c = load_calibration(dir / "cam_to_cam.txt");
+  const double f = 690.6366, cx = 596.5517;
+  EXPECT_NEAR(c.rectified.baseline_m,
+              ((41.4382 - cx * 2.745884e-3) - (-326.6791 - cx * 2.729905e-3)) / f, 1e-12);
+
+  // The same pair 5 % of its baseline apart vertically is not side by side.
+  const std::string apart =
+      std::regex_replace(text, std::regex("2\\.199936e\\+00"), "1.860000e+01");
+  const std::string msg = load_error(dir, "ki_apart.txt", apart);
+  EXPECT_NE(msg.find("ki_apart.txt:19: P_rect_02 and P_rect_03 place the cameras apart "
+                     "vertically or in depth by more than 2 % of their baseline"),
+            std::string::npos)
+      << msg;
 }
 
 TEST(Calibration, KittiExtrinsicsFollowFromRectificationAlone) {

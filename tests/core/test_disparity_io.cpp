@@ -133,6 +133,36 @@ TEST(Pfm, ReadsAHeaderEndedByCrLf) {
   expect_equal(read_pfm(dir / "crlf.pfm"), img);
 }
 
+// Whitespace a writer put after the scale belongs to the header; a byte past the data means the
+// data cannot be placed, and is refused rather than read shifted.
+TEST(Pfm, HeaderPaddingIsSkippedAndExtraBytesAreRefused) {
+  test::TempDir dir;
+  const Image<float> img = ramp(3, 2, 1);
+  write_pfm(dir / "plain.pfm", img.cview());
+  const std::string bytes = test::read_file(dir / "plain.pfm");
+  const std::size_t header = bytes.size() - 3 * 2 * sizeof(float);
+  ASSERT_EQ(bytes[header - 1], '\n');
+  const std::string head = bytes.substr(0, header - 1), data = bytes.substr(header);
+
+  test::write_file(dir / "space.pfm", head + " \n" + data);
+  expect_equal(read_pfm(dir / "space.pfm"), img);
+  test::write_file(dir / "crlf_pad.pfm", head + "\r\n " + data);
+  expect_equal(read_pfm(dir / "crlf_pad.pfm"), img);
+
+  const auto refused = [&](const std::string& name, const std::string& file) {
+    test::write_file(dir / name, file);
+    try {
+      read_pfm(dir / name);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(name + "': PFM holds"), std::string::npos) << e.what();
+    }
+  };
+  refused("tail.pfm", bytes + "x");
+  refused("tail_newline.pfm", head + "\n" + data + std::string(4, '\0'));
+  refused("padding.pfm", head + std::string(12, ' ') + data);
+}
+
 TEST(Pfm, ReadsMiddleburyGroundTruth) {
   const auto dir = test::data_dir() / "middlebury2014" / "Motorcycle";
   const Image<float> gt = read_pfm(dir / "disp0GT.pfm");

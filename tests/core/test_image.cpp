@@ -1,6 +1,7 @@
 #include "dco/core/image.hpp"
 
 #include <cstdint>
+#include <new>
 
 #include <gtest/gtest.h>
 
@@ -46,6 +47,26 @@ TEST(Image, ResizeReusesStorageWhenItFits) {
   EXPECT_TRUE(img.resize(200, 100));
   EXPECT_EQ(img.width(), 200);
   EXPECT_TRUE(aligned(img.data()));
+}
+
+TEST(Image, AFailedResizeLeavesTheImageAsItWas) {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  GTEST_SKIP() << "the sanitizers' allocators abort on a request this large";
+#else
+  Image<float> img(10, 10);
+  img.fill(3.0f);
+  const float* const data = img.data();
+  // 2^62 bytes: no machine has them, so aligned_alloc returns null.
+  EXPECT_THROW(img.resize(1 << 30, 1 << 30), std::bad_alloc);
+  EXPECT_EQ(img.data(), data);
+  EXPECT_EQ(img.width(), 10);
+  EXPECT_EQ(img.height(), 10);
+  EXPECT_EQ(img.at(9, 9), 3.0f);
+  EXPECT_FALSE(img.resize(5, 5));  // the old storage still serves a smaller size
+  EXPECT_EQ(img.data(), data);
+  img.fill(1.0f);
+  EXPECT_EQ(img.at(4, 4), 1.0f);
+#endif
 }
 
 TEST(Image, FillAndAt) {

@@ -100,9 +100,12 @@ class Image {
     const std::size_t bytes = padded * static_cast<std::size_t>(height);
     bool allocated = false;
     if (bytes > capacity_) {
+      // The new block first: when it cannot be had, the image stays as it was.
+      void* grown =
+          std::aligned_alloc(kAlignment, (bytes + kAlignment - 1) / kAlignment * kAlignment);
+      if (grown == nullptr) throw std::bad_alloc();
       std::free(storage_);
-      storage_ = std::aligned_alloc(kAlignment, (bytes + kAlignment - 1) / kAlignment * kAlignment);
-      if (storage_ == nullptr) throw std::bad_alloc();
+      storage_ = grown;
       capacity_ = bytes;
       allocated = true;
     }
