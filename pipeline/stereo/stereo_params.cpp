@@ -88,8 +88,9 @@ void register_params(ConfigSchema& s, StereoParams& p) {
 }
 
 void validate(const StereoParams& p) {
-  require(p.max_disparity >= 1,
-          "max_disparity must be at least 1, not " + std::to_string(p.max_disparity));
+  require(p.max_disparity >= 1 && p.max_disparity <= kMaxDisparityLimit,
+          "max_disparity must be in 1.." + std::to_string(kMaxDisparityLimit) + ", not " +
+              std::to_string(p.max_disparity));
   require(p.internal_resolution == "auto" || p.internal_resolution == "full" ||
               p.internal_resolution == "half",
           "internal_resolution must be auto, full or half, not '" + p.internal_resolution + "'");

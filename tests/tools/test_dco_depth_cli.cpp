@@ -216,6 +216,24 @@ TEST(DcoDepthCli, MaxDisparityAboveTheStagesLimitIsRefused) {
                1, "--max-disp 1200: value 1200 is outside [1, 1024]");
 }
 
+// A manifest's max_disp is held to the same limit as --max-disp.
+TEST(DcoDepthCli, ManifestMaxDisparityAboveTheStagesLimitIsRefused) {
+  TempDir dir;
+  const fs::path manifest = dir.path() / "wide.tsv";
+  {
+    std::ifstream in(kDataDir / "stereo_scenes.tsv");
+    std::ofstream out(manifest);
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("scene\t", 0) == 0) out << line << '\n';
+      if (line.rfind("middlebury2001/Tsukuba\t", 0) == 0)
+        out << line.substr(0, line.rfind('\t')) << "\t2000\n";
+    }
+  }
+  expect_error(run_depth(dir, {"--scenes", manifest.string(), "--data-root", kDataDir.string(),
+                               "--out-dir", (dir.path() / "pred").string()}),
+               1, "max_disparity must be in 1..1024, not 2000");
+}
+
 TEST(DcoDepthCli, MaxDisparityWiderThanTheImageIsRefused) {
   TempDir dir;
   expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",

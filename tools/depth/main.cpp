@@ -321,6 +321,7 @@ int run_batch(const Options& opt, dco::pipeline::PipelineParams params) {
   dco::pipeline::DepthResult result;
   for (const dco::tools::Scene& scene : scenes) {
     if (!opt.max_disp) params.stereo.max_disparity = scene.max_disp;
+    dco::pipeline::validate(params);
     dco::pipeline::DepthPipeline pipeline(params);
     const dco::Image<std::uint8_t> left = dco::load_image(scene.left);
     const dco::Image<std::uint8_t> right = dco::load_image(scene.right);

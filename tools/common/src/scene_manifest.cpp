@@ -105,7 +105,9 @@ Scene parse_row(const std::vector<std::string_view>& fields,
   if (field(kNoccMask) != "-") scene.nocc_mask = path(kNoccMask);
 
   scene.max_disp = parse_number<int>(field(kMaxDisp), "max_disp", where);
-  if (scene.max_disp <= 0) throw Error(fmt::format("{}: max_disp must be positive", where));
+  // No disparity exceeds an image's width.
+  if (scene.max_disp <= 0 || scene.max_disp > kMaxImageSide)
+    throw Error(fmt::format("{}: max_disp must be within 1..{}", where, kMaxImageSide));
   return scene;
 }
 
