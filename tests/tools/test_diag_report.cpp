@@ -269,6 +269,37 @@ TEST(LogDigest, HugeCountsSaturate) {
             std::string::npos);
 }
 
+// Channel names, device text and decode problems come from the log: the text report shows their
+// control characters as '?', so a forged log cannot send escape sequences to a terminal.
+TEST(LogSummary, TextFromTheLogReachesTheTerminalWithoutControlCharacters) {
+  std::ostringstream out;
+  const auto add = [&](const std::string& channel, std::vector<std::uint8_t> data) {
+    LcmLogEvent e;
+    e.number = 0;
+    e.timestamp_us = kStartUs;
+    e.channel = channel;
+    e.data = std::move(data);
+    drivers::write_lcm_log_event(out, e);
+  };
+  ::dco::device_status_t status{};
+  status.state = ::dco::device_status_t::STATE_ERROR;
+  status.device = "cam\x1b[2J";
+  status.error = "usb\r\nfake line";
+  add(ipc::channel::kStatus, lcm_bytes(status));
+  add("\x1b]0;title\x07", {1, 2, 3});
+  add(ipc::channel::kStats, {0x1b, 0x5b, 0x32, 0x4a});  // does not decode
+  std::istringstream in(out.str());
+  const LogDigest d = digest_log(in, "forged.log", DigestOptions{});
+  const std::string text = text_summary(d, summarize(d), "");
+  for (const char c : text)
+    EXPECT_TRUE(c == '\n' || (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f))
+        << "control character " << static_cast<int>(c) << " in:\n"
+        << text;
+  EXPECT_NE(text.find("cam?[2J"), std::string::npos) << text;
+  EXPECT_NE(text.find("usb??fake line"), std::string::npos) << text;
+  EXPECT_NE(text.find("?]0;title?"), std::string::npos) << text;
+}
+
 TEST(LogDigest, ALogCutAnywhereReportsWhatPrecedesTheCut) {
   const KnownLog known;
   const std::string whole = known.bytes();

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "dco/core/printable.hpp"
 #include "dco/tools/json.hpp"
 
 namespace dco::diag {
@@ -115,14 +116,16 @@ std::string text_summary(const LogDigest& d, const LogSummary& s, const std::str
       d.damage.empty() ? std::string("read to the end")
                        : fmt::format("DAMAGED, read {} of {} bytes", d.bytes, d.file_bytes));
   if (!d.damage.empty()) out += fmt::format("  damage    {}\n", d.damage);
+  // Text from the log is shown with its control characters as '?': a corrupt or forged log must
+  // not move the cursor or retitle the terminal that reads this.
   std::string channels;
   for (const auto& [name, tally] : d.channels)
-    channels += fmt::format("{}{} {}", channels.empty() ? "" : ", ", name, tally.events);
+    channels += fmt::format("{}{} {}", channels.empty() ? "" : ", ", printable(name), tally.events);
   out += fmt::format("  channels  {}\n", channels);
   for (const auto& [name, tally] : d.channels)
     if (tally.undecodable > 0)
-      out += fmt::format("  BAD       {}: {} messages do not decode; first: {}\n", name,
-                         tally.undecodable, tally.first_problem);
+      out += fmt::format("  BAD       {}: {} messages do not decode; first: {}\n", printable(name),
+                         tally.undecodable, printable(tally.first_problem));
   out += fmt::format(
       "  frames    {} published in {} session{}, {:.1f} fps; {} camera frames not published, {} "
       "announcements missing from the log\n",
@@ -149,9 +152,9 @@ std::string text_summary(const LogDigest& d, const LogSummary& s, const std::str
   }
   if (d.has_status)
     out += fmt::format("  device    {} ({}){}; {} state changes, {} faults, {} disconnects\n",
-                       d.last_status.device.empty() ? "?" : d.last_status.device,
+                       d.last_status.device.empty() ? "?" : printable(d.last_status.device),
                        device_state_name(d.last_status.state),
-                       d.last_status.error.empty() ? "" : ": " + d.last_status.error,
+                       d.last_status.error.empty() ? "" : ": " + printable(d.last_status.error),
                        s.state_changes, s.device_errors, s.disconnects);
   out += fmt::format("  messages  {} errors, {} warnings, {} info in DCO_LOG\n", s.log_errors,
                      s.log_warnings, d.log_by_level[1]);
