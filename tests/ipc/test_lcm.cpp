@@ -226,6 +226,9 @@ TEST(Publisher, PreviewIsSmallNearestDepthAndRateLimited) {
   for (int y = 0; y < 5; ++y)
     for (int x = 195; x < 200; ++x) depth.at(x, y) = std::numeric_limits<float>::quiet_NaN();
   depth.at(199, 89) = 100.0f;
+  // A far, finite depth (1e16 m: a disparity a hair above 0) is the farthest the preview holds.
+  for (int y = 85; y < 90; ++y)
+    for (int x = 0; x < 5; ++x) depth.at(x, y) = 1e16f;
   // 30 fps by capture time for one second: at 2 Hz that is a preview at 0 and 0.5 s.
   for (int i = 0; i < 30; ++i) {
     FrameMeta meta;
@@ -248,6 +251,7 @@ TEST(Publisher, PreviewIsSmallNearestDepthAndRateLimited) {
   EXPECT_EQ(p.depth_mm[1 * 40 + 1], 500);
   EXPECT_EQ(p.depth_mm[39], 0);               // nothing valid in that block
   EXPECT_EQ(p.depth_mm[17 * 40 + 39], 2000);  // nearest wins over the 100 m pixel
+  EXPECT_EQ(p.depth_mm[17 * 40], 32767);
   EXPECT_EQ(static_cast<std::uint64_t>(p.session_id), ring.session_id());
 }
 

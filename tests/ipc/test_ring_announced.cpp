@@ -80,6 +80,19 @@ TEST_F(Announcements, AcceptsTheFrameTheRingHolds) {
   EXPECT_EQ(read(writer_.session_id(), b.slot, b.index), DCO_OK);
 }
 
+// An announced frame counts as returned: wait_next waits for a newer one, as after latest.
+TEST_F(Announcements, WaitNextWaitsForAFrameNewerThanTheAnnouncedOne) {
+  publish(1);
+  const Announced a = publish(2);
+  ASSERT_EQ(read(writer_.session_id(), a.slot, a.index), DCO_OK) << dco_client_last_error();
+  dco_frame_view view;
+  dco_frame_view_init(&view);
+  EXPECT_EQ(dco_client_wait_next(client_, 50, &view), DCO_E_TIMEOUT);
+  const Announced b = publish(3);
+  ASSERT_EQ(dco_client_wait_next(client_, 1000, &view), DCO_OK) << dco_client_last_error();
+  EXPECT_EQ(view.info.publish_index, b.index);
+}
+
 TEST_F(Announcements, RejectsFramesTheRingNeverHeld) {
   const Announced a = publish(1);
   publish(2);

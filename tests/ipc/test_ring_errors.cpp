@@ -180,6 +180,9 @@ TEST_F(RingErrors, NotARegularFileOrASymlink) {
   EXPECT_EQ(open_path(dir_.path() / "dir.shm").status, DCO_E_PERMISSION);
   std::filesystem::create_symlink(writer_->path(), dir_.path() / "link.shm");
   EXPECT_EQ(open_path(dir_.path() / "link.shm").status, DCO_E_PERMISSION);
+  // A FIFO would block a plain open until a writer came: refused at once instead.
+  ASSERT_EQ(mkfifo((dir_.path() / "fifo.shm").c_str(), 0640), 0);
+  EXPECT_EQ(open_path(dir_.path() / "fifo.shm").status, DCO_E_PERMISSION);
 }
 
 TEST_F(RingErrors, GeometryMismatch) {

@@ -124,7 +124,8 @@ dco_status check_header(const Mapping& m, const Expectations& e, std::uint64_t f
 
 dco_status map_segment(const Expectations& e, Mapping& out) {
   Mapping m;
-  m.fd = open(e.path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  // O_NONBLOCK: a FIFO or device left at the path must not block the open; it is refused below.
+  m.fd = open(e.path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
   if (m.fd < 0) {
     const int err = errno;
     if (err == ENOENT) return fail(DCO_E_NO_SEGMENT, e.path + ": no depth ring (is dcod running?)");
@@ -327,6 +328,7 @@ struct dco_client {
                                              std::to_string(publish_index) +
                                              " was never written to slot " + std::to_string(slot));
       *view = taken;
+      if (held > last_index) last_index = held;  // wait_next then waits for a newer one
       return DCO_OK;
     }
     return fail(DCO_E_OVERTAKEN, expect.path + ": slot " + std::to_string(slot) +

@@ -34,7 +34,8 @@ std::int16_t block_depth_mm(ImageView<const float> depth, int x0, int y0, int fa
       if (row[x] > 0.0f && row[x] < nearest) nearest = row[x];
   }
   if (!std::isfinite(nearest)) return 0;
-  return static_cast<std::int16_t>(std::clamp(std::lround(nearest * 1000.0f), 1L, 32767L));
+  // Clamped before rounding: a far but finite depth (a tiny disparity) overflows a long in mm.
+  return static_cast<std::int16_t>(std::lround(std::clamp(nearest * 1000.0f, 1.0f, 32767.0f)));
 }
 
 }  // namespace
@@ -101,9 +102,11 @@ std::uint64_t DepthPublisher::write(ImageView<const float> depth,
 }
 
 template <class Message>
-void DepthPublisher::send(const char* channel, const Message& message) {
-  if (lcm_->publish(channel, &message) != 0)
-    throw Error(fmt::format("publisher: LCM publish on {} failed", channel));
+bool DepthPublisher::send(const char* channel, const Message& message) {
+  if (lcm_->publish(channel, &message) == 0) return true;
+  ++send_failures_;
+  last_failed_channel_ = channel;
+  return false;
 }
 
 void DepthPublisher::announce(std::uint64_t publish_index, std::uint32_t slot,
@@ -202,7 +205,8 @@ void DepthPublisher::publish_status(const DeviceStatus& status, std::int64_t now
 }
 
 void DepthPublisher::publish_raw(const ::dco::raw_stereo_t& message) {
-  send(channel::kRaw, message);
+  if (!send(channel::kRaw, message))
+    throw Error(fmt::format("publisher: LCM publish on {} failed", channel::kRaw));
 }
 
 void DepthPublisher::log(LogLevel level, std::string_view source, std::string_view text,

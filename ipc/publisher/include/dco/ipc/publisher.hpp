@@ -59,6 +59,10 @@ class DepthPublisher {
   DepthPublisher& operator=(const DepthPublisher&) = delete;
   ~DepthPublisher();
 
+  // LCM is best effort beside the ring: a message LCM cannot send (a network interface gone,
+  // a full socket buffer) is counted in send_failures() and the call goes on, so depth keeps
+  // reaching the ring's readers. Only publish_raw throws, for its recorder's own accounting.
+  //
   // Zero copy: fill the slot begin_write() returns, then publish() it. publish stamps the slot
   // (RingWriter::publish), announces it and sends a preview when one is due; it returns the
   // publish index.
@@ -74,13 +78,17 @@ class DepthPublisher {
   void publish_stats(const pipeline::runtime::RuntimeStats& stats, std::int64_t now_ns);
   void publish_status(const DeviceStatus& status, std::int64_t now_ns);
   void log(LogLevel level, std::string_view source, std::string_view text, std::int64_t now_ns);
-  // DCO_RAW: a recorded raw pair (the daemon's raw recorder builds it).
+  // DCO_RAW: a recorded raw pair (the daemon's raw recorder builds it). Throws dco::Error when
+  // LCM cannot send it.
   void publish_raw(const ::dco::raw_stereo_t& message);
 
   // Changes the DCO_DEPTH_PREVIEW rate (a configuration reload); throws dco::Error when < 0.
   void set_preview_hz(double hz);
 
   std::uint64_t previews_sent() const { return previews_sent_; }
+  // Messages LCM could not send (DCO_RAW's included), and the channel of the last one.
+  std::uint64_t send_failures() const { return send_failures_; }
+  const char* last_failed_channel() const { return last_failed_channel_; }
   lcm::LCM& lcm() { return *lcm_; }
 
  private:
@@ -90,7 +98,7 @@ class DepthPublisher {
   void send_preview(std::uint64_t publish_index, const FrameMeta& meta,
                     ImageView<const float> depth);
   template <class Message>
-  void send(const char* channel, const Message& message);
+  bool send(const char* channel, const Message& message);
 
   RingWriter& ring_;
   PublisherOptions options_;
@@ -100,6 +108,8 @@ class DepthPublisher {
   bool preview_sent_ = false;
   std::int64_t last_preview_capture_ns_ = 0;
   std::uint64_t previews_sent_ = 0;
+  std::uint64_t send_failures_ = 0;
+  const char* last_failed_channel_ = "";
   std::int64_t stats_since_ns_ = 0;
   long stats_pushed_ = 0, stats_published_ = 0;
 };
