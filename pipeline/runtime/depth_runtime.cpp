@@ -500,8 +500,12 @@ void DepthRuntime::run_contour(std::stop_token stop, int centre, int neighbour_a
   // The sequence's last step has no next one, and the causal window's has none to prepare (its
   // flow cue is made by this thread, which must not meet prepare_next).
   if (early_contour_moves_ && !last && pipeline_.contour.lookahead == 1) {
-    std::lock_guard lock(mutex_);
-    next_contour_ = NextContour::kReady;
+    {
+      std::lock_guard lock(mutex_);
+      next_contour_ = NextContour::kReady;
+    }
+    // The stereo thread may be asleep in a wait that takes this step's share.
+    changed_.notify_all();
   }
   if (params_.threads < 3) {
     densify_receive(stop, result);
