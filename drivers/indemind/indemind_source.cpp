@@ -3,6 +3,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <ctime>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -34,6 +35,9 @@ constexpr std::int64_t kLeadNs = 50'000'000;
 // How far behind it: no sample waits this long in a queue, so a device time that maps there is
 // garbage (an IMU report) or of another time line (a frame after the counter stood still).
 constexpr std::int64_t kLagNs = 1'000'000'000;
+// A frame whose counter leaves the time line is held; a next frame at most this many counts on
+// (one or two lost between them) may confirm it as the start of a new time line.
+constexpr std::uint16_t kRunMaxStep = 3;
 // Protocol notes §7.1: the counter can move on before the ticks reset; the vendor SDK then
 // takes 0.1 ms into the frame.
 constexpr std::uint32_t kRaceTicks = 16'000;
@@ -47,7 +51,11 @@ std::int64_t monotonic_ns() {
   return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
 }
 
-// Every fault the driver can see, counted where it is seen.
+// Every fault the driver can see, counted where it is seen. A frame is either taken (`frames`) or
+// dropped and counted once, when it comes: a frame held to see whether the counter left the time
+// line for good counts as `implausible_counters` (or `backward_frames`, a counter a little behind)
+// whether or not the next frame confirms it, so a single wrong counter and the frame that opens a
+// new time line (`counter_restarts`) each cost one there.
 struct Counters {
   std::atomic<std::uint64_t> frames{0}, delivered{0}, delivery_drops{0};
   std::atomic<std::uint64_t> lost_frames{0}, duplicate_frames{0}, backward_frames{0};
@@ -242,10 +250,7 @@ class IndemindSource final : public FrameSource {
       }
       device_ = std::move(device);
       usb_speed_ = d.speed_mbps;
-      // A replugged module counts frames from anywhere and runs a new time line.
-      extender_.resync();
-      new_time_line();
-      have_last_report_ = false;
+      // A replugged module counts frames from anywhere: start_streaming() starts a new time line.
       ++counters_.reconnects;
       state_ = SourceStatus::State::kStarting;
       return;
@@ -260,6 +265,12 @@ class IndemindSource final : public FrameSource {
     if (options_.imu_hz > 0) control.configure_imu(options_.imu_hz, ranges_);
     counters_.control_busy += control.busy_retries();
     assembler_->reset();
+    // A started stream (after a stall, a silence, an error or a replug) may count from anywhere:
+    // the module may start its counter again, or have counted frames it never sent. Its first
+    // frame is a first one, on a new time line.
+    extender_.resync();
+    new_time_line();
+    have_last_report_ = false;
     device_->start_in_stream(
         kVideoEndpoint, EndpointType::kBulk, committed.max_payload_transfer_size,
         options_.transfers,
@@ -275,18 +286,22 @@ class IndemindSource final : public FrameSource {
     imu_seen_ = false;
   }
 
-  // The device time line starts again (a replugged module, a counter that restarted): what the
-  // clock map and the IMU order learnt from the old one no longer applies.
+  // The device time line starts again (a started stream, a counter that restarted): what the
+  // clock map, the IMU order and a held frame learnt from the old one no longer applies. The
+  // stamps' floors stay: a new line starts near the host clock, at most the lead behind the old
+  // one's last stamp, and a consumer must never see a stamp again.
   void new_time_line() {
     clock_.reset();
     last_imu_device_ns_ = -1;
+    held_.reset();
   }
+
+  std::int64_t lead_ns() const { return std::max(kLeadNs, frames_ns(2)); }
 
   // Whether a device time maps more than the lead ahead of the host clock `now`, or more than
   // kLagNs behind it.
   bool ahead_of_host(std::int64_t device_ns, std::int64_t now) const {
-    const std::int64_t lead = std::max(kLeadNs, 2 * frame_device_ns(1));
-    return clock_.buckets() > 0 && clock_.to_host(device_ns) > now + lead;
+    return clock_.buckets() > 0 && clock_.to_host(device_ns) > now + lead_ns();
   }
   bool behind_host(std::int64_t device_ns, std::int64_t now) const {
     return clock_.buckets() > 0 && clock_.to_host(device_ns) < now - kLagNs;
@@ -434,33 +449,53 @@ class IndemindSource final : public FrameSource {
     }
     const auto step = extender_.classify(meta.counter);
     const std::int64_t now = options_.clock();
+    bool fits = true;
     switch (step.step) {
       case CounterExtender::Step::kDuplicate:
         ++counters_.duplicate_frames;
         return;
       case CounterExtender::Step::kBackward:
-        ++counters_.backward_frames;
-        return;
-      case CounterExtender::Step::kGap:
-        // A counter that runs ahead of the host clock is a corrupt one, not frames lost: taking
-        // it would drop the frames after it as backward and bend the clock map.
-        if (ahead_of_host(frame_device_ns(step.extended), now)) {
-          ++counters_.implausible_counters;
-          return;
-        }
-        counters_.lost_frames += step.skipped;
-        break;
       case CounterExtender::Step::kRestart:
-        ++counters_.counter_restarts;
-        new_time_line();
+        fits = false;
+        break;
+      case CounterExtender::Step::kGap:
+        // A counter that runs ahead of the host clock is not frames lost: taking it would drop
+        // the frames after it as backward and bend the clock map.
+        fits = !ahead_of_host(frame_device_ns(step.extended), now);
         break;
       case CounterExtender::Step::kFirst:
       case CounterExtender::Step::kNext:
         break;
     }
-    extender_.accept(step);
+    CounterExtender::Result taken = step;
+    if (fits) {
+      counters_.lost_frames += step.skipped;
+    } else if (const std::uint16_t on = counts_past_held(meta.counter, first_ns); on > 0) {
+      // Two frames agree with each other and not with the time line: the module counts from
+      // elsewhere now (its counter restarted, or the time line was set by a stale first frame).
+      counters_.lost_frames += on - 1u;
+      ++counters_.counter_restarts;
+      extender_.resync();
+      taken = extender_.classify(meta.counter);
+      new_time_line();
+    } else {
+      // No checksum tells a corrupt counter from the first of a new time line: one frame never
+      // moves the time line (and the clock map with it); it waits for a second that agrees.
+      held_ = Held{meta.counter, first_ns};
+      ++(step.step == CounterExtender::Step::kBackward ? counters_.backward_frames
+                                                       : counters_.implausible_counters);
+      return;
+    }
+    held_.reset();
+    extender_.accept(taken);
+    if (taken.step == CounterExtender::Step::kFirst) {
+      // Each time line places its first value up to 2^17 above the last: counted from zero,
+      // device times would overflow after some 10^5 restarts. The margin keeps IMU reports of
+      // the frames before it (placed at most 2^15 back) above the origin.
+      origin_ = taken.extended - std::min<std::uint64_t>(taken.extended, 1u << 16);
+    }
     mask_frame_metadata(last, std::span<const std::uint8_t>(last.data() - row, row));
-    const std::int64_t device_ns = frame_device_ns(step.extended);
+    const std::int64_t device_ns = frame_device_ns(taken.extended);
     if (behind_host(device_ns, now)) {
       // The counter stood still while the host clock ran on (a module that stops counting while
       // it is not streaming): the map's offsets are of another time line now.
@@ -478,7 +513,7 @@ class IndemindSource final : public FrameSource {
       if (options_.lossless) slot_free_cv_.wait(lock, [this] { return !slot_.full || !running_; });
       if (slot_.full) ++counters_.delivery_drops;
       std::swap(slot_.buffer, spare_);
-      slot_.capture_ns = clock_.to_host(device_ns);
+      slot_.capture_ns = rising(clock_.to_host(device_ns), last_frame_capture_ns_);
       // Samples of a frame the consumer never took still belong to the time line: keep them.
       for (const ImuSample& s : imu_pending_) {
         if (slot_.imu.size() >= kMaxQueuedImu) {
@@ -493,8 +528,29 @@ class IndemindSource final : public FrameSource {
     slot_cv_.notify_one();
   }
 
+  // Nominal duration of `n` frames.
+  std::int64_t frames_ns(std::int64_t n) const { return n * 1'000'000'000 / mode_.fps; }
   std::int64_t frame_device_ns(std::uint64_t extended) const {
-    return static_cast<std::int64_t>(extended) * 1'000'000'000 / mode_.fps;
+    return frames_ns(static_cast<std::int64_t>(extended - origin_));
+  }
+
+  // How many counts `counter` is past the held frame if it agrees with it (a few counts on, and
+  // arrived as many frame periods after it, within the lead the host clock check allows); 0 if
+  // it does not.
+  std::uint16_t counts_past_held(std::uint16_t counter, std::int64_t first_ns) const {
+    if (!held_) return 0;
+    const auto on = static_cast<std::uint16_t>(counter - held_->counter);
+    if (on == 0 || on > kRunMaxStep) return 0;
+    const std::int64_t miss = first_ns - held_->first_ns - frames_ns(on);
+    return miss <= lead_ns() && -miss <= lead_ns() ? on : 0;
+  }
+
+  // The clock map moves as it learns (a lower minimum, a new fit) and may map a later device
+  // time before an earlier one; the daemon finds a frame by its exact capture time and IMU
+  // consumers integrate in order, so each stream's stamps only rise.
+  static std::int64_t rising(std::int64_t stamp, std::int64_t& last) {
+    last = std::max(stamp, last + 1);
+    return last;
   }
 
   void on_imu(TransferStatus status, std::span<const std::uint8_t> data) {
@@ -560,7 +616,7 @@ class IndemindSource final : public FrameSource {
     clock_.add(device_ns, now);
     const indemind::ImuSample scaled = to_sample(*report, ranges_);
     drivers::ImuSample s;
-    s.capture_ns = clock_.to_host(device_ns);
+    s.capture_ns = rising(clock_.to_host(device_ns), last_imu_capture_ns_);
     for (int i = 0; i < 3; ++i) {
       s.accel_mps2[i] = static_cast<float>(scaled.accel_g[i] * kStandardGravity);
       s.gyro_radps[i] = static_cast<float>(scaled.gyro_dps[i] * kRadPerDegree);
@@ -653,6 +709,16 @@ class IndemindSource final : public FrameSource {
   std::int64_t last_imu_host_ns_ = 0, last_imu_report_ns_ = 0;
   std::uint64_t last_imu_placed_ = 0;
   std::uint32_t last_imu_ticks_ = 0;
+  // Floors of the stamps of each stream: what the last frame and IMU sample got.
+  std::int64_t last_frame_capture_ns_ = std::numeric_limits<std::int64_t>::min();
+  std::int64_t last_imu_capture_ns_ = std::numeric_limits<std::int64_t>::min();
+  // The last frame whose counter left the time line, with its first payload's arrival.
+  struct Held {
+    std::uint16_t counter = 0;
+    std::int64_t first_ns = 0;
+  };
+  std::optional<Held> held_;
+  std::uint64_t origin_ = 0;  // the extended value at device time 0 of this time line
   bool imu_seen_ = false;
   bool streaming_ = false, restart_ = false, gone_ = false;
 

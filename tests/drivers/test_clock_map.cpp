@@ -40,5 +40,21 @@ TEST(ClockMap, ResetForgetsTheOldTimeLine) {
   EXPECT_EQ(map.to_host(10), 1'010);
 }
 
+// 1 kHz samples 1.5 ms after their device time, but the first of the third bucket (500 ms) comes
+// 4 ms late. That bucket is still filling: a line through it would bend the map by its single
+// sample, and the next sample, on time again, would map before the late one.
+TEST(ClockMap, ALateSampleInTheNewestBucketDoesNotBendTheMap) {
+  ClockMap map;
+  const std::int64_t delay = 1'500'000, late = 4'000'000;
+  std::int64_t previous = 0;
+  for (std::int64_t device = 0; device <= 3'000'000'000; device += 1'000'000) {
+    map.add(device, device + delay + (device == 500'000'000 ? late : 0));
+    const std::int64_t stamp = map.to_host(device);
+    EXPECT_GT(stamp, previous) << device;
+    EXPECT_NEAR(static_cast<double>(stamp - device), static_cast<double>(delay), 1'000.0) << device;
+    previous = stamp;
+  }
+}
+
 }  // namespace
 }  // namespace dco::indemind

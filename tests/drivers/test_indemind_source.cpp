@@ -197,13 +197,155 @@ TEST(IndemindSource, CaptureTimesFollowTheModuleClock) {
   EXPECT_GT(checked, 100);
 }
 
+// Capture times of the last `n` frames, each against the module's nearest frame start.
+void expect_on_frame_starts(Rig& rig, std::size_t n, double tolerance_ns) {
+  std::lock_guard lock(rig.sink.mutex_);
+  const auto& t = rig.sink.captures;
+  ASSERT_GE(t.size(), n);
+  for (std::size_t i = t.size() - n; i < t.size(); ++i)
+    EXPECT_NEAR(static_cast<double>(t[i] - rig.sim->nearest_frame_start_ns(t[i])), 0.0,
+                tolerance_ns)
+        << i;
+}
+
+// One frame whose metadata counter is wrong, 100 behind (as if 1400 came between 1499 and 1501)
+// or far ahead, costs that frame only: the time line, the clock map and the IMU carry on.
+TEST(IndemindSource, OneWrongCounterCostsOneFrame) {
+  for (const int off : {-100, 5000}) {
+    SCOPED_TRACE(off);
+    Rig rig;
+    rig.source->start(rig.sink);
+    ASSERT_TRUE(rig.wait_frames(150));
+    ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kCorruptCounter, off));
+    ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 150, 10));
+    rig.source->stop();
+    const auto rec = rig.sim->record();
+    const auto n = counters_of(*rig.source);
+    EXPECT_EQ(n.at("implausible_counters"), 1u);
+    EXPECT_EQ(n.at("counter_restarts"), 0u);
+    EXPECT_EQ(n.at("clock_resets"), 0u);
+    EXPECT_EQ(n.at("frames"), rec.frames_intact);
+    EXPECT_EQ(n.at("lost_frames"), rec.expected_lost);
+    EXPECT_EQ(n.at("imu_implausible"), 0u);
+    EXPECT_EQ(rig.sink.non_increasing, 0);
+    EXPECT_EQ(rig.sink.imu_non_increasing, 0);
+    expect_on_frame_starts(rig, 100, 300'000.0);
+  }
+}
+
+// The first frame after the start carries a stale counter (0), the module's own run starts at
+// 12347: the stale frame must not become the time line every later frame is judged against.
+TEST(IndemindSource, AStaleFirstCounterIsLeftAfterTwoFrames) {
+  SimulatedIndemind::Options o;
+  o.first_counter = 12345;
+  Rig rig(o);
+  rig.sim->inject(Fault::kCorruptCounter, -12346);  // on the first frame sent
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(200, 10));
+  rig.source->stop();
+  const auto rec = rig.sim->record();
+  const auto n = counters_of(*rig.source);
+  // The stale frame was taken as the first; 12347 was held until 12348 agreed with it.
+  EXPECT_EQ(n.at("counter_restarts"), 1u);
+  EXPECT_EQ(n.at("implausible_counters"), 1u);
+  EXPECT_EQ(n.at("frames"), rec.frames_intact);
+  EXPECT_EQ(n.at("lost_frames"), rec.expected_lost);
+  EXPECT_EQ(rig.sink.non_increasing, 0);
+  EXPECT_EQ(rig.sink.imu_non_increasing, 0);
+  EXPECT_GT(rig.sink.imu, 150u * 1000 / 50);
+  expect_on_frame_starts(rig, 100, 1'000'000.0);
+}
+
+// The module counts on from elsewhere for good: far back (a restarted counter), a few back, or
+// far ahead. Two frames that agree with each other (consecutive, a frame period apart) start the
+// new time line; one frame is held to see that.
+TEST(IndemindSource, FramesThatAgreeWithEachOtherStartANewTimeLine) {
+  for (const int back : {1000, 10, -5000}) {
+    SCOPED_TRACE(back);
+    Rig rig;
+    rig.source->start(rig.sink);
+    ASSERT_TRUE(rig.wait_frames(150));
+    ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kCounterRestart, back));
+    ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 150, 10));
+    rig.source->stop();
+    const auto rec = rig.sim->record();
+    const auto n = counters_of(*rig.source);
+    EXPECT_EQ(n.at("counter_restarts"), 1u);
+    // The held frame is counted where a single wrong counter of its kind would be.
+    EXPECT_EQ(n.at("backward_frames"), back == 10 ? 1u : 0u);
+    EXPECT_EQ(n.at("implausible_counters"), back == 10 ? 0u : 1u);
+    EXPECT_EQ(n.at("frames") + 1, rec.frames_intact);
+    EXPECT_EQ(n.at("lost_frames"), rec.expected_lost);
+    EXPECT_EQ(n.at("clock_resets"), 0u);
+    // IMU reports that carry the new counter before the new time line starts: the held frame's
+    // period and the next one's readout, at most two periods (1 kHz, 50 fps). A few back, they
+    // map before the samples taken; further, before or after the host clock.
+    EXPECT_LE(n.at("imu_implausible") + n.at("imu_out_of_order"), 2u * 1000 / 50);
+    EXPECT_EQ(rig.sink.non_increasing, 0);
+    EXPECT_EQ(rig.sink.imu_non_increasing, 0);
+    expect_on_frame_starts(rig, 100, 1'000'000.0);
+  }
+}
+
+// A module that starts its counter again with each stream: after a stall restart the counter is
+// far behind the old time line, which must not cost frames or count as a restart of the counter.
+TEST(IndemindSource, AStallRestartStartsANewTimeLine) {
+  SimulatedIndemind::Options o;
+  o.counter_restarts_with_stream = true;
+  IndemindOptions io;
+  io.stall_ms = 300;
+  Rig rig(o, io);
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(150));
+  ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kStall, 0));
+  ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 150, 10));
+  rig.source->stop();
+  const auto rec = rig.sim->record();
+  const auto n = counters_of(*rig.source);
+  EXPECT_EQ(n.at("stream_restarts"), 1u);
+  EXPECT_EQ(n.at("counter_restarts"), 0u);
+  EXPECT_EQ(n.at("implausible_counters"), 0u);
+  EXPECT_EQ(n.at("backward_frames"), 0u);
+  EXPECT_EQ(n.at("imu_implausible"), 0u);
+  EXPECT_EQ(n.at("frames"), rec.frames_intact);
+  EXPECT_EQ(n.at("lost_frames"), rec.expected_lost);
+  EXPECT_EQ(rig.sink.non_increasing, 0);
+  EXPECT_EQ(rig.sink.imu_non_increasing, 0);
+  expect_on_frame_starts(rig, 100, 1'000'000.0);
+}
+
+// The first payload comes 25 ms after the frame starts, IMU reports 1.5 ms after their sample:
+// the first frame sets the map's offset, the first reports lower it by 23.5 ms, which would
+// stamp the next frames (10 ms apart at 100 fps) before the first. The daemon finds a frame by
+// its capture time, so each stream's stamps must keep rising.
+TEST(IndemindSource, CaptureTimesKeepRisingWhileTheMapLearns) {
+  SimulatedIndemind::Options o;
+  o.latency_ns = 25'000'000;
+  o.jitter_ns = 0;
+  o.imu_latency_ns = 1'500'000;
+  IndemindOptions io;
+  io.width = 640;
+  io.height = 400;
+  io.fps = 100;
+  Rig rig(o, io);
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(300));
+  rig.source->stop();
+  EXPECT_EQ(rig.sink.non_increasing, 0);
+  EXPECT_EQ(rig.sink.imu_non_increasing, 0);
+  EXPECT_GT(rig.sink.imu, 250u * 10);
+  // Once settled, stamps sit the IMU's delay after the frame starts.
+  expect_on_frame_starts(rig, 100, 2'000'000.0);
+}
+
 // A module whose counter stands still while it sends nothing: after a 3 s silence its frames'
 // device times map 3 s into the past. The clock map starts again instead of stamping them there.
 TEST(IndemindSource, ACounterThatStoodStillStartsTheClockMapAgain) {
   SimulatedIndemind::Options o;
   o.counter_counts_unsent_frames = false;
   IndemindOptions io;
-  io.stall_ms = 300;
+  // Longer than the silence: a stream restart would start a new time line on its own.
+  io.stall_ms = 5000;
   Rig rig(o, io);
   rig.source->start(rig.sink);
   ASSERT_TRUE(rig.wait_frames(150));
@@ -338,7 +480,9 @@ TEST(IndemindSource, CountsAThousandInjectedFaultsAndRecovers) {
                                          injected(Fault::kImuStall) + injected(Fault::kImuSilence));
   EXPECT_EQ(n.at("imu_silences"), injected(Fault::kImuSilence));
   EXPECT_EQ(n.at("counter_restarts"), injected(Fault::kCounterRestart));
-  EXPECT_EQ(n.at("implausible_counters"), injected(Fault::kCorruptCounter));
+  // The first frame of each restarted counter is held until the next agrees with it.
+  EXPECT_EQ(n.at("implausible_counters"),
+            injected(Fault::kCorruptCounter) + injected(Fault::kCounterRestart));
   EXPECT_EQ(n.at("empty_payloads"), injected(Fault::kEmptyPayload));
   EXPECT_EQ(n.at("imu_tick_clamps"), injected(Fault::kImuTickRace));
   // Garbage ticks, and the few reports that carry a restarted counter before its first frame.
@@ -353,7 +497,7 @@ TEST(IndemindSource, CountsAThousandInjectedFaultsAndRecovers) {
   // From each replug to the first sound frame the driver took, in module time.
   EXPECT_EQ(rec.recoveries, injected(Fault::kUnplug));
   EXPECT_LT(rec.worst_recovery_ns, 2'000'000'000);
-  EXPECT_EQ(n.at("frames"), rec.frames_intact);
+  EXPECT_EQ(n.at("frames") + injected(Fault::kCounterRestart), rec.frames_intact);
   EXPECT_EQ(n.at("lost_frames"), rec.expected_lost);
   EXPECT_EQ(n.at("backward_frames"), 0u);
   EXPECT_EQ(n.at("imu_out_of_order"), 0u);

@@ -160,8 +160,9 @@ void SimulatedIndemind::State::generate_frame() {
   }
   ++counter;
   if (has_fault && fault == Fault::kCounterRestart) {
-    // Extended values keep rising (they key the frame starts); the wire goes 1000 back.
-    counter += 65536 - 1000;
+    // Extended values keep rising (they key the frame starts); the wire goes `back` back.
+    const int back = param != 0 ? param : 1000;
+    counter += static_cast<std::uint64_t>(65536 - back);
     has_intact = false;  // frames lost across a restart are not counted
   }
   if (has_fault && fault == Fault::kSkipCounter) hide_frames += param;  // captured, never sent
@@ -189,8 +190,8 @@ void SimulatedIndemind::State::emit(std::int64_t start, bool has_fault, Fault fa
   const int w = mode.width, h = mode.height;
   frame = image(w, h);
   indemind::FrameMetadata meta;
-  meta.counter =
-      static_cast<std::uint16_t>(counter + (has_fault && fault == Fault::kCorruptCounter ? 50 : 0));
+  const int off = has_fault && fault == Fault::kCorruptCounter ? (param != 0 ? param : 50) : 0;
+  meta.counter = static_cast<std::uint16_t>(counter + static_cast<std::uint64_t>(off));
   meta.exposure_raw = 549;  // 5 ms
   meta.timer_raw = static_cast<std::uint32_t>(start / 125'000);
   meta.torn = has_fault && fault == Fault::kTornMetadata;
@@ -297,7 +298,7 @@ void SimulatedIndemind::State::generate_imu() {
   r.temperature_raw = 3268;       // 35 °C
   const auto bytes = indemind::encode_imu_report(r);
   Completion c;
-  c.at = t + opt.latency_ns / 4;
+  c.at = t + (opt.imu_latency_ns >= 0 ? opt.imu_latency_ns : opt.latency_ns / 4);
   c.endpoint = indemind::kImuEndpoint;
   c.generation = imu.generation;
   c.bytes.assign(bytes.begin(), bytes.end());
@@ -434,6 +435,13 @@ class SimulatedIndemind::Device final : public drivers::UsbDevice {
       }
       s.frame_start += k * p;
       s.next_frame = s.frame_start + p;
+      if (s.opt.counter_restarts_with_stream) {
+        // Above every value so far on the extended scale; the wire starts again.
+        s.counter = ((s.counter >> 16) + 1) << 16 | s.opt.first_counter;
+      }
+      // The driver starts a new time line with each stream: frames missed across a restart are
+      // not counted as lost.
+      s.has_intact = false;
     } else {
       s.next_imu = s.now + 1'000'000'000 / s.imu_hz;
     }

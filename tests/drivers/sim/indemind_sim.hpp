@@ -43,8 +43,9 @@ class SimulatedIndemind final : public drivers::UsbTransport {
     kImuDuplicate,      // one IMU report sent twice
     kControlBusy,       // the next param extension-unit answers say busy
     kUnplug,            // gone mid-frame; back after param ms (0 = stays away)
-    kCounterRestart,    // the module counts on from 1000 frames back (no replug)
-    kCorruptCounter,    // one frame's metadata counter reads 50 ahead; the next is right again
+    kCounterRestart,    // the module counts on from param frames back (0 = 1000; < 0 = ahead)
+    kCorruptCounter,    // one frame's metadata counter reads param off (0 = 50 ahead); the next
+                        // is right again
     kEmptyPayload,      // a zero-length transfer in the middle of a frame
     kImuBadTicks,       // one IMU report with garbage ticks (0xFFFFFFFF)
     kImuTickRace,       // the first report of a frame: counter moved on, ticks not reset
@@ -62,9 +63,12 @@ class SimulatedIndemind final : public drivers::UsbTransport {
     double clock_skew_ppm = 60;               // real frame period vs nominal
     std::int64_t latency_ns = 400'000;        // least transfer delay
     std::int64_t jitter_ns = 300'000;         // extra delay, uniform
+    std::int64_t imu_latency_ns = -1;         // delay of an IMU report; < 0: latency_ns / 4
     std::uint16_t first_counter = 65530;      // wraps after a few frames
     // The counter also counts frames it never sends (stream off, silence); false: it stands still.
     bool counter_counts_unsent_frames = true;
+    // The counter starts again at first_counter whenever the video stream starts.
+    bool counter_restarts_with_stream = false;
     bool pace_real_time = false;
     std::uint32_t seed = 1;
   };

@@ -41,9 +41,10 @@ void ClockMap::add(std::int64_t device_ns, std::int64_t host_ns) {
 }
 
 void ClockMap::refit() {
-  // The newest bucket is still filling and its minimum still high: leave it out once there are
-  // enough complete ones.
-  const std::size_t n_fit = buckets_.size() >= 4 ? buckets_.size() - 1 : buckets_.size();
+  // The newest bucket is still filling: its minimum may be one late sample, and a line through it
+  // would swing with every sample that lowers it. Fit the complete buckets only, once there are
+  // three; until then the least offset is the estimate.
+  const std::size_t n_fit = buckets_.size() - 1;
   ref_device_ = buckets_.back().device_ns;
   double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
   for (std::size_t i = 0; i < n_fit; ++i) {

@@ -11,7 +11,9 @@ namespace dco::indemind {
 // so the map follows the lower envelope of (host − device): device time is cut into buckets, the
 // smallest offset of each is kept, and a line through the last buckets' minima gives offset and
 // skew. The skew matters because the device's real frame period differs from the nominal one.
-// Constant memory, O(buckets) per sample at most.
+// Constant memory, O(buckets) per sample at most. The map moves as it learns (a lower minimum, a
+// new bucket in the fit), so two device times in order can map slightly out of order: a caller
+// that needs rising stamps keeps them rising itself.
 class ClockMap {
  public:
   explicit ClockMap(std::int64_t bucket_ns = 250'000'000, std::size_t buckets = 40);

@@ -37,7 +37,8 @@ void mask_frame_metadata(std::span<std::uint8_t> last_row, std::span<const std::
 class CounterExtender {
  public:
   // kDuplicate and kBackward (a counter up to 64 behind) mean: drop the frame; kRestart (further
-  // behind) means the device started counting again.
+  // behind) means the device started counting again, or the counter is garbage: the metadata row
+  // has no checksum, so a caller confirms a restart with the frames after it.
   enum class Step { kFirst, kNext, kGap, kDuplicate, kBackward, kRestart };
   struct Result {
     Step step = Step::kFirst;
