@@ -212,6 +212,15 @@ void Daemon::stop_all() {
   if (runtime_) runtime_->stop();
 }
 
+void Daemon::finish_frames_in_flight() {
+  if (!runtime_ || !runtime_->running()) return;  // stages that did not start hold no frame
+  try {
+    runtime_->drain();
+  } catch (const std::exception& e) {
+    on_error(e.what());  // a stage failed: nothing more can be finished
+  }
+}
+
 void Daemon::on_frame(const drivers::StereoFrame& frame) {
   {
     std::lock_guard lock(raw_mutex_);
@@ -237,10 +246,11 @@ void Daemon::on_end() {
 
 void Daemon::on_error(const std::string& message) {
   {
+    // The first failure is the cause; what follows from it is not reported in its place.
     std::lock_guard lock(error_mutex_);
-    error_ = message;
+    if (!failed_) error_ = message;
+    failed_ = true;
   }
-  failed_ = true;
   wake();
 }
 
@@ -289,6 +299,27 @@ void Daemon::on_result(const pipeline::DepthResult& result,
   }
 }
 
+void Daemon::report_lcm_failures(std::int64_t now_ns) {
+  // At most every kLcmReportPeriodNs: the warning itself goes out on DCO_LOG, which may fail too.
+  constexpr std::int64_t kLcmReportPeriodNs = 10'000'000'000;
+  if (lcm_failures_reported_ns_ != 0 && now_ns - lcm_failures_reported_ns_ < kLcmReportPeriodNs)
+    return;
+  std::uint64_t failures = 0;
+  std::string channel;
+  {
+    std::lock_guard lock(publish_mutex_);
+    failures = publisher_->send_failures();
+    channel = publisher_->last_failed_channel();
+  }
+  if (failures <= lcm_failures_reported_) return;
+  log_.warning(
+      fmt::format("LCM could not send {} messages (the last on {}); depth still reaches "
+                  "the ring's readers",
+                  failures - lcm_failures_reported_, channel));
+  lcm_failures_reported_ = failures;
+  lcm_failures_reported_ns_ = now_ns;
+}
+
 bool Daemon::healthy(std::int64_t now_ns) const {
   const std::int64_t last = std::max(last_publish_ns_.load(), pipeline_start_ns_.load());
   if (static_cast<double>(now_ns - last) < loaded_.config.stall_timeout_s * 1e9) return true;
@@ -328,6 +359,7 @@ void Daemon::tick(std::int64_t now_ns) {
     notifier_.watchdog();
     last_ping_ns_ = now_ns;
   }
+  report_lcm_failures(now_ns);
   if (now_ns < next_stats_ns_) return;
   next_stats_ns_ = now_ns + static_cast<std::int64_t>(1e9 / loaded_.config.stats_hz);
   const pipeline::runtime::RuntimeStats stats = runtime_->stats();
@@ -455,6 +487,9 @@ void Daemon::apply_live_settings() {
 
 void Daemon::restart_pipeline() {
   source_->stop();
+  // The frames already taken in are finished with the settings they came under: a reload loses
+  // none (stop() would discard them).
+  finish_frames_in_flight();
   runtime_->stop();
   start_pipeline();
   start_source();
@@ -591,8 +626,12 @@ int Daemon::run() {
     std::uint64_t events = 0;
     [[maybe_unused]] const ssize_t n = read(event_fd_, &events, sizeof events);
     if (failed_) {
+      // A source that fails (a log cut short, a camera error) leaves good frames in the stages:
+      // they are published before the exit, as a failed stage's are not.
+      source_->stop();
+      finish_frames_in_flight();
       std::lock_guard lock(error_mutex_);
-      log_.error(error_);
+      log_.error(fmt::format("{} (after {} published frames)", error_, published_.load()));
       status = 1;
       break;
     }

@@ -184,6 +184,36 @@ TEST(Dcod, SighupReloadsWhatItCanAndNamesTheRest) {
   EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
 }
 
+// A reload that restarts the stages finishes the frames they hold first: a deterministic run
+// publishes every frame of its source through two reloads.
+TEST(Dcod, AReloadLosesNoFrame) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  constexpr int kFrames = 2000;
+  const auto config = dir.write("dcod.toml", "[densify]\nlambda_s = 1.2\n");
+  DcodOptions o = configured(dir, config, notify);
+  o.args = base_args(
+      dir, "synthetic://hand?width=160&height=96&fps=0&frames=" + std::to_string(kFrames));
+  o.args.insert(o.args.end(), {"--config", config.string(), "--set", "runtime.deterministic=true"});
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  for (const char* lambda : {"2", "1.5"}) {
+    dir.write("dcod.toml", std::string("[densify]\nlambda_s = ") + lambda + "\n");
+    ASSERT_TRUE(reloaded(dcod, notify)) << dcod.log();
+  }
+  EXPECT_EQ(dcod.wait(60s), 0) << dcod.log();
+  const std::string log = dcod.log();
+  std::size_t restarts = 0;
+  for (std::size_t at = 0;
+       (at = log.find("restarted the pipeline for densify.lambda_s", at)) != std::string::npos;
+       ++at)
+    ++restarts;
+  ASSERT_EQ(restarts, 2u) << "both reloads came before the source's end\n" << log;
+  EXPECT_NE(log.find("the source ended after " + std::to_string(kFrames) + " published frames"),
+            std::string::npos)
+      << log;
+}
+
 TEST(Dcod, AReloadWhoseStagesCannotStartKeepsTheRunningConfiguration) {
   TempDir dir;
   NotifySocket notify(dir / "notify");
@@ -585,14 +615,26 @@ TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
       << other.output;
   EXPECT_NE(other.output.find("preview pixels differ, by up to"), std::string::npos)
       << other.output;
-  // The same log cut short: the frames before the cut, then one line naming it.
+  // The same log cut short: every pair before the cut is published (the stages finish what they
+  // hold, even at full speed), then one line names the cut.
   const std::string bytes = read_file(log);
   std::ofstream(dir / "cut.log", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  int whole_pairs = 0;
+  {
+    drivers::LcmLogReader cut_reader(dir / "cut.log");
+    drivers::LcmLogEvent event;
+    while (cut_reader.next(event)) whole_pairs += event.channel == ipc::channel::kRaw;
+    ASSERT_FALSE(cut_reader.damage().empty());
+  }
+  ASSERT_GE(whole_pairs, 2);
   const auto cut = run_command(std::string(DCOD_EXE) + " --source lcmlog://" +
                                (dir / "cut.log").string() + "?fps=0 --set lcm.url=memq:// " +
                                "--set ring.path=" + (dir / "cut.shm").string() + pipeline);
   EXPECT_EQ(cut.status, 1) << cut.output;
   EXPECT_NE(cut.output.find("ends inside the event"), std::string::npos) << cut.output;
+  EXPECT_NE(cut.output.find("(after " + std::to_string(whole_pairs) + " published frames)"),
+            std::string::npos)
+      << cut.output;
 }
 
 TEST(DcodService, UnitVerifiesAndItsExposureIsAtMost2_5) {

@@ -58,6 +58,9 @@ class Daemon final : public drivers::FrameSink {
   void start_pipeline();  // a new runtime from the current config, started
   void start_source();
   void stop_all();
+  // Waits until the runtime has published every frame it took in (the source stopped first); a
+  // failed stage is reported through on_error.
+  void finish_frames_in_flight();
   // Reads the recorded depth previews when the source replays a field log deterministically.
   void open_replay_check();
   void reload();
@@ -69,6 +72,8 @@ class Daemon final : public drivers::FrameSink {
   void configure_raw_recording();
   void report_raw_recording();
   void tick(std::int64_t now_ns);
+  // A warning when LCM failed to send since the last one (the ring is unaffected).
+  void report_lcm_failures(std::int64_t now_ns);
   bool healthy(std::int64_t now_ns) const;
   std::string status_line(const pipeline::runtime::RuntimeStats& stats) const;
   void wake();
@@ -94,6 +99,8 @@ class Daemon final : public drivers::FrameSink {
   std::string raw_settings_;  // what raw_ was made with
   std::uint64_t raw_dropped_reported_ = 0, raw_oversized_reported_ = 0, raw_failed_reported_ = 0;
   std::unique_ptr<ReplayCheck> replay_check_;  // replaying a field log in deterministic mode
+  std::uint64_t lcm_failures_reported_ = 0;
+  std::int64_t lcm_failures_reported_ns_ = 0;
 
   // Source sequence numbers by capture time, so a result names the camera frame it came from.
   // Every push is recorded, dropped frames too, for as long as a frame can be in flight: the
