@@ -430,6 +430,44 @@ std::map<std::uint64_t, std::vector<float>> read_ring(const std::filesystem::pat
   return received;
 }
 
+// The headset's network goes away (Wi-Fi off): LCM can no longer send, and depth keeps reaching
+// the ring's readers, with a warning instead of an exit.
+TEST(Dcod, LostLcmNetworkIsAWarningAndTheRingGoesOn) {
+  if (geteuid() != 0) GTEST_SKIP() << "nsenter into dcod's network namespace needs root";
+  if (const std::string problem = private_network_problem(); !problem.empty())
+    GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o;
+  o.args = {"--source", kScene,
+            "--set",    "lcm.url=udpm://239.255.76.67:7667?ttl=0",
+            "--set",    "ring.path=" + (dir / "depth.shm").string()};
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  o.private_network = true;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  dco::client::Client client = ring_client(dir);
+  ASSERT_TRUE(client.wait_next(2s)) << dcod.log();
+  const auto route = run_command("nsenter -t " + std::to_string(dcod.pid()) +
+                                 " -n ip route del 224.0.0.0/4 dev lo");
+  ASSERT_EQ(route.status, 0) << route.output;
+  for (int i = 0; i < 60 && dcod.log().find("LCM could not send") == std::string::npos; ++i)
+    std::this_thread::sleep_for(50ms);
+  EXPECT_NE(dcod.log().find("depth still reaches the ring's readers"), std::string::npos)
+      << dcod.log();
+  std::uint64_t last = 0;
+  for (int i = 0; i < 5; ++i) {
+    const auto frame = client.wait_next(2s);
+    ASSERT_TRUE(frame.has_value()) << dcod.log();
+    EXPECT_GT(frame->info().publish_index, last);
+    last = frame->info().publish_index;
+  }
+  EXPECT_TRUE(dcod.running()) << dcod.log();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+}
+
 TEST(Dcod, ReplayInDeterministicModeIsBitIdenticalToDcoDepth) {
   TempDir dir;
   constexpr int kFrames = 6;
