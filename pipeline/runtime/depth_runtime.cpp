@@ -298,8 +298,13 @@ void DepthRuntime::release_slot(int slot, int fallback_model) {
   slot_free_[static_cast<std::size_t>(slot)] = true;
   if (model >= 0) {
     const StereoSlot& m = slots_[static_cast<std::size_t>(model)].slot;
-    for (std::size_t i = 0; i < slots_.size(); ++i)
-      if (slot_free_[i] && static_cast<int>(i) != model) size_like(m, slots_[i].slot);
+    try {
+      for (std::size_t i = 0; i < slots_.size(); ++i)
+        if (slot_free_[i] && static_cast<int>(i) != model) size_like(m, slots_[i].slot);
+    } catch (...) {
+      // Out of memory at a new size: a failure push() reports, not a terminated process.
+      if (!failure_) failure_ = std::current_exception();
+    }
   }
   changed_.notify_all();
 }
@@ -684,8 +689,12 @@ void DepthRuntime::deliver(int result, bool early) {
   early_ += early;
   // Every free result gets this one's room, so none allocates when it is first taken, however
   // late in the sequence that is (frames dropped at the entry leave entries unused).
-  for (std::size_t i = 0; i < results_.size(); ++i)
-    if (result_free_[i]) size_like(r.result, results_[i].result);
+  try {
+    for (std::size_t i = 0; i < results_.size(); ++i)
+      if (result_free_[i]) size_like(r.result, results_[i].result);
+  } catch (...) {
+    if (!failure_) failure_ = std::current_exception();  // as in release_slot
+  }
   result_free_[static_cast<std::size_t>(result)] = true;
   changed_.notify_all();
 }
