@@ -4,6 +4,8 @@
 
 #include <string>
 
+#include "dco/core/printable.hpp"
+
 namespace dco::daemon {
 
 ServiceNotifier::ServiceNotifier() {
@@ -17,12 +19,14 @@ void ServiceNotifier::send(std::string_view message) const {
   sd_notify(0, std::string(message).c_str());
 }
 
+// A status quotes the source (a file path, a device name): its control characters are shown as
+// '?', so a line break in them cannot add an assignment such as WATCHDOG=1 to the message.
 void ServiceNotifier::ready(std::string_view status) const {
-  send("READY=1\nSTATUS=" + std::string(status));
+  send("READY=1\nSTATUS=" + printable(status));
 }
 
 void ServiceNotifier::status(std::string_view status) const {
-  send("STATUS=" + std::string(status));
+  send("STATUS=" + printable(status));
 }
 
 void ServiceNotifier::reloading() const {

@@ -35,7 +35,9 @@ std::int64_t monotonic_ns() {
 std::uint64_t random_session_id() {
   std::uint64_t id = 0;
   while (id == 0) {
-    if (getrandom(&id, sizeof(id), 0) != static_cast<ssize_t>(sizeof(id)))
+    const ssize_t got = getrandom(&id, sizeof(id), 0);
+    if (got == -1 && errno == EINTR) continue;  // a signal while the pool was not yet ready
+    if (got != static_cast<ssize_t>(sizeof(id)))
       throw Error(fmt::format("getrandom: {}", std::strerror(errno)));
   }
   return id;
@@ -64,8 +66,9 @@ RingWriter::RingWriter(const std::filesystem::path& path, const RingOptions& opt
   session_id_ = random_session_id();
 
   // Built under a temporary name and renamed into place, so a reader never maps a half-made ring.
-  const std::filesystem::path tmp = path.string() + ".tmp." + std::to_string(getpid());
-  unlink(tmp.c_str());  // left behind by a writer with our pid that died while creating
+  // The name holds the random session id: writers in other pid namespaces may share a pid and
+  // the directory.
+  const std::filesystem::path tmp = fmt::format("{}.tmp.{:016x}", path.string(), session_id_);
   fd_ = open(tmp.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, 0640);
   if (fd_ < 0) fail_errno(tmp, "cannot create the depth ring");
   size_ = sizes->file_size;
