@@ -111,7 +111,7 @@ DepthRuntime::~DepthRuntime() {
 }
 
 void DepthRuntime::reset_state() {
-  held_up_since_ = held_up_until_ = {};
+  hold_ups_.clear();
   input_free_.fill(true);
   waiting_input_ = -1;
   end_requested_ = false;
@@ -158,12 +158,17 @@ void DepthRuntime::start() {
   }
   if (params_.opencv_threads > 0) opencv_threads_.emplace(params_.opencv_threads);
   threads_.reserve(4);
-  threads_.emplace_back([this](std::stop_token stop) { stereo_loop(stop); });
-  if (params_.threads >= 2)
-    threads_.emplace_back([this](std::stop_token stop) { contour_loop(stop); });
-  if (params_.threads >= 3)
-    threads_.emplace_back([this](std::stop_token stop) { densify_loop(stop); });
-  if (releasing_) threads_.emplace_back([this](std::stop_token stop) { release_loop(stop); });
+  try {
+    threads_.emplace_back([this](std::stop_token stop) { stereo_loop(stop); });
+    if (params_.threads >= 2)
+      threads_.emplace_back([this](std::stop_token stop) { contour_loop(stop); });
+    if (params_.threads >= 3)
+      threads_.emplace_back([this](std::stop_token stop) { densify_loop(stop); });
+    if (releasing_) threads_.emplace_back([this](std::stop_token stop) { release_loop(stop); });
+  } catch (...) {
+    stop();  // a thread the system refused (EAGAIN): nothing is left running
+    throw;
+  }
   name_threads();
   if (releasing_) {  // so stats() tells from the start whether it runs at real-time priority
     std::unique_lock lock(mutex_);
@@ -313,10 +318,9 @@ bool DepthRuntime::is_late(const Input& input) const {
   // Nothing newer comes after the end of a sequence, and a deterministic run drops nothing.
   if (params_.deterministic || end_requested_) return false;
   const Clock::time_point now = Clock::now();
-  const double held_up =
-      ms_between(std::max(input.entry, held_up_since_), std::min(now, held_up_until_));
-  return late_at_entry(ms_between(input.entry, now), held_up, params_.entry_deadline_ms,
-                       params_.entry_deadline_share, frame_interval_.ms());
+  return late_at_entry(ms_between(input.entry, now), hold_ups_.ms_within(input.entry, now),
+                       params_.entry_deadline_ms, params_.entry_deadline_share,
+                       frame_interval_.ms());
 }
 
 void DepthRuntime::stereo_loop(std::stop_token stop) {

@@ -31,6 +31,30 @@ double FrameInterval::ms() const {
   return *middle;
 }
 
+void HoldUps::begin(Clock::time_point at) {
+  waits_[next_] = {at, Clock::time_point::max()};
+  next_ = (next_ + 1) % kKept;
+  count_ = std::min(count_ + 1, kKept);
+}
+
+void HoldUps::end(Clock::time_point at) {
+  if (count_ > 0) waits_[(next_ + kKept - 1) % kKept].until = at;
+}
+
+void HoldUps::clear() {
+  count_ = next_ = 0;
+}
+
+double HoldUps::ms_within(Clock::time_point from, Clock::time_point to) const {
+  double ms = 0;
+  for (std::size_t i = 0; i < count_; ++i) {
+    const Wait& w = waits_[i];
+    const Clock::time_point a = std::max(from, w.since), b = std::min(to, w.until);
+    if (b > a) ms += std::chrono::duration<double, std::milli>(b - a).count();
+  }
+  return ms;
+}
+
 bool late_at_entry(double waited_ms, double held_up_ms, double deadline_ms, double share,
                    double interval_ms) {
   if (deadline_ms <= 0 || waited_ms <= deadline_ms) return false;

@@ -132,6 +132,36 @@ TEST(FrameInterval, IgnoresRepeatedAndBackwardTimesAndPauses) {
   EXPECT_DOUBLE_EQ(f.ms(), 16.0);
 }
 
+// Two waits of 1.5 ms since a frame came (a slot, then room in a queue) hold it up 3 ms, past a
+// 2 ms deadline; waits before it came and after now do not count, one still going counts to now.
+TEST(EntryDeadline, HoldUpsAddEveryWaitSinceTheFrameCame) {
+  using Clock = HoldUps::Clock;
+  using std::chrono::microseconds;
+  const Clock::time_point t0{};
+  const auto at = [&](int us) { return t0 + microseconds(us); };
+  HoldUps h;
+  EXPECT_EQ(h.ms_within(at(0), at(10'000)), 0.0);
+  h.begin(at(0));
+  h.end(at(2'000));  // before the frame came at 1 ms: 1 ms of it counts
+  h.begin(at(3'000));
+  h.end(at(4'500));
+  h.begin(at(5'000));
+  h.end(at(6'500));
+  EXPECT_DOUBLE_EQ(h.ms_within(at(1'000), at(7'000)), 4.0);
+  EXPECT_DOUBLE_EQ(h.ms_within(at(2'500), at(6'000)), 2.5);
+  EXPECT_TRUE(late_at_entry(5.0, h.ms_within(at(2'500), at(7'500)), 2.0, 0.4, 16.7));
+  h.begin(at(8'000));  // still waiting
+  EXPECT_DOUBLE_EQ(h.ms_within(at(7'000), at(9'000)), 1.0);
+  // Only the last kKept waits are kept: older ones have long ended.
+  for (int i = 0; i < static_cast<int>(HoldUps::kKept); ++i) {
+    h.begin(at(10'000 + i * 1'000));
+    h.end(at(10'500 + i * 1'000));
+  }
+  EXPECT_DOUBLE_EQ(h.ms_within(at(0), at(100'000)), 0.5 * static_cast<double>(HoldUps::kKept));
+  h.clear();
+  EXPECT_EQ(h.ms_within(at(0), at(100'000)), 0.0);
+}
+
 TEST(EntryDeadline, AFrameIsLateBeyondTheFixedDeadlineOnlyPastItsShareOrWhenHeldUp) {
   // 30 fps, deadline 2 ms, share 0.4: 13.3 ms.
   EXPECT_FALSE(late_at_entry(1.9, 0.0, 2.0, 0.4, 33.3));

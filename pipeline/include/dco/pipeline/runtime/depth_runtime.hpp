@@ -206,10 +206,9 @@ class DepthRuntime {
   bool stereo_wait(std::unique_lock<std::mutex>& lock, std::stop_token stop, Ready&& ready) {
     if (ready()) return true;
     // Held up by the later stages: the entry deadline's share does not cover this wait.
-    held_up_since_ = Clock::now();
-    held_up_until_ = Clock::time_point::max();
+    hold_ups_.begin(Clock::now());
     const auto until_now = [this](bool result) {
-      held_up_until_ = Clock::now();
+      hold_ups_.end(Clock::now());
       return result;
     };
     while (true) {
@@ -283,9 +282,8 @@ class DepthRuntime {
   int width_ = 0, height_ = 0, channels_ = 0;
   std::size_t entry_high_water_ = 0;
   FrameInterval frame_interval_;  // of the sequence's capture times
-  // The stereo thread's last wait for the later stages (a slot, room in the queue); until is
-  // max() while it lasts.
-  Clock::time_point held_up_since_{}, held_up_until_{};
+  // The stereo thread's last waits for the later stages (a slot, room in the queue).
+  HoldUps hold_ups_;
 
   // Stereo -> contour.
   std::vector<SlotEntry> slots_;

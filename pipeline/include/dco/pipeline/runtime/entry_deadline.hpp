@@ -32,6 +32,28 @@ class FrameInterval {
   bool has_last_ = false;
 };
 
+// The stereo thread's last waits for the later stages, so a frame's time held up at the entry
+// counts every one of them since it came (a slot, then room in a queue: two waits a frame), not
+// only the last. Fixed room, no allocation; the thread's waits never overlap.
+class HoldUps {
+ public:
+  using Clock = std::chrono::steady_clock;
+  static constexpr std::size_t kKept = 8;
+
+  void begin(Clock::time_point at);  // a wait starts; it lasts until end()
+  void end(Clock::time_point at);
+  void clear();
+  // ms of [from, to] spent in the kept waits (one still going counts up to `to`).
+  double ms_within(Clock::time_point from, Clock::time_point to) const;
+
+ private:
+  struct Wait {
+    Clock::time_point since, until;
+  };
+  std::array<Wait, kKept> waits_{};
+  std::size_t count_ = 0, next_ = 0;
+};
+
 // Whether the stereo stage should take a frame from the entry as a flow neighbour only (late):
 // when it waited there longer than deadline_ms and either waited longer than `share` of the
 // frame interval or spent more than deadline_ms of its wait while the stereo thread waited for
