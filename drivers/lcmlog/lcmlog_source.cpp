@@ -90,15 +90,28 @@ class LcmLogSource final : public PacedSource {
   std::uint64_t frame_number(std::uint64_t) const override {
     return static_cast<std::uint64_t>(message_.frame_seq);
   }
-  std::span<const ImuSample> frame_imu() const override { return imu_; }
+  // The replay stamps a frame when it delivers it; the samples carry the headset's clock. Each
+  // keeps its offset to the recorded frame's capture time, moved onto the replay's time line, so
+  // a frame and its samples share one clock (and a re-recorded replay keeps them together).
+  // Between frames the samples follow the replay's pace, not the recorded one. The arithmetic
+  // wraps instead of overflowing on a damaged log's stamps.
+  std::span<const ImuSample> frame_imu(std::int64_t capture_ns) override {
+    replayed_imu_.assign(imu_.begin(), imu_.end());
+    const auto shift =
+        static_cast<std::uint64_t>(capture_ns) - static_cast<std::uint64_t>(message_.capture_ns);
+    for (ImuSample& s : replayed_imu_)
+      s.capture_ns = static_cast<std::int64_t>(static_cast<std::uint64_t>(s.capture_ns) + shift);
+    return replayed_imu_;
+  }
 
   std::string path_, where_, channel_, calibration_toml_;
   std::unique_ptr<LcmLogReader> reader_;
   LcmLogEvent event_;
   ::dco::raw_stereo_t message_;
   Image<std::uint8_t> left_, right_;
-  std::vector<ImuSample> imu_;
-  bool pending_ = false;  // the first pair, read at open, not yet delivered
+  std::vector<ImuSample> imu_;           // as recorded
+  std::vector<ImuSample> replayed_imu_;  // on the replay's time line
+  bool pending_ = false;                 // the first pair, read at open, not yet delivered
   StereoCalibration calibration_;
   SourceInfo info_;
 };

@@ -63,8 +63,8 @@ void PacedSource::run(std::stop_token stop, FrameSink& sink) {
       return;
     }
     frame.seq = frame_number(next_seq_++);
-    frame.imu = frame_imu();
     frame.capture_ns = monotonic_ns();
+    frame.imu = frame_imu(frame.capture_ns);
     try {
       sink.on_frame(frame);
     } catch (const std::exception& e) {

@@ -27,8 +27,9 @@ class PacedSource : public FrameSource {
   // The number frame `counter` (0, 1, ...) is delivered with, asked right after produce() made
   // it: the counter itself, or the number a recording gave the frame.
   virtual std::uint64_t frame_number(std::uint64_t counter) const { return counter; }
-  // The IMU samples that came with the frame produce() made (a recording's); none by default.
-  virtual std::span<const ImuSample> frame_imu() const { return {}; }
+  // The IMU samples that came with the frame produce() made (a recording's), stamped on the time
+  // line of `capture_ns`, the time the frame is delivered with; none by default.
+  virtual std::span<const ImuSample> frame_imu(std::int64_t /*capture_ns*/) { return {}; }
   // After this many frames the source keeps running but delivers nothing more: a camera that hung
   // (0 = never).
   void set_stall_after(std::uint64_t frames) { stall_after_ = frames; }

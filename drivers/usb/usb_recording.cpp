@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <mutex>
+#include <thread>
 #include <utility>
 
 #include <fmt/format.h>
@@ -44,6 +45,44 @@ class CaptureWriter {
   // Stamps and writes one record.
   void write(UsbCaptureRecord& r) {
     std::lock_guard lock(mutex_);
+    write_locked(r);
+  }
+
+  // Writes a transfer completion or hotplug note, flagged when it arrived inside a call.
+  void write_completion(UsbCaptureRecord& r) {
+    std::lock_guard lock(mutex_);
+    r.flags = call_thread_ == std::this_thread::get_id() ? call_flag_ : 0;
+    write_locked(r);
+  }
+
+  // While it lives, completions this thread writes arrived inside a call (libusb handles events,
+  // hotplug callbacks among them, inside its synchronous transfers) and carry `flag`: a replay
+  // then delivers them inside the same call, where the driver saw them.
+  class Call {
+   public:
+    Call(CaptureWriter& w, std::uint8_t flag) : w_(w) {
+      std::lock_guard lock(w_.mutex_);
+      outer_thread_ = w_.call_thread_;
+      outer_flag_ = w_.call_flag_;
+      w_.call_thread_ = std::this_thread::get_id();
+      w_.call_flag_ = flag;
+    }
+    ~Call() {
+      std::lock_guard lock(w_.mutex_);
+      w_.call_thread_ = outer_thread_;
+      w_.call_flag_ = outer_flag_;
+    }
+    Call(const Call&) = delete;
+    Call& operator=(const Call&) = delete;
+
+   private:
+    CaptureWriter& w_;
+    std::thread::id outer_thread_;
+    std::uint8_t outer_flag_ = 0;
+  };
+
+ private:
+  void write_locked(UsbCaptureRecord& r) {
     if (!file_) return;
     r.t_ns = clock_();
     buffer_.clear();
@@ -51,7 +90,6 @@ class CaptureWriter {
     if (std::fwrite(buffer_.data(), buffer_.size(), 1, file_) != 1) fail();
   }
 
- private:
   void fail() {
     std::fprintf(stderr, "dco: USB capture '%s': write failed (%s); recording stopped\n",
                  path_.c_str(), std::strerror(errno));
@@ -64,17 +102,25 @@ class CaptureWriter {
   std::mutex mutex_;
   std::FILE* file_ = nullptr;
   std::vector<std::uint8_t> buffer_;
+  std::thread::id call_thread_;  // the thread inside a call; none when no call runs
+  std::uint8_t call_flag_ = 0;
 };
 
-// Runs `call`, notes its outcome in `r`, writes `r` and passes on what the call threw.
+// Runs `call`, notes its outcome in `r`, writes `r` and passes on what the call threw. The record
+// is written once the call returns, so completions that arrived inside it come before it, flagged
+// kInNextCall.
 template <typename F>
 auto recorded(CaptureWriter& w, UsbCaptureRecord& r, F&& call) {
+  auto inside = [&] {
+    CaptureWriter::Call in_call(w, UsbCaptureRecord::kInNextCall);
+    return call();
+  };
   try {
     if constexpr (std::is_void_v<decltype(call())>) {
-      call();
+      inside();
       w.write(r);
     } else {
-      auto result = call();
+      auto result = inside();
       w.write(r);
       return result;
     }
@@ -137,11 +183,10 @@ class RecordingDevice final : public UsbDevice {
       // Cancellations are what stop_streams() does; a replay reproduces them by itself.
       if (status != TransferStatus::kCancelled) {
         // One record serves every completion: its buffer stops growing after the first.
-        transfer_.flags = in_call_ ? UsbCaptureRecord::kInCall : 0;
         transfer_.endpoint = endpoint;
         transfer_.status = status;
         transfer_.data.assign(data.begin(), data.end());
-        writer_->write(transfer_);
+        writer_->write_completion(transfer_);
       }
       cb(status, data);
     };
@@ -153,9 +198,9 @@ class RecordingDevice final : public UsbDevice {
   void stop_streams() override {
     UsbCaptureRecord r = make(Kind::kStopStreams);
     writer_->write(r);
-    in_call_ = true;
+    // Written before the call: what completes while it waits for its transfers follows it.
+    CaptureWriter::Call in_call(*writer_, UsbCaptureRecord::kInCall);
     inner_->stop_streams();
-    in_call_ = false;
   }
 
   int transfers_in_flight() const override { return inner_->transfers_in_flight(); }
@@ -172,7 +217,6 @@ class RecordingDevice final : public UsbDevice {
   std::shared_ptr<CaptureWriter> writer_;
   std::uint16_t id_;
   // Event thread only, like every call here.
-  bool in_call_ = false;
   UsbCaptureRecord transfer_ = make(Kind::kTransfer);
 };
 
@@ -183,6 +227,7 @@ class RecordingTransport final : public UsbTransport {
       : inner_(std::move(inner)),
         writer_(std::make_shared<CaptureWriter>(path, std::move(clock))) {}
 
+  // Listing handles no events: nothing can arrive inside it.
   std::vector<UsbDeviceInfo> list(std::uint16_t vendor, std::uint16_t product) override {
     UsbCaptureRecord r;
     r.kind = Kind::kList;
@@ -207,7 +252,7 @@ class RecordingTransport final : public UsbTransport {
     inner_->watch_hotplug(vendor, product, [w = writer_, cb = std::move(on_change)] {
       UsbCaptureRecord r;
       r.kind = Kind::kHotplug;
-      w->write(r);
+      w->write_completion(r);
       cb();
     });
   }

@@ -1,6 +1,7 @@
 // A transport that plays a capture back: it answers the driver's calls with the recorded outcomes
 // and delivers the recorded completions at their recorded times on a virtual clock.
 
+#include <algorithm>
 #include <atomic>
 #include <deque>
 #include <map>
@@ -27,6 +28,11 @@ constexpr int kIdleCallsBeforeTimePasses = 64;
 
 bool is_completion(Kind k) {
   return k == Kind::kTransfer || k == Kind::kHotplug;
+}
+
+// A completion that arrived inside a call still running: that call's record comes after it.
+bool inside_next_call(const UsbCaptureRecord& r) {
+  return is_completion(r.kind) && (r.flags & UsbCaptureRecord::kInNextCall);
 }
 
 struct Stream {
@@ -90,19 +96,27 @@ struct Replay {
     throw UsbError(message, false);
   }
 
+  // The next call's record, past the completions that arrived inside that call; null when the
+  // capture ends first.
+  const UsbCaptureRecord* next_call() {
+    for (std::size_t i = 0; has(i); ++i)
+      if (!inside_next_call(window[i])) return &window[i];
+    return nullptr;
+  }
+
   std::string describe_next() {
-    if (at_end()) return "its end";
-    const UsbCaptureRecord& r = next();
-    return fmt::format("{} (device {})", to_string(r.kind), r.device);
+    const UsbCaptureRecord* r = next_call();
+    if (!r) return "its end";
+    return fmt::format("{} (device {})", to_string(r->kind), r->device);
   }
 
   // What is left is the recorded driver shutting down (its streams stopped when it was told to
-  // stop): the replay has reached its end.
+  // stop, a call that never returned before the recording ended): the replay has reached its end.
   bool only_shutdown_left() {
     for (std::size_t i = 0; has(i); ++i) {
       const UsbCaptureRecord& r = window[i];
       if (r.kind != Kind::kStopStreams && r.kind != Kind::kList &&
-          !(r.flags & UsbCaptureRecord::kInCall))
+          !(r.flags & (UsbCaptureRecord::kInCall | UsbCaptureRecord::kInNextCall)))
         return false;
     }
     return true;
@@ -120,14 +134,21 @@ struct Replay {
   const UsbCaptureRecord& expect(Kind kind, std::uint16_t device) {
     if (finished) throw UsbError(fmt::format("USB replay of '{}' has ended", path), true);
     skip_lists();
-    if (at_end() || next().kind != kind || next().device != device)
+    const UsbCaptureRecord* r = next_call();
+    if (!r || r->kind != kind || r->device != device)
       diverge(fmt::format("the capture has {} next, the driver called {} (device {})",
                           describe_next(), to_string(kind), device));
-    return next();
+    return *r;
   }
 
-  // Consumes the record of a call and replays its outcome.
+  // Delivers what arrived inside the call the driver is making, at the times it arrived (the
+  // driver reads its clock there), then consumes the call's record and replays its outcome.
   void conclude() {
+    while (inside_next_call(next())) {
+      const UsbCaptureRecord c = advance();
+      now = std::max<std::int64_t>(now, c.t_ns);
+      deliver(c);
+    }
     const UsbCaptureRecord r = advance();
     if (r.outcome != Outcome::kOk) throw UsbError(r.message, r.outcome == Outcome::kNoDevice);
   }
@@ -268,10 +289,11 @@ class ReplayTransport final : public UsbReplayTransport {
   std::unique_ptr<UsbDevice> open(const UsbDeviceInfo& device) override {
     Replay& r = *r_;
     r.skip_lists();
-    if (r.at_end() || r.next().kind != Kind::kOpen)
+    const UsbCaptureRecord* call = r.next_call();
+    if (!call || call->kind != Kind::kOpen)
       r.diverge(fmt::format("the capture has {} next, the driver opened {}", r.describe_next(),
                             device.port_path));
-    const UsbCaptureRecord& rec = r.next();
+    const UsbCaptureRecord& rec = *call;
     if (rec.port_path != device.port_path)
       r.diverge(
           fmt::format("the capture opens '{}', the driver '{}'", rec.port_path, device.port_path));
@@ -295,9 +317,10 @@ class ReplayTransport final : public UsbReplayTransport {
       return;
     }
     const UsbCaptureRecord& rec = r.next();
-    if (!is_completion(rec.kind)) {
-      // The driver makes the next call when its clock says so; let time run up to it, and past
-      // it only when the driver keeps polling without making it.
+    if (!is_completion(rec.kind) || inside_next_call(rec)) {
+      // The driver makes the next call when its clock says so (one with completions inside it
+      // started before the first of them); let time run up to it, and past it only when the
+      // driver keeps polling without making it.
       if (rec.t_ns > r.now) {
         r.now = std::min(deadline, rec.t_ns);
       } else if (++r.idle_calls > kIdleCallsBeforeTimePasses) {
@@ -322,7 +345,7 @@ class ReplayTransport final : public UsbReplayTransport {
     const std::int64_t t = rec.t_ns;
     r.now = std::max<std::int64_t>(r.now, t);
     while (!r.finished && is_completion(r.next().kind) && r.next().t_ns == t &&
-           !(r.next().flags & UsbCaptureRecord::kInCall))
+           !(r.next().flags & (UsbCaptureRecord::kInCall | UsbCaptureRecord::kInNextCall)))
       r.deliver(r.advance());
   }
 

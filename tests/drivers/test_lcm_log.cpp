@@ -247,6 +247,16 @@ TEST(RecordedPreviews, OnlyWholeGridsAreKeptForTheReplayCheck) {
   EXPECT_EQ(r.undecodable, 4);
 }
 
+// The headset's clock when it captured frame i of recorded_log(): up for three days, at 30 fps.
+std::int64_t recorded_capture_ns(int i) {
+  return 259'200'000'000'000 + std::int64_t{i} * 33'333'333;
+}
+// Sample k of frame i against that frame's capture time: the earlier ones before it, the last
+// one after it (readout).
+std::int64_t recorded_imu_offset_ns(int i, int k) {
+  return std::int64_t{k - i} * 4'000'000 + 1'500'000;
+}
+
 // A log as dcod records it: the scene's pairs on DCO_RAW between other channels, numbered from
 // 100 as a recording switched on mid-run would be, frame i with i IMU samples.
 std::string recorded_log(int frames, int width, int height) {
@@ -259,12 +269,14 @@ std::string recorded_log(int frames, int width, int height) {
     scene.render(i, s);
     std::vector<ImuSample> imu(static_cast<std::size_t>(i));
     for (int k = 0; k < i; ++k) {
-      imu[static_cast<std::size_t>(k)].capture_ns = 1000 * i + k;
+      imu[static_cast<std::size_t>(k)].capture_ns =
+          recorded_capture_ns(i) + recorded_imu_offset_ns(i, k);
       imu[static_cast<std::size_t>(k)].accel_mps2 = {static_cast<float>(i), 0.5f, 9.81f};
       imu[static_cast<std::size_t>(k)].gyro_radps = {0.1f, static_cast<float>(k), 0.3f};
     }
     StereoFrame f = frame_of(s.left, s.right, imu);
     f.seq = static_cast<std::uint64_t>(100 + i);
+    f.capture_ns = recorded_capture_ns(i);
     ::dco::raw_stereo_t m;
     encoder.encode(f, calibration, m);
     events.push_back(event_of(2 * i, "DCO_RAW", dco::testing::lcm_bytes(m)));
@@ -276,6 +288,7 @@ std::string recorded_log(int frames, int width, int height) {
 struct Collect : FrameSink {
   std::vector<std::vector<std::uint8_t>> lefts;
   std::vector<std::uint64_t> seqs;
+  std::vector<std::int64_t> captures;
   std::vector<std::vector<ImuSample>> imus;
   bool ended = false;
   std::string error;
@@ -288,6 +301,7 @@ struct Collect : FrameSink {
     std::lock_guard lock(mutex);
     lefts.push_back(std::move(l));
     seqs.push_back(f.seq);
+    captures.push_back(f.capture_ns);
     imus.emplace_back(f.imu.begin(), f.imu.end());
   }
   void on_end() override {
@@ -329,12 +343,11 @@ TEST(LcmLogSource, ReplaysTheRecordedPairsAndNamesDamage) {
     for (int y = 0; y < 64; ++y)
       ASSERT_EQ(0,
                 std::memcmp(&sink.lefts[4][static_cast<std::size_t>(y) * 96], s.left.row(y), 96));
-    // The headset's frame numbers and IMU samples come with the pairs.
+    // The headset's frame numbers and IMU samples come with the pairs (their stamps: below).
     EXPECT_EQ(sink.seqs, (std::vector<std::uint64_t>{100, 101, 102, 103, 104}));
     for (std::size_t i = 0; i < 5; ++i) {
       ASSERT_EQ(sink.imus[i].size(), i);
       for (std::size_t k = 0; k < i; ++k) {
-        EXPECT_EQ(sink.imus[i][k].capture_ns, static_cast<std::int64_t>(1000 * i + k));
         EXPECT_EQ(sink.imus[i][k].accel_mps2[0], static_cast<float>(i));
         EXPECT_EQ(sink.imus[i][k].gyro_radps[1], static_cast<float>(k));
       }
@@ -371,6 +384,38 @@ TEST(LcmLogSource, ReplaysTheRecordedPairsAndNamesDamage) {
     ADD_FAILURE() << "opened a text file";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("no LCM sync word"), std::string::npos) << e.what();
+  }
+}
+
+TEST(LcmLogSource, ImuSamplesKeepTheirOffsetsToTheFrameOnTheReplaysClock) {
+  dco::testing::TempDir dir;
+  const auto path = dir.path() / "rec.log";
+  std::ofstream(path, std::ios::binary) << recorded_log(6, 64, 48);
+  const auto steady_ns = [] {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+               std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+  };
+  const std::int64_t before = steady_ns();
+  auto source = open_source("lcmlog://" + path.string() + "?fps=0");
+  Collect sink;
+  source->start(sink);
+  ASSERT_TRUE(sink.wait());
+  source->stop();
+  const std::int64_t after = steady_ns();
+  EXPECT_TRUE(sink.ended) << sink.error;
+  ASSERT_EQ(sink.captures.size(), 6u);
+  for (std::size_t i = 0; i < 6; ++i) {
+    SCOPED_TRACE(i);
+    // Frames are stamped on the replay's clock, not the headset's...
+    EXPECT_GE(sink.captures[i], before);
+    EXPECT_LE(sink.captures[i], after);
+    // ...and so are their samples, as far from the frame as they were when recorded.
+    ASSERT_EQ(sink.imus[i].size(), i);
+    for (std::size_t k = 0; k < i; ++k)
+      EXPECT_EQ(sink.imus[i][k].capture_ns - sink.captures[i],
+                recorded_imu_offset_ns(static_cast<int>(i), static_cast<int>(k)))
+          << "sample " << k;
   }
 }
 

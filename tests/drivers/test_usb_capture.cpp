@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -151,6 +153,35 @@ std::unique_ptr<FrameSource> open_replay(const std::string& path, IndemindOption
   return open_indemind(std::move(replay), io, "indemind://?replay");
 }
 
+// Replays `path` and checks that it gives what the live run gave: every frame the driver
+// accepted, in order, each one the live consumer saw byte for byte and with the same capture
+// time, and every counter equal. `replayed` gets the replayed frames.
+void replay_and_compare(const std::string& path, Recorder& live,
+                        const std::map<std::string, std::uint64_t>& live_counters,
+                        std::vector<Seen>& replayed) {
+  Recorder sink;
+  auto source = open_replay(path, fast_mode());
+  source->start(sink);
+  ASSERT_TRUE(sink.wait_end());
+  source->stop();
+  EXPECT_EQ(sink.error, "");
+  EXPECT_EQ(sink.frames.size(), live_counters.at("frames"));
+  EXPECT_EQ(counters_of(*source), live_counters);
+  std::size_t j = 0, matched = 0;
+  for (const Seen& s : live.frames) {
+    while (j < sink.frames.size() && sink.frames[j].capture_ns < s.capture_ns) ++j;
+    ASSERT_LT(j, sink.frames.size());
+    EXPECT_EQ(sink.frames[j].left, s.left);
+    EXPECT_EQ(sink.frames[j].right, s.right);
+    EXPECT_EQ(sink.frames[j].capture_ns, s.capture_ns);
+    // IMU samples of a frame the live consumer never took went out with the next one it took.
+    matched += sink.frames[j].left == s.left && sink.frames[j].right == s.right &&
+               sink.frames[j].capture_ns == s.capture_ns;
+  }
+  EXPECT_EQ(matched, live.frames.size());
+  replayed = std::move(sink.frames);
+}
+
 TEST(UsbCapture, EveryRecordKindSurvivesTheFile) {
   std::vector<UsbCaptureRecord> in(9);
   in[0].kind = Kind::kList;
@@ -281,28 +312,8 @@ TEST(UsbCapture, ReplayReproducesARecordedSessionWithFaultsFrameForFrame) {
   ASSERT_GT(live.frames.size(), 10u);
   ASSERT_GE(live_counters.at("reconnects"), 1u);
 
-  Recorder replayed;
-  auto source = open_replay(path, fast_mode());
-  source->start(replayed);
-  ASSERT_TRUE(replayed.wait_end());
-  source->stop();
-  EXPECT_EQ(replayed.error, "");
-  // Every frame the driver accepted comes out of the replay, in order; each one the live
-  // consumer saw is among them, byte for byte and with the same capture time.
-  EXPECT_EQ(replayed.frames.size(), live_counters.at("frames"));
-  EXPECT_EQ(counters_of(*source), live_counters);
-  std::size_t j = 0, matched = 0;
-  for (const Seen& s : live.frames) {
-    while (j < replayed.frames.size() && replayed.frames[j].capture_ns < s.capture_ns) ++j;
-    ASSERT_LT(j, replayed.frames.size());
-    EXPECT_EQ(replayed.frames[j].left, s.left);
-    EXPECT_EQ(replayed.frames[j].right, s.right);
-    EXPECT_EQ(replayed.frames[j].capture_ns, s.capture_ns);
-    // IMU samples of a frame the live consumer never took went out with the next one it took.
-    matched += replayed.frames[j].left == s.left && replayed.frames[j].right == s.right &&
-               replayed.frames[j].capture_ns == s.capture_ns;
-  }
-  EXPECT_EQ(matched, live.frames.size());
+  std::vector<Seen> replayed;
+  ASSERT_NO_FATAL_FAILURE(replay_and_compare(path, live, live_counters, replayed));
 
   // Cut the file in the middle: the frames before the cut, then an error that says where.
   std::vector<std::uint8_t> bytes = read_all(path);
@@ -315,9 +326,9 @@ TEST(UsbCapture, ReplayReproducesARecordedSessionWithFaultsFrameForFrame) {
   cut->stop();
   EXPECT_NE(partial.error.find("capture ends inside record"), std::string::npos) << partial.error;
   EXPECT_GT(partial.frames.size(), 10u);
-  ASSERT_LT(partial.frames.size(), replayed.frames.size());
+  ASSERT_LT(partial.frames.size(), replayed.size());
   for (std::size_t i = 0; i < partial.frames.size(); ++i)
-    EXPECT_EQ(partial.frames[i], replayed.frames[i]) << i;
+    EXPECT_EQ(partial.frames[i], replayed[i]) << i;
 
   // A driver asked for another mode leaves the recording at the first control that differs.
   IndemindOptions other = fast_mode();
@@ -331,6 +342,189 @@ TEST(UsbCapture, ReplayReproducesARecordedSessionWithFaultsFrameForFrame) {
   EXPECT_EQ(diverged.frames.size(), 0u);
   std::remove(path.c_str());
   std::remove(cut_path.c_str());
+}
+
+// How many hotplug notes the capture has inside a control transfer: flagged, and followed by a
+// control record after at most more flagged completions.
+std::size_t hotplugs_inside_controls(const std::string& path) {
+  const std::vector<std::uint8_t> bytes = read_all(path);
+  const UsbCapture c = parse_usb_capture(bytes);
+  EXPECT_EQ(c.problem, "");
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < c.records.size(); ++i) {
+    if (c.records[i].kind != Kind::kHotplug ||
+        !(c.records[i].flags & UsbCaptureRecord::kInNextCall))
+      continue;
+    std::size_t k = i + 1;
+    while (k < c.records.size() && (c.records[k].flags & UsbCaptureRecord::kInNextCall)) ++k;
+    n += k < c.records.size() && c.records[k].kind == Kind::kControl;
+  }
+  return n;
+}
+
+TEST(UsbCapture, HotplugNotesInsideControlTransfersReplayInsideThem) {
+  const std::string path = temp_path("hotplug-in-control.usbcap");
+  Recorder live;
+  std::map<std::string, std::uint64_t> live_counters;
+  {
+    SimulatedIndemind::Options o;
+    o.seed = 5;
+    auto sim_owned = std::make_unique<SimulatedIndemind>(o);
+    SimulatedIndemind* sim = sim_owned.get();
+    IndemindOptions io = fast_mode();
+    io.clock = [sim] { return sim->now_ns(); };
+    auto source = open_indemind(
+        make_recording_transport(std::move(sim_owned), path, [sim] { return sim->now_ns(); }), io,
+        "indemind://");
+    source->start(live);
+    // A second module plugged in while the driver reads the flash of the one it reopens...
+    sim->hotplug_in_control(3);
+    ASSERT_TRUE(sim->inject_and_settle(Fault::kUnplug, 200));
+    // ...and a flaky cable that drops the module while the driver reads its flash: that reopen
+    // fails, the next one (after the note) finds it back.
+    sim->unplug_in_control(4, 100);
+    ASSERT_TRUE(sim->inject_and_settle(Fault::kUnplug, 200));
+    ASSERT_TRUE(sim->inject_and_settle(Fault::kControlBusy, 2));
+    source->stop();
+    live_counters = counters_of(*source);
+    EXPECT_EQ(sim->record().control_hotplugs, 4u);
+  }
+  EXPECT_EQ(live_counters.at("reconnects"), 2u);
+  EXPECT_EQ(live_counters.at("disconnects"), 2u);
+  ASSERT_GT(live.frames.size(), 5u);
+  EXPECT_EQ(hotplugs_inside_controls(path), 4u);
+
+  std::vector<Seen> replayed;
+  ASSERT_NO_FATAL_FAILURE(replay_and_compare(path, live, live_counters, replayed));
+  std::remove(path.c_str());
+}
+
+// A bus whose synchronous calls handle events, as libusb's do: each control transfer and
+// clear_halt() completes a transfer of the running stream and raises the hotplug note before it
+// answers, and so does each handle_events(). Its clock moves 1 ms per round of events.
+class EventfulBus final : public UsbTransport {
+ public:
+  std::vector<UsbDeviceInfo> list(std::uint16_t, std::uint16_t) override {
+    return {{1, 4, "1-2", 480, "EV1"}};
+  }
+  std::unique_ptr<UsbDevice> open(const UsbDeviceInfo& d) override {
+    return std::make_unique<Device>(*this, d);
+  }
+  void watch_hotplug(std::uint16_t, std::uint16_t, std::function<void()> on_change) override {
+    hotplug_ = std::move(on_change);
+  }
+  void handle_events(std::chrono::milliseconds) override { run_events(); }
+  std::int64_t now_ns() const { return now_; }
+
+ private:
+  class Device final : public UsbDevice {
+   public:
+    Device(EventfulBus& bus, UsbDeviceInfo info) : bus_(bus), info_(std::move(info)) {}
+    const UsbDeviceInfo& info() const override { return info_; }
+    void claim_interface(int) override {}
+    std::size_t control(std::uint8_t, std::uint8_t, std::uint16_t, std::uint16_t,
+                        std::span<std::uint8_t> data, std::chrono::milliseconds) override {
+      bus_.run_events();
+      std::fill(data.begin(), data.end(), std::uint8_t{0x5a});
+      return data.size();
+    }
+    void clear_halt(std::uint8_t) override {
+      bus_.run_events();
+      throw UsbError("clear_halt: the device is gone", true);
+    }
+    void start_in_stream(std::uint8_t, EndpointType, std::size_t, int,
+                         TransferCallback on_complete) override {
+      bus_.stream_ = std::move(on_complete);
+    }
+    void stop_streams() override { bus_.stream_ = nullptr; }
+    int transfers_in_flight() const override { return bus_.stream_ ? 1 : 0; }
+
+   private:
+    EventfulBus& bus_;
+    UsbDeviceInfo info_;
+  };
+
+  void run_events() {
+    now_ += 1'000'000;
+    if (stream_) {
+      const std::uint8_t b = next_byte_++;
+      const std::array<std::uint8_t, 3> bytes = {b, b, b};
+      stream_(TransferStatus::kCompleted, bytes);
+    }
+    if (hotplug_) hotplug_();
+  }
+
+  TransferCallback stream_;
+  std::function<void()> hotplug_;
+  std::int64_t now_ = 1'000'000'000;
+  std::uint8_t next_byte_ = 1;
+};
+
+// Makes the same calls on any bus; returns what reached the caller, and inside which call.
+std::vector<std::string> drive(UsbTransport& bus) {
+  std::vector<std::string> seen;
+  std::string inside;
+  bus.watch_hotplug(1, 2, [&] { seen.push_back(inside + "hotplug"); });
+  const std::vector<UsbDeviceInfo> found = bus.list(1, 2);
+  std::unique_ptr<UsbDevice> device = bus.open(found.at(0));
+  device->start_in_stream(0x81, EndpointType::kBulk, 64, 1,
+                          [&](TransferStatus status, std::span<const std::uint8_t> data) {
+                            seen.push_back(inside + "transfer " + to_string(status) + " " +
+                                           std::to_string(data.size()) + "x" +
+                                           std::to_string(data.empty() ? 0 : data[0]));
+                          });
+  bus.handle_events(std::chrono::milliseconds(20));
+  std::array<std::uint8_t, 4> reply{};
+  inside = "in control: ";
+  const std::size_t n = device->control(0xc0, 1, 2, 3, reply, std::chrono::milliseconds(100));
+  inside.clear();
+  seen.push_back("control " + std::to_string(n) + "x" + std::to_string(reply[3]));
+  inside = "in clear_halt: ";
+  try {
+    device->clear_halt(0x81);
+    seen.push_back("clear_halt");
+  } catch (const UsbError& e) {
+    seen.push_back(std::string("clear_halt failed, gone: ") + (e.no_device() ? "yes" : "no"));
+  }
+  inside.clear();
+  bus.handle_events(std::chrono::milliseconds(20));
+  device->stop_streams();
+  return seen;
+}
+
+TEST(UsbCapture, CompletionsInsideACallReachTheDriverInsideItOnReplay) {
+  const std::string path = temp_path("events-in-calls.usbcap");
+  auto bus = std::make_unique<EventfulBus>();
+  EventfulBus* clock = bus.get();
+  std::vector<std::string> live;
+  {
+    auto recording =
+        make_recording_transport(std::move(bus), path, [clock] { return clock->now_ns(); });
+    live = drive(*recording);
+  }
+  const std::vector<std::string> want = {"transfer completed 3x1",
+                                         "hotplug",
+                                         "in control: transfer completed 3x2",
+                                         "in control: hotplug",
+                                         "control 4x90",
+                                         "in clear_halt: transfer completed 3x3",
+                                         "in clear_halt: hotplug",
+                                         "clear_halt failed, gone: yes",
+                                         "transfer completed 3x4",
+                                         "hotplug"};
+  ASSERT_EQ(live, want);
+
+  auto replay = open_usb_replay(path);
+  std::vector<std::string> replayed;
+  try {
+    replayed = drive(*replay);
+  } catch (const UsbError& e) {
+    ADD_FAILURE() << e.what();
+  }
+  EXPECT_EQ(replayed, live);
+  EXPECT_TRUE(replay->finished());
+  EXPECT_EQ(replay->finish_error(), "");
+  std::remove(path.c_str());
 }
 
 TEST(UsbCapture, UriRefusesBadCapturesWithOneLine) {

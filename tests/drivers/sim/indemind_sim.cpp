@@ -77,6 +77,9 @@ struct SimulatedIndemind::State {
 
   std::vector<std::uint8_t> flash_header, blob, xu_reply;
   int busy_left = 0;
+  int hotplugs_in_control = 0;
+  int unplug_in_control = -1;  // control transfers before the one that meets an unplug
+  std::int64_t unplug_in_control_replug_ns = 0;
 
   Stream video, imu;
   int generation = 0;
@@ -369,6 +372,7 @@ class SimulatedIndemind::Device final : public drivers::UsbDevice {
   std::size_t control(std::uint8_t type, std::uint8_t request, std::uint16_t value,
                       std::uint16_t index, std::span<std::uint8_t> data,
                       std::chrono::milliseconds) override {
+    events_inside_control();
     std::lock_guard lock(s_->mu);
     check_alive();
     State& s = *s_;
@@ -477,6 +481,39 @@ class SimulatedIndemind::Device final : public drivers::UsbDevice {
   void check_alive() const {
     if (!s_->present || session_ != s_->session)
       throw UsbError("the device is gone (LIBUSB_ERROR_NO_DEVICE)", true);
+  }
+
+  // The hotplug notes hotplug_in_control() and unplug_in_control() asked for, raised while the
+  // transfer runs, as libusb does; outside the lock, as handle_events() runs callbacks.
+  void events_inside_control() {
+    std::function<void()> note;
+    {
+      std::lock_guard lock(s_->mu);
+      State& s = *s_;
+      bool raise = false;
+      if (s.hotplugs_in_control > 0) {
+        --s.hotplugs_in_control;
+        raise = true;
+      }
+      if (s.unplug_in_control >= 0 && s.unplug_in_control-- == 0 && s.present &&
+          session_ == s.session) {
+        const bool note_pending = s.hotplug_note;
+        std::vector<Completion> out;
+        s.unplug_now(s.unplug_in_control_replug_ns, out);
+        // Transfers in flight complete with the next handle_events(); the note goes out here.
+        for (Completion& c : out) {
+          c.at = s.now;
+          s.pending.push_front(std::move(c));
+        }
+        s.hotplug_note = note_pending;
+        raise = true;
+      }
+      if (raise && s.hotplug) {
+        ++s.rec.control_hotplugs;
+        note = s.hotplug;
+      }
+    }
+    if (note) note();
   }
 
   indemind::StreamControl negotiate(const indemind::StreamControl& asked) const {
@@ -795,6 +832,17 @@ void SimulatedIndemind::set_present(bool present) {
       s.pending.push_front(std::move(c));
     }
   }
+}
+
+void SimulatedIndemind::hotplug_in_control(int count) {
+  std::lock_guard lock(state_->mu);
+  state_->hotplugs_in_control += count;
+}
+
+void SimulatedIndemind::unplug_in_control(int nth, int replug_ms) {
+  std::lock_guard lock(state_->mu);
+  state_->unplug_in_control = nth;
+  state_->unplug_in_control_replug_ns = std::int64_t{replug_ms} * 1'000'000;
 }
 
 std::int64_t SimulatedIndemind::now_ns() const {

@@ -89,6 +89,7 @@ class SimulatedIndemind final : public drivers::UsbTransport {
     std::uint64_t transfers_submitted = 0, transfers_completed = 0;
     std::uint64_t opens = 0;
     std::uint64_t busy_answers = 0;      // extension-unit answers that said busy
+    std::uint64_t control_hotplugs = 0;  // hotplug notes raised inside control transfers
     std::uint64_t expected_lost = 0;     // counter values between consecutive intact frames
     std::uint64_t recoveries = 0;        // replugs followed by a sound frame
     std::int64_t worst_recovery_ns = 0;  // longest replug -> first sound frame
@@ -119,6 +120,13 @@ class SimulatedIndemind final : public drivers::UsbTransport {
   bool inject_and_settle(Fault fault, int param,
                          std::chrono::milliseconds timeout = std::chrono::seconds(30));
   void set_present(bool present);  // plugged in (true) or not, from now on
+  // libusb handles events, hotplug callbacks among them, inside a synchronous transfer. The next
+  // `count` control transfers each raise a hotplug note before they answer (a second module
+  // plugged in while the driver reads flash).
+  void hotplug_in_control(int count);
+  // The `nth` control transfer from now (0: the next) meets an unplug: its hotplug note runs
+  // inside the transfer, which fails with the device gone; the module is back after `replug_ms`.
+  void unplug_in_control(int nth, int replug_ms);
   std::int64_t now_ns() const;
   Record record() const;
   int transfers_in_flight() const;

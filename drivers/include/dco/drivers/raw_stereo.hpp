@@ -30,8 +30,9 @@ class RawStereoEncoder {
 // that differ from what the message says.
 void decode_raw_stereo(const ::dco::raw_stereo_t& message, Image<std::uint8_t>& left,
                        Image<std::uint8_t>& right);
-// The message's IMU samples into `out` (its capacity reused). Throws dco::Error when a row does
-// not hold three values.
+// The message's IMU samples into `out` (its capacity reused), with the recorded stamps: the
+// headset's clock, like message.capture_ns (lcmlog:// moves both onto the replay's). Throws
+// dco::Error when a row does not hold three values.
 void decode_raw_imu(const ::dco::raw_stereo_t& message, std::vector<ImuSample>& out);
 
 }  // namespace dco::drivers

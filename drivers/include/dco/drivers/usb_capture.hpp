@@ -22,7 +22,10 @@ namespace dco::drivers {
 // File: the 8 bytes "DCOUSBC1", then records, all little-endian. A record is a 16-byte head
 // (u8 kind, u8 flags, u16 device, u32 body length, i64 time in ns) and its body. Strings are a
 // u16 length and bytes. Calls end their body with an outcome byte (0 ok, 1 failed, 2 device
-// gone) and, when it is not 0, the error message.
+// gone) and, when it is not 0, the error message. A call is written when it returns, except
+// stop_streams(), written when it starts. A transfer completion or hotplug note that arrived
+// inside a call (libusb handles events inside synchronous transfers) is flagged, so a replay
+// delivers it inside that call: kInNextCall before the call's record, kInCall after a stop's.
 struct UsbCaptureRecord {
   enum class Kind : std::uint8_t {
     kList = 1,     // list(vendor, product) and the devices it returned
@@ -35,7 +38,10 @@ struct UsbCaptureRecord {
     kTransfer,     // a completed transfer: endpoint, status, bytes
     kHotplug,      // the hotplug note
   };
-  static constexpr std::uint8_t kInCall = 1;  // flag: a completion delivered inside a device call
+  // Flags of completions delivered inside a device call: the stop_streams() recorded before it,
+  // or the call whose record comes next (after any more flagged completions).
+  static constexpr std::uint8_t kInCall = 1;
+  static constexpr std::uint8_t kInNextCall = 2;
 
   Kind kind = Kind::kList;
   std::uint8_t flags = 0;
