@@ -47,6 +47,18 @@ DcodOptions configured(const TempDir& dir, const std::filesystem::path& config,
   return o;
 }
 
+// dcod on the small scene in a private network namespace, with LCM on udpm as on a headset.
+DcodOptions on_udpm(const TempDir& dir, NotifySocket& notify) {
+  DcodOptions o;
+  o.args = {"--source", kScene,
+            "--set",    "lcm.url=udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304",
+            "--set",    "ring.path=" + (dir / "depth.shm").string()};
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  o.private_network = true;
+  return o;
+}
+
 // SIGHUP, then RELOADING=1 and READY=1 again, as systemd sees a reload.
 bool reloaded(DcodProcess& dcod, NotifySocket& notify) {
   const std::size_t before = notify.messages().size();
@@ -319,14 +331,8 @@ TEST(Dcod, ThreeWatchClientsInAPrivateNetworkNamespace) {
     GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
   TempDir dir;
   NotifySocket notify(dir / "notify");
-  DcodOptions o;
-  o.args = {"--source", kScene,
-            "--set",    "lcm.url=udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304",
-            "--set",    "ring.path=" + (dir / "depth.shm").string()};
-  o.log = dir / "dcod.log";
-  o.notify = &notify;
+  DcodOptions o = on_udpm(dir, notify);
   o.watchdog = 2s;
-  o.private_network = true;
   DcodProcess dcod(o);
   ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
   std::vector<std::FILE*> watchers;
@@ -438,14 +444,7 @@ TEST(Dcod, LostLcmNetworkIsAWarningAndTheRingGoesOn) {
     GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
   TempDir dir;
   NotifySocket notify(dir / "notify");
-  DcodOptions o;
-  o.args = {"--source", kScene,
-            "--set",    "lcm.url=udpm://239.255.76.67:7667?ttl=0",
-            "--set",    "ring.path=" + (dir / "depth.shm").string()};
-  o.log = dir / "dcod.log";
-  o.notify = &notify;
-  o.private_network = true;
-  DcodProcess dcod(o);
+  DcodProcess dcod(on_udpm(dir, notify));
   ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
   dco::client::Client client = ring_client(dir);
   ASSERT_TRUE(client.wait_next(2s)) << dcod.log();
