@@ -110,19 +110,28 @@ IndemindOptions fast_mode() {
   return io;
 }
 
+// The driver on a simulated module (seeded with `seed`) through a recording transport that
+// writes `path`; `sim` is the module, owned by the source.
+std::unique_ptr<FrameSource> recorded_source(const std::string& path, std::uint32_t seed,
+                                             SimulatedIndemind*& sim) {
+  SimulatedIndemind::Options o;
+  o.seed = seed;
+  auto sim_owned = std::make_unique<SimulatedIndemind>(o);
+  SimulatedIndemind* module = sim_owned.get();
+  sim = module;
+  IndemindOptions io = fast_mode();
+  io.clock = [module] { return module->now_ns(); };
+  return open_indemind(
+      make_recording_transport(std::move(sim_owned), path, [module] { return module->now_ns(); }),
+      io, "indemind://");
+}
+
 // Streams from a simulated module through a recording transport, injecting a mix of faults (an
 // unplug and replug among them); returns the driver's counters.
 std::map<std::string, std::uint64_t> record_session(const std::string& path, Recorder& sink,
                                                     int faults) {
-  SimulatedIndemind::Options o;
-  o.seed = 3;
-  auto sim_owned = std::make_unique<SimulatedIndemind>(o);
-  SimulatedIndemind* sim = sim_owned.get();
-  IndemindOptions io = fast_mode();
-  io.clock = [sim] { return sim->now_ns(); };
-  auto source = open_indemind(
-      make_recording_transport(std::move(sim_owned), path, [sim] { return sim->now_ns(); }), io,
-      "indemind://");
+  SimulatedIndemind* sim = nullptr;
+  auto source = recorded_source(path, 3, sim);
   source->start(sink);
   std::mt19937 rng(9);
   const Fault kinds[] = {Fault::kShortTransfer,    Fault::kLostPayload, Fault::kExtraPayload,
@@ -367,15 +376,8 @@ TEST(UsbCapture, HotplugNotesInsideControlTransfersReplayInsideThem) {
   Recorder live;
   std::map<std::string, std::uint64_t> live_counters;
   {
-    SimulatedIndemind::Options o;
-    o.seed = 5;
-    auto sim_owned = std::make_unique<SimulatedIndemind>(o);
-    SimulatedIndemind* sim = sim_owned.get();
-    IndemindOptions io = fast_mode();
-    io.clock = [sim] { return sim->now_ns(); };
-    auto source = open_indemind(
-        make_recording_transport(std::move(sim_owned), path, [sim] { return sim->now_ns(); }), io,
-        "indemind://");
+    SimulatedIndemind* sim = nullptr;
+    auto source = recorded_source(path, 5, sim);
     source->start(live);
     // A second module plugged in while the driver reads the flash of the one it reopens...
     sim->hotplug_in_control(3);
