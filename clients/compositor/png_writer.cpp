@@ -17,13 +17,17 @@ void write_png(const std::string& path, const std::uint8_t* pixels, int width, i
                int channels) {
   if (channels != 1 && channels != 3 && channels != 4)
     throw Error("png: 1, 3 or 4 channels, not " + std::to_string(channels));
-  std::FILE* file = std::fopen(path.c_str(), "wb");
-  if (!file) throw Error("png '" + path + "': cannot create: " + std::strerror(errno));
+  // Written beside it and renamed over it: a reader never sees half a PNG, and a failed write
+  // (a full disk) leaves the last good one.
+  const std::string temp = path + ".tmp";
+  std::FILE* file = std::fopen(temp.c_str(), "wb");
+  if (!file) throw Error("png '" + temp + "': cannot create: " + std::strerror(errno));
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!png || !info) {
     png_destroy_write_struct(&png, nullptr);
     std::fclose(file);
+    std::remove(temp.c_str());
     throw Error("png '" + path + "': out of memory");
   }
   std::vector<png_bytep> rows(static_cast<std::size_t>(height));
@@ -34,6 +38,7 @@ void write_png(const std::string& path, const std::uint8_t* pixels, int width, i
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
     std::fclose(file);
+    std::remove(temp.c_str());
     throw Error("png '" + path + "': write failed");
   }
   png_init_io(png, file);
@@ -47,8 +52,11 @@ void write_png(const std::string& path, const std::uint8_t* pixels, int width, i
   png_write_image(png, rows.data());
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  if (std::fclose(file) != 0)
-    throw Error("png '" + path + "': write failed: " + std::strerror(errno));
+  if (std::fclose(file) != 0 || std::rename(temp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    std::remove(temp.c_str());
+    throw Error("png '" + path + "': write failed: " + std::strerror(err));
+  }
 }
 
 }  // namespace dco::compositor

@@ -251,7 +251,8 @@ struct Renderer::Impl {
   struct {
     GLint proj, depth, height, width, ab, cam, soft_radius, color, sphere, sphere_cr;
   } obj{};
-  int width = 0, height = 0;
+  int width = 0, height = 0;              // the framebuffer's: the last frame drawn
+  int input_width = 0, input_height = 0;  // the input textures': the last frame uploaded
   std::string egl_display;
   std::vector<std::uint8_t> rgba, flipped;
   std::vector<float> vertices;
@@ -438,13 +439,27 @@ struct Renderer::Impl {
     window.reset();
   }
 
-  void resize(int w, int h) {
-    if (w == width && h == height) return;
+  // The input textures at a frame's size. The framebuffer follows only once the frame is drawn
+  // (resize_target): a frame given up after its upload leaves the last one drawn, whatever its
+  // size.
+  void resize_inputs(int w, int h) {
+    if (w == input_width && h == input_height) return;
     GLint max_size = 0;
     glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_size);
     if (w <= 0 || h <= 0 || w > max_size || h > max_size)
       throw Error("compositor: frame size " + std::to_string(w) + "x" + std::to_string(h) +
                   " is outside 1.." + std::to_string(max_size));
+    glBindTexture(GL_TEXTURE_2D, depth_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, w, h, 0, GL_RED, GL_FLOAT, nullptr);
+    glBindTexture(GL_TEXTURE_2D, image_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_R8, w, h, 0, GL_RED, GL_UNSIGNED_BYTE, nullptr);
+    check_gl("allocating the input textures");
+    input_width = w;
+    input_height = h;
+  }
+
+  void resize_target(int w, int h) {
+    if (w == width && h == height) return;
     glBindRenderbuffer(GL_RENDERBUFFER, color_rb);
     glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
     glBindRenderbuffer(GL_RENDERBUFFER, depth_rb);
@@ -454,11 +469,7 @@ struct Renderer::Impl {
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_rb);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw Error("GL: the offscreen framebuffer is incomplete");
-    glBindTexture(GL_TEXTURE_2D, depth_tex);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, w, h, 0, GL_RED, GL_FLOAT, nullptr);
-    glBindTexture(GL_TEXTURE_2D, image_tex);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_R8, w, h, 0, GL_RED, GL_UNSIGNED_BYTE, nullptr);
-    check_gl("allocating the framebuffer and textures");
+    check_gl("allocating the framebuffer");
     width = w;
     height = h;
   }
@@ -473,14 +484,15 @@ struct Renderer::Impl {
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, depth_tex);
     glPixelStorei(GL_UNPACK_ROW_LENGTH, static_cast<GLint>(f.depth_stride / sizeof(float)));
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RED, GL_FLOAT, f.depth);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, input_width, input_height, GL_RED, GL_FLOAT, f.depth);
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, image_tex);
     if (f.image) {
       if (f.image_stride < static_cast<std::size_t>(f.camera.width))
         throw Error("compositor: image rows shorter than the width");
       glPixelStorei(GL_UNPACK_ROW_LENGTH, static_cast<GLint>(f.image_stride));
-      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RED, GL_UNSIGNED_BYTE, f.image);
+      glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, input_width, input_height, GL_RED, GL_UNSIGNED_BYTE,
+                      f.image);
     }
     glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
     check_gl("uploading depth and image");
@@ -517,23 +529,28 @@ RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
     throw Error("compositor: the frame carries no usable camera intrinsics");
   if (options.soft_radius_px < 0 || options.soft_radius_px > 8)
     throw Error("compositor: soft radius must be 0..8 px");
+  if (!(options.near_m > 0 && options.far_m > options.near_m))
+    throw Error("compositor: the depth range needs 0 < near < far (far may be infinite)");
   const auto start = std::chrono::steady_clock::now();
   if (m.stamps[0]) {
     GLint disjoint = 0;
     glGetIntegerv(GL_GPU_DISJOINT_EXT, &disjoint);  // clears the flag before the measurement
     m.query_counter(m.stamps[0], GL_TIMESTAMP_EXT);
   }
-  m.resize(cam.width, cam.height);
+  m.resize_inputs(cam.width, cam.height);
   m.upload(frame);
   if (keep && !keep()) {
     RenderTimes skipped;
     skipped.drawn = false;
     return skipped;
   }
+  m.resize_target(cam.width, cam.height);
 
   const double n = options.near_m, f = options.far_m;
-  const float a = static_cast<float>((f + n) / (f - n));
-  const float b = static_cast<float>(-2 * f * n / (f - n));
+  // OpenGL's projection of z to NDC, a + b / z; with no far plane its limit, 1 - 2n / z.
+  const float a = std::isinf(f) ? 1.0f : static_cast<float>((f + n) / (f - n));
+  const float b =
+      std::isinf(f) ? static_cast<float>(-2 * n) : static_cast<float>(-2 * f * n / (f - n));
   const double w = cam.width, h = cam.height;
   // Column-major: pixel centres of the depth map land on pixel centres of the framebuffer, row 0
   // of the image at the top.

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -122,11 +123,19 @@ Scene parse_scene(std::string_view text, const std::string& name) {
 }
 
 Scene load_scene(const std::string& path) {
+  // A directory opens as a stream that reads nothing: refused by name, as a read error is.
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw Error("scene '" + printable(path) + "': not a readable file");
   std::ifstream in(path);
-  if (!in) throw Error("scene '" + path + "': cannot open: " + std::strerror(errno));
+  if (!in) throw Error("scene '" + printable(path) + "': cannot open: " + std::strerror(errno));
   std::ostringstream text;
   text << in.rdbuf();
-  return parse_scene(text.str(), path);
+  if (in.bad()) throw Error("scene '" + printable(path) + "': read failed");
+  Scene scene = parse_scene(text.str(), path);
+  // A scene file given on purpose and holding nothing is a mistake, not a wish for the default.
+  if (scene.empty()) throw Error("scene '" + printable(path) + "': no cube or sphere in it");
+  return scene;
 }
 
 }  // namespace dco::compositor

@@ -1,14 +1,20 @@
 // The compositor on exact scenes (exact_scene.hpp): its occlusion mask against the one ray-cast
 // on the CPU, soft occlusion, following the daemon's ring, bad input.
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
@@ -107,6 +113,82 @@ TEST(Compositor, AFrameGivenUpAfterItsUploadLeavesTheLastOne) {
   EXPECT_FALSE(t.drawn);
   EXPECT_EQ(asked, 1);
   EXPECT_EQ(r.read_rgba(), shown);
+  // So does one of another size (the first of a new ring session), given up the same way.
+  RealFrame smaller = frame_of(e);
+  smaller.camera.width = kW / 2;
+  smaller.camera.height = kH / 2;
+  EXPECT_FALSE(r.render(smaller, e.scene, {}, [] { return false; }).drawn);
+  EXPECT_EQ(r.read_rgba(), shown);
+  ASSERT_TRUE(r.render(smaller, e.scene, {}).drawn);
+  EXPECT_EQ(r.read_rgba().size(), static_cast<std::size_t>(kW / 2) * (kH / 2) * 4);
+}
+
+// No far plane: a virtual object 150 or 300 m away is drawn in front of unknown real depth, and
+// behind real depth nearer than it.
+TEST(Compositor, FarObjectsAreDrawnInFrontOfUnknownDepth) {
+  std::vector<float> depth(static_cast<std::size_t>(kW) * kH,
+                           std::numeric_limits<float>::infinity());
+  for (int v = 0; v < kH; ++v)
+    for (int u = kW / 2; u < kW; ++u) depth[static_cast<std::size_t>(v) * kW + u] = 200.0f;
+  RealFrame frame;
+  frame.camera = kCamera;
+  frame.depth = depth.data();
+  frame.depth_stride = kW * sizeof(float);
+  Scene scene;
+  scene.cubes.push_back({{-20.0f, 0.0f, 150.0f}, 10.0f});   // left: unknown depth behind it
+  scene.spheres.push_back({{40.0f, 0.0f, 300.0f}, 20.0f});  // right: a wall at 200 m in front
+  Renderer r;
+  ASSERT_TRUE(r.render(frame, scene, {}).drawn);
+  const std::vector<std::uint8_t> alpha = alpha_of(r.read_rgba(), 128);
+  const auto at = [&](double x, double z) {
+    const int u = static_cast<int>(std::lround(kCamera.cx + kCamera.fx * x / z));
+    return alpha[static_cast<std::size_t>(kH / 2) * kW + u];
+  };
+  EXPECT_EQ(at(-20.0, 145.0), 1);
+  EXPECT_EQ(at(40.0, 280.0), 0);
+  // A nearer sphere in the same place is in front of the wall.
+  scene.spheres[0].center[2] = 190.0f;
+  scene.spheres[0].center[0] = 25.0f;
+  ASSERT_TRUE(r.render(frame, scene, {}).drawn);
+  const std::vector<std::uint8_t> again = alpha_of(r.read_rgba(), 128);
+  const int u = static_cast<int>(std::lround(kCamera.cx + kCamera.fx * 25.0 / 170.0));
+  EXPECT_EQ(again[static_cast<std::size_t>(kH / 2) * kW + u], 1);
+  RenderOptions bad;
+  bad.far_m = bad.near_m;
+  EXPECT_THROW(r.render(frame, scene, bad), Error);
+}
+
+// A PNG that cannot be written whole (a full disk: here a file size limit) leaves the last good
+// one in place and no partial file.
+TEST(Compositor, AFailedPngWriteLeavesTheLastGoodOne) {
+  dco::testing::TempDir dir;
+  const std::string path = (dir / "frame.png").string();
+  const std::vector<std::uint8_t> good(64 * 48, 100);
+  write_png(path, good.data(), 64, 48, 1);
+  const std::string before = dco::testing::read_file(path);
+  std::vector<std::uint8_t> noise(640 * 400 * 3);
+  std::uint32_t x = 12345;
+  for (std::uint8_t& v : noise)
+    v = static_cast<std::uint8_t>((x = x * 1664525u + 1013904223u) >> 24);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const rlimit limit{4096, 4096};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    std::signal(SIGXFSZ, SIG_IGN);
+    try {
+      write_png(path, noise.data(), 640, 400, 3);
+    } catch (const Error&) {
+      _exit(3);
+    }
+    _exit(0);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 3) << "the write should have failed";
+  EXPECT_EQ(dco::testing::read_file(path), before);
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
 }
 
 // Two renderers on one thread (one per eye, say): each draws and reads in its own context, and
@@ -326,6 +408,18 @@ TEST(Compositor, BadInputIsOneClearLine) {
     message = ex.what();
   }
   EXPECT_NE(message.find("scene.txt:3: unknown object 'torus'"), std::string::npos) << message;
+  // A directory, or a file with no object, is no scene (the default one is not put in its place).
+  std::ofstream(dir.path() / "empty.txt") << "# nothing yet\n";
+  for (const auto& [name, expected] :
+       {std::pair{std::string("."), std::string("not a readable file")},
+        std::pair{std::string("empty.txt"), std::string("no cube or sphere in it")}}) {
+    try {
+      load_scene((dir.path() / name).string());
+      ADD_FAILURE() << name << " was taken as a scene";
+    } catch (const Error& ex) {
+      EXPECT_NE(std::string(ex.what()).find(expected), std::string::npos) << ex.what();
+    }
+  }
   // An argument quoted in an error stays on one line.
   try {
     parse_cube("0,0\n,1,0.3");

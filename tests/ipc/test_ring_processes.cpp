@@ -175,6 +175,15 @@ TEST(RingProcesses, ClientSeesAKilledWriterAndFollowsItsReplacement) {
   EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(500))
       << "a dead writer is noticed without waiting for the timeout";
   EXPECT_TRUE(std::filesystem::exists(path)) << "a killed writer leaves its file behind";
+  {
+    // A client that comes after the crash gets no stale frame from wait_next, only from latest.
+    client::Client late(co);
+    dco_frame_view stale;
+    dco_frame_view_init(&stale);
+    EXPECT_EQ(dco_client_wait_next(late.handle(), 2000, &stale), DCO_E_WRITER_GONE);
+    ASSERT_EQ(dco_client_latest(late.handle(), &stale), DCO_OK);
+    EXPECT_EQ(stale.info.frame_seq, 5u);
+  }
 
   RingWriter again(path, o);
   publish_pattern(again, 6);
@@ -216,13 +225,23 @@ TEST(DcoWatch, PrintsRateLatencyAndMetadata) {
   int code = -1;
   const std::string out =
       run_watch("--path " + writer.path().string() + " --frames 20 --interval-ms 50", &code);
+  // One frame gives no rate (it was published before the watch began), not frames per the
+  // microseconds it took to read it.
+  int one_code = -1;
+  const std::string one =
+      run_watch("--path " + writer.path().string() + " --frames 1 --interval-ms 50", &one_code);
+  EXPECT_EQ(one_code, 0) << one;
+  EXPECT_EQ(one.rfind("fps 0.0 ", 0), 0u) << one;
   int copy_code = -1;
   const std::string copy_out = run_watch(
       "--path " + writer.path().string() + " --frames 5 --interval-ms 50 --copy", &copy_code);
   done.store(true);
   publisher.join();
   EXPECT_EQ(code, 0) << out;
-  EXPECT_NE(out.find("fps "), std::string::npos) << out;
+  ASSERT_EQ(out.rfind("fps ", 0), 0u) << out;
+  const double fps = std::stod(out.substr(4));
+  EXPECT_GT(fps, 20.0) << out;  // one frame every 5 ms and a little
+  EXPECT_LT(fps, 250.0) << out;
   EXPECT_NE(out.find("latency capture p50"), std::string::npos) << out;
   EXPECT_NE(out.find("64x48"), std::string::npos) << out;
   EXPECT_NE(out.find("fx 5"), std::string::npos) << out;

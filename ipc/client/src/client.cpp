@@ -375,8 +375,16 @@ struct dco_client {
     map = fresh;
     last_index = 0;
     polled_write = 0;
+    skip_dead_writers_frames();
     *remapped = true;
     return DCO_OK;
+  }
+
+  // A ring found with its writer already gone (a daemon killed, its file left behind) holds no
+  // new frame: wait_next reports the writer gone instead of handing on its last, stale one.
+  // latest() still returns it, as the newest there is.
+  void skip_dead_writers_frames() {
+    if (writer_gone()) last_index = map.header()->publish_count.load(std::memory_order_acquire);
   }
 
   bool writer_gone() const {
@@ -438,6 +446,7 @@ dco_status dco_client_open(const dco_client_options* options, dco_client** out) 
     client->poll_ns = std::int64_t{poll_us} * 1000;
     const dco_status status = map_segment(client->expect, client->map);
     if (status != DCO_OK) return status;
+    client->skip_dead_writers_frames();
     client->last_path_check_ns = now_ns();
     *out = client.release();
     return DCO_OK;

@@ -131,10 +131,12 @@ int main(int argc, char** argv) {
     std::vector<double> from_publish_ms;
     long long received = 0;
     long long torn = 0;
+    // A window starts at a frame and counts the frames after it: the first frame, already
+    // published when the watch starts, says nothing of the rate.
     long long window_frames = 0;
-    std::uint64_t last_index = 0;
+    std::int64_t window_start = 0;
+    std::uint64_t last_index = 0, last_session = 0;
     long long skipped = 0;
-    std::int64_t window_start = now_ns();
     dco_frame_info newest;
     dco_frame_info_init(&newest);
     std::vector<std::uint8_t> overlay_rgb;
@@ -166,14 +168,18 @@ int main(int argc, char** argv) {
         }
       }
       const std::int64_t t = now_ns();
-      if (last_index != 0 && info.publish_index > last_index + 1)
+      // Publish indices count per ring session: a restarted daemon's first frame skips nothing.
+      if (last_index != 0 && info.session_id == last_session && info.publish_index > last_index + 1)
         skipped += static_cast<long long>(info.publish_index - last_index - 1);
       last_index = info.publish_index;
+      last_session = info.session_id;
       from_capture_ms.push_back(static_cast<double>(t - info.capture_ns) / 1e6);
       from_publish_ms.push_back(static_cast<double>(t - info.publish_ns) / 1e6);
       newest = info;
-      ++received;
-      ++window_frames;
+      if (received++ == 0)
+        window_start = t;
+      else
+        ++window_frames;
       const std::int64_t elapsed = t - window_start;
       if (elapsed >= interval_ms * 1'000'000 || (frames != 0 && received == frames)) {
         if (!overlay.empty()) {
@@ -191,7 +197,8 @@ int main(int argc, char** argv) {
             "skipped %lld  overtaken %lld\n"
             "  session %016llx  seq %llu  index %llu  slot %u  %ux%u  image %u ch  "
             "fx %.2f fy %.2f cx %.2f cy %.2f baseline %.4f m\n",
-            static_cast<double>(window_frames) * 1e9 / static_cast<double>(elapsed),
+            elapsed > 0 ? static_cast<double>(window_frames) * 1e9 / static_cast<double>(elapsed)
+                        : 0.0,
             percentile(from_capture_ms, 0.5), percentile(from_capture_ms, 1.0),
             percentile(from_publish_ms, 0.5), percentile(from_publish_ms, 1.0), skipped, torn,
             static_cast<unsigned long long>(newest.session_id),
@@ -206,7 +213,7 @@ int main(int argc, char** argv) {
         window_start = t;
       }
     }
-  } catch (const dco::client::Error& e) {
+  } catch (const std::exception& e) {  // the client's errors, and out of memory with --copy
     std::fprintf(stderr, "dco-watch: error: %s\n", e.what());
     return 1;
   }

@@ -26,7 +26,8 @@ void render_occlusion_overlay(const dco::client::FrameView& frame, double virtua
       std::uint8_t* px = &rgb[(std::size_t{y} * w + x) * 3];
       px[0] = px[1] = px[2] = grey;
       const bool inside = x >= x0 && x < x1 && y >= y0 && y < y1;
-      const bool real_in_front = depth[x] < virtual_depth_m;  // +inf (unknown) never occludes
+      // Unknown depth (+inf, NaN, 0 or below) never occludes.
+      const bool real_in_front = depth[x] > 0 && depth[x] < virtual_depth_m;
       if (inside && !real_in_front) {
         px[0] = static_cast<unsigned char>(0.3 * grey + 0.7 * 230);
         px[1] = static_cast<unsigned char>(0.3 * grey + 0.7 * 70);

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,7 +33,9 @@ struct RenderOptions {
   // pixel's coverage is the fraction of real depth behind it in a (2N+1)² window, so edges blend
   // over N pixels around the depth contours and nowhere else.
   int soft_radius_px = 0;
-  float near_m = kNearPlaneM, far_m = 100.0f;
+  // Depth range drawn. The far plane defaults to infinity: a virtual object however far is drawn
+  // in front of unknown (+inf) or farther real depth; 1 - near/z keeps metres apart at 100 m.
+  float near_m = kNearPlaneM, far_m = std::numeric_limits<float>::infinity();
 };
 
 // An on-screen window on an X display, for a desk setup or a headset driven as a display.
