@@ -387,13 +387,17 @@ TEST(UsbCapture, HotplugNotesInsideControlTransfersReplayInsideThem) {
     sim->unplug_in_control(4, 100);
     ASSERT_TRUE(sim->inject_and_settle(Fault::kUnplug, 200));
     ASSERT_TRUE(sim->inject_and_settle(Fault::kControlBusy, 2));
+    // Frames after the last reopen, however busy the machine: the replay must give them too.
+    const std::size_t before = live.count();
+    for (int i = 0; i < 1000 && live.count() < before + 10; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
     source->stop();
     live_counters = counters_of(*source);
     EXPECT_EQ(sim->record().control_hotplugs, 4u);
   }
   EXPECT_EQ(live_counters.at("reconnects"), 2u);
   EXPECT_EQ(live_counters.at("disconnects"), 2u);
-  ASSERT_GT(live.frames.size(), 5u);
+  ASSERT_GE(live.frames.size(), 10u);
   EXPECT_EQ(hotplugs_inside_controls(path), 4u);
 
   std::vector<Seen> replayed;
