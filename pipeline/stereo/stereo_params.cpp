@@ -46,8 +46,10 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "λ_census of Eq. 1 (the paper: 40)");
   s.add("stereo.gamma_l", &p.gamma_l, 0.0, 100.0, "γ_L of Eq. 1 (edge control)");
   s.add("stereo.epsilon", &p.epsilon, 0.001, 100.0, "ε of Eq. 1 (correction)");
-  s.add("stereo.census_width", &p.census_width, 1, 63, "census window width, odd");
-  s.add("stereo.census_height", &p.census_height, 1, 63, "census window height, odd");
+  s.add("stereo.census_width", &p.census_width, 1, 63,
+        "census window width, odd; the window holds 2..65 pixels (a 64-bit signature)");
+  s.add("stereo.census_height", &p.census_height, 1, 63,
+        "census window height, odd; width x height within 2..65");
   s.add("stereo.arm_max", &p.arm_max, 2, 255, "longest cross arm L1, input pixels");
   s.add("stereo.arm_short", &p.arm_short, 0, 255, "arm length L2 beyond which tau2 applies");
   s.add("stereo.tau1", &p.tau1, 1, 255, "colour threshold of the arms");
