@@ -299,10 +299,11 @@ void Daemon::on_result(const pipeline::DepthResult& result,
   }
 }
 
-void Daemon::report_lcm_failures(std::int64_t now_ns) {
+void Daemon::report_lcm_failures(std::int64_t now_ns, bool last) {
   // At most every kLcmReportPeriodNs: the warning itself goes out on DCO_LOG, which may fail too.
   constexpr std::int64_t kLcmReportPeriodNs = 10'000'000'000;
-  if (lcm_failures_reported_ns_ != 0 && now_ns - lcm_failures_reported_ns_ < kLcmReportPeriodNs)
+  if (!last && lcm_failures_reported_ns_ != 0 &&
+      now_ns - lcm_failures_reported_ns_ < kLcmReportPeriodNs)
     return;
   std::uint64_t failures = 0;
   std::string channel;
@@ -359,7 +360,7 @@ void Daemon::tick(std::int64_t now_ns) {
     notifier_.watchdog();
     last_ping_ns_ = now_ns;
   }
-  report_lcm_failures(now_ns);
+  report_lcm_failures(now_ns, false);
   if (now_ns < next_stats_ns_) return;
   next_stats_ns_ = now_ns + static_cast<std::int64_t>(1e9 / loaded_.config.stats_hz);
   const pipeline::runtime::RuntimeStats stats = runtime_->stats();
@@ -659,6 +660,7 @@ int Daemon::run() {
   notifier_.stopping();
   stop_all();
   report_raw_recording();
+  report_lcm_failures(monotonic_ns(), true);  // those since the last warning
   if (raw_) {
     std::lock_guard lock(raw_mutex_);
     const RawRecorder::Counts n = raw_->close();  // sends the pairs it still holds

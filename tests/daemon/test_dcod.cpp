@@ -465,6 +465,12 @@ TEST(Dcod, LostLcmNetworkIsAWarningAndTheRingGoesOn) {
   EXPECT_TRUE(dcod.running()) << dcod.log();
   dcod.signal(SIGTERM);
   EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+  // The messages lost after the first warning are reported as dcod stops.
+  const std::string log = dcod.log();
+  std::size_t warnings = 0;
+  for (std::size_t at = 0; (at = log.find("LCM could not send", at)) != std::string::npos; ++at)
+    ++warnings;
+  EXPECT_GE(warnings, 2u) << log;
 }
 
 TEST(Dcod, ReplayInDeterministicModeIsBitIdenticalToDcoDepth) {

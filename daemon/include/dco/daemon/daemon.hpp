@@ -72,8 +72,9 @@ class Daemon final : public drivers::FrameSink {
   void configure_raw_recording();
   void report_raw_recording();
   void tick(std::int64_t now_ns);
-  // A warning when LCM failed to send since the last one (the ring is unaffected).
-  void report_lcm_failures(std::int64_t now_ns);
+  // A warning when LCM failed to send since the last one (the ring is unaffected); `last`: at
+  // the exit, whenever the last warning was.
+  void report_lcm_failures(std::int64_t now_ns, bool last);
   bool healthy(std::int64_t now_ns) const;
   std::string status_line(const pipeline::runtime::RuntimeStats& stats) const;
   void wake();
