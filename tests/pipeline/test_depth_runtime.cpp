@@ -220,10 +220,11 @@ TEST(DepthRuntime, MovableStepsRunOnTheThreadWithLessOtherWorkAndNoByteChanges) 
     const RuntimeStats& st = run.stats;
     // Decided from the published frames' times: the first frames go to the stereo thread before
     // the second result is known (the first is no sample of the work per frame): 3 here, one or
-    // two more when a busy machine holds the other thread's results back.
+    // two more when a busy machine holds the other thread's results back. The same busy machine
+    // can make one stereo step look as long as a sleeping solve (15 of 16 in a CI run).
     if (heavy_densify) {
-      EXPECT_EQ(st.planes_on_stereo_thread, 16);
-      EXPECT_EQ(st.early_contour_on_stereo_thread, 16);
+      EXPECT_GE(st.planes_on_stereo_thread, 14);
+      EXPECT_GE(st.early_contour_on_stereo_thread, 14);
     } else {
       EXPECT_LE(st.planes_on_stereo_thread, 5);
       EXPECT_LE(st.early_contour_on_stereo_thread, 5);
