@@ -187,6 +187,7 @@ void write_pfm(const std::filesystem::path& path, ImageView<const float> image) 
   for (int y = image.height - 1; y >= 0; --y)
     out.write(reinterpret_cast<const char*>(image.row(y)),
               static_cast<std::streamsize>(row_floats * sizeof(float)));
+  out.close();  // the last bytes reach the file here: a full disk shows only now
   if (!out) throw Error("write to " + quoted(path) + " failed");
 }
 

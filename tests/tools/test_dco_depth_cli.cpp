@@ -104,6 +104,15 @@ TEST(DcoDepthCli, DepthOutputFollowsTheCalibration) {
       ++checked;
     }
   EXPECT_GT(checked, 1000);
+  // A .PNG name gets a 16-bit PNG, whatever the case of its extension.
+  const fs::path png = dir.path() / "Z.PNG";
+  ASSERT_EQ(run_depth(dir, {"--left", (kMotorcycle / "im0.png").string(), "--right",
+                            (kMotorcycle / "im1.png").string(), "--calib",
+                            (kMotorcycle / "calib.txt").string(), "--max-disp", "70", "--out",
+                            disp.string(), "--depth-out", png.string()})
+                .exit_code,
+            0);
+  EXPECT_EQ(dco::testing::read_file(png).substr(1, 3), "PNG");
 }
 
 TEST(DcoDepthCli, BatchModeWritesEveryScene) {
@@ -261,6 +270,43 @@ TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
                "--right-roll needs a number in [-1, 1]");
   expect_error(run_depth(dir, {"--synthetic", "hand", "--lens-falloff", "0.8", "--out-dir", "o"}),
                2, "--lens-falloff needs a number in [0, 0.75]");
+  // Options of another mode are refused, not ignored.
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--first", "5", "--out-dir", "o"}), 2,
+               "--first and --count are for --left-pattern");
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--calib", "x.txt", "--out-dir", "o"}), 2,
+               "--synthetic does not take --calib");
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--data-root", "d", "--out-dir", "o"}), 2,
+               "--data-root needs --scenes");
+  expect_error(
+      run_depth(dir, {"--left", "l.png", "--right", "r.png", "--out", "d.pfm", "--overlays"}), 2,
+      "--overlays is for --out-dir");
+  for (const char* count : {"0", "-7"})
+    expect_error(run_depth(dir, {"--left-pattern", "l%d.png", "--right-pattern", "r%d.png",
+                                 "--count", count, "--out-dir", "o"}),
+                 2, "--count must be >= 1");
+}
+
+// A sequence written into the folder of a longer one leaves none of the old frames to be scored
+// with the new; a disparity range given with --set holds for a synthetic scene too.
+TEST(DcoDepthCli, ASequenceReplacesAnEarlierOneAndKeepsTheRangeItWasGiven) {
+  TempDir dir;
+  const fs::path out = dir.path() / "seq";
+  const auto run = [&](const std::string& frames) {
+    return run_depth(dir, {"--synthetic", "hand", "--size", "160x96", "--frames", frames,
+                           "--out-dir", out.string(), "--set", "stereo.max_disparity=20"});
+  };
+  ASSERT_EQ(run("4").exit_code, 0);
+  ASSERT_TRUE(fs::exists(out / "frame_000003.pfm"));
+  ASSERT_TRUE(fs::exists(out / "gt_000003.pfm"));
+  std::ofstream(out / "notes.txt") << "kept\n";
+  const CliRun again = run("3");
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_THAT(again.out, HasSubstr("removed 2 frame and ground-truth maps of an earlier run"));
+  EXPECT_THAT(again.out, HasSubstr("3 frames, max-disp 20,"));
+  EXPECT_TRUE(fs::exists(out / "frame_000002.pfm"));
+  EXPECT_FALSE(fs::exists(out / "frame_000003.pfm"));
+  EXPECT_FALSE(fs::exists(out / "gt_000003.pfm"));
+  EXPECT_TRUE(fs::exists(out / "notes.txt"));
 }
 
 TEST(DcoDepthCli, UnknownParameterIsRefused) {

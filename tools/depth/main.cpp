@@ -3,11 +3,14 @@
 // as PFM, plus pictures a person can judge it by.
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <regex>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -29,6 +32,11 @@
 #include "overlays.hpp"
 
 namespace {
+
+std::string lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
 
 namespace fs = std::filesystem;
 using dco::tools::UsageError;
@@ -59,7 +67,8 @@ Every scene of a manifest:
                        the dense map also .sparse.pfm (the stereo stage's map it was filled in
                        from, which dco-eval uses to split the error)
   --data-root DIR      what the manifest's paths are relative to (default: the TSV's folder)
-A sequence (frame_000000.pfm, ... in --out-dir; synthetic scenes add gt_000000.pfm, ...):
+A sequence (frame_000000.pfm, ... in --out-dir; synthetic scenes add gt_000000.pfm, ...; such
+maps of an earlier run in that folder that this one does not write are removed):
   --left-pattern P     numbered left images, e.g. 'images/I1_%06d.png'
   --right-pattern P    numbered right images
   --first N --count N  frame range (default: from 0 until the first missing file)
@@ -77,7 +86,9 @@ A sequence (frame_000000.pfm, ... in --out-dir; synthetic scenes add gt_000000.p
                        0; r = 1 at the half-diagonal)
   --overlays           also write overlay/depth_*.png, contours_*.png, occlusion_*.png
 Common:
-  --max-disp N         largest disparity searched, input pixels
+  --max-disp N         largest disparity searched, input pixels (so does stereo.max_disparity
+                       from --set or --config); without either, each scene's own: the
+                       manifest's max_disp, a synthetic scene's nearest object
   --out-dir DIR        output folder (created if missing)
   --sparse             write the sparse stereo map instead of the dense one
   --config FILE        TOML with [stereo], [contour] and [densify] tables (see --list-params)
@@ -188,6 +199,7 @@ Options parse_args(int argc, char** argv) {
     if (!opt.out) throw UsageError("--out is required");
     if (opt.depth_out && !opt.calib) throw UsageError("--depth-out needs --calib");
     if (opt.out_dir || opt.data_root) throw UsageError("--out-dir and --data-root need --scenes");
+    if (opt.overlays) throw UsageError("--overlays is for --out-dir; one pair takes --overlay-dir");
     return opt;
   }
   if (!opt.out_dir) throw UsageError("this mode needs --out-dir");
@@ -201,15 +213,24 @@ Options parse_args(int argc, char** argv) {
   if (opt.synthetic && (opt.frames < 1 || opt.width < 16 || opt.height < 16))
     throw UsageError("--frames must be >= 1 and --size at least 16x16");
   if (opt.left_pattern && opt.first < 0) throw UsageError("--first must be >= 0");
+  if (opt.left_pattern && opt.count != -1 && opt.count < 1)
+    throw UsageError("--count must be >= 1 (without it: up to the first missing file)");
+  if (!opt.left_pattern && (opt.first != 0 || opt.count != -1))
+    throw UsageError("--first and --count are for --left-pattern/--right-pattern");
+  if (opt.synthetic && opt.calib) throw UsageError("--synthetic does not take --calib");
+  if (!opt.scenes && opt.data_root) throw UsageError("--data-root needs --scenes");
   return opt;
 }
 
-dco::pipeline::PipelineParams load_params(const Options& opt) {
+// The parameters, and whether the disparity range was given (--max-disp, a --set or the config
+// file): then it holds for every scene instead of the manifest's or the synthetic scene's own.
+dco::pipeline::PipelineParams load_params(const Options& opt, bool& max_disparity_given) {
   dco::pipeline::PipelineParams params;
   dco::ConfigSchema schema;
   dco::pipeline::register_params(schema, params);
   if (opt.config) schema.load_file(*opt.config);
   for (const std::string& assignment : opt.overrides) schema.set(assignment);
+  max_disparity_given = opt.max_disp || schema.was_set("stereo.max_disparity");
   // --max-disp has the range of stereo.max_disparity (its lower end is checked with the options).
   if (opt.max_disp && *opt.max_disp > dco::stereo::kMaxDisparityLimit)
     throw dco::Error(fmt::format("--max-disp {}: value {} is outside [1, {}]", *opt.max_disp,
@@ -301,7 +322,7 @@ int run_pair(const Options& opt, const dco::pipeline::PipelineParams& params) {
   if (opt.depth_out) {
     dco::Image<float> depth(map.width(), map.height());
     dco::disparity_to_depth(map.view(), rectifier->geometry(), depth.view());
-    if (opt.depth_out->extension() == ".png")
+    if (lower(opt.depth_out->extension().string()) == ".png")
       dco::write_depth_png16(*opt.depth_out, depth.view());
     else
       dco::write_pfm(*opt.depth_out, depth.view());
@@ -314,13 +335,13 @@ int run_pair(const Options& opt, const dco::pipeline::PipelineParams& params) {
   return 0;
 }
 
-int run_batch(const Options& opt, dco::pipeline::PipelineParams params) {
+int run_batch(const Options& opt, dco::pipeline::PipelineParams params, bool max_disparity_given) {
   const fs::path data_root = opt.data_root.value_or(opt.scenes->parent_path());
   const auto scenes = dco::tools::load_scene_manifest(*opt.scenes, data_root);
   fs::create_directories(*opt.out_dir);
   dco::pipeline::DepthResult result;
   for (const dco::tools::Scene& scene : scenes) {
-    if (!opt.max_disp) params.stereo.max_disparity = scene.max_disp;
+    if (!max_disparity_given) params.stereo.max_disparity = scene.max_disp;
     dco::pipeline::validate(params);
     dco::pipeline::DepthPipeline pipeline(params);
     const dco::Image<std::uint8_t> left = dco::load_image(scene.left);
@@ -334,7 +355,11 @@ int run_batch(const Options& opt, dco::pipeline::PipelineParams params) {
       fs::remove(sparse);  // a dense run's, which no longer matches the .pfm
     else
       dco::write_pfm(sparse, result.sparse.view());
-    std::ofstream(*opt.out_dir / (stem + ".time_ms")) << total_ms(result, opt.sparse) << '\n';
+    const fs::path time_file = *opt.out_dir / (stem + ".time_ms");
+    std::ofstream time_out(time_file);
+    time_out << total_ms(result, opt.sparse) << '\n';
+    time_out.close();
+    if (!time_out) throw dco::Error("cannot write " + time_file.string());
     fmt::print("{:<40} {}x{} max-disp {:3}  {}{}\n", scene.name, left.width(), left.height(),
                params.stereo.max_disparity, timing_text(result, opt.sparse),
                correction_text(result));
@@ -342,14 +367,29 @@ int run_batch(const Options& opt, dco::pipeline::PipelineParams params) {
   return 0;
 }
 
-int run_sequence(const Options& opt, dco::pipeline::PipelineParams params) {
+// Removes frame_NNNNNN.pfm and gt_NNNNNN.pfm files in `dir` whose number is not in `keep`;
+// returns how many.
+int remove_other_frames(const fs::path& dir, const std::set<int>& keep) {
+  static const std::regex kName("(frame|gt)_([0-9]{6})\\.pfm");
+  int removed = 0;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
+    std::smatch m;
+    const std::string name = e.path().filename().string();
+    if (!e.is_regular_file() || !std::regex_match(name, m, kName)) continue;
+    if (keep.count(std::stoi(m[2].str())) == 0 && fs::remove(e.path())) ++removed;
+  }
+  return removed;
+}
+
+int run_sequence(const Options& opt, dco::pipeline::PipelineParams params,
+                 bool max_disparity_given) {
   std::unique_ptr<dco::tools::FrameSequence> frames =
       opt.synthetic ? dco::tools::make_synthetic_sequence(*opt.synthetic, opt.width, opt.height,
                                                           opt.frames, opt.color, opt.right_camera)
                     : dco::tools::make_pattern_sequence(*opt.left_pattern, *opt.right_pattern,
                                                         opt.first, opt.count, opt.calib);
   // A synthetic scene's nearest object, as far as the stage reaches.
-  if (!opt.max_disp && frames->max_disparity())
+  if (!max_disparity_given && frames->max_disparity())
     params.stereo.max_disparity =
         std::min(*frames->max_disparity(), dco::stereo::kMaxDisparityLimit);
   dco::pipeline::validate(params);
@@ -359,6 +399,7 @@ int run_sequence(const Options& opt, dco::pipeline::PipelineParams params) {
   dco::pipeline::DepthResult result;
   float plane = 0.0f;
   int written = 0;
+  std::set<int> written_indices;
   double sum_ms = 0;
   dco::stereo::CameraCorrection correction;  // as last printed
   const auto emit = [&] {
@@ -375,16 +416,23 @@ int run_sequence(const Options& opt, dco::pipeline::PipelineParams params) {
                result.flow_cue ? "" : "  (no flow cue)",
                result.camera_correction == correction ? std::string() : correction_text(result));
     correction = result.camera_correction;
+    written_indices.insert(result.index);
     ++written;
   };
   while (frames->next(input)) {
-    if (!input.gt_disparity.empty())
+    if (!input.gt_disparity.empty()) {
       dco::write_pfm(*opt.out_dir / fmt::format("gt_{:06d}.pfm", input.index),
                      input.gt_disparity.view());
+      written_indices.insert(input.index);
+    }
     if (pipeline.push(input.left.cview(), input.right.cview(), result)) emit();
   }
   while (pipeline.finish(result)) emit();
   if (written == 0) throw dco::Error("the sequence holds no frame");
+  // Frames of an earlier, longer run in the same folder would be scored with these.
+  if (const int stale = remove_other_frames(*opt.out_dir, written_indices); stale > 0)
+    fmt::print("removed {} frame and ground-truth maps of an earlier run from {}\n", stale,
+               opt.out_dir->string());
   fmt::print("{} frames, max-disp {}, mean {:.1f} ms per frame\n", written,
              params.stereo.max_disparity, sum_ms / written);
   return 0;
@@ -407,9 +455,10 @@ int main(int argc, char** argv) {
       fmt::print("{}", schema.describe());
       return 0;
     }
-    const dco::pipeline::PipelineParams params = load_params(opt);
-    if (opt.scenes) return run_batch(opt, params);
+    bool max_disparity_given = false;
+    const dco::pipeline::PipelineParams params = load_params(opt, max_disparity_given);
+    if (opt.scenes) return run_batch(opt, params, max_disparity_given);
     if (opt.left) return run_pair(opt, params);
-    return run_sequence(opt, params);
+    return run_sequence(opt, params, max_disparity_given);
   });
 }

@@ -370,7 +370,7 @@ std::vector<NoiseFloor> evaluate_noise_floor(const std::vector<Scene>& scenes,
     const dco::tools::GroundTruth gt = dco::tools::load_ground_truth(scenes[i]);
     for (NoiseFloor& f : floors) {
       const dco::Image<float> noisy =
-          dco::tools::noisy_ground_truth(gt.disparity.view(), f.sigma_px, i + 1);
+          dco::tools::noisy_ground_truth(gt.disparity.view(), f.sigma_px, scenes[i].position + 1);
       f.metrics.push_back(dco::tools::evaluate_disparity(scenes[i].name, noisy.view(), gt));
     }
   }

@@ -177,6 +177,7 @@ std::vector<Scene> load_scene_manifest(const std::filesystem::path& tsv,
       throw Error(fmt::format("{}: {} tab-separated fields, the header has {}", where,
                               fields.size(), header_fields));
     scenes.push_back(parse_row(fields, *index, data_root, where));
+    scenes.back().position = static_cast<int>(scenes.size()) - 1;
     const std::string& name = scenes.back().name;
     const std::string stem = scenes.back().file_stem();
     for (std::size_t i = 0; i + 1 < scenes.size(); ++i) {

@@ -19,6 +19,8 @@ struct Scene {
   double gt_divisor = 1;
   std::optional<std::filesystem::path> nocc_mask;
   int max_disp = 0;
+  int position = 0;  // among the manifest's scenes, from 0: stays with the scene when some are
+                     // left out (per-scene seeds)
 
   // "middlebury2014_Motorcycle": the file stem dco-depth and dco-eval agree on.
   std::string file_stem() const;
