@@ -28,7 +28,9 @@ class CpuContourExtractor final : public ContourExtractor {
     check_contour_input(params_, in);
     const bool flow = params_.use_flow && !in.neighbour_a.empty() && !in.neighbour_b.empty();
     const bool given_flow = !in.flow_cue.empty();
-    if (flow && !given_flow) flow_cue_.check_size(in.centre);
+    // Also on a sequence's first frames, which have no flow yet: a frame too small for DIS fails
+    // there, before any output, not two frames later.
+    if (params_.use_flow && !given_flow) flow_cue_.check_size(in.centre);
     Stopwatch t;
     timings_ = {};
     prepare(in, out);

@@ -199,6 +199,7 @@ TEST(DcoBenchCli, BadCommandLinesExitWithTwo) {
   expect_usage({"--warmup", "-1"}, "--warmup");
   expect_usage({"--rounds", "0"}, "--rounds");
   expect_usage({"--frobnicate"}, "unknown option --frobnicate");
+  expect_usage({"--sequence", "synthetic", "--synthetic", "cats"}, "unknown preset 'cats'");
 }
 
 TEST(DcoBenchCli, BadDataAndParametersExitWithOne) {
@@ -210,7 +211,6 @@ TEST(DcoBenchCli, BadDataAndParametersExitWithOne) {
               "missing");
   expect_data({"--sequence", "synthetic", "--set", "runtime.threads=9"}, "runtime.threads");
   expect_data({"--sequence", "synthetic", "--set", "runtime.affinity=0,0"}, "listed twice");
-  expect_data({"--sequence", "synthetic", "--synthetic", "cats"}, "cats");
 }
 
 // The ipc benchmark sends udpm multicast, so it runs only where a private network namespace can

@@ -270,6 +270,8 @@ TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
                "--right-roll needs a number in [-1, 1]");
   expect_error(run_depth(dir, {"--synthetic", "hand", "--lens-falloff", "0.8", "--out-dir", "o"}),
                2, "--lens-falloff needs a number in [0, 0.75]");
+  expect_error(run_depth(dir, {"--synthetic", "cats", "--out-dir", "o"}), 2,
+               "unknown preset 'cats'");
   // Options of another mode are refused, not ignored.
   expect_error(run_depth(dir, {"--synthetic", "hand", "--first", "5", "--out-dir", "o"}), 2,
                "--first and --count are for --left-pattern");
@@ -284,6 +286,16 @@ TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
     expect_error(run_depth(dir, {"--left-pattern", "l%d.png", "--right-pattern", "r%d.png",
                                  "--count", count, "--out-dir", "o"}),
                  2, "--count must be >= 1");
+}
+
+// A frame too small for the flow cue fails at the first frame, before anything is written.
+TEST(DcoDepthCli, ASequenceTooSmallForTheFlowCueFailsBeforeItsFirstFrame) {
+  TempDir dir;
+  const fs::path out = dir.path() / "tiny";
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--size", "64x48", "--frames", "4",
+                               "--out-dir", out.string()}),
+               1, "too small for DIS optical flow");
+  EXPECT_FALSE(fs::exists(out / "frame_000000.pfm"));
 }
 
 // A sequence written into the folder of a longer one leaves none of the old frames to be scored

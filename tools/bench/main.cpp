@@ -176,6 +176,7 @@ Options parse_args(int argc, char** argv) {
       throw UsageError(fmt::format("unexpected argument '{}'", arg));
   }
   if (opt.help) return opt;
+  dco::tools::check_synthetic_name(opt.synthetic);
   if (opt.sequence != "synthetic" && opt.sequence != "karlsruhe" && opt.sequence != "all")
     throw UsageError(
         fmt::format("--sequence must be synthetic, karlsruhe or all, not '{}'", opt.sequence));

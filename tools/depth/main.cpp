@@ -212,6 +212,7 @@ Options parse_args(int argc, char** argv) {
     throw UsageError("--right-pattern needs --left-pattern");
   if (opt.synthetic && (opt.frames < 1 || opt.width < 16 || opt.height < 16))
     throw UsageError("--frames must be >= 1 and --size at least 16x16");
+  if (opt.synthetic) dco::tools::check_synthetic_name(*opt.synthetic);
   if (opt.left_pattern && opt.first < 0) throw UsageError("--first must be >= 0");
   if (opt.left_pattern && opt.count != -1 && opt.count < 1)
     throw UsageError("--count must be >= 1 (without it: up to the first missing file)");

@@ -7,7 +7,9 @@
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
 
+#include "dco/core/error.hpp"
 #include "dco/core/printable.hpp"
+#include "dco/core/synthetic_scene.hpp"
 
 namespace dco::tools {
 
@@ -92,6 +94,14 @@ int run_tool(std::string_view tool, const std::function<int()>& body) {
   } catch (const std::exception& e) {
     fmt::print(stderr, "{}: error: {}\n", tool, one_line(e.what()));
     return 1;
+  }
+}
+
+void check_synthetic_name(const std::string& name) {
+  try {
+    synthetic::preset(name, 64, 64);
+  } catch (const Error& e) {
+    throw UsageError(e.what());
   }
 }
 

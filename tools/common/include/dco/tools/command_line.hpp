@@ -39,6 +39,10 @@ class ArgCursor {
   std::optional<std::string> inline_value_;
 };
 
+// Throws UsageError unless `name` is a synthetic scene (hand, boxes, static): a command line
+// naming another one is a usage error, found before any work.
+void check_synthetic_name(const std::string& name);
+
 struct ImageSize {
   int width = 0, height = 0;
 };
