@@ -145,13 +145,16 @@ Image<float> read_pfm(const std::filesystem::path& path) {
     throw Error(quoted(path) + ": PFM data is truncated (" +
                 std::to_string(std::max<std::streamoff>(after_header - 1, 0)) + " of " +
                 std::to_string(data_bytes) + " bytes)");
-  for (std::streamoff i = 0; i < std::min(padding, kMostHeaderPadding + 1); ++i) {
+  const auto is_padding = [&in] {
     const int c = in.get();
-    if (i == kMostHeaderPadding || (c != ' ' && c != '\t' && c != '\r' && c != '\n'))
-      throw Error(quoted(path) + ": PFM holds " + std::to_string(padding - 1) +
-                  " bytes more than its " + std::to_string(width) + "x" + std::to_string(height) +
-                  " data and the byte that ends its header");
-  }
+    return c == ' ' || c == '\t' || c == '\r' || c == '\n';
+  };
+  bool header_padding = padding <= kMostHeaderPadding;
+  for (std::streamoff i = 0; header_padding && i < padding; ++i) header_padding = is_padding();
+  if (!header_padding)
+    throw Error(quoted(path) + ": PFM holds " + std::to_string(padding - 1) +
+                " bytes more than its " + std::to_string(width) + "x" + std::to_string(height) +
+                " data and the byte that ends its header");
   const bool little = scale < 0;
   const bool swap = little != (std::endian::native == std::endian::little);
 

@@ -40,16 +40,12 @@ dco_status fail(dco_status status, const std::string& message) {
   return status;
 }
 
-// The C functions' bodies: out of memory (building a message, a client) must not unwind into a
-// C caller, which has no unwind tables; it is DCO_E_IO. The message fits the string's own room.
-template <class Body>
-dco_status no_throw(Body&& body) noexcept {
-  try {
-    return body();
-  } catch (...) {
-    t_last_error = "out of memory";
-    return DCO_E_IO;
-  }
+// What a C function returns when an exception reaches it (out of memory building a message or a
+// client): it must not unwind into a C caller, which has no unwind tables. The message fits the
+// string's own room, so nothing is allocated here.
+dco_status out_of_memory() noexcept {
+  t_last_error = "out of memory";
+  return DCO_E_IO;
 }
 
 std::string errno_text(int err) {
@@ -425,44 +421,44 @@ void dco_frame_info_init(dco_frame_info* info) {
   info->struct_size = sizeof(dco_frame_info);
 }
 
-dco_status dco_client_open(const dco_client_options* options, dco_client** out) {
-  return no_throw([&]() -> dco_status {
-    if (out == nullptr) return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: out is NULL");
-    *out = nullptr;
-    if (!struct_ok(options, options ? options->struct_size : 0, kOptionsSizeV1))
-      return fail(DCO_E_INVALID_ARGUMENT,
-                  "dco_client_open: options missing or not set up by dco_client_options_init");
-    if (options->path == nullptr || options->path[0] == '\0')
-      return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: no segment path");
-    const std::uint32_t poll_us =
-        options->struct_size >= sizeof(dco_client_options) ? options->poll_us : 0;
-    if (poll_us > kMaxPollUs)
-      return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: poll_us " + std::to_string(poll_us) +
-                                              " above " + std::to_string(kMaxPollUs));
-    auto client = std::make_unique<dco_client>();
-    client->expect = {options->path, options->expected_uid, options->expected_width,
-                      options->expected_height};
-    client->max_attempts = options->max_attempts ? options->max_attempts : kDefaultAttempts;
-    client->poll_ns = std::int64_t{poll_us} * 1000;
-    const dco_status status = map_segment(client->expect, client->map);
-    if (status != DCO_OK) return status;
-    client->skip_dead_writers_frames();
-    client->last_path_check_ns = now_ns();
-    *out = client.release();
-    return DCO_OK;
-  });
+dco_status dco_client_open(const dco_client_options* options, dco_client** out) try {
+  if (out == nullptr) return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: out is NULL");
+  *out = nullptr;
+  if (!struct_ok(options, options ? options->struct_size : 0, kOptionsSizeV1))
+    return fail(DCO_E_INVALID_ARGUMENT,
+                "dco_client_open: options missing or not set up by dco_client_options_init");
+  if (options->path == nullptr || options->path[0] == '\0')
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: no segment path");
+  const std::uint32_t poll_us =
+      options->struct_size >= sizeof(dco_client_options) ? options->poll_us : 0;
+  if (poll_us > kMaxPollUs)
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: poll_us " + std::to_string(poll_us) +
+                                            " above " + std::to_string(kMaxPollUs));
+  auto client = std::make_unique<dco_client>();
+  client->expect = {options->path, options->expected_uid, options->expected_width,
+                    options->expected_height};
+  client->max_attempts = options->max_attempts ? options->max_attempts : kDefaultAttempts;
+  client->poll_ns = std::int64_t{poll_us} * 1000;
+  const dco_status status = map_segment(client->expect, client->map);
+  if (status != DCO_OK) return status;
+  client->skip_dead_writers_frames();
+  client->last_path_check_ns = now_ns();
+  *out = client.release();
+  return DCO_OK;
+} catch (...) {
+  return out_of_memory();
 }
 
 void dco_client_close(dco_client* client) {
   delete client;
 }
 
-dco_status dco_client_latest(dco_client* client, dco_frame_view* view) {
-  return no_throw([&]() -> dco_status {
-    if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
-      return fail(DCO_E_INVALID_ARGUMENT, "dco_client_latest: bad client or view");
-    return client->returned(client->checked_latest(view));
-  });
+dco_status dco_client_latest(dco_client* client, dco_frame_view* view) try {
+  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_latest: bad client or view");
+  return client->returned(client->checked_latest(view));
+} catch (...) {
+  return out_of_memory();
 }
 
 int dco_client_still_valid(const dco_client* client, const dco_frame_view* view) {
@@ -471,146 +467,145 @@ int dco_client_still_valid(const dco_client* client, const dco_frame_view* view)
   return client->valid(view) ? 1 : 0;
 }
 
-dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_frame_view* view) {
-  return no_throw([&]() -> dco_status {
-    if (client == nullptr ||
-        !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)) || timeout_ms < 0)
-      return fail(DCO_E_INVALID_ARGUMENT, "dco_client_wait_next: bad client, view or timeout");
-    const std::int64_t deadline = now_ns() + std::int64_t{timeout_ms} * 1'000'000;
-    if (client->poll_ns != 0) request_polling_slice();
-    for (;;) {
-      const auto* h = client->map.header();
-      // Read the wake word before looking for a frame: a publish after the look changes it, so the
-      // sleep below returns at once instead of missing that frame.
-      const std::uint32_t seen = h->wake.load(std::memory_order_acquire);
-      const std::uint64_t published = h->publish_count.load(std::memory_order_acquire);
-      if (published > client->last_index) {
-        const dco_status status = client->take_latest(view);
-        if (status != DCO_E_NO_FRAME) return client->returned(status);
-      }
-      const std::int64_t now = now_ns();
-      const bool closed = h->state.load(std::memory_order_acquire) == layout::kStateClosed;
-      if (closed || now - client->last_path_check_ns >= kPathCheckNs) {
-        bool remapped = false;
-        const dco_status status = client->follow_path(&remapped);
-        if (status != DCO_OK) return status;
-        if (remapped) continue;
-        if (client->writer_gone()) {
-          // A frame published between the look above and the close is still the client's: the
-          // writer publishes before it closes, so a count read after seeing it gone has it.
-          if (h->publish_count.load(std::memory_order_acquire) > client->last_index) continue;
-          return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
-        }
-      }
-      if (now >= deadline)
-        return fail(DCO_E_TIMEOUT, client->expect.path + ": no new frame within " +
-                                       std::to_string(timeout_ms) + " ms");
-      // A writer that dies never wakes us, and a restarted one writes a new file: wake up for the
-      // path check at the latest.
-      const std::int64_t until = std::min(deadline, client->last_path_check_ns + kPathCheckNs);
-      if (client->poll_ns == 0) {
-        layout::wait_for_change(h->wake, seen, until - now);
-        continue;
-      }
-      // Compared with the count read before the look for a frame: equal means no write began
-      // since, and the next one changes the word this sleeps on.
-      const std::uint32_t begun = h->writes_begun.load(std::memory_order_acquire);
-      if (begun == static_cast<std::uint32_t>(published)) {
-        layout::wait_for_change(h->writes_begun, begun, until - now);
-      } else {
-        if (begun != client->polled_write) {
-          client->polled_write = begun;
-          client->poll_end_ns = now + client->poll_ns;
-        }
-        // A path check falling due ends a poll early; the poll resumes after it.
-        if (now < client->poll_end_ns)
-          poll_for_change(h->wake, seen, std::min(until, client->poll_end_ns));
-        else  // this write outlasted the polling: sleep until it is published
-          layout::wait_for_change(h->wake, seen, until - now);
+dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_frame_view* view) try {
+  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)) ||
+      timeout_ms < 0)
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_wait_next: bad client, view or timeout");
+  const std::int64_t deadline = now_ns() + std::int64_t{timeout_ms} * 1'000'000;
+  if (client->poll_ns != 0) request_polling_slice();
+  for (;;) {
+    const auto* h = client->map.header();
+    // Read the wake word before looking for a frame: a publish after the look changes it, so the
+    // sleep below returns at once instead of missing that frame.
+    const std::uint32_t seen = h->wake.load(std::memory_order_acquire);
+    const std::uint64_t published = h->publish_count.load(std::memory_order_acquire);
+    if (published > client->last_index) {
+      const dco_status status = client->take_latest(view);
+      if (status != DCO_E_NO_FRAME) return client->returned(status);
+    }
+    const std::int64_t now = now_ns();
+    const bool closed = h->state.load(std::memory_order_acquire) == layout::kStateClosed;
+    if (closed || now - client->last_path_check_ns >= kPathCheckNs) {
+      bool remapped = false;
+      const dco_status status = client->follow_path(&remapped);
+      if (status != DCO_OK) return status;
+      if (remapped) continue;
+      if (client->writer_gone()) {
+        // A frame published between the look above and the close is still the client's: the
+        // writer publishes before it closes, so a count read after seeing it gone has it.
+        if (h->publish_count.load(std::memory_order_acquire) > client->last_index) continue;
+        return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
       }
     }
-  });
+    if (now >= deadline)
+      return fail(DCO_E_TIMEOUT, client->expect.path + ": no new frame within " +
+                                     std::to_string(timeout_ms) + " ms");
+    // A writer that dies never wakes us, and a restarted one writes a new file: wake up for the
+    // path check at the latest.
+    const std::int64_t until = std::min(deadline, client->last_path_check_ns + kPathCheckNs);
+    if (client->poll_ns == 0) {
+      layout::wait_for_change(h->wake, seen, until - now);
+      continue;
+    }
+    // Compared with the count read before the look for a frame: equal means no write began
+    // since, and the next one changes the word this sleeps on.
+    const std::uint32_t begun = h->writes_begun.load(std::memory_order_acquire);
+    if (begun == static_cast<std::uint32_t>(published)) {
+      layout::wait_for_change(h->writes_begun, begun, until - now);
+    } else {
+      if (begun != client->polled_write) {
+        client->polled_write = begun;
+        client->poll_end_ns = now + client->poll_ns;
+      }
+      // A path check falling due ends a poll early; the poll resumes after it.
+      if (now < client->poll_end_ns)
+        poll_for_change(h->wake, seen, std::min(until, client->poll_end_ns));
+      else  // this write outlasted the polling: sleep until it is published
+        layout::wait_for_change(h->wake, seen, until - now);
+    }
+  }
+} catch (...) {
+  return out_of_memory();
 }
 
 dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
-                           dco_frame_buffer* dst) {
-  return no_throw([&]() -> dco_status {
-    if (client == nullptr ||
-        !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)) ||
-        !struct_ok(dst, dst ? dst->struct_size : 0, sizeof(dco_frame_buffer)) ||
-        dst->depth == nullptr)
-      return fail(DCO_E_INVALID_ARGUMENT, "dco_client_copy: bad client, view or buffer");
-    // Sizes and addresses come from the mapping; the view only names the slot and its token.
-    const Mapping& m = client->map;
-    const std::size_t depth_row = std::size_t{m.geometry.width} * sizeof(float);
-    const std::size_t rows = m.geometry.height;
-    if (!rows_fit(dst->depth_capacity, dst->depth_stride, rows, depth_row))
-      return fail(DCO_E_BUFFER_TOO_SMALL, "dco_client_copy: depth buffer too small");
-    const bool copy_image = dst->image != nullptr && m.geometry.image_channels != 0;
-    const std::size_t image_row = std::size_t{m.geometry.width} * m.geometry.image_channels;
-    if (copy_image && !rows_fit(dst->image_capacity, dst->image_stride, rows, image_row))
-      return fail(DCO_E_BUFFER_TOO_SMALL, "dco_client_copy: image buffer too small");
-    if (!client->valid(view))
-      return fail(DCO_E_OVERTAKEN, client->expect.path + ": slot overwritten before the copy");
-    const unsigned char* slot = m.slot(view->info.slot);
-    const unsigned char* depth = slot + m.sizes.depth_offset;
-    auto* out = reinterpret_cast<unsigned char*>(dst->depth);
+                           dco_frame_buffer* dst) try {
+  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)) ||
+      !struct_ok(dst, dst ? dst->struct_size : 0, sizeof(dco_frame_buffer)) ||
+      dst->depth == nullptr)
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_copy: bad client, view or buffer");
+  // Sizes and addresses come from the mapping; the view only names the slot and its token.
+  const Mapping& m = client->map;
+  const std::size_t depth_row = std::size_t{m.geometry.width} * sizeof(float);
+  const std::size_t rows = m.geometry.height;
+  if (!rows_fit(dst->depth_capacity, dst->depth_stride, rows, depth_row))
+    return fail(DCO_E_BUFFER_TOO_SMALL, "dco_client_copy: depth buffer too small");
+  const bool copy_image = dst->image != nullptr && m.geometry.image_channels != 0;
+  const std::size_t image_row = std::size_t{m.geometry.width} * m.geometry.image_channels;
+  if (copy_image && !rows_fit(dst->image_capacity, dst->image_stride, rows, image_row))
+    return fail(DCO_E_BUFFER_TOO_SMALL, "dco_client_copy: image buffer too small");
+  if (!client->valid(view))
+    return fail(DCO_E_OVERTAKEN, client->expect.path + ": slot overwritten before the copy");
+  const unsigned char* slot = m.slot(view->info.slot);
+  const unsigned char* depth = slot + m.sizes.depth_offset;
+  auto* out = reinterpret_cast<unsigned char*>(dst->depth);
+  for (std::size_t y = 0; y < rows; ++y)
+    std::memcpy(out + y * dst->depth_stride, depth + y * m.sizes.depth_stride, depth_row);
+  if (copy_image) {
+    const unsigned char* image = slot + m.sizes.image_offset;
     for (std::size_t y = 0; y < rows; ++y)
-      std::memcpy(out + y * dst->depth_stride, depth + y * m.sizes.depth_stride, depth_row);
-    if (copy_image) {
-      const unsigned char* image = slot + m.sizes.image_offset;
-      for (std::size_t y = 0; y < rows; ++y)
-        std::memcpy(dst->image + y * dst->image_stride, image + y * m.sizes.image_stride,
-                    image_row);
-    }
-    if (!client->valid(view))
-      return fail(DCO_E_OVERTAKEN, client->expect.path + ": slot overwritten during the copy");
-    return DCO_OK;
-  });
+      std::memcpy(dst->image + y * dst->image_stride, image + y * m.sizes.image_stride, image_row);
+  }
+  if (!client->valid(view))
+    return fail(DCO_E_OVERTAKEN, client->expect.path + ": slot overwritten during the copy");
+  return DCO_OK;
+} catch (...) {
+  return out_of_memory();
 }
 
-dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst, dco_frame_info* info) {
-  return no_throw([&]() -> dco_status {
-    if (client == nullptr || (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
-      return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_latest: bad client or info");
-    dco_frame_view view;
-    dco_frame_view_init(&view);
-    for (std::uint32_t attempt = 0; attempt < client->max_attempts; ++attempt) {
-      dco_status status = client->checked_latest(&view);
-      if (status != DCO_OK) return status;
-      status = dco_client_copy(client, &view, dst);
-      if (status == DCO_E_OVERTAKEN) continue;
-      if (status == DCO_OK && info != nullptr) *info = view.info;
-      return client->returned(status);
-    }
-    return fail(DCO_E_OVERTAKEN, client->expect.path + ": every copy was overtaken (" +
-                                     std::to_string(client->max_attempts) + " attempts)");
-  });
+dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst,
+                                  dco_frame_info* info) try {
+  if (client == nullptr || (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_latest: bad client or info");
+  dco_frame_view view;
+  dco_frame_view_init(&view);
+  for (std::uint32_t attempt = 0; attempt < client->max_attempts; ++attempt) {
+    dco_status status = client->checked_latest(&view);
+    if (status != DCO_OK) return status;
+    status = dco_client_copy(client, &view, dst);
+    if (status == DCO_E_OVERTAKEN) continue;
+    if (status == DCO_OK && info != nullptr) *info = view.info;
+    return client->returned(status);
+  }
+  return fail(DCO_E_OVERTAKEN, client->expect.path + ": every copy was overtaken (" +
+                                   std::to_string(client->max_attempts) + " attempts)");
+} catch (...) {
+  return out_of_memory();
 }
 
 dco_status dco_client_view_announced(dco_client* client, uint64_t session_id, uint32_t slot,
-                                     uint64_t publish_index, dco_frame_view* view) {
-  return no_throw([&]() -> dco_status {
-    if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
-      return fail(DCO_E_INVALID_ARGUMENT, "dco_client_view_announced: bad client or view");
-    return client->returned(client->take_announced(session_id, slot, publish_index, view));
-  });
+                                     uint64_t publish_index, dco_frame_view* view) try {
+  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_view_announced: bad client or view");
+  return client->returned(client->take_announced(session_id, slot, publish_index, view));
+} catch (...) {
+  return out_of_memory();
 }
 
 dco_status dco_client_read_announced(dco_client* client, uint64_t session_id, uint32_t slot,
                                      uint64_t publish_index, dco_frame_buffer* dst,
-                                     dco_frame_info* info) {
-  return no_throw([&]() -> dco_status {
-    if (client == nullptr || (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
-      return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_announced: bad client or info");
-    dco_frame_view view;
-    dco_frame_view_init(&view);
-    dco_status status = client->take_announced(session_id, slot, publish_index, &view);
-    if (status != DCO_OK) return status;
-    status = dco_client_copy(client, &view, dst);
-    if (status == DCO_OK && info != nullptr) *info = view.info;
-    return client->returned(status);
-  });
+                                     dco_frame_info* info) try {
+  if (client == nullptr || (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_announced: bad client or info");
+  dco_frame_view view;
+  dco_frame_view_init(&view);
+  dco_status status = client->take_announced(session_id, slot, publish_index, &view);
+  if (status != DCO_OK) return status;
+  status = dco_client_copy(client, &view, dst);
+  if (status == DCO_OK && info != nullptr) *info = view.info;
+  return client->returned(status);
+} catch (...) {
+  return out_of_memory();
 }
 
 uint64_t dco_client_session_id(const dco_client* client) {
