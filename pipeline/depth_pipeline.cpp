@@ -22,7 +22,7 @@ void validate(const PipelineParams& params) {
 }
 
 void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint8_t> left,
-                   int index, StereoSlot& slot) {
+                   FrameIndex index, StereoSlot& slot) {
   slot.index = index;
   slot.flow_cue_done = false;
   slot.image.resize(left.width, left.height);
@@ -343,14 +343,14 @@ void size_like(const DepthResult& model, DepthResult& out) {
   size_image_like(model.contours, out.contours);
 }
 
-ContourWindow window_on_arrival(int lookahead, int newest) {
-  const auto frame = [](int i) { return i >= 0 ? i : -1; };
+ContourWindow window_on_arrival(int lookahead, FrameIndex newest) {
+  const auto frame = [](FrameIndex i) -> FrameIndex { return i >= 0 ? i : -1; };
   if (lookahead == 0) return {newest, frame(newest - 1), frame(newest - 2)};
   if (newest == 0) return {};
   return {newest - 1, frame(newest - 2), newest};
 }
 
-ContourWindow window_at_end(int last) {
+ContourWindow window_at_end(FrameIndex last) {
   return {last, last >= 1 ? last - 1 : -1, -1};
 }
 
@@ -382,7 +382,7 @@ bool DepthPipeline::push(ImageView<const std::uint8_t> left, ImageView<const std
                   std::to_string(last.image.height()) + "; call reset() for a new sequence");
   }
   // With lookahead 1 the slot being overwritten (t-3) has been finished already.
-  const int t = next_index_;
+  const FrameIndex t = next_index_;
   StereoSlot& slot = slot_of(t);
   stereo_frame(*stereo_, left, right, slot,  // first: it rejects bad input
                densifier_.refines(left.width, left.height));
@@ -405,7 +405,7 @@ bool DepthPipeline::finish(DepthResult& out) {
 }
 
 void DepthPipeline::finish_frame(const ContourWindow& window, DepthResult& out) {
-  const auto neighbour = [this](int i) { return i >= 0 ? &slot_of(i) : nullptr; };
+  const auto neighbour = [this](FrameIndex i) { return i >= 0 ? &slot_of(i) : nullptr; };
   contour_frame_moving_maps(*contour_, slot_of(window.centre), neighbour(window.neighbour_a),
                             neighbour(window.neighbour_b), out);
   densify_frame(densifier_, out);

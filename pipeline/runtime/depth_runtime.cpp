@@ -417,17 +417,17 @@ void DepthRuntime::contour_loop(std::stop_token stop) {
   }
 }
 
-int DepthRuntime::window_slot(int frame) const {
+int DepthRuntime::window_slot(FrameIndex frame) const {
   return frame >= 0 ? window_[static_cast<std::size_t>(frame) % window_.size()] : -1;
 }
 
-bool DepthRuntime::has_depth(int frame) const {
+bool DepthRuntime::has_depth(FrameIndex frame) const {
   return frame >= 0 && !slots_[static_cast<std::size_t>(window_slot(frame))].neighbour_only;
 }
 
 void DepthRuntime::contour_receive(std::stop_token stop, int slot) {
   // Frames are numbered in the order they passed the entry, as DepthPipeline numbers its pushes.
-  const int t = received_++;
+  const FrameIndex t = received_++;
   window_[static_cast<std::size_t>(t) % window_.size()] = slot;
   const ContourWindow w = window_on_arrival(pipeline_.contour.lookahead, t);
   if (has_depth(w.centre)) {
@@ -435,7 +435,7 @@ void DepthRuntime::contour_receive(std::stop_token stop, int slot) {
     // stereo: made here, the contour step after the stereo is left the short part.
     if (pipeline_.contour.lookahead == 0 && pipeline_.contour.use_flow && w.neighbour_b >= 0 &&
         params_.threads > 1) {
-      const auto entry_of = [this](int frame) -> SlotEntry& {
+      const auto entry_of = [this](FrameIndex frame) -> SlotEntry& {
         return slots_[static_cast<std::size_t>(window_slot(frame))];
       };
       SlotEntry& centre = entry_of(w.centre);
@@ -464,7 +464,7 @@ void DepthRuntime::contour_end(std::stop_token stop) {
       run_contour(stop, window_slot(w.centre), window_slot(w.neighbour_a),
                   window_slot(w.neighbour_b), /*last=*/true);
   }
-  for (int t = std::max(received_ - 2, 0); t < received_; ++t)
+  for (FrameIndex t = std::max<FrameIndex>(received_ - 2, 0); t < received_; ++t)
     release_slot(window_slot(t), window_slot(received_ - 1));
   received_ = 0;
   if (params_.threads < 3) {

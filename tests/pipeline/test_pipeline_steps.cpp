@@ -280,5 +280,19 @@ TEST(ContourWindows, CentredWindowTrailsByOneAndCausalWindowLooksBack) {
   expect(window_at_end(5), 5, 4, -1);
 }
 
+TEST(ContourWindows, FramesPastTwoToTheThirtyOneKeepTheirNeighbours) {
+  // 2^31 frames are 414 days at 60 fps: a service running that long must not wrap to frame -1.
+  const FrameIndex t = FrameIndex{1} << 31;
+  const ContourWindow centred = window_on_arrival(1, t);
+  EXPECT_EQ(centred.centre, t - 1);
+  EXPECT_EQ(centred.neighbour_a, t - 2);
+  EXPECT_EQ(centred.neighbour_b, t);
+  const ContourWindow causal = window_on_arrival(0, t + 1);
+  EXPECT_EQ(causal.centre, t + 1);
+  EXPECT_EQ(causal.neighbour_a, t);
+  EXPECT_EQ(causal.neighbour_b, t - 1);
+  EXPECT_EQ(window_at_end(t).neighbour_a, t - 1);
+}
+
 }  // namespace
 }  // namespace dco::pipeline

@@ -370,14 +370,14 @@ int run_batch(const Options& opt, dco::pipeline::PipelineParams params, bool max
 
 // Removes frame_NNNNNN.pfm and gt_NNNNNN.pfm files in `dir` whose number is not in `keep`;
 // returns how many.
-int remove_other_frames(const fs::path& dir, const std::set<int>& keep) {
+int remove_other_frames(const fs::path& dir, const std::set<dco::pipeline::FrameIndex>& keep) {
   static const std::regex kName("(frame|gt)_([0-9]{6})\\.pfm");
   int removed = 0;
   for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
     std::smatch m;
     const std::string name = e.path().filename().string();
     if (!e.is_regular_file() || !std::regex_match(name, m, kName)) continue;
-    if (keep.count(std::stoi(m[2].str())) == 0 && fs::remove(e.path())) ++removed;
+    if (keep.count(std::stoll(m[2].str())) == 0 && fs::remove(e.path())) ++removed;
   }
   return removed;
 }
@@ -400,7 +400,7 @@ int run_sequence(const Options& opt, dco::pipeline::PipelineParams params,
   dco::pipeline::DepthResult result;
   float plane = 0.0f;
   int written = 0;
-  std::set<int> written_indices;
+  std::set<dco::pipeline::FrameIndex> written_indices;
   double sum_ms = 0;
   dco::stereo::CameraCorrection correction;  // as last printed
   const auto emit = [&] {

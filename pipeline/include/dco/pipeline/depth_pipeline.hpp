@@ -28,9 +28,13 @@ struct PipelineParams {
 void register_params(ConfigSchema& schema, PipelineParams& params);
 void validate(const PipelineParams& params);  // throws dco::Error
 
+// A frame's number in its sequence. 64 bits: a service that runs for years at any frame rate
+// never wraps it.
+using FrameIndex = std::int64_t;
+
 // Everything the pipeline knows about one frame once it is done.
 struct DepthResult {
-  int index = -1;
+  FrameIndex index = -1;
   Image<std::uint8_t> image;  // grey left image, input resolution
   // Grey right image, input resolution, on the left's rows and levels (the stereo stage's camera
   // correction); empty unless the densifier's photometric refinement reads it.
@@ -57,7 +61,7 @@ struct DepthResult {
 
 // What the stereo step leaves of one frame for the contour and densify steps.
 struct StereoSlot {
-  int index = -1;
+  FrameIndex index = -1;
   Image<std::uint8_t> image;          // grey left image, input resolution
   Image<std::uint8_t> small;          // grey left image at the stereo stage's internal resolution
   Image<std::uint8_t> small_colour;   // scratch: the colour image downscaled before its grey
@@ -99,7 +103,7 @@ struct EarlyContourScratch {
 // 1. The grey images of the left view; `small` equals the stereo stage's internal grey image.
 //    Cheap, and with lookahead 1 all the previous frame's contour step needs of this frame.
 void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint8_t> left,
-                   int index, StereoSlot& slot);
+                   FrameIndex index, StereoSlot& slot);
 // 2. The sparse stage: sparse and raw disparity, timings (independent of step 1), and with
 //    `keep_right` the corrected grey right image (and, with a lens fall-off correction, the
 //    corrected grey left one). Throws dco::Error on bad input.
@@ -163,13 +167,13 @@ void size_like(const DepthResult& model, DepthResult& out);
 
 // Frame numbers of one contour window; -1 where a frame does not exist.
 struct ContourWindow {
-  int centre = -1, neighbour_a = -1, neighbour_b = -1;
+  FrameIndex centre = -1, neighbour_a = -1, neighbour_b = -1;
 };
 // The window frame `newest` completes: with lookahead 1 the previous frame's (none for frame 0),
 // with lookahead 0 its own.
-ContourWindow window_on_arrival(int lookahead, int newest);
+ContourWindow window_on_arrival(int lookahead, FrameIndex newest);
 // With lookahead 1, the window of the sequence's last frame, which has no successor.
-ContourWindow window_at_end(int last);
+ContourWindow window_at_end(FrameIndex last);
 
 // Makers of the stages that run on more than one backend; an empty one makes the CPU stage.
 struct StageFactories {
@@ -203,7 +207,9 @@ class DepthPipeline {
   const PipelineParams& params() const { return params_; }
 
  private:
-  StereoSlot& slot_of(int index) { return slots_[static_cast<std::size_t>(index) % slots_.size()]; }
+  StereoSlot& slot_of(FrameIndex index) {
+    return slots_[static_cast<std::size_t>(index) % slots_.size()];
+  }
   void finish_frame(const ContourWindow& window, DepthResult& out);
 
   PipelineParams params_;
@@ -216,8 +222,8 @@ class DepthPipeline {
   // runtime's stereo thread does it, with a CPU contour stage; a GPU one does it beside its flow.
   bool early_contour_apart_;
   std::array<StereoSlot, 3> slots_;
-  int next_index_ = 0;   // index of the next pushed frame
-  int next_output_ = 0;  // index of the next frame to finish
+  FrameIndex next_index_ = 0;   // index of the next pushed frame
+  FrameIndex next_output_ = 0;  // index of the next frame to finish
 };
 
 }  // namespace dco::pipeline

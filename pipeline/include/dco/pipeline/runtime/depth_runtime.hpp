@@ -122,7 +122,7 @@ class DepthRuntime {
   // references are valid during the call only.
   using ResultCallback = std::function<void(const DepthResult&, const FrameTimes&)>;
   // Called on a stage's thread right before that stage runs on a frame (tests slow stages down).
-  using StageHook = std::function<void(Stage, int index)>;
+  using StageHook = std::function<void(Stage, FrameIndex index)>;
 
   // Throws dco::Error on invalid params.
   // `stages` makes the stereo and contour stages and the densify solver (empty: the CPU ones).
@@ -162,7 +162,7 @@ class DepthRuntime {
   struct Input {
     Image<std::uint8_t> left, right;
     Clock::time_point capture, entry;
-    int index = -1;
+    FrameIndex index = -1;
   };
   struct SlotEntry {
     StereoSlot slot;
@@ -189,8 +189,8 @@ class DepthRuntime {
   // The steps after the stereo stage's hand-over, on whichever thread runs them.
   void contour_receive(std::stop_token stop, int slot);
   void contour_end(std::stop_token stop);
-  int window_slot(int frame) const;  // -1 for a frame before the first
-  bool has_depth(int frame) const;   // a received frame of the window that is not late
+  int window_slot(FrameIndex frame) const;  // -1 for a frame before the first
+  bool has_depth(FrameIndex frame) const;   // a received frame of the window that is not late
   // `last`: the sequence's last contour step.
   void run_contour(std::stop_token stop, int centre, int neighbour_a, int neighbour_b, bool last);
   // The stereo thread's share of the next contour step (ContourExtractor::prepare_next):
@@ -278,7 +278,7 @@ class DepthRuntime {
   std::size_t input_cursor_ = 0;
   int waiting_input_ = -1;  // the frame at the entry, -1 when none
   bool end_requested_ = false;
-  int next_index_ = 0;  // index of the next pushed frame of the sequence
+  FrameIndex next_index_ = 0;  // index of the next pushed frame of the sequence
   int width_ = 0, height_ = 0, channels_ = 0;
   std::size_t entry_high_water_ = 0;
   FrameInterval frame_interval_;  // of the sequence's capture times
@@ -291,7 +291,7 @@ class DepthRuntime {
   std::size_t slot_cursor_ = 0;
   BoundedQueue<int> stereo_queue_;
   std::array<int, 3> window_{};  // slot of frame t at t mod 3, for the last three frames
-  int received_ = 0;             // frames of the sequence the contour step received
+  FrameIndex received_ = 0;      // frames of the sequence the contour step received
   // The work the last contour step's results allow for the next one: none to take, ready for the
   // stereo thread to take, or being done by it (the contour step then waits for it). Only while
   // early_contour_moves_.
