@@ -378,19 +378,23 @@ bool Densifier::solves_at_half(int width) const {
   return densify::solves_at_half(params_, width);
 }
 
+void Densifier::clamp_to_data_range(ImageView<float> map) {
+  if (data_high_ <= 0.0f) return;
+  rows_.run(map.height, [&](int, int begin, int end) {
+    for (int y = begin; y < end; ++y) {
+      float* row = map.row(y);
+      for (int x = 0; x < map.width; ++x) row[x] = std::clamp(row[x], data_low_, data_high_);
+    }
+  });
+}
+
 void Densifier::finish(Image<float>& dense) {
   const int w = solution_.width();
   const int h = solution_.height();
   dense.resize(w, h);
   // An iterative solve stopped early can overshoot in a small region that contours cut off
   // (weakly coupled, so it weighs little in the residual); the exact solution cannot.
-  if (data_high_ > 0.0f)
-    rows_.run(h, [&](int, int begin, int end) {
-      for (int y = begin; y < end; ++y) {
-        float* row = solution_.row(y);
-        for (int x = 0; x < w; ++x) row[x] = std::clamp(row[x], data_low_, data_high_);
-      }
-    });
+  clamp_to_data_range(solution_.view());
   if (params_.median_size == 3) {
     cv::medianBlur(as_mat(solution_.cview()), as_mat(dense.view()), 3);
   } else if (params_.median_size == 5) {
@@ -461,9 +465,13 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
   timings_.solve_ms = t.lap_ms();
   finish(dense);
   timings_.median_ms = t.lap_ms();
-  if (refines(w, h) && !in.right.empty() && !in.image.empty())
+  if (refines(w, h) && !in.right.empty() && !in.image.empty()) {
     refiner_->refine(in.photometric_left.empty() ? in.image : in.photometric_left, in.right,
                      params_.photometric, dense.view());
+    // Its linearised steps can overshoot where the images say little (flat ground, a small
+    // alpha): the refined map keeps to the data's range, as the solution does.
+    clamp_to_data_range(dense.view());
+  }
   timings_.refine_ms = t.lap_ms();
   timings_.total_ms = t.total_ms();
 }

@@ -59,6 +59,7 @@ void PhotometricTermsRow(const PhotometricTermRows& in, const pixel::Photometric
   const auto half = hn::Set(df, 0.5f);
   const auto zeta = hn::Set(df, pixel::kPhotometricZetaSquared);
   const auto eps = hn::Set(df, pixel::kPhotometricEpsSquared);
+  const auto tiny = hn::Set(df, pixel::kPhotometricTiny);
   const auto one = hn::Set(df, 1.0f);
   const auto delta = hn::Set(df, w.delta), gamma = hn::Set(df, w.gamma),
              alpha = hn::Set(df, w.alpha);
@@ -125,7 +126,7 @@ void PhotometricTermsRow(const PhotometricTermRows& in, const pixel::Photometric
                         hn::Mul(my, hn::Mul(ixy, ey))),
                 inverse);
     hn::StoreU(coeff, df, a + x);
-    hn::StoreU(hn::Add(hn::Mul(coeff, d), pull), df, rhs + x);
+    hn::StoreU(hn::Add(hn::Mul(hn::Add(coeff, tiny), d), pull), df, rhs + x);
     // pixel::photometric_smoothness.
     const auto gx =
         hn::Mul(half, hn::Sub(hn::LoadU(df, in.d + x + 1), hn::LoadU(df, in.d + x - 1)));

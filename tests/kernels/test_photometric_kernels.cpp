@@ -146,11 +146,25 @@ TEST(PhotometricPixel, DataTermPullsTowardsTheShiftThatAlignsARamp) {
   float a = 0, rhs = 0;
   pixel::photometric_data_term(left, left, 10.0f, weights, a, rhs);
   EXPECT_GT(a, 0.0f);
-  EXPECT_FLOAT_EQ(rhs, a * 10.0f);
+  EXPECT_FLOAT_EQ(rhs, (a + pixel::kPhotometricTiny) * 10.0f);
   // The right image's sample is 0.25 px "ahead": the aligning disparity is 10.25.
   const pixel::Derivatives right{100.0f + 0.25f * g, g, 0.0f, 0.0f, 0.0f, 0.0f};
   pixel::photometric_data_term(left, right, 10.0f, weights, a, rhs);
   EXPECT_NEAR(rhs / a, 10.25f, 1e-4f);
+}
+
+// Flat ground says nothing of the disparity: with no neighbour to pull it either (alpha 0) an SOR
+// step keeps the pixel's value rather than sending it towards 0.
+TEST(PhotometricPixel, APixelWithoutDataOrNeighboursKeepsItsDisparity) {
+  const pixel::PhotometricWeights weights{0.0f, 2.0f, 20.0f};
+  const pixel::Derivatives flat{100.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+  float a = 1, rhs = 0;
+  pixel::photometric_data_term(flat, flat, 12.5f, weights, a, rhs);
+  EXPECT_EQ(a, 0.0f);
+  const float inverse = pixel::photometric_inverse_diagonal(a, 0.0f, 0.0f, 0.0f, 0.0f);
+  EXPECT_NEAR(
+      pixel::sor_step(12.5f, rhs, inverse, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.6f),
+      12.5f, 1e-3f);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The offline pipeline: frame bookkeeping of the contour window and a dense result on a
 // synthetic sequence whose truth is known.
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -56,6 +57,31 @@ TEST(DepthPipeline, CausalWindowReleasesEveryFrameAtOnce) {
     EXPECT_EQ(r.flow_cue, i >= 2);
   }
   EXPECT_FALSE(pipeline.finish(r));
+}
+
+// The photometric refinement's linearised steps can run far where the images say little (flat
+// ground, no smoothness): what it gives stays within the matches' range.
+TEST(DepthPipeline, RefinedMapKeepsToTheRangeOfTheMatches) {
+  const auto scene = synthetic::SceneRenderer(synthetic::preset("boxes", 320, 240));
+  PipelineParams p;
+  p.stereo.max_disparity = 32;
+  p.densify.photometric.alpha = 0.0;
+  DepthPipeline pipeline(p);
+  synthetic::StereoSample s;
+  DepthResult r;
+  for (int i = 0; i < 2; ++i) {
+    scene.render(i, s);
+    if (!pipeline.push(s.left.cview(), s.right.cview(), r)) continue;
+    float high = 0.0f;
+    for (int y = 0; y < r.sparse.height(); ++y)
+      for (int x = 0; x < r.sparse.width(); ++x)
+        if (std::isfinite(r.sparse.at(x, y))) high = std::max(high, r.sparse.at(x, y));
+    for (int y = 0; y < r.dense.height(); ++y)
+      for (int x = 0; x < r.dense.width(); ++x) {
+        ASSERT_GE(r.dense.at(x, y), 0.0f) << x << "," << y;
+        ASSERT_LE(r.dense.at(x, y), std::max(high, 32.0f)) << x << "," << y;
+      }
+  }
 }
 
 TEST(DepthPipeline, DenseMapIsCompleteAndMostlyRightOnASyntheticSequence) {

@@ -167,6 +167,8 @@ class Densifier {
   void build_system(const DensifyInputs& in);
   // The output: the clamped solution through the median filter (median_size).
   void finish(Image<float>& dense);
+  // Clamps `map` to the range of the data terms' values (none before the first system).
+  void clamp_to_data_range(ImageView<float> map);
   // Overwrites the hints of the holes at the start of each row (see border_plane_rms) and widens
   // [low, high] to the hints it sets.
   void border_plane_hints(ImageView<const float> sparse, float& low, float& high);

@@ -49,7 +49,9 @@ struct PhotometricWeights {
 // One pixel's linearised data term about its disparity d: the left image's derivatives `l`
 // against the right's sampled at x - d (`r`); the derivatives linearised are both images' mean.
 // The data term is a (d' - d)^2 - 2 (a d - rhs) (d' - d) + const, written as `a` and the
-// right-hand side `rhs` of its normal equation a d' = rhs.
+// right-hand side `rhs` of its normal equation a d' = rhs. The diagonal's kPhotometricTiny is
+// matched here by kPhotometricTiny d, so a pixel without data or neighbours (flat ground, alpha 0)
+// keeps d instead of decaying towards 0.
 //
 // Each term's weight is w Psi'(n e^2) n with the normalisation n = 1 / D, D = |grad|^2 + zeta^2:
 // w / (D sqrt(e^2 / D + eps^2)) = w / q with q = sqrt(D e^2 + D^2 eps^2). Over the common
@@ -70,7 +72,8 @@ DCO_HD inline void photometric_data_term(const Derivatives& l, const Derivatives
   const float mc = w.delta * (qx * qy), mx = w.gamma * (qc * qy), my = w.gamma * (qc * qx);
   const float inverse = 1.0f / (qc * (qx * qy));
   a = ((mc * (ix * ix) + mx * (ixx * ixx)) + my * (ixy * ixy)) * inverse;
-  rhs = a * d + ((mc * (ix * e) + mx * (ixx * ex)) + my * (ixy * ey)) * inverse;
+  rhs =
+      (a + kPhotometricTiny) * d + ((mc * (ix * e) + mx * (ixx * ex)) + my * (ixy * ey)) * inverse;
 }
 
 // The robust smoothness weight alpha / Psi(|grad d|^2) from the central differences of d.
