@@ -166,7 +166,10 @@ std::string read_text(const std::filesystem::path& path) {
   if (!in) throw Error(fmt::format("{}: cannot open calibration file", path.string()));
   std::ostringstream ss;
   ss << in.rdbuf();
-  return ss.str();
+  std::string text = ss.str();
+  // Editors on some systems start UTF-8 files with a byte-order mark, which no format here knows.
+  if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
+  return text;
 }
 
 enum class Format { kToml, kMiddlebury, kKeyColon };
@@ -233,6 +236,17 @@ void StereoCalibration::validate() const {
     fail_at(src, 0,
             fmt::format("baseline {} m (the translation's length) is not within {}", baseline,
                         kBaselineRangeText));
+  // A right camera far in front of or behind the left turns the rectified views away from both
+  // cameras' own (the rectification's x axis is the line between them).
+  constexpr double kMaxDepthOffsetDeg = 30;
+  const double depth_offset_deg =
+      std::asin(std::min(std::abs(translation[2]) / baseline, 1.0)) * 180 / std::numbers::pi;
+  if (depth_offset_deg > kMaxDepthOffsetDeg)
+    fail_at(src, 0,
+            fmt::format("the right camera sits {:.1f} degrees in front of or behind the left "
+                        "(translation {:g}, {:g}, {:g}; at most {:g} for a side-by-side pair)",
+                        depth_offset_deg, translation[0], translation[1], translation[2],
+                        kMaxDepthOffsetDeg));
   if (has_rectification) {
     check_rotation(src, "left rectifying rotation", rect_rotation_left);
     check_rotation(src, "right rectifying rotation", rect_rotation_right);

@@ -165,6 +165,13 @@ RectifiedGeometry geometry_from_projections(const KeyValues& kv, const std::stri
     fail_at(kv.file(), kv.line(right_key),
             fmt::format("{} and {} do not describe a rectified pair (f or cy differ)", left_key,
                         right_key));
+  // The entries a rectified projection holds at 0 (skew, and the rows' other terms); any other
+  // value would be dropped without a word.
+  for (const auto* p : {&pl, &pr})
+    if ((*p)[1] != 0 || (*p)[4] != 0 || (*p)[8] != 0 || (*p)[9] != 0)
+      fail_at(kv.file(), kv.line(p == &pl ? left_key : right_key),
+              fmt::format("{} is not a rectified projection [f 0 cx tx; 0 f cy ty; 0 0 1 tz]",
+                          p == &pl ? left_key : right_key));
   const double f = pl[0];
   const auto offset = [f](const std::vector<double>& p) {
     return std::array<double, 3>{(p[3] - p[2] * p[11]) / f, (p[7] - p[6] * p[11]) / f, p[11]};

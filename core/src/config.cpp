@@ -106,10 +106,13 @@ std::optional<Value> from_toml(const toml::node& n) {
   return std::nullopt;
 }
 
+// from_chars over the whole text, which may start with '+' as a TOML number may.
 template <typename T>
-bool parse_whole(std::string_view s, T& out) {
+std::errc parse_whole(std::string_view s, T& out) {
+  if (s.size() > 1 && s.front() == '+' && s[1] != '+' && s[1] != '-') s.remove_prefix(1);
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-  return ec == std::errc() && end == s.data() + s.size() && !s.empty();
+  if (s.empty() || end != s.data() + s.size()) return std::errc::invalid_argument;
+  return ec;
 }
 
 }  // namespace
@@ -211,12 +214,18 @@ void ConfigSchema::assign(const Entry& e, std::string_view text, const std::stri
   Value v = std::string(text);
   if (std::holds_alternative<double*>(e.target)) {
     double d = 0;
-    if (!parse_whole(text, d) || !std::isfinite(d))
+    const std::errc ec = parse_whole(text, d);
+    if (ec == std::errc::result_out_of_range)
+      throw Error(fmt::format("{}: '{}' is beyond what a double holds", where, text));
+    if (ec != std::errc() || !std::isfinite(d))
       throw Error(fmt::format("{}: '{}' is not a number", where, text));
     v = d;
   } else if (std::holds_alternative<int*>(e.target)) {
     std::int64_t i = 0;
-    if (!parse_whole(text, i)) throw Error(fmt::format("{}: '{}' is not an integer", where, text));
+    const std::errc ec = parse_whole(text, i);
+    if (ec == std::errc::result_out_of_range)
+      throw Error(fmt::format("{}: value {} is outside [{}, {}]", where, text, e.min, e.max));
+    if (ec != std::errc()) throw Error(fmt::format("{}: '{}' is not an integer", where, text));
     v = i;
   } else if (std::holds_alternative<bool*>(e.target)) {
     if (text != "true" && text != "false")

@@ -50,10 +50,14 @@ std::uint32_t byteswap32(std::uint32_t v) {
 }
 
 Image<std::uint16_t> read_png16(const std::filesystem::path& path, const char* what) {
-  const cv::Mat m =
-      read_image_file(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE, std::string(what) + " PNG");
+  // Unchanged: a grey conversion would mix a colour PNG's channels (KITTI's optical flow is one)
+  // into values that look like a map.
+  const cv::Mat m = read_image_file(path, cv::IMREAD_UNCHANGED, std::string(what) + " PNG");
   if (m.depth() != CV_16U)
     throw Error(quoted(path) + " is not a 16-bit PNG (" + std::string(what) + " needs 16 bits)");
+  if (m.channels() != 1)
+    throw Error(quoted(path) + " has " + std::to_string(m.channels()) + " channels (" +
+                std::string(what) + " needs one)");
   Image<std::uint16_t> out(m.cols, m.rows);
   out.copy_from(as_view<std::uint16_t>(std::as_const(m)));
   return out;

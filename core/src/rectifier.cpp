@@ -1,7 +1,9 @@
 #include "dco/core/rectifier.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include <fmt/format.h>
 #include <opencv2/calib3d.hpp>
@@ -63,6 +65,30 @@ RectifiedGeometry geometry_from(const cv::Mat& p1, const cv::Mat& p2, cv::Size s
   return g;
 }
 
+// Distortion coefficients far from any lens, or a rectified focal length typed in the wrong unit,
+// give a focal length orders of magnitude off the camera's, and every disparity then rounds to 0
+// or overflows: say so instead.
+void check_focal_length(const StereoCalibration& calib, double f, const std::string& src,
+                        const char* hint) {
+  const double lens_f = std::max(calib.left.fx, calib.left.fy);
+  if (!(f > lens_f / 8 && f < lens_f * 8))
+    throw Error(
+        fmt::format("{}: the rectification is degenerate (focal length {:.4g} px from a "
+                    "camera of {:.4g} px): {}",
+                    src, f, lens_f, hint));
+}
+
+// The share of a fixed-point map's pixels that read inside a width x height image.
+double share_inside(const cv::Mat& map_xy, int width, int height) {
+  long inside = 0;
+  for (int y = 0; y < map_xy.rows; ++y) {
+    const cv::Vec2s* row = map_xy.ptr<cv::Vec2s>(y);
+    for (int x = 0; x < map_xy.cols; ++x)
+      inside += row[x][0] >= 0 && row[x][0] < width && row[x][1] >= 0 && row[x][1] < height;
+  }
+  return static_cast<double>(inside) / static_cast<double>(map_xy.total());
+}
+
 void check_input(ImageView<const std::uint8_t> img, const char* side, int width, int height) {
   if (img.empty() || (img.channels != 1 && img.channels != 3))
     throw Error(fmt::format("rectify: {} image must be a non-empty 1- or 3-channel image", side));
@@ -101,6 +127,13 @@ Rectifier::Rectifier(const StereoCalibration& calib) {
     cv::Size out_size = in_size;
     if (calib.has_rectification) {
       geometry_ = calib.rectified;
+      check_focal_length(calib, geometry_.f, src, "check the rectified focal length");
+      // Larger rectified images hold no more of the scene, only more memory and time.
+      if (geometry_.width > 2 * in_width_ || geometry_.height > 2 * in_height_)
+        throw Error(
+            fmt::format("{}: rectified images of {}x{} from a camera of {}x{}: at most "
+                        "twice its size a side",
+                        src, geometry_.width, geometry_.height, in_width_, in_height_));
       out_size = cv::Size(geometry_.width, geometry_.height);
       r1 = mat3(calib.rect_rotation_left);
       r2 = mat3(calib.rect_rotation_right);
@@ -127,19 +160,21 @@ Rectifier::Rectifier(const StereoCalibration& calib) {
                           r2, p1, p2, q, cv::CALIB_ZERO_DISPARITY, 0.0, in_size);
       }
       geometry_ = geometry_from(p1, p2, in_size, src);
-      // Distortion coefficients far from any lens give a rectified focal length orders of
-      // magnitude off, and every disparity then rounds to 0: say so instead.
-      const double lens_f = std::max(calib.left.fx, calib.left.fy);
-      if (!(geometry_.f > lens_f / 8 && geometry_.f < lens_f * 8))
-        throw Error(
-            fmt::format("{}: the rectification is degenerate (focal length {:.4g} px from "
-                        "a camera of {:.4g} px): check the distortion coefficients",
-                        src, geometry_.f, lens_f));
+      check_focal_length(calib, geometry_.f, src, "check the distortion coefficients");
       p1 = p1.colRange(0, 3).clone();
       p2 = p2.colRange(0, 3).clone();
     }
     build_maps(calib.left, r1, p1, out_size, map_left_xy_, map_left_frac_);
     build_maps(calib.right, r2, p2, out_size, map_right_xy_, map_right_frac_);
+    // Rectified images mostly black (a wrong principal point, folded distortion) would be
+    // matched as a scene: refuse them. A real rig keeps nearly all of its view.
+    constexpr double kMinShareInside = 0.5;
+    for (const auto& [map, side] : {std::pair{&map_left_xy_, "left"}, {&map_right_xy_, "right"}})
+      if (const double share = share_inside(*map, in_width_, in_height_); share < kMinShareInside)
+        throw Error(
+            fmt::format("{}: only {:.1f} % of the rectified {} image falls on the "
+                        "camera's (at least {:g} %): check the calibration",
+                        src, 100 * share, side, 100 * kMinShareInside));
   } catch (const cv::Exception& e) {
     throw Error(src + ": cannot compute the rectification: " + e.err);
   }

@@ -112,12 +112,6 @@ SceneConfig boxes(int width, int height) {
 
 }  // namespace
 
-int covering_max_disparity(const SceneConfig& c) {
-  double z_min = c.background_z_m;
-  for (const Object& o : c.objects) z_min = std::min(z_min, o.z_m - std::abs(o.amp_z_m));
-  return static_cast<int>(std::ceil(1.1 * c.focal_px * c.baseline_m / z_min));
-}
-
 SceneConfig preset(const std::string& name, int width, int height) {
   if (name == "hand") return hand(width, height);
   if (name == "boxes") return boxes(width, height);

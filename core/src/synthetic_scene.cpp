@@ -185,10 +185,12 @@ struct BackgroundExtent {
 
 // Over everything either view sees. Disparity is affine and the scene point (x - cx, y - cy) B / d
 // linear-fractional, so the extremes lie at the corners of the left image or of the right
-// image's back-projection.
-BackgroundExtent background_extent(const Rig& r, const Background& bg, double scale) {
+// image's back-projection, whose rows reach right_rows beyond the image's.
+BackgroundExtent background_extent(const Rig& r, const Background& bg, double scale,
+                                   double right_rows) {
+  const double reach = std::ceil(std::abs(right_rows));
   BackgroundExtent e;
-  for (double y : {0.0, r.h - 1.0})
+  for (double y : {-reach, r.h - 1.0 + reach})
     for (double x : {0.0, r.w - 1.0})
       for (double xl : {x, bg.left_x(r, x, y)}) {
         const double d = bg.disparity(r, xl, y);
@@ -548,7 +550,8 @@ void validate(const SceneConfig& c) {
   if (std::abs(c.background_slope_x) >= 1)
     fail(fmt::format("background_slope_x {} must be within (-1, 1)", c.background_slope_x));
   const Rig r = rig_of(c);
-  const BackgroundExtent e = background_extent(r, background_of(c), background_scale(c));
+  const BackgroundExtent e =
+      background_extent(r, background_of(c), background_scale(c), c.right_rows);
   if (!(e.d_min > 0))
     fail(
         fmt::format("background disparity falls to {:.3f} px inside the view (it must stay "
@@ -566,6 +569,16 @@ void validate(const SceneConfig& c) {
 }
 
 }  // namespace
+
+int covering_max_disparity(const SceneConfig& c) {
+  validate(c);
+  const Rig r = rig_of(c);
+  // The background's nearest point: a tilted one comes nearer than at the image centre.
+  double z_min =
+      r.fb() / background_extent(r, background_of(c), background_scale(c), c.right_rows).d_max;
+  for (const Object& o : c.objects) z_min = std::min(z_min, o.z_m - std::abs(o.amp_z_m));
+  return static_cast<int>(std::ceil(1.1 * r.fb() / z_min));
+}
 
 SceneRenderer::SceneRenderer(SceneConfig config) : config_(std::move(config)) {
   validate(config_);

@@ -143,6 +143,17 @@ TEST(Calibration, DetectsMiddleburyByContentNotLineOrder) {
   EXPECT_DOUBLE_EQ(c.rectified.cx_right, 326.96);
 }
 
+// A byte-order mark before the first line does not hide the format.
+TEST(Calibration, FilesStartingWithAByteOrderMarkLoad) {
+  test::TempDir dir;
+  test::write_file(dir / "bom.txt", "\xEF\xBB\xBF" + test::read_file(kMiddlebury));
+  EXPECT_DOUBLE_EQ(load_calibration(dir / "bom.txt").rectified.cx_right, 326.96);
+  test::write_file(dir / "bom_kitti.txt", "\xEF\xBB\xBF" + test::read_file(kKitti));
+  EXPECT_TRUE(load_calibration(dir / "bom_kitti.txt").has_rectification);
+  test::write_file(dir / "bom.toml", "\xEF\xBB\xBF" + kRigToml);
+  EXPECT_DOUBLE_EQ(load_calibration(dir / "bom.toml").translation[0], -0.1);
+}
+
 TEST(Calibration, LoadsKarlsruhe) {
   const StereoCalibration c = load_calibration(kKarlsruhe);
   EXPECT_TRUE(c.is_rectified);
@@ -232,6 +243,17 @@ TEST(Calibration, KittiColourPairSlightlyOffItsBaselineLoads) {
                      "vertically or in depth by more than 2 % of their baseline"),
             std::string::npos)
       << msg;
+
+  // A skew, or a term in the third row, has no place in a rectified projection.
+  for (const int i : {1, 4, 8, 9}) {
+    std::string skewed = text;
+    set_numbers("P_rect_03", {{i, "5.000000e-01"}});
+    std::swap(skewed, text);
+    const std::string why = load_error(dir, "ki_skew.txt", skewed);
+    EXPECT_NE(why.find("ki_skew.txt:19: P_rect_03 is not a rectified projection"),
+              std::string::npos)
+        << i << ": " << why;
+  }
 }
 
 TEST(Calibration, KittiExtrinsicsFollowFromRectificationAlone) {
@@ -436,6 +458,9 @@ TEST(CalibrationErrors, NameTheFileAndLine) {
        replaced(kRigToml, "rotation = [1, 0, 0, 0, 1, 0, 0, 0, 1]",
                 "rotation = [-1, 0, 0, 0, 1, 0, 0, 0, -1]"),
        "turned.toml: the cameras are turned 180.0 degrees apart (at most 60 for a stereo pair)"},
+      {"forward.toml",
+       replaced(kRigToml, "translation = [-0.1, 0, 0]", "translation = [-0.03, 0, 0.064]"),
+       "forward.toml: the right camera sits 64.9 degrees in front of or behind the left"},
       {"huge.toml",
        replaced(replaced(kRigToml, "width = 640", "width = 20000"), "width = 640", "width = 20000"),
        "huge.toml: left camera: image size 20000x480 is not within 1..16384 px a side"},

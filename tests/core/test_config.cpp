@@ -149,6 +149,20 @@ TEST_F(Config, SetOverrides) {
   EXPECT_NE(set_error("stereo.use_color=yes").find("not true or false"), std::string::npos);
   EXPECT_NE(set_error("stereo.mode=slow").find("not one of"), std::string::npos);
   EXPECT_EQ(p.lambda_ad, 12.5);
+
+  // As a TOML file reads them: a leading '+', and integers too large for any type are out of
+  // range rather than "not an integer".
+  schema.set("stereo.lambda_ad=+7.5");
+  EXPECT_EQ(p.lambda_ad, 7.5);
+  schema.set("stereo.max_disparity=+64");
+  EXPECT_EQ(p.max_disparity, 64);
+  EXPECT_NE(set_error("stereo.max_disparity=+-64").find("not an integer"), std::string::npos);
+  EXPECT_NE(set_error("stereo.max_disparity=+").find("not an integer"), std::string::npos);
+  EXPECT_EQ(set_error("stereo.max_disparity=99999999999999999999"),
+            "--set stereo.max_disparity=99999999999999999999: value 99999999999999999999 is "
+            "outside [1, 256]");
+  EXPECT_NE(set_error("stereo.lambda_ad=1e999").find("beyond what a double holds"),
+            std::string::npos);
 }
 
 TEST_F(Config, LoadFile) {

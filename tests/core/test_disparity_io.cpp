@@ -255,6 +255,19 @@ TEST(DisparityPng16, RefusesEightBitAndMissingFiles) {
   EXPECT_THROW(write_disparity_png16(dir / "x.png", three.cview()), Error);
 }
 
+// A 16-bit colour PNG (KITTI's optical flow is one) is not a map whose channels may be mixed.
+TEST(DisparityPng16, RefusesColour) {
+  test::TempDir dir;
+  cv::Mat colour(2, 2, CV_16UC3, cv::Scalar(160, 640, 1));
+  ASSERT_TRUE(cv::imwrite((dir / "flow.png").string(), colour));
+  for (const auto read : {&read_disparity_png16, &read_depth_png16}) try {
+      read(dir / "flow.png");
+      ADD_FAILURE() << "a colour PNG was read as a map";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("has 3 channels"), std::string::npos) << e.what();
+    }
+}
+
 // OpenCV decodes by content and throws from some decoders (a PFM of height 0 under a .png name);
 // a PNG's claimed size is checked before anything is inflated.
 TEST(DisparityPng16, CorruptAndHugeFilesAreClearErrors) {

@@ -276,6 +276,37 @@ TEST(Rectifier, RefusesADegenerateRectification) {
   EXPECT_NO_THROW(Rectifier{c});
 }
 
+// A precomputed rectification gets the checks of one dco computes: a focal length typed in the
+// wrong unit, an output far larger than the camera's, or one that mostly misses the camera's
+// image is refused instead of rectifying to black frames.
+TEST(Rectifier, RefusesAPrecomputedRectificationThatMissesTheCamera) {
+  const StereoCalibration kitti = load_calibration(test::source_dir() / "tests" / "core" / "data" /
+                                                   "kitti_calib_cam_to_cam.txt");
+  const auto refused = [](const StereoCalibration& c, const std::string& why) {
+    try {
+      Rectifier r(c);
+      ADD_FAILURE() << "rectified to " << r.geometry().width << "x" << r.geometry().height
+                    << ", f = " << r.geometry().f;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
+  StereoCalibration c = kitti;
+  c.rectified.f /= 100;
+  c.rectified.baseline_m *= 100;
+  refused(c, "the rectification is degenerate (focal length 6.906 px");
+  c = kitti;
+  c.rectified.width = c.rectified.height = 16384;
+  refused(c, "rectified images of 16384x16384 from a camera of 1392x512");
+  c = kitti;
+  c.rectified.cx_left += 2000;
+  refused(c, "of the rectified left image falls on the camera's");
+  c = kitti;
+  c.rectified.cx_right -= 2000;
+  refused(c, "of the rectified right image falls on the camera's");
+  EXPECT_NO_THROW(Rectifier{kitti});
+}
+
 // A pass-through still checks that the images are of the calibrated size.
 TEST(Rectifier, PassThroughChecksTheCalibratedSize) {
   StereoCalibration c = pinhole_rig();

@@ -190,6 +190,20 @@ TEST(SyntheticScene, CoveringMaxDisparityCoversEveryFrameWithLittleToSpare) {
     EXPECT_LE(largest, static_cast<float>(range)) << name;
     EXPECT_GT(largest, 0.75f * static_cast<float>(range)) << name;  // not a wild overestimate
   }
+  // A tilted background alone: its nearest point is not at the image centre.
+  for (const double slope : {0.03, -0.03}) {
+    SceneConfig config = preset("static", 320, 180);
+    config.objects.clear();
+    config.background_slope_y = slope;
+    config.background_slope_x = slope / 3;
+    const int range = covering_max_disparity(config);
+    const StereoSample s = render(config, 0);
+    float largest = 0;
+    for (int y = 0; y < s.disparity.height(); ++y)
+      for (int x = 0; x < s.disparity.width(); ++x)
+        largest = std::max(largest, s.disparity.at(x, y));
+    EXPECT_LE(largest, static_cast<float>(range)) << slope;
+  }
 }
 
 TEST(SyntheticScene, CloserObjectHasLargerDisparity) {
@@ -526,6 +540,18 @@ TEST(SyntheticScene, InvalidConfigsThrowNamingTheProblem) {
   expect_error(with([](SceneConfig& c) { c.right_gain = NAN; }), "right_gain");
   expect_error(with([](SceneConfig& c) { c.right_offset = 200; }), "right_offset");
   expect_error(with([](SceneConfig& c) { c.right_rows = 9; }), "right_rows");
+  {
+    // A background whose disparity reaches 0 four rows above the image: the left view stays
+    // clear of it, but a right view 8 rows off renders those rows.
+    SceneConfig c = ok;
+    c.objects.clear();
+    c.background_slope_x = 0;
+    c.background_slope_y =
+        c.focal_px * c.baseline_m / c.background_z_m / ((c.height - 1) / 2.0 + 4);
+    EXPECT_NO_THROW(SceneRenderer{c});
+    c.right_rows = 8;
+    expect_error(c, "background disparity");
+  }
   expect_error(with([](SceneConfig& c) { c.right_roll_deg = -1.5; }), "right_roll_deg");
   expect_error(with([](SceneConfig& c) { c.right_roll_deg = NAN; }), "right_roll_deg");
   expect_error(with([](SceneConfig& c) { c.lens_falloff = 0.8; }), "lens_falloff");

@@ -72,7 +72,7 @@ struct SceneConfig {
 SceneConfig preset(const std::string& name, int width = 1280, int height = 720);
 
 // A disparity search range that covers the scene: the disparity of the nearest depth any object
-// (or the background) reaches, plus 10 %.
+// (or the background) reaches, plus 10 %. Throws dco::Error for an invalid config.
 int covering_max_disparity(const SceneConfig& config);
 
 struct StereoSample {
