@@ -198,7 +198,7 @@ Format detect_format(std::string_view text) {
 
 double RectifiedGeometry::depth_from_disparity(double d) const {
   const double denom = d + doffs();
-  if (denom <= 0) return std::numeric_limits<double>::infinity();
+  if (!(denom > 0)) return std::numeric_limits<double>::infinity();  // NaN too: unknown
   return f * baseline_m / denom;
 }
 

@@ -305,6 +305,15 @@ StereoCalibration parse_kitti(const KeyValues& kv) {
   c.rectified = geometry_from_projections(kv, "P_rect" + l, "P_rect" + r);
   if (kv.has("S_rect" + l)) {
     size_from(kv, "S_rect" + l, c.rectified.width, c.rectified.height);
+    // One rectified size serves both images.
+    if (kv.has("S_rect" + r)) {
+      int width = 0, height = 0;
+      size_from(kv, "S_rect" + r, width, height);
+      if (width != c.rectified.width || height != c.rectified.height)
+        fail_at(kv.file(), kv.line("S_rect" + r),
+                fmt::format("S_rect{} is {}x{} but S_rect{} is {}x{}", r, width, height, l,
+                            c.rectified.width, c.rectified.height));
+    }
   } else {
     c.rectified.width = c.left.width;
     c.rectified.height = c.left.height;

@@ -11,6 +11,8 @@ void disparity_to_depth(ImageView<const float> disparity, const RectifiedGeometr
                         ImageView<float> depth) {
   if (!depth.same_size(disparity) || disparity.channels != 1 || depth.channels != 1)
     throw Error("disparity_to_depth: depth image must match the one-channel disparity image");
+  if (!(geometry.f > 0) || !(geometry.baseline_m > 0))
+    throw Error("disparity_to_depth: the geometry has no focal length or baseline");
   const float fb = static_cast<float>(geometry.f * geometry.baseline_m);
   const float doffs = static_cast<float>(geometry.doffs());
   constexpr float kUnknown = std::numeric_limits<float>::infinity();
