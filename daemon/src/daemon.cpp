@@ -131,7 +131,7 @@ void Daemon::open() {
 }
 
 void Daemon::open_replay_check() {
-  const auto log = drivers::lcmlog_path(loaded_.config.source);
+  const auto log = drivers::replayed_log(loaded_.config.source);
   if (!log) return;
   if (!loaded_.config.runtime.deterministic) {
     log_.info(

@@ -10,7 +10,8 @@
 namespace dco::daemon {
 
 void ReplayCheck::check(std::uint64_t frame_seq, ImageView<const float> depth) {
-  const auto it = recorded_.by_frame.find(static_cast<std::int64_t>(frame_seq));
+  const auto seq = static_cast<std::int64_t>(frame_seq);
+  const auto it = recorded_.by_frame.find({sessions_.session_of(seq), seq});
   if (it == recorded_.by_frame.end()) return;
   const ::dco::depth_preview_t& want = it->second;
   std::string difference;

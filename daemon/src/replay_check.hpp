@@ -11,12 +11,15 @@ namespace dco::daemon {
 
 // A replay of a field log checked against the depth the headset published: every replayed frame
 // with a recorded DCO_DEPTH_PREVIEW is shrunk the same way and compared pixel for pixel. In
-// deterministic mode a replay through the same build and configuration matches exactly.
+// deterministic mode a replay through the same build and configuration matches exactly. A log
+// of several dcod runs numbers their frames again; each replayed frame is compared with the
+// preview of its own run.
 class ReplayCheck {
  public:
   explicit ReplayCheck(drivers::RecordedPreviews recorded) : recorded_(std::move(recorded)) {}
 
-  // The pipeline's thread: the depth published for camera frame `frame_seq`.
+  // The pipeline's thread, for every frame in the order replayed: the depth published for camera
+  // frame `frame_seq`.
   void check(std::uint64_t frame_seq, ImageView<const float> depth);
 
   struct Result {
@@ -32,6 +35,7 @@ class ReplayCheck {
   mutable std::mutex mutex_;
   Result result_;
   ::dco::depth_preview_t replayed_;
+  drivers::FrameSessions sessions_;
 };
 
 }  // namespace dco::daemon

@@ -31,10 +31,14 @@ std::string cut(std::uint64_t got, std::uint64_t needed) {
 
 }  // namespace
 
-LcmLogReader::LcmLogReader(const std::filesystem::path& path)
-    : file_(std::make_unique<std::ifstream>(path, std::ios::binary)),
-      in_(file_.get()),
-      name_(path.string()) {
+LcmLogReader::LcmLogReader(const std::filesystem::path& path) : name_(path.string()) {
+  if (path.empty()) throw Error("no LCM log file named (an empty path)");
+  // A directory or a device would read as an empty log, and a pipe blocks the open.
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw Error(name_ + ": not an LCM log file (a directory, a device or a pipe)");
+  file_ = std::make_unique<std::ifstream>(path, std::ios::binary);
+  in_ = file_.get();
   if (!*file_) throw Error(name_ + ": cannot open the LCM log");
   measure();
 }
@@ -62,11 +66,19 @@ bool LcmLogReader::fail(const std::string& what) {
   return false;
 }
 
+void LcmLogReader::check_read() const {
+  // A short read is the log's end only when the stream says so; else the disk failed.
+  if (in_->bad())
+    throw Error(name_ + ": cannot read the LCM log at byte " + std::to_string(offset_) +
+                " (event " + std::to_string(events_ + 1) + ")");
+}
+
 bool LcmLogReader::next(LcmLogEvent& event) {
   if (!damage_.empty()) return false;
   std::array<std::uint8_t, kHeadBytes> head{};
   in_->read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size()));
   const auto got = static_cast<std::size_t>(in_->gcount());
+  check_read();
   if (got == 0) return false;  // the clean end
   if (got < 4 || read_be(head.data(), 4) != kSyncWord)
     return fail(got < 4 ? "the log ends inside an event's sync word"
@@ -97,6 +109,7 @@ bool LcmLogReader::next(LcmLogEvent& event) {
     in_->read(reinterpret_cast<char*>(event.data.data()), static_cast<std::streamsize>(data_bytes));
     data_got = static_cast<std::uint64_t>(in_->gcount());
   }
+  check_read();
   if (channel_got < channel_bytes || data_got < data_bytes)
     return fail(cut(kHeadBytes + channel_got + data_got, kHeadBytes + channel_bytes + data_bytes));
   offset_ += kHeadBytes + channel_bytes + data_bytes;

@@ -1,37 +1,69 @@
 #include "dco/drivers/recorded_previews.hpp"
 
+#include <algorithm>
+#include <deque>
+
 #include "dco/drivers/lcm_log.hpp"
 #include "dco/drivers/source_uri.hpp"
 #include "dco/ipc/lcm_messages.hpp"
 
 namespace dco::drivers {
 
-RecordedPreviews read_recorded_previews(const std::filesystem::path& log, std::size_t max_count) {
+RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_count) {
+  // A frame of the headset: its number and capture time, which its raw pair and preview share.
+  using Frame = std::pair<std::int64_t, std::int64_t>;
+  // dcod sends a frame's pair and its preview from different threads, in either order and a few
+  // frames apart: recent pairs wait for their previews, and previews for their pairs.
+  constexpr std::size_t kRecentPairs = 256;
+  std::deque<std::pair<Frame, std::int64_t>> recent_pairs;  // and their sessions
+  std::map<Frame, ::dco::depth_preview_t> waiting;
+  FrameSessions sessions;
   RecordedPreviews out;
-  LcmLogReader reader(log);
+  LcmLogReader reader(log.path);
   LcmLogEvent event;
   ::dco::depth_preview_t preview;
+  ::dco::raw_stereo_t pair;
   std::string problem;
   while (reader.next(event)) {
+    if (event.channel == log.channel) {
+      // One that does not decode ends the replay, which says why.
+      if (!ipc::decode_message(event.data.data(), event.data.size(), pair, problem)) continue;
+      const Frame frame{pair.frame_seq, pair.capture_ns};
+      const std::int64_t session = sessions.session_of(pair.frame_seq);
+      if (const auto it = waiting.find(frame); it != waiting.end()) {
+        out.by_frame[{session, pair.frame_seq}] = std::move(it->second);
+        waiting.erase(it);
+      } else {
+        recent_pairs.emplace_back(frame, session);
+        if (recent_pairs.size() > kRecentPairs) recent_pairs.pop_front();
+      }
+      continue;
+    }
     if (event.channel != ipc::channel::kDepthPreview) continue;
     if (!ipc::decode_message(event.data.data(), event.data.size(), preview, problem) ||
         !ipc::consistent_preview(preview)) {
       ++out.undecodable;
       continue;
     }
-    if (out.by_frame.size() >= max_count) {
+    if (out.by_frame.size() + waiting.size() >= max_count) {
       out.truncated = true;
       break;
     }
-    const std::int64_t frame = preview.frame_seq;
-    out.by_frame[frame] = std::move(preview);
+    const Frame frame{preview.frame_seq, preview.capture_ns};
+    const auto it = std::find_if(recent_pairs.rbegin(), recent_pairs.rend(),
+                                 [&](const auto& p) { return p.first == frame; });
+    if (it != recent_pairs.rend())
+      out.by_frame[{it->second, preview.frame_seq}] = std::move(preview);
+    else
+      waiting[frame] = std::move(preview);
   }
-  return out;
+  return out;  // previews still waiting have no pair in the log: nothing replays their frames
 }
 
-std::optional<std::filesystem::path> lcmlog_path(std::string_view source_uri) {
+std::optional<ReplayedLog> replayed_log(std::string_view source_uri) {
   if (!source_uri.starts_with("lcmlog://")) return std::nullopt;
-  return SourceUri(source_uri).path();
+  SourceUri uri(source_uri);
+  return ReplayedLog{uri.path(), uri.value("channel").value_or(ipc::channel::kRaw)};
 }
 
 }  // namespace dco::drivers

@@ -1,8 +1,8 @@
 // replay://DIR: a recorded stereo sequence from image files, paced like the camera it came from.
 //
 // DIR holds either images/I1_*.png + images/I2_*.png (the Karlsruhe sequences' layout) or
-// left/* + right/* (any image files: paired by the number in their names where every name has
-// one, else in name order), and one calibration file: calib.toml
+// left/* + right/* (any image files: paired and ordered by the numbers in their names, all of them
+// in order, where every name has one, else in name order), and one calibration file: calib.toml
 // (dco's format), calib.txt (Middlebury or Karlsruhe) or calib_cam_to_cam.txt (KITTI). The whole
 // recording is decoded up front, so replay never touches the disk while it streams and a looped
 // replay allocates nothing per frame.
@@ -51,35 +51,56 @@ std::vector<fs::path> list_images(const fs::path& dir, const std::string& prefix
   return out;
 }
 
-// The last run of digits in a file's stem ("I1_000012" -> 12, "0007_left" -> 7), if any.
-std::optional<std::uint64_t> frame_number(const fs::path& p) {
-  const std::string stem = p.stem().string();
-  const auto last = stem.find_last_of("0123456789");
-  if (last == std::string::npos) return std::nullopt;
-  auto first = last;
-  while (first > 0 && std::isdigit(static_cast<unsigned char>(stem[first - 1]))) --first;
-  if (last - first >= 18) return std::nullopt;  // no frame count has that many digits
-  return std::stoull(stem.substr(first, last - first + 1));
+// The numbers in a file's stem after its side's prefix, in order: "I1_000012" -> 12,
+// "1305031102.175304" (a capture time) -> 1305031102, 175304, "000046_10" (KITTI) -> 46, 10.
+// Compared in that order, so files play in time and frame order. nullopt when there is none.
+using FrameKey = std::vector<std::uint64_t>;
+
+std::optional<FrameKey> frame_key(const fs::path& p, const std::string& prefix) {
+  const std::string stem = p.stem().string().substr(prefix.size());
+  const auto digit = [&](std::size_t i) {
+    return i < stem.size() && std::isdigit(static_cast<unsigned char>(stem[i]));
+  };
+  FrameKey key;
+  for (std::size_t first = 0; first < stem.size(); ++first) {
+    if (!digit(first)) continue;
+    std::size_t last = first;
+    while (digit(last + 1)) ++last;
+    if (last - first >= 18) return std::nullopt;  // no frame count or time has that many digits
+    key.push_back(std::stoull(stem.substr(first, last - first + 1)));
+    first = last;
+  }
+  if (key.empty()) return std::nullopt;
+  return key;
 }
 
-// Left and right images as pairs. Where every name carries a number the pairs are made by it, in
-// its order (a file missing on one side is named, "9" comes before "10"); else by name order.
+std::string to_string(const FrameKey& key) {
+  std::string text;
+  for (const std::uint64_t n : key) text += (text.empty() ? "" : "_") + std::to_string(n);
+  return text;
+}
+
+// Left and right images as pairs, their names' side prefixes given. Where every name carries a
+// number the pairs are made by the numbers, in their order (a file missing on one side is named,
+// "9" comes before "10"); else by name order.
 std::vector<std::pair<fs::path, fs::path>> pair_images(const std::vector<fs::path>& left,
                                                        const std::vector<fs::path>& right,
+                                                       const std::string (&prefix)[2],
                                                        const std::string& where) {
-  std::map<std::uint64_t, fs::path> by_number[2];
+  std::map<FrameKey, fs::path> by_number[2];
   bool numbered = true;
   for (int side = 0; side < 2 && numbered; ++side)
     for (const fs::path& p : side == 0 ? left : right) {
-      const auto n = frame_number(p);
-      if (!n) {
+      const auto key = frame_key(p, prefix[side]);
+      if (!key) {
         numbered = false;
         break;
       }
-      const auto [at, added] = by_number[side].emplace(*n, p);
+      const auto [at, added] = by_number[side].emplace(*key, p);
       if (!added)
         throw Error(fmt::format("{}: {} and {} are both frame {}", where,
-                                at->second.filename().string(), p.filename().string(), *n));
+                                at->second.filename().string(), p.filename().string(),
+                                to_string(*key)));
     }
   std::vector<std::pair<fs::path, fs::path>> pairs;
   if (!numbered) {
@@ -89,11 +110,11 @@ std::vector<std::pair<fs::path, fs::path>> pair_images(const std::vector<fs::pat
     return pairs;
   }
   for (int side = 0; side < 2; ++side)
-    for (const auto& [n, p] : by_number[side])
-      if (!by_number[1 - side].contains(n))
+    for (const auto& [key, p] : by_number[side])
+      if (!by_number[1 - side].contains(key))
         throw Error(fmt::format("{}: {} has no {} image of frame {}", where, p.filename().string(),
-                                side == 0 ? "right" : "left", n));
-  for (const auto& [n, p] : by_number[0]) pairs.emplace_back(p, by_number[1].at(n));
+                                side == 0 ? "right" : "left", to_string(key)));
+  for (const auto& [key, p] : by_number[0]) pairs.emplace_back(p, by_number[1].at(key));
   return pairs;
 }
 
@@ -108,9 +129,12 @@ class ReplaySource final : public PacedSource {
     if (!fs::is_directory(dir_)) throw Error(where + ": no such directory");
 
     std::vector<fs::path> left, right;
+    std::string prefix[2];
     if (fs::is_directory(dir_ / "images")) {
-      left = list_images(dir_ / "images", "I1_");
-      right = list_images(dir_ / "images", "I2_");
+      prefix[0] = "I1_";
+      prefix[1] = "I2_";
+      left = list_images(dir_ / "images", prefix[0]);
+      right = list_images(dir_ / "images", prefix[1]);
     } else {
       left = list_images(dir_ / "left", "");
       right = list_images(dir_ / "right", "");
@@ -118,7 +142,7 @@ class ReplaySource final : public PacedSource {
     if (left.empty())
       throw Error(where +
                   ": no frames (expected images/I1_*.png + images/I2_*.png, or left/ + right/)");
-    const auto pairs = pair_images(left, right, where);
+    const auto pairs = pair_images(left, right, prefix, where);
 
     calibration_ = load_calibration(find_calibration(where));
     const CameraIntrinsics& cam = calibration_.left;

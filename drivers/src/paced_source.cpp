@@ -51,7 +51,7 @@ void PacedSource::run(std::stop_token stop, FrameSink& sink) {
       wake_.wait_until(lock, stop, due, [] { return false; });  // wakes early only on stop
       if (stop.stop_requested()) return;
       due += period;
-      if (Clock::now() > due + period) due = Clock::now();  // fell behind: no burst
+      if (Clock::now() > due + period) due = Clock::now() + period;  // fell behind: no burst
     }
     try {
       if (!produce(next_seq_, frame.left, frame.right)) {

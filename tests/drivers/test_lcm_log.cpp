@@ -6,10 +6,13 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <sstream>
+#include <streambuf>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dco/core/calibration.hpp"
@@ -20,6 +23,7 @@
 #include "dco/drivers/raw_stereo.hpp"
 #include "dco/drivers/recorded_previews.hpp"
 #include "dco/ipc/lcm_messages.hpp"
+#include "support/error_of.hpp"
 #include "support/lcm_bytes.hpp"
 #include "support/temp_dir.hpp"
 
@@ -104,6 +108,47 @@ TEST(LcmLogReader, DamagedHeadsAreNamed) {
   huge[24] = 0x40;  // data length 1 GiB and more
   EXPECT_NE(damage_of(huge).find("more than LCM's"), std::string::npos) << damage_of(huge);
   EXPECT_THROW(LcmLogReader("/nonexistent/x.log"), Error);
+}
+
+// Serves `bytes`, then fails as a disk does (EIO): the stream sets badbit, not eofbit.
+class FailingBuffer : public std::streambuf {
+ public:
+  explicit FailingBuffer(std::string bytes) : bytes_(std::move(bytes)) {
+    setg(bytes_.data(), bytes_.data(), bytes_.data() + bytes_.size());
+  }
+
+ protected:
+  int_type underflow() override { throw std::ios_base::failure("input/output error"); }
+
+ private:
+  std::string bytes_;
+};
+
+TEST(LcmLogReader, AReadErrorIsNeitherTheEndNorACut) {
+  const std::string two = log_of({event_of(0, "A", {1, 2, 3}), event_of(1, "B", {4, 5})});
+  const std::size_t first = 28 + 1 + 3;
+  // Failing where the second event starts, inside its head, inside its data.
+  for (const std::size_t served : {first, first + 10, first + 29}) {
+    SCOPED_TRACE(served);
+    FailingBuffer buffer(two.substr(0, served));
+    std::istream in(&buffer);
+    LcmLogReader reader(in, "eio.log");
+    LcmLogEvent e;
+    ASSERT_TRUE(reader.next(e));
+    EXPECT_NE(dco::testing::error_of([&] {
+                reader.next(e);
+              }).find("eio.log: cannot read the LCM log at byte 32 (event 2)"),
+              std::string::npos);
+  }
+  // A directory or a device reads as an empty log: refused, named.
+  dco::testing::TempDir dir;
+  for (const std::filesystem::path& path : {dir.path(), std::filesystem::path("/dev/null")})
+    EXPECT_NE(dco::testing::error_of([&] {
+                LcmLogReader reader(path);
+              }).find(path.string() + ": not an LCM log file"),
+              std::string::npos);
+  EXPECT_NE(dco::testing::error_of([] { LcmLogReader reader(""); }).find("no LCM log file named"),
+            std::string::npos);
 }
 
 StereoFrame frame_of(const Image<std::uint8_t>& l, const Image<std::uint8_t>& r,
@@ -219,12 +264,23 @@ TEST(LcmMessages, DecodingAgainKeepsNothingOfTheLastMessage) {
   EXPECT_FALSE(ipc::consistent_preview(preview)) << "a 2x2 preview of no pixels";
 }
 
+// A raw pair's message as far as the previews need it: its frame number and capture time.
+std::vector<std::uint8_t> pair_bytes(std::int64_t seq, std::int64_t capture_ns) {
+  ::dco::raw_stereo_t m{};
+  m.frame_seq = seq;
+  m.capture_ns = capture_ns;
+  return dco::testing::lcm_bytes(m);
+}
+
 TEST(RecordedPreviews, OnlyWholeGridsAreKeptForTheReplayCheck) {
   dco::testing::TempDir dir;
   std::vector<LcmLogEvent> events;
   auto add = [&](std::int64_t seq, std::int32_t w, std::int32_t h, std::int32_t n) {
+    events.push_back(
+        event_of(static_cast<int>(events.size()), ipc::channel::kRaw, pair_bytes(seq, 1000 + seq)));
     ::dco::depth_preview_t p{};
     p.frame_seq = seq;
+    p.capture_ns = 1000 + seq;
     p.source_width = 64;
     p.source_height = 48;
     p.width = w;
@@ -241,10 +297,56 @@ TEST(RecordedPreviews, OnlyWholeGridsAreKeptForTheReplayCheck) {
   add(5, 40000, 1, 40000);
   const auto path = dir.path() / "previews.log";
   std::ofstream(path, std::ios::binary) << log_of(events);
-  const RecordedPreviews r = read_recorded_previews(path, 100);
+  const RecordedPreviews r = read_recorded_previews({path, ipc::channel::kRaw}, 100);
   ASSERT_EQ(r.by_frame.size(), 1u);
-  EXPECT_EQ(r.by_frame.begin()->first, 1);
+  EXPECT_EQ(r.by_frame.begin()->first, (std::pair<std::int64_t, std::int64_t>{0, 1}));
   EXPECT_EQ(r.undecodable, 4);
+}
+
+// Two dcod runs in one log, both numbering their frames from 0: each preview stays with its own
+// run, whichever of a frame's pair and preview the logger got first.
+TEST(RecordedPreviews, ARestartedDcodKeepsItsOwnPreviews) {
+  dco::testing::TempDir dir;
+  std::vector<LcmLogEvent> events;
+  auto add = [&](const char* channel, std::vector<std::uint8_t> bytes) {
+    events.push_back(event_of(static_cast<int>(events.size()), channel, std::move(bytes)));
+  };
+  auto preview = [](int run, std::int64_t seq) {
+    ::dco::depth_preview_t p{};
+    p.frame_seq = seq;
+    p.capture_ns = 1'000'000 * run + seq;
+    p.source_width = 64;
+    p.source_height = 48;
+    p.width = p.height = p.num_pixels = 1;
+    p.depth_mm = {static_cast<std::int16_t>(1000 * run + seq)};
+    return dco::testing::lcm_bytes(p);
+  };
+  for (int run = 1; run <= 2; ++run)
+    for (std::int64_t seq = 0; seq < 3; ++seq) {
+      const bool preview_first = seq == 1;
+      if (preview_first) add(ipc::channel::kDepthPreview, preview(run, seq));
+      add(ipc::channel::kRaw, pair_bytes(seq, 1'000'000 * run + seq));
+      if (!preview_first && seq != 2) add(ipc::channel::kDepthPreview, preview(run, seq));
+    }
+  add(ipc::channel::kDepthPreview, preview(3, 0));  // no pair of its frame: never replayed
+  const auto path = dir.path() / "two_runs.log";
+  std::ofstream(path, std::ios::binary) << log_of(events);
+
+  const RecordedPreviews r = read_recorded_previews({path, ipc::channel::kRaw}, 100);
+  std::vector<std::pair<std::int64_t, std::int64_t>> keys;
+  for (const auto& [key, p] : r.by_frame) {
+    keys.push_back(key);
+    EXPECT_EQ(p.depth_mm[0], 1000 * (key.first + 1) + key.second) << "a preview of the other run";
+  }
+  EXPECT_EQ(keys,
+            (std::vector<std::pair<std::int64_t, std::int64_t>>{{0, 0}, {0, 1}, {1, 0}, {1, 1}}));
+  // The replay check numbers the replayed frames' runs the same way.
+  FrameSessions sessions;
+  std::vector<std::int64_t> replayed;
+  for (const std::int64_t seq : {0, 1, 2, 0, 1, 2}) replayed.push_back(sessions.session_of(seq));
+  EXPECT_EQ(replayed, (std::vector<std::int64_t>{0, 0, 0, 1, 1, 1}));
+  EXPECT_TRUE(read_recorded_previews({path, "OTHER_RAW"}, 100).by_frame.empty())
+      << "only the replayed channel's pairs";
 }
 
 // The headset's clock when it captured frame i of recorded_log(): up for three days, at 30 fps.

@@ -53,6 +53,10 @@ TEST(OpenSource, NamesTheProblemAndNeverFallsBack) {
   EXPECT_NE(error_of("indemind://?imu_hz=300").find("imu_hz must divide 1000"), std::string::npos);
   EXPECT_NE(error_of("lcmlog:///nonexistent/x.log").find("cannot open the LCM log"),
             std::string::npos);
+  EXPECT_NE(error_of("lcmlog://?fps=0").find("no LCM log file named"), std::string::npos)
+      << error_of("lcmlog://?fps=0");
+  EXPECT_NE(error_of("lcmlog:///tmp?fps=0").find("/tmp: not an LCM log file"), std::string::npos)
+      << error_of("lcmlog:///tmp?fps=0");
   EXPECT_NE(error_of("webcam://0").find("unknown scheme 'webcam'"), std::string::npos);
   EXPECT_NE(error_of("replay:///nonexistent/dir").find("no such directory"), std::string::npos);
 }

@@ -1,9 +1,12 @@
 #include <chrono>
 #include <condition_variable>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <mutex>
+#include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -191,6 +194,39 @@ TEST(SyntheticSource, StallAfterStopsDeliveringWithoutEnding) {
   EXPECT_LT(std::chrono::steady_clock::now() - before, 200ms) << "stop wakes a stalled source";
 }
 
+// A sink that holds frame `slow_seq` for `hold`, as a pipeline that hiccups would.
+class SlowSink : public RecordingSink {
+ public:
+  SlowSink(std::uint64_t slow_seq, std::chrono::milliseconds hold)
+      : slow_seq_(slow_seq), hold_(hold) {}
+  void on_frame(const StereoFrame& f) override {
+    RecordingSink::on_frame(f);
+    if (f.seq == slow_seq_) std::this_thread::sleep_for(hold_);
+  }
+
+ private:
+  const std::uint64_t slow_seq_;
+  const std::chrono::milliseconds hold_;
+};
+
+TEST(SyntheticSource, ASourceHeldUpDoesNotBurstAfterwards) {
+  // 10 fps; frame 2 is held for 5 periods. Frame 3 goes out at once, late; frame 4 a period
+  // after it, not right behind it.
+  auto source = open_source("synthetic://hand?width=64&height=48&fps=10&frames=6");
+  SlowSink sink(2, 500ms);
+  source->start(sink);
+  ASSERT_TRUE(sink.wait_for_end(10s));
+  source->stop();
+  const auto frames = sink.frames();
+  ASSERT_EQ(frames.size(), 6u);
+  const auto gap_ms = [&](std::size_t i) {
+    return static_cast<double>(frames[i].capture_ns - frames[i - 1].capture_ns) / 1e6;
+  };
+  EXPECT_GE(gap_ms(3), 500.0) << "frame 3 waits for the held frame";
+  for (std::size_t i = 4; i < frames.size(); ++i)
+    EXPECT_GE(gap_ms(i), 50.0) << "frame " << i << " came in a burst";
+}
+
 using dco::testing::write_synthetic_recording;
 
 // Every frame of a replay of `dir`, delivered as fast as taken.
@@ -302,6 +338,66 @@ TEST(ReplaySource, PairsAndOrdersByTheNumbersInTheNames) {
   EXPECT_TRUE(same_pixels(frames[0].left.cview(), sample.left.cview()));
   renderer.render(1, sample);
   EXPECT_TRUE(same_pixels(frames[1].left.cview(), sample.left.cview()));
+}
+
+// Every number in a name counts, in order: capture times (seconds.microseconds) and KITTI's
+// frame_camera names order as the numbers say; the Karlsruhe side prefixes do not count.
+TEST(ReplaySource, OrdersByEveryNumberInTheNames) {
+  const auto rename_all = [](const std::filesystem::path& dir,
+                             const std::vector<std::string>& names) {
+    for (const char* side : {"left", "right"})
+      for (std::size_t i = 0; i < names.size(); ++i) {
+        char old_name[32];
+        std::snprintf(old_name, sizeof old_name, "%06zu.png", i);
+        std::filesystem::rename(dir / side / old_name, dir / side / (names[i] + ".png"));
+      }
+  };
+  const auto in_order = [](const std::vector<RecordingSink::Frame>& frames, std::size_t n) {
+    if (frames.size() != n) return false;
+    synthetic::SceneRenderer renderer(synthetic::preset("hand", 96, 64));
+    synthetic::StereoSample sample;
+    for (std::size_t i = 0; i < n; ++i) {
+      renderer.render(static_cast<int>(i), sample);
+      if (!same_pixels(frames[i].left.cview(), sample.left.cview()) ||
+          !same_pixels(frames[i].right.cview(), sample.right.cview()))
+        return false;
+    }
+    return true;
+  };
+
+  dco::testing::TempDir timed;
+  write_synthetic_recording(timed.path(), 4, 96, 64);
+  rename_all(timed.path(),
+             {"1305031102.175304", "1305031102.943210", "1305031103.211000", "1305031103.600001"});
+  EXPECT_TRUE(in_order(replay_all(timed.path()), 4)) << "by capture time";
+
+  dco::testing::TempDir kitti;
+  write_synthetic_recording(kitti.path(), 3, 96, 64);
+  rename_all(kitti.path(), {"000046_10", "000047_10", "000048_10"});
+  EXPECT_TRUE(in_order(replay_all(kitti.path()), 3)) << "by KITTI frame";
+
+  dco::testing::TempDir karlsruhe;
+  write_synthetic_recording(karlsruhe.path(), 2, 96, 64);
+  std::filesystem::create_directories(karlsruhe.path() / "images");
+  for (const auto& [side, prefix] : {std::pair{"left", "I1_"}, std::pair{"right", "I2_"}}) {
+    for (const char* name : {"000000.png", "000001.png"})
+      std::filesystem::rename(karlsruhe.path() / side / name,
+                              karlsruhe.path() / "images" / (std::string(prefix) + name));
+    std::filesystem::remove(karlsruhe.path() / side);
+  }
+  EXPECT_TRUE(in_order(replay_all(karlsruhe.path()), 2)) << "Karlsruhe I1_/I2_";
+
+  // Two names with the same numbers are still one frame twice.
+  std::filesystem::copy_file(kitti.path() / "left" / "000047_10.png",
+                             kitti.path() / "left" / "47_10.png");
+  try {
+    open_source("replay://" + kitti.path().string());
+    ADD_FAILURE() << "opened a recording with a frame twice";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("000047_10.png and 47_10.png are both frame 47_10"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // A Karlsruhe calib.txt without roi gives no image size: the images give it.

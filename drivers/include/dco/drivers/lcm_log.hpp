@@ -26,13 +26,14 @@ struct LcmLogEvent {
 
 class LcmLogReader {
  public:
-  // Throws dco::Error when the file cannot be opened.
+  // Throws dco::Error when the file cannot be opened or is no regular file.
   explicit LcmLogReader(const std::filesystem::path& path);
   // Reads from a stream the caller keeps alive; `name` is for messages.
   LcmLogReader(std::istream& in, std::string name);
 
   // The next event, its buffers reused. False at the end of the log, and at damage, after which
-  // damage() says where and what, and nothing more is read.
+  // damage() says where and what, and nothing more is read. Throws dco::Error when the stream
+  // fails to read (a disk error), which is neither end nor damage.
   bool next(LcmLogEvent& event);
 
   // Empty while the log is intact (so far); else one line naming the log, the event and byte.
@@ -46,10 +47,11 @@ class LcmLogReader {
 
  private:
   bool fail(const std::string& what);
+  void check_read() const;
   void measure();
 
   std::unique_ptr<std::ifstream> file_;
-  std::istream* in_;
+  std::istream* in_ = nullptr;
   std::string name_;
   std::string damage_;
   std::uint64_t offset_ = 0;

@@ -1,30 +1,56 @@
 #pragma once
 
-// The depth previews (DCO_DEPTH_PREVIEW) a field log holds, by camera frame number: what the
-// headset's depth looked like, for checking a replay of the same log against it.
+// The depth previews (DCO_DEPTH_PREVIEW) a field log holds, by dcod session and camera frame
+// number: what the headset's depth looked like, for checking a replay of the same log against it.
 
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <string>
 #include <string_view>
+#include <utility>
 
 #include "dco/depth_preview_t.hpp"
 
 namespace dco::drivers {
 
+// Numbers the dcod sessions in a sequence of frame numbers: one that does not increase starts a
+// new session (a restarted dcod numbers its frames again). The previews are keyed by the sessions
+// of the log's raw pairs, and the replay check counts the replayed frames the same way.
+class FrameSessions {
+ public:
+  std::int64_t session_of(std::int64_t frame_seq) {
+    if (last_ && frame_seq <= *last_) ++session_;
+    last_ = frame_seq;
+    return session_;
+  }
+
+ private:
+  std::optional<std::int64_t> last_;
+  std::int64_t session_ = 0;
+};
+
 struct RecordedPreviews {
-  std::map<std::int64_t, ::dco::depth_preview_t> by_frame;
+  // By (session, frame number); only previews of frames whose raw pair is in the log, since only
+  // those are replayed.
+  std::map<std::pair<std::int64_t, std::int64_t>, ::dco::depth_preview_t> by_frame;
   long undecodable = 0;    // preview messages that did not decode or hold no whole grid
   bool truncated = false;  // more previews than the limit; the first ones are kept
 };
 
-// Reads the log up to its end or its damage (which the replay itself reports). Throws dco::Error
-// when the file cannot be opened.
-RecordedPreviews read_recorded_previews(const std::filesystem::path& log, std::size_t max_count);
+// The log an lcmlog:// URI replays and the channel of its raw pairs.
+struct ReplayedLog {
+  std::filesystem::path path;
+  std::string channel;
+};
 
-// The log an lcmlog:// URI replays; nullopt for other sources.
-std::optional<std::filesystem::path> lcmlog_path(std::string_view source_uri);
+// Reads the log up to its end or its damage (which the replay itself reports). Throws dco::Error
+// when the file cannot be opened or read.
+RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_count);
+
+// nullopt for sources other than lcmlog://.
+std::optional<ReplayedLog> replayed_log(std::string_view source_uri);
 
 }  // namespace dco::drivers
