@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <new>
 #include <string>
 
@@ -47,6 +48,45 @@ std::uint64_t random_session_id() {
   throw Error(fmt::format("{}: {}: {}", path.string(), what, std::strerror(errno)));
 }
 
+// Held while a writer creates its temporary ring, moves a ring into place or removes one: the
+// check that the ring at the path is still a writer's own and its removal are then one step for
+// every other writer in the directory. Without a readable directory there is nothing to lock and
+// writers fall back to the unguarded steps.
+class DirectoryLock {
+ public:
+  explicit DirectoryLock(const std::filesystem::path& file) {
+    const std::filesystem::path dir = file.parent_path().empty() ? "." : file.parent_path();
+    fd_ = open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd_ >= 0)
+      while (flock(fd_, LOCK_EX) != 0 && errno == EINTR) {
+      }
+  }
+  DirectoryLock(const DirectoryLock&) = delete;
+  DirectoryLock& operator=(const DirectoryLock&) = delete;
+  ~DirectoryLock() {
+    if (fd_ >= 0) close(fd_);  // drops the lock
+  }
+
+ private:
+  int fd_ = -1;
+};
+
+// Temporary rings of writers killed while they built them (each holds a whole ring's memory, in
+// RAM under /run): a live writer's is locked. Called under the DirectoryLock, which every writer
+// holds from creating its temporary ring to locking it.
+void remove_abandoned_rings(const std::filesystem::path& path) {
+  const std::string prefix = path.filename().string() + ".tmp.";
+  const std::filesystem::path dir = path.parent_path().empty() ? "." : path.parent_path();
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    if (!entry.path().filename().string().starts_with(prefix)) continue;
+    const int fd = open(entry.path().c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0) continue;
+    if (flock(fd, LOCK_EX | LOCK_NB) == 0) unlink(entry.path().c_str());
+    close(fd);
+  }
+}
+
 }  // namespace
 
 RingWriter::RingWriter(const std::filesystem::path& path, const RingOptions& options)
@@ -69,23 +109,27 @@ RingWriter::RingWriter(const std::filesystem::path& path, const RingOptions& opt
   // The name holds the random session id: writers in other pid namespaces may share a pid and
   // the directory.
   const std::filesystem::path tmp = fmt::format("{}.tmp.{:016x}", path.string(), session_id_);
-  fd_ = open(tmp.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, 0640);
-  if (fd_ < 0) fail_errno(tmp, "cannot create the depth ring");
   size_ = sizes->file_size;
   const auto cleanup = [&](const char* what) {
     const int err = errno;
     if (base_ != nullptr) munmap(base_, size_);
     base_ = nullptr;
-    close(fd_);
+    if (fd_ >= 0) close(fd_);
     fd_ = -1;
     unlink(tmp.c_str());
     errno = err;
-    fail_errno(tmp, what);
+    fail_errno(path, what);
   };
+  {
+    const DirectoryLock lock(path);
+    remove_abandoned_rings(path);
+    fd_ = open(tmp.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, 0640);
+    if (fd_ < 0) fail_errno(tmp, "cannot create the depth ring");
+    // Readers take a shared lock to learn whether the writer died; the kernel drops ours with us.
+    if (flock(fd_, LOCK_EX | LOCK_NB) != 0) cleanup("flock");
+  }
   // The umask may have dropped bits of 0640; the mode is part of the contract with readers.
   if (fchmod(fd_, 0640) != 0) cleanup("fchmod");
-  // Readers take a shared lock to learn whether the writer died; the kernel drops ours with us.
-  if (flock(fd_, LOCK_EX | LOCK_NB) != 0) cleanup("flock");
   if (ftruncate(fd_, static_cast<off_t>(size_)) != 0) cleanup("ftruncate");
   // ftruncate reserves nothing on tmpfs: a full /run would fault (SIGBUS) on the first touch of
   // a page below. Reserving the pages now turns that into an error here.
@@ -126,6 +170,7 @@ RingWriter::RingWriter(const std::filesystem::path& path, const RingOptions& opt
   writing_ = g.slot_count - 1;
   h->newest_slot.store(writing_, std::memory_order_relaxed);
 
+  const DirectoryLock lock(path);
   if (rename(tmp.c_str(), path.c_str()) != 0) cleanup("cannot move the depth ring into place");
 }
 
@@ -134,7 +179,9 @@ RingWriter::~RingWriter() {
   h->state.store(layout::kStateClosed, std::memory_order_release);
   layout::change_and_wake(h->wake);
   layout::change_and_wake(h->writes_begun);
-  // Only remove the file while it is still ours: a newer writer may have replaced it.
+  // Only remove the file while it is still ours: a newer writer may have replaced it, and none
+  // can between the check and the removal.
+  const DirectoryLock lock(path_);
   struct stat mine {};
   struct stat there {};
   if (fstat(fd_, &mine) == 0 && stat(path_.c_str(), &there) == 0 && mine.st_dev == there.st_dev &&

@@ -343,6 +343,32 @@ TEST(Publisher, StatsStatusAndLog) {
   EXPECT_EQ(got.logs[0].text, "frame 12 arrived late");
 }
 
+// LCM's encoder stops a string at its first NUL while its size counts every byte: the message
+// would carry unwritten bytes and fail every decoder. A NUL becomes '?' instead.
+TEST(Publisher, StringsWithANulStillDecode) {
+  TempDir dir;
+  RingWriter ring(dir.path() / "depth.shm", ring_options(8, 8));
+  DepthPublisher pub(ring, memq());
+  Collector got(pub.lcm());
+  using namespace std::string_literals;
+  pub.log(LogLevel::kError, "dcod"s, "path 'a\0b' refused"s, 1);
+  pub.publish_status({DeviceStatus::State::kStreaming,
+                      "INDEMIND",
+                      "SN\0\0"s,
+                      "fw",
+                      480,
+                      "",
+                      {{"lost\0frames"s, 1}}},
+                     1);
+  handle_all(pub.lcm());
+  ASSERT_EQ(got.logs.size(), 1u);
+  EXPECT_EQ(got.logs[0].text, "path 'a?b' refused");
+  ASSERT_EQ(got.status.size(), 1u);
+  EXPECT_EQ(got.status[0].serial, "SN??");
+  EXPECT_EQ(got.status[0].counter_names[0], "lost?frames");
+  EXPECT_EQ(pub.send_failures(), 0u);
+}
+
 TEST(Publisher, BadUrlIsAClearError) {
   TempDir dir;
   RingWriter ring(dir.path() / "depth.shm", ring_options(8, 8));

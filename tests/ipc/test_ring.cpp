@@ -1,7 +1,9 @@
 // One process, writer and client side by side: what a reader sees of a frame and when a view
 // stops being valid.
 
+#include <fcntl.h>
 #include <sched.h>
+#include <sys/file.h>
 #include <sys/mount.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -65,6 +67,50 @@ TEST(RingWriter, CreatesTheFileWith0640AndANewSessionEachTime) {
   EXPECT_FALSE(std::filesystem::exists(path)) << "a stopped writer removes its ring";
   RingWriter again(path, small_ring());
   EXPECT_NE(again.session_id(), first);
+}
+
+// A writer killed while it built its ring leaves the temporary file, a whole ring of memory under
+// /run: the next writer of that name removes it, but not one a live writer is still building.
+TEST(RingWriter, RemovesTheTemporaryRingsOfKilledWriters) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  const auto abandoned = dir.path() / "depth.shm.tmp.00000000deadbeef";
+  const auto building = dir.path() / "depth.shm.tmp.00000000feedface";
+  const auto other = dir.path() / "other.shm.tmp.00000000deadbeef";
+  for (const auto& p : {abandoned, building, other}) std::ofstream(p) << "part of a ring";
+  const int live = open(building.c_str(), O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(live, 0);
+  ASSERT_EQ(flock(live, LOCK_EX | LOCK_NB), 0);
+  {
+    RingWriter writer(path, small_ring());
+    EXPECT_FALSE(std::filesystem::exists(abandoned));
+    EXPECT_TRUE(std::filesystem::exists(building)) << "its writer still holds it";
+    EXPECT_TRUE(std::filesystem::exists(other)) << "another ring's name";
+  }
+  close(live);
+}
+
+// A stopping writer checks that the ring at the path is still its own and removes it as one step
+// against other writers, which hold the directory's lock to move theirs into place: it never
+// removes a successor's ring that was moved in between.
+TEST(RingWriter, AStoppingWriterRemovesItsRingOnlyUnderTheDirectoryLock) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  auto writer = std::make_unique<RingWriter>(path, small_ring());
+  const int directory = open(dir.path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  ASSERT_GE(directory, 0);
+  ASSERT_EQ(flock(directory, LOCK_EX), 0);
+  std::thread stopping([&] { writer.reset(); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_TRUE(std::filesystem::exists(path)) << "removed without the directory's lock";
+  // A successor moves its ring into place while the stopping writer waits.
+  const auto successor = dir.path() / "successor";
+  std::ofstream(successor) << "a newer ring";
+  ASSERT_EQ(rename(successor.c_str(), path.c_str()), 0);
+  flock(directory, LOCK_UN);
+  stopping.join();
+  close(directory);
+  EXPECT_TRUE(std::filesystem::exists(path)) << "the successor's ring was removed";
 }
 
 TEST(RingWriter, RejectsBadGeometryAndMismatchedFrames) {

@@ -21,6 +21,14 @@ std::int64_t monotonic_ns() {
   return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
 }
 
+// LCM strings end at their first NUL, though their encoded size counts every byte: the bytes
+// after it would go out unwritten. A NUL in a device string or a log line becomes '?'.
+std::string lcm_string(std::string_view text) {
+  std::string s(text);
+  std::replace(s.begin(), s.end(), '\0', '?');
+  return s;
+}
+
 std::int64_t as_lcm(std::uint64_t v) {
   return static_cast<std::int64_t>(v);  // LCM has no unsigned types; the bits travel unchanged
 }
@@ -103,7 +111,11 @@ std::uint64_t DepthPublisher::write(ImageView<const float> depth,
 
 template <class Message>
 bool DepthPublisher::send(const char* channel, const Message& message) {
-  if (lcm_->publish(channel, &message) == 0) return true;
+  const int size = message.getEncodedSize();
+  encoded_.resize(static_cast<std::size_t>(std::max(size, 0)));  // grows once, then reused
+  if (size >= 0 && message.encode(encoded_.data(), 0, size) == size &&
+      lcm_->publish(channel, encoded_.data(), static_cast<unsigned>(size)) == 0)
+    return true;
   ++send_failures_;
   last_failed_channel_ = channel;
   return false;
@@ -191,14 +203,14 @@ void DepthPublisher::publish_status(const DeviceStatus& status, std::int64_t now
   dco::device_status_t m;
   m.utime_ns = now_ns;
   m.state = static_cast<std::int8_t>(status.state);
-  m.device = status.device;
-  m.serial = status.serial;
-  m.firmware = status.firmware;
+  m.device = lcm_string(status.device);
+  m.serial = lcm_string(status.serial);
+  m.firmware = lcm_string(status.firmware);
   m.usb_speed_mbps = status.usb_speed_mbps;
-  m.error = status.error;
+  m.error = lcm_string(status.error);
   m.counter_count = static_cast<std::int32_t>(status.counters.size());
   for (const auto& [name, value] : status.counters) {
-    m.counter_names.push_back(name);
+    m.counter_names.push_back(lcm_string(name));
     m.counter_values.push_back(static_cast<std::int64_t>(value));
   }
   send(channel::kStatus, m);
@@ -214,8 +226,8 @@ void DepthPublisher::log(LogLevel level, std::string_view source, std::string_vi
   dco::log_event_t m;
   m.utime_ns = now_ns;
   m.level = static_cast<std::int8_t>(level);
-  m.source = std::string(source);
-  m.text = std::string(text);
+  m.source = lcm_string(source);
+  m.text = lcm_string(text);
   send(channel::kLog, m);
 }
 
