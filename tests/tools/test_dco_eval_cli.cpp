@@ -151,6 +151,11 @@ TEST(DcoEvalCli, OnlyFilterBaselineAndTimeSidecar) {
   EXPECT_THAT(json.out, HasSubstr(R"("baseline": {"name": "sgbm-wls")"));
   EXPECT_THAT(json.out, HasSubstr(R"("comparison": {)"));
   EXPECT_THAT(json.out, HasSubstr(R"("time_ms": {"prediction": 12.5, "sgbm-wls": )"));
+
+  // A sidecar holding more than one time is no time.
+  std::ofstream(pred_dir / "middlebury2001_Tsukuba.time_ms") << "12abc\n";
+  expect_one_error_line(run_eval(dir, eval_args(pred_dir)), 1,
+                        "does not hold a time in milliseconds");
 }
 
 // The offset each scene's GT needs to match its own images. art's GT is known to sit about

@@ -286,6 +286,23 @@ TEST(Metrics, PlanesSitBetweenQuantileAndNextGtValue) {
   EXPECT_DOUBLE_EQ(planes[4], 8.5);
 }
 
+// When a quantile is the largest GT value there is nothing above it: the plane goes halfway to the
+// next smaller value, so the pixels at the largest value are in front of it, not on it.
+TEST(Metrics, APlaneAtTheLargestValueSitsBelowIt) {
+  GroundTruth gt;
+  gt.disparity.resize(10, 10);
+  for (int y = 0; y < 10; ++y)
+    for (int x = 0; x < 10; ++x) gt.disparity.at(x, y) = y < 4 ? 10.0f : 20.0f;
+  const auto planes = occlusion_planes(gt.disparity.view());
+  EXPECT_DOUBLE_EQ(planes[0], 15.0);  // 10, the 20 % quantile, and the next value above
+  for (std::size_t i = 2; i < planes.size(); ++i) EXPECT_DOUBLE_EQ(planes[i], 15.0) << i;
+  Image<float> pred(10, 10);
+  pred.copy_from(gt.disparity.view());
+  for (int y = 0; y < 10; ++y)
+    for (int x = 0; x < 10; ++x) pred.at(x, y) += 0.01f;  // far below any error threshold
+  EXPECT_DOUBLE_EQ(evaluate_disparity("two", pred.view(), gt).occ_err, 0.0);
+}
+
 TEST(Metrics, ConstantGtHasNoBand) {
   GroundTruth gt;
   gt.disparity.resize(8, 8);

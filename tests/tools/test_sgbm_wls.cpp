@@ -79,6 +79,10 @@ TEST(SgbmWls, RejectsBadInput) {
   EXPECT_THROW(run_sgbm_wls(two_channels.view(), two_channels.view(), 16), Error);
   EXPECT_THROW(run_sgbm_wls(pair.left.view(), pair.right.view(), 0), Error);
   EXPECT_THROW(run_sgbm_wls(ImageView<const std::uint8_t>(), pair.right.view(), 16), Error);
+  // OpenCV aborts the process on images no wider than the disparity count (a multiple of 16).
+  for (const int too_many : {49, 64, 80, 200})
+    EXPECT_THROW(run_sgbm_wls(pair.left.view(), pair.right.view(), too_many), Error) << too_many;
+  EXPECT_NO_THROW(run_sgbm_wls(pair.left.view(), pair.right.view(), 48));
 }
 
 }  // namespace

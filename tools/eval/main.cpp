@@ -242,7 +242,7 @@ double read_time_ms(const fs::path& path) {
   if (!fs::exists(path)) return dco::tools::kUndefined;
   std::ifstream in(path);
   double ms = 0;
-  if (!(in >> ms) || !(ms >= 0))
+  if (!(in >> ms) || !(ms >= 0) || !(in >> std::ws).eof())
     throw dco::Error(fmt::format("'{}' does not hold a time in milliseconds", path.string()));
   return ms;
 }

@@ -85,8 +85,8 @@ BoundaryAccuracy boundary_accuracy(ImageView<const float> prediction, ImageView<
     if (std::isnan(plane)) continue;
     const Boundaries b =
         find_boundaries(detail::plane_sides(gt, plane), detail::plane_sides(prediction, plane));
-    // As for bandErr: a plane with no GT edge (e.g. one at the largest GT disparity, with nothing
-    // in front of it) has nothing to find, and any tiny excess there would read as an edge.
+    // As for bandErr: a plane with no GT edge (e.g. one of a GT of a single value) has nothing to
+    // find, and any tiny excess there would read as an edge.
     if (cv::countNonZero(b.gt) == 0) continue;
     per_plane.push_back({matched_percent(b.gt, b.predicted, tolerance),
                          matched_percent(b.predicted, b.gt, tolerance)});
@@ -95,43 +95,23 @@ BoundaryAccuracy boundary_accuracy(ImageView<const float> prediction, ImageView<
 }
 
 std::vector<double> gap_planes(ImageView<const float> gt, int count, double min_gap) {
-  // Occupancy of 0.25 px bins between the smallest and largest GT disparity.
-  constexpr double kBin = 0.25;
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  std::vector<float> values;
   for (int y = 0; y < gt.height; ++y)
     for (int x = 0; x < gt.width; ++x)
-      if (is_valid_disparity(gt.row(y)[x])) {
-        lo = std::min(lo, double{gt.row(y)[x]});
-        hi = std::max(hi, double{gt.row(y)[x]});
-      }
-  if (!(hi > lo)) return {};
-  // Ground truth spans at most a few thousand pixels of disparity; a wider span is no depth map
-  // this can bin (and would not fit a size_t).
-  constexpr double kMaxSpan = 1e5;
-  if (hi - lo > kMaxSpan)
-    throw Error(fmt::format("ground truth disparities span {:g}..{:g} px, more than {:g}", lo, hi,
-                            kMaxSpan));
-  std::vector<char> used(static_cast<std::size_t>((hi - lo) / kBin) + 1, 0);
-  for (int y = 0; y < gt.height; ++y)
-    for (int x = 0; x < gt.width; ++x)
-      if (is_valid_disparity(gt.row(y)[x]))
-        used[static_cast<std::size_t>((gt.row(y)[x] - lo) / kBin)] = 1;
+      if (is_valid_disparity(gt.row(y)[x])) values.push_back(gt.row(y)[x]);
+  std::sort(values.begin(), values.end());
+  values.erase(std::unique(values.begin(), values.end()), values.end());
+  // The empty intervals are those between neighbouring distinct values.
   struct Gap {
     double width, centre;
   };
   std::vector<Gap> gaps;
-  for (std::size_t i = 0; i < used.size();) {
-    if (used[i]) {
-      ++i;
-      continue;
-    }
-    std::size_t j = i;
-    while (j < used.size() && !used[j]) ++j;
-    const double width = static_cast<double>(j - i) * kBin;
-    if (width >= min_gap) gaps.push_back({width, lo + (static_cast<double>(i + j) / 2.0) * kBin});
-    i = j;
+  for (std::size_t i = 1; i < values.size(); ++i) {
+    const double a = values[i - 1], b = values[i];
+    if (b - a >= min_gap) gaps.push_back({b - a, 0.5 * (a + b)});
   }
-  std::sort(gaps.begin(), gaps.end(), [](const Gap& a, const Gap& b) { return a.width > b.width; });
+  std::stable_sort(gaps.begin(), gaps.end(),
+                   [](const Gap& g, const Gap& h) { return g.width > h.width; });
   std::vector<double> planes;
   for (std::size_t k = 0; k < gaps.size() && static_cast<int>(k) < count; ++k)
     planes.push_back(gaps[k].centre);

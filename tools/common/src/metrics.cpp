@@ -200,6 +200,9 @@ std::array<double, kOcclusionPlaneQuantiles.size()> occlusion_planes(ImageView<c
     float next = at_rank;  // next larger distinct value, if any (all later ones are >= at_rank)
     for (std::ptrdiff_t j = k + 1; j < n; ++j)
       if (values[j] > at_rank && (next == at_rank || values[j] < next)) next = values[j];
+    if (next == at_rank)  // the largest value: the plane goes below it (all earlier are <=)
+      for (std::ptrdiff_t j = 0; j < k; ++j)
+        if (values[j] < at_rank && (next == at_rank || values[j] > next)) next = values[j];
     planes[i] = 0.5 * (static_cast<double>(at_rank) + static_cast<double>(next));
   }
   return planes;

@@ -19,6 +19,11 @@ constexpr double kWlsSigmaColor = 1.5;
 // OpenCV matchers report disparities in 1/16 px (StereoMatcher::DISP_SHIFT = 4).
 constexpr float kFixedPointScale = 1.0f / 16.0f;
 
+// SGBM searches a multiple of 16 disparities.
+long disparity_count(int max_disp) {
+  return (static_cast<long>(max_disp) + 15) / 16 * 16;
+}
+
 void check_inputs(ImageView<const std::uint8_t> left, ImageView<const std::uint8_t> right,
                   int max_disp) {
   if (left.empty() || right.empty()) throw Error("sgbm-wls: empty input image");
@@ -30,10 +35,17 @@ void check_inputs(ImageView<const std::uint8_t> left, ImageView<const std::uint8
                             left.channels, right.channels));
   if (max_disp <= 0)
     throw Error(fmt::format("sgbm-wls: max_disp must be positive (got {})", max_disp));
+  // OpenCV's SGBM aborts the process (an exception out of a destructor) on images no wider than
+  // its disparity count.
+  if (static_cast<long>(left.width) <= disparity_count(max_disp))
+    throw Error(
+        fmt::format("sgbm-wls: images {} px wide are too narrow for {} disparities (max_disp "
+                    "{} rounded up to 16)",
+                    left.width, disparity_count(max_disp), max_disp));
 }
 
 cv::Ptr<cv::StereoSGBM> make_left_matcher(int max_disp, int channels) {
-  const int num_disparities = (max_disp + 15) / 16 * 16;
+  const int num_disparities = static_cast<int>(disparity_count(max_disp));
   const int area = kBlockSize * kBlockSize;
   return cv::StereoSGBM::create(/*minDisparity=*/0, num_disparities, kBlockSize,
                                 /*P1=*/8 * channels * area, /*P2=*/32 * channels * area,

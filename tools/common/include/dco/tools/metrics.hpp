@@ -23,9 +23,10 @@
 //   - "nocc" numbers run over GT pixels whose nocc mask is 255 (only when the scene has a mask).
 //   - Occlusion: virtual fronto-parallel planes are placed at the 20/35/50/65/80 % quantiles of the
 //     GT disparities (nearest rank). Each plane sits halfway between the quantile value and the
-//     next larger distinct GT disparity, so no GT pixel lies exactly on it: with integer GT (e.g.
-//     Tsukuba) a whole surface would otherwise be a coin flip. A pixel is in front of a plane when
-//     its disparity is larger than the plane's.
+//     next larger distinct GT disparity (the next smaller one when the quantile is the largest), so
+//     no GT pixel lies exactly on it: with integer GT (e.g. Tsukuba) a whole surface would
+//     otherwise be a coin flip. Only a GT of one value has its planes on it. A pixel is in front
+//     of a plane when its disparity is larger than the plane's.
 //       occErr   % of GT pixels whose predicted side is wrong (missing prediction = wrong),
 //       bandErr  the same over GT pixels within Chebyshev distance 3 (a 7x7 dilation) of the GT
 //                occlusion boundary, i.e. GT pixels whose side differs from a 4-neighbour's;
