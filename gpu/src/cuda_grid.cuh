@@ -13,8 +13,11 @@
 namespace dco::gpu {
 
 inline void cuda_check(cudaError_t status, const char* what) {
-  if (status != cudaSuccess)
-    throw Error(std::string("cuda: ") + what + ": " + cudaGetErrorString(status));
+  if (status == cudaSuccess) return;
+  // The runtime keeps a failed call's error as the thread's last one until it is read: read here,
+  // or the next launch's check would report it again for a launch that succeeded.
+  (void)cudaGetLastError();
+  throw Error(std::string("cuda: ") + what + ": " + cudaGetErrorString(status));
 }
 
 template <class F>
@@ -66,10 +69,9 @@ class CudaGrid {
    private:
     void release() {
       if (data_ == nullptr) return;
-      if (kPinned)
-        cudaFreeHost(data_);
-      else
-        cudaFree(data_);
+      // A failure here (the context already broken) must not linger as the next launch's error.
+      if ((kPinned ? cudaFreeHost(data_) : cudaFree(data_)) != cudaSuccess)
+        (void)cudaGetLastError();
       data_ = nullptr;
       size_ = 0;
     }

@@ -1,10 +1,17 @@
 #include <cuda_runtime.h>
 
+#include <string>
+
 #include "cuda_entry.hpp"
 #include "cuda_grid.cuh"
 #include "dco/gpu/grid_stereo_matcher.hpp"
 
 namespace dco::gpu::detail {
+namespace {
+
+__global__ void probe_kernel() {}
+
+}  // namespace
 
 CudaDevice cuda_probe() {
   CudaDevice d;
@@ -24,11 +31,22 @@ CudaDevice cuda_probe() {
     d.why = cudaGetErrorString(props);
     return d;
   }
-  d.usable = true;
   d.name = p.name;
   d.compute_major = p.major;
   d.compute_minor = p.minor;
   d.memory_gib = static_cast<double>(p.totalGlobalMem) / (1024.0 * 1024.0 * 1024.0);
+  // A device older than every architecture this build holds code for has no kernel to run:
+  // "auto" must then stay on the CPU instead of failing at the first frame.
+  cudaFuncAttributes attributes{};
+  if (const cudaError_t image = cudaFuncGetAttributes(&attributes, probe_kernel);
+      image != cudaSuccess) {
+    (void)cudaGetLastError();
+    d.why = std::string("no kernel of this build runs on ") + p.name + " (compute capability " +
+            std::to_string(p.major) + "." + std::to_string(p.minor) +
+            "): " + cudaGetErrorString(image);
+    return d;
+  }
+  d.usable = true;
   return d;
 }
 

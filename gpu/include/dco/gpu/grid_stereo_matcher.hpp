@@ -120,7 +120,10 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
     grid_.launch(w_, h_, passes::Census{grey_r, census_right_.data(), w_, h_, cw, ch});
 
     const int max_arm = params_.arm_max / scale_;
-    if (tables_.channels() != ad_channels || tables_.max_arm() != max_arm) {
+    if (!tables_on_device_ || tables_.channels() != ad_channels || tables_.max_arm() != max_arm) {
+      // Until both tables are on the device: an allocation or copy that fails below leaves the
+      // next frame to upload them again rather than read freed or null memory.
+      tables_on_device_ = false;
       tables_.build(model_, ad_channels, max_arm);
       const kernels::CostTableView host = tables_.wide();
       table_ad_.resize(static_cast<std::size_t>(host.ad_size) * (max_arm + 1));
@@ -130,6 +133,7 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
       device_tables_ = host;
       device_tables_.ad = table_ad_.data();
       device_tables_.census = table_census_.data();
+      tables_on_device_ = true;
     }
   }
 
@@ -314,6 +318,7 @@ class GridStereoMatcher final : public stereo::StereoMatcher {
   kernels::pixel::BoundaryRule boundary_rule_;
   stereo::CostTables tables_;
   kernels::CostTableView device_tables_;
+  bool tables_on_device_ = false;
   stereo::StereoTimings timings_;
   int scale_ = 1, w_ = 0, h_ = 0, depth_ = 1;
 
