@@ -47,9 +47,10 @@ const Frames& frames() {
 }
 
 // One frame as the pipeline runs it: warm-started from, and stabilised towards, the previous
-// frame's solution (computed outside the timed region).
+// frame's solution (computed outside the timed region). On one thread unless asked, as Eigen's
+// solve runs.
 void run_dco(benchmark::State& state, const char* solve_resolution, bool photometric = false,
-             int row_threads = 0) {
+             int row_threads = 1) {
   const Frames& f = frames();
   densify::DensifyParams params;
   params.solve_resolution = solve_resolution;
@@ -86,8 +87,8 @@ void BM_DcoDensify_HalfPhotometric(benchmark::State& state) {
   run_dco(state, "half", true);
 }
 // The same with the stage's row-wise steps, the refinement's passes among them, on one, two and
-// four threads (densify.row_threads; 0, the default, takes one on a machine of fewer than 4 CPUs
-// and half of them, at most 4, elsewhere).
+// four threads (densify.row_threads; 0, the pipeline's default, takes one on a machine of fewer
+// than 4 CPUs and half of them, at most 4, elsewhere).
 void BM_DcoDensify_HalfPhotometricOneThread(benchmark::State& state) {
   run_dco(state, "half", true, 1);
 }

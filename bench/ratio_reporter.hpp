@@ -1,7 +1,7 @@
 #pragma once
 
-// Console output as usual, plus the real time of each benchmark, so a program can print the
-// ratios of dco against its peers of the same run at the end.
+// The output the command line asks for, plus the real time of each benchmark, so a program can
+// print the ratios of dco against its peers of the same run at the end.
 
 #include <cstdio>
 #include <initializer_list>
@@ -16,10 +16,19 @@
 
 namespace dco::bench {
 
-class RatioReporter : public benchmark::ConsoleReporter {
+// Passes every report to the display reporter the command line chose (--benchmark_format,
+// --benchmark_color, --benchmark_counters_tabular) and keeps each benchmark's real time.
+class RatioReporter : public benchmark::BenchmarkReporter {
  public:
+  // After benchmark::Initialize, which reads the flags; the display reporter belongs to the
+  // library.
+  RatioReporter() : display_(benchmark::CreateDefaultDisplayReporter()) {}
+
+  bool ReportContext(const Context& context) override { return display_->ReportContext(context); }
+  void Finalize() override { display_->Finalize(); }
+
   void ReportRuns(const std::vector<Run>& runs) override {
-    ConsoleReporter::ReportRuns(runs);
+    display_->ReportRuns(runs);
     // With --benchmark_repetitions the median stands for the benchmark.
     for (const Run& run : runs) {
       if (run.error_occurred) continue;
@@ -31,18 +40,22 @@ class RatioReporter : public benchmark::ConsoleReporter {
     }
   }
 
+  // Whether the display is the console table (else JSON or CSV, which the ratios must not join).
+  bool console() const { return dynamic_cast<benchmark::ConsoleReporter*>(display_) != nullptr; }
+
   double ms(const std::string& name) const {
     const auto it = ms_.find(name);
     return it == ms_.end() ? 0.0 : it->second;
   }
 
-  // Prints ours / peer when both ran (< 1: dco is faster).
-  void print_ratio(const char* ours, const char* peer) const {
+  // Prints ours / peer to `out` when both ran (< 1: dco is faster).
+  void print_ratio(std::FILE* out, const char* ours, const char* peer) const {
     const double a = ms(ours), b = ms(peer);
-    if (a > 0 && b > 0) std::printf("ratio %-28s / %-28s = %.2f\n", ours, peer, a / b);
+    if (a > 0 && b > 0) std::fprintf(out, "ratio %-28s / %-28s = %.2f\n", ours, peer, a / b);
   }
 
  private:
+  benchmark::BenchmarkReporter* display_;
   std::map<std::string, double> ms_;
   std::set<std::string> has_median_;
 };
@@ -62,8 +75,11 @@ inline int run_with_ratios(int argc, char** argv, std::initializer_list<RatioPai
   RatioReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
-  std::printf("\ntime ratios (< 1: dco is faster)\n");
-  for (const RatioPair& pair : pairs) reporter.print_ratio(pair.ours, pair.peer);
+  // Beside a JSON or CSV report on standard output, the ratios go to standard error.
+  std::FILE* out = reporter.console() ? stdout : stderr;
+  std::fflush(stdout);
+  std::fprintf(out, "\ntime ratios (< 1: dco is faster)\n");
+  for (const RatioPair& pair : pairs) reporter.print_ratio(out, pair.ours, pair.peer);
   return 0;
 }
 

@@ -137,6 +137,22 @@ TEST(DcoBenchCli, JsonHasThroughputLatencyAndThePeer) {
   EXPECT_THAT(r.out, HasSubstr("\"release_realtime\": false"));
 }
 
+// A range asked for is the range both dco and the peer search, not each sequence's own.
+TEST(DcoBenchCli, AMaxDisparityAskedForIsTheOneSearched) {
+  TempDir dir;
+  const std::vector<std::string> args = {
+      "--sequence", "synthetic", "--size", "320x180",        "--frames", "3",     "--warmup",
+      "1",          "--rounds",  "1",      "--paced-frames", "3",        "--json"};
+  const CliRun own = run_bench(dir, args);
+  ASSERT_EQ(own.exit_code, 0) << own.err;
+  EXPECT_GT(json_value(own.out, "max_disparity"), 16);
+  std::vector<std::string> asked = args;
+  for (const char* a : {"--set", "stereo.max_disparity=16"}) asked.push_back(a);
+  const CliRun set = run_bench(dir, asked);
+  ASSERT_EQ(set.exit_code, 0) << set.err;
+  EXPECT_EQ(json_value(set.out, "max_disparity"), 16);
+}
+
 TEST(DcoBenchCli, TheReleaseLineSaysHowTheReleaseThreadIsScheduled) {
   TempDir dir;
   const CliRun r =
@@ -193,6 +209,7 @@ TEST(DcoBenchCli, BadCommandLinesExitWithTwo) {
   expect_usage({"--size", "320by180"}, "--size");
   expect_usage({"--size", "32x32"}, "at least 64x64");
   expect_usage({"--fps", "fast"}, "--fps");
+  expect_usage({"--fps", "1e-10"}, "--fps needs a rate in [0.01, 1000]");
   expect_usage({"--sequence", "kitti"}, "'kitti'");
   expect_usage({"--paced-frames", "-1"}, "--paced-frames");
   expect_usage({"--paced-frames", "2147483647"}, "--paced-frames must be within 1..100000");

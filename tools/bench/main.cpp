@@ -129,10 +129,11 @@ double parse_fps(const std::string& text) {
   try {
     std::size_t used = 0;
     const double fps = std::stod(text, &used);
-    if (used == text.size() && fps > 0 && fps <= 1000) return fps;
+    // Below 0.01 fps a run of frames would take days, and 1/fps in nanoseconds soon leaves int64.
+    if (used == text.size() && fps >= 0.01 && fps <= 1000) return fps;
   } catch (const std::exception&) {
   }
-  throw UsageError(fmt::format("--fps needs a rate in (0, 1000], not '{}'", text));
+  throw UsageError(fmt::format("--fps needs a rate in [0.01, 1000], not '{}'", text));
 }
 
 Options parse_args(int argc, char** argv) {
@@ -196,6 +197,7 @@ Options parse_args(int argc, char** argv) {
 struct Params {
   dco::pipeline::PipelineParams pipeline;
   rt::RuntimeParams runtime;
+  bool max_disparity_given = false;  // by --config or --set; else each sequence's own range
 };
 
 Params load_params(const Options& opt) {
@@ -205,6 +207,7 @@ Params load_params(const Options& opt) {
   rt::register_params(schema, p.runtime);
   if (opt.config) schema.load_file(*opt.config);
   for (const std::string& assignment : opt.overrides) schema.set(assignment);
+  p.max_disparity_given = schema.was_set("stereo.max_disparity");
   dco::pipeline::validate(p.pipeline);
   rt::validate(p.runtime);
   return p;
@@ -538,14 +541,17 @@ struct Result {
 
 Result run(const Options& opt, const Params& base, const Frames& frames) {
   Params p = base;
-  p.pipeline.stereo.max_disparity = frames.max_disparity;
+  // dco and the peer search the same range: the one asked for, else the sequence's own.
+  const int max_disparity =
+      base.max_disparity_given ? base.pipeline.stereo.max_disparity : frames.max_disparity;
+  p.pipeline.stereo.max_disparity = max_disparity;
   Result r;
   r.name = frames.name;
   r.width = frames.pairs[0].left.width();
   r.height = frames.pairs[0].left.height();
   r.frames = static_cast<int>(frames.pairs.size());
   r.warmup = std::min(opt.warmup, r.frames);
-  r.max_disparity = frames.max_disparity;
+  r.max_disparity = max_disparity;
   const dco::gpu::BackendChoice backend =
       dco::gpu::choose_backend(p.runtime.backend, p.pipeline.stereo);
   r.threads = rt::stage_threads(p.runtime);
@@ -599,11 +605,10 @@ Result run(const Options& opt, const Params& base, const Frames& frames) {
       all_times.insert(all_times.end(), times.begin(), times.end());
     }
     for (const auto& f : warmup_frames)
-      dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity);
+      dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), max_disparity);
     double peer_ms = 0;
     for (const auto& f : frames.pairs)
-      peer_ms +=
-          dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), frames.max_disparity).time_ms;
+      peer_ms += dco::tools::run_sgbm_wls(f.left.cview(), f.right.cview(), max_disparity).time_ms;
     turn.peer_ms_per_frame = peer_ms / r.frames;
     r.rounds.push_back(turn);
   }
