@@ -38,11 +38,14 @@ extern "C" void on_stop_signal(int) {
 void usage(std::FILE* out) {
   std::fprintf(
       out,
-      "usage: dco-compositor [--ring FILE] [--out FILE.png] [--mask FILE.png] [--frames N]\n"
+      "usage: dco-compositor [--ring FILE] [--uid UID] [--out FILE.png] [--mask FILE.png]\n"
+      "                      [--frames N]\n"
       "                      [--cube X,Y,Z,SIZE[,R,G,B]]... [--sphere X,Y,Z,R[,R,G,B]]...\n"
       "                      [--scene FILE] [--soft N] [--wait S] [--width W --height H]\n"
       "                      [--egl auto|surfaceless|device] [--window [--display NAME]]\n"
       "  --ring FILE     depth ring of dcod (default %s)\n"
+      "  --uid UID       owner the ring must have (default: own uid; the packaged dcod runs as\n"
+      "                  the user dcod)\n"
       "  --out FILE      composited frames as PNG; a printf pattern (frame_%%04d.png) keeps\n"
       "                  every frame, a plain name the last one\n"
       "  --mask FILE     where virtual objects are visible, as a grey PNG (same naming)\n"
@@ -101,6 +104,7 @@ std::string frame_name(const std::string& pattern, long index) {
 struct Args {
   std::string ring = kDefaultRing, out, mask, scene_file;
   long frames = -1, soft = 0, wait_s = 5, width = 0, height = 0;  // frames -1: the default
+  long uid = -1;                                                  // -1: own uid
   bool window = false;
   std::string display;
   HeadlessDisplay egl = HeadlessDisplay::kAuto;
@@ -123,6 +127,7 @@ int run(const Args& args) {
 
   dco::client::Options options;
   options.path = args.ring;
+  if (args.uid >= 0) options.expected_uid = static_cast<std::uint32_t>(args.uid);
   options.expected_width = static_cast<std::uint32_t>(args.width);
   options.expected_height = static_cast<std::uint32_t>(args.height);
   const auto patience = std::chrono::seconds(args.wait_s);
@@ -295,6 +300,8 @@ int main(int argc, char** argv) {
       };
       if (a == "--ring") {
         args.ring = value;
+      } else if (a == "--uid") {
+        number(0, 0xfffffffeL, &args.uid);
       } else if (a == "--out") {
         check_pattern(value, "--out");
         args.out = value;

@@ -78,7 +78,7 @@ uniform highp sampler2D u_depth;
 uniform mediump sampler2D u_image;
 uniform int u_has_image;
 uniform int u_height;
-uniform vec2 u_ab;
+uniform vec2 u_rev;
 out vec4 o_color;
 void main() {
   ivec2 p = ivec2(int(gl_FragCoord.x), u_height - 1 - int(gl_FragCoord.y));
@@ -86,7 +86,7 @@ void main() {
   float g = u_has_image == 1 ? texelFetch(u_image, p, 0).r : 0.5;
   o_color = vec4(g, g, g, 0.0);
   bool known = z > 0.0 && !isinf(z) && !isnan(z);
-  gl_FragDepth = known ? clamp((u_ab.x + u_ab.y / z) * 0.5 + 0.5, 0.0, 1.0) : 1.0;
+  gl_FragDepth = known ? clamp(u_rev.x + u_rev.y / z, 0.0, 1.0) : 0.0;
 }
 )";
 
@@ -110,7 +110,7 @@ precision highp float;
 uniform highp sampler2D u_depth;
 uniform int u_height;
 uniform int u_width;
-uniform vec2 u_ab;
+uniform vec2 u_rev;
 uniform vec4 u_cam;
 uniform vec3 u_color;
 uniform int u_sphere;
@@ -142,7 +142,7 @@ void main() {
     pos = t * d;
     n = (pos - c) / r;
   }
-  gl_FragDepth = clamp((u_ab.x + u_ab.y / pos.z) * 0.5 + 0.5, 0.0, 1.0);
+  gl_FragDepth = clamp(u_rev.x + u_rev.y / pos.z, 0.0, 1.0);
   float coverage = 1.0;
   if (u_soft_radius > 0) {
     ivec2 p = ivec2(int(gl_FragCoord.x), u_height - 1 - int(gl_FragCoord.y));
@@ -246,10 +246,10 @@ struct Renderer::Impl {
   GLuint depth_tex = 0, image_tex = 0, fbo = 0, color_rb = 0, depth_rb = 0;
   // Uniform locations, looked up once.
   struct {
-    GLint depth, image, has_image, height, ab;
+    GLint depth, image, has_image, height, rev;
   } bg{};
   struct {
-    GLint proj, depth, height, width, ab, cam, soft_radius, color, sphere, sphere_cr;
+    GLint proj, depth, height, width, rev, cam, soft_radius, color, sphere, sphere_cr;
   } obj{};
   int width = 0, height = 0;              // the framebuffer's: the last frame drawn
   int input_width = 0, input_height = 0;  // the input textures': the last frame uploaded
@@ -370,9 +370,9 @@ struct Renderer::Impl {
     object = link(kObjectVs, kObjectFs, "object");
     auto at = [](GLuint program, const char* name) { return glGetUniformLocation(program, name); };
     bg = {at(background, "u_depth"), at(background, "u_image"), at(background, "u_has_image"),
-          at(background, "u_height"), at(background, "u_ab")};
+          at(background, "u_height"), at(background, "u_rev")};
     obj = {at(object, "u_proj"),        at(object, "u_depth"), at(object, "u_height"),
-           at(object, "u_width"),       at(object, "u_ab"),    at(object, "u_cam"),
+           at(object, "u_width"),       at(object, "u_rev"),   at(object, "u_cam"),
            at(object, "u_soft_radius"), at(object, "u_color"), at(object, "u_sphere"),
            at(object, "u_sphere_cr")};
     glGenVertexArrays(1, &vao_empty);
@@ -547,10 +547,15 @@ RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
   m.resize_target(cam.width, cam.height);
 
   const double n = options.near_m, f = options.far_m;
-  // OpenGL's projection of z to NDC, a + b / z; with no far plane its limit, 1 - 2n / z.
+  // OpenGL's projection of z to NDC, a + b / z; with no far plane its limit, 1 - 2n / z. It clips;
+  // the depth test reads the reversed window depth rev_a + rev_b / z instead (1 at the near
+  // plane, 0 at the far one; n / z without a far plane), which a float keeps to a relative 1e-7
+  // at any distance, where 1 - n / z rounds to 1 beyond some 100 km.
   const float a = std::isinf(f) ? 1.0f : static_cast<float>((f + n) / (f - n));
   const float b =
       std::isinf(f) ? static_cast<float>(-2 * n) : static_cast<float>(-2 * f * n / (f - n));
+  const float rev_a = std::isinf(f) ? 0.0f : static_cast<float>(-n / (f - n));
+  const float rev_b = std::isinf(f) ? static_cast<float>(n) : static_cast<float>(f * n / (f - n));
   const double w = cam.width, h = cam.height;
   // Column-major: pixel centres of the depth map land on pixel centres of the framebuffer, row 0
   // of the image at the top.
@@ -576,7 +581,7 @@ RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
   glDisable(GL_BLEND);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_ALWAYS);
-  glClearDepthf(1.0f);
+  glClearDepthf(0.0f);  // reversed: 0 is infinitely far
   glClearColor(0, 0, 0, 0);
   glDepthMask(GL_TRUE);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -588,7 +593,7 @@ RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
   glUniform1i(m.bg.image, 1);
   glUniform1i(m.bg.has_image, frame.image ? 1 : 0);
   glUniform1i(m.bg.height, cam.height);
-  glUniform2f(m.bg.ab, a, b);
+  glUniform2f(m.bg.rev, rev_a, rev_b);
   glBindVertexArray(m.vao_empty);
   glDrawArrays(GL_TRIANGLES, 0, 3);
   check_gl("drawing the camera image and real depth");
@@ -610,7 +615,7 @@ RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
       check_gl("uploading the objects");
       m.uploaded_boxes = m.boxes;
     }
-    glDepthFunc(GL_LESS);
+    glDepthFunc(GL_GREATER);
     glDepthMask(GL_TRUE);
     glEnable(GL_CULL_FACE);
     glCullFace(GL_BACK);
@@ -623,7 +628,7 @@ RenderTimes Renderer::render(const RealFrame& frame, const Scene& scene,
     glUniform1i(m.obj.depth, 0);
     glUniform1i(m.obj.height, cam.height);
     glUniform1i(m.obj.width, cam.width);
-    glUniform2f(m.obj.ab, a, b);
+    glUniform2f(m.obj.rev, rev_a, rev_b);
     glUniform4f(m.obj.cam, static_cast<float>(cam.fx), static_cast<float>(cam.fy),
                 static_cast<float>(cam.cx), static_cast<float>(cam.cy));
     glUniform1i(m.obj.soft_radius, options.soft_radius_px);

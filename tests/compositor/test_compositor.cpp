@@ -158,6 +158,41 @@ TEST(Compositor, FarObjectsAreDrawnInFrontOfUnknownDepth) {
   EXPECT_THROW(r.render(frame, scene, bad), Error);
 }
 
+// However far: a cube 900 km away over unknown depth, and one 9 km away in front of a real
+// surface 1 % farther, where 1 - n / z in a float no longer tells the two apart.
+TEST(Compositor, ObjectsHundredsOfKilometresAwayKeepTheirDepthOrder) {
+  std::vector<float> depth(static_cast<std::size_t>(kW) * kH,
+                           std::numeric_limits<float>::infinity());
+  for (int v = 0; v < kH; ++v)
+    for (int u = kW / 2; u < kW; ++u) depth[static_cast<std::size_t>(v) * kW + u] = 9.1e3f;
+  RealFrame frame;
+  frame.camera = kCamera;
+  frame.depth = depth.data();
+  frame.depth_stride = kW * sizeof(float);
+  Scene scene;
+  scene.cubes.push_back({{-1.2e5f, 0.0f, 9.0e5f}, 6.0e4f});  // left, over unknown depth
+  scene.cubes.push_back({{1.2e3f, 0.0f, 9.0e3f}, 6.0e1f});   // right, 1 % before the wall
+  Renderer r;
+  for (const int soft : {0, 2}) {
+    RenderOptions options;
+    options.soft_radius_px = soft;
+    ASSERT_TRUE(r.render(frame, scene, options).drawn);
+    const std::vector<std::uint8_t> alpha = alpha_of(r.read_rgba(), 128);
+    const auto at = [&](double x, double z) {
+      const int u = static_cast<int>(std::lround(kCamera.cx + kCamera.fx * x / z));
+      return alpha[static_cast<std::size_t>(kH / 2) * kW + u];
+    };
+    EXPECT_EQ(at(-1.2e5, 8.7e5), 1) << "soft " << soft;
+    EXPECT_EQ(at(1.2e3, 8.97e3), 1) << "soft " << soft;
+  }
+  // Behind the wall the near cube is hidden.
+  scene.cubes[1].center[2] = 9.3e3f;
+  ASSERT_TRUE(r.render(frame, scene, {}).drawn);
+  const std::vector<std::uint8_t> alpha = alpha_of(r.read_rgba(), 128);
+  const int u = static_cast<int>(std::lround(kCamera.cx + kCamera.fx * 1.2e3 / 9.27e3));
+  EXPECT_EQ(alpha[static_cast<std::size_t>(kH / 2) * kW + u], 0);
+}
+
 // A PNG that cannot be written whole (a full disk: here a file size limit) leaves the last good
 // one in place and no partial file.
 TEST(Compositor, AFailedPngWriteLeavesTheLastGoodOne) {
@@ -370,6 +405,17 @@ TEST(Compositor, BadInputIsOneClearLine) {
                                 " 2>&1");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.output.find("64"), std::string::npos) << r.output;
+  // The owner the ring must have: the packaged dcod runs as its own user.
+  const std::string own = std::to_string(getuid());
+  r = dco::testing::run_command(bin + " --wait 1 --uid " + std::to_string(getuid() + 1) +
+                                " --ring " + ring + " 2>&1");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("wrong owner"), std::string::npos) << r.output;
+  r = dco::testing::run_command(bin + " --wait 1 --uid " + own +
+                                " --width 640 --height 400 --ring " + ring + " 2>&1");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(r.output.find("wrong owner"), std::string::npos) << r.output;
+  EXPECT_EQ(dco::testing::run_command(bin + " --uid -1 2>&1").status, 2);
   r = dco::testing::run_command(bin + " --cube 0,0,1,0.3, 2>&1");  // a comma and no number
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.output.find("'' is not a number"), std::string::npos) << r.output;

@@ -269,6 +269,47 @@ TEST(LogDigest, HugeCountsSaturate) {
             std::string::npos);
 }
 
+// The drops of a restarted pipeline or dcod count whole, even where the new count has already
+// reached the old one when its first DCO_STATS is sent.
+TEST(LogDigest, DropsAfterARestartCountWhole) {
+  std::ostringstream out;
+  std::int64_t number = 0;
+  const auto add = [&](const std::string& channel, std::vector<std::uint8_t> data) {
+    LcmLogEvent e;
+    e.number = number;
+    e.timestamp_us = kStartUs + number * 1000;
+    ++number;
+    e.channel = channel;
+    e.data = std::move(data);
+    drivers::write_lcm_log_event(out, e);
+  };
+  const auto frame = [&](std::int64_t session) {
+    ::dco::depth_frame_t m{};
+    m.session_id = session;
+    m.publish_index = 1;
+    m.width = 64;
+    m.height = 48;
+    add(ipc::channel::kDepth, lcm_bytes(m));
+  };
+  const auto stats = [&](std::int64_t pushed, std::int64_t dropped) {
+    ::dco::pipeline_stats_t m{};
+    m.pushed = pushed;
+    m.dropped = dropped;
+    m.published = pushed - dropped;
+    add(ipc::channel::kStats, lcm_bytes(m));
+  };
+  frame(0x1111);
+  stats(100, 3);
+  stats(200, 3);
+  frame(0x2222);  // a new dcod
+  stats(50, 7);
+  stats(60, 8);
+  stats(20, 9);  // a reload restarts the pipeline: pushed steps down
+  std::istringstream in(out.str());
+  const LogSummary s = summarize(digest_log(in, "restarts.log", DigestOptions{}));
+  EXPECT_EQ(s.dropped_at_entry, 3 + 8 + 9);
+}
+
 // Channel names, device text and decode problems come from the log: the text report shows their
 // control characters as '?', so a forged log cannot send escape sequences to a terminal.
 TEST(LogSummary, TextFromTheLogReachesTheTerminalWithoutControlCharacters) {
@@ -465,6 +506,15 @@ TEST(DcoDiagCli, WritesTheReportsAndExitsByTheRules) {
   EXPECT_EQ(run_cli(DCO_DIAG_EXE, dir, {}).exit_code, 2);
   EXPECT_EQ(run_cli(DCO_DIAG_EXE, dir, {log.string(), "--previews", "-3"}).exit_code, 2);
   EXPECT_EQ(run_cli(DCO_DIAG_EXE, dir, {log.string(), "--bogus"}).exit_code, 2);
+  // A report never goes over the recording it reads.
+  for (const char* option : {"--html", "--json"}) {
+    r = run_cli(DCO_DIAG_EXE, dir, {log.string(), option, log.string()});
+    EXPECT_EQ(r.exit_code, 2) << option;
+    EXPECT_NE(r.err.find("is the log itself"), std::string::npos) << r.err;
+  }
+  r = run_cli(DCO_DIAG_EXE, dir, {log.string(), "--html", (dir / "." / "field.log").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(slurp(log), bytes);
 }
 
 }  // namespace

@@ -26,11 +26,30 @@ JSON ("-" = stdout instead of the summary); --previews: depth thumbnails in the 
 it read); 1 when the file is not an LCM log; 2 for a usage mistake.
 )";
 
+// Written beside its name and renamed over it: a failed write leaves the last report whole.
 void write_file(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  std::filesystem::path tmp = path;
+  tmp += ".tmp";
+  std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
   out << text;
   out.close();
-  if (!out) throw dco::Error("cannot write " + path.string());
+  std::error_code ec;
+  if (!out) {
+    std::filesystem::remove(tmp, ec);
+    throw dco::Error("cannot write " + path.string());
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw dco::Error("cannot write " + path.string() + ": " + ec.message());
+  }
+}
+
+// A report written over the recording it reads would lose the field log.
+void refuse_the_log(const std::string& log, const std::string& report, const char* option) {
+  std::error_code ec;
+  if (report == log || std::filesystem::equivalent(log, report, ec))
+    throw dco::tools::UsageError(fmt::format("{} {} is the log itself", option, report));
 }
 
 }  // namespace
@@ -66,6 +85,8 @@ int main(int argc, char** argv) {
     if (log.empty()) throw UsageError(std::string("no log given\n") + kUsage);
     if (no_html && !html.empty()) throw UsageError("--html and --no-html exclude each other");
     if (!no_html && html.empty()) html = log + ".html";
+    if (!no_html) refuse_the_log(log, html, "--html");
+    if (!json.empty() && json != "-") refuse_the_log(log, json, "--json");
 
     const dco::diag::LogDigest digest = dco::diag::digest_log(log, options);
     const dco::diag::LogSummary summary = dco::diag::summarize(digest);

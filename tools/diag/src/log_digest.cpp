@@ -67,6 +67,7 @@ class Digester {
     auto it = std::find_if(d_.sessions.begin(), d_.sessions.end(),
                            [&](const Session& s) { return s.id == m.session_id; });
     if (it == d_.sessions.end()) {
+      new_session_ = true;  // a new dcod: its DCO_STATS count from 0
       Session s;
       s.id = m.session_id;
       s.first_s = t;
@@ -100,10 +101,19 @@ class Digester {
   }
 
   void add_stats(double t) {
-    // The runtime's counter restarts with the pipeline: a step down begins a new count.
-    const double dropped = std::clamp(static_cast<double>(stats_.dropped), 0.0, 1e15);
-    const double increment = dropped >= last_dropped_ ? dropped - last_dropped_ : dropped;
+    // The runtime's counters restart with the pipeline (a reload) and with dcod (a new session
+    // since the last DCO_STATS): then the whole count is new. A step down of any counter says
+    // so even when the new count has already passed the old one in another.
+    const auto count = [](std::int64_t v) { return std::clamp(static_cast<double>(v), 0.0, 1e15); };
+    const double pushed = count(stats_.pushed), dropped = count(stats_.dropped),
+                 published = count(stats_.published);
+    const bool restarted = new_session_ || pushed < last_pushed_ || dropped < last_dropped_ ||
+                           published < last_published_;
+    const double increment = restarted ? dropped : dropped - last_dropped_;
+    last_pushed_ = pushed;
     last_dropped_ = dropped;
+    last_published_ = published;
+    new_session_ = false;
     d_.stats.push_back({t, static_cast<long>(increment), stats_});
   }
 
@@ -151,7 +161,8 @@ class Digester {
   LogDigest& d_;
   const DigestOptions& options_;
   long preview_stride_ = 1;
-  double last_dropped_ = 0;
+  double last_pushed_ = 0, last_dropped_ = 0, last_published_ = 0;
+  bool new_session_ = false;  // a DCO_DEPTH of a session not seen before since the last stats
   ::dco::depth_frame_t depth_;
   ::dco::pipeline_stats_t stats_;
   ::dco::device_status_t status_;
