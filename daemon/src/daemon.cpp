@@ -26,6 +26,13 @@
 namespace dco::daemon {
 namespace {
 
+// A recording's totals: what went out, and what did not and why.
+std::string raw_totals(const RawRecorder::Counts& n) {
+  return fmt::format(
+      "{} pairs on DCO_RAW, {} dropped, {} larger than raw.max_message_bytes, {} failed to encode",
+      n.recorded, n.dropped, n.oversized, n.failed);
+}
+
 using pipeline::runtime::Clock;
 
 std::int64_t monotonic_ns() {
@@ -163,12 +170,21 @@ void Daemon::start_pipeline() {
     log_.info(backend.message);
   // The source is stopped here (first start or a restart), so nothing is rectifying.
   remapper_ = rectifier_ && backend.remapper ? backend.remapper(*rectifier_) : nullptr;
-  runtime_ = std::make_unique<pipeline::runtime::DepthRuntime>(
+  auto next = std::make_unique<pipeline::runtime::DepthRuntime>(
       loaded_.config.pipeline, loaded_.config.runtime,
       [this](const pipeline::DepthResult& r, const pipeline::runtime::FrameTimes& t) {
         on_result(r, t);
       },
       pipeline::runtime::DepthRuntime::StageHook{}, backend.stages);
+  if (runtime_) {
+    // A restarted pipeline counts from 0: the daemon's totals keep what the one it replaces
+    // dropped, and the rates measure the new one from its start.
+    const pipeline::runtime::RuntimeStats before = runtime_->stats();
+    earlier_dropped_ += before.dropped;
+    earlier_late_ += before.late;
+    last_pushed_ = last_published_ = 0;
+  }
+  runtime_ = std::move(next);
   runtime_->start();
   const int threads = runtime_->runtime_params().threads;
   const pipeline::PipelineParams& stages = loaded_.config.pipeline;
@@ -199,7 +215,9 @@ void Daemon::start_pipeline() {
           "CPU busy a release can slip by a scheduler tick",
           rp.release_latency_ms, rp.release_priority));
   }
-  pipeline_start_ns_ = monotonic_ns();
+  // Only the first start: a reload that restarts the stages is no sign that frames flow, and a
+  // hung camera must not earn another stall_timeout_s of watchdog pings from one.
+  if (pipeline_start_ns_ == 0) pipeline_start_ns_ = monotonic_ns();
 }
 
 void Daemon::start_source() {
@@ -333,8 +351,8 @@ std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const 
   return fmt::format(
       "{}: {:.1f} fps in, {:.1f} fps out, {} published, {} dropped ({} late), latency p50 {:.1f} "
       "ms p99 {:.1f} ms{}{}",
-      source_->info().description, fps_in_, fps_out_, published_.load(), s.dropped, s.late,
-      s.latency.p50_ms, s.latency.p99_ms,
+      source_->info().description, fps_in_, fps_out_, published_.load(),
+      earlier_dropped_ + s.dropped, earlier_late_ + s.late, s.latency.p50_ms, s.latency.p99_ms,
       // With runtime.release_latency_ms the latency is fixed: what the stages took and the
       // results ready too late for it tell whether the setting suits the machine.
       runtime_->holds_results_for_release()
@@ -444,8 +462,7 @@ void Daemon::configure_raw_recording() {
   }
   if (previous) {
     const RawRecorder::Counts n = previous->close();  // sends what it holds
-    log_.info(fmt::format("raw recording stopped: {} pairs on DCO_RAW, {} dropped", n.recorded,
-                          n.dropped));
+    log_.info("raw recording stopped: " + raw_totals(n));
   }
   raw_dropped_reported_ = raw_oversized_reported_ = raw_failed_reported_ = 0;
   raw_settings_ = settings;
@@ -470,7 +487,11 @@ void Daemon::report_raw_recording() {
                     "camera; a lower raw.png_level helps)",
                     n.dropped - raw_dropped_reported_));
   if (n.oversized > raw_oversized_reported_ || n.failed > raw_failed_reported_)
-    log_.warning("raw recording: " + error);
+    log_.warning(fmt::format(
+        "raw recording: {} pairs not recorded, {} since the last report; the "
+        "last: {}",
+        n.oversized + n.failed,
+        n.oversized + n.failed - raw_oversized_reported_ - raw_failed_reported_, error));
   raw_dropped_reported_ = n.dropped;
   raw_oversized_reported_ = n.oversized;
   raw_failed_reported_ = n.failed;
@@ -478,6 +499,9 @@ void Daemon::report_raw_recording() {
 
 void Daemon::apply_live_settings() {
   log_.set_level(parse_log_level(loaded_.config.log_level));
+  // A new lcm.stats_hz applies at once, not after the old period.
+  next_stats_ns_ = std::min<std::int64_t>(
+      next_stats_ns_, monotonic_ns() + static_cast<std::int64_t>(1e9 / loaded_.config.stats_hz));
   max_frames_ = loaded_.config.max_frames;
   {
     std::lock_guard lock(publish_mutex_);
@@ -665,7 +689,7 @@ int Daemon::run() {
     std::lock_guard lock(raw_mutex_);
     const RawRecorder::Counts n = raw_->close();  // sends the pairs it still holds
     raw_.reset();
-    log_.info(fmt::format("raw recording: {} pairs on DCO_RAW, {} dropped", n.recorded, n.dropped));
+    log_.info("raw recording: " + raw_totals(n));
   }
   if (replay_check_) {
     if (const ReplayCheck::Result r = replay_check_->result(); r.identical == r.compared)

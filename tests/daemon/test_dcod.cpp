@@ -164,6 +164,105 @@ TEST(Dcod, AStalledSourceStopsTheWatchdogPings) {
   EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
 }
 
+// A reload that restarts the stages is no sign of life: a hung camera stays without pings.
+TEST(Dcod, AReloadDoesNotRearmTheWatchdogOfAStalledSource) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  const auto config = dir.write("dcod.toml", "[densify]\nlambda_s = 1.2\n");
+  DcodOptions o = configured(dir, config, notify);
+  o.args = base_args(dir, "synthetic://hand?width=160&height=96&fps=30&stall_after=15");
+  o.args.insert(o.args.end(),
+                {"--config", config.string(), "--set", "service.stall_timeout_s=0.5"});
+  o.watchdog = 400ms;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  ASSERT_TRUE(notify.wait_for("STALLED", 5s)) << dcod.log();
+  dir.write("dcod.toml", "[densify]\nlambda_s = 2\n");
+  ASSERT_TRUE(reloaded(dcod, notify)) << dcod.log();
+  const std::size_t after = notify.messages().size();
+  std::this_thread::sleep_for(1200ms);
+  EXPECT_EQ(notify.count("WATCHDOG=1", after), 0) << dcod.log();
+  EXPECT_EQ(dcod.log().find("frames flow again"), std::string::npos) << dcod.log();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+}
+
+// What a reload changes live applies at once: a faster lcm.stats_hz does not wait out the slow
+// one's period. And the status keeps counting the drops of the stages a reload replaced.
+TEST(Dcod, AReloadKeepsTheCountsAndAppliesTheStatsRateAtOnce) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  const auto config = dir.write("dcod.toml", "[densify]\nlambda_s = 1.2\n[lcm]\nstats_hz = 2\n");
+  DcodOptions o = configured(dir, config, notify);
+  // As fast as the source renders: most frames are dropped at the entry.
+  o.args = base_args(dir, "synthetic://hand?width=160&height=96&fps=0");
+  o.args.insert(o.args.end(), {"--config", config.string()});
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  const auto dropped_in = [](const std::string& status) {
+    const std::size_t at = status.find(" dropped (");
+    if (at == std::string::npos) return -1L;
+    const std::size_t begin = status.rfind(", ", at) + 2;
+    return std::stol(status.substr(begin, at - begin));
+  };
+  const auto last_dropped = [&](std::size_t from) {
+    long dropped = -1;
+    const std::vector<Notification> m = notify.messages();
+    for (std::size_t i = from; i < m.size(); ++i)
+      if (m[i].text.find("STATUS=") != std::string::npos)
+        dropped = std::max(dropped, dropped_in(m[i].text));
+    return dropped;
+  };
+  ASSERT_TRUE(notify.collect(10s, [&](const auto&) { return last_dropped(0) > 20; })) << dcod.log();
+  const long before = last_dropped(0);
+  const auto status_lines = [&](std::size_t from) {
+    long n = 0;
+    const std::vector<Notification> m = notify.messages();
+    for (std::size_t i = from; i < m.size(); ++i) n += m[i].text.rfind("STATUS=", 0) == 0;
+    return n;
+  };
+  dir.write("dcod.toml", "[densify]\nlambda_s = 2\n[lcm]\nstats_hz = 0.1\n");
+  const std::size_t slow = notify.messages().size();
+  ASSERT_TRUE(reloaded(dcod, notify)) << dcod.log();
+  // The status READY=1 carries right after the restart counts the replaced stages' drops.
+  const std::vector<Notification> m = notify.messages();
+  for (std::size_t i = slow; i < m.size(); ++i)
+    if (m[i].text.rfind("READY=1", 0) == 0) {
+      EXPECT_GE(dropped_in(m[i].text), before) << m[i].text;
+    }
+  // One more status at the old rate arms the slow period.
+  ASSERT_TRUE(notify.collect(3s, [&](const auto&) { return status_lines(slow) >= 1; }))
+      << dcod.log();
+  dir.write("dcod.toml", "[densify]\nlambda_s = 2\n[lcm]\nstats_hz = 10\n");
+  const std::size_t fast = notify.messages().size();
+  ASSERT_TRUE(reloaded(dcod, notify)) << dcod.log();
+  // READY=1 carries a status too; the stats' own STATUS lines follow at 10 Hz.
+  ASSERT_TRUE(notify.collect(3s, [&](const auto&) { return status_lines(fast) >= 3; }))
+      << "the 0.1 Hz period was waited out\n"
+      << dcod.log();
+  EXPECT_GE(last_dropped(fast), before) << dcod.log();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+}
+
+// The recording's totals name every pair it did not send, not only those it dropped.
+TEST(Dcod, RawRecordingTotalsCountThePairsTooLargeToSend) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o;
+  o.args = base_args(dir, "synthetic://hand?width=640&height=360&fps=30&frames=6");
+  o.args.insert(o.args.end(), {"--set", "raw.enabled=true", "--set", "raw.max_message_bytes=65536",
+                               "--set", "runtime.deterministic=true"});
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  DcodProcess dcod(o);
+  ASSERT_EQ(dcod.wait(30s), 0) << dcod.log();
+  EXPECT_NE(dcod.log().find("raw recording: 0 pairs on DCO_RAW, 0 dropped, 6 larger than "
+                            "raw.max_message_bytes, 0 failed to encode"),
+            std::string::npos)
+      << dcod.log();
+}
+
 TEST(Dcod, SighupReloadsWhatItCanAndNamesTheRest) {
   TempDir dir;
   NotifySocket notify(dir / "notify");

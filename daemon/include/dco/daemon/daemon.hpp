@@ -122,6 +122,7 @@ class Daemon final : public drivers::FrameSink {
   bool stalled_ = false;
   std::int64_t next_stats_ns_ = 0, last_ping_ns_ = 0;
   long last_pushed_ = 0, last_published_ = 0;
+  long earlier_dropped_ = 0, earlier_late_ = 0;  // by the runtimes that reloads replaced
   std::int64_t last_rate_ns_ = 0;
   double fps_in_ = 0, fps_out_ = 0;
   // The stereo stage's correction of the right camera as last written to the log.
