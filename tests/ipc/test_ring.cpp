@@ -302,6 +302,14 @@ TEST(RingClient, ReadLatestCopiesAnUntornFrameIntoCallerMemory) {
   }
   EXPECT_EQ(std::count(depth.begin(), depth.end(), 0xAB),
             static_cast<std::ptrdiff_t>(depth.size()));
+
+  // A frame whose copy failed was not returned: wait_next still gives it.
+  publish_pattern(writer, 43);
+  buf.depth_capacity = 1;
+  EXPECT_EQ(dco_client_read_latest(c.handle(), &buf, &out), DCO_E_BUFFER_TOO_SMALL);
+  const auto next = c.wait_next(std::chrono::milliseconds(0));
+  ASSERT_TRUE(next.has_value());
+  EXPECT_EQ(next->info().frame_seq, 43u);
 }
 
 TEST(RingWriter, AWriteNeverPublishedIsWrittenAgainAndNeverLooksPublished) {

@@ -238,6 +238,15 @@ struct dco_client {
     if (status == DCO_OK) retired.release();
     return status;
   }
+  // A frame taken but not copied (the caller's buffer too small, the slot overtaken) was not
+  // returned: wait_next may still return it, unless the ring has since changed session.
+  struct Returned {
+    std::uint64_t session_id, last_index;
+  };
+  Returned last_returned() const { return {map.session_id, last_index}; }
+  void not_returned(const Returned& before) {
+    if (map.session_id == before.session_id) last_index = before.last_index;
+  }
 
   // Reads slot `slot`'s metadata under its seqlock into a view (pixels are left in place).
   // False when the slot was being written or changed during the read.
@@ -569,12 +578,14 @@ dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst,
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_latest: bad client or info");
   dco_frame_view view;
   dco_frame_view_init(&view);
+  const dco_client::Returned before = client->last_returned();
   for (std::uint32_t attempt = 0; attempt < client->max_attempts; ++attempt) {
     dco_status status = client->checked_latest(&view);
     if (status != DCO_OK) return status;
     status = dco_client_copy(client, &view, dst);
     if (status == DCO_E_OVERTAKEN) continue;
     if (status == DCO_OK && info != nullptr) *info = view.info;
+    if (status != DCO_OK) client->not_returned(before);
     return client->returned(status);
   }
   return fail(DCO_E_OVERTAKEN, client->expect.path + ": every copy was overtaken (" +
@@ -599,10 +610,12 @@ dco_status dco_client_read_announced(dco_client* client, uint64_t session_id, ui
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_announced: bad client or info");
   dco_frame_view view;
   dco_frame_view_init(&view);
+  const dco_client::Returned before = client->last_returned();
   dco_status status = client->take_announced(session_id, slot, publish_index, &view);
   if (status != DCO_OK) return status;
   status = dco_client_copy(client, &view, dst);
   if (status == DCO_OK && info != nullptr) *info = view.info;
+  if (status != DCO_OK) client->not_returned(before);
   return client->returned(status);
 } catch (...) {
   return out_of_memory();
