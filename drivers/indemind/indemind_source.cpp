@@ -67,7 +67,7 @@ struct Counters {
   std::atomic<std::uint64_t> stalls{0}, transfer_errors{0}, stream_restarts{0};
   std::atomic<std::uint64_t> imu_samples{0}, imu_bad_reports{0}, imu_duplicates{0};
   std::atomic<std::uint64_t> imu_out_of_order{0}, imu_overflow{0}, imu_implausible{0};
-  std::atomic<std::uint64_t> imu_tick_clamps{0}, imu_silences{0};
+  std::atomic<std::uint64_t> imu_tick_clamps{0}, imu_silences{0}, imu_before_first_frame{0};
   std::atomic<std::uint64_t> disconnects{0}, reconnects{0}, control_busy{0};
 };
 
@@ -170,6 +170,7 @@ class IndemindSource final : public FrameSource {
                   {"imu_implausible", c.imu_implausible},
                   {"imu_tick_clamps", c.imu_tick_clamps},
                   {"imu_silences", c.imu_silences},
+                  {"imu_before_first_frame", c.imu_before_first_frame},
                   {"disconnects", c.disconnects},
                   {"reconnects", c.reconnects},
                   {"control_busy", c.control_busy}};
@@ -218,10 +219,12 @@ class IndemindSource final : public FrameSource {
       return;
     }
     const StreamMode d = default_stream_mode(speed);
+    // A width or height alone names its mode's size.
+    const bool no_size = options_.width == 0 && options_.height == 0;
     std::string why;
-    auto m = find_stream_mode(options_.width ? options_.width : d.width,
-                              options_.height ? options_.height : d.height,
-                              options_.fps ? options_.fps : d.fps, speed, why);
+    auto m =
+        find_stream_mode(no_size ? d.width : options_.width, no_size ? d.height : options_.height,
+                         options_.fps ? options_.fps : d.fps, speed, why);
     if (!m) throw Error("indemind: " + why);
     mode_ = *m;
   }
@@ -297,6 +300,14 @@ class IndemindSource final : public FrameSource {
   }
 
   std::int64_t lead_ns() const { return std::max(kLeadNs, frames_ns(2)); }
+
+  // A slow IMU leaves gaps between reports longer than stall_ms; only three missed in a row are
+  // a silence.
+  std::int64_t imu_silence_ns() const {
+    const std::int64_t stall = std::int64_t{options_.stall_ms} * 1'000'000;
+    if (options_.imu_hz <= 0) return stall;  // no IMU stream asked for
+    return std::max(stall, 3 * std::int64_t{1'000'000'000} / options_.imu_hz);
+  }
 
   // Whether a device time maps more than the lead ahead of the host clock `now`, or more than
   // kLagNs behind it.
@@ -383,13 +394,14 @@ class IndemindSource final : public FrameSource {
     const std::int64_t after = options_.clock();
     const bool stalled = after - last_frame_ns_ > stall_ns;
     // Armed by a first report: a module that sends no IMU at all must not lose its video.
-    const bool imu_silent = imu_seen_ && after - last_imu_report_ns_ > stall_ns;
+    const bool imu_silent = imu_seen_ && after - last_imu_report_ns_ > imu_silence_ns();
     if (restart_ || stalled || imu_silent) {
       if (stalled) {
         set_error(fmt::format("no frame for {} ms; restarting the stream", options_.stall_ms));
       } else if (imu_silent && !restart_) {
         ++counters_.imu_silences;
-        set_error(fmt::format("no IMU report for {} ms; restarting the stream", options_.stall_ms));
+        set_error(fmt::format("no IMU report for {} ms; restarting the stream",
+                              imu_silence_ns() / 1'000'000));
       }
       ++counters_.stream_restarts;
       stop_streaming();
@@ -459,9 +471,10 @@ class IndemindSource final : public FrameSource {
         fits = false;
         break;
       case CounterExtender::Step::kGap:
-        // A counter that runs ahead of the host clock is not frames lost: taking it would drop
-        // the frames after it as backward and bend the clock map.
-        fits = !ahead_of_host(frame_device_ns(step.extended), now);
+        // Frames lost inside the module or on the bus leave as many periods between arrivals as
+        // the counter steps; a corrupt counter a few counts high does not: taking it would stamp
+        // the frame late, drop the frames after it as backward and bend the clock map.
+        fits = arrived_as_counted(step.extended, first_ns);
         break;
       case CounterExtender::Step::kFirst:
       case CounterExtender::Step::kNext:
@@ -488,6 +501,7 @@ class IndemindSource final : public FrameSource {
     }
     held_.reset();
     extender_.accept(taken);
+    last_taken_first_ns_ = first_ns;
     if (taken.step == CounterExtender::Step::kFirst) {
       // Each time line places its first value up to 2^17 above the last: counted from zero,
       // device times would overflow after some 10^5 restarts. The margin keeps IMU reports of
@@ -532,6 +546,16 @@ class IndemindSource final : public FrameSource {
   std::int64_t frames_ns(std::int64_t n) const { return n * 1'000'000'000 / mode_.fps; }
   std::int64_t frame_device_ns(std::uint64_t extended) const {
     return frames_ns(static_cast<std::int64_t>(extended - origin_));
+  }
+
+  // Whether a frame at `extended` arrived (its first payload at `first_ns`) as many frame periods
+  // after the last frame taken as the counter stepped, within half a period. The clock map's skew
+  // scales the nominal period, which over a long gap may be off by more than that.
+  bool arrived_as_counted(std::uint64_t extended, std::int64_t first_ns) const {
+    const std::int64_t counted = clock_.to_host(frame_device_ns(extended)) -
+                                 clock_.to_host(frame_device_ns(extender_.last()));
+    const std::int64_t miss = first_ns - last_taken_first_ns_ - counted;
+    return 2 * miss < frames_ns(1) && -2 * miss < frames_ns(1);
   }
 
   // How many counts `counter` is past the held frame if it agrees with it (a few counts on, and
@@ -584,8 +608,11 @@ class IndemindSource final : public FrameSource {
     }
     last_report_ = *report;
     have_last_report_ = true;
-    // Samples before the first frame have no place on the frame counter's time line yet.
-    if (!extender_.started()) return;
+    if (!extender_.started()) {
+      // Samples before the first frame have no place on the frame counter's time line yet.
+      ++counters_.imu_before_first_frame;
+      return;
+    }
     const std::uint64_t placed = extender_.place(report->frame_counter);
     auto device_ns_of = [&](std::uint32_t ticks) {
       return frame_device_ns(placed) +
@@ -705,6 +732,8 @@ class IndemindSource final : public FrameSource {
   ImuReport last_report_;
   bool have_last_report_ = false;
   std::int64_t last_imu_device_ns_ = -1, last_frame_ns_ = 0;
+  // The first payload's arrival of the last frame taken: a counter gap must agree with it.
+  std::int64_t last_taken_first_ns_ = 0;
   // The last IMU sample taken (for the tick race) and the last report of any kind (for silence).
   std::int64_t last_imu_host_ns_ = 0, last_imu_report_ns_ = 0;
   std::uint64_t last_imu_placed_ = 0;

@@ -72,6 +72,11 @@ ModuleCalibration ModuleControl::read_calibration() {
 void ModuleControl::configure_imu(int rate_hz, const ImuRanges& ranges) {
   if (rate_hz <= 0 || 1000 % rate_hz != 0)
     throw Error(fmt::format("indemind: IMU rate {} Hz does not divide 1000 Hz", rate_hz));
+  // A divider above 255 would wrap in the register and set another rate.
+  if (rate_hz < kMinImuHz)
+    throw Error(
+        fmt::format("indemind: IMU rate {} Hz is below the slowest the module runs at ({} Hz)",
+                    rate_hz, kMinImuHz));
   const std::pair<std::uint8_t, std::uint8_t> writes[] = {
       {0x19, static_cast<std::uint8_t>(1000 / rate_hz - 1)},       // SMPLRT_DIV
       {0x1B, static_cast<std::uint8_t>(ranges.gyro_index << 3)},   // GYRO_CONFIG

@@ -23,7 +23,7 @@ class ModuleControl {
   std::vector<std::uint8_t> read_flash(std::uint32_t address, std::size_t length);
   ModuleCalibration read_calibration();
 
-  // Sample rate (must divide 1000) and full-scale ranges of the ICM-20602.
+  // Sample rate (must divide 1000, at least kMinImuHz) and full-scale ranges of the ICM-20602.
   void configure_imu(int rate_hz, const ImuRanges& ranges);
 
   // Probe, check what the module offers, commit. Returns the committed control.

@@ -5,6 +5,7 @@
 #include "dco/core/error.hpp"
 #include "dco/drivers/indemind_source.hpp"
 #include "dco/drivers/usb_capture.hpp"
+#include "dco/indemind/imu_report.hpp"
 #include "dco/indemind/stream_control.hpp"
 #include "src/sources.hpp"
 
@@ -17,9 +18,11 @@ std::unique_ptr<FrameSource> open_indemind(SourceUri& uri) {
   o.height = uri.integer("height", 0, 0, 800);
   o.fps = uri.integer("fps", 0, 0, 200);
   o.imu_hz = uri.integer("imu_hz", 1000, 0, 1000);
-  if (o.imu_hz > 0 && 1000 % o.imu_hz != 0)
-    throw Error(
-        fmt::format("source '{}': imu_hz must divide 1000 (100, 200, 250, 500, 1000)", uri.text()));
+  if (o.imu_hz > 0 && (1000 % o.imu_hz != 0 || o.imu_hz < indemind::kMinImuHz))
+    throw Error(fmt::format(
+        "source '{}': imu_hz must divide 1000 and be at least {} (4, 5, 8, 10, ..., 500, 1000), or "
+        "0 for no IMU",
+        uri.text(), indemind::kMinImuHz));
   o.transfers = uri.integer("transfers", 8, 2, 64);
   o.stall_ms = uri.integer("stall_ms", 1000, 100, 60000);
   const std::optional<std::string> record = uri.value("record");
@@ -31,7 +34,9 @@ std::unique_ptr<FrameSource> open_indemind(SourceUri& uri) {
     // Modes the module never offers are refused before touching USB; the link speed is checked
     // once the module is found.
     std::string why;
-    if (!indemind::find_stream_mode(o.width ? o.width : 640, o.height ? o.height : 400,
+    // A width or height alone names its mode's size.
+    const bool no_size = o.width == 0 && o.height == 0;
+    if (!indemind::find_stream_mode(no_size ? 640 : o.width, no_size ? 400 : o.height,
                                     o.fps ? o.fps : 50, 0, why))
       throw Error(fmt::format("source '{}': {}", uri.text(), why));
   }

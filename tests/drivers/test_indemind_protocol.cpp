@@ -285,5 +285,22 @@ TEST(StreamControl, KnowsTheModesAndTheUsb2Limit) {
   EXPECT_FALSE(decode_stream_control(std::span(bytes).first(25)));
 }
 
+TEST(StreamControl, AWidthOrHeightAloneNamesTheSize) {
+  std::string why;
+  auto m = find_stream_mode(1280, 0, 50, 5000, why);
+  ASSERT_TRUE(m) << why;
+  EXPECT_EQ(m->height, 800);
+  m = find_stream_mode(0, 400, 200, 5000, why);
+  ASSERT_TRUE(m) << why;
+  EXPECT_EQ(m->width, 640);
+  EXPECT_FALSE(find_stream_mode(1000, 0, 50, 5000, why));
+  EXPECT_EQ(why.rfind("no mode 1000 wide (modes: 1280x800", 0), 0u) << why;
+  EXPECT_FALSE(find_stream_mode(0, 480, 50, 5000, why));
+  EXPECT_EQ(why.rfind("no mode 480 high", 0), 0u) << why;
+  // The size is found before the rate and the link are checked.
+  EXPECT_FALSE(find_stream_mode(0, 800, 200, 5000, why));
+  EXPECT_EQ(why.rfind("1280x800 does not run at 200 fps", 0), 0u) << why;
+}
+
 }  // namespace
 }  // namespace dco::indemind

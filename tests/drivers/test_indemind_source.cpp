@@ -233,6 +233,63 @@ TEST(IndemindSource, OneWrongCounterCostsOneFrame) {
   }
 }
 
+// A corrupt counter a few counts high, less than the host clock check's lead ahead (a flipped
+// low bit), arrived one period after the frame before it: it is held like any wrong counter, not
+// taken as frames lost, and the frames after it keep their counters and stamps.
+TEST(IndemindSource, ACounterAFewCountsHighIsNotTakenForLostFrames) {
+  const std::pair<int, int> cases[] = {{50, 1}, {50, 2}, {200, 8}};
+  for (const auto& [fps, off] : cases) {
+    SCOPED_TRACE(std::to_string(fps) + " fps, +" + std::to_string(off));
+    IndemindOptions io;
+    io.width = 640;
+    io.height = 400;
+    io.fps = fps;
+    Rig rig({}, io);
+    rig.source->start(rig.sink);
+    ASSERT_TRUE(rig.wait_frames(300));
+    ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kCorruptCounter, off));
+    ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 300, 10));
+    rig.source->stop();
+    const auto rec = rig.sim->record();
+    const auto n = counters_of(*rig.source);
+    EXPECT_EQ(n.at("implausible_counters"), 1u);
+    EXPECT_EQ(n.at("duplicate_frames"), 0u);
+    EXPECT_EQ(n.at("backward_frames"), 0u);
+    EXPECT_EQ(n.at("counter_restarts"), 0u);
+    EXPECT_EQ(n.at("frames"), rec.frames_intact);
+    EXPECT_EQ(n.at("lost_frames"), rec.expected_lost);
+    EXPECT_EQ(rig.sink.non_increasing, 0);
+    expect_on_frame_starts(rig, 300, 1'000'000.0);
+  }
+}
+
+// Frames the module captured and never sent: the next one arrives as many periods later as its
+// counter steps, so the gap counts as lost frames and the time line carries on.
+TEST(IndemindSource, FramesLostInTheModuleAreCountedAndKeepTheTimeLine) {
+  for (const int fps : {50, 200}) {
+    SCOPED_TRACE(fps);
+    IndemindOptions io;
+    io.width = 640;
+    io.height = 400;
+    io.fps = fps;
+    Rig rig({}, io);
+    rig.source->start(rig.sink);
+    ASSERT_TRUE(rig.wait_frames(300));
+    ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kSkipCounter, 3));
+    ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 300, 10));
+    rig.source->stop();
+    const auto rec = rig.sim->record();
+    const auto n = counters_of(*rig.source);
+    EXPECT_EQ(rec.expected_lost, 3u);
+    EXPECT_EQ(n.at("lost_frames"), 3u);
+    EXPECT_EQ(n.at("implausible_counters"), 0u);
+    EXPECT_EQ(n.at("counter_restarts"), 0u);
+    EXPECT_EQ(n.at("frames"), rec.frames_intact);
+    EXPECT_EQ(rig.sink.non_increasing, 0);
+    expect_on_frame_starts(rig, 300, 1'000'000.0);
+  }
+}
+
 // The first frame after the start carries a stale counter (0), the module's own run starts at
 // 12347: the stale frame must not become the time line every later frame is judged against.
 TEST(IndemindSource, AStaleFirstCounterIsLeftAfterTwoFrames) {
@@ -363,6 +420,90 @@ TEST(IndemindSource, ACounterThatStoodStillStartsTheClockMapAgain) {
   for (std::size_t i = t.size() - 100; i < t.size(); ++i)
     EXPECT_NEAR(static_cast<double>(t[i] - rig.sim->nearest_frame_start_ns(t[i])), 0.0, 1'000'000.0)
         << i;
+}
+
+// Each width has one height and each height one width: one of them names the mode.
+TEST(IndemindSource, AWidthOrHeightAloneTakesTheOtherFromItsMode) {
+  IndemindOptions wide;
+  wide.width = 1280;
+  Rig by_width({}, wide);
+  EXPECT_EQ(by_width.source->info().height, 800);
+  EXPECT_EQ(by_width.source->info().fps, 50);
+  IndemindOptions high;
+  high.height = 400;
+  high.fps = 200;
+  Rig by_height({}, high);
+  EXPECT_EQ(by_height.source->info().width, 640);
+  EXPECT_EQ(by_height.source->info().fps, 200);
+}
+
+// SMPLRT_DIV = 1000 / rate - 1 is 8 bits: at 2 Hz (499) it would wrap to 243, about 4 Hz.
+TEST(IndemindSource, AnImuRateTheDividerCannotHoldIsRefused) {
+  IndemindOptions io;
+  io.imu_hz = 2;
+  Rig rig({}, io);
+  rig.source->start(rig.sink);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (rig.source->status().error.empty() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  rig.source->stop();
+  EXPECT_NE(rig.source->status().error.find("IMU rate 2 Hz is below"), std::string::npos)
+      << rig.source->status().error;
+  EXPECT_EQ(rig.sim->record().imu_registers.count(0x19), 0u);
+  // The slowest rate that fits.
+  io.imu_hz = 4;
+  Rig slowest({}, io);
+  slowest.source->start(slowest.sink);
+  ASSERT_TRUE(slowest.wait_frames(5));
+  slowest.source->stop();
+  EXPECT_EQ(slowest.sim->record().imu_registers.at(0x19), 249);
+}
+
+// At 5 Hz reports come 200 ms apart, longer than stall_ms: that is the rate, not a silence. A
+// report missing for three periods still is one.
+TEST(IndemindSource, ASlowImuIsSilentOnlyAfterThreePeriods) {
+  IndemindOptions io;
+  io.imu_hz = 5;
+  io.stall_ms = 100;
+  Rig rig({}, io);
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(200));  // 4 s at 50 fps
+  auto n = counters_of(*rig.source);
+  EXPECT_EQ(n.at("stream_restarts"), 0u);
+  EXPECT_EQ(n.at("imu_silences"), 0u);
+  EXPECT_GE(n.at("imu_samples"), 15u);
+  ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kImuSilence, 1000));
+  ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 100));
+  rig.source->stop();
+  n = counters_of(*rig.source);
+  EXPECT_EQ(n.at("imu_silences"), 1u);
+  EXPECT_EQ(n.at("stream_restarts"), 1u);
+}
+
+// Reports that come before the first frame of each start cannot be placed; they are counted, so
+// every report the module sent is in one counter.
+TEST(IndemindSource, ImuReportsBeforeTheFirstFrameAreCounted) {
+  IndemindOptions io;
+  io.fps = 25;
+  io.stall_ms = 300;
+  Rig rig({}, io);
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(100));
+  const std::uint64_t first = counters_of(*rig.source).at("imu_before_first_frame");
+  EXPECT_GT(first, 0u);
+  ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kStall, 0));
+  ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 100));
+  rig.source->stop();
+  const auto n = counters_of(*rig.source);
+  EXPECT_EQ(n.at("stream_restarts"), 1u);
+  EXPECT_GT(n.at("imu_before_first_frame"), first);
+  const std::uint64_t counted = n.at("imu_samples") + n.at("imu_before_first_frame") +
+                                n.at("imu_bad_reports") + n.at("imu_duplicates") +
+                                n.at("imu_out_of_order") + n.at("imu_implausible");
+  // Reports still in flight when a stream stopped never arrive: at most the 4 transfers each.
+  const std::uint64_t sent = rig.sim->record().imu_reports;
+  EXPECT_LE(counted, sent);
+  EXPECT_LE(sent - counted, 8u);
 }
 
 TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {

@@ -61,5 +61,25 @@ TEST(OpenSource, NamesTheProblemAndNeverFallsBack) {
   EXPECT_NE(error_of("replay:///nonexistent/dir").find("no such directory"), std::string::npos);
 }
 
+// Checked before any USB: the URI alone says what is wrong with it.
+TEST(OpenSource, IndemindSizeAndImuRateAreCheckedFromTheUri) {
+  auto no_module = [](const std::string& e) {
+    return e.find("no INDEMIND module") != std::string::npos ||
+           e.find("USB unavailable") != std::string::npos;
+  };
+  // A width or height alone takes the other from its mode.
+  EXPECT_TRUE(no_module(error_of("indemind://?width=1280"))) << error_of("indemind://?width=1280");
+  EXPECT_TRUE(no_module(error_of("indemind://?height=800&fps=100")))
+      << error_of("indemind://?height=800&fps=100");
+  EXPECT_NE(error_of("indemind://?width=1000").find("no mode 1000 wide"), std::string::npos)
+      << error_of("indemind://?width=1000");
+  // The IMU's rate divider holds 255 at most: 4 Hz is the slowest rate.
+  for (const char* uri : {"indemind://?imu_hz=1", "indemind://?imu_hz=2"})
+    EXPECT_NE(error_of(uri).find("imu_hz must divide 1000 and be at least 4"), std::string::npos)
+        << error_of(uri);
+  EXPECT_TRUE(no_module(error_of("indemind://?imu_hz=4"))) << error_of("indemind://?imu_hz=4");
+  EXPECT_TRUE(no_module(error_of("indemind://?imu_hz=0"))) << error_of("indemind://?imu_hz=0");
+}
+
 }  // namespace
 }  // namespace dco::drivers

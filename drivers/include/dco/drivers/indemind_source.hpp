@@ -11,11 +11,12 @@
 namespace dco::drivers {
 
 struct IndemindOptions {
-  std::string module_id;               // the flash ModuleInfo id; empty: the one module attached
-  int width = 0, height = 0, fps = 0;  // per eye; 0: 640x400 at 50 fps (25 on USB 2)
-  int imu_hz = 1000;                   // 0: no IMU stream; else divides 1000
-  int transfers = 8;                   // bulk transfers in flight
-  int stall_ms = 1000;                 // no frame for this long: restart the stream
+  std::string module_id;  // the flash ModuleInfo id; empty: the one module attached
+  // Per eye; 0: 640x400 at 50 fps (25 on USB 2), a width or height alone: its mode's size.
+  int width = 0, height = 0, fps = 0;
+  int imu_hz = 1000;    // 0: no IMU stream; else divides 1000, at least 4
+  int transfers = 8;    // bulk transfers in flight
+  int stall_ms = 1000;  // no frame for this long: restart the stream
   // Wait for the consumer instead of replacing a frame it has not taken (replays, where nothing
   // is lost by waiting and every recorded frame should come out).
   bool lossless = false;

@@ -19,6 +19,15 @@ std::string mode_list() {
   return "1280x800 at 100/50/25 fps, 640x400 at 200/100/50/25 fps";
 }
 
+// Each width has one height and each height one width, so either alone names a size.
+constexpr bool sizes_are_unique() {
+  for (const ModeEntry& a : kModes)
+    for (const ModeEntry& b : kModes)
+      if (&a != &b && (a.width == b.width || a.height == b.height)) return false;
+  return true;
+}
+static_assert(sizes_are_unique());
+
 }  // namespace
 
 std::string StreamMode::name() const {
@@ -27,6 +36,19 @@ std::string StreamMode::name() const {
 
 std::optional<StreamMode> find_stream_mode(int width, int height, int fps, int usb_speed_mbps,
                                            std::string& why) {
+  if (width == 0 || height == 0) {
+    const ModeEntry* sized = nullptr;
+    for (const ModeEntry& e : kModes)
+      if (e.width == width || e.height == height) sized = &e;
+    if (!sized) {
+      why = "no mode " +
+            (width ? std::to_string(width) + " wide" : std::to_string(height) + " high") +
+            " (modes: " + mode_list() + ")";
+      return std::nullopt;
+    }
+    width = sized->width;
+    height = sized->height;
+  }
   for (const ModeEntry& e : kModes) {
     if (e.width != width || e.height != height) continue;
     for (int f : e.fps) {

@@ -12,6 +12,9 @@ namespace dco::indemind {
 inline constexpr std::size_t kImuReportBytes = 32;
 // The sub-frame tick counter runs at 160 MHz.
 inline constexpr double kImuTicksPerSecond = 160e6;
+// The ICM-20602 samples at 1 kHz divided by SMPLRT_DIV + 1, an 8-bit register: its rates divide
+// 1000 and are at least 1000 / 256 Hz.
+inline constexpr int kMinImuHz = 4;
 
 struct ImuReport {
   std::uint16_t frame_counter = 0;  // the camera frame counter when the sample was taken

@@ -21,7 +21,8 @@ struct StreamMode {
 };
 
 // The module's modes: 1280×800 at 100/50/25 and 640×400 at 200/100/50/25 on USB 3; only 640×400
-// at 25 on USB 2. nullopt with `why` filled when the combination is not offered.
+// at 25 on USB 2. A width or height of 0 is the one of the mode with the other (each size has
+// one). nullopt with `why` filled when the combination is not offered.
 std::optional<StreamMode> find_stream_mode(int width, int height, int fps, int usb_speed_mbps,
                                            std::string& why);
 // The mode used when none is asked for: 640×400 at 50 on USB 3, at 25 on USB 2.
