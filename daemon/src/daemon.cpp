@@ -640,14 +640,18 @@ int Daemon::run() {
       break;
     }
     signalfd_siginfo info{};
+    // The kernel hands pending signals over lowest number first, SIGHUP before SIGTERM: a stop
+    // that came with a reload is not delayed by the reload's pipeline restart.
+    bool reload_asked = false;
     while (read(signal_fd, &info, sizeof info) == static_cast<ssize_t>(sizeof info)) {
       if (info.ssi_signo == SIGHUP) {
-        reload();
+        reload_asked = true;
       } else {
         log_.info(fmt::format("stopping on {}", info.ssi_signo == SIGTERM ? "SIGTERM" : "SIGINT"));
         running = false;
       }
     }
+    if (reload_asked && running) reload();
     std::uint64_t events = 0;
     [[maybe_unused]] const ssize_t n = read(event_fd_, &events, sizeof events);
     if (failed_) {

@@ -263,6 +263,25 @@ TEST(Dcod, RawRecordingTotalsCountThePairsTooLargeToSend) {
       << dcod.log();
 }
 
+// A reload asked for together with a stop is not carried out: the stop comes first.
+TEST(Dcod, ASighupThatCameWithASigtermDoesNotReload) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  const auto config = dir.write("dcod.toml", "[densify]\nlambda_s = 1.2\n");
+  DcodProcess dcod(configured(dir, config, notify));
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  dir.write("dcod.toml", "[densify]\nlambda_s = 2\n");
+  // Both pending at once when it runs again, as when a reload and a stop come close together.
+  dcod.signal(SIGSTOP);
+  std::this_thread::sleep_for(100ms);
+  dcod.signal(SIGHUP);
+  dcod.signal(SIGTERM);
+  dcod.signal(SIGCONT);
+  EXPECT_EQ(dcod.wait(5s), 0) << dcod.log();
+  EXPECT_NE(dcod.log().find("stopping on SIGTERM"), std::string::npos) << dcod.log();
+  EXPECT_EQ(dcod.log().find("restarted the pipeline"), std::string::npos) << dcod.log();
+}
+
 TEST(Dcod, SighupReloadsWhatItCanAndNamesTheRest) {
   TempDir dir;
   NotifySocket notify(dir / "notify");
