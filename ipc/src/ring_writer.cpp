@@ -48,6 +48,10 @@ std::uint64_t random_session_id() {
   throw Error(fmt::format("{}: {}: {}", path.string(), what, std::strerror(errno)));
 }
 
+std::filesystem::path directory_of(const std::filesystem::path& file) {
+  return file.parent_path().empty() ? "." : file.parent_path();
+}
+
 // Held while a writer creates its temporary ring, moves a ring into place or removes one: the
 // check that the ring at the path is still a writer's own and its removal are then one step for
 // every other writer in the directory. Without a readable directory there is nothing to lock and
@@ -55,8 +59,7 @@ std::uint64_t random_session_id() {
 class DirectoryLock {
  public:
   explicit DirectoryLock(const std::filesystem::path& file) {
-    const std::filesystem::path dir = file.parent_path().empty() ? "." : file.parent_path();
-    fd_ = open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    fd_ = open(directory_of(file).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (fd_ >= 0)
       while (flock(fd_, LOCK_EX) != 0 && errno == EINTR) {
       }
@@ -76,9 +79,8 @@ class DirectoryLock {
 // holds from creating its temporary ring to locking it.
 void remove_abandoned_rings(const std::filesystem::path& path) {
   const std::string prefix = path.filename().string() + ".tmp.";
-  const std::filesystem::path dir = path.parent_path().empty() ? "." : path.parent_path();
   std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+  for (const auto& entry : std::filesystem::directory_iterator(directory_of(path), ec)) {
     if (!entry.path().filename().string().starts_with(prefix)) continue;
     const int fd = open(entry.path().c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
     if (fd < 0) continue;

@@ -238,14 +238,17 @@ struct dco_client {
     if (status == DCO_OK) retired.release();
     return status;
   }
-  // A frame taken but not copied (the caller's buffer too small, the slot overtaken) was not
-  // returned: wait_next may still return it, unless the ring has since changed session.
+  // The calls that copy a frame pass their copy's status through here with what had been
+  // returned before they took it: a frame taken but not copied (the caller's buffer too small,
+  // the slot overtaken) was not returned, so wait_next may still return it, unless the ring has
+  // since changed session.
   struct Returned {
     std::uint64_t session_id, last_index;
   };
   Returned last_returned() const { return {map.session_id, last_index}; }
-  void not_returned(const Returned& before) {
-    if (map.session_id == before.session_id) last_index = before.last_index;
+  dco_status copied(dco_status status, const Returned& before) {
+    if (status != DCO_OK && map.session_id == before.session_id) last_index = before.last_index;
+    return returned(status);
   }
 
   // Reads slot `slot`'s metadata under its seqlock into a view (pixels are left in place).
@@ -585,8 +588,7 @@ dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst,
     status = dco_client_copy(client, &view, dst);
     if (status == DCO_E_OVERTAKEN) continue;
     if (status == DCO_OK && info != nullptr) *info = view.info;
-    if (status != DCO_OK) client->not_returned(before);
-    return client->returned(status);
+    return client->copied(status, before);
   }
   return fail(DCO_E_OVERTAKEN, client->expect.path + ": every copy was overtaken (" +
                                    std::to_string(client->max_attempts) + " attempts)");
@@ -615,8 +617,7 @@ dco_status dco_client_read_announced(dco_client* client, uint64_t session_id, ui
   if (status != DCO_OK) return status;
   status = dco_client_copy(client, &view, dst);
   if (status == DCO_OK && info != nullptr) *info = view.info;
-  if (status != DCO_OK) client->not_returned(before);
-  return client->returned(status);
+  return client->copied(status, before);
 } catch (...) {
   return out_of_memory();
 }
