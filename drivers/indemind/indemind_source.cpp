@@ -1,8 +1,10 @@
 #include "dco/drivers/indemind_source.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <ctime>
+#include <exception>
 #include <limits>
 #include <mutex>
 #include <optional>
@@ -187,20 +189,37 @@ class IndemindSource final : public FrameSource {
           "indemind: no INDEMIND module (USB 05a9:f581) found; check the cable and that this "
           "user may access it (udev rule, group dcod)");
     std::vector<std::string> ids;
+    std::vector<std::string> unreadable;
+    std::exception_ptr first_failure;
     for (const UsbDeviceInfo& d : found) {
-      auto device = transport_->open(d);
-      ModuleCalibration m = read_module(*device);
+      std::unique_ptr<UsbDevice> device;
+      ModuleCalibration m;
+      try {
+        device = transport_->open(d);
+        m = read_module(*device);
+      } catch (const std::exception& e) {
+        // One held by another program, or one that just left: the next may be the one asked for.
+        if (!first_failure) first_failure = std::current_exception();
+        unreadable.push_back(e.what());
+        continue;
+      }
       if (!options_.module_id.empty() && m.info.id != options_.module_id) {
         ids.push_back(m.info.id);
+        other_modules_.push_back(bus_address(d));
         continue;
       }
       choose_mode(d.speed_mbps);
       calibration_ = to_stereo_calibration(m, mode_.width, mode_.height);
       module_ = std::move(m);
       usb_speed_ = d.speed_mbps;
+      port_path_ = d.port_path;
       device_ = std::move(device);
       return;
     }
+    if (ids.empty() && unreadable.size() == 1) std::rethrow_exception(first_failure);
+    for (const std::string& why : unreadable) ids.push_back("one unreadable: " + why);
+    if (options_.module_id.empty())
+      throw Error(fmt::format("indemind: no module could be opened ({})", fmt::join(ids, "; ")));
     throw Error(fmt::format("indemind: no module with id '{}' (found: {})", options_.module_id,
                             fmt::join(ids, ", ")));
   }
@@ -229,9 +248,28 @@ class IndemindSource final : public FrameSource {
     mode_ = *m;
   }
 
+  using BusAddress = std::pair<int, int>;
+  static BusAddress bus_address(const UsbDeviceInfo& d) { return {d.bus, d.address}; }
+  bool is_other_module(const UsbDeviceInfo& d) const {
+    return std::find(other_modules_.begin(), other_modules_.end(), bus_address(d)) !=
+           other_modules_.end();
+  }
+
   // The module came back (or another one arrived): take it only if it is the same module.
   void try_reopen() {
-    for (const UsbDeviceInfo& d : transport_->list(kVendorId, kProductId)) {
+    std::vector<UsbDeviceInfo> found = transport_->list(kVendorId, kProductId);
+    // A module once read as another one stays another one until it leaves the bus (a replug
+    // gives a new address): opening it again would take it from whoever uses it, since claiming
+    // detaches its kernel driver.
+    std::erase_if(other_modules_, [&](const BusAddress& a) {
+      return std::none_of(found.begin(), found.end(),
+                          [&](const UsbDeviceInfo& d) { return bus_address(d) == a; });
+    });
+    std::erase_if(found, [&](const UsbDeviceInfo& d) { return is_other_module(d); });
+    // Its own socket first: a module replugged there is found without opening the others.
+    std::stable_partition(found.begin(), found.end(),
+                          [&](const UsbDeviceInfo& d) { return d.port_path == port_path_; });
+    for (const UsbDeviceInfo& d : found) {
       std::unique_ptr<UsbDevice> device;
       ModuleCalibration m;
       try {
@@ -242,6 +280,7 @@ class IndemindSource final : public FrameSource {
         continue;
       }
       if (!(m == module_)) {
+        other_modules_.push_back(bus_address(d));
         set_error(fmt::format("a different module ('{}') was plugged in; waiting for '{}'",
                               m.info.id, module_.info.id));
         continue;
@@ -253,6 +292,7 @@ class IndemindSource final : public FrameSource {
       }
       device_ = std::move(device);
       usb_speed_ = d.speed_mbps;
+      port_path_ = d.port_path;
       // A replugged module counts frames from anywhere: start_streaming() starts a new time line.
       ++counters_.reconnects;
       state_ = SourceStatus::State::kStarting;
@@ -718,6 +758,9 @@ class IndemindSource final : public FrameSource {
   SourceInfo info_;
   StereoCalibration calibration_;
   ModuleCalibration module_;
+  // Where the module was last found, and modules read as others; the event thread's alone.
+  std::string port_path_;
+  std::vector<BusAddress> other_modules_;
   StreamMode mode_;
   ImuRanges ranges_;
   std::unique_ptr<UsbDevice> device_;

@@ -7,6 +7,8 @@
 #include <random>
 #include <thread>
 
+#include <fmt/format.h>
+
 #include "dco/core/error.hpp"
 #include "dco/drivers/indemind_source.hpp"
 #include "indemind_sim.hpp"
@@ -536,6 +538,138 @@ TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {
   // of the clock runs late whenever it is descheduled while the driver moves the clock on.
   EXPECT_EQ(rec.recoveries, 1u);
   EXPECT_LT(rec.worst_recovery_ns, 2'000'000'000);
+}
+
+// A module on the bus that another program holds: claiming its interfaces fails.
+class HeldByAnother final : public UsbDevice {
+ public:
+  explicit HeldByAnother(UsbDeviceInfo info) : info_(std::move(info)) {}
+  const UsbDeviceInfo& info() const override { return info_; }
+  void claim_interface(int number) override {
+    throw UsbError(fmt::format("cannot claim interface {}: busy", number), false);
+  }
+  std::size_t control(std::uint8_t, std::uint8_t, std::uint16_t, std::uint16_t,
+                      std::span<std::uint8_t>, std::chrono::milliseconds) override {
+    throw UsbError("not claimed", false);
+  }
+  void clear_halt(std::uint8_t) override {}
+  void start_in_stream(std::uint8_t, EndpointType, std::size_t, int, TransferCallback) override {
+    throw UsbError("not claimed", false);
+  }
+  void stop_streams() override {}
+  int transfers_in_flight() const override { return 0; }
+
+ private:
+  UsbDeviceInfo info_;
+};
+
+// The simulated module, listed after a second one in socket 1-4: module SIM-0099, or one that
+// another program holds.
+class BusWithTwoModules final : public UsbTransport {
+ public:
+  explicit BusWithTwoModules(bool second_held) : held_(second_held) {
+    indemind::ModuleCalibration c = SimulatedIndemind::sim_calibration();
+    c.info.id = "SIM-0099";
+    SimulatedIndemind::Options o;
+    o.calibration = c;
+    second_ = std::make_unique<SimulatedIndemind>(o);
+  }
+  std::vector<UsbDeviceInfo> list(std::uint16_t vendor, std::uint16_t product) override {
+    std::vector<UsbDeviceInfo> found;
+    for (UsbDeviceInfo d : second_->list(vendor, product)) {
+      d.bus = 1;
+      d.port_path = "1-4";
+      found.push_back(std::move(d));
+    }
+    for (UsbDeviceInfo& d : first_->list(vendor, product)) found.push_back(std::move(d));
+    return found;
+  }
+  std::unique_ptr<UsbDevice> open(const UsbDeviceInfo& device) override {
+    if (device.port_path != "1-4") return first_->open(device);
+    ++second_opens;
+    if (held_) return std::make_unique<HeldByAnother>(device);
+    UsbDeviceInfo own = device;
+    own.bus = 2;
+    own.port_path = "2-1";
+    return second_->open(own);
+  }
+  void watch_hotplug(std::uint16_t vendor, std::uint16_t product,
+                     std::function<void()> on_change) override {
+    first_->watch_hotplug(vendor, product, std::move(on_change));
+  }
+  void handle_events(std::chrono::milliseconds timeout) override { first_->handle_events(timeout); }
+
+  SimulatedIndemind& first() { return *first_; }
+  std::atomic<int> second_opens{0};
+
+ private:
+  bool held_;
+  std::unique_ptr<SimulatedIndemind> first_ = std::make_unique<SimulatedIndemind>();
+  std::unique_ptr<SimulatedIndemind> second_;
+};
+
+TEST(IndemindSource, AnotherModuleIsReadOnceNotAtEveryReopen) {
+  auto owned = std::make_unique<BusWithTwoModules>(false);
+  BusWithTwoModules& bus = *owned;
+  IndemindOptions o;
+  o.module_id = "SIM-0042";
+  o.clock = [s = &bus.first()] { return s->now_ns(); };
+  auto source = open_indemind(std::move(owned), std::move(o), "indemind://SIM-0042");
+  EXPECT_EQ(source->status().serial, "SIM-0042");
+  EXPECT_EQ(bus.second_opens, 1);
+  Collector sink;
+  source->start(sink);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (sink.count() < 5 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_GE(sink.count(), 5);
+  // While the module is away the driver looks for it many times; the other module, read once
+  // already, is not opened again (that would detach its kernel driver from its user).
+  bus.first().set_present(false);
+  while (counters_of(*source).at("disconnects") == 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const std::int64_t away = bus.first().now_ns();
+  while (bus.first().now_ns() - away < 2'000'000'000 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  bus.first().set_present(true);
+  while (counters_of(*source).at("reconnects") == 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  source->stop();
+  EXPECT_EQ(counters_of(*source).at("reconnects"), 1u);
+  EXPECT_EQ(bus.second_opens, 1);
+}
+
+TEST(IndemindSource, AModuleAnotherProgramHoldsIsPassedOver) {
+  auto owned = std::make_unique<BusWithTwoModules>(true);
+  BusWithTwoModules& bus = *owned;
+  IndemindOptions o;
+  o.clock = [s = &bus.first()] { return s->now_ns(); };
+  auto source = open_indemind(std::move(owned), std::move(o), "indemind://");
+  EXPECT_EQ(source->status().serial, "SIM-0042");
+  EXPECT_EQ(bus.second_opens, 1);
+}
+
+TEST(IndemindSource, ModulesThatCannotBeOpenedAreNamedWhenNoneFits) {
+  auto alone = std::make_unique<BusWithTwoModules>(true);
+  alone->first().set_present(false);
+  try {
+    open_indemind(std::move(alone), {}, "indemind://");
+    FAIL() << "opened a module another program holds";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot claim interface 0: busy"), std::string::npos)
+        << e.what();
+  }
+  IndemindOptions other;
+  other.module_id = "M-9";
+  try {
+    open_indemind(std::make_unique<BusWithTwoModules>(true), std::move(other), "indemind://");
+    FAIL() << "opened the wrong module";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no module with id 'M-9' (found: SIM-0042, one "
+                                         "unreadable: cannot claim interface 0: busy)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // A sink that fails (the pipeline behind it threw) ends the delivery with on_error on the

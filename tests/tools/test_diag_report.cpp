@@ -229,6 +229,24 @@ TEST(LogDigest, KeyNumbersOfAKnownLog) {
   EXPECT_NE(json.find("\"damage\": null"), std::string::npos) << json;
 }
 
+// A device that flaps all day must not fill memory: the list stops, the counts go on.
+TEST(LogDigest, StatusChangesPastTheCapAreCountedNotKept) {
+  const KnownLog known;
+  std::istringstream in(known.bytes());
+  DigestOptions options;
+  options.max_status_changes = 2;
+  const LogDigest d = digest_log(in, "known.log", options);
+  const LogSummary s = summarize(d);
+  ASSERT_EQ(d.status_changes.size(), 2u);
+  EXPECT_EQ(d.status_changes[1].status.state, +::dco::device_status_t::STATE_STREAMING);
+  EXPECT_EQ(d.status_changes_dropped, 3);
+  EXPECT_EQ(s.state_changes, 4);
+  EXPECT_EQ(s.disconnects, 1);
+  EXPECT_EQ(s.device_errors, 1);
+  EXPECT_EQ(d.last_status.error, "usb: babble");
+  EXPECT_NE(html_report(d, s).find("3 later changes are not listed"), std::string::npos);
+}
+
 TEST(LogSummary, TheRightCameraNamesEachChannelOfAColourCamera) {
   ::dco::pipeline_stats_t m{};
   EXPECT_EQ(right_camera_text(m), "none reported");  // a channel count dcod never sends

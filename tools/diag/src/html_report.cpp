@@ -128,6 +128,9 @@ std::string device_section(const LogDigest& d) {
              h(s.serial), h(s.firmware), std::to_string(s.usb_speed_mbps), h(s.error)});
   }
   out += "</table>\n";
+  if (d.status_changes_dropped > 0)
+    out += fmt::format("<p>{} later changes are not listed; the counts include them.</p>\n",
+                       d.status_changes_dropped);
   const ::dco::device_status_t& last = d.last_status;
   const auto n = std::min({static_cast<std::size_t>(std::max(0, last.counter_count)),
                            last.counter_names.size(), last.counter_values.size()});

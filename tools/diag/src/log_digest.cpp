@@ -129,9 +129,21 @@ class Digester {
 
   void add_status(double t) {
     ++d_.status_messages;
-    if (!d_.has_status || status_.state != d_.last_status.state ||
-        status_.error != d_.last_status.error || status_.device != d_.last_status.device)
-      d_.status_changes.push_back({t, status_});
+    const ::dco::device_status_t* before = d_.has_status ? &d_.last_status : nullptr;
+    if (!before || status_.state != before->state || status_.error != before->error ||
+        status_.device != before->device) {
+      const bool new_state = !before || before->state != status_.state;
+      if (before && new_state) ++d_.state_changes;
+      if (new_state && status_.state == ::dco::device_status_t::STATE_DISCONNECTED)
+        ++d_.disconnects;
+      if ((new_state && status_.state == ::dco::device_status_t::STATE_ERROR) ||
+          (!status_.error.empty() && (!before || before->error != status_.error)))
+        ++d_.device_errors;
+      if (d_.status_changes.size() < options_.max_status_changes)
+        d_.status_changes.push_back({t, status_});
+      else
+        ++d_.status_changes_dropped;
+    }
     d_.last_status = status_;
     d_.has_status = true;
   }

@@ -91,18 +91,9 @@ LogSummary summarize(const LogDigest& d) {
     }
   }
 
-  for (std::size_t i = 0; i < d.status_changes.size(); ++i) {
-    const ::dco::device_status_t& now = d.status_changes[i].status;
-    const ::dco::device_status_t* before = i > 0 ? &d.status_changes[i - 1].status : nullptr;
-    if (before && before->state != now.state) ++s.state_changes;
-    if (now.state == ::dco::device_status_t::STATE_DISCONNECTED &&
-        (!before || before->state != now.state))
-      ++s.disconnects;
-    if ((now.state == ::dco::device_status_t::STATE_ERROR &&
-         (!before || before->state != now.state)) ||
-        (!now.error.empty() && (!before || before->error != now.error)))
-      ++s.device_errors;
-  }
+  s.state_changes = d.state_changes;
+  s.disconnects = d.disconnects;
+  s.device_errors = d.device_errors;
   s.log_errors = d.log_by_level[3];
   s.log_warnings = d.log_by_level[2];
   for (const auto& [name, tally] : d.channels) s.undecodable += tally.undecodable;

@@ -2,8 +2,9 @@
 
 // What a dcod LCM log holds, gathered in one streaming pass: every published frame's latency,
 // the runtime's statistics, the device's state changes, the daemon's log, a sample of the depth
-// previews and the raw recording. Memory grows with the number of frames by 8 bytes a frame (a
-// day at 30 fps: 21 MB); previews and log lines are capped.
+// previews and the raw recording. Memory grows by 8 bytes a frame (a day at 30 fps: 21 MB) and
+// about 220 bytes a DCO_STATS (a day at the default 1 Hz: 19 MB); previews, log lines and status
+// changes are capped.
 
 #include <array>
 #include <cstdint>
@@ -78,8 +79,9 @@ struct ChannelTally {
 };
 
 struct DigestOptions {
-  std::size_t max_previews = 48;     // kept evenly over the log
-  std::size_t max_log_lines = 5000;  // DCO_LOG entries kept; the rest are only counted
+  std::size_t max_previews = 48;          // kept evenly over the log
+  std::size_t max_log_lines = 5000;       // DCO_LOG entries kept; the rest are only counted
+  std::size_t max_status_changes = 1000;  // the first ones kept; the rest are only counted
 };
 
 struct LogDigest {
@@ -96,7 +98,11 @@ struct LogDigest {
   std::vector<Session> sessions;   // in order of appearance
   std::vector<StatsPoint> stats;   // every DCO_STATS
   long status_messages = 0;
-  std::vector<StatusChange> status_changes;
+  std::vector<StatusChange> status_changes;  // the first max_status_changes
+  long status_changes_dropped = 0;
+  // Over every change, kept or not: changes of state, into DISCONNECTED, and faults (into ERROR
+  // or a new error text).
+  long state_changes = 0, disconnects = 0, device_errors = 0;
   bool has_status = false;
   ::dco::device_status_t last_status;
   std::vector<LogLine> log;
