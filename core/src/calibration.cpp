@@ -17,6 +17,7 @@
 
 #include "calibration_internal.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/file_replace.hpp"
 #include "dco/core/image.hpp"
 
 namespace dco {
@@ -251,7 +252,17 @@ void StereoCalibration::validate() const {
     check_rotation(src, "left rectifying rotation", rect_rotation_left);
     check_rotation(src, "right rectifying rotation", rect_rotation_right);
   }
-  if (is_rectified || has_rectification) check_geometry(src, rectified, size_unknown);
+  if (is_rectified || has_rectification) {
+    check_geometry(src, rectified, size_unknown);
+    // Rectification turns the cameras, it does not move them: two baselines in one file that
+    // disagree leave unknown which the depth should use. 5 % holds rounding and KITTI's
+    // rectified baseline, 0.7 % off its translations.
+    constexpr double kBaselineTolerance = 0.05;
+    if (std::abs(rectified.baseline_m - baseline) > kBaselineTolerance * baseline)
+      fail_at(src, 0,
+              fmt::format("rectified baseline {} m differs from the translation's length {} m",
+                          rectified.baseline_m, baseline));
+  }
   if (is_rectified && (rectified.width != left.width || rectified.height != left.height))
     fail_at(src, 0,
             fmt::format("rectified size {} differs from the camera size {}",
@@ -298,10 +309,13 @@ StereoCalibration calibration_from_toml(std::string_view text, const std::string
 
 void save_calibration(const std::filesystem::path& path, const StereoCalibration& calib) {
   const std::string out = detail::format_toml(calib);
-  std::ofstream f(path, std::ios::binary);
-  if (!f) throw Error(fmt::format("{}: cannot create calibration file", path.string()));
-  f << out;
-  if (!f.flush()) throw Error(fmt::format("{}: write failed", path.string()));
+  replace_file(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream f(tmp, std::ios::binary);
+    if (!f) throw Error(fmt::format("{}: cannot create calibration file", path.string()));
+    f << out;
+    f.close();
+    if (!f) throw Error(fmt::format("{}: write failed", path.string()));
+  });
 }
 
 }  // namespace dco

@@ -17,6 +17,7 @@
 #include <toml++/toml.h>
 
 #include "dco/core/error.hpp"
+#include "dco/core/printable.hpp"
 #include "dco/core/utf8.hpp"
 
 namespace dco {
@@ -36,7 +37,7 @@ std::string show(const Value& v) {
       [](const auto& x) -> std::string {
         using X = std::decay_t<decltype(x)>;
         if constexpr (std::is_same_v<X, std::string>)
-          return "\"" + x + "\"";
+          return "\"" + printable(x) + "\"";
         else
           return fmt::format("{}", x);
       },
@@ -78,7 +79,7 @@ std::string problem(const E& e, const Value& v) {
     // TOML files are UTF-8; a --set could bring any bytes, which no file could then hold.
     if (!is_valid_utf8(*s)) return "the string is not valid UTF-8";
     if (!e.choices.empty() && std::find(e.choices.begin(), e.choices.end(), *s) == e.choices.end())
-      return fmt::format("\"{}\" is not one of {}", *s, join(e.choices, ", "));
+      return fmt::format("\"{}\" is not one of {}", printable(*s), join(e.choices, ", "));
   }
   return {};
 }

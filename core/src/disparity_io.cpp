@@ -14,6 +14,7 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/file_replace.hpp"
 #include "dco/core/image_io.hpp"
 
 namespace dco {
@@ -65,13 +66,15 @@ Image<std::uint16_t> read_png16(const std::filesystem::path& path, const char* w
 
 void write_png16(const std::filesystem::path& path, const Image<std::uint16_t>& img) {
   cv::Mat m = as_mat(img.view());
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path.string(), m);
-  } catch (const cv::Exception& e) {
-    throw Error("cannot write " + quoted(path) + ": " + e.err);
-  }
-  if (!ok) throw Error("cannot write " + quoted(path));
+  replace_file(path, [&](const std::filesystem::path& tmp) {
+    bool ok = false;
+    try {
+      ok = cv::imwrite(tmp.string(), m);
+    } catch (const cv::Exception& e) {
+      throw Error("cannot write " + quoted(path) + ": " + e.err);
+    }
+    if (!ok) throw Error("cannot write " + quoted(path));
+  });
 }
 
 // Both 16-bit PNG conventions store round(value * scale) with 0 meaning unknown; values that are
@@ -184,18 +187,20 @@ void write_pfm(const std::filesystem::path& path, ImageView<const float> image) 
   if (image.empty() || (image.channels != 1 && image.channels != 3))
     throw Error("cannot write " + quoted(path) +
                 ": PFM holds 1 or 3 channels of a non-empty image");
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw Error("cannot create " + quoted(path));
-  const float scale = std::endian::native == std::endian::little ? -1.0f : 1.0f;
-  out << (image.channels == 1 ? "Pf" : "PF") << '\n'
-      << image.width << ' ' << image.height << '\n'
-      << scale << '\n';
-  const std::size_t row_floats = static_cast<std::size_t>(image.width) * image.channels;
-  for (int y = image.height - 1; y >= 0; --y)
-    out.write(reinterpret_cast<const char*>(image.row(y)),
-              static_cast<std::streamsize>(row_floats * sizeof(float)));
-  out.close();  // the last bytes reach the file here: a full disk shows only now
-  if (!out) throw Error("write to " + quoted(path) + " failed");
+  replace_file(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw Error("cannot create " + quoted(path));
+    const float scale = std::endian::native == std::endian::little ? -1.0f : 1.0f;
+    out << (image.channels == 1 ? "Pf" : "PF") << '\n'
+        << image.width << ' ' << image.height << '\n'
+        << scale << '\n';
+    const std::size_t row_floats = static_cast<std::size_t>(image.width) * image.channels;
+    for (int y = image.height - 1; y >= 0; --y)
+      out.write(reinterpret_cast<const char*>(image.row(y)),
+                static_cast<std::streamsize>(row_floats * sizeof(float)));
+    out.close();  // the last bytes reach the file here: a full disk shows only now
+    if (!out) throw Error("write to " + quoted(path) + " failed");
+  });
 }
 
 void write_disparity_png16(const std::filesystem::path& path, ImageView<const float> disparity) {

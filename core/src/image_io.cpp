@@ -16,6 +16,7 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/file_replace.hpp"
 
 namespace dco {
 namespace {
@@ -101,13 +102,15 @@ void save_image(const std::filesystem::path& path, ImageView<const std::uint8_t>
   if (image.empty() || (image.channels != 1 && image.channels != 3 && image.channels != 4))
     throw Error("cannot write image " + quoted(path) +
                 ": it must be non-empty with 1, 3 or 4 channels");
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path.string(), as_mat(image));
-  } catch (const cv::Exception& e) {
-    throw Error("cannot write image " + quoted(path) + ": " + e.err);
-  }
-  if (!ok) throw Error("cannot write image " + quoted(path));
+  replace_file(path, [&](const std::filesystem::path& tmp) {
+    bool ok = false;
+    try {
+      ok = cv::imwrite(tmp.string(), as_mat(image));
+    } catch (const cv::Exception& e) {
+      throw Error("cannot write image " + quoted(path) + ": " + e.err);
+    }
+    if (!ok) throw Error("cannot write image " + quoted(path));
+  });
 }
 
 }  // namespace dco

@@ -111,7 +111,7 @@ void prepare_gate(ImageView<const float> gate, int w, CannyScratch& scratch) {
 const float* gate_row(ImageView<const float> gate, int y, int w, int h, CannyScratch& scratch) {
   const float* g = gate.row(px::gate_sample(y, h, gate.height));
   if (gate.width == w) return g;
-  if (2 * gate.width == w)  // gate_sample's column x * (w / 2) / w is x / 2
+  if (2 * gate.width == w)  // gate_sample's column is x / 2
     kernels::repeat_pairs(g, w, scratch.gate_row.data());
   else
     for (int x = 0; x < w; ++x) scratch.gate_row[x] = g[scratch.gate_x[x]];

@@ -12,6 +12,7 @@
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
+#include "dco/kernels/contour_pixel.hpp"
 #include "dco/kernels/densify_kernels.hpp"
 #include "dco/kernels/densify_pixel.hpp"
 #include "dco/kernels/filter_kernels.hpp"
@@ -214,7 +215,7 @@ void Densifier::build_system(const DensifyInputs& in) {
     fuse_column_.resize(static_cast<std::size_t>(w));
     for (int x = 0; x < w; ++x)
       fuse_column_[static_cast<std::size_t>(x)] =
-          std::min(x * in.m_fuse.width / w, in.m_fuse.width - 1);
+          kernels::pixel::gate_sample(x, w, in.m_fuse.width);
   }
   rows_.run(h, [&](int, int begin, int end) {
     if (has_contours)
@@ -227,7 +228,7 @@ void Densifier::build_system(const DensifyInputs& in) {
         std::fill(s, s + w, 0.0f);
         continue;
       }
-      const float* fuse = in.m_fuse.row(std::min(y * in.m_fuse.height / h, in.m_fuse.height - 1));
+      const float* fuse = in.m_fuse.row(kernels::pixel::gate_sample(y, h, in.m_fuse.height));
       const float* intensity = in.m_intensity.row(y);
       if (in.m_fuse.width * 2 == w)
         strength_row_half_width(fuse, intensity, w, s);

@@ -113,13 +113,17 @@ void validate(const StereoParams& p) {
   require(p.tau1 <= 255 && p.tau2 >= 1 && p.tau2 <= p.tau1, "need 1 <= tau2 <= tau1 <= 255");
   require(p.aggregation_passes >= 1 && p.aggregation_passes <= 8,
           "aggregation_passes must be in 1..8");
-  require(p.lr_max_diff >= 0, "lr_max_diff must be >= 0");
+  // The ranges of the config schema: the kernels add to these in 32-bit lanes.
+  require(p.lr_max_diff >= 0 && p.lr_max_diff <= 16, "lr_max_diff must be in 0..16");
   require(p.uniqueness >= 0 && p.uniqueness < 1, "uniqueness must be in [0, 1)");
-  require(p.vote_iterations >= 0 && p.vote_min_count >= 1 && p.vote_tolerance >= 0,
-          "vote_iterations and vote_tolerance must be >= 0 and vote_min_count >= 1");
-  require(p.max_neighbour_jump >= -1, "max_neighbour_jump must be >= -1");
-  require(p.speckle_size >= 0 && p.speckle_range >= 0,
-          "speckle_size and speckle_range must be >= 0");
+  require(p.vote_iterations >= 0 && p.vote_iterations <= 16 && p.vote_min_count >= 1 &&
+              p.vote_min_count <= 100000 && p.vote_tolerance >= 0 && p.vote_tolerance <= 16,
+          "vote_iterations and vote_tolerance must be in 0..16 and vote_min_count in 1..100000");
+  require(p.max_neighbour_jump >= -1 && p.max_neighbour_jump <= 64,
+          "max_neighbour_jump must be in -1..64");
+  require(p.speckle_size >= 0 && p.speckle_size <= 100000 && p.speckle_range >= 0 &&
+              p.speckle_range <= 64,
+          "speckle_size must be in 0..100000 and speckle_range in 0..64");
   require(p.vote_min_ratio >= 0 && p.vote_min_ratio <= 1, "vote_min_ratio must be in [0, 1]");
   require(p.boundary_radius >= 0 && p.boundary_radius <= 15, "boundary_radius must be in 0..15");
   require(p.boundary_ratio > 0 && p.boundary_ratio <= 1, "boundary_ratio must be in (0, 1]");

@@ -427,6 +427,12 @@ TEST(CalibrationErrors, NameTheFileAndLine) {
       {"no_right.toml", kRigToml.substr(0, kRigToml.find("[right]")),
        "no_right.toml: missing section [right]"},
       {"empty.toml", "\n\n", "empty.toml: calibration file is empty"},
+      // A rectified rig whose extrinsics say another baseline: which one the depth needs is
+      // unknown (here 5 m against 0.1 m).
+      {"two_baselines.toml",
+       kRigToml + "\n[rectified]\nwidth = 640\nheight = 480\nf = 500\ncx_left = 320\n"
+                  "cx_right = 320\ncy = 240\nbaseline_m = 5.0\n",
+       "two_baselines.toml: rectified baseline 5 m differs from the translation's length 0.1 m"},
       {"mb_doffs.txt", replaced(test::read_file(kMiddlebury), "doffs=32.778", "doffs=30"),
        "mb_doffs.txt:3: doffs 30 disagrees"},
       {"mb_number.txt", replaced(test::read_file(kMiddlebury), "baseline=193.001", "baseline=19x"),

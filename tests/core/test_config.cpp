@@ -102,6 +102,11 @@ TEST_F(Config, TypeErrors) {
   EXPECT_NE(load_error("[stereo]\nlambda_ad = \n").find("dcod.toml:2:"),
             std::string::npos);  // syntax
   EXPECT_EQ(p.lambda_ad, 10.0);
+  // A NUL in a string would end the message where it stands; control characters show as '?'.
+  EXPECT_EQ(load_error("[stereo]\nmode = \"fast\\u0000junk\"\n"),
+            "dcod.toml:2: stereo.mode: \"fast?junk\" is not one of fast, accurate");
+  EXPECT_EQ(load_error("threads = \"\\u001b[2J\"\n"),
+            "dcod.toml:1: threads: expects an integer, got \"?[2J\"");
 }
 
 TEST_F(Config, RangesAreInclusive) {

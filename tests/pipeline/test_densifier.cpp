@@ -288,6 +288,36 @@ TEST(Densifier, ContourKeepsTwoSurfacesApart) {
   EXPECT_GT(dense.at(edge + 1, h / 2), 20.0f);
 }
 
+// M_fuse at the half internal resolution of an odd width: cell 10 covers image columns 20 and
+// 21, so the smoothness is cut on the edge between them, as for an even width.
+TEST(Densifier, AnOddWidthCutsTheSmoothnessWhereItsCueIs) {
+  for (const int w : {66, 65}) {
+    const int h = 3;
+    Image<float> sparse(w, h), fuse(w / 2, 1), intensity(w, h);
+    sparse.fill(10.0f);
+    intensity.fill(1.0f);
+    fuse.fill(0.0f);
+    fuse.at(10, 0) = 1.0f;
+    DensifyParams p;
+    p.plane_window = 0;
+    p.solve_resolution = "full";
+    Densifier d(p);
+    DensifyInputs in;
+    in.sparse = sparse.cview();
+    in.m_fuse = fuse.cview();
+    in.m_intensity = intensity.cview();
+    in.match_step = 2;
+    Image<float> out;
+    d.compute(in, out);
+    const GridSystem& a = d.last_system();
+    int weakest = 0;
+    for (int x = 1; x < w - 1; ++x)
+      if (a.wx.at(x, 1) < a.wx.at(weakest, 1)) weakest = x;
+    EXPECT_EQ(weakest, 20) << w;
+    EXPECT_LT(a.wx.at(20, 1), 0.01f * a.wx.at(19, 1)) << w;
+  }
+}
+
 TEST(Densifier, HolesBesideAJumpLeanTowardsTheFartherSurface) {
   // A hole between a far surface (10) and a near one (40) on its right, where the left image
   // holds occlusions (too narrow for the near surface's strip): with the background pull the

@@ -5,6 +5,7 @@
 #include <queue>
 #include <random>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -13,6 +14,7 @@
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/image.hpp"
 #include "dco/kernels/canny_kernels.hpp"
+#include "dco/kernels/contour_pixel.hpp"
 #include "dco/pipeline/contour/separable_filters.hpp"
 #include "support/same_bytes.hpp"
 
@@ -150,6 +152,35 @@ TEST(GatedCanny, GateClosedOnTheLeftHalfKeepsOnlyRightHalfEdges) {
   // Right of the gate border (plus one pixel of hysteresis reach) nothing changes.
   for (int y = 0; y < kH; ++y)
     for (int x = kW / 2 + 1; x < kW; ++x) EXPECT_EQ(e.at(x, y), open.at(x, y)) << x << "," << y;
+}
+
+// An odd width has an internal frame of (w - 1) / 2 cells; cell g still covers columns 2g and
+// 2g + 1, as in the matcher's output, and the last column takes the last cell.
+TEST(GatedCanny, AnOddWidthReadsTheGateOfItsOwnColumns) {
+  for (const int w : {66, 65}) {
+    Image<float> magnitude(w, 5);
+    Image<std::uint8_t> direction(w, 5), edges(w, 5);
+    for (int y = 0; y < 5; ++y)
+      for (int x = 0; x < w; ++x) {
+        magnitude.at(x, y) = x % 2 == 0 ? 1.0f : 0.5f;
+        direction.at(x, y) = 0;
+      }
+    Image<float> gate(w / 2, 2);
+    gate.fill(0.0f);
+    for (int y = 0; y < 2; ++y) gate.at(10, y) = 1.0f;  // image columns 20 and 21
+    CannyScratch scratch;
+    gated_canny(magnitude.cview(), direction.cview(), gate.cview(), {0.9f, 0.1f, 0.5f},
+                edges.view(), scratch);
+    std::vector<int> columns;
+    for (int x = 0; x < w; ++x)
+      if (edges.at(x, 2)) columns.push_back(x);
+    EXPECT_EQ(columns, std::vector<int>{20}) << w;
+  }
+  EXPECT_EQ(kernels::pixel::gate_sample(64, 65, 32), 31);
+  EXPECT_EQ(kernels::pixel::gate_sample(63, 65, 32), 31);
+  EXPECT_EQ(kernels::pixel::gate_sample(21, 65, 32), 10);
+  EXPECT_EQ(kernels::pixel::gate_sample(7, 9, 9), 7);
+  EXPECT_EQ(kernels::pixel::gate_sample(9, 10, 4), 3);  // no whole ratio: proportional
 }
 
 TEST(GatedCanny, GateBelowTDepthOnlyRejects) {

@@ -1,6 +1,7 @@
 #include "dco/pipeline/stereo/stereo_params.hpp"
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -81,6 +82,17 @@ TEST(StereoParams, ValidateRejectsEachInvalidField) {
       {"passes 0", [](StereoParams& p) { p.aggregation_passes = 0; }, "aggregation_passes"},
       {"passes 9", [](StereoParams& p) { p.aggregation_passes = 9; }, "aggregation_passes"},
       {"lr_max_diff -1", [](StereoParams& p) { p.lr_max_diff = -1; }, "lr_max_diff"},
+      {"lr_max_diff 17", [](StereoParams& p) { p.lr_max_diff = 17; }, "lr_max_diff"},
+      {"lr_max_diff INT_MAX",
+       [](StereoParams& p) { p.lr_max_diff = std::numeric_limits<int>::max(); }, "lr_max_diff"},
+      {"vote_iterations 17", [](StereoParams& p) { p.vote_iterations = 17; }, "vote_iterations"},
+      {"vote_tolerance 17", [](StereoParams& p) { p.vote_tolerance = 17; }, "vote_tolerance"},
+      {"vote_min_count 100001", [](StereoParams& p) { p.vote_min_count = 100001; },
+       "vote_min_count"},
+      {"max_neighbour_jump 65", [](StereoParams& p) { p.max_neighbour_jump = 65; },
+       "max_neighbour_jump"},
+      {"speckle_size 100001", [](StereoParams& p) { p.speckle_size = 100001; }, "speckle_size"},
+      {"speckle_range 65", [](StereoParams& p) { p.speckle_range = 65; }, "speckle_range"},
       {"uniqueness 1", [](StereoParams& p) { p.uniqueness = 1.0; }, "uniqueness"},
       {"uniqueness < 0", [](StereoParams& p) { p.uniqueness = -0.01; }, "uniqueness"},
       {"vote_iterations -1", [](StereoParams& p) { p.vote_iterations = -1; }, "vote_iterations"},

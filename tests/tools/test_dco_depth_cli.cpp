@@ -1,9 +1,13 @@
 // Runs the dco-depth binary the way a user does: good runs write the files they promise, bad
 // input gives one clear error line and a non-zero exit.
 
+#include <sys/wait.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -171,6 +175,35 @@ TEST(DcoDepthCli, MissingInputFileIsNamed) {
       run_depth(dir, {"--left", "/nonexistent/l.png", "--right", (kTsukuba / "im4.png").string(),
                       "--out", (dir.path() / "d.pfm").string()}),
       1, "/nonexistent/l.png");
+}
+
+TEST(DcoDepthCli, AManifestWithoutScenesOrThatIsADirectoryIsRefused) {
+  TempDir dir;
+  const auto rows = dir.write(
+      "no_rows.tsv", "scene\tleft\tright\tgt\tgt_format\tgt_divisor\tnocc_mask\tmax_disp\n");
+  expect_error(
+      run_depth(dir, {"--scenes", rows.string(), "--out-dir", (dir.path() / "out").string()}), 1,
+      "lists no scene");
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+  expect_error(
+      run_depth(dir, {"--scenes", dir.path().string(), "--out-dir", (dir.path() / "out").string()}),
+      1, "is a directory");
+}
+
+// A full disk in the middle of a map (a file size limit here) keeps the map written before.
+TEST(DcoDepthCli, AWriteCutShortKeepsTheEarlierMap) {
+  TempDir dir;
+  const auto out = dir.path() / "d.pfm";
+  dir.write("d.pfm", "earlier");
+  const std::string cmd = "ulimit -f 100; trap '' XFSZ; '" + std::string(DCO_DEPTH_EXE) +
+                          "' --left '" + (kTsukuba / "im3.png").string() + "' --right '" +
+                          (kTsukuba / "im4.png").string() + "' --max-disp 16 --out '" +
+                          out.string() + "' > /dev/null 2>&1";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  EXPECT_EQ(dco::testing::read_file(out), "earlier");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator{}), 1);
 }
 
 TEST(DcoDepthCli, SizeMismatchIsRefused) {

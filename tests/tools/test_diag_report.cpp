@@ -533,6 +533,11 @@ TEST(DcoDiagCli, WritesTheReportsAndExitsByTheRules) {
   r = run_cli(DCO_DIAG_EXE, dir, {log.string(), "--html", (dir / "." / "field.log").string()});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(slurp(log), bytes);
+  // A report that cannot be written says why.
+  std::filesystem::create_directory(dir / "taken.html");
+  r = run_cli(DCO_DIAG_EXE, dir, {log.string(), "--html", (dir / "taken.html").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("taken.html': Is a directory"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -22,6 +22,7 @@
 #include "dco/core/depth_conversion.hpp"
 #include "dco/core/disparity_io.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/file_replace.hpp"
 #include "dco/core/image_io.hpp"
 #include "dco/core/memory_policy.hpp"
 #include "dco/core/rectifier.hpp"
@@ -339,6 +340,7 @@ int run_pair(const Options& opt, const dco::pipeline::PipelineParams& params) {
 int run_batch(const Options& opt, dco::pipeline::PipelineParams params, bool max_disparity_given) {
   const fs::path data_root = opt.data_root.value_or(opt.scenes->parent_path());
   const auto scenes = dco::tools::load_scene_manifest(*opt.scenes, data_root);
+  if (scenes.empty()) throw dco::Error(fmt::format("'{}' lists no scene", opt.scenes->string()));
   fs::create_directories(*opt.out_dir);
   dco::pipeline::DepthResult result;
   for (const dco::tools::Scene& scene : scenes) {
@@ -357,10 +359,12 @@ int run_batch(const Options& opt, dco::pipeline::PipelineParams params, bool max
     else
       dco::write_pfm(sparse, result.sparse.view());
     const fs::path time_file = *opt.out_dir / (stem + ".time_ms");
-    std::ofstream time_out(time_file);
-    time_out << total_ms(result, opt.sparse) << '\n';
-    time_out.close();
-    if (!time_out) throw dco::Error("cannot write " + time_file.string());
+    dco::replace_file(time_file, [&](const fs::path& tmp) {
+      std::ofstream time_out(tmp);
+      time_out << total_ms(result, opt.sparse) << '\n';
+      time_out.close();
+      if (!time_out) throw dco::Error("cannot write " + time_file.string());
+    });
     fmt::print("{:<40} {}x{} max-disp {:3}  {}{}\n", scene.name, left.width(), left.height(),
                params.stereo.max_disparity, timing_text(result, opt.sparse),
                correction_text(result));

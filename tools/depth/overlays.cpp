@@ -7,12 +7,15 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/file_replace.hpp"
 
 namespace dco::tools {
 namespace {
 
 void write_png(const std::filesystem::path& path, const cv::Mat& bgr) {
-  if (!cv::imwrite(path.string(), bgr)) throw Error("cannot write '" + path.string() + "'");
+  replace_file(path, [&](const std::filesystem::path& tmp) {
+    if (!cv::imwrite(tmp.string(), bgr)) throw Error("cannot write '" + path.string() + "'");
+  });
 }
 
 cv::Mat to_bgr(ImageView<const std::uint8_t> image) {

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "dco/core/error.hpp"
+#include "dco/core/file_replace.hpp"
 #include "dco/diag/html_report.hpp"
 #include "dco/diag/log_digest.hpp"
 #include "dco/diag/log_summary.hpp"
@@ -28,21 +29,12 @@ it read); 1 when the file is not an LCM log; 2 for a usage mistake.
 
 // Written beside its name and renamed over it: a failed write leaves the last report whole.
 void write_file(const std::filesystem::path& path, const std::string& text) {
-  std::filesystem::path tmp = path;
-  tmp += ".tmp";
-  std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-  out << text;
-  out.close();
-  std::error_code ec;
-  if (!out) {
-    std::filesystem::remove(tmp, ec);
-    throw dco::Error("cannot write " + path.string());
-  }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw dco::Error("cannot write " + path.string() + ": " + ec.message());
-  }
+  dco::replace_file(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out) throw dco::Error("cannot write " + path.string());
+  });
 }
 
 // A report written over the recording it reads would lose the field log.

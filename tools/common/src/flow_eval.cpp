@@ -15,6 +15,7 @@
 
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
+#include "dco/core/file_replace.hpp"
 #include "dco/core/image_io.hpp"
 
 namespace dco::tools {
@@ -85,14 +86,17 @@ Image<float> read_flo(const std::filesystem::path& path) {
 void write_flo(const std::filesystem::path& path, ImageView<const float> flow) {
   if (flow.empty() || flow.channels != 2)
     throw Error(fmt::format("{}: a .flo file holds a non-empty 2-channel flow", path.string()));
-  std::ofstream file(path, std::ios::binary);
-  const std::int32_t size[2] = {flow.width, flow.height};
-  file.write(reinterpret_cast<const char*>(&kFloTag), 4);
-  file.write(reinterpret_cast<const char*>(size), 8);
-  for (int y = 0; y < flow.height; ++y)
-    file.write(reinterpret_cast<const char*>(flow.row(y)),
-               static_cast<std::streamsize>(flow.width) * 8);
-  if (!file) throw Error(fmt::format("{}: cannot write flow file", path.string()));
+  replace_file(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream file(tmp, std::ios::binary);
+    const std::int32_t size[2] = {flow.width, flow.height};
+    file.write(reinterpret_cast<const char*>(&kFloTag), 4);
+    file.write(reinterpret_cast<const char*>(size), 8);
+    for (int y = 0; y < flow.height; ++y)
+      file.write(reinterpret_cast<const char*>(flow.row(y)),
+                 static_cast<std::streamsize>(flow.width) * 8);
+    file.close();
+    if (!file) throw Error(fmt::format("{}: cannot write flow file", path.string()));
+  });
 }
 
 namespace {

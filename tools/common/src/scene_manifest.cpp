@@ -156,6 +156,9 @@ std::string Scene::file_stem() const {
 
 std::vector<Scene> load_scene_manifest(const std::filesystem::path& tsv,
                                        const std::filesystem::path& data_root) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(tsv, ec))
+    throw Error(fmt::format("scene manifest '{}' is a directory", tsv.string()));
   std::ifstream in(tsv);
   if (!in) throw Error(fmt::format("cannot open scene manifest '{}'", tsv.string()));
 

@@ -94,8 +94,8 @@ struct DensifyParams {
 void register_params(ConfigSchema& schema, DensifyParams& params);
 void validate(const DensifyParams& params);  // throws dco::Error
 
-// Everything at the input resolution except m_fuse (any resolution: it is sampled at
-// x * m_fuse.width / width). Optional inputs may be empty.
+// Everything at the input resolution except m_fuse (the internal resolution, or any other: it is
+// sampled as the contour gate, kernels::pixel::gate_sample). Optional inputs may be empty.
 struct DensifyInputs {
   ImageView<const float> sparse;           // disparity px, +inf (or <= 0) where unknown
   ImageView<const float> m_fuse;           // [0, 1], optional

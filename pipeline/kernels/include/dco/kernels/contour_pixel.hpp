@@ -84,9 +84,16 @@ DCO_HD inline float jump_strength(float d, float left, float right, float up, fl
   return 1.0f < j ? 1.0f : j;
 }
 
-// The gate (internal resolution, gate_size columns or rows) is sampled for image column or row i
-// of `size` at i * gate_size / size, rounded down.
+// The gate (internal resolution, gate_size columns or rows) for image column or row i of `size`.
+// An internal frame of size / k (k = 1 or 2, rounded down) has cell g over image pixels k g ..
+// k g + k - 1, as the matcher's own output (an odd last pixel takes the last cell); any other
+// ratio samples at i * gate_size / size, rounded down.
 DCO_HD inline int gate_sample(int i, int size, int gate_size) {
+  const int k = size / gate_size;
+  if (k >= 1 && size - k * gate_size < k) {
+    const int g = i / k;
+    return g < gate_size - 1 ? g : gate_size - 1;
+  }
   return static_cast<int>(static_cast<long long>(i) * gate_size / size);
 }
 
