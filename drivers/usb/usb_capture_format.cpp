@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -328,6 +329,10 @@ UsbCapture parse_usb_capture(std::span<const std::uint8_t> bytes) {
 }
 
 UsbCaptureReader::UsbCaptureReader(const std::string& path) : path_(path) {
+  // A directory would read as an empty capture, and a pipe blocks the open.
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw Error("USB capture '" + path + "': not a capture file (a directory, a device or a pipe)");
   file_ = std::fopen(path.c_str(), "rb");
   if (!file_) throw Error("USB capture '" + path + "': cannot open: " + std::strerror(errno));
   char magic[sizeof kUsbCaptureMagic] = {};

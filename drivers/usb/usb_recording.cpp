@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <mutex>
 #include <thread>
 #include <utility>
@@ -31,6 +32,13 @@ class CaptureWriter {
  public:
   CaptureWriter(const std::string& path, std::function<std::int64_t()> clock)
       : path_(path), clock_(clock ? std::move(clock) : monotonic_ns) {
+    // A pipe would block the open until someone reads it, with the camera waiting.
+    std::error_code ec;
+    if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+      throw Error(
+          fmt::format("USB capture '{}': not a file to record into (a directory, a device "
+                      "or a pipe)",
+                      path));
     file_ = std::fopen(path.c_str(), "wb");
     if (!file_)
       throw Error(fmt::format("USB capture '{}': cannot create: {}", path, std::strerror(errno)));

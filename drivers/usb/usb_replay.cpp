@@ -25,6 +25,10 @@ using Outcome = UsbCaptureRecord::Outcome;
 constexpr std::int64_t kCallPatienceNs = 30'000'000'000;
 // handle_events() calls without progress before virtual time moves on regardless.
 constexpr int kIdleCallsBeforeTimePasses = 64;
+// Completions read ahead to find the call they arrived in. Inside one call (a control transfer's
+// 200 ms, a stop) the fastest mode brings about 10 MB; more is a damaged capture, not one to load
+// whole.
+constexpr std::size_t kMostLookaheadBytes = 32u << 20;
 
 bool is_completion(Kind k) {
   return k == Kind::kTransfer || k == Kind::kHotplug;
@@ -48,6 +52,7 @@ struct Replay {
   std::string path;
   UsbCaptureReader reader;
   std::deque<UsbCaptureRecord> window;  // records read ahead, the next one first
+  std::size_t window_bytes = 0;         // their data
   std::size_t pos = 0;                  // records consumed
   std::atomic<std::int64_t> now{0};
   std::atomic<bool> finished{false};
@@ -61,8 +66,16 @@ struct Replay {
   // Whether record pos + i exists, reading ahead as far as needed.
   bool has(std::size_t i) {
     while (window.size() <= i) {
+      if (window_bytes > kMostLookaheadBytes) {
+        end(
+            fmt::format("capture '{}' is damaged: more than {} MiB of completions after record {} "
+                        "arrived inside one call",
+                        path, kMostLookaheadBytes >> 20, pos));
+        return false;
+      }
       std::optional<UsbCaptureRecord> r = reader.next();
       if (!r) return false;
+      window_bytes += r->data.size();
       window.push_back(std::move(*r));
     }
     return true;
@@ -74,6 +87,7 @@ struct Replay {
   UsbCaptureRecord advance() {
     UsbCaptureRecord r = std::move(window.front());
     window.pop_front();
+    window_bytes -= r.data.size();
     ++pos;
     idle_calls = 0;
     if (at_end())
@@ -106,7 +120,7 @@ struct Replay {
 
   std::string describe_next() {
     const UsbCaptureRecord* r = next_call();
-    if (!r) return "its end";
+    if (!r) return reader.problem().empty() ? "its end" : "its end (" + reader.problem() + ")";
     return fmt::format("{} (device {})", to_string(r->kind), r->device);
   }
 
@@ -132,7 +146,12 @@ struct Replay {
 
   // The record for a call the driver makes now; throws when the capture has something else next.
   const UsbCaptureRecord& expect(Kind kind, std::uint16_t device) {
-    if (finished) throw UsbError(fmt::format("USB replay of '{}' has ended", path), true);
+    if (finished) {
+      std::lock_guard lock(error_mutex);
+      throw UsbError(fmt::format("USB replay of '{}' has ended{}", path,
+                                 error.empty() ? std::string() : ": " + error),
+                     true);
+    }
     skip_lists();
     const UsbCaptureRecord* r = next_call();
     if (!r || r->kind != kind || r->device != device)
@@ -313,6 +332,7 @@ class ReplayTransport final : public UsbReplayTransport {
     r.skip_lists();
     if (r.finished) return;
     if (r.only_shutdown_left()) {
+      if (r.finished) return;  // damaged on the way
       while (!r.at_end()) r.advance();
       return;
     }

@@ -1,3 +1,5 @@
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -339,6 +341,12 @@ TEST(UsbCapture, ReplayReproducesARecordedSessionWithFaultsFrameForFrame) {
   for (std::size_t i = 0; i < partial.frames.size(); ++i)
     EXPECT_EQ(partial.frames[i], replayed[i]) << i;
 
+  // Cut during the driver's first calls: the error still says where the capture ends.
+  write_all(cut_path, std::span(bytes).first(100));
+  const std::string early = testing::error_of([&] { open_replay(cut_path, fast_mode()); });
+  EXPECT_NE(early.find("capture ends inside the head of record 3 at byte 94"), std::string::npos)
+      << early;
+
   // A driver asked for another mode leaves the recording at the first control that differs.
   IndemindOptions other = fast_mode();
   other.fps = 100;
@@ -351,6 +359,45 @@ TEST(UsbCapture, ReplayReproducesARecordedSessionWithFaultsFrameForFrame) {
   EXPECT_EQ(diverged.frames.size(), 0u);
   std::remove(path.c_str());
   std::remove(cut_path.c_str());
+}
+
+// Completions flagged as arriving inside a call that never comes: the replay reads ahead only so
+// far for the call, then says the capture is damaged, instead of loading the rest of the file and
+// ending as if the driver had been stopped.
+TEST(UsbCapture, CompletionsWithoutTheirCallAreDamageNotAnEnd) {
+  const std::string path = temp_path("plain.usbcap");
+  {
+    SimulatedIndemind* sim = nullptr;
+    Recorder live;
+    auto source = recorded_source(path, 5, sim);
+    source->start(live);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (live.count() < 120 && std::chrono::steady_clock::now() < until)
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    source->stop();
+    ASSERT_GE(live.count(), 120u);
+  }
+  UsbCapture parsed = parse_usb_capture(read_all(path));
+  ASSERT_EQ(parsed.problem, "");
+  const std::size_t from = parsed.records.size() / 10;
+  std::size_t flagged_bytes = 0;
+  for (std::size_t i = from; i < parsed.records.size(); ++i)
+    if (parsed.records[i].kind == Kind::kTransfer) {
+      parsed.records[i].flags |= UsbCaptureRecord::kInNextCall;
+      flagged_bytes += parsed.records[i].data.size();
+    }
+  ASSERT_GT(flagged_bytes, std::size_t{33} << 20);
+  std::vector<std::uint8_t> flagged(kUsbCaptureMagic, kUsbCaptureMagic + sizeof kUsbCaptureMagic);
+  for (const UsbCaptureRecord& r : parsed.records) encode_usb_capture_record(r, flagged);
+  write_all(path, flagged);
+  Recorder replayed;
+  auto damaged = open_replay(path, fast_mode());
+  damaged->start(replayed);
+  ASSERT_TRUE(replayed.wait_end());
+  damaged->stop();
+  EXPECT_NE(replayed.error.find("is damaged: more than 32 MiB of completions"), std::string::npos)
+      << replayed.error;
+  std::remove(path.c_str());
 }
 
 // How many hotplug notes the capture has inside a control transfer: flagged, and followed by a
@@ -557,6 +604,17 @@ TEST(UsbCapture, UriRefusesBadCapturesWithOneLine) {
                                        "/nonexistent-dir/x.usbcap");
             }).find("'/nonexistent-dir/x.usbcap': cannot create"),
             std::string::npos);
+  // A pipe would block the open (until a writer or reader comes), with the service starting.
+  const std::string fifo = temp_path("capture.fifo");
+  std::remove(fifo.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_NE(testing::error_of([&] { open("indemind://?replay=" + fifo); }).find("a pipe"),
+            std::string::npos);
+  EXPECT_NE(testing::error_of([&] {
+              make_recording_transport(std::make_unique<SimulatedIndemind>(), fifo);
+            }).find("a pipe"),
+            std::string::npos);
+  std::remove(fifo.c_str());
   std::remove(junk.c_str());
   std::remove(empty.c_str());
 }
