@@ -253,14 +253,14 @@ std::uint64_t RingWriter::publish(const FrameMeta& meta) {
 
 std::uint64_t RingWriter::write(ImageView<const float> depth, ImageView<const std::uint8_t> image,
                                 const FrameMeta& meta) {
-  if (!depth.same_size(options_.width, options_.height) || depth.channels != 1)
+  if (depth.empty() || !depth.same_size(options_.width, options_.height) || depth.channels != 1)
     throw Error(fmt::format("{}: depth is {}x{}x{}, the ring holds {}x{}x1", path_.string(),
                             depth.width, depth.height, depth.channels, options_.width,
                             options_.height));
   // A slot's depth and image are one frame: an image ring never gets depth without its image.
   const bool image_ok = options_.image_channels == 0
                             ? image.empty()
-                            : image.same_size(options_.width, options_.height) &&
+                            : !image.empty() && image.same_size(options_.width, options_.height) &&
                                   image.channels == options_.image_channels;
   if (!image_ok)
     throw Error(fmt::format("{}: image is {}x{}x{}, the ring holds {}x{}x{}", path_.string(),

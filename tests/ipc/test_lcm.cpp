@@ -16,6 +16,7 @@
 #include "dco/ipc/publisher.hpp"
 #include "ipc_test_support.hpp"
 #include "lcm_samples.hpp"
+#include "support/allocation_counter.hpp"
 
 namespace dco::ipc::testing {
 namespace {
@@ -253,6 +254,28 @@ TEST(Publisher, PreviewIsSmallNearestDepthAndRateLimited) {
   EXPECT_EQ(p.depth_mm[17 * 40 + 39], 2000);  // nearest wins over the 100 m pixel
   EXPECT_EQ(p.depth_mm[17 * 40], 32767);
   EXPECT_EQ(static_cast<std::uint64_t>(p.session_id), ring.session_id());
+}
+
+// The publish path allocates nothing once warm, previews included (30 Hz: one every frame).
+TEST(Publisher, WarmWritesDoNotAllocateEvenWithAPreviewEachFrame) {
+  TempDir dir;
+  RingWriter ring(dir.path() / "depth.shm", ring_options(200, 90));
+  PublisherOptions po = memq();
+  po.preview_hz = 30;
+  DepthPublisher pub(ring, po);
+  Image<float> depth(200, 90);
+  depth.fill(2.0f);
+  Image<std::uint8_t> image(200, 90);
+  FrameMeta meta;
+  for (int i = 0; i < 40; ++i) {
+    meta.frame_seq = static_cast<std::uint64_t>(i);
+    meta.capture_ns = i * 33'333'334LL;
+    if (i == 10) dco::testing::start_counting_allocations();
+    pub.write(depth.cview(), image.cview(), meta);
+  }
+  const dco::testing::AllocationCounts n = dco::testing::stop_counting_allocations();
+  EXPECT_EQ(pub.previews_sent(), 40u);
+  EXPECT_EQ(n.total(), 0) << n.new_calls << " new, " << n.aligned_alloc_calls << " aligned";
 }
 
 TEST(Publisher, NoPreviewAtZeroHz) {

@@ -132,6 +132,12 @@ TEST(RingWriter, RejectsBadGeometryAndMismatchedFrames) {
   Image<std::uint8_t> colour(kWidth, kHeight, 3);
   EXPECT_THROW(writer.write(depth.cview(), colour.cview(), {}), Error);
   EXPECT_THROW(writer.write(depth.cview(), {}, {}), Error) << "depth without its image";
+  // Views with the ring's size but no pixels.
+  const ImageView<const std::uint8_t> no_image(nullptr, kWidth, kHeight, 1, kWidth);
+  EXPECT_THROW(writer.write(depth.cview(), no_image, {}), Error);
+  const ImageView<const float> no_depth(nullptr, kWidth, kHeight, 1, kWidth);
+  Image<std::uint8_t> grey(kWidth, kHeight);
+  EXPECT_THROW(writer.write(no_depth, grey.cview(), {}), Error);
   EXPECT_EQ(writer.published(), 0u);
 }
 

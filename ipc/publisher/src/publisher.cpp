@@ -15,6 +15,12 @@
 namespace dco::ipc {
 namespace {
 
+// LCM takes a channel as a std::string: built once, since a name past the short-string buffer
+// ("DCO_DEPTH_PREVIEW") would allocate at every message.
+const std::string kDepthChannel{channel::kDepth}, kDepthPreviewChannel{channel::kDepthPreview},
+    kStatsChannel{channel::kStats}, kStatusChannel{channel::kStatus}, kRawChannel{channel::kRaw},
+    kLogChannel{channel::kLog};
+
 std::int64_t monotonic_ns() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -110,14 +116,14 @@ std::uint64_t DepthPublisher::write(ImageView<const float> depth,
 }
 
 template <class Message>
-bool DepthPublisher::send(const char* channel, const Message& message) {
+bool DepthPublisher::send(const std::string& channel, const Message& message) {
   const int size = message.getEncodedSize();
   encoded_.resize(static_cast<std::size_t>(std::max(size, 0)));  // grows once, then reused
   if (size >= 0 && message.encode(encoded_.data(), 0, size) == size &&
       lcm_->publish(channel, encoded_.data(), static_cast<unsigned>(size)) == 0)
     return true;
   ++send_failures_;
-  last_failed_channel_ = channel;
+  last_failed_channel_ = channel.c_str();
   return false;
 }
 
@@ -132,7 +138,7 @@ void DepthPublisher::announce(std::uint64_t publish_index, std::uint32_t slot,
   m.publish_ns = monotonic_ns();
   m.width = ring_.options().width;
   m.height = ring_.options().height;
-  send(channel::kDepth, m);
+  send(kDepthChannel, m);
   if (options_.preview_hz > 0) {
     const auto period_ns = static_cast<std::int64_t>(1e9 / options_.preview_hz);
     if (!preview_sent_ || meta.capture_ns - last_preview_capture_ns_ >= period_ns)
@@ -142,7 +148,8 @@ void DepthPublisher::announce(std::uint64_t publish_index, std::uint32_t slot,
 
 void DepthPublisher::send_preview(std::uint64_t publish_index, const FrameMeta& meta,
                                   ImageView<const float> depth) {
-  dco::depth_preview_t m;
+  // Kept between previews: its pixels are allocated once.
+  dco::depth_preview_t& m = preview_;
   m.session_id = as_lcm(ring_.session_id());
   m.publish_index = as_lcm(publish_index);
   m.frame_seq = as_lcm(meta.frame_seq);
@@ -151,7 +158,7 @@ void DepthPublisher::send_preview(std::uint64_t publish_index, const FrameMeta& 
                      preview_factor(depth.width, depth.height, options_.preview_max_width,
                                     options_.preview_max_height),
                      m);
-  send(channel::kDepthPreview, m);
+  send(kDepthPreviewChannel, m);
   preview_sent_ = true;
   last_preview_capture_ns_ = meta.capture_ns;
   ++previews_sent_;
@@ -193,7 +200,7 @@ void DepthPublisher::publish_stats(const pipeline::runtime::RuntimeStats& stats,
   m.right_row_offset = c.row_offset;
   m.right_roll_deg = c.roll * 180.0 / std::numbers::pi;
   m.lens_falloff = c.falloff;
-  send(channel::kStats, m);
+  send(kStatsChannel, m);
   stats_since_ns_ = now_ns;
   stats_pushed_ = stats.pushed;
   stats_published_ = stats.published;
@@ -213,11 +220,11 @@ void DepthPublisher::publish_status(const DeviceStatus& status, std::int64_t now
     m.counter_names.push_back(lcm_string(name));
     m.counter_values.push_back(static_cast<std::int64_t>(value));
   }
-  send(channel::kStatus, m);
+  send(kStatusChannel, m);
 }
 
 void DepthPublisher::publish_raw(const ::dco::raw_stereo_t& message) {
-  if (!send(channel::kRaw, message))
+  if (!send(kRawChannel, message))
     throw Error(fmt::format("publisher: LCM publish on {} failed", channel::kRaw));
 }
 
@@ -228,7 +235,7 @@ void DepthPublisher::log(LogLevel level, std::string_view source, std::string_vi
   m.level = static_cast<std::int8_t>(level);
   m.source = lcm_string(source);
   m.text = lcm_string(text);
-  send(channel::kLog, m);
+  send(kLogChannel, m);
 }
 
 }  // namespace dco::ipc

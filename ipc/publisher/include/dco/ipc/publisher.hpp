@@ -100,12 +100,13 @@ class DepthPublisher {
   // Encodes into encoded_ and sends; false (counted) when LCM refuses it or the message does not
   // encode to its own size (a string with a NUL, which LCM's encoder stops at).
   template <class Message>
-  bool send(const char* channel, const Message& message);
+  bool send(const std::string& channel, const Message& message);
 
   RingWriter& ring_;
   PublisherOptions options_;
   std::unique_ptr<lcm::LCM> lcm_;
   std::vector<std::uint8_t> encoded_;
+  ::dco::depth_preview_t preview_;
   std::uint32_t open_slot_ = 0;
   ImageView<const float> open_depth_;  // the slot begin_write() opened
   bool preview_sent_ = false;
