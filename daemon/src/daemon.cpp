@@ -339,14 +339,6 @@ void Daemon::report_lcm_failures(std::int64_t now_ns, bool last) {
   lcm_failures_reported_ns_ = now_ns;
 }
 
-bool Daemon::healthy(std::int64_t now_ns) const {
-  const std::int64_t last = std::max(last_publish_ns_.load(), pipeline_start_ns_.load());
-  if (static_cast<double>(now_ns - last) < loaded_.config.stall_timeout_s * 1e9) return true;
-  // An unplugged camera is waited for, not a hang: a restart by the watchdog would not bring it
-  // back sooner, and the driver resumes by itself when it returns.
-  return source_->status().state == drivers::SourceStatus::State::kDisconnected;
-}
-
 std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const {
   return fmt::format(
       "{}: {:.1f} fps in, {:.1f} fps out, {} published, {} dropped ({} late), latency p50 {:.1f} "
@@ -362,13 +354,21 @@ std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const 
 }
 
 void Daemon::tick(std::int64_t now_ns) {
-  const bool ok = healthy(now_ns);
+  // The source's state only while frames pause: status() builds strings, and a tick can come
+  // with every frame.
+  constexpr std::int64_t kPauseNs = 200'000'000;
+  const bool paused = now_ns - last_publish_ns_.load() > kPauseNs;
+  const bool ok = stall_clock_.healthy(
+      now_ns, last_publish_ns_.load(), pipeline_start_ns_.load(),
+      paused && source_->status().state == drivers::SourceStatus::State::kDisconnected,
+      loaded_.config.stall_timeout_s);
   if (!ok && !stalled_) {
     stalled_ = true;
-    log_.warning(fmt::format(
-        "no frame published for {:.1f} s: watchdog pings withheld",
-        static_cast<double>(now_ns - std::max(last_publish_ns_.load(), pipeline_start_ns_.load())) *
-            1e-9));
+    log_.warning(
+        fmt::format("no frame published for {:.1f} s: watchdog pings withheld",
+                    static_cast<double>(now_ns - stall_clock_.since_ns(last_publish_ns_.load(),
+                                                                       pipeline_start_ns_.load())) *
+                        1e-9));
   } else if (ok && stalled_) {
     stalled_ = false;
     log_.info("frames flow again");

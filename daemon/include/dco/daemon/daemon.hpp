@@ -14,6 +14,7 @@
 #include "dco/daemon/daemon_config.hpp"
 #include "dco/daemon/logger.hpp"
 #include "dco/daemon/service_notifier.hpp"
+#include "dco/daemon/stall_clock.hpp"
 #include "dco/drivers/frame_source.hpp"
 #include "dco/ipc/publisher.hpp"
 #include "dco/ipc/ring_writer.hpp"
@@ -75,7 +76,6 @@ class Daemon final : public drivers::FrameSink {
   // A warning when LCM failed to send since the last one (the ring is unaffected); `last`: at
   // the exit, whenever the last warning was.
   void report_lcm_failures(std::int64_t now_ns, bool last);
-  bool healthy(std::int64_t now_ns) const;
   std::string status_line(const pipeline::runtime::RuntimeStats& stats) const;
   void wake();
 
@@ -112,6 +112,7 @@ class Daemon final : public drivers::FrameSink {
 
   std::atomic<std::int64_t> last_publish_ns_{0};
   std::atomic<std::int64_t> pipeline_start_ns_{0};
+  StallClock stall_clock_;  // the main thread's
   std::atomic<long> published_{0};
   std::atomic<int> max_frames_{0};
   std::atomic<bool> source_ended_{false}, max_reached_{false}, failed_{false};
