@@ -659,8 +659,13 @@ class IndemindSource final : public FrameSource {
              static_cast<std::int64_t>(ticks * (1e9 / kImuTicksPerSecond));
     };
     std::int64_t device_ns = device_ns_of(report->ticks);
-    // Ticks that ran on from the previous frame are below two frame periods; more is garbage.
+    // Ticks that ran on from the previous frame are below two frame periods; more is garbage,
+    // even where it would still map near the host clock (it would bend the clock map).
     const double race_ticks_max = 2.0 * kImuTicksPerSecond / mode_.fps;
+    if (report->ticks >= race_ticks_max) {
+      ++counters_.imu_implausible;
+      return;
+    }
     if (last_imu_device_ns_ >= 0 && placed > last_imu_placed_ && report->ticks >= last_imu_ticks_ &&
         report->ticks < race_ticks_max &&
         device_ns - last_imu_device_ns_ > now - last_imu_host_ns_ + kRaceSlackNs) {

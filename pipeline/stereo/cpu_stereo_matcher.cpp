@@ -412,7 +412,7 @@ std::unique_ptr<StereoMatcher> make_stereo_matcher(const StereoMatcherFactory& f
                                                    const StereoParams& params) {
   std::unique_ptr<StereoMatcher> stage =
       factory ? factory(params) : make_cpu_stereo_matcher(params);
-  return params.exposure_balance || params.vertical_alignment
+  return params.exposure_balance || params.vertical_alignment || params.lens_falloff
              ? with_camera_alignment(std::move(stage))
              : std::move(stage);
 }

@@ -173,9 +173,16 @@ void FalloffCorrection::apply(ImageView<const std::uint8_t> image, Image<std::ui
     out.copy_from(image);
     return;
   }
-  cv::Mat to = as_mat(out.view());
-  // Rounded and saturated to 8 bits by OpenCV; into `out`'s own memory.
-  cv::multiply(as_mat(image), gain_, to, 1.0, CV_8U);
+  // As cv::multiply(image, gain_, out, 1, CV_8U) rounds and saturates (the CUDA pass too), row by
+  // row: OpenCV's call allocates a buffer every time.
+  const int n = image.width * image.channels;
+  for (int y = 0; y < image.height; ++y) {
+    const std::uint8_t* in = image.row(y);
+    const float* g = gain_.ptr<float>(y);
+    std::uint8_t* o = out.row(y);
+    for (int i = 0; i < n; ++i)
+      o[i] = cv::saturate_cast<std::uint8_t>(static_cast<float>(in[i]) * g[i]);
+  }
 }
 
 }  // namespace dco::stereo

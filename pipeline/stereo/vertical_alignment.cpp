@@ -56,7 +56,7 @@ struct Sampler {
     const int c = right.channels;
     const double fx = std::floor(x), fy = std::floor(y);
     const int x0 = std::clamp(static_cast<int>(fx), 0, right.width - 1);
-    const int x1 = std::min(x0 + 1, right.width - 1);
+    const int x1 = std::clamp(static_cast<int>(fx) + 1, 0, right.width - 1);
     const int y0 = std::clamp(static_cast<int>(fy), 0, right.height - 1);
     const int y1 = std::clamp(static_cast<int>(fy) + 1, 0, right.height - 1);
     const double tx = x - fx, ty = y - fy;

@@ -235,6 +235,23 @@ TEST(IndemindSource, OneWrongCounterCostsOneFrame) {
   }
 }
 
+// An IMU report whose ticks are garbage but small enough (43.75 ms: over two frame periods, under
+// the host clock check's 50 ms lead) to map near the host clock is dropped, not put on the clock
+// map: the frames' capture times stay on the module's frame starts.
+TEST(IndemindSource, IMUTicksPastTwoFramePeriodsAreDroppedEvenNearTheHostClock) {
+  Rig rig;
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(200));
+  ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kImuBadTicks, 7'000'000));
+  ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 150, 10));
+  rig.source->stop();
+  const auto n = counters_of(*rig.source);
+  EXPECT_EQ(n.at("imu_implausible"), 1u);
+  EXPECT_EQ(n.at("imu_out_of_order"), 0u);
+  EXPECT_EQ(rig.sink.imu_non_increasing, 0);
+  expect_on_frame_starts(rig, 150, 300'000.0);
+}
+
 // A corrupt counter a few counts high, less than the host clock check's lead ahead (a flipped
 // low bit), arrived one period after the frame before it: it is held like any wrong counter, not
 // taken as frames lost, and the frames after it keep their counters and stamps.

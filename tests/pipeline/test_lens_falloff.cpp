@@ -10,10 +10,14 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/core.hpp>
+
+#include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/stereo/lens_falloff.hpp"
 #include "dco/pipeline/stereo/stereo_matcher.hpp"
+#include "support/allocation_counter.hpp"
 #include "support/fall_off.hpp"
 #include "support/good_matches.hpp"
 #include "support/same_bytes.hpp"
@@ -138,6 +142,56 @@ TEST(LensFalloffMatcher, FindsTheFalloffOnTheFirstFrame) {
   const synthetic::StereoSample next = falling_off(s, kTruth);
   corrected.matcher->compute(next.left.cview(), next.right.cview(), corrected.disparity);
   EXPECT_EQ(corrected.matcher->last_correction().falloff, found.falloff);
+}
+
+// The fall-off alone, without the exposure balance and the row alignment, still gets the stage
+// that fits and applies it.
+TEST(LensFalloffMatcher, TheFalloffAloneIsFittedToo) {
+  const synthetic::SceneConfig config = synthetic::preset("boxes", 480, 270);
+  const synthetic::SceneRenderer scene(config);
+  synthetic::StereoSample s;
+  scene.render(0, s);
+  const synthetic::StereoSample dark = falling_off(s, 0.4);
+  StereoParams params;
+  params.max_disparity = synthetic::covering_max_disparity(config);
+  params.exposure_balance = false;
+  params.vertical_alignment = false;
+  params.lens_falloff = true;
+  const auto matcher = make_stereo_matcher({}, params);
+  Image<float> disparity;
+  matcher->compute(dark.left.cview(), dark.right.cview(), disparity);
+  EXPECT_NEAR(matcher->last_correction().falloff, 0.4, 0.03);
+}
+
+// The correction rounds as cv::multiply(image, gain, out, 1, CV_8U) does (the CUDA pass too), and
+// a warm frame allocates nothing.
+TEST(FalloffCorrection, RoundsAsOpenCvAndAllocatesNothingWhenWarm) {
+  Image<std::uint8_t> image(97, 61, 3);
+  for (int y = 0; y < 61; ++y)
+    for (int x = 0; x < 97 * 3; ++x)
+      image.row(y)[x] = static_cast<std::uint8_t>((x * 7 + y * 13) % 256);
+  FalloffCorrection lens;
+  lens.build({0.33}, 97, 61, 3);
+  Image<std::uint8_t> out;
+  lens.apply(image.cview(), out);
+  // The gains again, as the correction builds them: 1 / (1 - k r^2).
+  cv::Mat expected;
+  cv::Mat gain(61, 97, CV_32FC3);
+  for (int y = 0; y < 61; ++y)
+    for (int x = 0; x < 97; ++x) {
+      const float g = static_cast<float>(1.0 / (1.0 - 0.33 * falloff_radius_squared(97, 61, x, y)));
+      gain.at<cv::Vec3f>(y, x) = cv::Vec3f(g, g, g);
+    }
+  cv::multiply(as_mat(image.cview()), gain, expected, 1.0, CV_8U);
+  int differ = 0;
+  for (int y = 0; y < 61; ++y)
+    for (int x = 0; x < 97 * 3; ++x)
+      differ += out.cview().row(y)[x] != expected.ptr<std::uint8_t>(y)[x];
+  EXPECT_EQ(differ, 0);
+  dco::testing::start_counting_allocations();
+  lens.apply(image.cview(), out);
+  const auto n = dco::testing::stop_counting_allocations();
+  EXPECT_EQ(n.total(), 0);
 }
 
 TEST(LensFalloffMatcher, APairWithoutFalloffKeepsItsBytes) {

@@ -101,6 +101,7 @@ struct SimulatedIndemind::State {
   std::deque<Completion> pending;  // sorted by time
   std::deque<std::pair<Fault, int>> frame_faults;
   int imu_short = 0, imu_duplicate = 0, imu_bad_ticks = 0, imu_race = 0, imu_stall = 0;
+  std::uint32_t imu_bad_ticks_value = 0xFFFFFFFFu;
   int imu_silence_ms = 0;
   std::uint16_t last_imu_counter = 0;
   std::uint32_t last_imu_ticks = 0;
@@ -294,7 +295,7 @@ void SimulatedIndemind::State::generate_imu() {
   if (imu_bad_ticks > 0) {
     --imu_bad_ticks;
     ++rec.injected[static_cast<int>(Fault::kImuBadTicks)];
-    r.ticks = 0xFFFFFFFFu;
+    r.ticks = imu_bad_ticks_value;
   }
   r.accel_raw = {20, -41, 2048};  // ±16 g range: 2048 LSB/g
   r.gyro_raw = {8, -4, 2};        // ±2000 °/s: 16.4 LSB/(°/s)
@@ -771,6 +772,7 @@ void SimulatedIndemind::inject(Fault fault, int param) {
       break;
     case Fault::kImuBadTicks:
       ++s.imu_bad_ticks;
+      s.imu_bad_ticks_value = param > 0 ? static_cast<std::uint32_t>(param) : 0xFFFFFFFFu;
       break;
     case Fault::kImuTickRace:
       ++s.imu_race;

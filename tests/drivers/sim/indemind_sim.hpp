@@ -47,7 +47,7 @@ class SimulatedIndemind final : public drivers::UsbTransport {
     kCorruptCounter,    // one frame's metadata counter reads param off (0 = 50 ahead); the next
                         // is right again
     kEmptyPayload,      // a zero-length transfer in the middle of a frame
-    kImuBadTicks,       // one IMU report with garbage ticks (0xFFFFFFFF)
+    kImuBadTicks,       // one IMU report with garbage ticks (param, or 0xFFFFFFFF when 0)
     kImuTickRace,       // the first report of a frame: counter moved on, ticks not reset
     kImuStall,          // the interrupt endpoint halts until cleared
     kImuSilence,        // no IMU report for param ms
