@@ -195,8 +195,7 @@ class IndemindSource final : public FrameSource {
       std::unique_ptr<UsbDevice> device;
       ModuleCalibration m;
       try {
-        device = transport_->open(d);
-        m = read_module(*device);
+        m = open_module(d, device);
       } catch (const std::exception& e) {
         // One held by another program, or one that just left: the next may be the one asked for.
         if (!first_failure) first_failure = std::current_exception();
@@ -222,6 +221,12 @@ class IndemindSource final : public FrameSource {
       throw Error(fmt::format("indemind: no module could be opened ({})", fmt::join(ids, "; ")));
     throw Error(fmt::format("indemind: no module with id '{}' (found: {})", options_.module_id,
                             fmt::join(ids, ", ")));
+  }
+
+  // Opens a listed module into `device` and reads its flash.
+  ModuleCalibration open_module(const UsbDeviceInfo& d, std::unique_ptr<UsbDevice>& device) {
+    device = transport_->open(d);
+    return read_module(*device);
   }
 
   ModuleCalibration read_module(UsbDevice& device) {
@@ -273,8 +278,7 @@ class IndemindSource final : public FrameSource {
       std::unique_ptr<UsbDevice> device;
       ModuleCalibration m;
       try {
-        device = transport_->open(d);
-        m = read_module(*device);
+        m = open_module(d, device);
       } catch (const std::exception& e) {
         set_error(std::string("reopening: ") + e.what());
         continue;
