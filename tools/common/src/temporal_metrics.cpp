@@ -37,7 +37,7 @@ void FlickerMeter::add(ImageView<const float> disparity) {
     std::uint8_t* prev = previous_side_.row(y);
     for (int x = 0; x < disparity.width; ++x) {
       const std::uint8_t now = sides(d[x], planes_);
-      if (frames_ > 0) {
+      if (frames_ > 0 && (now != kNoValue || prev[x] != kNoValue)) {
         for (std::size_t k = 0; k < planes_.size(); ++k) {
           const bool both = now != kNoValue && prev[x] != kNoValue;
           const bool flipped = !both || (((now ^ prev[x]) >> k) & 1u);

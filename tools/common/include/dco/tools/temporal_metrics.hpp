@@ -11,8 +11,10 @@ namespace dco::tools {
 // Temporal stability of an occlusion decision: for virtual fronto-parallel planes fixed by the
 // first frame (its 20..80 % disparity quantiles, as in the accuracy metrics), the share of pixels
 // whose side of each plane changes between consecutive frames. A renderer shows such a flip as
-// a flicker of the virtual object's edge. Pixels without a value (+inf, NaN, <= 0) in either
-// frame of a pair count as flips: a hole that comes and goes flickers too.
+// a flicker of the virtual object's edge. A pixel without a value (+inf, NaN, <= 0) in one frame
+// of a pair and with one in the other counts as a flip (a hole that comes and goes flickers too);
+// one without a value in both is not compared (it has no side to change, and a ground truth's
+// fixed gaps are no flicker).
 class FlickerMeter {
  public:
   using Planes = std::array<double, kOcclusionPlaneQuantiles.size()>;
