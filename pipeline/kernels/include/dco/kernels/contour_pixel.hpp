@@ -85,9 +85,9 @@ DCO_HD inline float jump_strength(float d, float left, float right, float up, fl
 }
 
 // The gate (internal resolution, gate_size columns or rows) for image column or row i of `size`.
-// An internal frame of size / k (k = 1 or 2, rounded down) has cell g over image pixels k g ..
-// k g + k - 1, as the matcher's own output (an odd last pixel takes the last cell); any other
-// ratio samples at i * gate_size / size, rounded down.
+// An internal frame of size / k for a whole k (1 or 2 in the pipeline), rounded down, has cell g
+// over image pixels k g .. k g + k - 1, as the matcher's own output (an odd last pixel takes the
+// last cell); any other ratio samples at i * gate_size / size, rounded down.
 DCO_HD inline int gate_sample(int i, int size, int gate_size) {
   const int k = size / gate_size;
   if (k >= 1 && size - k * gate_size < k) {
