@@ -65,16 +65,7 @@ Image<std::uint16_t> read_png16(const std::filesystem::path& path, const char* w
 }
 
 void write_png16(const std::filesystem::path& path, const Image<std::uint16_t>& img) {
-  cv::Mat m = as_mat(img.view());
-  replace_file(path, [&](const std::filesystem::path& tmp) {
-    bool ok = false;
-    try {
-      ok = cv::imwrite(tmp.string(), m);
-    } catch (const cv::Exception& e) {
-      throw Error("cannot write " + quoted(path) + ": " + e.err);
-    }
-    if (!ok) throw Error("cannot write " + quoted(path));
-  });
+  write_image_file(path, as_mat(img.view()), "PNG");
 }
 
 // Both 16-bit PNG conventions store round(value * scale) with 0 meaning unknown; values that are

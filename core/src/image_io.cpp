@@ -102,14 +102,20 @@ void save_image(const std::filesystem::path& path, ImageView<const std::uint8_t>
   if (image.empty() || (image.channels != 1 && image.channels != 3 && image.channels != 4))
     throw Error("cannot write image " + quoted(path) +
                 ": it must be non-empty with 1, 3 or 4 channels");
+  write_image_file(path, as_mat(image), "image");
+}
+
+void write_image_file(const std::filesystem::path& path, const cv::Mat& image,
+                      std::string_view what) {
+  const std::string name = "cannot write " + std::string(what) + " " + quoted(path);
   replace_file(path, [&](const std::filesystem::path& tmp) {
     bool ok = false;
     try {
-      ok = cv::imwrite(tmp.string(), as_mat(image));
+      ok = cv::imwrite(tmp.string(), image);
     } catch (const cv::Exception& e) {
-      throw Error("cannot write image " + quoted(path) + ": " + e.err);
+      throw Error(name + ": " + e.err);
     }
-    if (!ok) throw Error("cannot write image " + quoted(path));
+    if (!ok) throw Error(name);
   });
 }
 

@@ -357,18 +357,18 @@ void Daemon::tick(std::int64_t now_ns) {
   // The source's state only while frames pause: status() builds strings, and a tick can come
   // with every frame.
   constexpr std::int64_t kPauseNs = 200'000'000;
-  const bool paused = now_ns - last_publish_ns_.load() > kPauseNs;
+  const std::int64_t last_publish = last_publish_ns_.load();
+  const std::int64_t start = pipeline_start_ns_.load();
   const bool ok = stall_clock_.healthy(
-      now_ns, last_publish_ns_.load(), pipeline_start_ns_.load(),
-      paused && source_->status().state == drivers::SourceStatus::State::kDisconnected,
+      now_ns, last_publish, start,
+      now_ns - last_publish > kPauseNs &&
+          source_->status().state == drivers::SourceStatus::State::kDisconnected,
       loaded_.config.stall_timeout_s);
   if (!ok && !stalled_) {
     stalled_ = true;
-    log_.warning(
-        fmt::format("no frame published for {:.1f} s: watchdog pings withheld",
-                    static_cast<double>(now_ns - stall_clock_.since_ns(last_publish_ns_.load(),
-                                                                       pipeline_start_ns_.load())) *
-                        1e-9));
+    log_.warning(fmt::format(
+        "no frame published for {:.1f} s: watchdog pings withheld",
+        static_cast<double>(now_ns - stall_clock_.since_ns(last_publish, start)) * 1e-9));
   } else if (ok && stalled_) {
     stalled_ = false;
     log_.info("frames flow again");

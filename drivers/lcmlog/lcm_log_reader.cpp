@@ -3,6 +3,7 @@
 #include <string>
 
 #include "dco/core/error.hpp"
+#include "dco/core/special_file.hpp"
 #include "dco/drivers/lcm_log.hpp"
 
 namespace dco::drivers {
@@ -33,9 +34,7 @@ std::string cut(std::uint64_t got, std::uint64_t needed) {
 
 LcmLogReader::LcmLogReader(const std::filesystem::path& path) : name_(path.string()) {
   if (path.empty()) throw Error("no LCM log file named (an empty path)");
-  // A directory or a device would read as an empty log, and a pipe blocks the open.
-  std::error_code ec;
-  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+  if (is_special_file(path))
     throw Error(name_ + ": not an LCM log file (a directory, a device or a pipe)");
   file_ = std::make_unique<std::ifstream>(path, std::ios::binary);
   in_ = file_.get();

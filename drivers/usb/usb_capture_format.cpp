@@ -3,11 +3,11 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <optional>
 #include <string>
 
 #include "dco/core/error.hpp"
+#include "dco/core/special_file.hpp"
 #include "dco/drivers/usb_capture.hpp"
 
 namespace dco::drivers {
@@ -329,9 +329,7 @@ UsbCapture parse_usb_capture(std::span<const std::uint8_t> bytes) {
 }
 
 UsbCaptureReader::UsbCaptureReader(const std::string& path) : path_(path) {
-  // A directory would read as an empty capture, and a pipe blocks the open.
-  std::error_code ec;
-  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+  if (is_special_file(path))
     throw Error("USB capture '" + path + "': not a capture file (a directory, a device or a pipe)");
   file_ = std::fopen(path.c_str(), "rb");
   if (!file_) throw Error("USB capture '" + path + "': cannot open: " + std::strerror(errno));

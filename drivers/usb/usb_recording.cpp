@@ -6,7 +6,6 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <mutex>
 #include <thread>
 #include <utility>
@@ -14,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "dco/core/error.hpp"
+#include "dco/core/special_file.hpp"
 #include "dco/drivers/usb_capture.hpp"
 
 namespace dco::drivers {
@@ -32,9 +32,7 @@ class CaptureWriter {
  public:
   CaptureWriter(const std::string& path, std::function<std::int64_t()> clock)
       : path_(path), clock_(clock ? std::move(clock) : monotonic_ns) {
-    // A pipe would block the open until someone reads it, with the camera waiting.
-    std::error_code ec;
-    if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    if (is_special_file(path))
       throw Error(
           fmt::format("USB capture '{}': not a file to record into (a directory, a device "
                       "or a pipe)",

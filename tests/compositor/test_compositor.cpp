@@ -1,17 +1,12 @@
 // The compositor on exact scenes (exact_scene.hpp): its occlusion mask against the one ray-cast
 // on the CPU, soft occlusion, following the daemon's ring, bad input.
 
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -24,6 +19,7 @@
 #include "dco/ipc/ring_writer.hpp"
 #include "exact_scene.hpp"
 #include "support/commands.hpp"
+#include "support/file_size_limit.hpp"
 #include "support/temp_dir.hpp"
 
 namespace dco::compositor {
@@ -205,23 +201,10 @@ TEST(Compositor, AFailedPngWriteLeavesTheLastGoodOne) {
   std::uint32_t x = 12345;
   for (std::uint8_t& v : noise)
     v = static_cast<std::uint8_t>((x = x * 1664525u + 1013904223u) >> 24);
-  const pid_t child = fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    const rlimit limit{4096, 4096};
-    setrlimit(RLIMIT_FSIZE, &limit);
-    std::signal(SIGXFSZ, SIG_IGN);
-    try {
-      write_png(path, noise.data(), 640, 400, 3);
-    } catch (const Error&) {
-      _exit(3);
-    }
-    _exit(0);
-  }
-  int status = 0;
-  ASSERT_EQ(waitpid(child, &status, 0), child);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 3) << "the write should have failed";
+  EXPECT_EQ(dco::testing::status_of_write_past_file_limit(
+                4096, [&] { write_png(path, noise.data(), 640, 400, 3); }),
+            dco::testing::kWriteThrew)
+      << "the write should have failed";
   EXPECT_EQ(dco::testing::read_file(path), before);
   EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
 }

@@ -77,6 +77,15 @@ struct Rig {
     io.clock = [s = sim] { return s->now_ns(); };
     source = open_indemind(std::move(owned), std::move(io), "indemind://");
   }
+  // Streams `before` frames, injects `fault`, streams `after` frames more (within `seconds`) and
+  // stops; false when the module never settled or the frames did not come.
+  bool stream_through(Fault fault, int param, long before, long after, double seconds = 10) {
+    source->start(sink);
+    const bool ok = wait_frames(before) && sim->inject_and_settle(fault, param) &&
+                    wait_frames(sink.count() + after, seconds);
+    source->stop();
+    return ok;
+  }
   bool wait_frames(long n, double seconds = 20) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     while (sink.count() < n) {
@@ -216,11 +225,7 @@ TEST(IndemindSource, OneWrongCounterCostsOneFrame) {
   for (const int off : {-100, 5000}) {
     SCOPED_TRACE(off);
     Rig rig;
-    rig.source->start(rig.sink);
-    ASSERT_TRUE(rig.wait_frames(150));
-    ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kCorruptCounter, off));
-    ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 150, 10));
-    rig.source->stop();
+    ASSERT_TRUE(rig.stream_through(Fault::kCorruptCounter, off, 150, 150));
     const auto rec = rig.sim->record();
     const auto n = counters_of(*rig.source);
     EXPECT_EQ(n.at("implausible_counters"), 1u);
@@ -240,11 +245,7 @@ TEST(IndemindSource, OneWrongCounterCostsOneFrame) {
 // map: the frames' capture times stay on the module's frame starts.
 TEST(IndemindSource, IMUTicksPastTwoFramePeriodsAreDroppedEvenNearTheHostClock) {
   Rig rig;
-  rig.source->start(rig.sink);
-  ASSERT_TRUE(rig.wait_frames(200));
-  ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kImuBadTicks, 7'000'000));
-  ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 150, 10));
-  rig.source->stop();
+  ASSERT_TRUE(rig.stream_through(Fault::kImuBadTicks, 7'000'000, 200, 150));
   const auto n = counters_of(*rig.source);
   EXPECT_EQ(n.at("imu_implausible"), 1u);
   EXPECT_EQ(n.at("imu_out_of_order"), 0u);
@@ -264,11 +265,7 @@ TEST(IndemindSource, ACounterAFewCountsHighIsNotTakenForLostFrames) {
     io.height = 400;
     io.fps = fps;
     Rig rig({}, io);
-    rig.source->start(rig.sink);
-    ASSERT_TRUE(rig.wait_frames(300));
-    ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kCorruptCounter, off));
-    ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 300, 10));
-    rig.source->stop();
+    ASSERT_TRUE(rig.stream_through(Fault::kCorruptCounter, off, 300, 300));
     const auto rec = rig.sim->record();
     const auto n = counters_of(*rig.source);
     EXPECT_EQ(n.at("implausible_counters"), 1u);
@@ -292,11 +289,7 @@ TEST(IndemindSource, FramesLostInTheModuleAreCountedAndKeepTheTimeLine) {
     io.height = 400;
     io.fps = fps;
     Rig rig({}, io);
-    rig.source->start(rig.sink);
-    ASSERT_TRUE(rig.wait_frames(300));
-    ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kSkipCounter, 3));
-    ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 300, 10));
-    rig.source->stop();
+    ASSERT_TRUE(rig.stream_through(Fault::kSkipCounter, 3, 300, 300));
     const auto rec = rig.sim->record();
     const auto n = counters_of(*rig.source);
     EXPECT_EQ(rec.expected_lost, 3u);
@@ -339,11 +332,7 @@ TEST(IndemindSource, FramesThatAgreeWithEachOtherStartANewTimeLine) {
   for (const int back : {1000, 10, -5000}) {
     SCOPED_TRACE(back);
     Rig rig;
-    rig.source->start(rig.sink);
-    ASSERT_TRUE(rig.wait_frames(150));
-    ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kCounterRestart, back));
-    ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 150, 10));
-    rig.source->stop();
+    ASSERT_TRUE(rig.stream_through(Fault::kCounterRestart, back, 150, 150));
     const auto rec = rig.sim->record();
     const auto n = counters_of(*rig.source);
     EXPECT_EQ(n.at("counter_restarts"), 1u);
@@ -371,11 +360,7 @@ TEST(IndemindSource, AStallRestartStartsANewTimeLine) {
   IndemindOptions io;
   io.stall_ms = 300;
   Rig rig(o, io);
-  rig.source->start(rig.sink);
-  ASSERT_TRUE(rig.wait_frames(150));
-  ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kStall, 0));
-  ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 150, 10));
-  rig.source->stop();
+  ASSERT_TRUE(rig.stream_through(Fault::kStall, 0, 150, 150));
   const auto rec = rig.sim->record();
   const auto n = counters_of(*rig.source);
   EXPECT_EQ(n.at("stream_restarts"), 1u);

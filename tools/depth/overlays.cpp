@@ -2,21 +2,13 @@
 
 #include <cmath>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "dco/core/cv_interop.hpp"
-#include "dco/core/error.hpp"
-#include "dco/core/file_replace.hpp"
+#include "dco/core/image_io.hpp"
 
 namespace dco::tools {
 namespace {
-
-void write_png(const std::filesystem::path& path, const cv::Mat& bgr) {
-  replace_file(path, [&](const std::filesystem::path& tmp) {
-    if (!cv::imwrite(tmp.string(), bgr)) throw Error("cannot write '" + path.string() + "'");
-  });
-}
 
 cv::Mat to_bgr(ImageView<const std::uint8_t> image) {
   cv::Mat bgr;
@@ -45,14 +37,14 @@ void write_disparity_colour(const std::filesystem::path& path, ImageView<const f
   cv::Mat colour;
   cv::applyColorMap(scaled, colour, cv::COLORMAP_TURBO);
   colour.setTo(cv::Scalar(0, 0, 0), unknown);
-  write_png(path, colour);
+  write_image_file(path, colour, "overlay");
 }
 
 void write_contour_overlay(const std::filesystem::path& path, ImageView<const std::uint8_t> image,
                            ImageView<const std::uint8_t> contours) {
   cv::Mat bgr = to_bgr(image);
   bgr.setTo(cv::Scalar(0, 0, 255), as_mat(contours) != 0);
-  write_png(path, bgr);
+  write_image_file(path, bgr, "overlay");
 }
 
 void write_occlusion_composite(const std::filesystem::path& path,
@@ -69,7 +61,7 @@ void write_occlusion_composite(const std::filesystem::path& path,
       const cv::Vec3b plane = dark ? cv::Vec3b(160, 60, 20) : cv::Vec3b(240, 160, 80);
       for (int c = 0; c < 3; ++c) p[c] = static_cast<std::uint8_t>((p[c] + 3 * plane[c]) / 4);
     }
-  write_png(path, bgr);
+  write_image_file(path, bgr, "overlay");
 }
 
 }  // namespace dco::tools

@@ -34,6 +34,12 @@ std::optional<PngHeader> png_header(std::span<const std::uint8_t> bytes);
 // file can claim gigabytes).
 cv::Mat read_image_file(const std::filesystem::path& path, int flags, std::string_view what);
 
+// Writes `image` with OpenCV, the format by the extension, beside its name and renamed over it
+// (replace_file): a failed write leaves no file, or the earlier one whole. Any failure is a
+// dco::Error naming the file as `what`.
+void write_image_file(const std::filesystem::path& path, const cv::Mat& image,
+                      std::string_view what);
+
 // Writes an 8-bit image; the format follows the extension. Throws dco::Error on failure.
 void save_image(const std::filesystem::path& path, ImageView<const std::uint8_t> image);
 
