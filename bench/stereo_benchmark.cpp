@@ -195,7 +195,9 @@ void BM_DcoRightCorrectionTurned_Color_1280x720(benchmark::State& state) {
   run_right_correction(state, {0.4, 0.002});
 }
 
-void BM_OpenCVRightCorrection_Color_1280x720(benchmark::State& state) {
+// The same two passes by OpenCV: warpAffine with the alignment's map (linear, borders repeated,
+// as align_rows), then a table per channel.
+void run_opencv_right_correction(benchmark::State& state, const dco::stereo::RowAlignment& rows) {
   if (pair_or_skip(state) == nullptr) return;
   const cv::Mat& right = headset_right();
   const dco::stereo::ExposureMap map = brighter_map();
@@ -205,13 +207,24 @@ void BM_OpenCVRightCorrection_Color_1280x720(benchmark::State& state) {
       lut.at<cv::Vec3b>(0, v)[c] =
           cv::saturate_cast<std::uint8_t>(map.channels[static_cast<std::size_t>(c)].gain * v +
                                           map.channels[static_cast<std::size_t>(c)].offset);
-  const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, 0, 0, 1, -0.4);
+  const double c = std::cos(rows.roll), s = std::sin(rows.roll);
+  const double xc = 0.5 * (right.cols - 1), yc = 0.5 * (right.rows - 1);
+  const cv::Matx23d to_src(c, -s, xc - c * xc + s * yc, s, c, yc - s * xc - c * yc + rows.offset);
   cv::Mat moved, balanced;
   for (auto _ : state) {
-    cv::warpAffine(right, moved, shift, right.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    cv::warpAffine(right, moved, to_src, right.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                   cv::BORDER_REPLICATE);
     cv::LUT(moved, lut, balanced);
     benchmark::DoNotOptimize(balanced.data);
   }
+}
+
+void BM_OpenCVRightCorrection_Color_1280x720(benchmark::State& state) {
+  run_opencv_right_correction(state, {0.4, 0.0});
+}
+
+void BM_OpenCVRightCorrectionTurned_Color_1280x720(benchmark::State& state) {
+  run_opencv_right_correction(state, {0.4, 0.002});
 }
 
 // One view through a lens fall-off correction (k 0.3), as the stage does to both before it matches
@@ -322,6 +335,9 @@ BENCHMARK(BM_DcoExposureBalance_Gray)->Unit(benchmark::kMillisecond)->UseRealTim
 BENCHMARK(BM_DcoRightCorrection_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_OpenCVRightCorrection_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DcoRightCorrectionTurned_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_OpenCVRightCorrectionTurned_Color_1280x720)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_DcoLensFalloff_Color_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_DcoRowAlignmentSearch_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_OpenCVSiftRowAlignment_1280x720)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -338,5 +354,7 @@ int main(int argc, char** argv) {
        {"BM_DcoSparseStereo_Color", "BM_SGBM3Way_Color_1Thread"},
        {"BM_DcoSparseStereo_Gray", "BM_SGBM3Way_Gray_2Threads"},
        {"BM_DcoRightCorrection_Color_1280x720", "BM_OpenCVRightCorrection_Color_1280x720"},
+       {"BM_DcoRightCorrectionTurned_Color_1280x720",
+        "BM_OpenCVRightCorrectionTurned_Color_1280x720"},
        {"BM_DcoRowAlignmentSearch_1280x720", "BM_OpenCVSiftRowAlignment_1280x720"}});
 }
