@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstddef>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
@@ -54,15 +55,23 @@ std::filesystem::path directory_of(const std::filesystem::path& file) {
 
 // Held while a writer creates its temporary ring, moves a ring into place or removes one: the
 // check that the ring at the path is still a writer's own and its removal are then one step for
-// every other writer in the directory. Without a readable directory there is nothing to lock and
-// writers fall back to the unguarded steps.
+// every other writer in the directory. A writer holds it for microseconds; whoever else can read
+// the directory (a client's group) can lock it too, so it is waited for a second at most and the
+// steps then go unguarded, as they do without a readable directory.
 class DirectoryLock {
  public:
   explicit DirectoryLock(const std::filesystem::path& file) {
     fd_ = open(directory_of(file).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (fd_ >= 0)
-      while (flock(fd_, LOCK_EX) != 0 && errno == EINTR) {
-      }
+    if (fd_ < 0) return;
+    constexpr int kTries = 1000;
+    for (int i = 0; i < kTries; ++i) {
+      if (flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
+      if (errno != EWOULDBLOCK && errno != EINTR) break;
+      const timespec ms{0, 1'000'000};
+      nanosleep(&ms, nullptr);
+    }
+    close(fd_);
+    fd_ = -1;
   }
   DirectoryLock(const DirectoryLock&) = delete;
   DirectoryLock& operator=(const DirectoryLock&) = delete;
@@ -74,6 +83,19 @@ class DirectoryLock {
   int fd_ = -1;
 };
 
+// Opens a file of the ring's directory to look at it: never a FIFO's wait for a writer, never a
+// link's target. -1 for anything that is not a regular file.
+int open_regular(const std::filesystem::path& file) {
+  const int fd = open(file.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return -1;
+  struct stat st {};
+  if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
 // Temporary rings of writers killed while they built them (each holds a whole ring's memory, in
 // RAM under /run): a live writer's is locked. Called under the DirectoryLock, which every writer
 // holds from creating its temporary ring to locking it.
@@ -82,11 +104,31 @@ void remove_abandoned_rings(const std::filesystem::path& path) {
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(directory_of(path), ec)) {
     if (!entry.path().filename().string().starts_with(prefix)) continue;
-    const int fd = open(entry.path().c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    const int fd = open_regular(entry.path());
     if (fd < 0) continue;
     if (flock(fd, LOCK_EX | LOCK_NB) == 0) unlink(entry.path().c_str());
     close(fd);
   }
+}
+
+// One writer per ring: a ring at the path whose writer still holds its lock is a live writer's
+// (a second dcod started by hand beside the service), and replacing it would leave that writer
+// publishing into a file no client can find while it still tells its watchdog all is well.
+// Readers only ever take the lock shared, so a shared probe fails on the writer alone.
+void refuse_live_writer(const std::filesystem::path& path) {
+  const int fd = open_regular(path);
+  if (fd < 0) return;
+  const bool live = flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  std::uint64_t magic = 0;
+  std::int64_t pid = 0;
+  const bool has_pid = pread(fd, &magic, sizeof(magic), 0) == static_cast<ssize_t>(sizeof(magic)) &&
+                       magic == layout::kMagic &&
+                       pread(fd, &pid, sizeof(pid), offsetof(layout::RingHeader, writer_pid)) ==
+                           static_cast<ssize_t>(sizeof(pid));
+  close(fd);
+  if (!live) return;
+  throw Error(fmt::format("{}: another writer{} publishes depth there; stop it first",
+                          path.string(), has_pid ? fmt::format(" (pid {})", pid) : std::string()));
 }
 
 }  // namespace
@@ -124,6 +166,7 @@ RingWriter::RingWriter(const std::filesystem::path& path, const RingOptions& opt
   };
   {
     const DirectoryLock lock(path);
+    refuse_live_writer(path);
     remove_abandoned_rings(path);
     fd_ = open(tmp.c_str(), O_CREAT | O_EXCL | O_RDWR | O_CLOEXEC, 0640);
     if (fd_ < 0) fail_errno(tmp, "cannot create the depth ring");
@@ -173,6 +216,14 @@ RingWriter::RingWriter(const std::filesystem::path& path, const RingOptions& opt
   h->newest_slot.store(writing_, std::memory_order_relaxed);
 
   const DirectoryLock lock(path);
+  try {
+    refuse_live_writer(path);  // one may have moved its ring into place while this one was built
+  } catch (const Error&) {
+    munmap(base_, size_);
+    close(fd_);
+    unlink(tmp.c_str());
+    throw;
+  }
   if (rename(tmp.c_str(), path.c_str()) != 0) cleanup("cannot move the depth ring into place");
 }
 
@@ -284,11 +335,25 @@ std::filesystem::path RingWriter::default_directory() {
     return dirs.substr(0, dirs.find(':'));
   }
   if (access("/run/dcod", W_OK | X_OK) == 0) return "/run/dcod";
-  std::string tmpl = (std::filesystem::temp_directory_path() / "dcod.XXXXXX").string();
-  if (mkdtemp(tmpl.data()) == nullptr)
-    throw Error(
-        fmt::format("{}: cannot create a runtime directory: {}", tmpl, std::strerror(errno)));
-  return tmpl;
+  // Run by hand: a directory of the user's own, the same at every start, so that a client
+  // follows a restarted daemon to its new ring.
+  const char* xdg = std::getenv("XDG_RUNTIME_DIR");
+  const std::filesystem::path dir =
+      xdg != nullptr && *xdg == '/'
+          ? std::filesystem::path(xdg) / "dcod"
+          : std::filesystem::temp_directory_path() / fmt::format("dcod-{}", getuid());
+  if (mkdir(dir.c_str(), 0700) != 0 && errno != EEXIST)
+    throw Error(fmt::format("{}: cannot create a runtime directory: {}", dir.string(),
+                            std::strerror(errno)));
+  struct stat st {};
+  if (lstat(dir.c_str(), &st) != 0)
+    throw Error(fmt::format("{}: {}", dir.string(), std::strerror(errno)));
+  // Anyone else able to write there could put their own file where clients look for depth.
+  if (!S_ISDIR(st.st_mode) || st.st_uid != getuid() || (st.st_mode & (S_IWGRP | S_IWOTH)) != 0)
+    throw Error(fmt::format(
+        "{}: not a directory of uid {} that only it can write to; set ring.path elsewhere",
+        dir.string(), getuid()));
+  return dir;
 }
 
 }  // namespace dco::ipc

@@ -3,6 +3,7 @@
 
 #include <fcntl.h>
 #include <sched.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <sys/mount.h>
 #include <sys/stat.h>
@@ -14,6 +15,8 @@
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -191,6 +194,47 @@ TEST(RingWriter, DefaultDirectoryFollowsRuntimeDirectory) {
     setenv("RUNTIME_DIRECTORY", saved.c_str(), 1);
   else
     unsetenv("RUNTIME_DIRECTORY");
+}
+
+// An environment variable set (or, with nullptr, unset) for a scope.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const char* value) : name_(name) {
+    if (const char* old = std::getenv(name)) saved_ = old;
+    if (value)
+      setenv(name, value, 1);
+    else
+      unsetenv(name);
+  }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+  ~ScopedEnv() {
+    if (saved_)
+      setenv(name_, saved_->c_str(), 1);
+    else
+      unsetenv(name_);
+  }
+
+ private:
+  const char* name_;
+  std::optional<std::string> saved_;
+};
+
+// Run by hand: the same directory of the user's own at every start, so clients follow a restart.
+TEST(RingWriter, DefaultDirectoryByHandIsTheUsersOwnAndTheSameEachTime) {
+  if (access("/run/dcod", W_OK | X_OK) == 0) GTEST_SKIP() << "/run/dcod is writable here";
+  TempDir dir;
+  const ScopedEnv runtime("RUNTIME_DIRECTORY", nullptr);
+  const ScopedEnv xdg("XDG_RUNTIME_DIR", dir.path().c_str());
+  const auto first = RingWriter::default_directory();
+  EXPECT_EQ(first, dir.path() / "dcod");
+  EXPECT_EQ(RingWriter::default_directory(), first);
+  struct stat st {};
+  ASSERT_EQ(stat(first.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0077, 0u);
+  // One that others can write to is refused: they could put their own file where clients look.
+  ASSERT_EQ(chmod(first.c_str(), 0777), 0);
+  EXPECT_THROW(RingWriter::default_directory(), Error);
 }
 
 TEST(RingClient, NoFrameBeforeTheFirstPublish) {
@@ -475,7 +519,7 @@ TEST(RingClient, FollowsARestartedWriterToItsNewSession) {
   ASSERT_TRUE(old_view.has_value());
   const std::uint64_t old_session = c.session_id();
 
-  // A new writer replaces the file while the old one still runs (as a restart does).
+  old_writer.reset();
   RingWriter writer(path, small_ring(5));
   publish_pattern(writer, 1);
   const auto v = c.wait_next(std::chrono::milliseconds(1000));
@@ -486,12 +530,101 @@ TEST(RingClient, FollowsARestartedWriterToItsNewSession) {
   EXPECT_EQ(v->info().publish_index, 1u) << "publish indices restart with the session";
   EXPECT_EQ(view_checksum(*v), expected_checksum(1, kWidth, kHeight, true));
   EXPECT_FALSE(c.still_valid(*old_view)) << "a view of the old session is never valid";
-  old_writer.reset();
-  EXPECT_TRUE(std::filesystem::exists(path)) << "the old writer leaves the new ring alone";
   publish_pattern(writer, 2);
   const auto after = c.wait_next(std::chrono::milliseconds(1000));
   ASSERT_TRUE(after.has_value());
   EXPECT_EQ(after->info().frame_seq, 2u);
+}
+
+// A second daemon started by hand beside the service: it must not take the ring over, or the
+// first would go on publishing into a file no client finds while its watchdog hears all is well.
+TEST(RingWriter, RefusesAPathALiveWriterPublishesAt) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  auto first = std::make_unique<RingWriter>(path, small_ring());
+  client::Client c = connect(path);
+  try {
+    RingWriter second(path, small_ring(5));
+    ADD_FAILURE() << "a second writer took the ring over";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("another writer (pid " + std::to_string(getpid()) + ")"),
+              std::string::npos)
+        << e.what();
+  }
+  publish_pattern(*first, 3);
+  const auto v = c.wait_next(std::chrono::milliseconds(1000));
+  ASSERT_TRUE(v.has_value()) << "the first writer's clients read on";
+  EXPECT_EQ(v->info().session_id, first->session_id());
+  int left = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path())) left += e.path() != path;
+  EXPECT_EQ(left, 0) << "the refused writer left its temporary ring behind";
+  first.reset();
+  RingWriter next(path, small_ring(5));  // once it has stopped, the path is free
+}
+
+// A ring put over a writer's own by someone else (a file moved there by hand): the writer's stop
+// leaves it alone.
+TEST(RingWriter, LeavesARingThatReplacedItsOwnAlone) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  auto writer = std::make_unique<RingWriter>(path, small_ring());
+  const auto other = dir.path() / "other";
+  std::ofstream(other) << "not this writer's";
+  std::filesystem::rename(other, path);
+  writer.reset();
+  EXPECT_TRUE(std::filesystem::exists(path));
+}
+
+// Runs `body` in a child process and returns its exit status, or -1 when it is still running
+// after `seconds` (it is then killed): a writer that blocks must fail a test, not hang it.
+int exit_status_within(int seconds, const std::function<int()>& body) {
+  const pid_t child = fork();
+  if (child == 0) _exit(body());
+  for (int i = 0; i < seconds * 100; ++i) {
+    int status = 0;
+    if (waitpid(child, &status, WNOHANG) == child)
+      return WIFEXITED(status) ? WEXITSTATUS(status) : -2;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  kill(child, SIGKILL);
+  waitpid(child, nullptr, 0);
+  return -1;
+}
+
+// A FIFO named like an abandoned temporary ring (anyone can make one in /dev/shm) must not
+// block a writer's start for ever.
+TEST(RingWriter, StartsBesideAFifoNamedLikeATemporaryRing) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  const auto fifo = dir.path() / "depth.shm.tmp.00000000deadbeef";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(exit_status_within(10,
+                               [&] {
+                                 RingWriter writer(path, small_ring());
+                                 return 0;
+                               }),
+            0);
+  EXPECT_TRUE(std::filesystem::exists(fifo)) << "only abandoned rings are removed";
+}
+
+// Whoever can read the ring's directory (a client's group) can lock it: the writer's start and
+// stop wait a second at most for it.
+TEST(RingWriter, StartsAndStopsWhileSomeoneElseLocksTheDirectory) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  const int dir_fd = open(dir.path().c_str(), O_RDONLY | O_DIRECTORY);
+  ASSERT_GE(dir_fd, 0);
+  ASSERT_EQ(flock(dir_fd, LOCK_EX), 0);
+  const auto started = std::chrono::steady_clock::now();
+  EXPECT_EQ(exit_status_within(10,
+                               [&] {
+                                 RingWriter writer(path, small_ring());
+                                 return std::filesystem::exists(path) ? 0 : 3;
+                               }),
+            0);
+  EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(5));
+  EXPECT_FALSE(std::filesystem::exists(path)) << "the stop removed the ring";
+  close(dir_fd);
 }
 
 TEST(RingClient, AViewOfARestartedWriterStaysMappedUntilAFrameIsReturned) {

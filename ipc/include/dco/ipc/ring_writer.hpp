@@ -27,7 +27,8 @@ struct FrameMeta {
 // atomically, so readers of a previous session see a new inode and a new session id.
 class RingWriter {
  public:
-  // Throws dco::Error when the file cannot be created or the geometry is out of range.
+  // Throws dco::Error when the file cannot be created, the geometry is out of range or another
+  // live writer publishes at `path`.
   RingWriter(const std::filesystem::path& path, const RingOptions& options);
   RingWriter(const RingWriter&) = delete;
   RingWriter& operator=(const RingWriter&) = delete;
@@ -60,8 +61,9 @@ class RingWriter {
   std::uint64_t session_id() const { return session_id_; }
   std::uint64_t published() const { return published_; }
 
-  // $RUNTIME_DIRECTORY, else /run/dcod when it is writable, else a new directory under the
-  // system temp directory.
+  // $RUNTIME_DIRECTORY, else /run/dcod when it is writable, else the user's own
+  // $XDG_RUNTIME_DIR/dcod or <temp>/dcod-<uid> (made 0700; refused when it is not the user's or
+  // others can write to it).
   static std::filesystem::path default_directory();
 
  private:
