@@ -227,6 +227,25 @@ TEST(RingPolling, APollingWaitAsksForAShortTimeSliceForItsThreadAndKeepsItsNiceV
   }
 }
 
+// A thread's reset-on-fork flag is part of its policy (sched_setscheduler's SCHED_RESET_ON_FORK):
+// the time slice a polling wait asks for keeps it.
+TEST(RingPolling, TheTimeSliceRequestKeepsTheThreadsResetOnFork) {
+  int before = -1, after = -1;
+  bool set = false;
+  std::thread([&] {
+    sched_param p{};
+    if (sched_setscheduler(0, SCHED_OTHER | SCHED_RESET_ON_FORK, &p) != 0) return;
+    before = sched_getscheduler(0);
+    SchedAttr attr;
+    set = thread_sched_attr(0, attr) && dco::set_time_slice(attr, 100'000);
+    after = sched_getscheduler(0);
+  }).join();
+  if (before < 0) GTEST_SKIP() << "no SCHED_RESET_ON_FORK here";
+  ASSERT_TRUE(set);
+  EXPECT_EQ(before, SCHED_OTHER | SCHED_RESET_ON_FORK);
+  EXPECT_EQ(after, before);
+}
+
 TEST(RingPolling, PollTimeIsCheckedAndCallersBuiltBeforeItGetTheDefault) {
   TempDir dir;
   RingWriter writer(dir.path() / "depth.shm", small_ring());

@@ -3,6 +3,7 @@
 #include "dco/client.h"
 
 #include <fcntl.h>
+#include <pthread.h>
 #include <sys/file.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
@@ -212,6 +213,22 @@ void poll_for_change(const std::atomic<std::uint32_t>& word, std::uint32_t seen,
   while (word.load(std::memory_order_acquire) == seen && now_ns() < until_ns) sched_yield();
 }
 
+// Held through every call that can reach a cancellation point (open, stat, futex waits, munmap):
+// a thread cancelled there would unwind through the catch-all handlers that keep C++ exceptions
+// from reaching a C caller, or out of the noexcept destructor dco_client_close runs, and the
+// process would abort. A cancel that arrives meanwhile takes effect at the caller's next
+// cancellation point after the call returns (wait_next within its timeout).
+class NoCancel {
+ public:
+  NoCancel() { pthread_setcancelstate(PTHREAD_CANCEL_DISABLE, &old_); }
+  NoCancel(const NoCancel&) = delete;
+  NoCancel& operator=(const NoCancel&) = delete;
+  ~NoCancel() { pthread_setcancelstate(old_, nullptr); }
+
+ private:
+  int old_ = PTHREAD_CANCEL_ENABLE;
+};
+
 }  // namespace
 
 struct dco_client {
@@ -226,6 +243,10 @@ struct dco_client {
   std::int64_t poll_ns = 0;
   std::uint32_t polled_write = 0;  // writes_begun value of the write polled through last
   std::int64_t poll_end_ns = 0;    // when polling through that write stops
+  // wait_next said DCO_E_WRITER_GONE for this ring: later calls wait out their timeout (a
+  // restarted daemon still found within it) rather than return at once, which would spin a
+  // caller that simply calls again.
+  bool gone_reported = false;
 
   ~dco_client() {
     map.release();
@@ -356,6 +377,15 @@ struct dco_client {
                                      " attempts");
   }
 
+  // Whether the view's pixels are in this handle's current mapping: a view another handle of the
+  // same ring returned names the same slot and token, but its pixels go with that handle.
+  bool owns(const dco_frame_view* view) const {
+    if (view->info.slot >= map.geometry.slot_count) return false;
+    const unsigned char* base = map.slot(view->info.slot);
+    return reinterpret_cast<const unsigned char*>(view->depth) == base + map.sizes.depth_offset &&
+           view->image == (map.geometry.image_channels ? base + map.sizes.image_offset : nullptr);
+  }
+
   bool valid(const dco_frame_view* view) const {
     if (view->info.session_id != map.session_id || view->info.slot >= map.geometry.slot_count)
       return false;
@@ -383,6 +413,7 @@ struct dco_client {
     map = fresh;
     last_index = 0;
     polled_write = 0;
+    gone_reported = false;
     skip_dead_writers_frames();
     *remapped = true;
     return DCO_OK;
@@ -434,6 +465,7 @@ void dco_frame_info_init(dco_frame_info* info) {
 }
 
 dco_status dco_client_open(const dco_client_options* options, dco_client** out) try {
+  const NoCancel no_cancel;
   if (out == nullptr) return fail(DCO_E_INVALID_ARGUMENT, "dco_client_open: out is NULL");
   *out = nullptr;
   if (!struct_ok(options, options ? options->struct_size : 0, kOptionsSizeV1))
@@ -462,10 +494,12 @@ dco_status dco_client_open(const dco_client_options* options, dco_client** out) 
 }
 
 void dco_client_close(dco_client* client) {
+  const NoCancel no_cancel;
   delete client;
 }
 
 dco_status dco_client_latest(dco_client* client, dco_frame_view* view) try {
+  const NoCancel no_cancel;
   if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_latest: bad client or view");
   return client->returned(client->checked_latest(view));
@@ -476,15 +510,17 @@ dco_status dco_client_latest(dco_client* client, dco_frame_view* view) try {
 int dco_client_still_valid(const dco_client* client, const dco_frame_view* view) {
   if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
     return 0;
-  return client->valid(view) ? 1 : 0;
+  return client->owns(view) && client->valid(view) ? 1 : 0;
 }
 
 dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_frame_view* view) try {
+  const NoCancel no_cancel;
   if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)) ||
       timeout_ms < 0)
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_wait_next: bad client, view or timeout");
   const std::int64_t deadline = now_ns() + std::int64_t{timeout_ms} * 1'000'000;
   if (client->poll_ns != 0) request_polling_slice();
+  bool gone = false;
   for (;;) {
     const auto* h = client->map.header();
     // Read the wake word before looking for a frame: a publish after the look changes it, so the
@@ -497,21 +533,30 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     }
     const std::int64_t now = now_ns();
     const bool closed = h->state.load(std::memory_order_acquire) == layout::kStateClosed;
-    if (closed || now - client->last_path_check_ns >= kPathCheckNs) {
+    if ((closed && !client->gone_reported) || now - client->last_path_check_ns >= kPathCheckNs) {
       bool remapped = false;
       const dco_status status = client->follow_path(&remapped);
       if (status != DCO_OK) return status;
-      if (remapped) continue;
-      if (client->writer_gone()) {
+      if (remapped) {
+        gone = false;
+        continue;
+      }
+      gone = client->writer_gone();
+      if (gone) {
         // A frame published between the look above and the close is still the client's: the
         // writer publishes before it closes, so a count read after seeing it gone has it.
         if (h->publish_count.load(std::memory_order_acquire) > client->last_index) continue;
-        return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
+        if (!client->gone_reported) {
+          client->gone_reported = true;
+          return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
+        }
       }
     }
-    if (now >= deadline)
+    if (now >= deadline) {
+      if (gone) return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
       return fail(DCO_E_TIMEOUT, client->expect.path + ": no new frame within " +
                                      std::to_string(timeout_ms) + " ms");
+    }
     // A writer that dies never wakes us, and a restarted one writes a new file: wake up for the
     // path check at the latest.
     const std::int64_t until = std::min(deadline, client->last_path_check_ns + kPathCheckNs);
@@ -542,6 +587,7 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
 
 dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
                            dco_frame_buffer* dst) try {
+  const NoCancel no_cancel;
   if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)) ||
       !struct_ok(dst, dst ? dst->struct_size : 0, sizeof(dco_frame_buffer)) ||
       dst->depth == nullptr)
@@ -577,6 +623,7 @@ dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
 
 dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst,
                                   dco_frame_info* info) try {
+  const NoCancel no_cancel;
   if (client == nullptr || (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_latest: bad client or info");
   dco_frame_view view;
@@ -598,6 +645,7 @@ dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst,
 
 dco_status dco_client_view_announced(dco_client* client, uint64_t session_id, uint32_t slot,
                                      uint64_t publish_index, dco_frame_view* view) try {
+  const NoCancel no_cancel;
   if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)))
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_view_announced: bad client or view");
   return client->returned(client->take_announced(session_id, slot, publish_index, view));
@@ -608,6 +656,7 @@ dco_status dco_client_view_announced(dco_client* client, uint64_t session_id, ui
 dco_status dco_client_read_announced(dco_client* client, uint64_t session_id, uint32_t slot,
                                      uint64_t publish_index, dco_frame_buffer* dst,
                                      dco_frame_info* info) try {
+  const NoCancel no_cancel;
   if (client == nullptr || (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_announced: bad client or info");
   dco_frame_view view;

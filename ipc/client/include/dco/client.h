@@ -1,9 +1,12 @@
 /* libdco-client: read the depth frames dcod publishes in its shared-memory ring.
  *
  * Plain C, stable ABI: every struct a caller passes starts with `struct_size`, set by the
- * matching *_init function, so fields can be appended without breaking old callers. A client
- * handle is not thread-safe; use one per thread. Frames are read-only views into the mapping or
- * copies into caller memory; neither path ever blocks the daemon. */
+ * matching *_init function. Options may gain fields at the end (older sizes are accepted); the
+ * view, buffer and info structs are fixed for this soname. A client handle is not thread-safe;
+ * use one per thread, and a view only with the handle that returned it. Frames are read-only
+ * views into the mapping or copies into caller memory; neither path ever blocks the daemon.
+ * No call is a cancellation point: a thread cancelled during one is cancelled at its next
+ * cancellation point after the call returns (dco_client_wait_next within its timeout). */
 #ifndef DCO_CLIENT_H
 #define DCO_CLIENT_H
 
@@ -109,11 +112,14 @@ DCO_CLIENT_API void dco_client_close(dco_client* client);
 
 /* The newest frame as a view (only a view whose counter was even when taken is returned). */
 DCO_CLIENT_API dco_status dco_client_latest(dco_client* client, dco_frame_view* view);
-/* 1 while the slot behind the view has not been rewritten, else 0. */
+/* 1 while the slot behind the view has not been rewritten, else 0; 0 as well for a view another
+ * handle returned (its pixels go with that handle). */
 DCO_CLIENT_API int dco_client_still_valid(const dco_client* client, const dco_frame_view* view);
 /* Waits up to timeout_ms for a frame newer than the last one this client returned. Remaps when
  * the daemon restarted (new session id). DCO_E_WRITER_GONE as soon as the writer is seen to
- * have stopped or died; calling again picks up a daemon that comes back. */
+ * have stopped or died; calling again picks up a daemon that comes back, and while none does,
+ * each later call waits out its timeout and says DCO_E_WRITER_GONE again (a loop that calls
+ * again does not spin). */
 DCO_CLIENT_API dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms,
                                                dco_frame_view* view);
 /* Copies the frame a view names; DCO_E_OVERTAKEN when its slot changed before or during the

@@ -3,6 +3,10 @@
 // Thin C++ layer over dco/client.h: RAII ownership and exceptions for failures a caller cannot
 // route around; "no new frame yet" and "overwritten" are ordinary results, not exceptions.
 
+#if __cplusplus < 201703L
+#error "dco/client.hpp needs C++17 or later (std::optional); C programs include dco/client.h"
+#endif
+
 #include <dco/client.h>
 
 #include <algorithm>

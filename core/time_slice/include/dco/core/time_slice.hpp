@@ -37,7 +37,10 @@ inline bool thread_sched_attr(pid_t tid, SchedAttr& out) {
 // policy and nice value; true when the kernel accepted it.
 inline bool set_time_slice(SchedAttr attr, std::uint64_t ns) {
   attr.size = sizeof attr;
-  attr.sched_flags = 0;
+  // SCHED_FLAG_RESET_ON_FORK is part of the thread's policy (sched_setscheduler's
+  // SCHED_RESET_ON_FORK): kept. The other flags ask for changes this call does not make.
+  constexpr std::uint64_t kResetOnFork = 0x01;
+  attr.sched_flags &= kResetOnFork;
   attr.sched_runtime = ns;
   return syscall(SYS_sched_setattr, 0, &attr, 0) == 0;
 }
