@@ -56,6 +56,9 @@ Daemon::Daemon(ConfigSources sources, LoadedConfig config, Logger& log, SourceOp
   event_fd_ = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
   if (event_fd_ < 0) throw Error(std::string("eventfd: ") + std::strerror(errno));
   max_frames_ = loaded_.config.max_frames;
+  // What is logged before the publisher exists (the source, the log's settings) reaches DCO_LOG
+  // once it does.
+  log_.hold_for_forward();
 }
 
 Daemon::~Daemon() {
@@ -131,6 +134,10 @@ void Daemon::open() {
   options.lcm_url = c.lcm_url;
   options.preview_hz = c.preview_hz;
   publisher_ = std::make_unique<ipc::DepthPublisher>(*ring_, options);
+  if (const std::string problem = publisher_->lcm_problem(); !problem.empty())
+    log_.warning(problem + ": depth reaches the ring's readers, LCM is tried again every " +
+                 std::to_string(kLcmRetryNs / 1'000'000'000) + " s");
+  lcm_retry_ns_ = monotonic_ns();
   log_.set_forward([this](LogLevel level, std::string_view text) {
     std::lock_guard lock(publish_mutex_);
     if (publisher_) publisher_->log(level, "dcod", text, monotonic_ns());
@@ -317,6 +324,17 @@ void Daemon::on_result(const pipeline::DepthResult& result,
   }
 }
 
+void Daemon::retry_lcm(std::int64_t now_ns) {
+  if (now_ns - lcm_retry_ns_ < kLcmRetryNs) return;
+  lcm_retry_ns_ = now_ns;
+  bool set_up = false;
+  {
+    std::lock_guard lock(publish_mutex_);
+    if (!publisher_->lcm_problem().empty()) set_up = publisher_->retry_lcm();
+  }
+  if (set_up) log_.info("LCM is set up now: DCO_DEPTH and the other channels go out");
+}
+
 void Daemon::report_lcm_failures(std::int64_t now_ns, bool last) {
   // At most every kLcmReportPeriodNs: the warning itself goes out on DCO_LOG, which may fail too.
   constexpr std::int64_t kLcmReportPeriodNs = 10'000'000'000;
@@ -378,6 +396,7 @@ void Daemon::tick(std::int64_t now_ns) {
     notifier_.watchdog();
     last_ping_ns_ = now_ns;
   }
+  retry_lcm(now_ns);
   report_lcm_failures(now_ns, false);
   if (now_ns < next_stats_ns_) return;
   next_stats_ns_ = now_ns + static_cast<std::int64_t>(1e9 / loaded_.config.stats_hz);

@@ -4,6 +4,8 @@
 
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
+#include "dco/drivers/frame_source.hpp"
+#include "dco/ipc/publisher.hpp"
 
 namespace dco::daemon {
 namespace {
@@ -88,6 +90,8 @@ LoadedConfig load_config(const ConfigSources& sources) {
   try {
     pipeline::validate(out.config.pipeline);
     pipeline::runtime::validate(out.config.runtime);
+    drivers::check_source_uri(out.config.source);
+    ipc::check_lcm_url(out.config.lcm_url);
   } catch (const Error& e) {
     throw Error(fmt::format("{}: {}", where, e.what()));
   }

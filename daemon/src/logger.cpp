@@ -73,6 +73,23 @@ void Logger::set_level(LogLevel level) {
 void Logger::set_forward(Forward forward) {
   std::lock_guard lock(mutex_);
   forward_ = std::move(forward);
+  if (forward_)
+    for (const auto& [level, line] : held_) send_forward(level, line);
+  held_.clear();
+  holding_ = false;
+}
+
+void Logger::hold_for_forward() {
+  std::lock_guard lock(mutex_);
+  holding_ = true;
+}
+
+void Logger::send_forward(LogLevel level, const std::string& line) {
+  try {
+    forward_(level, line);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "dcod: error: DCO_LOG: %s\n", e.what());
+  }
 }
 
 void Logger::log(LogLevel level, std::string_view text) {
@@ -85,13 +102,10 @@ void Logger::log(LogLevel level, std::string_view text) {
                     "SYSLOG_IDENTIFIER=dcod", nullptr);
   else
     std::fprintf(stderr, "dcod: %s: %s\n", name(level), line.c_str());
-  if (forward_) {
-    try {
-      forward_(level, line);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "dcod: error: DCO_LOG: %s\n", e.what());
-    }
-  }
+  if (forward_)
+    send_forward(level, line);
+  else if (holding_ && held_.size() < kMaxHeld)
+    held_.emplace_back(level, line);
 }
 
 }  // namespace dco::daemon

@@ -72,7 +72,8 @@ int main(int argc, char** argv) {
     config = dco::daemon::load_config(sources);
     log.set_level(dco::daemon::parse_log_level(config.config.log_level));
   } catch (const dco::Error& e) {
-    std::fprintf(stderr, "dcod: %s\n", dco::printable(e.what()).c_str());
+    // Through the log: under systemd the journal then has it at error priority.
+    log.error(e.what());
     return 2;
   }
   if (print_config) {
@@ -90,6 +91,9 @@ int main(int argc, char** argv) {
   sigaddset(&mask, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &mask, nullptr);
   signal(SIGPIPE, SIG_IGN);
+  // A write past a file size limit (LimitFSIZE=, ulimit -f) is then an error the writer reports,
+  // not the end of the daemon.
+  signal(SIGXFSZ, SIG_IGN);
 
   try {
     dco::daemon::Daemon daemon(sources, std::move(config), log);

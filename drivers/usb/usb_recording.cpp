@@ -1,6 +1,7 @@
 // A transport that passes every call through to another one and writes it, with its outcome and
 // every transfer completion, to a capture file.
 
+#include <sys/stat.h>
 #include <time.h>
 
 #include <cerrno>
@@ -28,6 +29,21 @@ std::int64_t monotonic_ns() {
   return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
 }
 
+// A capture already at the path is a restarted service's last session, often the fault it was
+// recording: one that streamed (past kKeptCaptureBytes) moves to PATH.1, replacing an older one,
+// before the new capture is created. Smaller ones (a module not found, each restart of a service
+// waiting for it) are written over, so they never push the one that matters out.
+void keep_earlier_capture(const std::string& path) {
+  struct stat st {};
+  if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode) ||
+      static_cast<std::uint64_t>(st.st_size) <= kKeptCaptureBytes)
+    return;
+  const std::string kept = path + ".1";
+  if (std::rename(path.c_str(), kept.c_str()) != 0)
+    throw Error(fmt::format("USB capture '{}': cannot keep the earlier capture as '{}': {}", path,
+                            kept, std::strerror(errno)));
+}
+
 class CaptureWriter {
  public:
   CaptureWriter(const std::string& path, std::function<std::int64_t()> clock)
@@ -37,6 +53,7 @@ class CaptureWriter {
           fmt::format("USB capture '{}': not a file to record into (a directory, a device "
                       "or a pipe)",
                       path));
+    keep_earlier_capture(path);
     file_ = std::fopen(path.c_str(), "wb");
     if (!file_)
       throw Error(fmt::format("USB capture '{}': cannot create: {}", path, std::strerror(errno)));

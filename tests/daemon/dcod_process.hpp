@@ -120,10 +120,11 @@ class NotifySocket {
 
 struct DcodOptions {
   std::vector<std::string> args;
-  std::filesystem::path log;              // stderr goes here
-  const NotifySocket* notify = nullptr;   // sets $NOTIFY_SOCKET
-  std::chrono::microseconds watchdog{0};  // sets $WATCHDOG_USEC/$WATCHDOG_PID when > 0
-  bool private_network = false;           // run inside unshare -n with lo multicast
+  std::filesystem::path log;                // stderr goes here
+  const NotifySocket* notify = nullptr;     // sets $NOTIFY_SOCKET
+  std::chrono::microseconds watchdog{0};    // sets $WATCHDOG_USEC/$WATCHDOG_PID when > 0
+  bool private_network = false;             // run inside unshare -n with lo multicast
+  std::string network_setup = kNetnsSetup;  // what runs in that namespace before dcod
 };
 
 class DcodProcess {
@@ -133,7 +134,7 @@ class DcodProcess {
     if (o.private_network) {
       std::istringstream words(unshare_command());
       for (std::string w; words >> w;) argv.push_back(w);
-      argv.insert(argv.end(), {"sh", "-c", std::string(kNetnsSetup) + " && exec \"$0\" \"$@\""});
+      argv.insert(argv.end(), {"sh", "-c", o.network_setup + " && exec \"$0\" \"$@\""});
     }
     argv.push_back(DCOD_EXE);
     argv.insert(argv.end(), o.args.begin(), o.args.end());

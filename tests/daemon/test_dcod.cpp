@@ -394,6 +394,47 @@ TEST(Dcod, AReloadThatLowersMaxFramesBelowThePublishedCountStopsCleanly) {
   EXPECT_NE(dcod.log().find("(service.max_frames): stopping"), std::string::npos) << dcod.log();
 }
 
+// A headset that boots without a network has no multicast route on lo: LCM udpm cannot be set
+// up, and depth must reach the ring's readers all the same; LCM follows once the route is there.
+TEST(Dcod, StartsWithoutAMulticastRouteAndSetsLcmUpOnceThereIsOne) {
+  if (const std::string problem = private_network_problem(); !problem.empty())
+    GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
+  if (run_command("command -v nsenter").status != 0) GTEST_SKIP() << "no nsenter here";
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o = on_udpm(dir, notify);
+  o.network_setup = "ip link set lo up";
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  client::Options co;
+  co.path = (dir / "depth.shm").string();
+  client::Client reader(co);
+  EXPECT_TRUE(reader.wait_next(5s).has_value()) << "depth reaches the ring without LCM";
+  EXPECT_NE(dcod.log().find("LCM cannot be set up"), std::string::npos) << dcod.log();
+  const CommandResult route = run_command("nsenter -t " + std::to_string(dcod.pid()) +
+                                          " -n ip route add 224.0.0.0/4 dev lo");
+  ASSERT_EQ(route.status, 0) << route.output;
+  const auto until = SteadyClock::now() + 10s;
+  while (dcod.log().find("LCM is set up now") == std::string::npos && SteadyClock::now() < until)
+    std::this_thread::sleep_for(50ms);
+  EXPECT_NE(dcod.log().find("LCM is set up now"), std::string::npos) << dcod.log();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(10s), 0) << dcod.log();
+}
+
+// A file size limit (LimitFSIZE=, ulimit -f) makes a write past it an error the writer reports,
+// not a SIGXFSZ that ends dcod and leaves a temporary ring behind.
+TEST(Dcod, AFileSizeLimitIsAnErrorNotASignal) {
+  TempDir dir;
+  const CommandResult r =
+      run_command("ulimit -f 16 && " + std::string(DCOD_EXE) + " --source '" + kScene +
+                  "' --set lcm.url=memq:// --set ring.path=" + (dir / "depth.shm").string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("depth.shm: ftruncate: File too large"), std::string::npos) << r.output;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    ADD_FAILURE() << "left behind: " << e.path();
+}
+
 TEST(Dcod, BadConfigurationsFailWithFileLineAndReason) {
   TempDir dir;
   const auto exe = std::string(DCOD_EXE);
@@ -406,6 +447,21 @@ TEST(Dcod, BadConfigurationsFailWithFileLineAndReason) {
   r = run_command(exe + " --set ring.slots=99");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.output.find("--set ring.slots=99"), std::string::npos) << r.output;
+
+  // A source URI or LCM URL that no build could open is a configuration error too, named by
+  // where it came from.
+  const auto bad_uri = dir.write("uri.toml", "[source]\nuri = \"bogus\"\n");
+  r = run_command(exe + " --config " + bad_uri.string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find(bad_uri.string() + ": source 'bogus': expected scheme://"),
+            std::string::npos)
+      << r.output;
+  r = run_command(exe + " --source ftp://cam");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("unknown scheme 'ftp'"), std::string::npos) << r.output;
+  r = run_command(exe + " --source '" + kScene + "' --set lcm.url=nonsense://x");
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("lcm.url 'nonsense://x'"), std::string::npos) << r.output;
 
   r = run_command(exe + " --frobnicate");
   EXPECT_EQ(r.status, 2);

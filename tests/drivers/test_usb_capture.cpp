@@ -619,5 +619,21 @@ TEST(UsbCapture, UriRefusesBadCapturesWithOneLine) {
   std::remove(empty.c_str());
 }
 
+// record= in a service's configuration: each restart records anew. The session that recorded a
+// fault (a capture that streamed) is kept as FILE.1; the short captures of restarts that found no
+// module are written over and never push it out.
+TEST(UsbCapture, ARecordingKeepsTheLastCaptureThatStreamed) {
+  const std::string path = temp_path("kept.usbcap"), kept = path + ".1";
+  std::remove(kept.c_str());
+  const std::vector<char> streamed(kKeptCaptureBytes + 1, 'x');
+  std::ofstream(path, std::ios::binary).write(streamed.data(), std::streamsize(streamed.size()));
+  for (int restart = 0; restart < 3; ++restart)
+    make_recording_transport(std::make_unique<SimulatedIndemind>(), path);
+  EXPECT_EQ(read_all(kept).size(), streamed.size()) << "the capture that streamed";
+  EXPECT_LT(read_all(path).size(), 1024u) << "the last restart's";
+  std::remove(path.c_str());
+  std::remove(kept.c_str());
+}
+
 }  // namespace
 }  // namespace dco::drivers

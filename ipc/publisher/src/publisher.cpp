@@ -1,11 +1,18 @@
 #include "dco/ipc/publisher.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <numbers>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -52,7 +59,40 @@ std::int16_t block_depth_mm(ImageView<const float> depth, int x0, int y0, int fa
   return static_cast<std::int16_t>(std::lround(std::clamp(nearest * 1000.0f, 1.0f, 32767.0f)));
 }
 
+// Whether a UDP socket can be connected to the udpm URL's group (LCM's own first check); true
+// for other providers and for what it cannot read, which LCM then judges.
+bool udpm_route_ready(std::string url) {
+  if (url.empty()) {
+    const char* env = std::getenv("LCM_DEFAULT_URL");
+    url = env != nullptr && *env != '\0' ? env : "udpm://239.255.76.67:7667";
+  }
+  constexpr std::string_view kUdpm = "udpm://";
+  if (!url.starts_with(kUdpm)) return true;
+  const std::string address = url.substr(kUdpm.size(), url.find('?') - kUdpm.size());
+  const std::size_t colon = address.rfind(':');
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(
+      colon == std::string::npos ? 7667 : std::atoi(address.c_str() + colon + 1)));
+  if (inet_pton(AF_INET, address.substr(0, colon).c_str(), &to.sin_addr) != 1) return true;
+  const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return true;
+  const bool ok = connect(fd, reinterpret_cast<const sockaddr*>(&to), sizeof to) == 0;
+  close(fd);
+  return ok;
+}
+
 }  // namespace
+
+void check_lcm_url(std::string_view url) {
+  if (url.empty()) return;  // LCM's default: $LCM_DEFAULT_URL, else udpm
+  const std::size_t end = url.find("://");
+  const std::string_view provider = url.substr(0, end);
+  if (end == std::string_view::npos || std::find(std::begin(kLcmProviders), std::end(kLcmProviders),
+                                                 provider) == std::end(kLcmProviders))
+    throw Error(fmt::format("lcm.url '{}': not PROVIDER://... with a provider LCM has ({})", url,
+                            fmt::join(kLcmProviders, ", ")));
+}
 
 int preview_factor(int width, int height, int max_width, int max_height) {
   // One whole factor for both axes keeps the preview's pixels square.
@@ -80,12 +120,31 @@ DepthPublisher::DepthPublisher(RingWriter& ring, const PublisherOptions& options
     throw Error(fmt::format("publisher: preview rate {} Hz or size {}x{} out of range",
                             options.preview_hz, options.preview_max_width,
                             options.preview_max_height));
-  lcm_ = std::make_unique<lcm::LCM>(options.lcm_url);
-  if (!lcm_->good())
-    throw Error(
-        fmt::format("publisher: cannot set up LCM with '{}' (for udpm, is there a "
-                    "multicast route?)",
-                    options.lcm_url.empty() ? "the default URL" : options.lcm_url));
+  check_lcm_url(options.lcm_url);
+  retry_lcm();
+}
+
+bool DepthPublisher::retry_lcm() {
+  if (lcm_) return true;
+  // LCM prints a dozen lines of advice at every failed udpm setup: after the first, a retry waits
+  // until a route to the group is there.
+  if (tried_lcm_ && !udpm_route_ready(options_.lcm_url)) return false;
+  tried_lcm_ = true;
+  auto lcm = std::make_unique<lcm::LCM>(options_.lcm_url);
+  if (!lcm->good()) return false;
+  lcm_ = std::move(lcm);
+  return true;
+}
+
+std::string DepthPublisher::lcm_problem() const {
+  if (lcm_) return {};
+  return fmt::format("LCM cannot be set up with '{}' (for udpm, is there a multicast route?)",
+                     options_.lcm_url.empty() ? "the default URL" : options_.lcm_url);
+}
+
+lcm::LCM& DepthPublisher::lcm() {
+  if (!lcm_) throw Error("publisher: " + lcm_problem());
+  return *lcm_;
 }
 
 DepthPublisher::~DepthPublisher() = default;
@@ -119,7 +178,7 @@ template <class Message>
 bool DepthPublisher::send(const std::string& channel, const Message& message) {
   const int size = message.getEncodedSize();
   encoded_.resize(static_cast<std::size_t>(std::max(size, 0)));  // grows once, then reused
-  if (size >= 0 && message.encode(encoded_.data(), 0, size) == size &&
+  if (lcm_ && size >= 0 && message.encode(encoded_.data(), 0, size) == size &&
       lcm_->publish(channel, encoded_.data(), static_cast<unsigned>(size)) == 0)
     return true;
   ++send_failures_;

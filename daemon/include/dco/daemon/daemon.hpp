@@ -75,6 +75,9 @@ class Daemon final : public drivers::FrameSink {
   void tick(std::int64_t now_ns);
   // A warning when LCM failed to send since the last one (the ring is unaffected); `last`: at
   // the exit, whenever the last warning was.
+  // Sets LCM up when it could not be at the start (no multicast route yet), every kLcmRetryNs.
+  void retry_lcm(std::int64_t now_ns);
+  static constexpr std::int64_t kLcmRetryNs = 2'000'000'000;
   void report_lcm_failures(std::int64_t now_ns, bool last);
   std::string status_line(const pipeline::runtime::RuntimeStats& stats) const;
   void wake();
@@ -102,6 +105,7 @@ class Daemon final : public drivers::FrameSink {
   std::unique_ptr<ReplayCheck> replay_check_;  // replaying a field log in deterministic mode
   std::uint64_t lcm_failures_reported_ = 0;
   std::int64_t lcm_failures_reported_ns_ = 0;
+  std::int64_t lcm_retry_ns_ = 0;  // when LCM, not set up at the start, was last tried
 
   // Source sequence numbers by capture time, so a result names the camera frame it came from.
   // Every push is recorded, dropped frames too, for as long as a frame can be in flight: the

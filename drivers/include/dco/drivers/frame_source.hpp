@@ -96,5 +96,9 @@ class FrameSource {
 // missing or unreadable recording and for cameras this build cannot open; never falls back to
 // another source.
 std::unique_ptr<FrameSource> open_source(std::string_view uri);
+// The checks open_source makes before it opens anything: "scheme://..." with well-formed
+// parameters and a scheme this build can open. Throws dco::Error like open_source; a source's own
+// parameters are checked when it opens.
+void check_source_uri(std::string_view uri);
 
 }  // namespace dco::drivers

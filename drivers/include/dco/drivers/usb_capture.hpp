@@ -108,9 +108,12 @@ class UsbCaptureReader {
 };
 
 // Wraps a transport and writes everything that crosses it to `path`. `clock` stamps the records
-// (CLOCK_MONOTONIC by default; it must be the driver's clock for a replay to reproduce it). Throws
-// dco::Error when the file cannot be created; a later write failure stops the recording with one
-// line on stderr and leaves the camera running.
+// (CLOCK_MONOTONIC by default; it must be the driver's clock for a replay to reproduce it). A
+// capture of more than kKeptCaptureBytes already at `path` is moved to `path`.1 first (a
+// restarted service keeps the session that recorded its fault); smaller ones are written over.
+// Throws dco::Error when the file cannot be created; a later write failure stops the recording
+// with one line on stderr and leaves the camera running.
+inline constexpr std::uint64_t kKeptCaptureBytes = 64 * 1024;
 std::unique_ptr<UsbTransport> make_recording_transport(std::unique_ptr<UsbTransport> inner,
                                                        const std::string& path,
                                                        std::function<std::int64_t()> clock = {});

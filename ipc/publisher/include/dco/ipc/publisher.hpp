@@ -39,6 +39,13 @@ struct DeviceStatus {
 
 enum class LogLevel : std::int8_t { kDebug = 0, kInfo = 1, kWarning = 2, kError = 3 };
 
+// The providers LCM knows (1.3: lcm_create's table).
+inline constexpr std::string_view kLcmProviders[] = {"udpm", "file", "memq", "tcpq", "mpudpm"};
+// Throws dco::Error when `url` is neither empty (LCM's default) nor PROVIDER://... with one of
+// kLcmProviders: a mistyped provider is a configuration error, where a udpm URL that cannot be
+// set up now (no multicast route yet) is the network's state.
+void check_lcm_url(std::string_view url);
+
 // DCO_DEPTH_PREVIEW's pixels: the nearest depth in each factor x factor block in millimetres (0 =
 // unknown, 32767 = that far or farther); sets the sizes, num_pixels and depth_mm of `out`. A
 // replay computes the same to compare with what a headset recorded. Throws dco::Error when
@@ -53,7 +60,10 @@ int preview_factor(int width, int height, int max_width, int max_height);
 // to DCO_STATS, DCO_STATUS and DCO_LOG. Not thread-safe: one thread publishes.
 class DepthPublisher {
  public:
-  // Throws dco::Error when LCM cannot be set up with the URL.
+  // Throws dco::Error when the URL names no LCM provider (check_lcm_url). An LCM that cannot be
+  // set up now (udpm without a multicast route: a headset booted without a network) leaves the
+  // publisher without LCM: depth still reaches the ring, every message counts as a send failure,
+  // and retry_lcm() tries again.
   DepthPublisher(RingWriter& ring, const PublisherOptions& options);
   DepthPublisher(const DepthPublisher&) = delete;
   DepthPublisher& operator=(const DepthPublisher&) = delete;
@@ -89,7 +99,12 @@ class DepthPublisher {
   // Messages LCM could not send (DCO_RAW's included), and the channel of the last one.
   std::uint64_t send_failures() const { return send_failures_; }
   const char* last_failed_channel() const { return last_failed_channel_; }
-  lcm::LCM& lcm() { return *lcm_; }
+  // Sets LCM up when it is not yet; true when it is (now or before).
+  bool retry_lcm();
+  // Empty while LCM is set up, else why it is not.
+  std::string lcm_problem() const;
+  // Throws dco::Error while LCM is not set up.
+  lcm::LCM& lcm();
 
  private:
   // `depth`: the published frame, for the preview.
@@ -105,6 +120,7 @@ class DepthPublisher {
   RingWriter& ring_;
   PublisherOptions options_;
   std::unique_ptr<lcm::LCM> lcm_;
+  bool tried_lcm_ = false;
   std::vector<std::uint8_t> encoded_;
   ::dco::depth_preview_t preview_;
   std::uint32_t open_slot_ = 0;
