@@ -82,6 +82,7 @@ bool LcmLogReader::next(LcmLogEvent& event) {
   if (got < 4 || read_be(head.data(), 4) != kSyncWord)
     return fail(got < 4 ? "the log ends inside an event's sync word"
                         : "no LCM sync word where an event should start");
+  if (offset_ == 0) began_like_a_log_ = true;
   if (got < kHeadBytes)
     return fail("the log ends inside the event's head (" + std::to_string(got) + " of " +
                 std::to_string(kHeadBytes) + " bytes)");

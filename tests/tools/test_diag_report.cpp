@@ -401,6 +401,25 @@ TEST(LogDigest, AFileThatIsNoLogIsOneError) {
   EXPECT_THROW(digest_log("/nonexistent/field.log"), Error);
 }
 
+// lcm-logger stopped by a full disk at once: an LCM log cut inside its first event is said to be
+// that, not "not an LCM log".
+TEST(LogDigest, ALogCutInsideItsFirstEventSaysSo) {
+  const KnownLog known;
+  const std::string bytes = known.bytes();
+  for (const std::size_t cut : {std::size_t{10}, std::size_t{40}}) {
+    std::istringstream in(bytes.substr(0, cut));
+    try {
+      digest_log(in, "field.log");
+      FAIL() << "no error";
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("an LCM log cut before its first whole event"), std::string::npos)
+          << what;
+      EXPECT_EQ(what.find("not an LCM log"), std::string::npos) << what;
+    }
+  }
+}
+
 TEST(HtmlReport, IsSelfContainedEscapedAndHoldsChartsAndThumbnails) {
   const KnownLog known;
   std::istringstream in(known.bytes());

@@ -192,7 +192,11 @@ LogDigest read_all(drivers::LcmLogReader& reader, const std::string& name,
   while (reader.next(event)) digester.add(event);
   d.bytes = reader.bytes_read();
   d.damage = reader.damage();
-  if (d.events == 0 && !d.damage.empty()) throw Error(d.damage + " (not an LCM log?)");
+  if (d.events == 0 && !d.damage.empty())
+    throw Error(d.damage +
+                (reader.began_like_a_log()
+                     ? " (an LCM log cut before its first whole event: nothing to report)"
+                     : " (not an LCM log?)"));
   if (d.events == 0) throw Error(name + ": the log holds no event");
   // Keep the thinned sample within the budget when the last halving left more.
   if (d.previews.size() > options.max_previews) {

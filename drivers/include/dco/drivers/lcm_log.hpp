@@ -40,6 +40,9 @@ class LcmLogReader {
   const std::string& damage() const { return damage_; }
   long events_read() const { return events_; }
   std::uint64_t bytes_read() const { return offset_; }
+  // Whether the log began with an event's sync word: a log cut before its first whole event,
+  // where it is false for a file that is no LCM log at all.
+  bool began_like_a_log() const { return began_like_a_log_; }
 
   static constexpr std::uint32_t kSyncWord = 0xEDA1DA01;
   static constexpr std::size_t kMaxChannel = 255;
@@ -57,6 +60,7 @@ class LcmLogReader {
   std::uint64_t offset_ = 0;
   std::uint64_t size_ = UINT64_MAX;  // of the log, where the stream can tell
   long events_ = 0;
+  bool began_like_a_log_ = false;
 };
 
 // Writes events in the same format (for tools that cut or filter logs, and for tests).
