@@ -354,6 +354,18 @@ TEST(DcoDepthCli, ASequenceReplacesAnEarlierOneAndKeepsTheRangeItWasGiven) {
   EXPECT_TRUE(fs::exists(out / "notes.txt"));
 }
 
+// A synthetic scene wider than the search reaches (past 7500 px): the search stops at the stage's
+// limit, and says so, as dcod does.
+TEST(DcoDepthCli, ASyntheticSceneNearerThanTheSearchReachesIsSaid) {
+  TempDir dir;
+  const CliRun r =
+      run_depth(dir, {"--synthetic", "hand", "--size", "8192x16", "--frames", "1", "--out-dir",
+                      (dir.path() / "wide").string(), "--set", "contour.use_flow=false"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("the search stops at 1024: nearer surfaces are not measured"));
+  EXPECT_THAT(r.out, HasSubstr("max-disp 1024"));
+}
+
 TEST(DcoDepthCli, UnknownParameterIsRefused) {
   TempDir dir;
   expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",

@@ -71,6 +71,23 @@ TEST(MetricsFormat, TableHasFixedWidthRowsAndAMeanRow) {
   EXPECT_THAT(rows[3], HasSubstr("50.00"));  // mean density
 }
 
+// A value too wide for its column's digits (a 16-bit ground truth read as pixels, one wild
+// prediction) must not run into the cell before it.
+TEST(MetricsFormat, AValueTooWideForItsCellKeepsTheColumnsApart) {
+  std::vector<SceneMetrics> scenes = two_scenes();
+  scenes[0].all.avgerr = 65530.0;
+  scenes[0].pred.avgerr = -3e38;
+  const std::string table = format_metrics_table(scenes);
+  std::istringstream lines(table);
+  std::vector<std::string> rows;
+  for (std::string line; std::getline(lines, line);) rows.push_back(line);
+  ASSERT_GE(rows.size(), 4u);
+  for (int i = 1; i <= 3; ++i) EXPECT_EQ(rows[i].size(), rows[0].size()) << rows[i];
+  EXPECT_THAT(rows[1], HasSubstr(" 6.6e+04"));
+  EXPECT_THAT(rows[1], HasSubstr(" -3.0e+38"));
+  EXPECT_THAT(rows[1], Not(HasSubstr("65530.000")));
+}
+
 TEST(MetricsFormat, JsonHoldsEveryScenePlusTheMean) {
   const std::string json = format_metrics_json(two_scenes());
   EXPECT_EQ(json.front(), '{');

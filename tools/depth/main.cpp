@@ -394,9 +394,15 @@ int run_sequence(const Options& opt, dco::pipeline::PipelineParams params,
                     : dco::tools::make_pattern_sequence(*opt.left_pattern, *opt.right_pattern,
                                                         opt.first, opt.count, opt.calib);
   // A synthetic scene's nearest object, as far as the stage reaches.
-  if (!max_disparity_given && frames->max_disparity())
+  if (!max_disparity_given && frames->max_disparity()) {
     params.stereo.max_disparity =
         std::min(*frames->max_disparity(), dco::stereo::kMaxDisparityLimit);
+    if (*frames->max_disparity() > params.stereo.max_disparity)
+      fmt::print(stderr,
+                 "dco-depth: warning: the scene's nearest depth needs {} px of disparity, the "
+                 "search stops at {}: nearer surfaces are not measured\n",
+                 *frames->max_disparity(), params.stereo.max_disparity);
+  }
   dco::pipeline::validate(params);
   fs::create_directories(*opt.out_dir);
   dco::pipeline::DepthPipeline pipeline(params);

@@ -49,9 +49,14 @@ constexpr Column kColumns[] = {
 // clang-format on
 constexpr int kValueWidth = 9;
 
+// Right-aligned in `width` with at least one space before it: a value too wide for its fixed
+// digits (a wild prediction, a 16-bit ground truth read as pixels) goes in exponent form rather
+// than run into the cell before it.
 std::string cell(double value, int precision, int width) {
   if (std::isnan(value)) return fmt::format("{:>{}}", "-", width);
-  return fmt::format("{:>{}.{}f}", value, width, precision);
+  std::string text = fmt::format("{:.{}f}", value, precision);
+  if (static_cast<int>(text.size()) >= width) text = fmt::format("{:.1e}", value);
+  return fmt::format("{:>{}}", text, width);
 }
 
 std::string table_row(const SceneMetrics& m, std::size_t name_width) {
