@@ -462,7 +462,14 @@ void Densifier::compute(const DensifyInputs& in, Image<float>& dense) {
     }
   }
   report_ = solver_->solve(system_, rhs_.cview(), solution_.view());
-  has_solution_ = true;
+  // Disparities past any image's (1e20 and up overflow the solver's float sums) or a non-finite
+  // contour strength leave no finite solution: an error, never a "dense" map of NaN, and the next
+  // frame starts cold rather than from it.
+  has_solution_ = std::isfinite(report_.final_residual);
+  if (!has_solution_)
+    throw Error(
+        "densify: the solve found no finite solution (a sparse or previous disparity far past "
+        "any image's, or a contour strength that is not finite)");
   timings_.solve_ms = t.lap_ms();
   finish(dense);
   timings_.median_ms = t.lap_ms();

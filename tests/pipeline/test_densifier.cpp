@@ -264,6 +264,32 @@ TEST(Densifier, FillsEveryPixelAndKeepsAPlaneWhereDataIsExact) {
     }
 }
 
+// A library caller's sparse map with disparities no image has (1e22, 1e30: finite, but past what
+// the solver's float sums hold): an error, never a "dense" map of NaN, and the next frame, with
+// sane values, is solved from scratch rather than from the failed one.
+TEST(Densifier, DisparitiesPastAnyImagesAreAnErrorNotAMapOfNaN) {
+  const int w = 32, h = 16;
+  Image<float> sparse(w, h), sane(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      sparse.at(x, y) = x < w / 2 ? 1e22f : 5.0f;
+      sane.at(x, y) = (x + y) % 3 == 0 ? 5.0f : kUnknown;
+    }
+  for (const char* r : {"full", "half"}) {
+    DensifyParams params;
+    params.solve_resolution = r;
+    Densifier d(params);
+    DensifyInputs in;
+    in.sparse = sparse.cview();
+    Image<float> dense;
+    EXPECT_THROW(d.compute(in, dense), Error);
+    in.sparse = sane.cview();
+    d.compute(in, dense);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) ASSERT_NEAR(dense.at(x, y), 5.0f, 0.01f) << x << "," << y;
+  }
+}
+
 TEST(Densifier, ContourKeepsTwoSurfacesApart) {
   // Left half near (disparity 40), right half far (10); sparse values only far from the edge,
   // and a contour on the true boundary column: the fill must not blend across it.
