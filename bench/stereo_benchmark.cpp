@@ -195,8 +195,8 @@ void BM_DcoRightCorrectionTurned_Color_1280x720(benchmark::State& state) {
   run_right_correction(state, {0.4, 0.002});
 }
 
-// The same two passes by OpenCV: warpAffine with the alignment's map (linear, borders repeated,
-// as align_rows), then a table per channel.
+// The same two passes by OpenCV, on one thread: warpAffine with the alignment's map (linear,
+// borders repeated, as align_rows), then a table per channel.
 void run_opencv_right_correction(benchmark::State& state, const dco::stereo::RowAlignment& rows) {
   if (pair_or_skip(state) == nullptr) return;
   const cv::Mat& right = headset_right();
@@ -211,12 +211,16 @@ void run_opencv_right_correction(benchmark::State& state, const dco::stereo::Row
   const double xc = 0.5 * (right.cols - 1), yc = 0.5 * (right.rows - 1);
   const cv::Matx23d to_src(c, -s, xc - c * xc + s * yc, s, c, yc - s * xc - c * yc + rows.offset);
   cv::Mat moved, balanced;
+  // On one thread, as dco's passes and OpenCV's loops in the stage run.
+  const int previous_threads = cv::getNumThreads();
+  cv::setNumThreads(1);
   for (auto _ : state) {
     cv::warpAffine(right, moved, to_src, right.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
                    cv::BORDER_REPLICATE);
     cv::LUT(moved, lut, balanced);
     benchmark::DoNotOptimize(balanced.data);
   }
+  cv::setNumThreads(previous_threads);
 }
 
 void BM_OpenCVRightCorrection_Color_1280x720(benchmark::State& state) {

@@ -156,14 +156,19 @@ bool refine_window(const Sampler& s, int x, int y, int g, double& px, double& py
   return true;
 }
 
-// For sampled matched pixels with grey steps both ways, the row offset (-3 .. +3) at which a 5x5
+// The search's window of rows either way of a sample's match.
+constexpr int kSearchRows = static_cast<int>(kMaxVerticalOffset) + 1;
+
+// For sampled matched pixels with grey steps both ways, the row offset (-5 .. +5) at which a 5x5
 // window of the right image, within two columns of the match (as the roll in force places it),
 // differs least from the left's: the best whole row and column, then refine_window.
 std::vector<BestRow> best_rows(const Sampler& s, const Geometry& g0) {
   std::vector<BestRow> rows;
   const int c = std::min(s.left.channels, 3);
   const int w = s.left.width, h = s.left.height;
-  constexpr int kRadius = 2, kColumns = 2, kRows = 3;
+  // Rows: a row past kMaxVerticalOffset either way, since a best row on the window's edge says
+  // nothing (the minimum may lie beyond it) and is dropped: offsets up to the limit keep theirs.
+  constexpr int kRadius = 2, kColumns = 2, kRows = kSearchRows;
   for (int y = kRadius + 1; y + kRadius + 1 < h; y += s.step) {
     const float* d = s.disparity.row(y);
     for (int x = kRadius + 1; x + kRadius + 1 < w; x += s.step) {
@@ -202,14 +207,14 @@ std::vector<BestRow> best_rows(const Sampler& s, const Geometry& g0) {
 // quarter row of it. Samples whose matches were wrong spread over the whole window; the right
 // ones gather.
 double mode(const std::vector<double>& values) {
-  constexpr int kBins = 48;  // -3 .. +3 rows in eighths
+  constexpr int kBins = 2 * kSearchRows * 8;  // -5 .. +5 rows in eighths
   std::array<int, kBins> count{};
   const auto bin = [](double v) {
-    return std::clamp(static_cast<int>((v + 3.0) * 8.0), 0, kBins - 1);
+    return std::clamp(static_cast<int>((v + kSearchRows) * 8.0), 0, kBins - 1);
   };
   for (const double v : values) ++count[static_cast<std::size_t>(bin(v))];
   const int peak = static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
-  const double centre = (peak + 0.5) / 8.0 - 3.0;
+  const double centre = (peak + 0.5) / 8.0 - kSearchRows;
   double sum = 0;
   int n = 0;
   for (const double v : values)

@@ -112,6 +112,20 @@ TEST(FitRowAlignment, FindsTheRollBetweenTheCamerasFromTheMatches) {
   EXPECT_NEAR(a.offset, 0.0, 0.05);
 }
 
+// Offsets up to the limit either way are found: a best row on the search window's edge is
+// dropped, so the window reaches a row past the limit.
+TEST(FitRowAlignment, FindsOffsetsUpToTheLimit) {
+  for (const double offset : {2.9, 3.0, -3.0, 3.5, -3.9}) {
+    const synthetic::StereoSample s = turned_pair(0.0, offset);
+    RowAlignment a;
+    ASSERT_TRUE(
+        fit_row_alignment(s.left.cview(), s.right.cview(), s.disparity.cview(), {}, true, a))
+        << offset;
+    EXPECT_NEAR(a.offset, offset, 0.05);
+    EXPECT_NEAR(a.roll / kDegree, 0.0, 0.01) << offset;
+  }
+}
+
 TEST(AlignRows, TurnsTheRightImageBackOntoTheLeftsRows) {
   synthetic::SceneConfig config = synthetic::preset("boxes", 480, 270);
   config.noise_sigma = 0;

@@ -28,7 +28,7 @@ struct RowAlignment {
 // through `levels`), on the squared difference (pairs more than 40 levels apart left out); the
 // roll is fitted when the samples spread across the columns, else kept. With `search` (for a
 // pair whose rows may lie far from `alignment`), no steps: each of 16,384 sampled matches with
-// grey steps both ways finds the whole row (-3 .. +3) and column (-2 .. +2 around the match) at
+// grey steps both ways finds the whole row (-5 .. +5) and column (-2 .. +2 around the match) at
 // which a 5x5 window of the right image differs least from the left's, refined between rows by
 // Lucas-Kanade steps; a line through the most common row of each quarter of the columns, then
 // through the samples near it, gives the offset and the roll. Returns false, leaving `alignment`
