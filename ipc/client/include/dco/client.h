@@ -108,9 +108,13 @@ DCO_CLIENT_API void dco_frame_info_init(dco_frame_info* info);
 
 /* Maps the segment read-only after checking its owner, mode and layout. */
 DCO_CLIENT_API dco_status dco_client_open(const dco_client_options* options, dco_client** out);
+/* Unmaps the ring: views it returned are gone with it. NULL is accepted; a handle must not be
+ * closed twice or used after. */
 DCO_CLIENT_API void dco_client_close(dco_client* client);
 
-/* The newest frame as a view (only a view whose counter was even when taken is returned). */
+/* The newest frame as a view (only a view whose counter was even when taken is returned). It is
+ * the newest there is, also after the writer stopped: DCO_OK does not say the daemon runs
+ * (dco_client_wait_next says DCO_E_WRITER_GONE). */
 DCO_CLIENT_API dco_status dco_client_latest(dco_client* client, dco_frame_view* view);
 /* 1 while the slot behind the view has not been rewritten, else 0; 0 as well for a view another
  * handle returned (its pixels go with that handle). */
@@ -119,14 +123,15 @@ DCO_CLIENT_API int dco_client_still_valid(const dco_client* client, const dco_fr
  * the daemon restarted (new session id). DCO_E_WRITER_GONE as soon as the writer is seen to
  * have stopped or died; calling again picks up a daemon that comes back, and while none does,
  * each later call waits out its timeout and says DCO_E_WRITER_GONE again (a loop that calls
- * again does not spin). */
+ * again does not spin). timeout_ms 0 looks once; a negative one is DCO_E_INVALID_ARGUMENT. */
 DCO_CLIENT_API dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms,
                                                dco_frame_view* view);
 /* Copies the frame a view names; DCO_E_OVERTAKEN when its slot changed before or during the
  * copy. dst->image NULL skips the image. */
 DCO_CLIENT_API dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
                                           dco_frame_buffer* dst);
-/* Copies the newest frame, retrying overwritten slots; succeeds only with an untorn copy. */
+/* Copies the newest frame, retrying overwritten slots; succeeds only with an untorn copy. info
+ * may be NULL. */
 DCO_CLIENT_API dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst,
                                                  dco_frame_info* info);
 /* The frame an announcement names (the fields of an LCM DCO_DEPTH descriptor, or any other
@@ -150,7 +155,8 @@ DCO_CLIENT_API dco_status dco_client_read_announced(dco_client* client, uint64_t
 DCO_CLIENT_API uint64_t dco_client_session_id(const dco_client* client);
 
 DCO_CLIENT_API const char* dco_client_strerror(dco_status status);
-/* Details of the last failure on the calling thread (empty when there was none). */
+/* Details of the last failure on the calling thread (empty when there was none), valid until
+ * that thread's next call into the library. */
 DCO_CLIENT_API const char* dco_client_last_error(void);
 
 #ifdef __cplusplus
