@@ -78,6 +78,7 @@ bool parse_int(const char* text, long lo, long hi, long* out) {
 // A file name, or a pattern with one %d (%0Nd) for the frame number; anything else is refused,
 // since the pattern never reaches printf as a format.
 void check_pattern(const std::string& pattern, const char* option) {
+  if (pattern.empty()) throw Error(std::string(option) + ": an empty file name");
   const auto p = pattern.find('%');
   if (p == std::string::npos) return;
   std::size_t i = p + 1;
@@ -287,11 +288,12 @@ int main(int argc, char** argv) {
         args.window = true;
         continue;
       }
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "dco-compositor: %s needs a value\n", argv[i]);
-        usage(stderr);
-        return 2;
-      }
+      static constexpr std::string_view kTakesValue[] = {
+          "--ring",   "--uid",  "--out",  "--mask",  "--scene",  "--cube", "--sphere",
+          "--frames", "--soft", "--wait", "--width", "--height", "--egl",  "--display"};
+      if (std::find(std::begin(kTakesValue), std::end(kTakesValue), a) == std::end(kTakesValue))
+        throw Error("unknown option " + printable(a));
+      if (i + 1 >= argc) throw Error(std::string(a) + " needs a value");
       const char* value = argv[++i];
       auto number = [&](long lo, long hi, long* out) {
         if (!parse_int(value, lo, hi, out))
@@ -308,9 +310,10 @@ int main(int argc, char** argv) {
       } else if (a == "--mask") {
         check_pattern(value, "--mask");
         args.mask = value;
-      } else if (a == "--scene")
+      } else if (a == "--scene") {
+        if (!args.scene_file.empty()) throw Error("--scene given twice (one file holds them all)");
         args.scene_file = value;
-      else if (a == "--cube")
+      } else if (a == "--cube")
         args.scene.cubes.push_back(parse_cube(value));
       else if (a == "--sphere")
         args.scene.spheres.push_back(parse_sphere(value));
@@ -329,9 +332,10 @@ int main(int argc, char** argv) {
       else if (a == "--display") {
         args.display = value;
         args.window = true;
-      } else
-        throw Error("unknown option " + std::string(a));
+      }
     }
+    // One without the other would be compared with a ring of height or width 0.
+    if ((args.width == 0) != (args.height == 0)) throw Error("--width and --height go together");
   } catch (const Error& e) {
     std::fprintf(stderr, "dco-compositor: %s\n", e.what());
     usage(stderr);
@@ -339,6 +343,8 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
+  // A write past a file size limit is then an error the PNG writer reports.
+  std::signal(SIGXFSZ, SIG_IGN);
   try {
     return run(args);
   } catch (const std::exception& e) {

@@ -22,6 +22,12 @@ std::string printable(std::string_view text) {
 
 namespace {
 
+// What a message quotes of a file's or an option's text: printable, and no more than a line.
+std::string shown(std::string_view text) {
+  constexpr std::size_t kMax = 60;
+  return text.size() <= kMax ? printable(text) : printable(text.substr(0, kMax)) + "...";
+}
+
 std::vector<float> numbers(std::string_view text, char separator, const std::string& where) {
   std::vector<float> out;
   std::string s(text);
@@ -37,8 +43,11 @@ std::vector<float> numbers(std::string_view text, char separator, const std::str
     char* stop = nullptr;
     errno = 0;
     const float v = std::strtof(token.c_str(), &stop);
-    if (token.empty() || *stop != '\0' || errno != 0 || !std::isfinite(v))
-      throw Error(where + ": '" + printable(token) + "' is not a number");
+    // The whole token (a NUL inside it is not its end); a value too small for a float (1e-40)
+    // is that tiny value, one too large is inf and refused.
+    if (token.empty() || stop != token.c_str() + token.size() || (errno != 0 && errno != ERANGE) ||
+        !std::isfinite(v))
+      throw Error(where + ": '" + shown(token) + "' is not a number");
     out.push_back(v);
     pos = end + 1;
   }
@@ -79,14 +88,14 @@ T make(const std::vector<float>& v) {
 }  // namespace
 
 Cube parse_cube(std::string_view text) {
-  const std::string where = "--cube '" + printable(text) + "'";
+  const std::string where = "--cube '" + shown(text) + "'";
   const auto v = numbers(text, ',', where);
   check_object(v, "cube", where);
   return make<Cube>(v);
 }
 
 Sphere parse_sphere(std::string_view text) {
-  const std::string where = "--sphere '" + printable(text) + "'";
+  const std::string where = "--sphere '" + shown(text) + "'";
   const auto v = numbers(text, ',', where);
   check_object(v, "sphere", where);
   return make<Sphere>(v);
@@ -114,7 +123,7 @@ Scene parse_scene(std::string_view text, const std::string& name) {
       check_object(v, "sphere", where);
       scene.spheres.push_back(make<Sphere>(v));
     } else {
-      throw Error(where + ": unknown object '" + printable(word) + "' (cube or sphere)");
+      throw Error(where + ": unknown object '" + shown(word) + "' (cube or sphere)");
     }
     if (scene.size() > kMaxObjects)
       throw Error(where + ": more than " + std::to_string(kMaxObjects) + " objects");
@@ -127,6 +136,10 @@ Scene load_scene(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     throw Error("scene '" + printable(path) + "': not a readable file");
+  // kMaxObjects lines take well under a MiB: a larger file is not a scene.
+  if (std::filesystem::file_size(path, ec) > kMaxSceneBytes)
+    throw Error("scene '" + printable(path) + "': larger than " +
+                std::to_string(kMaxSceneBytes >> 20) + " MiB");
   std::ifstream in(path);
   if (!in) throw Error("scene '" + printable(path) + "': cannot open: " + std::strerror(errno));
   std::ostringstream text;

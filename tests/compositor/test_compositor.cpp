@@ -206,7 +206,49 @@ TEST(Compositor, AFailedPngWriteLeavesTheLastGoodOne) {
             dco::testing::kWriteThrew)
       << "the write should have failed";
   EXPECT_EQ(dco::testing::read_file(path), before);
-  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename(), "frame.png") << "left behind";
+}
+
+// The temporary file has a name of its own: a link planted at a guessable one (in a shared
+// directory) is never written through.
+TEST(Compositor, APngIsNeverWrittenThroughALinkPlantedBesideIt) {
+  dco::testing::TempDir dir;
+  const std::string path = (dir / "o.png").string();
+  std::ofstream(dir / "victim") << "keep me";
+  std::filesystem::create_symlink(dir / "victim", path + ".tmp");
+  const std::vector<std::uint8_t> pixels(16 * 8, 7);
+  write_png(path, pixels.data(), 16, 8, 1);
+  EXPECT_EQ(dco::testing::read_file((dir / "victim").string()), "keep me");
+  EXPECT_TRUE(std::filesystem::is_regular_file(std::filesystem::symlink_status(path)));
+}
+
+// Under a file size limit (LimitFSIZE=, ulimit -f) the tool reports the failed write and exits
+// 1: no SIGXFSZ, no temporary file left, one line (libpng's own message inside the tool's).
+TEST(Compositor, AFileSizeLimitIsOneErrorLine) {
+  dco::testing::TempDir dir;
+  const std::string ring = (dir.path() / "depth.shm").string();
+  ipc::RingOptions o;
+  o.width = 320;
+  o.height = 240;
+  o.image_channels = 3;
+  ipc::RingWriter w(ring, o);
+  std::vector<float> depth(320 * 240, 2.0f);
+  std::vector<std::uint8_t> image(320 * 240 * 3);
+  std::uint32_t x = 1;
+  for (std::uint8_t& v : image)
+    v = static_cast<std::uint8_t>((x = x * 1664525u + 1013904223u) >> 24);
+  w.write(ImageView<const float>(depth.data(), 320, 240, 1, 320),
+          ImageView<const std::uint8_t>(image.data(), 320, 240, 3, 320 * 3),
+          {1, 0, 300.0, 300.0, 160.0, 120.0, 0.1});
+  const auto r = dco::testing::run_command("ulimit -f 8 && " + std::string(DCO_COMPOSITOR_BIN) +
+                                           " --wait 1 --frames 1 --ring " + ring + " --out " +
+                                           (dir.path() / "f.png").string() + " 2>&1");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("write failed"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("libpng error"), std::string::npos) << r.output;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename(), "depth.shm") << "left behind";
 }
 
 // Two renderers on one thread (one per eye, say): each draws and reads in its own context, and
@@ -448,6 +490,43 @@ TEST(Compositor, BadInputIsOneClearLine) {
     } catch (const Error& ex) {
       EXPECT_NE(std::string(ex.what()).find(expected), std::string::npos) << ex.what();
     }
+  }
+  // Options: an unknown last one is unknown (not one "needing a value"), --scene once, --width
+  // and --height together, an empty --out refused.
+  r = dco::testing::run_command(bin + " --bogus 2>&1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("unknown option --bogus"), std::string::npos) << r.output;
+  r = dco::testing::run_command(bin + " --scene a.txt --scene b.txt 2>&1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("--scene given twice"), std::string::npos) << r.output;
+  r = dco::testing::run_command(bin + " --width 161 2>&1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("--width and --height go together"), std::string::npos) << r.output;
+  r = dco::testing::run_command(bin + " --out '' 2>&1");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.output.find("--out: an empty file name"), std::string::npos) << r.output;
+  // Numbers: a NUL inside one ends nothing, a value too small for a float is that tiny value,
+  // and a long bad token is quoted in part.
+  try {
+    parse_scene(std::string("cube 0 0 1\0junk 0.3\n", 20), "nul.txt");
+    ADD_FAILURE() << "took a number with a NUL in it";
+  } catch (const Error& ex) {
+    EXPECT_NE(std::string(ex.what()).find("nul.txt:1:"), std::string::npos) << ex.what();
+  }
+  EXPECT_EQ(parse_scene("cube 1e-40 0 1 0.3\n", "tiny.txt").size(), 1u);
+  try {
+    parse_scene("cube " + std::string(100000, '7') + "x 0 1 0.3\n", "long.txt");
+    ADD_FAILURE() << "took a bad number";
+  } catch (const Error& ex) {
+    EXPECT_LT(std::string(ex.what()).size(), 200u) << "the message quotes all of it";
+  }
+  // A file larger than any scene is refused before it is read.
+  std::ofstream(dir.path() / "huge.txt") << std::string(kMaxSceneBytes + 1, '#');
+  try {
+    load_scene((dir.path() / "huge.txt").string());
+    ADD_FAILURE() << "read a file larger than any scene";
+  } catch (const Error& ex) {
+    EXPECT_NE(std::string(ex.what()).find("larger than 1 MiB"), std::string::npos) << ex.what();
   }
   // An argument quoted in an error stays on one line.
   try {

@@ -198,8 +198,9 @@ TEST(RingProcesses, ReadersFollowWriterRestartsWithoutMixingSessions) {
   run_restarts(3, std::chrono::milliseconds(500), 3);
 }
 
-std::string run_watch(const std::string& args, int* exit_code) {
-  const std::string cmd = std::string(DCO_WATCH_EXE) + " " + args + " 2>&1";
+// Runs a shell command line, stderr with stdout; its output and exit code.
+std::string run_shell(const std::string& command, int* exit_code) {
+  const std::string cmd = command + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   char buf[512];
@@ -207,6 +208,10 @@ std::string run_watch(const std::string& args, int* exit_code) {
   const int status = p ? pclose(p) : -1;
   *exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return out;
+}
+
+std::string run_watch(const std::string& args, int* exit_code) {
+  return run_shell(std::string(DCO_WATCH_EXE) + " " + args, exit_code);
 }
 
 TEST(DcoWatch, PrintsRateLatencyAndMetadata) {
@@ -246,6 +251,90 @@ TEST(DcoWatch, PrintsRateLatencyAndMetadata) {
   EXPECT_NE(out.find("64x48"), std::string::npos) << out;
   EXPECT_NE(out.find("fx 5"), std::string::npos) << out;
   EXPECT_EQ(copy_code, 0) << copy_out;
+}
+
+// The daemon stops and a new one (another size) starts while the watch runs: it waits for it,
+// as a renderer does, and follows it.
+TEST(DcoWatch, FollowsARestartedWriter) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  RingOptions first;
+  first.width = 64;
+  first.height = 48;
+  RingOptions second = first;
+  second.width = 32;
+  second.height = 24;
+  std::atomic<bool> done{false};
+  std::thread daemon([&] {
+    {
+      RingWriter w(path, first);
+      for (std::uint64_t seq = 1; seq <= 30 && !done; ++seq) {
+        publish_pattern(w, seq);
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // a restart's pause
+    RingWriter w(path, second);
+    for (std::uint64_t seq = 1; !done; ++seq) {
+      publish_pattern(w, seq);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  int code = -1;
+  const std::string out = run_watch(
+      "--path " + path.string() + " --frames 60 --interval-ms 50 --timeout-ms 3000", &code);
+  done = true;
+  daemon.join();
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("the writer stopped; waiting"), std::string::npos) << out;
+  EXPECT_NE(out.find("32x24"), std::string::npos) << out;
+}
+
+// A stopped daemon that does not come back within --timeout-ms ends the watch with exit 1; an
+// overlay is never written through a link planted beside it; a file size limit is an error.
+TEST(DcoWatch, AWriterThatStaysAwayEndsItAndOverlaysAreWrittenSafely) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  RingOptions o;
+  o.width = 64;
+  o.height = 48;
+  o.image_channels = 1;
+  auto writer = std::make_unique<RingWriter>(path, o);
+  publish_pattern(*writer, 1);
+  const std::string overlay = (dir.path() / "ov.ppm").string();
+  std::ofstream(dir.path() / "victim") << "keep me";
+  std::filesystem::create_symlink(dir.path() / "victim", overlay + ".tmp");
+  std::thread stopper([&] {
+    for (std::uint64_t seq = 2; seq <= 20; ++seq) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      publish_pattern(*writer, seq);
+    }
+    writer.reset();
+  });
+  int code = -1;
+  const auto start = std::chrono::steady_clock::now();
+  const std::string out = run_watch(
+      "--path " + path.string() + " --interval-ms 1 --timeout-ms 500 --overlay " + overlay, &code);
+  stopper.join();
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("writer stopped"), std::string::npos) << out;
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+  std::ifstream victim(dir.path() / "victim");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(victim), {}), "keep me");
+  EXPECT_TRUE(std::filesystem::is_regular_file(std::filesystem::symlink_status(overlay)));
+
+  RingWriter again(path, o);
+  publish_pattern(again, 2);
+  const std::string limited =
+      run_shell("ulimit -f 1 && " + std::string(DCO_WATCH_EXE) + " --path " + path.string() +
+                    " --frames 1 --overlay " + (dir.path() / "big.ppm").string(),
+                &code);
+  EXPECT_EQ(code, 1) << limited;
+  EXPECT_NE(limited.find("File too large"), std::string::npos) << limited;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find("big.ppm"), std::string::npos)
+        << "left behind: " << e.path();
 }
 
 TEST(DcoWatch, BadInputGivesOneLineAndAnExitCode) {

@@ -5,6 +5,7 @@
 #include <dco/client.hpp>
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -75,6 +76,8 @@ double percentile(std::vector<double>& v, double p) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A write past a file size limit is then an error the overlay writer reports.
+  std::signal(SIGXFSZ, SIG_IGN);
   dco::client::Options options;
   options.path = kDefaultPath;
   long long frames = 0;
@@ -139,6 +142,7 @@ int main(int argc, char** argv) {
     long long skipped = 0;
     dco_frame_info newest;
     dco_frame_info_init(&newest);
+    std::int64_t gone_since = 0;  // when the writer was seen gone, 0 while it runs
     std::vector<std::uint8_t> overlay_rgb;
     while (frames == 0 || received < frames) {
       dco::client::FrameView view;
@@ -149,7 +153,19 @@ int main(int argc, char** argv) {
         ++torn;
         continue;
       }
+      // A stopped daemon is waited for, as a renderer does, until --timeout-ms has passed
+      // without a frame: a restarted one (another session, maybe another size) is followed.
+      if (status == DCO_E_WRITER_GONE) {
+        const std::int64_t t = now_ns();
+        if (gone_since == 0) {
+          gone_since = t;
+          std::fprintf(stderr, "dco-watch: the writer stopped; waiting up to %lld ms for it\n",
+                       timeout_ms);
+        }
+        if (t - gone_since < timeout_ms * 1'000'000) continue;
+      }
       if (status != DCO_OK) throw dco::client::Error(status);
+      gone_since = 0;
       const dco_frame_info info = view.info();
       if (copy) {
         const std::size_t depth_bytes = std::size_t{info.width} * info.height * sizeof(float);

@@ -1,10 +1,10 @@
 #include "overlay.hpp"
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <vector>
+
+#include "dco/replacing_file.hpp"
 
 void render_occlusion_overlay(const dco::client::FrameView& frame, double virtual_depth_m,
                               std::vector<std::uint8_t>& rgb) {
@@ -39,17 +39,15 @@ void render_occlusion_overlay(const dco::client::FrameView& frame, double virtua
 
 bool write_ppm(const std::string& path, const std::vector<std::uint8_t>& rgb, std::uint32_t width,
                std::uint32_t height, std::string& error) {
-  const std::string temp = path + ".tmp";
-  std::FILE* f = std::fopen(temp.c_str(), "wb");
-  if (f == nullptr) {
-    error = temp + ": " + std::strerror(errno);
+  dco::client_tools::ReplacingFile out(path);
+  if (out.file() == nullptr) {
+    error = out.error();
     return false;
   }
-  std::fprintf(f, "P6\n%u %u\n255\n", width, height);
-  const bool written = std::fwrite(rgb.data(), 1, rgb.size(), f) == rgb.size();
-  if (std::fclose(f) != 0 || !written || std::rename(temp.c_str(), path.c_str()) != 0) {
-    error = path + ": " + std::strerror(errno);
-    std::remove(temp.c_str());
+  const bool written = std::fprintf(out.file(), "P6\n%u %u\n255\n", width, height) > 0 &&
+                       std::fwrite(rgb.data(), 1, rgb.size(), out.file()) == rgb.size();
+  if (!out.commit(written)) {
+    error = out.error();
     return false;
   }
   return true;

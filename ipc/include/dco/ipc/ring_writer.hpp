@@ -23,8 +23,9 @@ struct FrameMeta {
 };
 
 // The publishing side of the shared-memory depth ring (layout: dco/ipc/ring_layout.hpp). One
-// writer per ring; it never waits for a reader. Creating a ring replaces any file at the path
-// atomically, so readers of a previous session see a new inode and a new session id.
+// writer per ring (a second one on a live writer's path is refused); it never waits for a reader.
+// Creating a ring replaces any file at the path atomically, so readers of a previous session see
+// a new inode and a new session id.
 class RingWriter {
  public:
   // Throws dco::Error when the file cannot be created, the geometry is out of range or another

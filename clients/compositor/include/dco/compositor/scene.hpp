@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -25,6 +26,7 @@ using Vec3 = std::array<float, 3>;
 inline constexpr float kNearPlaneM = 0.01f;
 // Objects per scene: each is a draw call per frame.
 inline constexpr std::size_t kMaxObjects = 4096;
+inline constexpr std::uintmax_t kMaxSceneBytes = 1 << 20;
 
 // Virtual objects in camera coordinates of the rectified left camera: x right, y down, z forward,
 // metres. Cubes are axis-aligned in that frame.
