@@ -228,11 +228,7 @@ TEST(Compositor, APngIsNeverWrittenThroughALinkPlantedBesideIt) {
 TEST(Compositor, AFileSizeLimitIsOneErrorLine) {
   dco::testing::TempDir dir;
   const std::string ring = (dir.path() / "depth.shm").string();
-  ipc::RingOptions o;
-  o.width = 320;
-  o.height = 240;
-  o.image_channels = 3;
-  ipc::RingWriter w(ring, o);
+  ipc::RingWriter w(ring, ipc::RingOptions{320, 240, 3});
   std::vector<float> depth(320 * 240, 2.0f);
   std::vector<std::uint8_t> image(320 * 240 * 3);
   std::uint32_t x = 1;

@@ -17,9 +17,7 @@ namespace {
 
 TEST(ClientCAbi, ACProgramReadsAFrame) {
   TempDir dir;
-  RingOptions o;
-  o.width = 32;
-  o.height = 8;
+  const RingOptions o{32, 8};
   RingWriter writer(dir.path() / "depth.shm", o);
   std::uint64_t seq = 0;
   float first = 0;
@@ -59,9 +57,7 @@ dco_client* open_client(const std::filesystem::path& path) {
 // another handle of the same ring must not call it valid.
 TEST(ClientCAbi, AViewIsValidOnlyWithTheHandleThatReturnedIt) {
   TempDir dir;
-  RingOptions o;
-  o.width = 32;
-  o.height = 8;
+  const RingOptions o{32, 8};
   RingWriter writer(dir.path() / "depth.shm", o);
   publish_pattern(writer, 5);
   dco_client* a = open_client(writer.path());
@@ -88,9 +84,7 @@ TEST(ClientCAbi, AViewIsValidOnlyWithTheHandleThatReturnedIt) {
 // after the calls.
 TEST(ClientCAbi, AThreadCancelledInACallEndsAfterItAndTheProcessGoesOn) {
   TempDir dir;
-  RingOptions o;
-  o.width = 32;
-  o.height = 8;
+  const RingOptions o{32, 8};
   RingWriter writer(dir.path() / "depth.shm", o);
   publish_pattern(writer, 3);
   struct Reader {
@@ -137,9 +131,7 @@ TEST(ClientCAbi, AThreadCancelledInACallEndsAfterItAndTheProcessGoesOn) {
 TEST(ClientCAbi, WaitNextAfterTheWriterStoppedWaitsOutItsTimeout) {
   TempDir dir;
   const auto path = dir.path() / "depth.shm";
-  RingOptions o;
-  o.width = 32;
-  o.height = 8;
+  const RingOptions o{32, 8};
   auto writer = std::make_unique<RingWriter>(path, o);
   dco_client* c = open_client(path);
   ASSERT_NE(c, nullptr);

@@ -258,12 +258,7 @@ TEST(DcoWatch, PrintsRateLatencyAndMetadata) {
 TEST(DcoWatch, FollowsARestartedWriter) {
   TempDir dir;
   const auto path = dir.path() / "depth.shm";
-  RingOptions first;
-  first.width = 64;
-  first.height = 48;
-  RingOptions second = first;
-  second.width = 32;
-  second.height = 24;
+  const RingOptions first{64, 48}, second{32, 24};
   std::atomic<bool> done{false};
   std::thread daemon([&] {
     {
@@ -296,10 +291,7 @@ TEST(DcoWatch, FollowsARestartedWriter) {
 TEST(DcoWatch, AWriterThatStaysAwayEndsItAndOverlaysAreWrittenSafely) {
   TempDir dir;
   const auto path = dir.path() / "depth.shm";
-  RingOptions o;
-  o.width = 64;
-  o.height = 48;
-  o.image_channels = 1;
+  const RingOptions o{64, 48, 1};
   auto writer = std::make_unique<RingWriter>(path, o);
   publish_pattern(*writer, 1);
   const std::string overlay = (dir.path() / "ov.ppm").string();
