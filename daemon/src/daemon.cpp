@@ -251,10 +251,7 @@ void Daemon::on_frame(const drivers::StereoFrame& frame) {
     std::lock_guard lock(raw_mutex_);
     if (raw_) raw_->offer(frame);
   }
-  {
-    std::lock_guard lock(seq_mutex_);
-    pushed_[pushed_cursor_++ % pushed_.size()] = {frame.capture_ns, frame.seq};
-  }
+  frame_numbers_.record(frame.capture_ns, frame.seq);
   const Clock::time_point capture{std::chrono::nanoseconds(frame.capture_ns)};
   if (rectifier_) {
     rectifier_->rectify(frame.left, frame.right, rect_left_, rect_right_, remapper_.get());
@@ -293,12 +290,7 @@ void Daemon::on_result(const pipeline::DepthResult& result,
           .count();
   ipc::FrameMeta meta;
   meta.capture_ns = capture_ns;
-  meta.frame_seq = static_cast<std::uint64_t>(result.index);
-  {
-    std::lock_guard lock(seq_mutex_);
-    for (const auto& [ns, seq] : pushed_)
-      if (ns == capture_ns) meta.frame_seq = seq;
-  }
+  meta.frame_seq = frame_numbers_.take(capture_ns, static_cast<std::uint64_t>(result.index));
   meta.fx = meta.fy = geometry_.f;
   meta.cx = geometry_.cx_left;
   meta.cy = geometry_.cy;

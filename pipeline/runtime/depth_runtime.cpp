@@ -18,6 +18,12 @@
 namespace dco::pipeline::runtime {
 namespace {
 
+// What a fixed release time counts from: the capture, or the entry when the camera's stamp lies
+// after it (a stamp in the future would hold the result, and every one behind it, that long).
+Clock::time_point release_base(const FrameTimes& t) {
+  return std::min(t.capture, t.entry);
+}
+
 std::vector<int> checked_cpus(const RuntimeParams& params) {
   validate(params);
   return parse_affinity(params.affinity);
@@ -626,7 +632,7 @@ void DepthRuntime::release_loop(std::stop_token stop) {
       item = release_queue_.front();
       if (item != kEnd) {
         const Clock::time_point due =
-            results_[static_cast<std::size_t>(item)].times.capture + release_latency_;
+            release_base(results_[static_cast<std::size_t>(item)].times) + release_latency_;
         release_changed_.wait_until(
             lock, stop, due, [&] { return release_wanted_ && held_for_release_ == kReleaseSlots; });
         if (stop.stop_requested()) return;
@@ -689,7 +695,7 @@ void DepthRuntime::deliver(int result, bool early) {
   sequence_recorded_ = true;
   ++published_;
   camera_correction_ = r.result.camera_correction;
-  if (releasing_ && t.densify_end - t.capture > release_latency_) ++overdue_;
+  if (releasing_ && t.densify_end - release_base(t) > release_latency_) ++overdue_;
   early_ += early;
   // Every free result gets this one's room, so none allocates when it is first taken, however
   // late in the sequence that is (frames dropped at the entry leave entries unused).

@@ -256,6 +256,31 @@ TEST(Publisher, PreviewIsSmallNearestDepthAndRateLimited) {
   EXPECT_EQ(static_cast<std::uint64_t>(p.session_id), ring.session_id());
 }
 
+// One frame stamped 5 s ahead (a camera's clock fault) among 30 fps frames: the previews go on
+// at their rate rather than stop until the clock has caught up with it.
+TEST(Publisher, AStampThatJumpsDoesNotSilenceThePreviews) {
+  TempDir dir;
+  RingWriter ring(dir.path() / "depth.shm", ring_options(40, 30));
+  PublisherOptions po = memq();
+  po.preview_hz = 2.0;
+  DepthPublisher pub(ring, po);
+  Collector got(pub.lcm());
+  Image<float> depth(40, 30);
+  Image<std::uint8_t> image(40, 30);
+  depth.fill(2.0f);
+  for (int i = 0; i < 90; ++i) {  // 3 s
+    FrameMeta meta;
+    meta.frame_seq = static_cast<std::uint64_t>(i);
+    meta.capture_ns = i * 33'333'333LL + (i == 30 ? 5'000'000'000LL : 0);
+    pub.write(depth.cview(), image.cview(), meta);
+  }
+  handle_all(pub.lcm());
+  // 0 and 0.5 s, the frame ahead, the one after it (the pacing afresh), then every 0.5 s.
+  std::vector<std::int64_t> seqs;
+  for (const auto& p : got.previews) seqs.push_back(p.frame_seq);
+  EXPECT_EQ(seqs, (std::vector<std::int64_t>{0, 16, 30, 31, 47, 63, 79}));
+}
+
 // The publish path allocates nothing once warm, previews included (30 Hz: one every frame).
 TEST(Publisher, WarmWritesDoNotAllocateEvenWithAPreviewEachFrame) {
   TempDir dir;

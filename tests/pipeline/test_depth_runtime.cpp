@@ -886,6 +886,37 @@ TEST(DepthRuntime, AResultReadyAfterItsReleaseTimeGoesAtOnceAndCountsAsOverdue) 
   }
 }
 
+// A camera stamp in the future (a clock fault) must not hold its result, and every one behind
+// it, until that time: the release counts from the entry when the stamp lies after it.
+TEST(DepthRuntime, AFutureCaptureStampIsReleasedFromItsEntry) {
+  Sequence s = make_sequence("hand", 3);
+  s.params.contour.use_flow = false;
+  RuntimeParams rp;
+  rp.release_latency_ms = 50;
+  rp.entry_deadline_ms = 0;
+  Collector c;
+  DepthRuntime runtime(s.params, rp, c.callback());
+  runtime.start();
+  const auto start = Clock::now();
+  for (int i = 0; i < 3; ++i) {
+    // One at a time: no frame is left behind as late, each result is the one of its push.
+    runtime.push(s.frames[i].left.cview(), s.frames[i].right.cview(),
+                 Clock::now() + (i == 1 ? 3s : 0s));
+    const auto until = Clock::now() + 5s;
+    while (Clock::now() < until) {
+      {
+        std::lock_guard lock(c.mutex);
+        if (c.times.size() == static_cast<std::size_t>(i + 1)) break;
+      }
+      std::this_thread::sleep_for(1ms);
+    }
+  }
+  runtime.drain();
+  EXPECT_LT(Clock::now() - start, 2s) << "a result was held until its stamp";
+  ASSERT_EQ(c.times.size(), 3u);
+  for (const FrameTimes& t : c.times) EXPECT_LT(t.release - t.entry, 1s);
+}
+
 // Whether a thread of this process may move itself to SCHED_FIFO at `priority`, tried on a thread
 // of its own.
 bool may_use_fifo_priority(int priority) {

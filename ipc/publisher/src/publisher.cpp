@@ -200,8 +200,11 @@ void DepthPublisher::announce(std::uint64_t publish_index, std::uint32_t slot,
   send(kDepthChannel, m);
   if (options_.preview_hz > 0) {
     const auto period_ns = static_cast<std::int64_t>(1e9 / options_.preview_hz);
-    if (!preview_sent_ || meta.capture_ns - last_preview_capture_ns_ >= period_ns)
-      send_preview(publish_index, meta, depth);
+    // By capture time, so a replay previews the frames the headset did. A stamp that went back
+    // (a camera's clock fault) starts the pacing afresh rather than silence the previews until
+    // the clock has caught up with the one that went ahead.
+    const std::int64_t since = meta.capture_ns - last_preview_capture_ns_;
+    if (!preview_sent_ || since >= period_ns || since < 0) send_preview(publish_index, meta, depth);
   }
 }
 

@@ -12,6 +12,7 @@
 #include "dco/core/image.hpp"
 #include "dco/core/rectifier.hpp"
 #include "dco/daemon/daemon_config.hpp"
+#include "dco/daemon/frame_numbers.hpp"
 #include "dco/daemon/logger.hpp"
 #include "dco/daemon/service_notifier.hpp"
 #include "dco/daemon/stall_clock.hpp"
@@ -107,12 +108,7 @@ class Daemon final : public drivers::FrameSink {
   std::int64_t lcm_failures_reported_ns_ = 0;
   std::int64_t lcm_retry_ns_ = 0;  // when LCM, not set up at the start, was last tried
 
-  // Source sequence numbers by capture time, so a result names the camera frame it came from.
-  // Every push is recorded, dropped frames too, for as long as a frame can be in flight: the
-  // stages plus up to runtime.release_latency_ms (1 s), 2.5 s of a 200 fps camera here.
-  std::mutex seq_mutex_;
-  std::array<std::pair<std::int64_t, std::uint64_t>, 512> pushed_{};
-  std::size_t pushed_cursor_ = 0;
+  FrameNumbers frame_numbers_;
 
   std::atomic<std::int64_t> last_publish_ns_{0};
   std::atomic<std::int64_t> pipeline_start_ns_{0};
