@@ -203,9 +203,10 @@ void Daemon::start_pipeline() {
                   loaded_.config.runtime.threads == 0
                       ? fmt::format(" (runtime.threads = 0, {} usable CPUs)", usable_cpus())
                       : "",
-                  contour::parallel_flow_fields(loaded_.config.pipeline.contour)
-                      ? ", the two flow fields on two threads"
-                      : "",
+                  !contour::parallel_flow_fields(loaded_.config.pipeline.contour) ? ""
+                  : loaded_.config.pipeline.contour.reuse_flow
+                      ? ", the two flow fields on two threads where one cannot be reused"
+                      : ", the two flow fields on two threads",
                   std::max({stereo_rows, contour_rows, densify_rows}) > 1
                       ? fmt::format(", rows on {} / {} / {} threads in stereo / contour / densify",
                                     stereo_rows, contour_rows, densify_rows)

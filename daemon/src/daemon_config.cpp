@@ -12,10 +12,11 @@ namespace {
 
 void register_params(ConfigSchema& s, DaemonConfig& c) {
   s.add("source.uri", &c.source, {},
-        "frames from: synthetic://NAME?width=&height=&fps=&frames=, replay://DIR?fps=&loop=, "
-        "lcmlog://FILE?fps=, indemind://[SERIAL]");
+        "frames from: synthetic://NAME?..., replay://DIR?..., lcmlog://FILE?fps=, indemind://...,"
+        " libcamera://... (see *The daemon, dcod*)");
   s.add("ring.path", &c.ring_path, {},
-        "depth ring file; empty = $RUNTIME_DIRECTORY (or /run/dcod, else a temp dir)/depth.shm");
+        "depth ring file; empty = $RUNTIME_DIRECTORY (or /run/dcod, else $XDG_RUNTIME_DIR/dcod or"
+        " the temp dir's dcod-<uid>)/depth.shm");
   s.add("ring.slots", &c.ring_slots, 3, 64, "frames the ring holds (readers get the newest)");
   s.add("ring.image", &c.ring_image, "each slot also carries the rectified left image");
   s.add("lcm.url", &c.lcm_url, {}, "LCM provider; empty = $LCM_DEFAULT_URL, else udpm multicast");
@@ -26,7 +27,8 @@ void register_params(ConfigSchema& s, DaemonConfig& c) {
   s.add("service.max_frames", &c.max_frames, 0, 2000000000,
         "exit cleanly after publishing this many frames (0 = run until stopped)");
   s.add("log.level", &c.log_level, {"debug", "info", "warning", "error"},
-        "least severe message written (journal or stderr, and DCO_LOG)");
+        "least severe message written (journal or stderr, and DCO_LOG); dcod writes nothing at "
+        "debug level yet, so debug shows what info does");
   s.add("raw.enabled", &c.raw_enabled,
         "record the source's raw pairs on DCO_RAW (PNG, with calibration and IMU) for "
         "lcm-logger and lcmlog:// replay; SIGHUP turns it on and off");

@@ -20,7 +20,8 @@ void register_params(ConfigSchema& s, ContourParams& p) {
         "cv::DISOpticalFlow preset");
   s.add("contour.parallel_flow", &p.parallel_flow, {"auto", "on", "off"},
         "the two flow fields on two threads at once (same output); auto = on with 4 or more "
-        "usable CPUs");
+        "usable CPUs; with reuse_flow only for the frames whose field cannot be reused (a "
+        "sequence's first, one after a dropped frame)");
   s.add("contour.reuse_flow", &p.reuse_flow,
         "one DIS run per frame instead of two: with lookahead 0 the field t -> t-2 is the fresh "
         "t -> t-1 carried on by the previous frame's t-1 -> t-2, with lookahead 1 the field "

@@ -89,7 +89,8 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
         "conjugate-gradient iterations at full size after a half-size solve and its sweeps");
   s.add("densify.output_residual", &p.output_residual,
         "after a half-size solve's sweeps also measure the output's residual on the full system "
-        "(a pass over it; dco-depth prints it)");
+        "(a pass over it, about 0.2–0.4 ms per 1280x720 frame; dco-depth prints it, else the "
+        "half-size solve's)");
   s.add("densify.max_iterations", &p.max_iterations, 1, 10000, "conjugate-gradient iterations");
   s.add("densify.tolerance", &p.tolerance, 1e-9, 0.1, "relative residual to stop at");
   s.add("densify.multigrid", &p.multigrid, "multigrid V-cycle preconditioner");
@@ -108,8 +109,9 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
   s.add("densify.photometric_gamma", &p.photometric.gamma, 0.0, 1000.0,
         "gradient constancy weight of the photometric refinement");
   s.add("densify.photometric_max_pixels", &p.photometric.max_pixels, 0, 100000000,
-        "where the photometric refinement runs on the CPU, frames with more pixels skip it (0: all "
-        "of them); on the CUDA backend it refines every frame");
+        "where the photometric refinement runs on the CPU, frames with more pixels skip it (0: "
+        "every frame skips it on the CPU); on the CUDA backend it refines every frame (1.8 ms at "
+        "1280x720 on an H200)");
   s.add("densify.row_threads", &p.row_threads, 0, 16,
         "threads sharing the row-wise steps (building the system, the clamp and the median), the "
         "stage's own included (0 = auto: 1 below 4 usable CPUs, else half of them, at most 4)");

@@ -28,9 +28,9 @@ void register_params(ConfigSchema& s, RuntimeParams& p) {
         "entry_deadline_share of the frame interval, when that is longer); 0 = no deadline");
   s.add("runtime.entry_deadline_share", &p.entry_deadline_share, 0.0, 1.0,
         "the entry deadline is at least this share of the camera's frame interval (the median of "
-        "the last 8 capture intervals), unless the frame waited for the later stages, so a "
-        "stereo stage a little slower than the camera still gives depth for most frames; 0 = "
-        "entry_deadline_ms alone");
+        "the last 8 capture intervals), unless the frame waited for the later stages, so a stereo"
+        " stage a little slower than the camera still gives depth for most frames; 0 = "
+        "entry_deadline_ms alone; with entry_deadline_ms 0 there is no deadline at all");
   s.add("runtime.release_latency_ms", &p.release_latency_ms, 0.0, 1000.0,
         "hand every depth map on this long after its capture, a constant age; one ready later "
         "goes at once (overdue); 0 = as soon as it is ready");

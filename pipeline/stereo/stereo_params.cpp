@@ -16,14 +16,15 @@ void require(bool ok, const std::string& what) {
 
 void register_params(ConfigSchema& s, StereoParams& p) {
   s.add("stereo.max_disparity", &p.max_disparity, 1, kMaxDisparityLimit,
-        "largest disparity searched, pixels of the input image");
+        "largest disparity searched, pixels of the input image (matching at half size searches "
+        "half of it, rounded down: 81 searches as 80)");
   s.add("stereo.internal_resolution", &p.internal_resolution, {"auto", "full", "half"},
         "auto = half size when the input is wider than 640 px");
   s.add("stereo.search_range", &p.search_range, {"auto", "full", "guided", "temporal"},
-        "guided = each row searches only the disparities a half-size pass finds near it; "
-        "temporal = those of the previous frame's map and of a quarter-size pass (a sequence's "
-        "first frame: guided); auto = temporal on the CPU when over 64 internal disparities, "
-        "full on CUDA");
+        "guided = each tile of 128 columns of a row searches only the disparities a half-size "
+        "pass finds near it; temporal = those near the previous frame's map and a quarter-size "
+        "pass (a sequence's first frame: guided); auto = temporal on the CPU when over 64 "
+        "internal disparities, full on CUDA");
   s.add("stereo.row_threads", &p.row_threads, 0, 16,
         "threads sharing the CPU stage's rows (input preparation, census, the disparity search in "
         "bands, boundary refinement), the stage's own included (0 = auto: 1 below 4 usable "
@@ -37,10 +38,10 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "many or more");
   s.add("stereo.lens_falloff", &p.lens_falloff,
         "correct both images for a brightness fall-off towards the corners shared by the two "
-        "lenses (1 - k r^2, fitted to the matches) before matching");
+        "lenses (1 − k r², fitted to the matches) before matching");
   s.add("stereo.vertical_alignment", &p.vertical_alignment,
-        "move the right image by the vertical offset between the cameras' rows (fitted to the "
-        "matches) before matching");
+        "move the right image by the vertical offset between the cameras' rows and turn it back "
+        "by their roll (both fitted to the matches) before matching");
   s.add("stereo.lambda_ad", &p.lambda_ad, 0.01, 1000.0, "λ_AD of Eq. 1");
   s.add("stereo.lambda_census", &p.lambda_census, 0.01, 1000.0,
         "λ_census of Eq. 1 (the paper: 40)");
@@ -50,10 +51,12 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "census window width, odd; the window holds 2..65 pixels (a 64-bit signature)");
   s.add("stereo.census_height", &p.census_height, 1, 63,
         "census window height, odd; width x height within 2..65");
-  s.add("stereo.arm_max", &p.arm_max, 2, 255, "longest cross arm L1, input pixels");
+  s.add("stereo.arm_max", &p.arm_max, 2, 255,
+        "longest cross arm L1, input pixels (halved, rounded down, at half size); at least "
+        "arm_short");
   s.add("stereo.arm_short", &p.arm_short, 0, 255, "arm length L2 beyond which tau2 applies");
   s.add("stereo.tau1", &p.tau1, 1, 255, "colour threshold of the arms");
-  s.add("stereo.tau2", &p.tau2, 1, 255, "stricter colour threshold beyond arm_short");
+  s.add("stereo.tau2", &p.tau2, 1, 255, "stricter colour threshold beyond arm_short; at most tau1");
   s.add("stereo.smooth_arms", &p.smooth_arms,
         "median-smooth the arm lengths across the arm direction");
   s.add("stereo.aggregation_passes", &p.aggregation_passes, 1, 8,
@@ -63,7 +66,8 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "best cost must be this fraction below the next non-adjacent one (0 = off)");
   s.add("stereo.vote_iterations", &p.vote_iterations, 0, 16, "histogram-vote iterations (Eq. 4)");
   s.add("stereo.vote_min_count", &p.vote_min_count, 1, 100000,
-        "reliable pixels a region needs for its vote to count");
+        "reliable pixels a region needs for its vote to count (with vote_iterations > 0, as the "
+        "three below)");
   s.add("stereo.vote_min_ratio", &p.vote_min_ratio, 0.0, 1.0,
         "share of the votes the winning disparity needs");
   s.add("stereo.vote_tolerance", &p.vote_tolerance, 0, 16,
@@ -74,7 +78,8 @@ void register_params(ConfigSchema& s, StereoParams& p) {
   s.add("stereo.speckle_size", &p.speckle_size, 0, 100000,
         "drop islands of at most this many internal pixels after the checks (0 = off)");
   s.add("stereo.speckle_range", &p.speckle_range, 0, 64,
-        "largest step between neighbours of one island, internal px");
+        "largest step between neighbours of one island, internal px (the neighbour-jump check "
+        "runs first: values of max_neighbour_jump and above change nothing)");
   s.add("stereo.subpixel", &p.subpixel,
         "equiangular (V) fit of the winning cost and its neighbours");
   s.add("stereo.boundary_radius", &p.boundary_radius, 0, 15,
@@ -84,7 +89,8 @@ void register_params(ConfigSchema& s, StereoParams& p) {
         "the side picked must cost at most this fraction of the other side");
   s.add("stereo.boundary_hole_reach", &p.boundary_hole_reach, 0, 16,
         "how far along its row a pixel without a value and no depth edge within 2 internal px "
-        "looks for the two sides, internal px (2 or less = not at all)");
+        "looks for the two sides, internal px (2 or less = not at all); like boundary_ratio and "
+        "boundary_hole_ratio, only when matching at half size and with boundary_radius > 0");
   s.add("stereo.boundary_hole_ratio", &p.boundary_hole_ratio, 0.01, 1.0,
         "the side picked for such a pixel must cost at most this fraction of the other side");
 }

@@ -435,6 +435,47 @@ TEST(Dcod, AFileSizeLimitIsAnErrorNotASignal) {
     ADD_FAILURE() << "left behind: " << e.path();
 }
 
+// The README's configuration reference is what the code registers: every key there, none more,
+// each described as `--print-config` (and `dco-depth --list-params`) describes it.
+TEST(Dcod, PrintConfigHoldsTheReadmesReference) {
+  std::ifstream readme(std::string(DCO_SOURCE_DIR) + "/README.md");
+  ASSERT_TRUE(readme) << "README.md";
+  const auto plain = [](std::string t) {
+    t = std::regex_replace(t, std::regex(R"(\\\|)"), "|");
+    t = std::regex_replace(t, std::regex("`"), "");
+    return std::regex_replace(t, std::regex(R"(\s+)"), " ");
+  };
+  std::map<std::string, std::string> documented;
+  const std::regex row(R"(^\| `([a-z_]+\.[a-z_0-9]+)` \| .*? \| .*? \| (.*) \|$)");
+  for (std::string line; std::getline(readme, line);)
+    if (std::smatch m; std::regex_match(line, m, row)) documented[m[1]] = plain(m[2]);
+  const CommandResult r = run_command(std::string(DCOD_EXE) + " --print-config");
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::map<std::string, std::string> registered;
+  std::istringstream lines(r.output);
+  std::string section, comment;
+  const std::regex heading(R"(^\[(\w+)\]$)"), key(R"(^(\w+) = .*)"), range(R"( \([^()]*\)$)");
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch m;
+    if (std::regex_match(line, m, heading))
+      section = m[1];
+    else if (line.starts_with("# ") && !section.empty())
+      comment = line.substr(2);
+    else if (std::regex_match(line, m, key) && !section.empty())
+      registered[section + "." + std::string(m[1])] = plain(std::regex_replace(comment, range, ""));
+  }
+  EXPECT_EQ(documented.size(), 99u);
+  for (const auto& [k, text] : documented) {
+    const auto it = registered.find(k);
+    if (it == registered.end())
+      ADD_FAILURE() << k << " is in the README, not in the code";
+    else
+      EXPECT_EQ(it->second, text) << k;
+  }
+  for (const auto& [k, text] : registered)
+    EXPECT_TRUE(documented.contains(k)) << k << " is registered, not in the README";
+}
+
 TEST(Dcod, BadConfigurationsFailWithFileLineAndReason) {
   TempDir dir;
   const auto exe = std::string(DCOD_EXE);
