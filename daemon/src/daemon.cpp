@@ -466,16 +466,15 @@ void Daemon::configure_raw_recording() {
           if (publisher_) publisher_->publish_raw(m);
         });
   }
-  std::unique_ptr<RawRecorder> previous;
+  std::optional<RawRecorder::Counts> closed;
   {
+    // The old recorder sends what it holds before the new one takes a pair, and the source's
+    // offers wait meanwhile: DCO_RAW stays in frame order, which a replay plays it in.
     std::lock_guard lock(raw_mutex_);
-    previous = std::move(raw_);
+    if (raw_) closed = raw_->close();
     raw_ = std::move(next);
   }
-  if (previous) {
-    const RawRecorder::Counts n = previous->close();  // sends what it holds
-    log_.info("raw recording stopped: " + raw_totals(n));
-  }
+  if (closed) log_.info("raw recording stopped: " + raw_totals(*closed));
   raw_dropped_reported_ = raw_oversized_reported_ = raw_failed_reported_ = 0;
   raw_settings_ = settings;
   if (c.raw_enabled)
@@ -509,7 +508,7 @@ void Daemon::report_raw_recording() {
   raw_failed_reported_ = n.failed;
 }
 
-void Daemon::apply_live_settings() {
+void Daemon::apply_live_settings(bool raw_recording) {
   log_.set_level(parse_log_level(loaded_.config.log_level));
   // A new lcm.stats_hz applies at once, not after the old period.
   next_stats_ns_ = std::min<std::int64_t>(
@@ -519,7 +518,7 @@ void Daemon::apply_live_settings() {
     std::lock_guard lock(publish_mutex_);
     publisher_->set_preview_hz(loaded_.config.preview_hz);
   }
-  configure_raw_recording();
+  if (raw_recording) configure_raw_recording();
 }
 
 void Daemon::restart_pipeline() {
@@ -528,6 +527,9 @@ void Daemon::restart_pipeline() {
   // none (stop() would discard them).
   finish_frames_in_flight();
   runtime_->stop();
+  // DCO_RAW records the pipeline keys each pair is processed with: the recorder changes with the
+  // stages, while no frame comes in.
+  configure_raw_recording();
   start_pipeline();
   start_source();
 }
@@ -569,7 +571,7 @@ void Daemon::reload() {
 
   LoadedConfig previous = std::move(loaded_);
   loaded_ = std::move(next);
-  apply_live_settings();
+  apply_live_settings(restarted.empty());  // else the restart changes the raw recording
   if (!restarted.empty()) {
     try {
       restart_pipeline();
@@ -580,7 +582,7 @@ void Daemon::reload() {
                              "pipeline: ") +
                  e.what());
       loaded_ = std::move(previous);
-      apply_live_settings();
+      apply_live_settings(false);
       try {
         restart_pipeline();
       } catch (const std::exception& again) {

@@ -772,6 +772,48 @@ TEST(Dcod, AReleaseLatencyPublishesEveryFrameAtItsCaptureTimePlusThatLatency) {
       << log;
 }
 
+// Reloads that change the raw recording's settings while it records: the old recorder sends what
+// it holds before the new one takes a pair, so DCO_RAW stays in frame order (a replay plays the
+// pairs in the order of the log).
+TEST(Dcod, ARawRecordingReloadKeepsThePairsInOrder) {
+  if (const std::string problem = private_network_problem(); !problem.empty())
+    GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
+  TempDir dir;
+  const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+  const auto log = dir / "field.log";
+  const auto config = dir.write("dcod.toml", "[raw]\nenabled = true\npng_level = 9\n");
+  const auto other = dir.write("other.toml", "[raw]\nenabled = true\npng_level = 0\n");
+  // Eight reloads, 0.25 s apart, swap the file between two PNG levels.
+  const std::string swaps = "for i in 1 2 3 4 5 6 7 8; do sleep 0.25; cp " + config.string() + " " +
+                            (dir / "a").string() + "; cp " + other.string() + " " +
+                            config.string() + "; cp " + (dir / "a").string() + " " +
+                            other.string() + "; kill -HUP $D; done";
+  const std::string record =
+      unshare_command() + " sh -c '" + kNetnsSetup + " && lcm-logger -q --lcm-url=\"" + url +
+      "\" " + log.string() + " & L=$!; sleep 0.5; " + DCOD_EXE +
+      " --source \"synthetic://hand?width=320&height=192&fps=60&frames=150\" --config " +
+      config.string() + " --set \"lcm.url=" + url +
+      "\" --set ring.path=" + (dir / "rec.shm").string() +
+      " --set runtime.deterministic=true & D=$!; " + swaps +
+      "; wait $D; S=$?; sleep 0.5; kill -INT $L; wait $L; exit $S'";
+  const auto r = run_command(record);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("raw recording stopped"), std::string::npos) << r.output;
+  drivers::LcmLogReader log_reader(log);
+  drivers::LcmLogEvent event;
+  std::vector<std::int64_t> seqs;
+  while (log_reader.next(event)) {
+    ::dco::raw_stereo_t raw;
+    std::string problem;
+    if (event.channel == ipc::channel::kRaw &&
+        ipc::decode_message(event.data.data(), event.data.size(), raw, problem))
+      seqs.push_back(raw.frame_seq);
+  }
+  ASSERT_EQ(seqs.size(), 150u) << r.output;
+  for (std::size_t i = 1; i < seqs.size(); ++i)
+    EXPECT_GT(seqs[i], seqs[i - 1]) << "pair " << i << " of the log";
+}
+
 TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
   if (const std::string problem = private_network_problem(); !problem.empty())
     GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";

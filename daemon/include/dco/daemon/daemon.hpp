@@ -66,8 +66,9 @@ class Daemon final : public drivers::FrameSink {
   // Reads the recorded depth previews when the source replays a field log deterministically.
   void open_replay_check();
   void reload();
-  // What a reload applies without restarting the pipeline, from loaded_.
-  void apply_live_settings();
+  // What a reload applies without restarting the pipeline, from loaded_; the raw recording
+  // too unless the pipeline restarts, which changes it with the stages.
+  void apply_live_settings(bool raw_recording = true);
   // The stage threads again with loaded_ (between two frames: the source stops first).
   void restart_pipeline();
   // Starts, stops or re-creates the DCO_RAW recorder as the configuration says.
