@@ -156,7 +156,9 @@ void Daemon::open_replay_check() {
   constexpr std::size_t kMaxPreviews = 100000;  // 2 Hz for 13 hours, under 1 GB
   drivers::RecordedPreviews recorded = drivers::read_recorded_previews(*log, kMaxPreviews);
   if (recorded.by_frame.empty()) {
-    log_.info("the log holds no DCO_DEPTH_PREVIEW: the replay is not checked against it");
+    log_.info(
+        "the log holds no DCO_DEPTH_PREVIEW of a recorded pair: the replay is not checked "
+        "against it");
     return;
   }
   log_.info(fmt::format("checking the replay against {} recorded depth previews{}",

@@ -45,7 +45,7 @@ RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_
       ++out.undecodable;
       continue;
     }
-    if (out.by_frame.size() + waiting.size() >= max_count) {
+    if (out.by_frame.size() >= max_count) {
       out.truncated = true;
       break;
     }
@@ -54,8 +54,12 @@ RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_
                                  [&](const auto& p) { return p.first == frame; });
     if (it != recent_pairs.rend())
       out.by_frame[{it->second, preview.frame_seq}] = std::move(preview);
-    else
+    else {
       waiting[frame] = std::move(preview);
+      // A preview's pair comes a few frames later at most: the oldest waiting ones past that are
+      // of frames the log holds no pair of (raw recording was off), and give way.
+      if (waiting.size() > kRecentPairs) waiting.erase(waiting.begin());
+    }
   }
   return out;  // previews still waiting have no pair in the log: nothing replays their frames
 }

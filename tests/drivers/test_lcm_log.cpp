@@ -303,6 +303,37 @@ TEST(RecordedPreviews, OnlyWholeGridsAreKeptForTheReplayCheck) {
   EXPECT_EQ(r.undecodable, 4);
 }
 
+// A log recorded for a while without raw pairs (raw recording switched on later): the previews of
+// frames without a pair never fill the limit, and the later ones with pairs are checked.
+TEST(RecordedPreviews, PreviewsWithoutPairsDoNotUseUpTheLimit) {
+  dco::testing::TempDir dir;
+  std::vector<LcmLogEvent> events;
+  auto preview = [](std::int64_t seq) {
+    ::dco::depth_preview_t p{};
+    p.frame_seq = seq;
+    p.capture_ns = 1000 + seq;
+    p.source_width = 64;
+    p.source_height = 48;
+    p.width = p.height = p.num_pixels = 1;
+    p.depth_mm = {1000};
+    return dco::testing::lcm_bytes(p);
+  };
+  for (std::int64_t seq = 0; seq < 500; ++seq)
+    events.push_back(
+        event_of(static_cast<int>(events.size()), ipc::channel::kDepthPreview, preview(seq)));
+  for (std::int64_t seq = 500; seq < 510; ++seq) {
+    events.push_back(
+        event_of(static_cast<int>(events.size()), ipc::channel::kRaw, pair_bytes(seq, 1000 + seq)));
+    events.push_back(
+        event_of(static_cast<int>(events.size()), ipc::channel::kDepthPreview, preview(seq)));
+  }
+  const auto path = dir.path() / "late_raw.log";
+  std::ofstream(path, std::ios::binary) << log_of(events);
+  const RecordedPreviews r = read_recorded_previews({path, ipc::channel::kRaw}, 100);
+  EXPECT_EQ(r.by_frame.size(), 10u);
+  EXPECT_FALSE(r.truncated);
+}
+
 // Two dcod runs in one log, both numbering their frames from 0: each preview stays with its own
 // run, whichever of a frame's pair and preview the logger got first.
 TEST(RecordedPreviews, ARestartedDcodKeepsItsOwnPreviews) {
