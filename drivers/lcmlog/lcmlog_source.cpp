@@ -61,6 +61,12 @@ class LcmLogSource final : public PacedSource {
       if (!ipc::decode_message(event_.data.data(), event_.data.size(), message_, problem))
         throw Error(fmt::format("{}: event {} at byte {} on {}: {}", where_, event_.number,
                                 event_.offset, channel_, problem));
+      // Before the PNGs are decoded: a pair that says it is larger than the log's frames would
+      // take its size in memory first.
+      if (info_.width > 0 && (message_.width != info_.width || message_.height != info_.height))
+        throw Error(fmt::format("{}: frame {} is {}x{}, the log started with {}x{}", where_,
+                                message_.frame_seq, message_.width, message_.height, info_.width,
+                                info_.height));
       decode_raw_stereo(message_, left_, right_);
       decode_raw_imu(message_, imu_);
       return true;

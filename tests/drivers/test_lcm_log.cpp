@@ -453,6 +453,36 @@ struct Collect : FrameSink {
   }
 };
 
+// A pair that says it is larger than the log's frames is refused before its PNGs are decoded (a
+// small message saying 16384x16384 would take gigabytes first).
+TEST(LcmLogSource, APairLargerThanTheLogsFramesIsRefusedBeforeItIsDecoded) {
+  dco::testing::TempDir dir;
+  synthetic::SceneRenderer scene(synthetic::preset("hand", 96, 64));
+  const std::string calibration = calibration_to_toml(scene.calibration());
+  RawStereoEncoder encoder;
+  std::vector<LcmLogEvent> events;
+  synthetic::StereoSample s;
+  for (int i = 0; i < 2; ++i) {
+    scene.render(i, s);
+    StereoFrame f = frame_of(s.left, s.right, {});
+    f.seq = static_cast<std::uint64_t>(i);
+    f.capture_ns = recorded_capture_ns(i);
+    ::dco::raw_stereo_t m;
+    encoder.encode(f, calibration, m);
+    if (i == 1) m.width = m.height = 16384;
+    events.push_back(event_of(i, "DCO_RAW", dco::testing::lcm_bytes(m)));
+  }
+  const auto path = dir.path() / "bomb.log";
+  std::ofstream(path, std::ios::binary) << log_of(events);
+  auto source = open_source("lcmlog://" + path.string() + "?fps=0");
+  Collect sink;
+  source->start(sink);
+  ASSERT_TRUE(sink.wait());
+  EXPECT_NE(sink.error.find("frame 1 is 16384x16384, the log started with 96x64"),
+            std::string::npos)
+      << sink.error;
+}
+
 TEST(LcmLogSource, ReplaysTheRecordedPairsAndNamesDamage) {
   dco::testing::TempDir dir;
   const std::string log = recorded_log(5, 96, 64);
