@@ -1,6 +1,7 @@
 #include "dco/core/image_io.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <fstream>
 #include <iterator>
@@ -27,6 +28,28 @@ std::string quoted(const std::filesystem::path& p) {
 
 std::uint32_t read_be32(const std::uint8_t* p) {
   return std::uint32_t{p[0]} << 24 | std::uint32_t{p[1]} << 16 | std::uint32_t{p[2]} << 8 | p[3];
+}
+
+// The largest value of a PGM/PPM (P2, P3, P5, P6), whose header is text: magic, width, height,
+// maxval, with '#' comments between. nullopt for any other file.
+std::optional<long> pnm_maxval(std::span<const std::uint8_t> bytes) {
+  if (bytes.size() < 2 || bytes[0] != 'P' ||
+      (bytes[1] != '2' && bytes[1] != '3' && bytes[1] != '5' && bytes[1] != '6'))
+    return std::nullopt;
+  std::size_t i = 2;
+  long fields[3] = {};
+  for (long& field : fields) {
+    while (i < bytes.size() && (std::isspace(bytes[i]) || bytes[i] == '#')) {
+      if (bytes[i] == '#')
+        while (i < bytes.size() && bytes[i] != '\n') ++i;
+      else
+        ++i;
+    }
+    if (i >= bytes.size() || !std::isdigit(bytes[i])) return std::nullopt;
+    for (; i < bytes.size() && std::isdigit(bytes[i]) && field < 1'000'000; ++i)
+      field = field * 10 + (bytes[i] - '0');
+  }
+  return fields[2];
 }
 
 const char* depth_name(int depth) {
@@ -68,6 +91,10 @@ cv::Mat read_image_file(const std::filesystem::path& path, int flags, std::strin
               png->height > static_cast<std::uint32_t>(kMaxImageSide)))
     throw Error(fmt::format("{} {} is a {}x{} PNG (sides at most {})", what, quoted(path),
                             png->width, png->height, kMaxImageSide));
+  // OpenCV reads a PGM/PPM of fewer levels (maxval 15) as 8-bit values 0..15, unscaled.
+  if (const auto maxval = pnm_maxval(bytes); maxval && *maxval < 255)
+    throw Error(fmt::format("{} {} is a PGM/PPM with maxval {} (8-bit ones need 255)", what,
+                            quoted(path), *maxval));
   cv::Mat m;
   try {
     if (!bytes.empty()) m = cv::imdecode(bytes, flags);

@@ -117,6 +117,28 @@ TEST(ImageIo, HugePngIsRefusedFromItsHeader) {
       << error_of(dir / "huge.png");
 }
 
+// A PGM of fewer levels than 8 bits give (maxval 15) would come out as values 0..15: refused,
+// where one of maxval 255, comments in its header, loads.
+TEST(ImageIo, APgmOfFewerLevelsIsRefused) {
+  test::TempDir dir;
+  const auto write = [&](const std::string& name, const std::string& header) {
+    std::ofstream out(dir.path() / name, std::ios::binary);
+    out << header << std::string(4 * 2, '\x0c');
+    return dir.path() / name;
+  };
+  const auto low = write("low.pgm", "P5\n# four levels of grey\n4 2\n15\n");
+  try {
+    load_image(low, ImageColor::kGray);
+    ADD_FAILURE() << "took a maxval 15 PGM";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("maxval 15"), std::string::npos) << e.what();
+  }
+  const Image<std::uint8_t> ok =
+      load_image(write("ok.pgm", "P5 4 2 # size\n255\n"), ImageColor::kGray);
+  EXPECT_EQ(ok.width(), 4);
+  EXPECT_EQ(ok.cview().at(0, 0), 12);
+}
+
 TEST(ImageIo, ReadsDatasetImages) {
   const auto mb = load_image(test::data_dir() / "middlebury2014" / "Motorcycle" / "im0.png");
   EXPECT_EQ(mb.width(), 741);
