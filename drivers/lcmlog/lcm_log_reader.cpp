@@ -79,9 +79,15 @@ bool LcmLogReader::next(LcmLogEvent& event) {
   const auto got = static_cast<std::size_t>(in_->gcount());
   check_read();
   if (got == 0) return false;  // the clean end
-  if (got < 4 || read_be(head.data(), 4) != kSyncWord)
+  if (got < 4 || read_be(head.data(), 4) != kSyncWord) {
+    // A log cut within its first sync word began like one all the same.
+    if (offset_ == 0 && got < 4 &&
+        (read_be(head.data(), got) << (8 * (4 - got))) ==
+            (kSyncWord >> (8 * (4 - got)) << (8 * (4 - got))))
+      began_like_a_log_ = true;
     return fail(got < 4 ? "the log ends inside an event's sync word"
                         : "no LCM sync word where an event should start");
+  }
   if (offset_ == 0) began_like_a_log_ = true;
   if (got < kHeadBytes)
     return fail("the log ends inside the event's head (" + std::to_string(got) + " of " +

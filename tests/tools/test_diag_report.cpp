@@ -406,14 +406,14 @@ TEST(LogDigest, AFileThatIsNoLogIsOneError) {
 TEST(LogDigest, ALogCutInsideItsFirstEventSaysSo) {
   const KnownLog known;
   const std::string bytes = known.bytes();
-  for (const std::size_t cut : {std::size_t{10}, std::size_t{40}}) {
+  for (const std::size_t cut : {std::size_t{2}, std::size_t{10}, std::size_t{40}}) {
     std::istringstream in(bytes.substr(0, cut));
     try {
       digest_log(in, "field.log");
       FAIL() << "no error";
     } catch (const Error& e) {
       const std::string what = e.what();
-      EXPECT_NE(what.find("an LCM log cut before its first whole event"), std::string::npos)
+      EXPECT_NE(what.find("an LCM log damaged before its first whole event"), std::string::npos)
           << what;
       EXPECT_EQ(what.find("not an LCM log"), std::string::npos) << what;
     }

@@ -195,7 +195,7 @@ LogDigest read_all(drivers::LcmLogReader& reader, const std::string& name,
   if (d.events == 0 && !d.damage.empty())
     throw Error(d.damage +
                 (reader.began_like_a_log()
-                     ? " (an LCM log cut before its first whole event: nothing to report)"
+                     ? " (an LCM log damaged before its first whole event: nothing to report)"
                      : " (not an LCM log?)"));
   if (d.events == 0) throw Error(name + ": the log holds no event");
   // Keep the thinned sample within the budget when the last halving left more.
