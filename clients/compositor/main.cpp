@@ -22,13 +22,12 @@
 
 #include "dco/compositor/renderer.hpp"
 #include "dco/compositor/scene.hpp"
+#include "dco/default_ring_path.hpp"
 
 namespace {
 
 using namespace dco::compositor;
 using Clock = std::chrono::steady_clock;
-
-constexpr const char* kDefaultRing = "/run/dcod/depth.shm";
 
 std::atomic<bool> g_stop{false};
 extern "C" void on_stop_signal(int) {
@@ -43,7 +42,8 @@ void usage(std::FILE* out) {
       "                      [--cube X,Y,Z,SIZE[,R,G,B]]... [--sphere X,Y,Z,R[,R,G,B]]...\n"
       "                      [--scene FILE] [--soft N] [--wait S] [--width W --height H]\n"
       "                      [--egl auto|surfaceless|device] [--window [--display NAME]]\n"
-      "  --ring FILE     depth ring of dcod (default %s)\n"
+      "  --ring FILE     depth ring of dcod (default %s, or the one dcod run by hand by this\n"
+      "                  user writes: $XDG_RUNTIME_DIR/dcod or the temp dir's dcod-UID)\n"
       "  --uid UID       owner the ring must have (default: own uid; the packaged dcod runs as\n"
       "                  the user dcod)\n"
       "  --out FILE      composited frames as PNG; a printf pattern (frame_%%04d.png) keeps\n"
@@ -63,7 +63,7 @@ void usage(std::FILE* out) {
       "                  or auto (default: the first that works)\n"
       "  --window        also show the frames in an X11 window, scaled to fit\n"
       "  --display NAME  the X display of the window (default $DISPLAY); implies --window\n",
-      kDefaultRing);
+      dco::client_tools::kServiceRingPath);
 }
 
 bool parse_int(const char* text, long lo, long hi, long* out) {
@@ -103,7 +103,7 @@ std::string frame_name(const std::string& pattern, long index) {
 }
 
 struct Args {
-  std::string ring = kDefaultRing, out, mask, scene_file;
+  std::string ring = dco::client_tools::default_ring_path(), out, mask, scene_file;
   long frames = -1, soft = 0, wait_s = 5, width = 0, height = 0;  // frames -1: the default
   long uid = -1;                                                  // -1: own uid
   bool window = false;

@@ -329,6 +329,21 @@ TEST(DcoWatch, AWriterThatStaysAwayEndsItAndOverlaysAreWrittenSafely) {
         << "left behind: " << e.path();
 }
 
+// Without --path, the ring of a dcod run by hand by the same user is found where it writes it.
+TEST(DcoWatch, FindsTheRingOfADcodRunByHand) {
+  if (std::filesystem::exists("/run/dcod/depth.shm")) GTEST_SKIP() << "a service's ring is here";
+  TempDir dir;
+  std::filesystem::create_directory(dir.path() / "dcod");
+  RingWriter writer(dir.path() / "dcod" / "depth.shm", RingOptions{32, 16});
+  publish_pattern(writer, 7);
+  int code = -1;
+  const std::string out = run_shell(
+      "XDG_RUNTIME_DIR=" + dir.path().string() + " " + std::string(DCO_WATCH_EXE) + " --frames 1",
+      &code);
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("32x16"), std::string::npos) << out;
+}
+
 TEST(DcoWatch, BadInputGivesOneLineAndAnExitCode) {
   TempDir dir;
   int code = -1;

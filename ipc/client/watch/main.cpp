@@ -14,11 +14,10 @@
 #include <string_view>
 #include <vector>
 
+#include "dco/default_ring_path.hpp"
 #include "overlay.hpp"
 
 namespace {
-
-constexpr const char* kDefaultPath = "/run/dcod/depth.shm";
 
 void usage(std::FILE* out) {
   std::fprintf(
@@ -26,7 +25,8 @@ void usage(std::FILE* out) {
       "usage: dco-watch [--path FILE] [--uid UID] [--frames N] [--interval-ms MS]\n"
       "                 [--timeout-ms MS] [--poll-us US] [--copy] [--overlay FILE.ppm]\n"
       "                 [--virtual-depth M]\n"
-      "  --path FILE       depth ring (default %s)\n"
+      "  --path FILE       depth ring (default %s, or the one dcod run by hand by this user\n"
+      "                    writes: $XDG_RUNTIME_DIR/dcod or the temp dir's dcod-UID)\n"
       "  --uid UID         owner the ring must have (default: own uid)\n"
       "  --frames N        stop after N frames (default: run until stopped)\n"
       "  --interval-ms MS  report period (default 1000)\n"
@@ -37,7 +37,7 @@ void usage(std::FILE* out) {
       "  --overlay FILE    at every report, write the newest frame as a PPM picture: the\n"
       "                    camera image with a virtual box that real surfaces occlude\n"
       "  --virtual-depth M distance of that box (default 1.0 m)\n",
-      kDefaultPath);
+      dco::client_tools::kServiceRingPath);
 }
 
 std::int64_t now_ns() {
@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
   // A write past a file size limit is then an error the overlay writer reports.
   std::signal(SIGXFSZ, SIG_IGN);
   dco::client::Options options;
-  options.path = kDefaultPath;
+  options.path = dco::client_tools::default_ring_path();
   long long frames = 0;
   long long interval_ms = 1000;
   long long timeout_ms = 2000;
