@@ -287,6 +287,33 @@ TEST(LogDigest, HugeCountsSaturate) {
             std::string::npos);
 }
 
+// Raw pairs whose frame numbers skip (dropped by the recorder, lost on the way to the logger) are
+// counted: a replay plays them as if consecutive. A number that goes back starts another run.
+TEST(LogDigest, FrameNumbersWithoutARawPairAreCounted) {
+  std::ostringstream out;
+  std::int64_t number = 0;
+  for (const std::int64_t seq : {0, 1, 2, 5, 6, 0, 1, 3}) {
+    ::dco::raw_stereo_t m{};
+    m.frame_seq = seq;
+    m.width = 8;
+    m.height = 4;
+    LcmLogEvent e;
+    e.number = number;
+    e.timestamp_us = kStartUs + number * 1000;
+    ++number;
+    e.channel = ipc::channel::kRaw;
+    e.data = lcm_bytes(m);
+    drivers::write_lcm_log_event(out, e);
+  }
+  std::istringstream in(out.str());
+  const LogDigest d = digest_log(in, "gaps.log", DigestOptions{});
+  EXPECT_EQ(d.raw_pairs, 8);
+  EXPECT_EQ(d.raw_missing, 3);
+  EXPECT_NE(text_summary(d, summarize(d), "").find("3 frame numbers between them have no pair"),
+            std::string::npos)
+      << text_summary(d, summarize(d), "");
+}
+
 // The drops of a restarted pipeline or dcod count whole, even where the new count has already
 // reached the old one when its first DCO_STATS is sent.
 TEST(LogDigest, DropsAfterARestartCountWhole) {

@@ -183,8 +183,10 @@ std::string summary_section(const LogDigest& d, const LogSummary& s) {
                                     s.device_errors, s.disconnects)});
   out += row({"messages", fmt::format("{} errors, {} warnings", s.log_errors, s.log_warnings)});
   if (d.raw_pairs > 0)
-    out += row({"raw recording", fmt::format("{} pairs of {}x{}, {} bytes", d.raw_pairs,
-                                             d.raw_width, d.raw_height, d.raw_bytes)});
+    out += row({"raw recording",
+                fmt::format("{} pairs of {}x{}, {} bytes; {} frame numbers between them without "
+                            "a pair",
+                            d.raw_pairs, d.raw_width, d.raw_height, d.raw_bytes, d.raw_missing)});
   out +=
       "</table>\n<h3>Sessions</h3>\n<table>\n<tr><th>session</th><th>from (s)</th><th>to "
       "(s)</th><th>size</th><th>frames</th><th>frame numbers</th><th>not published</th><th>"

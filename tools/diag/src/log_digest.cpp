@@ -39,6 +39,10 @@ class Digester {
       if (decode(e, tally, preview_) && plausible_preview(e, tally)) add_preview(t);
     } else if (e.channel == ch::kRaw) {
       if (decode(e, tally, raw_)) {
+        // Frame numbers rise within a run; one that does not starts another run.
+        if (d_.raw_pairs > 0 && raw_.frame_seq > last_raw_seq_ + 1)
+          d_.raw_missing += raw_.frame_seq - last_raw_seq_ - 1;
+        last_raw_seq_ = raw_.frame_seq;
         ++d_.raw_pairs;
         d_.raw_bytes += e.data.size();
         d_.raw_width = raw_.width;
@@ -181,6 +185,7 @@ class Digester {
   ::dco::log_event_t log_;
   ::dco::depth_preview_t preview_;
   ::dco::raw_stereo_t raw_;
+  std::int64_t last_raw_seq_ = 0;
 };
 
 LogDigest read_all(drivers::LcmLogReader& reader, const std::string& name,

@@ -150,9 +150,13 @@ std::string text_summary(const LogDigest& d, const LogSummary& s, const std::str
   out += fmt::format("  messages  {} errors, {} warnings, {} info in DCO_LOG\n", s.log_errors,
                      s.log_warnings, d.log_by_level[1]);
   if (d.raw_pairs > 0)
-    out += fmt::format("  raw       {} pairs of {}x{} on DCO_RAW, {} a pair\n", d.raw_pairs,
+    out += fmt::format("  raw       {} pairs of {}x{} on DCO_RAW, {} a pair{}\n", d.raw_pairs,
                        d.raw_width, d.raw_height,
-                       human_bytes(d.raw_bytes / static_cast<std::uint64_t>(d.raw_pairs)));
+                       human_bytes(d.raw_bytes / static_cast<std::uint64_t>(d.raw_pairs)),
+                       d.raw_missing > 0 ? fmt::format("; {} frame numbers between them have no "
+                                                       "pair (dropped or lost)",
+                                                       d.raw_missing)
+                                         : std::string());
   if (!report.empty()) out += fmt::format("  report    {}\n", report);
   return out;
 }
@@ -192,7 +196,8 @@ std::string json_summary(const LogDigest& d, const LogSummary& s) {
       "\"contour_p99\": {}, \"densify_p50\": {}, \"densify_p99\": {}}},\n"
       " \"right_camera\": {},\n"
       " \"state_changes\": {}, \"device_errors\": {}, \"disconnects\": {}, \"log_errors\": {}, "
-      "\"log_warnings\": {}, \"previews\": {}, \"raw_pairs\": {}, \"undecodable\": {}}}\n",
+      "\"log_warnings\": {}, \"previews\": {}, \"raw_pairs\": {}, \"raw_missing\": {}, "
+      "\"undecodable\": {}}}\n",
       json_string(d.name), d.events, d.bytes, d.file_bytes, json_number(d.span_s),
       d.damage.empty() ? std::string("null") : json_string(d.damage), channels, s.frames,
       s.sessions, json_number(s.fps), s.unpublished_frames, s.missing_announcements,
@@ -201,7 +206,7 @@ std::string json_summary(const LogDigest& d, const LogSummary& s) {
       stage(t.stereo_p50_ms), stage(t.stereo_p99_ms), stage(t.contour_p50_ms),
       stage(t.contour_p99_ms), stage(t.densify_p50_ms), stage(t.densify_p99_ms), right_camera,
       s.state_changes, s.device_errors, s.disconnects, s.log_errors, s.log_warnings,
-      d.previews_seen, d.raw_pairs, s.undecodable);
+      d.previews_seen, d.raw_pairs, d.raw_missing, s.undecodable);
 }
 
 }  // namespace dco::diag

@@ -111,6 +111,10 @@ struct LogDigest {
   std::vector<PreviewSample> previews;
   long previews_seen = 0;
   long raw_pairs = 0;
+  // Frame numbers between two pairs of a run that no pair holds: dropped by dcod's recorder
+  // (it says how many) or lost on the way to the logger. A replay plays the pairs as if
+  // consecutive.
+  std::int64_t raw_missing = 0;
   std::uint64_t raw_bytes = 0;
   int raw_width = 0, raw_height = 0;
 };
