@@ -43,6 +43,19 @@ int usage_error(const std::string& message) {
 
 int main(int argc, char** argv) {
   dco::retain_freed_memory();  // before any thread starts: see memory_policy.hpp
+  // First of all, and before any thread starts: every thread inherits the mask, the signals
+  // reach the daemon's signalfd only, and a reload or stop sent while the configuration is still
+  // being read waits for the daemon instead of killing it.
+  sigset_t mask;
+  sigemptyset(&mask);
+  sigaddset(&mask, SIGTERM);
+  sigaddset(&mask, SIGINT);
+  sigaddset(&mask, SIGHUP);
+  pthread_sigmask(SIG_BLOCK, &mask, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+  // A write past a file size limit (LimitFSIZE=, ulimit -f) is then an error the writer reports,
+  // not the end of the daemon.
+  signal(SIGXFSZ, SIG_IGN);
   dco::daemon::ConfigSources sources;
   bool print_config = false;
   for (int i = 1; i < argc; ++i) {
@@ -81,19 +94,6 @@ int main(int argc, char** argv) {
     std::fputs(config.toml.c_str(), stdout);
     return 0;
   }
-
-  // Before any thread starts, so every thread inherits the mask and the signals reach the
-  // daemon's signalfd only.
-  sigset_t mask;
-  sigemptyset(&mask);
-  sigaddset(&mask, SIGTERM);
-  sigaddset(&mask, SIGINT);
-  sigaddset(&mask, SIGHUP);
-  pthread_sigmask(SIG_BLOCK, &mask, nullptr);
-  signal(SIGPIPE, SIG_IGN);
-  // A write past a file size limit (LimitFSIZE=, ulimit -f) is then an error the writer reports,
-  // not the end of the daemon.
-  signal(SIGXFSZ, SIG_IGN);
 
   try {
     dco::daemon::Daemon daemon(sources, std::move(config), log);

@@ -784,11 +784,14 @@ TEST(Dcod, ARawRecordingReloadKeepsThePairsInOrder) {
   const auto log = dir / "field.log";
   const auto config = dir.write("dcod.toml", "[raw]\nenabled = true\npng_level = 9\n");
   const auto other = dir.write("other.toml", "[raw]\nenabled = true\npng_level = 0\n");
-  // Eight reloads, 0.25 s apart, swap the file between two PNG levels.
-  const std::string swaps = "for i in 1 2 3 4 5 6 7 8; do sleep 0.25; cp " + config.string() + " " +
-                            (dir / "a").string() + "; cp " + other.string() + " " +
-                            config.string() + "; cp " + (dir / "a").string() + " " +
-                            other.string() + "; kill -HUP $D; done";
+  // Eight reloads, 0.25 s apart, swap the file between two PNG levels. They start once the ring
+  // exists: a SIGHUP that reaches a process still being loaded ends it, as it would any program.
+  const std::string swaps = "n=0; while [ ! -e " + (dir / "rec.shm").string() +
+                            " ] && [ $n -lt 1000 ]; do sleep 0.02; n=$((n+1)); done; "
+                            "for i in 1 2 3 4 5 6 7 8; do sleep 0.25; cp " +
+                            config.string() + " " + (dir / "a").string() + "; cp " +
+                            other.string() + " " + config.string() + "; cp " +
+                            (dir / "a").string() + " " + other.string() + "; kill -HUP $D; done";
   const std::string record =
       unshare_command() + " sh -c '" + kNetnsSetup + " && lcm-logger -q --lcm-url=\"" + url +
       "\" " + log.string() + " & L=$!; sleep 0.5; " + DCOD_EXE +
