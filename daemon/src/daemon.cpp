@@ -464,8 +464,9 @@ void Daemon::configure_raw_recording() {
     o.pipeline_config = pipeline;
     next =
         std::make_unique<RawRecorder>(calibration_toml_, o, [this](const ::dco::raw_stereo_t& m) {
-          std::lock_guard lock(publish_mutex_);
-          if (publisher_) publisher_->publish_raw(m);
+          // Not under publish_mutex_: publish_raw waits for LCM to send the pair, which must
+          // never hold up a frame on its way into the ring.
+          publisher_->publish_raw(m);
         });
   }
   std::optional<RawRecorder::Counts> closed;
@@ -496,8 +497,8 @@ void Daemon::report_raw_recording() {
   }
   if (n.dropped > raw_dropped_reported_)
     log_.warning(
-        fmt::format("raw recording: {} pairs dropped (the encoder is slower than the "
-                    "camera; a lower raw.png_level helps)",
+        fmt::format("raw recording: {} pairs dropped (compressing and sending them is slower "
+                    "than the camera; a lower raw.png_level helps unless LCM holds them up)",
                     n.dropped - raw_dropped_reported_));
   if (n.oversized > raw_oversized_reported_ || n.failed > raw_failed_reported_)
     log_.warning(fmt::format(

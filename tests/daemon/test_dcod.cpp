@@ -20,6 +20,7 @@
 #include "dco/drivers/lcm_log.hpp"
 #include "dco/ipc/lcm_messages.hpp"
 #include "dcod_process.hpp"
+#include "support/stalled_tcpq_peer.hpp"
 #include "support/synthetic_recording.hpp"
 #include "support/temp_dir.hpp"
 #include "support/thread_names.hpp"
@@ -687,6 +688,47 @@ TEST(Dcod, LostLcmNetworkIsAWarningAndTheRingGoesOn) {
   for (std::size_t at = 0; (at = log.find("LCM could not send", at)) != std::string::npos; ++at)
     ++warnings;
   EXPECT_GE(warnings, 2u) << log;
+}
+
+// LCM over TCP to a peer that stopped reading (or a link gone dead), while raw pairs are
+// recorded: depth keeps reaching the ring, the watchdog keeps being fed and SIGTERM still stops
+// dcod. Every LCM send blocks there, so none may be made on the way into the ring.
+TEST(Dcod, AnLcmPeerThatStopsReadingHoldsUpNeitherTheRingNorAStop) {
+  StalledTcpqPeer peer;
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o;
+  o.args = {"--source", "synthetic://hand?width=320&height=192&fps=30",
+            "--set",    "lcm.url=" + peer.url(),
+            "--set",    "ring.path=" + (dir / "depth.shm").string(),
+            "--set",    "raw.enabled=true",
+            "--set",    "raw.png_level=0"};
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  o.watchdog = 800ms;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  dco::client::Client client = ring_client(dir);
+  // Uncompressed pairs of 320x192 fill both sockets' buffers within a second or two.
+  std::this_thread::sleep_for(3s);
+  const std::size_t before = notify.messages().size();
+  std::uint64_t last = 0;
+  int frames = 0;
+  for (const auto end = SteadyClock::now() + 2s; SteadyClock::now() < end;) {
+    const auto frame = client.wait_next(1s);
+    ASSERT_TRUE(frame.has_value()) << dcod.log();
+    EXPECT_GT(frame->info().publish_index, last);
+    last = frame->info().publish_index;
+    ++frames;
+  }
+  EXPECT_GE(frames, 10) << dcod.log();
+  EXPECT_GE(notify.count("WATCHDOG=1", before), 4) << dcod.log();
+  const auto term = SteadyClock::now();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(10s), 0) << dcod.log();
+  EXPECT_LT(SteadyClock::now() - term, 5s) << dcod.log();
+  EXPECT_NE(dcod.log().find("DCO_RAW not sent: LCM has not finished sending"), std::string::npos)
+      << dcod.log();
 }
 
 TEST(Dcod, ReplayInDeterministicModeIsBitIdenticalToDcoDepth) {

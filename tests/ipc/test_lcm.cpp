@@ -1,9 +1,14 @@
 // The LCM side of depth delivery, in one process over memq:// (nothing leaves the process): the
 // checked decoder of every dco type, and the publisher's channels.
 
+#include <signal.h>
+
+#include <chrono>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -17,6 +22,7 @@
 #include "ipc_test_support.hpp"
 #include "lcm_samples.hpp"
 #include "support/allocation_counter.hpp"
+#include "support/stalled_tcpq_peer.hpp"
 
 namespace dco::ipc::testing {
 namespace {
@@ -132,7 +138,9 @@ class Collector {
   }
 };
 
-void handle_all(lcm::LCM& lcm) {
+void handle_all(DepthPublisher& pub) {
+  ASSERT_TRUE(pub.flush(std::chrono::seconds(5)));
+  lcm::LCM& lcm = pub.lcm();
   while (lcm.handleTimeout(0) > 0) {
   }
 }
@@ -181,7 +189,7 @@ TEST(Publisher, AnnouncesEveryFrameAfterItIsInTheRing) {
       for (int y = 0; y < 16; ++y) std::memcpy(slot.depth.row(y), depth.row(y), 32 * sizeof(float));
       pub.publish(meta);
     }
-    handle_all(pub.lcm());
+    handle_all(pub);
     ASSERT_EQ(got.depth.size(), seq);
     const dco::depth_frame_t& d = got.depth.back();
     EXPECT_EQ(static_cast<std::uint64_t>(d.session_id), ring.session_id());
@@ -237,7 +245,7 @@ TEST(Publisher, PreviewIsSmallNearestDepthAndRateLimited) {
     meta.capture_ns = i * 33'333'333LL;
     pub.write(depth.cview(), image.cview(), meta);
   }
-  handle_all(pub.lcm());
+  handle_all(pub);
   ASSERT_EQ(got.depth.size(), 30u);
   ASSERT_EQ(got.previews.size(), 2u);
   EXPECT_EQ(pub.previews_sent(), 2u);
@@ -273,8 +281,9 @@ TEST(Publisher, AStampThatJumpsDoesNotSilenceThePreviews) {
     meta.frame_seq = static_cast<std::uint64_t>(i);
     meta.capture_ns = i * 33'333'333LL + (i == 30 ? 5'000'000'000LL : 0);
     pub.write(depth.cview(), image.cview(), meta);
+    ASSERT_TRUE(pub.flush(std::chrono::seconds(5)));  // 3 s of frames: more than the queue holds
   }
-  handle_all(pub.lcm());
+  handle_all(pub);
   // 0 and 0.5 s, the frame ahead, the one after it (the pacing afresh), then every 0.5 s.
   std::vector<std::int64_t> seqs;
   for (const auto& p : got.previews) seqs.push_back(p.frame_seq);
@@ -313,7 +322,7 @@ TEST(Publisher, NoPreviewAtZeroHz) {
   Image<float> depth(8, 8);
   Image<std::uint8_t> image(8, 8);
   pub.write(depth.cview(), image.cview(), FrameMeta{});
-  handle_all(pub.lcm());
+  handle_all(pub);
   EXPECT_EQ(got.depth.size(), 1u);
   EXPECT_TRUE(got.previews.empty());
 }
@@ -355,7 +364,7 @@ TEST(Publisher, StatsStatusAndLog) {
                       {{"frames", 120}, {"lost_frames", 3}}},
                      t0);
   pub.log(LogLevel::kWarning, "camera", "frame 12 arrived late", t0);
-  handle_all(pub.lcm());
+  handle_all(pub);
   ASSERT_EQ(got.stats.size(), 2u);
   const dco::pipeline_stats_t& m = got.stats[1];
   EXPECT_DOUBLE_EQ(m.interval_s, 2.0);
@@ -408,13 +417,64 @@ TEST(Publisher, StringsWithANulStillDecode) {
                       "",
                       {{"lost\0frames"s, 1}}},
                      1);
-  handle_all(pub.lcm());
+  handle_all(pub);
   ASSERT_EQ(got.logs.size(), 1u);
   EXPECT_EQ(got.logs[0].text, "path 'a?b' refused");
   ASSERT_EQ(got.status.size(), 1u);
   EXPECT_EQ(got.status[0].serial, "SN??");
   EXPECT_EQ(got.status[0].counter_names[0], "lost?frames");
   EXPECT_EQ(pub.send_failures(), 0u);
+}
+
+// A DCO_RAW pair that the network does not take holds up neither the frames nor their caller:
+// every frame reaches the ring at once, the pair's caller is told after its wait, and the
+// publisher goes away within its stop wait.
+TEST(Publisher, ANetworkThatStopsTakingMessagesHoldsUpNeitherFramesNorTheCaller) {
+  signal(SIGPIPE, SIG_IGN);  // as dcod: the peer's close fails the abandoned send, not the process
+  dco::testing::StalledTcpqPeer peer;
+  TempDir dir;
+  RingWriter ring(dir.path() / "depth.shm", ring_options(64, 48));
+  PublisherOptions po;
+  po.lcm_url = peer.url();
+  auto pub = std::make_unique<DepthPublisher>(ring, po);
+  ASSERT_TRUE(pub->lcm_ready());
+  dco::raw_stereo_t raw = sample_raw();
+  raw.left.assign(64u << 20, 7);  // far more than both sockets' buffers hold
+  raw.left_size = static_cast<std::int32_t>(raw.left.size());
+  std::string raw_error;
+  std::thread recorder([&] {
+    try {
+      pub->publish_raw(raw);
+    } catch (const dco::Error& e) {
+      raw_error = e.what();
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the pair is stuck by now
+  Image<float> depth(64, 48);
+  depth.fill(1.5f);
+  Image<std::uint8_t> image(64, 48);
+  double slowest_ms = 0;
+  for (int i = 1; i <= 40; ++i) {
+    FrameMeta meta;
+    meta.frame_seq = static_cast<std::uint64_t>(i);
+    meta.capture_ns = i * 33'333'333LL;
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_EQ(pub->write(depth.cview(), image.cview(), meta), static_cast<std::uint64_t>(i));
+    slowest_ms = std::max(
+        slowest_ms,
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  EXPECT_LT(slowest_ms, 100.0);
+  EXPECT_EQ(ring.published(), 40u);
+  recorder.join();
+  EXPECT_NE(raw_error.find("did not send DCO_RAW within"), std::string::npos) << raw_error;
+  // The next pair is refused at once: the first still holds LCM.
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_THROW(pub->publish_raw(sample_raw()), dco::Error);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(500));
+  const auto t1 = std::chrono::steady_clock::now();
+  pub.reset();
+  EXPECT_LT(std::chrono::steady_clock::now() - t1, std::chrono::seconds(3));
 }
 
 TEST(Publisher, BadUrlIsAClearError) {

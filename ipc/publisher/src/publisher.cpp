@@ -18,6 +18,7 @@
 
 #include "dco/core/error.hpp"
 #include "dco/ipc/lcm_messages.hpp"
+#include "lcm_sender.hpp"
 
 namespace dco::ipc {
 namespace {
@@ -82,6 +83,20 @@ bool udpm_route_ready(std::string url) {
   return ok;
 }
 
+// Messages waiting for LCM at most: a second of DCO_DEPTH at 60 fps, with its previews, stats and
+// log lines. A backlog beyond that is a network that does not take them: the oldest give way.
+constexpr std::size_t kQueuedMessages = 64;
+// How long a DCO_RAW pair may wait for LCM before its recorder counts it as not sent.
+constexpr std::chrono::milliseconds kRawSendWait{2000};
+
+// Room for the largest small message from the start: a preview of the configured size, or a few
+// kilobytes of log line or status.
+std::size_t small_message_bytes(const PublisherOptions& o) {
+  const auto preview = static_cast<std::size_t>(std::max(o.preview_max_width, 1)) *
+                       static_cast<std::size_t>(std::max(o.preview_max_height, 1)) * 2;
+  return std::max<std::size_t>(preview + 256, 4096);
+}
+
 }  // namespace
 
 void check_lcm_url(std::string_view url) {
@@ -121,33 +136,48 @@ DepthPublisher::DepthPublisher(RingWriter& ring, const PublisherOptions& options
                             options.preview_hz, options.preview_max_width,
                             options.preview_max_height));
   check_lcm_url(options.lcm_url);
+  sender_ = std::make_unique<detail::LcmSender>(kQueuedMessages, small_message_bytes(options));
   retry_lcm();
 }
 
 bool DepthPublisher::retry_lcm() {
-  if (lcm_) return true;
+  if (lcm_ready_) return true;
   // LCM prints a dozen lines of advice at every failed udpm setup: after the first, a retry waits
   // until a route to the group is there.
   if (tried_lcm_ && !udpm_route_ready(options_.lcm_url)) return false;
   tried_lcm_ = true;
   auto lcm = std::make_unique<lcm::LCM>(options_.lcm_url);
   if (!lcm->good()) return false;
-  lcm_ = std::move(lcm);
+  sender_->set_lcm(std::move(lcm));
+  lcm_ready_ = true;
   return true;
 }
 
 std::string DepthPublisher::lcm_problem() const {
-  if (lcm_) return {};
+  if (lcm_ready_) return {};
   return fmt::format("LCM cannot be set up with '{}' (for udpm, is there a multicast route?)",
                      options_.lcm_url.empty() ? "the default URL" : options_.lcm_url);
 }
 
 lcm::LCM& DepthPublisher::lcm() {
-  if (!lcm_) throw Error("publisher: " + lcm_problem());
-  return *lcm_;
+  lcm::LCM* const lcm = sender_->lcm();
+  if (lcm == nullptr) throw Error("publisher: " + lcm_problem());
+  return *lcm;
 }
 
 DepthPublisher::~DepthPublisher() = default;
+
+bool DepthPublisher::flush(std::chrono::milliseconds wait) {
+  return sender_->flush(wait);
+}
+
+std::uint64_t DepthPublisher::send_failures() const {
+  return sender_->failures();
+}
+
+const char* DepthPublisher::last_failed_channel() const {
+  return sender_->last_failed_channel();
+}
 
 void DepthPublisher::set_preview_hz(double hz) {
   if (!(hz >= 0)) throw Error(fmt::format("publisher: preview rate {} Hz out of range", hz));
@@ -175,15 +205,17 @@ std::uint64_t DepthPublisher::write(ImageView<const float> depth,
 }
 
 template <class Message>
-bool DepthPublisher::send(const std::string& channel, const Message& message) {
+void DepthPublisher::send(const std::string& channel, const Message& message) {
+  if (!lcm_ready_) {
+    sender_->count_failure(channel);  // not even encoded: nothing could send it
+    return;
+  }
   const int size = message.getEncodedSize();
   encoded_.resize(static_cast<std::size_t>(std::max(size, 0)));  // grows once, then reused
-  if (lcm_ && size >= 0 && message.encode(encoded_.data(), 0, size) == size &&
-      lcm_->publish(channel, encoded_.data(), static_cast<unsigned>(size)) == 0)
-    return true;
-  ++send_failures_;
-  last_failed_channel_ = channel.c_str();
-  return false;
+  if (size >= 0 && message.encode(encoded_.data(), 0, size) == size)
+    sender_->post(channel, encoded_.data(), static_cast<std::size_t>(size));
+  else
+    sender_->count_failure(channel);
 }
 
 void DepthPublisher::announce(std::uint64_t publish_index, std::uint32_t slot,
@@ -286,8 +318,34 @@ void DepthPublisher::publish_status(const DeviceStatus& status, std::int64_t now
 }
 
 void DepthPublisher::publish_raw(const ::dco::raw_stereo_t& message) {
-  if (!send(kRawChannel, message))
-    throw Error(fmt::format("publisher: LCM publish on {} failed", channel::kRaw));
+  std::lock_guard lock(raw_mutex_);
+  if (!lcm_ready_) {
+    sender_->count_failure(kRawChannel);
+    throw Error(fmt::format("publisher: {} not sent: {}", channel::kRaw, lcm_problem()));
+  }
+  std::vector<std::uint8_t>* bytes = sender_->acquire_large(kRawSendWait);
+  if (bytes == nullptr) {
+    sender_->count_failure(kRawChannel);
+    throw Error(
+        fmt::format("publisher: {} not sent: LCM has not finished sending the previous "
+                    "pair for {} ms",
+                    channel::kRaw, kRawSendWait.count()));
+  }
+  const int size = message.getEncodedSize();
+  bytes->resize(static_cast<std::size_t>(std::max(size, 0)));  // grows once, then reused
+  if (size < 0 || message.encode(bytes->data(), 0, size) != size) {
+    sender_->count_failure(kRawChannel);
+    throw Error(fmt::format("publisher: {} does not encode", channel::kRaw));
+  }
+  switch (sender_->send_large(kRawChannel, static_cast<std::size_t>(size), kRawSendWait)) {
+    case detail::LcmSender::LargeOutcome::kSent:
+      return;
+    case detail::LcmSender::LargeOutcome::kFailed:
+      throw Error(fmt::format("publisher: LCM publish on {} failed", channel::kRaw));
+    case detail::LcmSender::LargeOutcome::kTimedOut:
+      throw Error(fmt::format("publisher: LCM did not send {} within {} ms", channel::kRaw,
+                              kRawSendWait.count()));
+  }
 }
 
 void DepthPublisher::log(LogLevel level, std::string_view source, std::string_view text,

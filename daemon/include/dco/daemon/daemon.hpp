@@ -96,7 +96,9 @@ class Daemon final : public drivers::FrameSink {
   RectifiedGeometry geometry_;
   Image<std::uint8_t> rect_left_, rect_right_;
   std::unique_ptr<ipc::RingWriter> ring_;
-  std::mutex publish_mutex_;  // the publisher: frames (runtime thread), stats and logs (others)
+  // The publisher: frames (runtime thread), stats and logs (others). Never held across a wait
+  // for the network: the publisher's own thread sends.
+  std::mutex publish_mutex_;
   std::unique_ptr<ipc::DepthPublisher> publisher_;
   std::unique_ptr<pipeline::runtime::DepthRuntime> runtime_;
   std::string calibration_toml_;  // the source's, as DCO_RAW carries it

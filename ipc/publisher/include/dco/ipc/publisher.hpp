@@ -1,7 +1,10 @@
 #pragma once
 
+#include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -18,6 +21,9 @@ class LCM;
 }
 
 namespace dco::ipc {
+namespace detail {
+class LcmSender;
+}
 
 struct PublisherOptions {
   // LCM provider URL; empty = LCM's default (LCM_DEFAULT_URL, else udpm multicast).
@@ -57,7 +63,8 @@ int preview_factor(int width, int height, int max_width, int max_height);
 // The daemon's publishing side: frames go into the shared-memory ring first and are then announced
 // on DCO_DEPTH (a descriptor naming session, slot and publish index, never pixels), with a small
 // preview on DCO_DEPTH_PREVIEW at a few Hz; runtime statistics, device status and log events go
-// to DCO_STATS, DCO_STATUS and DCO_LOG. Not thread-safe: one thread publishes.
+// to DCO_STATS, DCO_STATUS and DCO_LOG. Not thread-safe: one thread publishes, except publish_raw,
+// which any one other thread may call meanwhile.
 class DepthPublisher {
  public:
   // Throws dco::Error when the URL names no LCM provider (check_lcm_url). An LCM that cannot be
@@ -69,9 +76,12 @@ class DepthPublisher {
   DepthPublisher& operator=(const DepthPublisher&) = delete;
   ~DepthPublisher();
 
-  // LCM is best effort beside the ring: a message LCM cannot send (a network interface gone,
-  // a full socket buffer) is counted in send_failures() and the call goes on, so depth keeps
-  // reaching the ring's readers. Only publish_raw throws, for its recorder's own accounting.
+  // LCM is best effort beside the ring: messages are encoded and queued, and a thread of the
+  // publisher's own sends them, so a send the network holds up (a tcpq peer that stopped
+  // reading, a slow link) delays LCM only. A message LCM cannot send, or one that gives way in a
+  // full queue to a newer one, is counted in send_failures() and the call goes on, so depth
+  // keeps reaching the ring's readers. Only publish_raw throws, for its recorder's own
+  // accounting. The destructor sends what waits (for up to a second).
   //
   // Zero copy: fill the slot begin_write() returns, then publish() it. publish stamps the slot
   // (RingWriter::publish), announces it and sends a preview when one is due; it returns the
@@ -88,17 +98,23 @@ class DepthPublisher {
   void publish_stats(const pipeline::runtime::RuntimeStats& stats, std::int64_t now_ns);
   void publish_status(const DeviceStatus& status, std::int64_t now_ns);
   void log(LogLevel level, std::string_view source, std::string_view text, std::int64_t now_ns);
-  // DCO_RAW: a recorded raw pair (the daemon's raw recorder builds it). Throws dco::Error when
-  // LCM cannot send it.
+  // DCO_RAW: a recorded raw pair (the daemon's raw recorder builds it), sent in its turn among
+  // the other messages; returns once LCM has sent it. Throws dco::Error when LCM is not set up,
+  // refuses it, or has not sent it (or the pair before it) within two seconds.
   void publish_raw(const ::dco::raw_stereo_t& message);
+  // Whether LCM is set up: a raw recorder need not compress pairs that cannot go out.
+  bool lcm_ready() const { return lcm_ready_; }
 
   // Changes the DCO_DEPTH_PREVIEW rate (a configuration reload); throws dco::Error when < 0.
   void set_preview_hz(double hz);
 
   std::uint64_t previews_sent() const { return previews_sent_; }
-  // Messages LCM could not send (DCO_RAW's included), and the channel of the last one.
-  std::uint64_t send_failures() const { return send_failures_; }
-  const char* last_failed_channel() const { return last_failed_channel_; }
+  // Messages LCM could not send or that gave way in a full queue (DCO_RAW's included), and the
+  // channel of the last one.
+  std::uint64_t send_failures() const;
+  const char* last_failed_channel() const;
+  // Waits until every queued message has been handed to LCM; false when `wait` ran out first.
+  bool flush(std::chrono::milliseconds wait);
   // Sets LCM up when it is not yet; true when it is (now or before).
   bool retry_lcm();
   // Empty while LCM is set up, else why it is not.
@@ -112,15 +128,17 @@ class DepthPublisher {
                 ImageView<const float> depth);
   void send_preview(std::uint64_t publish_index, const FrameMeta& meta,
                     ImageView<const float> depth);
-  // Encodes into encoded_ and sends; false (counted) when LCM refuses it or the message does not
-  // encode to its own size (a string with a NUL, which LCM's encoder stops at).
+  // Encodes into encoded_ and queues it; counted as a failure when LCM is not set up or the
+  // message does not encode to its own size (a string with a NUL, which LCM's encoder stops at).
   template <class Message>
-  bool send(const std::string& channel, const Message& message);
+  void send(const std::string& channel, const Message& message);
 
   RingWriter& ring_;
   PublisherOptions options_;
-  std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<detail::LcmSender> sender_;
+  std::atomic<bool> lcm_ready_{false};
   bool tried_lcm_ = false;
+  std::mutex raw_mutex_;  // publish_raw's callers
   std::vector<std::uint8_t> encoded_;
   ::dco::depth_preview_t preview_;
   std::uint32_t open_slot_ = 0;
@@ -128,8 +146,6 @@ class DepthPublisher {
   bool preview_sent_ = false;
   std::int64_t last_preview_capture_ns_ = 0;
   std::uint64_t previews_sent_ = 0;
-  std::uint64_t send_failures_ = 0;
-  const char* last_failed_channel_ = "";
   std::int64_t stats_since_ns_ = 0;
   long stats_pushed_ = 0, stats_published_ = 0;
 };
