@@ -382,11 +382,14 @@ bool Densifier::solves_at_half(int width) const {
 }
 
 void Densifier::clamp_to_data_range(ImageView<float> map) {
-  if (data_high_ <= 0.0f) return;
+  // No data at all (no match, no hint, no previous frame: a covered or dead camera) is a range
+  // of [0, 0]: nothing known, and nothing a refinement may invent.
+  const float high = std::max(data_high_, 0.0f);
+  const float low = std::min(data_low_, high);
   rows_.run(map.height, [&](int, int begin, int end) {
     for (int y = begin; y < end; ++y) {
       float* row = map.row(y);
-      for (int x = 0; x < map.width; ++x) row[x] = std::clamp(row[x], data_low_, data_high_);
+      for (int x = 0; x < map.width; ++x) row[x] = std::clamp(row[x], low, high);
     }
   });
 }

@@ -84,6 +84,32 @@ TEST(DepthPipeline, RefinedMapKeepsToTheRangeOfTheMatches) {
   }
 }
 
+// A right camera that sees nothing (covered by a hand, dead, glared): no match at all. The
+// refinement then has no range to keep to, yet must not invent depth where the stage found none.
+TEST(DepthPipeline, NoMatchLeavesTheRefinedMapAtZero) {
+  const auto scene = synthetic::SceneRenderer(synthetic::preset("boxes", 320, 240));
+  PipelineParams p;
+  p.stereo.max_disparity = 32;
+  p.densify.photometric.alpha = 0.0;
+  DepthPipeline pipeline(p);
+  synthetic::StereoSample s;
+  DepthResult r;
+  int frames = 0;
+  for (int i = 0; i < 3; ++i) {
+    scene.render(i, s);
+    s.right.fill(0);
+    if (!pipeline.push(s.left.cview(), s.right.cview(), r)) continue;
+    ++frames;
+    long matches = 0;
+    for (int y = 0; y < r.sparse.height(); ++y)
+      for (int x = 0; x < r.sparse.width(); ++x) matches += std::isfinite(r.sparse.at(x, y));
+    ASSERT_EQ(matches, 0);
+    for (int y = 0; y < r.dense.height(); ++y)
+      for (int x = 0; x < r.dense.width(); ++x) ASSERT_EQ(r.dense.at(x, y), 0.0f) << x << "," << y;
+  }
+  EXPECT_EQ(frames, 3);
+}
+
 TEST(DepthPipeline, DenseMapIsCompleteAndMostlyRightOnASyntheticSequence) {
   const auto scene = small_scene("boxes");
   DepthPipeline pipeline(params_for(scene));
