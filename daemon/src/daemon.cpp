@@ -29,7 +29,8 @@ namespace {
 // A recording's totals: what went out, and what did not and why.
 std::string raw_totals(const RawRecorder::Counts& n) {
   return fmt::format(
-      "{} pairs on DCO_RAW, {} dropped, {} larger than raw.max_message_bytes, {} failed to encode",
+      "{} pairs on DCO_RAW, {} dropped, {} larger than raw.max_message_bytes, {} failed to "
+      "encode or send",
       n.recorded, n.dropped, n.oversized, n.failed);
 }
 
@@ -331,11 +332,6 @@ void Daemon::retry_lcm(std::int64_t now_ns) {
 }
 
 void Daemon::report_lcm_failures(std::int64_t now_ns, bool last) {
-  // At most every kLcmReportPeriodNs: the warning itself goes out on DCO_LOG, which may fail too.
-  constexpr std::int64_t kLcmReportPeriodNs = 10'000'000'000;
-  if (!last && lcm_failures_reported_ns_ != 0 &&
-      now_ns - lcm_failures_reported_ns_ < kLcmReportPeriodNs)
-    return;
   std::uint64_t failures = 0;
   std::string channel;
   {
@@ -343,13 +339,16 @@ void Daemon::report_lcm_failures(std::int64_t now_ns, bool last) {
     failures = publisher_->send_failures();
     channel = publisher_->last_failed_channel();
   }
-  if (failures <= lcm_failures_reported_) return;
+  // Paced: a network that stays away must not fill the journal (the warning itself goes out on
+  // DCO_LOG, which fails too).
+  const bool news = failures > lcm_failures_reported_;
+  if (!lcm_failure_pacer_.due(now_ns, news) && !last) return;
+  if (!news) return;
   log_.warning(
       fmt::format("LCM could not send {} messages (the last on {}); depth still reaches "
                   "the ring's readers",
                   failures - lcm_failures_reported_, channel));
   lcm_failures_reported_ = failures;
-  lcm_failures_reported_ns_ = now_ns;
 }
 
 std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const {
@@ -444,7 +443,7 @@ void Daemon::tick(std::int64_t now_ns) {
     on_error(std::string("publishing statistics: ") + e.what());
   }
   notifier_.status(status_line(stats));
-  report_raw_recording();
+  report_raw_recording(now_ns, false);
 }
 
 void Daemon::configure_raw_recording() {
@@ -462,12 +461,14 @@ void Daemon::configure_raw_recording() {
     o.max_message_bytes = static_cast<std::size_t>(c.raw_max_message_bytes);
     o.never_drop = c.runtime.deterministic;
     o.pipeline_config = pipeline;
-    next =
-        std::make_unique<RawRecorder>(calibration_toml_, o, [this](const ::dco::raw_stereo_t& m) {
+    next = std::make_unique<RawRecorder>(
+        calibration_toml_, o,
+        [this](const ::dco::raw_stereo_t& m) {
           // Not under publish_mutex_: publish_raw waits for LCM to send the pair, which must
           // never hold up a frame on its way into the ring.
           publisher_->publish_raw(m);
-        });
+        },
+        [this] { return publisher_->lcm_ready(); });
   }
   std::optional<RawRecorder::Counts> closed;
   {
@@ -479,6 +480,7 @@ void Daemon::configure_raw_recording() {
   }
   if (closed) log_.info("raw recording stopped: " + raw_totals(*closed));
   raw_dropped_reported_ = raw_oversized_reported_ = raw_failed_reported_ = 0;
+  raw_dropped_pacer_ = raw_failed_pacer_ = WarningPacer{};
   raw_settings_ = settings;
   if (c.raw_enabled)
     log_.info(fmt::format(
@@ -486,7 +488,7 @@ void Daemon::configure_raw_recording() {
         c.raw_max_message_bytes, c.runtime.deterministic ? ", none dropped" : ""));
 }
 
-void Daemon::report_raw_recording() {
+void Daemon::report_raw_recording(std::int64_t now_ns, bool last) {
   RawRecorder::Counts n;
   std::string error;
   {
@@ -495,20 +497,25 @@ void Daemon::report_raw_recording() {
     n = raw_->counts();
     error = raw_->last_error();
   }
-  if (n.dropped > raw_dropped_reported_)
+  // Paced like LCM's failures: a fault that lasts is reported ever less often, with its counts.
+  const bool dropped = n.dropped > raw_dropped_reported_;
+  if ((raw_dropped_pacer_.due(now_ns, dropped) || last) && dropped) {
     log_.warning(
         fmt::format("raw recording: {} pairs dropped (compressing and sending them is slower "
                     "than the camera; a lower raw.png_level helps unless LCM holds them up)",
                     n.dropped - raw_dropped_reported_));
-  if (n.oversized > raw_oversized_reported_ || n.failed > raw_failed_reported_)
+    raw_dropped_reported_ = n.dropped;
+  }
+  const bool lost = n.oversized > raw_oversized_reported_ || n.failed > raw_failed_reported_;
+  if ((raw_failed_pacer_.due(now_ns, lost) || last) && lost) {
     log_.warning(fmt::format(
         "raw recording: {} pairs not recorded, {} since the last report; the "
         "last: {}",
         n.oversized + n.failed,
         n.oversized + n.failed - raw_oversized_reported_ - raw_failed_reported_, error));
-  raw_dropped_reported_ = n.dropped;
-  raw_oversized_reported_ = n.oversized;
-  raw_failed_reported_ = n.failed;
+    raw_oversized_reported_ = n.oversized;
+    raw_failed_reported_ = n.failed;
+  }
 }
 
 void Daemon::apply_live_settings(bool raw_recording) {
@@ -704,8 +711,8 @@ int Daemon::run() {
   }
   notifier_.stopping();
   stop_all();
-  report_raw_recording();
-  report_lcm_failures(monotonic_ns(), true);  // those since the last warning
+  report_raw_recording(monotonic_ns(), true);  // those since the last warnings
+  report_lcm_failures(monotonic_ns(), true);
   if (raw_) {
     std::lock_guard lock(raw_mutex_);
     const RawRecorder::Counts n = raw_->close();  // sends the pairs it still holds

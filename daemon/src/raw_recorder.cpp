@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "dco/core/error.hpp"
 #include "dco/core/thread_name.hpp"
 
 namespace dco::daemon {
@@ -19,10 +20,12 @@ void copy_into(const ImageView<const std::uint8_t>& from, Image<std::uint8_t>& t
 
 }  // namespace
 
-RawRecorder::RawRecorder(std::string calibration_toml, RawRecorderOptions options, Send send)
+RawRecorder::RawRecorder(std::string calibration_toml, RawRecorderOptions options, Send send,
+                         CanSend can_send)
     : calibration_toml_(std::move(calibration_toml)),
       options_(options),
       send_(std::move(send)),
+      can_send_(std::move(can_send)),
       encoder_(options.png_level),
       thread_([this] {
         name_this_thread("dco-recorder");
@@ -93,6 +96,8 @@ void RawRecorder::run() {
     enum { kSent, kOversized, kFailed } outcome = kSent;
     std::string error;
     try {
+      if (can_send_ && !can_send_())
+        throw Error(fmt::format("raw frame {} not compressed: LCM is not set up", slot.seq));
       encoder_.encode(frame, calibration_toml_, message_);
       if (static_cast<std::size_t>(message_.getEncodedSize()) > options_.max_message_bytes) {
         outcome = kOversized;

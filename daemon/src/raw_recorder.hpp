@@ -30,11 +30,15 @@ struct RawRecorderOptions {
 class RawRecorder {
  public:
   using Send = std::function<void(const ::dco::raw_stereo_t&)>;
+  // Whether a pair could go out now; while not, pairs are counted as failed without being
+  // compressed (no CPU spent on what cannot be sent).
+  using CanSend = std::function<bool()>;
   struct Counts {
     std::uint64_t recorded = 0, dropped = 0, oversized = 0, failed = 0;
   };
 
-  RawRecorder(std::string calibration_toml, RawRecorderOptions options, Send send);
+  RawRecorder(std::string calibration_toml, RawRecorderOptions options, Send send,
+              CanSend can_send = {});
   // Sends what it holds, then stops; close() returns the final counts.
   ~RawRecorder();
   Counts close();
@@ -59,6 +63,7 @@ class RawRecorder {
   const std::string calibration_toml_;
   const RawRecorderOptions options_;
   const Send send_;
+  const CanSend can_send_;
   drivers::RawStereoEncoder encoder_;
   ::dco::raw_stereo_t message_;
   std::array<Slot, 2> slots_;

@@ -259,7 +259,7 @@ TEST(Dcod, RawRecordingTotalsCountThePairsTooLargeToSend) {
   DcodProcess dcod(o);
   ASSERT_EQ(dcod.wait(30s), 0) << dcod.log();
   EXPECT_NE(dcod.log().find("raw recording: 0 pairs on DCO_RAW, 0 dropped, 6 larger than "
-                            "raw.max_message_bytes, 0 failed to encode"),
+                            "raw.max_message_bytes, 0 failed to encode or send"),
             std::string::npos)
       << dcod.log();
 }
@@ -422,6 +422,32 @@ TEST(Dcod, StartsWithoutAMulticastRouteAndSetsLcmUpOnceThereIsOne) {
   EXPECT_NE(dcod.log().find("LCM is set up now"), std::string::npos) << dcod.log();
   dcod.signal(SIGTERM);
   EXPECT_EQ(dcod.wait(10s), 0) << dcod.log();
+}
+
+// Raw recording asked for on a headset without a network: the pairs are not compressed for
+// nothing, and the fault is one warning, not one per statistics tick for as long as it lasts.
+TEST(Dcod, RawRecordingWithoutANetworkIsOneWarningAndNoCompression) {
+  if (const std::string problem = private_network_problem(); !problem.empty())
+    GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o = on_udpm(dir, notify);
+  o.network_setup = "ip link set lo up";
+  o.args.insert(o.args.end(), {"--set", "raw.enabled=true", "--set", "lcm.stats_hz=10"});
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  std::this_thread::sleep_for(4s);
+  const std::string running = dcod.log();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(10s), 0) << dcod.log();
+  const auto count = [](const std::string& log, const std::string& text) {
+    long n = 0;
+    for (std::size_t at = 0; (at = log.find(text, at)) != std::string::npos; ++at) ++n;
+    return n;
+  };
+  EXPECT_EQ(count(running, "pairs not recorded"), 1) << running;
+  EXPECT_LE(count(running, "LCM could not send"), 1) << running;
+  EXPECT_NE(running.find("not compressed: LCM is not set up"), std::string::npos) << running;
 }
 
 // A file size limit (LimitFSIZE=, ulimit -f) makes a write past it an error the writer reports,

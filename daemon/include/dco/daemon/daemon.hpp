@@ -16,6 +16,7 @@
 #include "dco/daemon/logger.hpp"
 #include "dco/daemon/service_notifier.hpp"
 #include "dco/daemon/stall_clock.hpp"
+#include "dco/daemon/warning_pacer.hpp"
 #include "dco/drivers/frame_source.hpp"
 #include "dco/ipc/publisher.hpp"
 #include "dco/ipc/ring_writer.hpp"
@@ -73,7 +74,9 @@ class Daemon final : public drivers::FrameSink {
   void restart_pipeline();
   // Starts, stops or re-creates the DCO_RAW recorder as the configuration says.
   void configure_raw_recording();
-  void report_raw_recording();
+  // Warnings of pairs dropped or not sent since the last ones, paced; `last`: at the exit,
+  // whatever the pace.
+  void report_raw_recording(std::int64_t now_ns, bool last);
   void tick(std::int64_t now_ns);
   // A warning when LCM failed to send since the last one (the ring is unaffected); `last`: at
   // the exit, whenever the last warning was.
@@ -106,9 +109,10 @@ class Daemon final : public drivers::FrameSink {
   std::unique_ptr<RawRecorder> raw_;
   std::string raw_settings_;  // what raw_ was made with
   std::uint64_t raw_dropped_reported_ = 0, raw_oversized_reported_ = 0, raw_failed_reported_ = 0;
+  WarningPacer raw_dropped_pacer_, raw_failed_pacer_;
   std::unique_ptr<ReplayCheck> replay_check_;  // replaying a field log in deterministic mode
   std::uint64_t lcm_failures_reported_ = 0;
-  std::int64_t lcm_failures_reported_ns_ = 0;
+  WarningPacer lcm_failure_pacer_;
   std::int64_t lcm_retry_ns_ = 0;  // when LCM, not set up at the start, was last tried
 
   FrameNumbers frame_numbers_;
