@@ -152,6 +152,13 @@ void check_geometry(const std::string& src, const RectifiedGeometry& g, bool siz
     fail_at(src, 0,
             fmt::format("rectified image size {} is not within 1..{} px a side",
                         size_text(g.width, g.height), kMaxImageSide));
+  // Z = f * baseline / (d + doffs): a difference as wide as the image leaves no disparity in it
+  // a finite depth (doffs <= -width), or every depth a sliver of the baseline (doffs >= width).
+  if (!size_unknown && !(std::abs(g.doffs()) < g.width))
+    fail_at(src, 0,
+            fmt::format("rectified principal points differ by {} px in x (cx_right - cx_left), "
+                        "not less than the image's width of {} px: every depth would be {}",
+                        g.doffs(), g.width, g.doffs() < 0 ? "infinite" : "a few millimetres"));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -433,6 +433,13 @@ TEST(CalibrationErrors, NameTheFileAndLine) {
        kRigToml + "\n[rectified]\nwidth = 640\nheight = 480\nf = 500\ncx_left = 320\n"
                   "cx_right = 320\ncy = 240\nbaseline_m = 5.0\n",
        "two_baselines.toml: rectified baseline 5 m differs from the translation's length 0.1 m"},
+      // Principal points as far apart as the image is wide: a typo that would make every depth
+      // infinite (or a few millimetres).
+      {"doffs_wide.toml",
+       kRigToml + "\n[rectified]\nwidth = 640\nheight = 480\nf = 500\ncx_left = 320\n"
+                  "cx_right = -400\ncy = 240\nbaseline_m = 0.1\n",
+       "doffs_wide.toml: rectified principal points differ by -720 px in x (cx_right - cx_left), "
+       "not less than the image's width of 640 px: every depth would be infinite"},
       {"mb_doffs.txt", replaced(test::read_file(kMiddlebury), "doffs=32.778", "doffs=30"),
        "mb_doffs.txt:3: doffs 30 disagrees"},
       {"mb_number.txt", replaced(test::read_file(kMiddlebury), "baseline=193.001", "baseline=19x"),
