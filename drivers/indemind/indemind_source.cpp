@@ -238,19 +238,22 @@ class IndemindSource final : public FrameSource {
   }
 
   void choose_mode(int speed) {
-    if (options_.width == 0 && options_.height == 0 && options_.fps == 0) {
-      mode_ = default_stream_mode(speed);
-      return;
-    }
-    const StreamMode d = default_stream_mode(speed);
-    // A width or height alone names its mode's size.
-    const bool no_size = options_.width == 0 && options_.height == 0;
     std::string why;
-    auto m =
-        find_stream_mode(no_size ? d.width : options_.width, no_size ? d.height : options_.height,
-                         options_.fps ? options_.fps : d.fps, speed, why);
+    const std::optional<StreamMode> m = mode_for(speed, why);
     if (!m) throw Error("indemind: " + why);
     mode_ = *m;
+  }
+
+  // The mode the options ask for on a link of `speed`: the default's size and rate where they
+  // name none. nullopt with `why` filled when the link cannot carry it.
+  std::optional<StreamMode> mode_for(int speed, std::string& why) const {
+    const StreamMode d = default_stream_mode(speed);
+    if (options_.width == 0 && options_.height == 0 && options_.fps == 0) return d;
+    // A width or height alone names its mode's size.
+    const bool no_size = options_.width == 0 && options_.height == 0;
+    return find_stream_mode(no_size ? d.width : options_.width,
+                            no_size ? d.height : options_.height,
+                            options_.fps ? options_.fps : d.fps, speed, why);
   }
 
   using BusAddress = std::pair<int, int>;
@@ -289,11 +292,24 @@ class IndemindSource final : public FrameSource {
                               m.info.id, module_.info.id));
         continue;
       }
+      // Back on a slower (or faster) link: the rate that link carries at the same size, unless
+      // a rate was asked for. A size the link cannot carry at all would change the calibration;
+      // the module is then left alone until it is plugged in again.
       std::string why;
-      if (!find_stream_mode(mode_.width, mode_.height, mode_.fps, d.speed_mbps, why)) {
-        set_error("replugged: " + why);
+      const std::optional<StreamMode> mode =
+          options_.fps == 0
+              ? mode_for(d.speed_mbps, why)
+              : find_stream_mode(mode_.width, mode_.height, mode_.fps, d.speed_mbps, why);
+      if (!mode || mode->width != mode_.width || mode->height != mode_.height) {
+        if (mode) why = fmt::format("this link carries {}, not {}", mode->name(), mode_.name());
+        other_modules_.push_back(bus_address(d));
+        set_error(fmt::format("replugged at {} Mb/s: {}; waiting for it on another port",
+                              d.speed_mbps, why));
         continue;
       }
+      // Only the rate changes: the size the delivery thread reads stays as it is.
+      mode_.fps = mode->fps;
+      mode_.frame_index = mode->frame_index;
       device_ = std::move(device);
       usb_speed_ = d.speed_mbps;
       port_path_ = d.port_path;

@@ -610,6 +610,76 @@ class BusWithTwoModules final : public UsbTransport {
   std::unique_ptr<SimulatedIndemind> second_;
 };
 
+// Waits (20 s of real time at most) until `done` holds.
+template <class Done>
+bool wait_until(Done done) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return true;
+}
+
+// Started on USB 3 at the default 640x400@50, replugged into a USB 2 port (or re-enumerated at
+// High Speed by a worn cable): the same size at the 25 fps that link carries, not a wait for a
+// rate it never will.
+TEST(IndemindSource, AModuleRepluggedOnASlowerLinkStreamsAtTheRateItCarries) {
+  Rig rig;
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(10));
+  rig.sim->set_present(false);
+  ASSERT_TRUE(wait_until([&] { return counters_of(*rig.source).at("disconnects") == 1; }));
+  rig.sim->set_usb_speed(480);
+  rig.sim->set_present(true);
+  ASSERT_TRUE(wait_until([&] { return counters_of(*rig.source).at("reconnects") == 1; }))
+      << rig.source->status().error;
+  const long back = rig.sink.count();
+  ASSERT_TRUE(rig.wait_frames(back + 6));
+  rig.source->stop();
+  EXPECT_EQ(rig.source->status().usb_speed_mbps, 480);
+  EXPECT_EQ(rig.sink.width, 640);
+  EXPECT_EQ(rig.sink.height, 400);
+  // 25 fps in the module's time: 40 ms between the last frames (more where one was dropped).
+  const std::vector<std::int64_t>& t = rig.sink.captures;
+  std::int64_t shortest = INT64_MAX;
+  for (std::size_t i = t.size() - 5; i < t.size(); ++i)
+    shortest = std::min(shortest, t[i] - t[i - 1]);
+  EXPECT_NEAR(static_cast<double>(shortest) * 1e-6, 40.0, 8.0);
+}
+
+// A rate asked for that the slower link cannot carry: the module is left alone (not read again
+// at every look for it, which detaches and reattaches its kernel driver each time) with an error
+// that says why, until it is plugged in again.
+TEST(IndemindSource, AModuleRepluggedOnALinkTooSlowForTheAskedRateIsLeftAlone) {
+  IndemindOptions io;
+  io.fps = 50;
+  Rig rig({}, io);
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(10));
+  rig.sim->set_present(false);
+  ASSERT_TRUE(wait_until([&] { return counters_of(*rig.source).at("disconnects") == 1; }));
+  rig.sim->set_usb_speed(480);
+  rig.sim->set_present(true);
+  ASSERT_TRUE(wait_until(
+      [&] { return rig.source->status().error.find("replugged at 480") != std::string::npos; }));
+  const std::uint64_t opens = rig.sim->record().opens;
+  const std::int64_t from = rig.sim->now_ns();
+  ASSERT_TRUE(wait_until([&] { return rig.sim->now_ns() - from > 2'000'000'000; }));
+  EXPECT_EQ(rig.sim->record().opens, opens);
+  EXPECT_NE(rig.source->status().error.find("needs USB 3"), std::string::npos)
+      << rig.source->status().error;
+  EXPECT_EQ(counters_of(*rig.source).at("reconnects"), 0u);
+  // Plugged into a USB 3 port again: streaming as asked.
+  rig.sim->set_present(false);
+  rig.sim->set_usb_speed(5000);
+  rig.sim->set_present(true);
+  ASSERT_TRUE(wait_until([&] { return counters_of(*rig.source).at("reconnects") == 1; }))
+      << rig.source->status().error;
+  ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 3));
+  rig.source->stop();
+}
+
 TEST(IndemindSource, AnotherModuleIsReadOnceNotAtEveryReopen) {
   auto owned = std::make_unique<BusWithTwoModules>(false);
   BusWithTwoModules& bus = *owned;

@@ -819,6 +819,11 @@ bool SimulatedIndemind::inject_and_settle(Fault fault, int param,
   });
 }
 
+void SimulatedIndemind::set_usb_speed(int mbps) {
+  std::lock_guard lock(state_->mu);
+  state_->opt.usb_speed_mbps = mbps;
+}
+
 void SimulatedIndemind::set_present(bool present) {
   State& s = *state_;
   std::lock_guard lock(s.mu);

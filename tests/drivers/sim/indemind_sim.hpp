@@ -120,6 +120,8 @@ class SimulatedIndemind final : public drivers::UsbTransport {
   bool inject_and_settle(Fault fault, int param,
                          std::chrono::milliseconds timeout = std::chrono::seconds(30));
   void set_present(bool present);  // plugged in (true) or not, from now on
+  // The link speed the next enumeration reports (a replug into another port or hub).
+  void set_usb_speed(int mbps);
   // libusb handles events, hotplug callbacks among them, inside a synchronous transfer. The next
   // `count` control transfers each raise a hotplug note before they answer (a second module
   // plugged in while the driver reads flash).
