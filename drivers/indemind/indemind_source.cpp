@@ -111,14 +111,21 @@ class IndemindSource final : public FrameSource {
     if (running_) throw Error("indemind: source already started");
     sink_ = &sink;
     running_ = true;
-    delivery_ = std::thread([this] {
-      name_this_thread("dco-usb-deliver");
-      delivery_loop();
-    });
-    events_ = std::thread([this] {
-      name_this_thread("dco-usb-events");
-      event_loop();
-    });
+    try {
+      delivery_ = std::thread([this] {
+        name_this_thread("dco-usb-deliver");
+        delivery_loop();
+      });
+      events_ = std::thread([this] {
+        name_this_thread("dco-usb-events");
+        event_loop();
+      });
+    } catch (...) {
+      // A thread that cannot be created (the unit's TasksMax): the start fails, and the one
+      // already running is stopped, not left to end the process when the source goes.
+      stop();
+      throw;
+    }
   }
 
   void stop() override {
@@ -129,8 +136,8 @@ class IndemindSource final : public FrameSource {
     }
     slot_cv_.notify_all();
     slot_free_cv_.notify_all();
-    events_.join();
-    delivery_.join();
+    if (events_.joinable()) events_.join();
+    if (delivery_.joinable()) delivery_.join();
   }
 
   SourceStatus status() const override {

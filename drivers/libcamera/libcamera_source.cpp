@@ -332,6 +332,12 @@ class LibcameraSource final : public FrameSource {
     }
     std::size_t started = 0;
     try {
+      // The delivery thread first, waiting for completions: a thread that cannot be created
+      // (the unit's TasksMax) then fails the start before any camera runs.
+      thread_ = std::thread([this, &sink] {
+        name_this_thread("dco-libcamera");
+        deliver(sink);
+      });
       for (; started < devices_.size(); ++started) {
         Device& d = *devices_[started];
         if (const int ret = d.camera->start(fps_ > 0 ? &start_controls_ : nullptr); ret < 0)
@@ -351,14 +357,14 @@ class LibcameraSource final : public FrameSource {
       {
         std::lock_guard lock(mutex_);
         running_ = false;
+        quit_ = true;
       }
+      wake_.notify_all();
+      if (thread_.joinable()) thread_.join();
+      thread_ = {};
       for (std::size_t i = 0; i < started; ++i) devices_[i]->camera->stop();
       throw;
     }
-    thread_ = std::thread([this, &sink] {
-      name_this_thread("dco-libcamera");
-      deliver(sink);
-    });
   }
 
   void stop() override {

@@ -1,3 +1,7 @@
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -678,6 +682,40 @@ TEST(IndemindSource, AModuleRepluggedOnALinkTooSlowForTheAskedRateIsLeftAlone) {
       << rig.source->status().error;
   ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 3));
   rig.source->stop();
+}
+
+// A thread that cannot be created (the unit's TasksMax, RLIMIT_NPROC) fails the start with an
+// error; the thread already running is stopped, not left to end the process when the source
+// goes. In a child process as an unprivileged user with a process limit of `limit`; the child
+// exits 0 when the start failed cleanly, 1 when it succeeded.
+int start_with_process_limit(rlim_t limit) {
+  const pid_t child = fork();
+  if (child == 0) {
+    int outcome = 1;
+    {
+      Rig rig;  // the module opened as root, before the limit
+      const rlimit nproc{limit, limit};
+      if (setgid(65534) != 0 || setuid(65534) != 0 || setrlimit(RLIMIT_NPROC, &nproc) != 0)
+        _exit(3);
+      try {
+        rig.source->start(rig.sink);
+        rig.source->stop();
+      } catch (const std::system_error&) {
+        outcome = 0;
+      }
+    }  // the source goes here: a thread left joinable would call std::terminate
+    _exit(outcome);
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+TEST(IndemindSource, AThreadThatCannotBeCreatedFailsTheStartCleanly) {
+  if (geteuid() != 0) GTEST_SKIP() << "an unprivileged user's process limit needs root to set";
+  EXPECT_EQ(start_with_process_limit(1), 0);  // not even the first thread
+  EXPECT_EQ(start_with_process_limit(2), 0);  // the first thread, not the second
+  EXPECT_EQ(start_with_process_limit(64), 1);
 }
 
 TEST(IndemindSource, AnotherModuleIsReadOnceNotAtEveryReopen) {
