@@ -1020,5 +1020,31 @@ TEST(DcodService, UnitVerifiesAndItsExposureIsAtMost2_5) {
   EXPECT_LE(std::stod(m[1]), 2.5) << security.output;
 }
 
+// A camera that is not plugged in fails every start: the retries end after a few, instead of a
+// restart every RestartSec all day (systemd's default limit, 5 in 10 s, is never reached 2 s
+// apart), and plugging the camera in starts dcod again.
+TEST(DcodService, ARestartLoopEndsAndPluggingTheCameraInStartsDcod) {
+  std::ifstream unit_file(DCOD_TEST_UNIT);
+  const std::string unit((std::istreambuf_iterator<char>(unit_file)), {});
+  const auto seconds_of = [&](const std::string& key) {
+    std::smatch m;
+    EXPECT_TRUE(std::regex_search(unit, m, std::regex("\\n" + key + "=([0-9]+)s?\\n"))) << key;
+    return m.empty() ? 0 : std::stoi(m[1]);
+  };
+  const int restart_s = seconds_of("RestartSec");
+  const int interval_s = seconds_of("StartLimitIntervalSec");
+  const int burst = seconds_of("StartLimitBurst");
+  EXPECT_GE(burst, 2);
+  EXPECT_LT((burst - 1) * restart_s, interval_s) << "a restart loop never reaches the limit";
+  EXPECT_LT(unit.find("StartLimitBurst"), unit.find("[Service]")) << "StartLimit* go in [Unit]";
+  std::ifstream rules_file(DCO_UDEV_RULES);
+  std::string camera_rule;
+  for (std::string line; std::getline(rules_file, line);)
+    if (line.find("ATTR{idVendor}==\"05a9\"") != std::string::npos) camera_rule = line;
+  EXPECT_NE(camera_rule.find("TAG+=\"systemd\""), std::string::npos) << camera_rule;
+  EXPECT_NE(camera_rule.find("ENV{SYSTEMD_WANTS}+=\"dcod.service\""), std::string::npos)
+      << camera_rule;
+}
+
 }  // namespace
 }  // namespace dco::testing
