@@ -13,7 +13,9 @@ constexpr int kLevels = 256;
 constexpr int kMinSpread = 16;    // levels between the darkest and brightest left level used
 constexpr int kMinBinPairs = 4;   // pairs a left level needs to count towards the spread
 constexpr double kOutlier = 3.0;  // levels off the first line that drop a left level's mean
-constexpr double kMinGain = 0.5, kMaxGain = 2.0;
+// Two cameras with their own auto-exposure can be more than twice apart; past four times one of
+// them has too few levels left for a match to tell.
+constexpr double kMinGain = 0.25, kMaxGain = 4.0;
 
 // The right level's mean at each left level, over one channel's pairs.
 struct LevelMeans {

@@ -20,7 +20,7 @@ constexpr int kMinPairs = 500;
 // small disparities put both views of a point at nearly one r, where no fall-off shows.
 constexpr double kMinUSpread = 0.01;
 constexpr double kMinK = -0.5, kMaxK = 0.75;
-constexpr double kMinGain = 0.5, kMaxGain = 2.0;
+constexpr double kMinGain = 0.25, kMaxGain = 4.0;  // as the exposure balance
 constexpr int kRounds = 3;  // linearised fits, each about the k of the one before
 
 // The normal equations of right = a left + b + c (u left) over one channel's pairs.

@@ -198,6 +198,41 @@ TEST(ExposureBalancedMatcher, AGainBetweenTheCamerasCostsFewMatches) {
             0.97 * good_matches(reference.disparity, same.disparity));
 }
 
+// Two cameras with their own auto-exposure can differ by more than twice: a right camera 2.5
+// times darker or brighter than the left is balanced too, within a few frames. Darker, it wins
+// back nearly every match; brighter, what it saturated is lost, but the rest comes back.
+TEST(ExposureBalancedMatcher, CamerasTwoAndAHalfTimesApartAreBalanced) {
+  for (const double right_gain : {0.4, 2.5}) {
+    synthetic::SceneConfig config = synthetic::preset("boxes", 480, 270);
+    const synthetic::SceneRenderer equal(config);
+    config.right_gain = right_gain;
+    const synthetic::SceneRenderer unequal(config);
+    Stage reference = stage_for(config, false), plain = stage_for(config, false),
+          balanced = stage_for(config, true);
+    synthetic::StereoSample same, differ;
+    int ref = 0, without = 0, with = 0;
+    for (int frame = 0; frame < 4; ++frame) {
+      equal.render(frame, same);
+      unequal.render(frame, differ);
+      reference.matcher->compute(same.left.cview(), same.right.cview(), reference.disparity);
+      plain.matcher->compute(differ.left.cview(), differ.right.cview(), plain.disparity);
+      balanced.matcher->compute(differ.left.cview(), differ.right.cview(), balanced.disparity);
+      ref = good_matches(reference.disparity, same.disparity);
+      without = good_matches(plain.disparity, differ.disparity);
+      with = good_matches(balanced.disparity, differ.disparity);
+    }
+    std::printf("right gain %.1f: good matches %d equal, %d without the balance, %d with it\n",
+                right_gain, ref, without, with);
+    EXPECT_NEAR(balanced.matcher->last_correction().levels.channels[0].gain, 1 / right_gain,
+                0.05 / right_gain)
+        << right_gain;
+    if (right_gain < 1)
+      EXPECT_GT(with, 0.9 * ref);
+    else
+      EXPECT_GT(with, 1.3 * without);
+  }
+}
+
 TEST(ExposureBalancedMatcher, APairThatAgreesKeepsItsBytes) {
   dco::testing::expect_step_keeps_the_bytes(&StereoParams::exposure_balance);
 }
