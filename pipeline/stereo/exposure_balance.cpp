@@ -103,10 +103,23 @@ bool fit_exposure(ImageView<const std::uint8_t> left, ImageView<const std::uint8
   }
   ExposureMap fitted;
   fitted.count = c;
+  std::array<bool, 3> fits{};
+  int fitting = 0;
+  ChannelLevels mean{0.0, 0.0};
+  for (int k = 0; k < c; ++k) {
+    const auto ks = static_cast<std::size_t>(k);
+    fits[ks] = fit_channel(means[ks], fitted.channels[ks]);
+    if (!fits[ks]) continue;
+    ++fitting;
+    mean.gain += fitted.channels[ks].gain;
+    mean.offset += fitted.channels[ks].offset;
+  }
+  if (fitting == 0) return false;
+  // A channel with too little spread to fit (blue under warm light) was exposed as the others
+  // were: it takes their mean map rather than leave every channel uncorrected.
   for (int k = 0; k < c; ++k)
-    if (!fit_channel(means[static_cast<std::size_t>(k)],
-                     fitted.channels[static_cast<std::size_t>(k)]))
-      return false;
+    if (!fits[static_cast<std::size_t>(k)])
+      fitted.channels[static_cast<std::size_t>(k)] = {mean.gain / fitting, mean.offset / fitting};
   map = fitted;
   return true;
 }

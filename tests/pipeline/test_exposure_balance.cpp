@@ -82,6 +82,24 @@ TEST(FitExposure, FitsEachColourChannelOnItsOwn) {
   }
 }
 
+// Warm indoor light leaves the blue channel a few levels deep, too little spread to fit a line
+// to; the exposure that darkened the other two darkened it alike, so it takes their map rather
+// than leave the whole correction undone.
+TEST(FitExposure, AChannelTooDimToFitTakesTheOthersMap) {
+  const double gain[3] = {1.3, 1.3, 1.3}, offset[3] = {0, 0, 0};
+  ShiftedPair p = shifted_pair(5, gain, offset, 3);
+  for (int y = 0; y < p.left.height(); ++y)
+    for (int x = 0; x < p.left.width(); ++x) {
+      p.left.view().at(x, y, 2) = static_cast<std::uint8_t>(p.left.view().at(x, y, 2) / 20);
+      p.right.view().at(x, y, 2) =
+          scaled(p.left.view().at(std::min(x + 5, p.left.width() - 1), y, 2), gain[2], offset[2]);
+    }
+  ExposureMap map;
+  ASSERT_TRUE(fit_exposure(p.left.cview(), p.right.cview(), p.disparity.cview(), map));
+  ASSERT_EQ(map.count, 3);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(map.channels[k].gain, 1 / 1.3, 0.01) << k;
+}
+
 TEST(FitExposure, MatchesAPixelOffAndSaturatedLevelsDoNotMoveIt) {
   // A map off by a pixel everywhere reads the ridges wrongly, and a gain of 1.4 saturates the
   // right camera above level 182: neither may pull the fit.
