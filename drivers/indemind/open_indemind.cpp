@@ -26,6 +26,10 @@ std::unique_ptr<FrameSource> open_indemind(SourceUri& uri) {
   o.transfers = uri.integer("transfers", 8, 2, 64);
   o.stall_ms = uri.integer("stall_ms", 1000, 100, 60000);
   const std::optional<std::string> record = uri.value("record");
+  const auto record_max_bytes =
+      static_cast<std::uint64_t>(
+          uri.integer("record_max_mb", static_cast<int>(kDefaultCaptureMaxBytes >> 20), 1, 1 << 20))
+      << 20;
   const std::optional<std::string> replay = uri.value("replay");
   uri.finish();
   if (record && replay)
@@ -50,7 +54,8 @@ std::unique_ptr<FrameSource> open_indemind(SourceUri& uri) {
       transport = std::move(r);
     } else {
       transport = make_libusb_transport();
-      if (record) transport = make_recording_transport(std::move(transport), *record);
+      if (record)
+        transport = make_recording_transport(std::move(transport), *record, {}, record_max_bytes);
     }
   } catch (const UsbError& e) {
     throw Error(fmt::format("source '{}': USB unavailable: {}", uri.text(), e.what()));

@@ -2,6 +2,7 @@
 // every transfer completion, to a capture file.
 
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <time.h>
 
 #include <cerrno>
@@ -46,8 +47,9 @@ void keep_earlier_capture(const std::string& path) {
 
 class CaptureWriter {
  public:
-  CaptureWriter(const std::string& path, std::function<std::int64_t()> clock)
-      : path_(path), clock_(clock ? std::move(clock) : monotonic_ns) {
+  CaptureWriter(const std::string& path, std::function<std::int64_t()> clock,
+                std::uint64_t max_bytes)
+      : path_(path), clock_(clock ? std::move(clock) : monotonic_ns), max_bytes_(max_bytes) {
     if (is_special_file(path))
       throw Error(
           fmt::format("USB capture '{}': not a file to record into (a directory, a device "
@@ -58,6 +60,8 @@ class CaptureWriter {
     if (!file_)
       throw Error(fmt::format("USB capture '{}': cannot create: {}", path, std::strerror(errno)));
     if (std::fwrite(kUsbCaptureMagic, sizeof kUsbCaptureMagic, 1, file_) != 1) fail();
+    written_ = sizeof kUsbCaptureMagic;
+    stop_if_disk_low();
   }
   ~CaptureWriter() {
     if (file_ && std::fclose(file_) != 0)
@@ -110,18 +114,42 @@ class CaptureWriter {
     r.t_ns = clock_();
     buffer_.clear();
     encode_usb_capture_record(r, buffer_);
-    if (std::fwrite(buffer_.data(), buffer_.size(), 1, file_) != 1) fail();
+    if (written_ + buffer_.size() > max_bytes_) {
+      stop(fmt::format("it reached its limit of {} MiB (record_max_mb)", max_bytes_ >> 20));
+      return;
+    }
+    if (std::fwrite(buffer_.data(), buffer_.size(), 1, file_) != 1) {
+      fail();
+      return;
+    }
+    written_ += buffer_.size();
+    if (written_ >= next_disk_check_) stop_if_disk_low();
   }
 
-  void fail() {
-    std::fprintf(stderr, "dco: USB capture '%s': write failed (%s); recording stopped\n",
-                 path_.c_str(), std::strerror(errno));
+  // Looked at every kDiskCheckBytes written: statvfs is a system call.
+  void stop_if_disk_low() {
+    next_disk_check_ = written_ + kDiskCheckBytes;
+    struct statvfs fs {};
+    if (file_ && fstatvfs(fileno(file_), &fs) == 0 &&
+        std::uint64_t{fs.f_bavail} * fs.f_frsize < kCaptureFreeBytes)
+      stop(fmt::format("its file system has less than {} MiB free", kCaptureFreeBytes >> 20));
+  }
+
+  void fail() { stop(fmt::format("write failed ({})", std::strerror(errno))); }
+
+  void stop(const std::string& why) {
+    std::fprintf(stderr, "dco: USB capture '%s': %s; recording stopped, the camera runs on\n",
+                 path_.c_str(), why.c_str());
     std::fclose(file_);
     file_ = nullptr;
   }
 
+  static constexpr std::uint64_t kDiskCheckBytes = std::uint64_t{64} << 20;
+
   std::string path_;
   std::function<std::int64_t()> clock_;
+  const std::uint64_t max_bytes_;
+  std::uint64_t written_ = 0, next_disk_check_ = 0;
   std::mutex mutex_;
   std::FILE* file_ = nullptr;
   std::vector<std::uint8_t> buffer_;
@@ -246,9 +274,9 @@ class RecordingDevice final : public UsbDevice {
 class RecordingTransport final : public UsbTransport {
  public:
   RecordingTransport(std::unique_ptr<UsbTransport> inner, const std::string& path,
-                     std::function<std::int64_t()> clock)
+                     std::function<std::int64_t()> clock, std::uint64_t max_bytes)
       : inner_(std::move(inner)),
-        writer_(std::make_shared<CaptureWriter>(path, std::move(clock))) {}
+        writer_(std::make_shared<CaptureWriter>(path, std::move(clock), max_bytes)) {}
 
   // Listing handles no events: nothing can arrive inside it.
   std::vector<UsbDeviceInfo> list(std::uint16_t vendor, std::uint16_t product) override {
@@ -292,8 +320,9 @@ class RecordingTransport final : public UsbTransport {
 
 std::unique_ptr<UsbTransport> make_recording_transport(std::unique_ptr<UsbTransport> inner,
                                                        const std::string& path,
-                                                       std::function<std::int64_t()> clock) {
-  return std::make_unique<RecordingTransport>(std::move(inner), path, std::move(clock));
+                                                       std::function<std::int64_t()> clock,
+                                                       std::uint64_t max_bytes) {
+  return std::make_unique<RecordingTransport>(std::move(inner), path, std::move(clock), max_bytes);
 }
 
 }  // namespace dco::drivers

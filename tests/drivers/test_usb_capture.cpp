@@ -115,7 +115,8 @@ IndemindOptions fast_mode() {
 // The driver on a simulated module (seeded with `seed`) through a recording transport that
 // writes `path`; `sim` is the module, owned by the source.
 std::unique_ptr<FrameSource> recorded_source(const std::string& path, std::uint32_t seed,
-                                             SimulatedIndemind*& sim) {
+                                             SimulatedIndemind*& sim,
+                                             std::uint64_t max_bytes = kDefaultCaptureMaxBytes) {
   SimulatedIndemind::Options o;
   o.seed = seed;
   auto sim_owned = std::make_unique<SimulatedIndemind>(o);
@@ -124,7 +125,8 @@ std::unique_ptr<FrameSource> recorded_source(const std::string& path, std::uint3
   IndemindOptions io = fast_mode();
   io.clock = [module] { return module->now_ns(); };
   return open_indemind(
-      make_recording_transport(std::move(sim_owned), path, [module] { return module->now_ns(); }),
+      make_recording_transport(
+          std::move(sim_owned), path, [module] { return module->now_ns(); }, max_bytes),
       io, "indemind://");
 }
 
@@ -633,6 +635,34 @@ TEST(UsbCapture, ARecordingKeepsTheLastCaptureThatStreamed) {
   EXPECT_LT(read_all(path).size(), 1024u) << "the last restart's";
   std::remove(path.c_str());
   std::remove(kept.c_str());
+}
+
+// A capture runs at tens of megabytes a second: at its size limit it stops after a whole record
+// while the camera streams on, and what it holds replays to a clean end.
+TEST(UsbCapture, ARecordingStopsAtItsSizeLimitAndReplaysAsFarAsItGoes) {
+  const std::string path = temp_path("limited.usbcap");
+  constexpr std::uint64_t kLimit = 3u << 20;  // six 640x400 frames
+  Recorder live;
+  SimulatedIndemind* sim = nullptr;
+  auto source = recorded_source(path, 5, sim, kLimit);
+  source->start(live);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (live.count() < 40 && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  source->stop();
+  ASSERT_GE(live.count(), 40u) << "the camera streams on past the limit";
+  const std::uint64_t size = read_all(path).size();
+  EXPECT_LE(size, kLimit);
+  EXPECT_GT(size, kLimit - (1u << 20));
+  Recorder replayed;
+  auto replay = open_replay(path, fast_mode());
+  replay->start(replayed);
+  ASSERT_TRUE(replayed.wait_end());
+  replay->stop();
+  EXPECT_EQ(replayed.error, "");
+  EXPECT_GE(replayed.frames.size(), 2u);
+  EXPECT_LT(replayed.frames.size(), 10u);
+  std::remove(path.c_str());
 }
 
 }  // namespace

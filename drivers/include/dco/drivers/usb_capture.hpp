@@ -112,11 +112,16 @@ class UsbCaptureReader {
 // capture of more than kKeptCaptureBytes already at `path` is moved to `path`.1 first (a
 // restarted service keeps the session that recorded its fault); smaller ones are written over.
 // Throws dco::Error when the file cannot be created; a later write failure stops the recording
-// with one line on stderr and leaves the camera running.
+// with one line on stderr and leaves the camera running. So does a capture that would grow past
+// `max_bytes`, or leave its file system with less than kCaptureFreeBytes: a capture runs at tens
+// of megabytes a second and must not fill a headset's disk. It then ends after a whole record,
+// and replays as far as it goes.
 inline constexpr std::uint64_t kKeptCaptureBytes = 64 * 1024;
-std::unique_ptr<UsbTransport> make_recording_transport(std::unique_ptr<UsbTransport> inner,
-                                                       const std::string& path,
-                                                       std::function<std::int64_t()> clock = {});
+inline constexpr std::uint64_t kDefaultCaptureMaxBytes = std::uint64_t{4096} << 20;
+inline constexpr std::uint64_t kCaptureFreeBytes = std::uint64_t{256} << 20;
+std::unique_ptr<UsbTransport> make_recording_transport(
+    std::unique_ptr<UsbTransport> inner, const std::string& path,
+    std::function<std::int64_t()> clock = {}, std::uint64_t max_bytes = kDefaultCaptureMaxBytes);
 
 // Plays a capture back as a transport. Time is the capture's: now_ns() is the time of the last
 // event delivered, so a driver given it as its clock makes the decisions it made when recording.
