@@ -203,7 +203,10 @@ std::array<double, kOcclusionPlaneQuantiles.size()> occlusion_planes(ImageView<c
     if (next == at_rank)  // the largest value: the plane goes below it (all earlier are <=)
       for (std::ptrdiff_t j = 0; j < k; ++j)
         if (values[j] < at_rank && (next == at_rank || values[j] > next)) next = values[j];
-    planes[i] = 0.5 * (static_cast<double>(at_rank) + static_cast<double>(next));
+    // One value only: no depth edge to put a plane in, and a plane on the surface itself would
+    // count any error, however small, as the wrong side.
+    planes[i] = next == at_rank ? kUndefined
+                                : 0.5 * (static_cast<double>(at_rank) + static_cast<double>(next));
   }
   return planes;
 }
