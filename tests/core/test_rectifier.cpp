@@ -300,12 +300,18 @@ TEST(Rectifier, RefusesAPrecomputedRectificationThatMissesTheCamera) {
   c = kitti;
   c.rectified.width = c.rectified.height = 16384;
   refused(c, "rectified images of 16384x16384 from a camera of 1392x512");
+  // Both principal points moved alike (their difference, doffs, as wide as the image is refused
+  // by the calibration's own check), then the right one by most of the image's width.
   c = kitti;
   c.rectified.cx_left += 2000;
+  c.rectified.cx_right += 2000;
   refused(c, "of the rectified left image falls on the camera's");
   c = kitti;
-  c.rectified.cx_right -= 2000;
+  c.rectified.cx_right -= 1100;
   refused(c, "of the rectified right image falls on the camera's");
+  c = kitti;
+  c.rectified.cx_right -= 2000;
+  refused(c, "rectified principal points differ by -2000 px in x");
   EXPECT_NO_THROW(Rectifier{kitti});
 }
 
