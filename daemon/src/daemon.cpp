@@ -468,7 +468,7 @@ void Daemon::configure_raw_recording() {
           // never hold up a frame on its way into the ring.
           publisher_->publish_raw(m);
         },
-        [this] { return publisher_->lcm_ready(); });
+        [this] { return publisher_->raw_can_go(); });
   }
   std::optional<RawRecorder::Counts> closed;
   {
@@ -712,13 +712,20 @@ int Daemon::run() {
   notifier_.stopping();
   stop_all();
   report_raw_recording(monotonic_ns(), true);  // those since the last warnings
-  report_lcm_failures(monotonic_ns(), true);
   if (raw_) {
     std::lock_guard lock(raw_mutex_);
     const RawRecorder::Counts n = raw_->close();  // sends the pairs it still holds
     raw_.reset();
     log_.info("raw recording: " + raw_totals(n));
   }
+  // What is queued goes out (or counts as failed) before LCM's failures are counted a last time;
+  // a network that holds a send is not waited for long.
+  constexpr std::chrono::milliseconds kFinalFlush{500};
+  if (!publisher_->flush(kFinalFlush))
+    log_.warning(
+        "LCM had not sent every message as dcod stopped (its network holds a send): the rest are "
+        "dropped");
+  report_lcm_failures(monotonic_ns(), true);
   if (replay_check_) {
     if (const ReplayCheck::Result r = replay_check_->result(); r.identical == r.compared)
       log_.info(replay_check_->summary());

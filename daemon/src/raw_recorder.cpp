@@ -97,7 +97,9 @@ void RawRecorder::run() {
     std::string error;
     try {
       if (can_send_ && !can_send_())
-        throw Error(fmt::format("raw frame {} not compressed: LCM is not set up", slot.seq));
+        throw Error(fmt::format(
+            "raw frame {} not compressed: LCM is not set up, or its network holds a send",
+            slot.seq));
       encoder_.encode(frame, calibration_toml_, message_);
       if (static_cast<std::size_t>(message_.getEncodedSize()) > options_.max_message_bytes) {
         outcome = kOversized;

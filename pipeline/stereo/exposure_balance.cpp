@@ -41,7 +41,10 @@ bool fit_line(const LevelMeans& m, const double* previous, double& a, double& b)
   return true;
 }
 
-bool fit_channel(const LevelMeans& m, ChannelLevels& out) {
+enum class Fit : std::int8_t { kFitted, kTooDim, kFailed };
+
+// kTooDim: the channel's levels spread too little to fit a line to (blue under warm light).
+Fit fit_channel(const LevelMeans& m, ChannelLevels& out) {
   std::uint32_t pairs = 0;
   int low = kLevels, high = -1;
   for (int l = 0; l < kLevels; ++l) {
@@ -49,16 +52,17 @@ bool fit_channel(const LevelMeans& m, ChannelLevels& out) {
     pairs += count;
     if (count >= kMinBinPairs) low = std::min(low, l), high = std::max(high, l);
   }
-  if (pairs < kMinExposurePairs || high - low < kMinSpread) return false;
+  if (pairs < kMinExposurePairs) return Fit::kFailed;
+  if (high - low < kMinSpread) return Fit::kTooDim;
   double first[2];
   double a = 0, b = 0;
-  if (!fit_line(m, nullptr, first[0], first[1]) || !fit_line(m, first, a, b)) return false;
+  if (!fit_line(m, nullptr, first[0], first[1]) || !fit_line(m, first, a, b)) return Fit::kFailed;
   // right = a * left + b, so a right level v is matched as (v - b) / a.
-  if (!(a > 0)) return false;
+  if (!(a > 0)) return Fit::kFailed;
   const double gain = 1.0 / a;
-  if (!(gain >= kMinGain && gain <= kMaxGain)) return false;
+  if (!(gain >= kMinGain && gain <= kMaxGain)) return Fit::kFailed;
   out = {gain, -b / a};
-  return true;
+  return Fit::kFitted;
 }
 
 long mapped_level(const ChannelLevels& c, int v) {
@@ -103,13 +107,16 @@ bool fit_exposure(ImageView<const std::uint8_t> left, ImageView<const std::uint8
   }
   ExposureMap fitted;
   fitted.count = c;
-  std::array<bool, 3> fits{};
+  std::array<Fit, 3> fits{};
   int fitting = 0;
   ChannelLevels mean{0.0, 0.0};
   for (int k = 0; k < c; ++k) {
     const auto ks = static_cast<std::size_t>(k);
     fits[ks] = fit_channel(means[ks], fitted.channels[ks]);
-    if (!fits[ks]) continue;
+    // A channel whose fit fails for another reason (a slope the cameras cannot have) says the
+    // frame cannot tell: the map stays as it was.
+    if (fits[ks] == Fit::kFailed) return false;
+    if (fits[ks] == Fit::kTooDim) continue;
     ++fitting;
     mean.gain += fitted.channels[ks].gain;
     mean.offset += fitted.channels[ks].offset;
@@ -118,7 +125,7 @@ bool fit_exposure(ImageView<const std::uint8_t> left, ImageView<const std::uint8
   // A channel with too little spread to fit (blue under warm light) was exposed as the others
   // were: it takes their mean map rather than leave every channel uncorrected.
   for (int k = 0; k < c; ++k)
-    if (!fits[static_cast<std::size_t>(k)])
+    if (fits[static_cast<std::size_t>(k)] == Fit::kTooDim)
       fitted.channels[static_cast<std::size_t>(k)] = {mean.gain / fitting, mean.offset / fitting};
   map = fitted;
   return true;

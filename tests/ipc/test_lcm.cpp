@@ -468,7 +468,10 @@ TEST(Publisher, ANetworkThatStopsTakingMessagesHoldsUpNeitherFramesNorTheCaller)
   EXPECT_EQ(ring.published(), 40u);
   recorder.join();
   EXPECT_NE(raw_error.find("did not send DCO_RAW within"), std::string::npos) << raw_error;
-  // The next pair is refused at once: the first still holds LCM.
+  // The next pair is refused at once, and a recorder is told not to compress it: the first
+  // still holds LCM.
+  EXPECT_FALSE(pub->raw_can_go());
+  EXPECT_TRUE(pub->lcm_ready());
   const auto t0 = std::chrono::steady_clock::now();
   EXPECT_THROW(pub->publish_raw(sample_raw()), dco::Error);
   EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(500));

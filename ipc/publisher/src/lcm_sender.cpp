@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <condition_variable>
+#include <deque>
 #include <mutex>
 
 #include <lcm/lcm-cpp.hpp>
@@ -32,15 +33,26 @@ struct LcmSender::State {
   std::uint64_t large_order = 0, large_done = 0;
   Large large = Large::kIdle;
   bool large_sent = false;
-  bool large_stuck = false;  // a large send outlived its caller's wait and is not over yet
+  // A large message's wait ran out while the network held a send, and no send has finished
+  // since: the next large message is refused at once.
+  bool blocked = false;
   std::uint64_t failures = 0;
   const char* last_failed_channel = "";
   bool stopping = false, exited = false;
+  bool flush_timed_out = false;  // the owner already waited for a network that held a send
+  // The channels' names, the state's own: a thread left blocked at the exit outlives the
+  // callers' strings.
+  std::deque<std::string> names;
 
   bool idle() const { return count == 0 && !sending_small && large == Large::kIdle; }
   void failed(const std::string& channel) {
     ++failures;
     last_failed_channel = channel.c_str();
+  }
+  const std::string& name(const std::string& channel) {
+    for (const std::string& n : names)
+      if (n == channel) return n;
+    return names.emplace_back(channel);
   }
 };
 
@@ -59,7 +71,9 @@ LcmSender::~LcmSender() {
   std::unique_lock lock(state_->mutex);
   state_->stopping = true;
   state_->changed.notify_all();
-  if (state_->changed.wait_for(lock, kStopWait, [&] { return state_->exited; })) {
+  // Not again after a flush that ran out: the network holds a send.
+  const auto wait = state_->flush_timed_out ? std::chrono::milliseconds(0) : kStopWait;
+  if (state_->changed.wait_for(lock, wait, [&] { return state_->exited; })) {
     lock.unlock();
     thread_.join();
   } else {
@@ -90,7 +104,7 @@ void LcmSender::run(const std::shared_ptr<State>& state) {
       if (!sent) s.failed(channel);
       s.large = State::Large::kIdle;
       s.large_sent = sent;
-      s.large_stuck = false;
+      s.blocked = false;
       ++s.large_done;
     } else {
       State::Message& m = s.queue[s.head];
@@ -106,6 +120,7 @@ void LcmSender::run(const std::shared_ptr<State>& state) {
       lock.lock();
       if (!sent) s.failed(channel);
       s.sending_small = false;
+      s.blocked = false;
     }
     s.changed.notify_all();
   }
@@ -126,8 +141,9 @@ lcm::LCM* LcmSender::lcm() const {
 void LcmSender::post(const std::string& channel, const std::uint8_t* data, std::size_t size) {
   State& s = *state_;
   std::lock_guard lock(s.mutex);
+  const std::string& name = s.name(channel);
   if (!s.lcm) {
-    s.failed(channel);  // nothing to send it with: not queued behind messages that will fail too
+    s.failed(name);  // nothing to send it with: not queued behind messages that will fail too
     return;
   }
   if (s.count == s.queue.size()) {
@@ -136,7 +152,7 @@ void LcmSender::post(const std::string& channel, const std::uint8_t* data, std::
     --s.count;
   }
   State::Message& m = s.queue[(s.head + s.count) % s.queue.size()];
-  m.channel = &channel;
+  m.channel = &name;
   m.bytes.assign(data, data + size);
   m.order = s.next_order++;
   ++s.count;
@@ -145,16 +161,20 @@ void LcmSender::post(const std::string& channel, const std::uint8_t* data, std::
 
 void LcmSender::count_failure(const std::string& channel) {
   std::lock_guard lock(state_->mutex);
-  state_->failed(channel);
+  state_->failed(state_->name(channel));
+}
+
+bool LcmSender::blocked() const {
+  std::lock_guard lock(state_->mutex);
+  return state_->blocked;
 }
 
 std::vector<std::uint8_t>* LcmSender::acquire_large(std::chrono::milliseconds wait) {
   State& s = *state_;
   std::unique_lock lock(s.mutex);
-  // A send the network already held past one wait is not waited for again: its recorder hears at
-  // once, and a stop is not held up pair after pair.
-  if (s.large_stuck ||
-      !s.changed.wait_for(lock, wait, [&] { return s.large == State::Large::kIdle; }))
+  // A network that already held a send past one wait is not waited for again: the caller hears
+  // at once, and a stop is not held up pair after pair.
+  if (s.blocked || !s.changed.wait_for(lock, wait, [&] { return s.large == State::Large::kIdle; }))
     return nullptr;
   return &s.large_bytes;
 }
@@ -163,11 +183,12 @@ LcmSender::LargeOutcome LcmSender::send_large(const std::string& channel, std::s
                                               std::chrono::milliseconds wait) {
   State& s = *state_;
   std::unique_lock lock(s.mutex);
+  const std::string& name = s.name(channel);
   if (!s.lcm) {
-    s.failed(channel);
+    s.failed(name);
     return LargeOutcome::kFailed;
   }
-  s.large_channel = &channel;
+  s.large_channel = &name;
   s.large_size = std::min(size, s.large_bytes.size());
   s.large_order = s.next_order++;
   s.large = State::Large::kQueued;
@@ -176,10 +197,10 @@ LcmSender::LargeOutcome LcmSender::send_large(const std::string& channel, std::s
   if (!s.changed.wait_for(lock, wait, [&] { return s.large_done != done_before; })) {
     if (s.large == State::Large::kQueued) {
       s.large = State::Large::kIdle;  // not sent: the buffer is free again
-      s.failed(channel);
-    } else {
-      s.large_stuck = true;
+      s.failed(name);
     }
+    // Held either way: in its own send, or behind another one the network holds.
+    s.blocked = true;
     return LargeOutcome::kTimedOut;
   }
   return s.large_sent ? LargeOutcome::kSent : LargeOutcome::kFailed;
@@ -187,7 +208,9 @@ LcmSender::LargeOutcome LcmSender::send_large(const std::string& channel, std::s
 
 bool LcmSender::flush(std::chrono::milliseconds wait) {
   std::unique_lock lock(state_->mutex);
-  return state_->changed.wait_for(lock, wait, [&] { return state_->idle(); });
+  const bool flushed = state_->changed.wait_for(lock, wait, [&] { return state_->idle(); });
+  state_->flush_timed_out = !flushed;
+  return flushed;
 }
 
 std::uint64_t LcmSender::failures() const {

@@ -179,6 +179,10 @@ const char* DepthPublisher::last_failed_channel() const {
   return sender_->last_failed_channel();
 }
 
+bool DepthPublisher::raw_can_go() const {
+  return lcm_ready_ && !sender_->blocked();
+}
+
 void DepthPublisher::set_preview_hz(double hz) {
   if (!(hz >= 0)) throw Error(fmt::format("publisher: preview rate {} Hz out of range", hz));
   options_.preview_hz = hz;
@@ -327,8 +331,7 @@ void DepthPublisher::publish_raw(const ::dco::raw_stereo_t& message) {
   if (bytes == nullptr) {
     sender_->count_failure(kRawChannel);
     throw Error(
-        fmt::format("publisher: {} not sent: LCM has not finished sending the previous "
-                    "pair for {} ms",
+        fmt::format("publisher: {} not sent: LCM's network holds a send (for more than {} ms)",
                     channel::kRaw, kRawSendWait.count()));
   }
   const int size = message.getEncodedSize();

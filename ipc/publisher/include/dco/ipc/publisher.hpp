@@ -81,7 +81,7 @@ class DepthPublisher {
   // reading, a slow link) delays LCM only. A message LCM cannot send, or one that gives way in a
   // full queue to a newer one, is counted in send_failures() and the call goes on, so depth
   // keeps reaching the ring's readers. Only publish_raw throws, for its recorder's own
-  // accounting. The destructor sends what waits (for up to a second).
+  // accounting. The destructor sends what waits (for up to a second, unless a flush() ran out).
   //
   // Zero copy: fill the slot begin_write() returns, then publish() it. publish stamps the slot
   // (RingWriter::publish), announces it and sends a preview when one is due; it returns the
@@ -102,8 +102,10 @@ class DepthPublisher {
   // the other messages; returns once LCM has sent it. Throws dco::Error when LCM is not set up,
   // refuses it, or has not sent it (or the pair before it) within two seconds.
   void publish_raw(const ::dco::raw_stereo_t& message);
-  // Whether LCM is set up: a raw recorder need not compress pairs that cannot go out.
   bool lcm_ready() const { return lcm_ready_; }
+  // Whether a DCO_RAW pair could go out now: LCM is set up and its network is not holding a
+  // send past publish_raw's wait. A raw recorder need not compress pairs that cannot go out.
+  bool raw_can_go() const;
 
   // Changes the DCO_DEPTH_PREVIEW rate (a configuration reload); throws dco::Error when < 0.
   void set_preview_hz(double hz);
