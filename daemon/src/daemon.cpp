@@ -49,6 +49,20 @@ std::string join(const std::vector<std::string>& items) {
 
 }  // namespace
 
+sigset_t service_signals() {
+  sigset_t mask;
+  sigemptyset(&mask);
+  sigaddset(&mask, SIGTERM);
+  sigaddset(&mask, SIGINT);
+  sigaddset(&mask, SIGHUP);
+  return mask;
+}
+
+void block_service_signals() {
+  const sigset_t mask = service_signals();
+  pthread_sigmask(SIG_BLOCK, &mask, nullptr);
+}
+
 Daemon::Daemon(ConfigSources sources, LoadedConfig config, Logger& log, SourceOpener open_source)
     : sources_(std::move(sources)),
       open_source_(std::move(open_source)),
@@ -628,11 +642,7 @@ int Daemon::run() {
     log_.set_forward({});
     return 1;
   }
-  sigset_t mask;
-  sigemptyset(&mask);
-  sigaddset(&mask, SIGTERM);
-  sigaddset(&mask, SIGINT);
-  sigaddset(&mask, SIGHUP);
+  const sigset_t mask = service_signals();
   const int signal_fd = signalfd(-1, &mask, SFD_CLOEXEC | SFD_NONBLOCK);
   if (signal_fd < 0) {
     log_.error(std::string("signalfd: ") + std::strerror(errno));

@@ -43,15 +43,9 @@ int usage_error(const std::string& message) {
 
 int main(int argc, char** argv) {
   dco::retain_freed_memory();  // before any thread starts: see memory_policy.hpp
-  // First of all, and before any thread starts: every thread inherits the mask, the signals
-  // reach the daemon's signalfd only, and a reload or stop sent while the configuration is still
-  // being read waits for the daemon instead of killing it.
-  sigset_t mask;
-  sigemptyset(&mask);
-  sigaddset(&mask, SIGTERM);
-  sigaddset(&mask, SIGINT);
-  sigaddset(&mask, SIGHUP);
-  pthread_sigmask(SIG_BLOCK, &mask, nullptr);
+  // First of all: a reload or stop sent while the configuration is still being read then waits
+  // for the daemon instead of killing it.
+  dco::daemon::block_service_signals();
   signal(SIGPIPE, SIG_IGN);
   // A write past a file size limit (LimitFSIZE=, ulimit -f) is then an error the writer reports,
   // not the end of the daemon.

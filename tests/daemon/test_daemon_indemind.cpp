@@ -45,13 +45,7 @@ struct Seen {
 // before the daemon (and the source it opened) is destroyed.
 Seen run_daemon(const std::string& source, std::vector<std::string> sets,
                 const Daemon::SourceOpener& opener, const std::function<void()>& after = {}) {
-  // The daemon reads SIGTERM/SIGINT/SIGHUP from a signalfd: block them before any thread starts.
-  sigset_t mask;
-  sigemptyset(&mask);
-  sigaddset(&mask, SIGTERM);
-  sigaddset(&mask, SIGINT);
-  sigaddset(&mask, SIGHUP);
-  pthread_sigmask(SIG_BLOCK, &mask, nullptr);
+  block_service_signals();  // as dcod's main does, before any thread starts
 
   const auto dir =
       std::filesystem::temp_directory_path() / ("dco_daemon_indemind_" + std::to_string(getpid()));

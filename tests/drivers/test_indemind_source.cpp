@@ -625,17 +625,22 @@ bool wait_until(Done done) {
   return true;
 }
 
+// Streams, unplugs the module and plugs it in again on a link of `speed_mbps`.
+void replug_at(Rig& rig, int speed_mbps) {
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(10));
+  rig.sim->set_present(false);
+  ASSERT_TRUE(wait_until([&] { return counters_of(*rig.source).at("disconnects") == 1; }));
+  rig.sim->set_usb_speed(speed_mbps);
+  rig.sim->set_present(true);
+}
+
 // Started on USB 3 at the default 640x400@50, replugged into a USB 2 port (or re-enumerated at
 // High Speed by a worn cable): the same size at the 25 fps that link carries, not a wait for a
 // rate it never will.
 TEST(IndemindSource, AModuleRepluggedOnASlowerLinkStreamsAtTheRateItCarries) {
   Rig rig;
-  rig.source->start(rig.sink);
-  ASSERT_TRUE(rig.wait_frames(10));
-  rig.sim->set_present(false);
-  ASSERT_TRUE(wait_until([&] { return counters_of(*rig.source).at("disconnects") == 1; }));
-  rig.sim->set_usb_speed(480);
-  rig.sim->set_present(true);
+  ASSERT_NO_FATAL_FAILURE(replug_at(rig, 480));
   ASSERT_TRUE(wait_until([&] { return counters_of(*rig.source).at("reconnects") == 1; }))
       << rig.source->status().error;
   const long back = rig.sink.count();
@@ -659,12 +664,7 @@ TEST(IndemindSource, AModuleRepluggedOnALinkTooSlowForTheAskedRateIsLeftAlone) {
   IndemindOptions io;
   io.fps = 50;
   Rig rig({}, io);
-  rig.source->start(rig.sink);
-  ASSERT_TRUE(rig.wait_frames(10));
-  rig.sim->set_present(false);
-  ASSERT_TRUE(wait_until([&] { return counters_of(*rig.source).at("disconnects") == 1; }));
-  rig.sim->set_usb_speed(480);
-  rig.sim->set_present(true);
+  ASSERT_NO_FATAL_FAILURE(replug_at(rig, 480));
   ASSERT_TRUE(wait_until(
       [&] { return rig.source->status().error.find("replugged at 480") != std::string::npos; }));
   const std::uint64_t opens = rig.sim->record().opens;

@@ -59,14 +59,20 @@ TEST(DepthPipeline, CausalWindowReleasesEveryFrameAtOnce) {
   EXPECT_FALSE(pipeline.finish(r));
 }
 
+// The photometric refinement without its smoothness (alpha 0), where its linearised steps run
+// farthest.
+PipelineParams unsmoothed_refinement() {
+  PipelineParams p;
+  p.stereo.max_disparity = 32;
+  p.densify.photometric.alpha = 0.0;
+  return p;
+}
+
 // The photometric refinement's linearised steps can run far where the images say little (flat
 // ground, no smoothness): what it gives stays within the matches' range.
 TEST(DepthPipeline, RefinedMapKeepsToTheRangeOfTheMatches) {
   const auto scene = synthetic::SceneRenderer(synthetic::preset("boxes", 320, 240));
-  PipelineParams p;
-  p.stereo.max_disparity = 32;
-  p.densify.photometric.alpha = 0.0;
-  DepthPipeline pipeline(p);
+  DepthPipeline pipeline(unsmoothed_refinement());
   synthetic::StereoSample s;
   DepthResult r;
   for (int i = 0; i < 2; ++i) {
@@ -88,10 +94,7 @@ TEST(DepthPipeline, RefinedMapKeepsToTheRangeOfTheMatches) {
 // refinement then has no range to keep to, yet must not invent depth where the stage found none.
 TEST(DepthPipeline, NoMatchLeavesTheRefinedMapAtZero) {
   const auto scene = synthetic::SceneRenderer(synthetic::preset("boxes", 320, 240));
-  PipelineParams p;
-  p.stereo.max_disparity = 32;
-  p.densify.photometric.alpha = 0.0;
-  DepthPipeline pipeline(p);
+  DepthPipeline pipeline(unsmoothed_refinement());
   synthetic::StereoSample s;
   DepthResult r;
   int frames = 0;

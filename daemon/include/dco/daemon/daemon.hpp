@@ -1,5 +1,7 @@
 #pragma once
 
+#include <signal.h>
+
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -28,6 +30,12 @@ class ReplayCheck;
 }  // namespace dco::daemon
 
 namespace dco::daemon {
+
+// SIGTERM, SIGINT and SIGHUP: what the daemon reads from its signalfd.
+sigset_t service_signals();
+// Blocks service_signals() in the calling thread. Called before any thread starts, every thread
+// inherits the mask and the signals reach the daemon's signalfd only.
+void block_service_signals();
 
 // dcod's wiring and lifecycle: source -> rectify -> real-time runtime -> depth ring + LCM, with
 // the service manager told about readiness, status and health. The source delivers on its own
