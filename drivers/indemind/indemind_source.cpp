@@ -303,10 +303,7 @@ class IndemindSource final : public FrameSource {
       // a rate was asked for. A size the link cannot carry at all would change the calibration;
       // the module is then left alone until it is plugged in again.
       std::string why;
-      const std::optional<StreamMode> mode =
-          options_.fps == 0
-              ? mode_for(d.speed_mbps, why)
-              : find_stream_mode(mode_.width, mode_.height, mode_.fps, d.speed_mbps, why);
+      const std::optional<StreamMode> mode = mode_for(d.speed_mbps, why);
       if (!mode || mode->width != mode_.width || mode->height != mode_.height) {
         if (mode) why = fmt::format("this link carries {}, not {}", mode->name(), mode_.name());
         other_modules_.push_back(bus_address(d));

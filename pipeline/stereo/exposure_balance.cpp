@@ -13,9 +13,6 @@ constexpr int kLevels = 256;
 constexpr int kMinSpread = 16;    // levels between the darkest and brightest left level used
 constexpr int kMinBinPairs = 4;   // pairs a left level needs to count towards the spread
 constexpr double kOutlier = 3.0;  // levels off the first line that drop a left level's mean
-// Two cameras with their own auto-exposure can be more than twice apart; past four times one of
-// them has too few levels left for a match to tell.
-constexpr double kMinGain = 0.25, kMaxGain = 4.0;
 
 // The right level's mean at each left level, over one channel's pairs.
 struct LevelMeans {
@@ -60,7 +57,7 @@ Fit fit_channel(const LevelMeans& m, ChannelLevels& out) {
   // right = a * left + b, so a right level v is matched as (v - b) / a.
   if (!(a > 0)) return Fit::kFailed;
   const double gain = 1.0 / a;
-  if (!(gain >= kMinGain && gain <= kMaxGain)) return Fit::kFailed;
+  if (!(gain >= detail::kMinRightGain && gain <= detail::kMaxRightGain)) return Fit::kFailed;
   out = {gain, -b / a};
   return Fit::kFitted;
 }

@@ -12,6 +12,10 @@
 
 namespace dco::stereo::detail {
 
+// The right camera's gain against the left's that the exposure and fall-off fits accept: two
+// cameras with their own auto-exposure can be more than twice apart; past four times one of them
+// has too few levels left for a match to tell.
+inline constexpr double kMinRightGain = 0.25, kMaxRightGain = 4.0;
 inline constexpr int kFlatRange = 6;  // levels three row neighbours may span to count as flat
 inline constexpr double kFitSamples = 16384;  // pixels a fit looks at first (every fourth row
                                               // and column of 640x360; every eighth at 1280x720)

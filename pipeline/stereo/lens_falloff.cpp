@@ -20,7 +20,6 @@ constexpr int kMinPairs = 500;
 // small disparities put both views of a point at nearly one r, where no fall-off shows.
 constexpr double kMinUSpread = 0.01;
 constexpr double kMinK = -0.5, kMaxK = 0.75;
-constexpr double kMinGain = 0.25, kMaxGain = 4.0;  // as the exposure balance
 constexpr int kRounds = 3;  // linearised fits, each about the k of the one before
 
 // The normal equations of right = a left + b + c (u left) over one channel's pairs.
@@ -91,7 +90,8 @@ bool fit_step_about(const std::array<Normals, 3>& normals, int channels, double&
     if (std::sqrt(std::max(0.0, n.u_squares / n.pairs - mean_u * mean_u)) < kMinUSpread)
       return false;
     std::array<double, 3> p{};
-    if (!solve(n, p) || !(p[0] >= kMinGain && p[0] <= kMaxGain)) return false;
+    if (!solve(n, p) || !(p[0] >= detail::kMinRightGain && p[0] <= detail::kMaxRightGain))
+      return false;
     // right / left ~ a (1 - dk u): c = -a dk.
     weighted += n.pairs * (-p[2] / p[0]);
     pairs += n.pairs;
