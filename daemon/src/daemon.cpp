@@ -210,6 +210,7 @@ void Daemon::start_pipeline() {
   }
   runtime_ = std::move(next);
   runtime_->start();
+  pushed_in_sequence_ = false;  // the source is stopped: its thread pushes nothing now
   const int threads = runtime_->runtime_params().threads;
   const pipeline::PipelineParams& stages = loaded_.config.pipeline;
   const int stereo_rows = pipeline::RowTeam::threads_for(stages.stereo.row_threads);
@@ -270,6 +271,14 @@ void Daemon::on_frame(const drivers::StereoFrame& frame) {
     if (raw_) raw_->offer(frame);
   }
   frame_numbers_.record(frame.capture_ns, frame.seq);
+  if (frame.follows_gap && pushed_in_sequence_) {
+    // The frames before the gap finish as a sequence of their own: none of them is this frame's
+    // neighbour for the flow or the stability term. A replayed log cuts at the same frames.
+    runtime_->drain();
+    last_cut_seq_ = frame.seq;
+    ++sequence_cuts_;
+  }
+  pushed_in_sequence_ = true;
   const Clock::time_point capture{std::chrono::nanoseconds(frame.capture_ns)};
   if (rectifier_) {
     rectifier_->rectify(frame.left, frame.right, rect_left_, rect_right_, remapper_.get());
@@ -365,6 +374,18 @@ void Daemon::report_lcm_failures(std::int64_t now_ns, bool last) {
   lcm_failures_reported_ = failures;
 }
 
+void Daemon::report_sequence_cuts(std::int64_t now_ns, bool last) {
+  const std::uint64_t cuts = sequence_cuts_.load();
+  // Paced: a camera that keeps dropping out must not fill the journal.
+  const bool news = cuts > cuts_reported_;
+  if (!(cut_pacer_.due(now_ns, news) || last) || !news) return;
+  log_.info(fmt::format(
+      "{} gap(s) in the camera's frames since the last report (the last before frame {}): depth "
+      "started a new sequence after each",
+      cuts - cuts_reported_, last_cut_seq_.load()));
+  cuts_reported_ = cuts;
+}
+
 std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const {
   return fmt::format(
       "{}: {:.1f} fps in, {:.1f} fps out, {} published, {} dropped ({} late), latency p50 {:.1f} "
@@ -406,6 +427,7 @@ void Daemon::tick(std::int64_t now_ns) {
   }
   retry_lcm(now_ns);
   report_lcm_failures(now_ns, false);
+  report_sequence_cuts(now_ns, false);
   if (now_ns < next_stats_ns_) return;
   next_stats_ns_ = now_ns + static_cast<std::int64_t>(1e9 / loaded_.config.stats_hz);
   const pipeline::runtime::RuntimeStats stats = runtime_->stats();
@@ -722,6 +744,7 @@ int Daemon::run() {
   notifier_.stopping();
   stop_all();
   report_raw_recording(monotonic_ns(), true);  // those since the last warnings
+  report_sequence_cuts(monotonic_ns(), true);
   if (raw_) {
     std::lock_guard lock(raw_mutex_);
     const RawRecorder::Counts n = raw_->close();  // sends the pairs it still holds

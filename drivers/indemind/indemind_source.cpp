@@ -15,6 +15,7 @@
 
 #include "dco/core/error.hpp"
 #include "dco/core/thread_name.hpp"
+#include "dco/drivers/capture_gaps.hpp"
 #include "dco/indemind/clock_map.hpp"
 #include "dco/indemind/frame_assembler.hpp"
 #include "dco/indemind/frame_metadata.hpp"
@@ -755,6 +756,7 @@ class IndemindSource final : public FrameSource {
       StereoFrame f;
       f.seq = seq_++;
       f.capture_ns = deliver_.capture_ns;
+      f.follows_gap = gaps_.follows_gap(f.capture_ns);
       f.left = ImageView<const std::uint8_t>(row0 + (swap ? w : 0), w, h, 1, 2 * w);
       f.right = ImageView<const std::uint8_t>(row0 + (swap ? 0 : w), w, h, 1, 2 * w);
       f.imu = deliver_.imu;
@@ -835,6 +837,7 @@ class IndemindSource final : public FrameSource {
   bool ended_ = false;  // the transport finished: deliver what is left, then end
   std::string end_error_;
   std::uint64_t seq_ = 0;
+  CaptureGaps gaps_;  // the delivery thread's, over the frames delivered
   FrameSink* sink_ = nullptr;
   std::thread events_, delivery_;
 };

@@ -7,6 +7,7 @@
 #include "../src/paced_source.hpp"
 #include "../src/sources.hpp"
 #include "dco/core/error.hpp"
+#include "dco/drivers/capture_gaps.hpp"
 #include "dco/drivers/lcm_log.hpp"
 #include "dco/drivers/raw_stereo.hpp"
 #include "dco/ipc/lcm_messages.hpp"
@@ -87,10 +88,17 @@ class LcmLogSource final : public PacedSource {
     if (message_.calibration != calibration_toml_)
       throw Error(fmt::format("{}: the calibration changes at frame {}; replay the parts apart",
                               where_, message_.frame_seq));
+    // Found on the recorded stamps, as the headset found its gaps, so the replay cuts its
+    // sequences where the headset did; a frame number that does not rise is another dcod run.
+    const bool seq_restarts = has_previous_seq_ && message_.frame_seq <= previous_seq_;
+    gap_ = gaps_.follows_gap(message_.capture_ns) || seq_restarts;
+    has_previous_seq_ = true;
+    previous_seq_ = message_.frame_seq;
     left = left_.cview();
     right = right_.cview();
     return true;
   }
+  bool follows_gap() const override { return gap_; }
 
   // Replayed frames keep the numbers the headset gave them, so its log and the replay's agree.
   std::uint64_t frame_number(std::uint64_t) const override {
@@ -118,6 +126,10 @@ class LcmLogSource final : public PacedSource {
   std::vector<ImuSample> imu_;           // as recorded
   std::vector<ImuSample> replayed_imu_;  // on the replay's time line
   bool pending_ = false;                 // the first pair, read at open, not yet delivered
+  CaptureGaps gaps_;
+  bool gap_ = false;  // the pair produce() made follows a gap
+  bool has_previous_seq_ = false;
+  std::int64_t previous_seq_ = 0;
   StereoCalibration calibration_;
   SourceInfo info_;
 };

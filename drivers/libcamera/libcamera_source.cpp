@@ -36,6 +36,7 @@
 #include "../src/sources.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/thread_name.hpp"
+#include "dco/drivers/capture_gaps.hpp"
 #include "frame_pairer.hpp"
 
 namespace dco::drivers {
@@ -613,6 +614,7 @@ class LibcameraSource final : public FrameSource {
         frame.seq = seq_++;
       }
       frame.capture_ns = pair[0].ns;
+      frame.follows_gap = gaps_.follows_gap(frame.capture_ns);
       frame.left = left_.cview();
       frame.right = right_.cview();
       try {
@@ -633,6 +635,7 @@ class LibcameraSource final : public FrameSource {
   int width_ = 0, height_ = 0;
   lc::ControlList start_controls_{lc::controls::controls};
   Image<std::uint8_t> left_, right_;
+  CaptureGaps gaps_;  // the delivery thread's, over the pairs delivered
 
   mutable std::mutex mutex_;
   std::condition_variable wake_;

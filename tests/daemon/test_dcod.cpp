@@ -1010,6 +1010,40 @@ TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
       << cut.output;
 }
 
+// A field log of two dcod runs: each run started its own sequence on the headset, so the replay
+// starts a new one where the second run's frames begin, and its depth is the headset's in both.
+TEST(Dcod, ALogOfTwoRunsReplaysEachRunAsItsOwnSequence) {
+  if (const std::string problem = private_network_problem(); !problem.empty())
+    GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
+  TempDir dir;
+  const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+  const auto log = dir / "field.log";
+  const std::string run =
+      std::string(DCOD_EXE) + " --source \"synthetic://hand?width=160&height=96&fps=8&frames=6\"" +
+      " --set \"lcm.url=" + url + "\" --set ring.path=" + (dir / "rec.shm").string() +
+      " --set raw.enabled=true --set lcm.preview_hz=30"
+      " --set runtime.deterministic=true --set stereo.max_disparity=40";
+  const auto recorded =
+      run_command(unshare_command() + " sh -c '" + kNetnsSetup + " && lcm-logger -q --lcm-url=\"" +
+                  url + "\" " + log.string() + " & L=$!; sleep 0.5; " + run + " && " + run +
+                  "; S=$?; sleep 0.5; kill -INT $L; wait $L; exit $S'");
+  ASSERT_EQ(recorded.status, 0) << recorded.output;
+
+  const auto replay =
+      run_command(std::string(DCOD_EXE) + " --source lcmlog://" + log.string() +
+                  "?fps=0 --set lcm.url=memq:// --set ring.path=" + (dir / "replay.shm").string() +
+                  " --set runtime.deterministic=true");
+  EXPECT_EQ(replay.status, 0) << replay.output;
+  EXPECT_NE(replay.output.find("1 gap(s) in the camera's frames since the last report (the last "
+                               "before frame 0): depth started a new sequence after each"),
+            std::string::npos)
+      << replay.output;
+  EXPECT_NE(replay.output.find("replay check: depth identical to the headset's in all 12 "
+                               "recorded previews replayed"),
+            std::string::npos)
+      << replay.output;
+}
+
 TEST(DcodService, UnitVerifiesAndItsExposureIsAtMost2_5) {
   const std::string unit = DCOD_TEST_UNIT;
   auto verify = run_command("systemd-analyze verify " + unit);

@@ -32,6 +32,7 @@ class Collector final : public FrameSink {
     if (f.capture_ns <= last_capture_ns) ++non_increasing;
     last_capture_ns = f.capture_ns;
     captures.push_back(f.capture_ns);
+    gaps += f.follows_gap;
     width = f.left.width;
     height = f.left.height;
     left_differs_from_right =
@@ -59,6 +60,7 @@ class Collector final : public FrameSink {
 
   std::mutex mutex_;
   long frames = 0, non_increasing = 0, imu_non_increasing = 0;
+  long gaps = 0;  // frames that follow a gap in the stream
   std::int64_t last_capture_ns = 0, last_imu_ns = 0;
   std::vector<std::int64_t> captures;
   int width = 0, height = 0;
@@ -363,6 +365,9 @@ TEST(IndemindSource, AStallRestartStartsANewTimeLine) {
   o.counter_restarts_with_stream = true;
   IndemindOptions io;
   io.stall_ms = 300;
+  // Every frame reaches the sink: the simulated module's clock runs ahead of the real one, so a
+  // descheduled delivery would skip whole seconds of its frames, a gap in the delivered stream.
+  io.lossless = true;
   Rig rig(o, io);
   ASSERT_TRUE(rig.stream_through(Fault::kStall, 0, 150, 150));
   const auto rec = rig.sim->record();
@@ -377,6 +382,9 @@ TEST(IndemindSource, AStallRestartStartsANewTimeLine) {
   EXPECT_EQ(rig.sink.non_increasing, 0);
   EXPECT_EQ(rig.sink.imu_non_increasing, 0);
   expect_on_frame_starts(rig, 100, 1'000'000.0);
+  // The restart costs a frame period or two: the frames on either side stay neighbours in time
+  // (an unplug is a gap: UnpluggedModuleIsWaitedForAndResumes).
+  EXPECT_EQ(rig.sink.gaps, 0);
 }
 
 // The first payload comes 25 ms after the frame starts, IMU reports 1.5 ms after their sample:
@@ -515,7 +523,9 @@ TEST(IndemindSource, ImuReportsBeforeTheFirstFrameAreCounted) {
 }
 
 TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {
-  Rig rig;
+  IndemindOptions io;
+  io.lossless = true;  // every frame reaches the sink (see AStallRestartStartsANewTimeLine)
+  Rig rig({}, io);
   rig.source->start(rig.sink);
   ASSERT_TRUE(rig.wait_frames(10));
   rig.sim->set_present(false);
@@ -538,6 +548,7 @@ TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {
   EXPECT_EQ(n.at("disconnects"), 1u);
   EXPECT_EQ(n.at("reconnects"), 1u);
   EXPECT_TRUE(rig.sink.errors.empty());
+  EXPECT_EQ(rig.sink.gaps, 1) << "the first frame after the replug follows a gap, no other";
   const auto rec = rig.sim->record();
   EXPECT_EQ(rec.transfers_submitted, rec.transfers_completed);
   // Recovery in the module's time, replug to the first sound frame: the test thread's own view

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <streambuf>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -423,6 +424,7 @@ struct Collect : FrameSink {
   std::vector<std::uint64_t> seqs;
   std::vector<std::int64_t> captures;
   std::vector<std::vector<ImuSample>> imus;
+  std::vector<bool> gaps;
   bool ended = false;
   std::string error;
   std::mutex mutex;
@@ -436,6 +438,7 @@ struct Collect : FrameSink {
     seqs.push_back(f.seq);
     captures.push_back(f.capture_ns);
     imus.emplace_back(f.imu.begin(), f.imu.end());
+    gaps.push_back(f.follows_gap);
   }
   void on_end() override {
     std::lock_guard lock(mutex);
@@ -481,6 +484,44 @@ TEST(LcmLogSource, APairLargerThanTheLogsFramesIsRefusedBeforeItIsDecoded) {
   EXPECT_NE(sink.error.find("frame 1 is 16384x16384, the log started with 96x64"),
             std::string::npos)
       << sink.error;
+}
+
+// The replay finds the headset's gaps on the recorded stamps, not on its own pace: a second's
+// pause in the camera's frames, and another dcod run (frame numbers from 0 again) recorded into
+// the same log soon after the first.
+TEST(LcmLogSource, GapsAreFoundOnTheRecordedStampsAndRuns) {
+  dco::testing::TempDir dir;
+  synthetic::SceneRenderer scene(synthetic::preset("hand", 64, 48));
+  const std::string calibration = calibration_to_toml(scene.calibration());
+  RawStereoEncoder encoder;
+  std::vector<LcmLogEvent> events;
+  synthetic::StereoSample s;
+  const std::int64_t paused = 1'000'000'000;
+  const std::vector<std::pair<std::uint64_t, std::int64_t>> frames = {
+      {7, recorded_capture_ns(0)},          {8, recorded_capture_ns(1)},
+      {9, recorded_capture_ns(2) + paused}, {10, recorded_capture_ns(3) + paused},
+      {0, recorded_capture_ns(4) + paused}, {1, recorded_capture_ns(5) + paused}};
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    scene.render(static_cast<int>(i), s);
+    StereoFrame f = frame_of(s.left, s.right, {});
+    std::tie(f.seq, f.capture_ns) = frames[i];
+    ::dco::raw_stereo_t m;
+    encoder.encode(f, calibration, m);
+    events.push_back(event_of(static_cast<std::int64_t>(i), "DCO_RAW", dco::testing::lcm_bytes(m)));
+  }
+  const auto path = dir.path() / "gaps.log";
+  std::ofstream(path, std::ios::binary) << log_of(events);
+  // Replayed as fast as taken and at 20 fps: the replay's own stamps have no such gaps.
+  for (const char* fps : {"0", "20"}) {
+    SCOPED_TRACE(fps);
+    auto source = open_source("lcmlog://" + path.string() + "?fps=" + fps);
+    Collect sink;
+    source->start(sink);
+    ASSERT_TRUE(sink.wait());
+    source->stop();
+    EXPECT_TRUE(sink.ended) << sink.error;
+    EXPECT_EQ(sink.gaps, (std::vector<bool>{false, false, true, false, true, false}));
+  }
 }
 
 TEST(LcmLogSource, ReplaysTheRecordedPairsAndNamesDamage) {

@@ -92,6 +92,9 @@ class Daemon final : public drivers::FrameSink {
   void retry_lcm(std::int64_t now_ns);
   static constexpr std::int64_t kLcmRetryNs = 2'000'000'000;
   void report_lcm_failures(std::int64_t now_ns, bool last);
+  // An info line when the source's frames had gaps since the last one (a sequence cut at each),
+  // paced like the warnings; `last`: at the exit, whatever the pace.
+  void report_sequence_cuts(std::int64_t now_ns, bool last);
   std::string status_line(const pipeline::runtime::RuntimeStats& stats) const;
   void wake();
 
@@ -124,6 +127,10 @@ class Daemon final : public drivers::FrameSink {
   std::int64_t lcm_retry_ns_ = 0;  // when LCM, not set up at the start, was last tried
 
   FrameNumbers frame_numbers_;
+  bool pushed_in_sequence_ = false;  // the source thread's: a frame since the last start or cut
+  std::atomic<std::uint64_t> sequence_cuts_{0}, last_cut_seq_{0};
+  std::uint64_t cuts_reported_ = 0;
+  WarningPacer cut_pacer_;
 
   std::atomic<std::int64_t> last_publish_ns_{0};
   std::atomic<std::int64_t> pipeline_start_ns_{0};

@@ -32,6 +32,9 @@ struct StereoFrame {
   ImageView<const std::uint8_t> left, right;  // raw (rectify with the source's calibration)
   // IMU samples that arrived since the previous frame (empty for sources without an IMU).
   std::span<const ImuSample> imu;
+  // The source's frames before this one are no neighbours of it in time (CaptureGaps: a gap in
+  // the camera's stream, or another run in a recorded log): depth starts a new sequence here.
+  bool follows_gap = false;
 };
 
 // What a source says about its device, for DCO_STATUS and the watchdog.
