@@ -182,7 +182,7 @@ void Daemon::open_replay_check() {
   if (recorded.undecodable > 0)
     log_.warning(fmt::format("{} recorded depth previews do not decode and are not compared",
                              recorded.undecodable));
-  replay_check_ = std::make_unique<ReplayCheck>(std::move(recorded));
+  replay_check_ = std::make_unique<ReplayCheck>(std::move(recorded), log->first_session);
 }
 
 void Daemon::start_pipeline() {

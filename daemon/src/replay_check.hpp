@@ -16,7 +16,9 @@ namespace dco::daemon {
 // preview of its own run.
 class ReplayCheck {
  public:
-  explicit ReplayCheck(drivers::RecordedPreviews recorded) : recorded_(std::move(recorded)) {}
+  // `first_session`: the dcod run of the log the replay starts with (drivers::ReplayedLog).
+  ReplayCheck(drivers::RecordedPreviews recorded, std::int64_t first_session)
+      : recorded_(std::move(recorded)), sessions_(first_session) {}
 
   // The pipeline's thread, for every frame in the order replayed: the depth published for camera
   // frame `frame_seq`.

@@ -1,6 +1,7 @@
 // lcmlog://FILE: the raw stereo pairs an LCM log recorded on DCO_RAW (dcod with raw.enabled),
-// paced at `fps` (0 = as fast as the pipeline takes them), through the same pipeline as live.
-// The log streams: one event at a time, never the whole file in memory.
+// paced at `fps` (0 = as fast as the pipeline takes them), through the same pipeline as live;
+// `run=N` replays the log's Nth dcod run alone. The log streams: one event at a time, never the
+// whole file in memory.
 
 #include <fmt/format.h>
 
@@ -10,6 +11,7 @@
 #include "dco/drivers/capture_gaps.hpp"
 #include "dco/drivers/lcm_log.hpp"
 #include "dco/drivers/raw_stereo.hpp"
+#include "dco/drivers/recorded_previews.hpp"
 #include "dco/ipc/lcm_messages.hpp"
 
 namespace dco::drivers {
@@ -21,17 +23,29 @@ class LcmLogSource final : public PacedSource {
     info_.uri = uri.text();
     info_.fps = uri.fps(30, "as fast as taken");
     channel_ = uri.value("channel").value_or(ipc::channel::kRaw);
+    run_ = uri.integer("run", 0, 1, kMaxRun);
     uri.finish();
     where_ = "lcmlog://" + path_;
     reader_ = std::make_unique<LcmLogReader>(path_);
-    // The first pair says the size and calibration every later one must have.
-    if (!read_pair()) {
+    // The first pair (of the run asked for) says the size, calibration and pipeline keys every
+    // later one must have.
+    if (!read_message()) {
       if (!reader_->damage().empty()) throw Error(where_ + ": " + reader_->damage());
       throw Error(
           fmt::format("{}: no {} message in {} events (was dcod recording with "
                       "raw.enabled = true?)",
                       where_, channel_, reader_->events_read()));
     }
+    run_of_pair_ = runs_.session_of(message_.frame_seq);
+    while (run_ > 0 && run_of_pair_ < run_ - 1) {
+      if (!read_message()) {
+        if (!reader_->damage().empty()) throw Error(where_ + ": " + reader_->damage());
+        throw Error(fmt::format("{}: run={} asked for, the log holds {} dcod run(s)", where_, run_,
+                                run_of_pair_ + 1));
+      }
+      run_of_pair_ = runs_.session_of(message_.frame_seq);
+    }
+    decode_pair();
     calibration_toml_ = message_.calibration;
     calibration_ = calibration_from_toml(calibration_toml_, where_ + " (recorded calibration)");
     if (calibration_.left.width != message_.width || calibration_.left.height != message_.height)
@@ -39,12 +53,14 @@ class LcmLogSource final : public PacedSource {
                               message_.width, message_.height, calibration_.left.width,
                               calibration_.left.height));
     info_.recorded_pipeline = message_.pipeline_config;
+    first_run_ = run_of_last_ = run_of_pair_;
     info_.width = message_.width;
     info_.height = message_.height;
     info_.channels = left_.channels();
-    info_.description =
-        fmt::format("lcmlog {} {}x{} @ {} fps", path_, info_.width, info_.height,
-                    info_.fps > 0 ? fmt::format("{}", info_.fps) : std::string("max"));
+    info_.description = fmt::format(
+        "lcmlog {}{} {}x{} @ {} fps", path_,
+        run_ > 0 ? fmt::format(" run {}", run_) : std::string(), info_.width, info_.height,
+        info_.fps > 0 ? fmt::format("{}", info_.fps) : std::string("max"));
     pending_ = true;
   }
   ~LcmLogSource() override { stop(); }
@@ -53,9 +69,11 @@ class LcmLogSource final : public PacedSource {
   const StereoCalibration& calibration() const override { return calibration_; }
 
  private:
-  // The next recorded pair into left_/right_; false at the end of the log. Damage ends the
-  // replay with an error naming where.
-  bool read_pair() {
+  static constexpr int kMaxRun = 1'000'000;
+
+  // The next recorded pair's message into message_, its images not decoded; false at the end of
+  // the log. Damage ends the replay with an error naming where.
+  bool read_message() {
     while (reader_->next(event_)) {
       if (event_.channel != channel_) continue;
       std::string problem;
@@ -68,32 +86,57 @@ class LcmLogSource final : public PacedSource {
         throw Error(fmt::format("{}: frame {} is {}x{}, the log started with {}x{}", where_,
                                 message_.frame_seq, message_.width, message_.height, info_.width,
                                 info_.height));
-      decode_raw_stereo(message_, left_, right_);
-      decode_raw_imu(message_, imu_);
       return true;
     }
     if (!reader_->damage().empty()) throw Error(where_ + ": " + reader_->damage());
     return false;
   }
 
+  void decode_pair() {
+    decode_raw_stereo(message_, left_, right_);
+    decode_raw_imu(message_, imu_);
+  }
+
   bool produce(std::uint64_t, ImageView<const std::uint8_t>& left,
                ImageView<const std::uint8_t>& right) override {
-    if (!pending_ && !read_pair()) return false;
+    if (!pending_) {
+      if (!read_message()) return false;
+      const std::int64_t run = runs_.session_of(message_.frame_seq);
+      if (run_ > 0 && run != first_run_) return false;  // the run asked for ended
+      // The headset made its depth with the recorded keys, and a replay with others would not be
+      // its depth. A new run may have new keys (a new configuration) and is replayed alone; a
+      // reload within a run restarted the headset's pipeline with them, which a replay from one
+      // set of keys cannot follow.
+      if (message_.pipeline_config != info_.recorded_pipeline)
+        throw Error(
+            run != run_of_pair_
+                ? fmt::format("{}: dcod run {} (from frame {}) has other pipeline keys than the "
+                              "replay started with; replay it alone: {}?run={}",
+                              where_, run + 1, message_.frame_seq, where_, run + 1)
+                : fmt::format("{}: the pipeline keys change at frame {} (the headset reloaded "
+                              "its settings): the replay ends here",
+                              where_, message_.frame_seq));
+      if (message_.calibration != calibration_toml_)
+        throw Error(run != run_of_pair_
+                        ? fmt::format("{}: dcod run {} (from frame {}) has another calibration; "
+                                      "replay it alone: {}?run={}",
+                                      where_, run + 1, message_.frame_seq, where_, run + 1)
+                        : fmt::format("{}: the calibration changes at frame {}; replay the parts "
+                                      "apart",
+                                      where_, message_.frame_seq));
+      run_of_pair_ = run;
+      decode_pair();
+    }
     pending_ = false;
     if (message_.width != info_.width || message_.height != info_.height ||
         left_.channels() != info_.channels)
       throw Error(fmt::format("{}: frame {} is {}x{}x{}, the log started with {}x{}x{}", where_,
                               message_.frame_seq, message_.width, message_.height, left_.channels(),
                               info_.width, info_.height, info_.channels));
-    if (message_.calibration != calibration_toml_)
-      throw Error(fmt::format("{}: the calibration changes at frame {}; replay the parts apart",
-                              where_, message_.frame_seq));
     // Found on the recorded stamps, as the headset found its gaps, so the replay cuts its
-    // sequences where the headset did; a frame number that does not rise is another dcod run.
-    const bool seq_restarts = has_previous_seq_ && message_.frame_seq <= previous_seq_;
-    gap_ = gaps_.follows_gap(message_.capture_ns) || seq_restarts;
-    has_previous_seq_ = true;
-    previous_seq_ = message_.frame_seq;
+    // sequences where the headset did; another dcod run started its own.
+    gap_ = gaps_.follows_gap(message_.capture_ns) || run_of_pair_ != run_of_last_;
+    run_of_last_ = run_of_pair_;
     left = left_.cview();
     right = right_.cview();
     return true;
@@ -128,8 +171,11 @@ class LcmLogSource final : public PacedSource {
   bool pending_ = false;                 // the first pair, read at open, not yet delivered
   CaptureGaps gaps_;
   bool gap_ = false;  // the pair produce() made follows a gap
-  bool has_previous_seq_ = false;
-  std::int64_t previous_seq_ = 0;
+  int run_ = 0;       // the one dcod run to replay (1, 2, ...; 0: all)
+  FrameSessions runs_;
+  // The dcod runs (0, 1, ...) of the first pair replayed, of message_'s pair and of the pair
+  // delivered before it.
+  std::int64_t first_run_ = 0, run_of_pair_ = 0, run_of_last_ = 0;
   StereoCalibration calibration_;
   SourceInfo info_;
 };

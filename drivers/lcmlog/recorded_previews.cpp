@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <deque>
+#include <limits>
 
 #include "dco/drivers/lcm_log.hpp"
 #include "dco/drivers/source_uri.hpp"
@@ -67,7 +68,10 @@ RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_
 std::optional<ReplayedLog> replayed_log(std::string_view source_uri) {
   if (!source_uri.starts_with("lcmlog://")) return std::nullopt;
   SourceUri uri(source_uri);
-  return ReplayedLog{uri.path(), uri.value("channel").value_or(ipc::channel::kRaw)};
+  ReplayedLog log{uri.path(), uri.value("channel").value_or(ipc::channel::kRaw)};
+  // Checked by the source when it opens; here only which run's previews to compare with.
+  log.first_session = uri.integer("run", 1, 1, std::numeric_limits<int>::max()) - 1;
+  return log;
 }
 
 }  // namespace dco::drivers

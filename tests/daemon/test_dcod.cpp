@@ -1010,38 +1010,58 @@ TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {
       << cut.output;
 }
 
-// A field log of two dcod runs: each run started its own sequence on the headset, so the replay
-// starts a new one where the second run's frames begin, and its depth is the headset's in both.
-TEST(Dcod, ALogOfTwoRunsReplaysEachRunAsItsOwnSequence) {
+// A field log of three dcod runs, the third with another disparity range. Each run started its
+// own sequence on the headset, so the replay starts a new one where the second run's frames
+// begin, and its depth is the headset's in both; it stops at the third, which replays alone.
+TEST(Dcod, EachRunOfAFieldLogReplaysAsItsOwnSequence) {
   if (const std::string problem = private_network_problem(); !problem.empty())
     GTEST_SKIP() << "no private network namespace (" << problem << "); udpm never runs outside one";
   TempDir dir;
   const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
   const auto log = dir / "field.log";
-  const std::string run =
-      std::string(DCOD_EXE) + " --source \"synthetic://hand?width=160&height=96&fps=8&frames=6\"" +
-      " --set \"lcm.url=" + url + "\" --set ring.path=" + (dir / "rec.shm").string() +
-      " --set raw.enabled=true --set lcm.preview_hz=30"
-      " --set runtime.deterministic=true --set stereo.max_disparity=40";
+  const auto run = [&](int max_disparity) {
+    return std::string(DCOD_EXE) +
+           " --source \"synthetic://hand?width=160&height=96&fps=8&frames=6\" --set \"lcm.url=" +
+           url + "\" --set ring.path=" + (dir / "rec.shm").string() +
+           " --set raw.enabled=true --set lcm.preview_hz=30 --set runtime.deterministic=true"
+           " --set stereo.max_disparity=" +
+           std::to_string(max_disparity);
+  };
   const auto recorded =
       run_command(unshare_command() + " sh -c '" + kNetnsSetup + " && lcm-logger -q --lcm-url=\"" +
-                  url + "\" " + log.string() + " & L=$!; sleep 0.5; " + run + " && " + run +
-                  "; S=$?; sleep 0.5; kill -INT $L; wait $L; exit $S'");
+                  url + "\" " + log.string() + " & L=$!; sleep 0.5; " + run(40) + " && " + run(40) +
+                  " && " + run(32) + "; S=$?; sleep 0.5; kill -INT $L; wait $L; exit $S'");
   ASSERT_EQ(recorded.status, 0) << recorded.output;
 
-  const auto replay =
-      run_command(std::string(DCOD_EXE) + " --source lcmlog://" + log.string() +
-                  "?fps=0 --set lcm.url=memq:// --set ring.path=" + (dir / "replay.shm").string() +
-                  " --set runtime.deterministic=true");
-  EXPECT_EQ(replay.status, 0) << replay.output;
-  EXPECT_NE(replay.output.find("1 gap(s) in the camera's frames since the last report (the last "
-                               "before frame 0): depth started a new sequence after each"),
+  const auto replay = [&](const std::string& query) {
+    return run_command(std::string(DCOD_EXE) + " --source \"lcmlog://" + log.string() + "?fps=0" +
+                       query + "\" --set lcm.url=memq:// --set ring.path=" +
+                       (dir / "replay.shm").string() + " --set runtime.deterministic=true");
+  };
+  const auto whole = replay("");
+  EXPECT_EQ(whole.status, 1) << whole.output;
+  EXPECT_NE(whole.output.find("1 gap(s) in the camera's frames since the last report (the last "
+                              "before frame 0): depth started a new sequence after each"),
             std::string::npos)
-      << replay.output;
-  EXPECT_NE(replay.output.find("replay check: depth identical to the headset's in all 12 "
-                               "recorded previews replayed"),
+      << whole.output;
+  EXPECT_NE(whole.output.find("replay check: depth identical to the headset's in all 12 "
+                              "recorded previews replayed"),
             std::string::npos)
-      << replay.output;
+      << whole.output;
+  EXPECT_NE(whole.output.find("dcod run 3 (from frame 0) has other pipeline keys than the replay "
+                              "started with; replay it alone: lcmlog://" +
+                              log.string() + "?run=3"),
+            std::string::npos)
+      << whole.output;
+  const auto third = replay("&run=3");
+  EXPECT_EQ(third.status, 0) << third.output;
+  EXPECT_NE(third.output.find("from the log's pipeline settings: stereo.max_disparity = 32"),
+            std::string::npos)
+      << third.output;
+  EXPECT_NE(third.output.find("replay check: depth identical to the headset's in all 6 "
+                              "recorded previews replayed"),
+            std::string::npos)
+      << third.output;
 }
 
 TEST(DcodService, UnitVerifiesAndItsExposureIsAtMost2_5) {

@@ -524,6 +524,91 @@ TEST(LcmLogSource, GapsAreFoundOnTheRecordedStampsAndRuns) {
   }
 }
 
+// A raw pair's frame number and pipeline keys, for log_of_pairs.
+struct RecordedPair {
+  std::uint64_t seq;
+  std::string keys;
+};
+std::filesystem::path log_of_pairs(const std::filesystem::path& path,
+                                   const std::vector<RecordedPair>& pairs) {
+  synthetic::SceneRenderer scene(synthetic::preset("hand", 64, 48));
+  const std::string calibration = calibration_to_toml(scene.calibration());
+  RawStereoEncoder encoder;
+  std::vector<LcmLogEvent> events;
+  synthetic::StereoSample s;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    scene.render(static_cast<int>(i), s);
+    StereoFrame f = frame_of(s.left, s.right, {});
+    f.seq = pairs[i].seq;
+    f.capture_ns = recorded_capture_ns(static_cast<int>(i));
+    ::dco::raw_stereo_t m;
+    encoder.encode(f, calibration, m);
+    m.pipeline_config = pairs[i].keys;
+    events.push_back(event_of(static_cast<std::int64_t>(i), "DCO_RAW", dco::testing::lcm_bytes(m)));
+  }
+  std::ofstream(path, std::ios::binary) << log_of(events);
+  return path;
+}
+
+// The first two runs of the log share their keys, the third has others.
+TEST(LcmLogSource, EachRunOfALogReplaysAloneAndOtherKeysAreNamed) {
+  dco::testing::TempDir dir;
+  const std::string a = "stereo.max_disparity=40\n", b = "stereo.max_disparity=32\n";
+  const auto path = log_of_pairs(dir.path() / "runs.log",
+                                 {{5, a}, {6, a}, {0, a}, {1, a}, {0, b}, {1, b}, {2, b}});
+  const auto replay = [&](const std::string& query, Collect& sink) {
+    auto source = open_source("lcmlog://" + path.string() + "?fps=0" + query);
+    source->start(sink);
+    EXPECT_TRUE(sink.wait());
+    source->stop();
+    return source->info().recorded_pipeline;
+  };
+  {
+    // The whole log: up to the run with other keys.
+    Collect sink;
+    EXPECT_EQ(replay("", sink), a);
+    EXPECT_EQ(sink.seqs, (std::vector<std::uint64_t>{5, 6, 0, 1}));
+    EXPECT_EQ(sink.gaps, (std::vector<bool>{false, false, true, false}));
+    EXPECT_NE(sink.error.find("dcod run 3 (from frame 0) has other pipeline keys than the replay "
+                              "started with; replay it alone: lcmlog://" +
+                              path.string() + "?run=3"),
+              std::string::npos)
+        << sink.error;
+  }
+  for (const auto& [run, seqs, keys] : {std::tuple{2, std::vector<std::uint64_t>{0, 1}, a},
+                                        std::tuple{3, std::vector<std::uint64_t>{0, 1, 2}, b}}) {
+    SCOPED_TRACE(run);
+    Collect sink;
+    EXPECT_EQ(replay("&run=" + std::to_string(run), sink), keys);
+    EXPECT_TRUE(sink.ended) << sink.error;
+    EXPECT_EQ(sink.seqs, seqs);
+    EXPECT_EQ(sink.gaps, std::vector<bool>(seqs.size(), false));
+  }
+  EXPECT_NE(dco::testing::error_of([&] {
+              open_source("lcmlog://" + path.string() + "?run=4");
+            }).find("run=4 asked for, the log holds 3 dcod run(s)"),
+            std::string::npos);
+  EXPECT_NE(dco::testing::error_of([&] {
+              open_source("lcmlog://" + path.string() + "?run=0");
+            }).find("run=0 must be an integer in [1, 1000000]"),
+            std::string::npos);
+  // The replay check compares a run's frames with that run's previews.
+  EXPECT_EQ(replayed_log("lcmlog://" + path.string() + "?run=3")->first_session, 2);
+  EXPECT_EQ(replayed_log("lcmlog://" + path.string())->first_session, 0);
+  // A reload on the headset changed the keys within a run: the replay ends there.
+  const auto reloaded = log_of_pairs(dir.path() / "reload.log", {{0, a}, {1, a}, {2, b}});
+  auto source = open_source("lcmlog://" + reloaded.string() + "?fps=0");
+  Collect sink;
+  source->start(sink);
+  ASSERT_TRUE(sink.wait());
+  source->stop();
+  EXPECT_EQ(sink.seqs.size(), 2u);
+  EXPECT_NE(sink.error.find("the pipeline keys change at frame 2 (the headset reloaded its "
+                            "settings): the replay ends here"),
+            std::string::npos)
+      << sink.error;
+}
+
 TEST(LcmLogSource, ReplaysTheRecordedPairsAndNamesDamage) {
   dco::testing::TempDir dir;
   const std::string log = recorded_log(5, 96, 64);

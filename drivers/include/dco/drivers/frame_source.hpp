@@ -92,7 +92,7 @@ class FrameSource {
 // Opens a source by URI:
 //   synthetic://NAME?width=W&height=H&fps=F&frames=N&color=0|1&stall_after=N
 //   replay://DIR?fps=F&loop=0|1
-//   lcmlog://FILE?fps=F&channel=DCO_RAW  (raw pairs an LCM log recorded)
+//   lcmlog://FILE?fps=F&channel=DCO_RAW&run=N  (raw pairs an LCM log recorded; N: one dcod run)
 //   indemind://[MODULE_ID]?width=W&height=H&fps=F&imu_hz=HZ&transfers=N&stall_ms=MS
 //   libcamera://LEFT_ID,RIGHT_ID?... or libcamera://ID?layout=sbs&... (builds with libcamera)
 // Throws dco::Error with a one-line reason for an unknown scheme, unknown or bad parameters, a

@@ -21,14 +21,19 @@ namespace dco::drivers {
 // of the log's raw pairs, and the replay check counts the replayed frames the same way.
 class FrameSessions {
  public:
+  // `first`: the session of the first frame (a replay of one run of a log: that run's).
+  explicit FrameSessions(std::int64_t first = 0) : session_(first) {}
+
   std::int64_t session_of(std::int64_t frame_seq) {
-    if (last_ && frame_seq <= *last_) ++session_;
+    if (has_last_ && frame_seq <= last_) ++session_;
+    has_last_ = true;
     last_ = frame_seq;
     return session_;
   }
 
  private:
-  std::optional<std::int64_t> last_;
+  bool has_last_ = false;
+  std::int64_t last_ = 0;
   std::int64_t session_ = 0;
 };
 
@@ -44,6 +49,7 @@ struct RecordedPreviews {
 struct ReplayedLog {
   std::filesystem::path path;
   std::string channel;
+  std::int64_t first_session = 0;  // the dcod run replayed first (lcmlog's run=N: N - 1)
 };
 
 // Reads the log up to its end or its damage (which the replay itself reports). Throws dco::Error
