@@ -3,6 +3,8 @@
 // `run=N` replays the log's Nth dcod run alone. The log streams: one event at a time, never the
 // whole file in memory.
 
+#include <string_view>
+
 #include <fmt/format.h>
 
 #include "../src/paced_source.hpp"
@@ -92,6 +94,21 @@ class LcmLogSource final : public PacedSource {
     return false;
   }
 
+  // The pair in message_ has other settings than the replay's first: a new dcod run replays on
+  // its own (`other_than`), a change within a run (`changes`: a reload) ends the replay.
+  Error settings_error(bool new_run, std::int64_t run, std::string_view other_than,
+                       std::string_view changes) const {
+    if (new_run)
+      return Error(
+          fmt::format("{}: dcod run {} (from frame {}) has {} the replay started with; "
+                      "replay it alone: {}?run={}",
+                      where_, run + 1, message_.frame_seq, other_than, where_, run + 1));
+    return Error(
+        fmt::format("{}: {} at frame {} (the headset reloaded its settings): the replay "
+                    "ends here",
+                    where_, changes, message_.frame_seq));
+  }
+
   void decode_pair() {
     decode_raw_stereo(message_, left_, right_);
     decode_raw_imu(message_, imu_);
@@ -107,23 +124,11 @@ class LcmLogSource final : public PacedSource {
       // its depth. A new run may have new keys (a new configuration) and is replayed alone; a
       // reload within a run restarted the headset's pipeline with them, which a replay from one
       // set of keys cannot follow.
+      const bool new_run = run != run_of_pair_;
       if (message_.pipeline_config != info_.recorded_pipeline)
-        throw Error(
-            run != run_of_pair_
-                ? fmt::format("{}: dcod run {} (from frame {}) has other pipeline keys than the "
-                              "replay started with; replay it alone: {}?run={}",
-                              where_, run + 1, message_.frame_seq, where_, run + 1)
-                : fmt::format("{}: the pipeline keys change at frame {} (the headset reloaded "
-                              "its settings): the replay ends here",
-                              where_, message_.frame_seq));
+        throw settings_error(new_run, run, "other pipeline keys than", "the pipeline keys change");
       if (message_.calibration != calibration_toml_)
-        throw Error(run != run_of_pair_
-                        ? fmt::format("{}: dcod run {} (from frame {}) has another calibration; "
-                                      "replay it alone: {}?run={}",
-                                      where_, run + 1, message_.frame_seq, where_, run + 1)
-                        : fmt::format("{}: the calibration changes at frame {}; replay the parts "
-                                      "apart",
-                                      where_, message_.frame_seq));
+        throw settings_error(new_run, run, "another calibration than", "the calibration changes");
       run_of_pair_ = run;
       decode_pair();
     }

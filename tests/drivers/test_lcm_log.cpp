@@ -486,47 +486,10 @@ TEST(LcmLogSource, APairLargerThanTheLogsFramesIsRefusedBeforeItIsDecoded) {
       << sink.error;
 }
 
-// The replay finds the headset's gaps on the recorded stamps, not on its own pace: a second's
-// pause in the camera's frames, and another dcod run (frame numbers from 0 again) recorded into
-// the same log soon after the first.
-TEST(LcmLogSource, GapsAreFoundOnTheRecordedStampsAndRuns) {
-  dco::testing::TempDir dir;
-  synthetic::SceneRenderer scene(synthetic::preset("hand", 64, 48));
-  const std::string calibration = calibration_to_toml(scene.calibration());
-  RawStereoEncoder encoder;
-  std::vector<LcmLogEvent> events;
-  synthetic::StereoSample s;
-  const std::int64_t paused = 1'000'000'000;
-  const std::vector<std::pair<std::uint64_t, std::int64_t>> frames = {
-      {7, recorded_capture_ns(0)},          {8, recorded_capture_ns(1)},
-      {9, recorded_capture_ns(2) + paused}, {10, recorded_capture_ns(3) + paused},
-      {0, recorded_capture_ns(4) + paused}, {1, recorded_capture_ns(5) + paused}};
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    scene.render(static_cast<int>(i), s);
-    StereoFrame f = frame_of(s.left, s.right, {});
-    std::tie(f.seq, f.capture_ns) = frames[i];
-    ::dco::raw_stereo_t m;
-    encoder.encode(f, calibration, m);
-    events.push_back(event_of(static_cast<std::int64_t>(i), "DCO_RAW", dco::testing::lcm_bytes(m)));
-  }
-  const auto path = dir.path() / "gaps.log";
-  std::ofstream(path, std::ios::binary) << log_of(events);
-  // Replayed as fast as taken and at 20 fps: the replay's own stamps have no such gaps.
-  for (const char* fps : {"0", "20"}) {
-    SCOPED_TRACE(fps);
-    auto source = open_source("lcmlog://" + path.string() + "?fps=" + fps);
-    Collect sink;
-    source->start(sink);
-    ASSERT_TRUE(sink.wait());
-    source->stop();
-    EXPECT_TRUE(sink.ended) << sink.error;
-    EXPECT_EQ(sink.gaps, (std::vector<bool>{false, false, true, false, true, false}));
-  }
-}
-
-// A raw pair's frame number and pipeline keys, for log_of_pairs.
+// A raw pair's frame number, capture time and pipeline keys, for log_of_pairs.
 struct RecordedPair {
   std::uint64_t seq;
+  std::int64_t capture_ns;
   std::string keys;
 };
 std::filesystem::path log_of_pairs(const std::filesystem::path& path,
@@ -540,7 +503,7 @@ std::filesystem::path log_of_pairs(const std::filesystem::path& path,
     scene.render(static_cast<int>(i), s);
     StereoFrame f = frame_of(s.left, s.right, {});
     f.seq = pairs[i].seq;
-    f.capture_ns = recorded_capture_ns(static_cast<int>(i));
+    f.capture_ns = pairs[i].capture_ns;
     ::dco::raw_stereo_t m;
     encoder.encode(f, calibration, m);
     m.pipeline_config = pairs[i].keys;
@@ -550,12 +513,45 @@ std::filesystem::path log_of_pairs(const std::filesystem::path& path,
   return path;
 }
 
+// The replay finds the headset's gaps on the recorded stamps, not on its own pace: a second's
+// pause in the camera's frames, and another dcod run (frame numbers from 0 again) recorded into
+// the same log soon after the first.
+TEST(LcmLogSource, GapsAreFoundOnTheRecordedStampsAndRuns) {
+  dco::testing::TempDir dir;
+  const std::int64_t paused = 1'000'000'000;
+  const auto path =
+      log_of_pairs(dir.path() / "gaps.log", {{7, recorded_capture_ns(0), ""},
+                                             {8, recorded_capture_ns(1), ""},
+                                             {9, recorded_capture_ns(2) + paused, ""},
+                                             {10, recorded_capture_ns(3) + paused, ""},
+                                             {0, recorded_capture_ns(4) + paused, ""},
+                                             {1, recorded_capture_ns(5) + paused, ""}});
+  // Replayed as fast as taken and at 20 fps: the replay's own stamps have no such gaps.
+  for (const char* fps : {"0", "20"}) {
+    SCOPED_TRACE(fps);
+    auto source = open_source("lcmlog://" + path.string() + "?fps=" + fps);
+    Collect sink;
+    source->start(sink);
+    ASSERT_TRUE(sink.wait());
+    source->stop();
+    EXPECT_TRUE(sink.ended) << sink.error;
+    EXPECT_EQ(sink.gaps, (std::vector<bool>{false, false, true, false, true, false}));
+  }
+}
+
 // The first two runs of the log share their keys, the third has others.
 TEST(LcmLogSource, EachRunOfALogReplaysAloneAndOtherKeysAreNamed) {
   dco::testing::TempDir dir;
   const std::string a = "stereo.max_disparity=40\n", b = "stereo.max_disparity=32\n";
-  const auto path = log_of_pairs(dir.path() / "runs.log",
-                                 {{5, a}, {6, a}, {0, a}, {1, a}, {0, b}, {1, b}, {2, b}});
+  // Frame i at recorded_capture_ns(i): the runs follow each other without a pause.
+  const auto at = [](int i) { return recorded_capture_ns(i); };
+  const auto path = log_of_pairs(dir.path() / "runs.log", {{5, at(0), a},
+                                                           {6, at(1), a},
+                                                           {0, at(2), a},
+                                                           {1, at(3), a},
+                                                           {0, at(4), b},
+                                                           {1, at(5), b},
+                                                           {2, at(6), b}});
   const auto replay = [&](const std::string& query, Collect& sink) {
     auto source = open_source("lcmlog://" + path.string() + "?fps=0" + query);
     source->start(sink);
@@ -596,7 +592,8 @@ TEST(LcmLogSource, EachRunOfALogReplaysAloneAndOtherKeysAreNamed) {
   EXPECT_EQ(replayed_log("lcmlog://" + path.string() + "?run=3")->first_session, 2);
   EXPECT_EQ(replayed_log("lcmlog://" + path.string())->first_session, 0);
   // A reload on the headset changed the keys within a run: the replay ends there.
-  const auto reloaded = log_of_pairs(dir.path() / "reload.log", {{0, a}, {1, a}, {2, b}});
+  const auto reloaded =
+      log_of_pairs(dir.path() / "reload.log", {{0, at(0), a}, {1, at(1), a}, {2, at(2), b}});
   auto source = open_source("lcmlog://" + reloaded.string() + "?fps=0");
   Collect sink;
   source->start(sink);
