@@ -211,6 +211,7 @@ void Daemon::start_pipeline() {
   runtime_ = std::move(next);
   runtime_->start();
   pushed_in_sequence_ = false;  // the source is stopped: its thread pushes nothing now
+  cut_at_gaps_ = !loaded_.config.runtime.deterministic;
   const int threads = runtime_->runtime_params().threads;
   const pipeline::PipelineParams& stages = loaded_.config.pipeline;
   const int stereo_rows = pipeline::RowTeam::threads_for(stages.stereo.row_threads);
@@ -271,7 +272,10 @@ void Daemon::on_frame(const drivers::StereoFrame& frame) {
     if (raw_) raw_->offer(frame);
   }
   frame_numbers_.record(frame.capture_ns, frame.seq);
-  if (frame.follows_gap && pushed_in_sequence_) {
+  // In deterministic mode push holds the camera up, so the frames' timing is the pipeline's: a
+  // slow first frame of a sequence would look like a gap and cut again. There the frames run as
+  // DepthPipeline would take them, cut only where a recorded dcod run started its own.
+  if ((frame.starts_run || (frame.follows_gap && cut_at_gaps_)) && pushed_in_sequence_) {
     // The frames before the gap finish as a sequence of their own: none of them is this frame's
     // neighbour for the flow or the stability term. A replayed log cuts at the same frames.
     runtime_->drain();

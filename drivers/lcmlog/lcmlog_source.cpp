@@ -82,12 +82,6 @@ class LcmLogSource final : public PacedSource {
       if (!ipc::decode_message(event_.data.data(), event_.data.size(), message_, problem))
         throw Error(fmt::format("{}: event {} at byte {} on {}: {}", where_, event_.number,
                                 event_.offset, channel_, problem));
-      // Before the PNGs are decoded: a pair that says it is larger than the log's frames would
-      // take its size in memory first.
-      if (info_.width > 0 && (message_.width != info_.width || message_.height != info_.height))
-        throw Error(fmt::format("{}: frame {} is {}x{}, the log started with {}x{}", where_,
-                                message_.frame_seq, message_.width, message_.height, info_.width,
-                                info_.height));
       return true;
     }
     if (!reader_->damage().empty()) throw Error(where_ + ": " + reader_->damage());
@@ -101,8 +95,9 @@ class LcmLogSource final : public PacedSource {
     if (new_run)
       return Error(
           fmt::format("{}: dcod run {} (from frame {}) has {} the replay started with; "
-                      "replay it alone: {}?run={}",
-                      where_, run + 1, message_.frame_seq, other_than, where_, run + 1));
+                      "replay it alone: {}?run={}{}",
+                      where_, run + 1, message_.frame_seq, other_than, where_, run + 1,
+                      channel_ == ipc::channel::kRaw ? "" : "&channel=" + channel_));
     return Error(
         fmt::format("{}: {} at frame {} (the headset reloaded its settings): the replay "
                     "ends here",
@@ -125,6 +120,14 @@ class LcmLogSource final : public PacedSource {
       // reload within a run restarted the headset's pipeline with them, which a replay from one
       // set of keys cannot follow.
       const bool new_run = run != run_of_pair_;
+      // Before the PNGs are decoded: a pair that says it is larger than the log's frames would
+      // take its size in memory first.
+      if (message_.width != info_.width || message_.height != info_.height) {
+        if (new_run) throw settings_error(true, run, "another image size than", "");
+        throw Error(fmt::format("{}: frame {} is {}x{}, the log started with {}x{}", where_,
+                                message_.frame_seq, message_.width, message_.height, info_.width,
+                                info_.height));
+      }
       if (message_.pipeline_config != info_.recorded_pipeline)
         throw settings_error(new_run, run, "other pipeline keys than", "the pipeline keys change");
       if (message_.calibration != calibration_toml_)
@@ -139,14 +142,19 @@ class LcmLogSource final : public PacedSource {
                               message_.frame_seq, message_.width, message_.height, left_.channels(),
                               info_.width, info_.height, info_.channels));
     // Found on the recorded stamps, as the headset found its gaps, so the replay cuts its
-    // sequences where the headset did; another dcod run started its own.
-    gap_ = gaps_.follows_gap(message_.capture_ns) || run_of_pair_ != run_of_last_;
+    // sequences where the headset did. Another dcod run started its own, and its gaps afresh.
+    starts_run_ = run_of_pair_ != run_of_last_;
+    if (starts_run_) gaps_ = CaptureGaps{};
+    gap_ = gaps_.follows_gap(message_.capture_ns) || starts_run_;
     run_of_last_ = run_of_pair_;
     left = left_.cview();
     right = right_.cview();
     return true;
   }
-  bool follows_gap() const override { return gap_; }
+  void mark_sequence(StereoFrame& frame) const override {
+    frame.follows_gap = gap_;
+    frame.starts_run = starts_run_;
+  }
 
   // Replayed frames keep the numbers the headset gave them, so its log and the replay's agree.
   std::uint64_t frame_number(std::uint64_t) const override {
@@ -175,8 +183,8 @@ class LcmLogSource final : public PacedSource {
   std::vector<ImuSample> replayed_imu_;  // on the replay's time line
   bool pending_ = false;                 // the first pair, read at open, not yet delivered
   CaptureGaps gaps_;
-  bool gap_ = false;  // the pair produce() made follows a gap
-  int run_ = 0;       // the one dcod run to replay (1, 2, ...; 0: all)
+  bool gap_ = false, starts_run_ = false;  // of the pair produce() made
+  int run_ = 0;                            // the one dcod run to replay (1, 2, ...; 0: all)
   FrameSessions runs_;
   // The dcod runs (0, 1, ...) of the first pair replayed, of message_'s pair and of the pair
   // delivered before it.

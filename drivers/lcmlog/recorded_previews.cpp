@@ -19,6 +19,10 @@ RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_
   std::deque<std::pair<Frame, std::int64_t>> recent_pairs;  // and their sessions
   std::map<Frame, ::dco::depth_preview_t> waiting;
   FrameSessions sessions;
+  // A replay of one run compares with that run's previews only, and counts no others.
+  const auto keep = [&](std::int64_t session) {
+    return !log.one_run || session == log.first_session;
+  };
   RecordedPreviews out;
   LcmLogReader reader(log.path);
   LcmLogEvent event;
@@ -32,7 +36,7 @@ RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_
       const Frame frame{pair.frame_seq, pair.capture_ns};
       const std::int64_t session = sessions.session_of(pair.frame_seq);
       if (const auto it = waiting.find(frame); it != waiting.end()) {
-        out.by_frame[{session, pair.frame_seq}] = std::move(it->second);
+        if (keep(session)) out.by_frame[{session, pair.frame_seq}] = std::move(it->second);
         waiting.erase(it);
       } else {
         recent_pairs.emplace_back(frame, session);
@@ -53,9 +57,9 @@ RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_
     const Frame frame{preview.frame_seq, preview.capture_ns};
     const auto it = std::find_if(recent_pairs.rbegin(), recent_pairs.rend(),
                                  [&](const auto& p) { return p.first == frame; });
-    if (it != recent_pairs.rend())
-      out.by_frame[{it->second, preview.frame_seq}] = std::move(preview);
-    else {
+    if (it != recent_pairs.rend()) {
+      if (keep(it->second)) out.by_frame[{it->second, preview.frame_seq}] = std::move(preview);
+    } else {
       waiting[frame] = std::move(preview);
       // A preview's pair comes a few frames later at most: the oldest waiting ones past that are
       // of frames the log holds no pair of (raw recording was off), and give way.
@@ -70,7 +74,9 @@ std::optional<ReplayedLog> replayed_log(std::string_view source_uri) {
   SourceUri uri(source_uri);
   ReplayedLog log{uri.path(), uri.value("channel").value_or(ipc::channel::kRaw)};
   // Checked by the source when it opens; here only which run's previews to compare with.
-  log.first_session = uri.integer("run", 1, 1, std::numeric_limits<int>::max()) - 1;
+  const int run = uri.integer("run", 0, 1, std::numeric_limits<int>::max());
+  log.one_run = run > 0;
+  log.first_session = log.one_run ? run - 1 : 0;
   return log;
 }
 

@@ -17,8 +17,11 @@ bool CaptureGaps::follows_gap(std::int64_t capture_ns) {
   if (interval <= 0) return last_was_gap_ = true;
   // Never two in a row: the frame after a gap may come late because the consumer ended the
   // sequence before it took the gap's frame, and a slow consumer must not cut every frame.
-  const bool gap = !after_gap && interval > kMinGapNs &&
-                   (recent_count_ == 0 || interval > kIntervals * shortest_interval());
+  // In double: damaged stamps' intervals would overflow four times over.
+  const bool gap =
+      !after_gap && interval > kMinGapNs &&
+      (recent_count_ == 0 ||
+       static_cast<double>(interval) > kIntervals * static_cast<double>(shortest_interval()));
   last_was_gap_ = gap;
   // A gap joins the recent intervals too: only the shortest counts, and a camera slower than
   // kMinGapNs a frame then cuts once, at its second frame, not at every frame.

@@ -65,7 +65,7 @@ void PacedSource::run(std::stop_token stop, FrameSink& sink) {
     frame.seq = frame_number(next_seq_++);
     frame.capture_ns = monotonic_ns();
     frame.imu = frame_imu(frame.capture_ns);
-    frame.follows_gap = follows_gap();
+    mark_sequence(frame);
     try {
       sink.on_frame(frame);
     } catch (const std::exception& e) {

@@ -30,9 +30,9 @@ class PacedSource : public FrameSource {
   // The IMU samples that came with the frame produce() made (a recording's), stamped on the time
   // line of `capture_ns`, the time the frame is delivered with; none by default.
   virtual std::span<const ImuSample> frame_imu(std::int64_t /*capture_ns*/) { return {}; }
-  // Whether the frame produce() made follows a gap (StereoFrame::follows_gap): a recording's,
-  // found on its recorded stamps. Frames made on demand have none.
-  virtual bool follows_gap() const { return false; }
+  // Sets StereoFrame::follows_gap and starts_run of the frame produce() made: a recording's,
+  // found on its recorded stamps and frame numbers. Frames made on demand have neither.
+  virtual void mark_sequence(StereoFrame& /*frame*/) const {}
   // After this many frames the source keeps running but delivers nothing more: a camera that hung
   // (0 = never).
   void set_stall_after(std::uint64_t frames) { stall_after_ = frames; }

@@ -121,6 +121,48 @@ TEST(DaemonIndemind, SimulatedModuleDeliversDepthEndToEnd) {
   EXPECT_EQ(flash_writes, 0u);
 }
 
+// A replug is a gap in the camera's frames: dcod finishes the frames before it and starts a new
+// sequence, and says so. In deterministic mode, where dcod's own pace holds the camera up and
+// makes gaps of its own, the frames run on as one sequence.
+TEST(DaemonIndemind, AReplugStartsANewSequenceUnlessDeterministic) {
+  for (const bool deterministic : {false, true}) {
+    SCOPED_TRACE(deterministic);
+    std::atomic<SimulatedIndemind*> sim{nullptr};
+    std::thread unplugger;
+    ::testing::internal::CaptureStderr();
+    const Seen seen = run_daemon(
+        "indemind://",
+        {"service.max_frames=30",
+         std::string("runtime.deterministic=") + (deterministic ? "true" : "false")},
+        [&](std::string_view uri) {
+          SimulatedIndemind::Options o;
+          o.pace_real_time = true;
+          auto owned = std::make_unique<SimulatedIndemind>(o);
+          sim = owned.get();
+          drivers::IndemindOptions io;
+          io.fps = 25;
+          io.clock = [s = owned.get()] { return s->now_ns(); };
+          // Ten frames, then the cable is out for half a second.
+          unplugger = std::thread([s = owned.get()] {
+            while (s->record().frames_intact < 10)
+              std::this_thread::sleep_for(std::chrono::milliseconds(5));
+            s->set_present(false);
+            std::this_thread::sleep_for(std::chrono::milliseconds(500));
+            s->set_present(true);
+          });
+          return drivers::open_indemind(std::move(owned), io, std::string(uri));
+        },
+        [&] { unplugger.join(); });
+    const std::string log = ::testing::internal::GetCapturedStderr();
+    EXPECT_EQ(seen.status, 0) << log;
+    ASSERT_NE(sim.load(), nullptr);
+    const bool cut =
+        log.find("gap(s) in the camera's frames since the last report") != std::string::npos;
+    EXPECT_EQ(cut, !deterministic) << log;
+    EXPECT_GE(seen.frames, 10) << seen.client_error;
+  }
+}
+
 TEST(DaemonIndemind, RecordedUsbCaptureReplaysThroughTheDaemon) {
   // Two seconds of the simulated module at 25 fps, recorded at the transport seam.
   const std::string capture = (std::filesystem::temp_directory_path() /

@@ -33,6 +33,23 @@ TEST(CaptureGaps, APauseLongerThanAQuarterSecondAndFourFramesIsOne) {
             (std::vector<bool>{false, false, false, false, false, true, false}));
 }
 
+TEST(CaptureGaps, ASlowCameraDroppingAFrameHasNone) {
+  // 5 fps: 600 ms (two frames dropped) is past the quarter second but within four intervals.
+  EXPECT_EQ(gaps_of({0, 200, 400, 1000, 1200}),
+            (std::vector<bool>{false, false, false, false, false}));
+}
+
+TEST(CaptureGaps, TheRateIsTheLastEightIntervals) {
+  // 30 fps, then 10 fps: once the eight intervals since the change are all 100 ms, 350 ms is
+  // within four of them; while a 33 ms interval was among the last eight, it was a gap.
+  EXPECT_EQ(gaps_of({0, 33, 133, 233, 333, 433, 533, 633, 733, 833, 1183}),
+            (std::vector<bool>{false, false, false, false, false, false, false, false, false, false,
+                               false}));
+  EXPECT_EQ(
+      gaps_of({0, 33, 133, 233, 333, 433, 533, 633, 733, 1083}),
+      (std::vector<bool>{false, false, false, false, false, false, false, false, false, true}));
+}
+
 TEST(CaptureGaps, AStampThatDoesNotRiseIsAnotherRun) {
   EXPECT_EQ(gaps_of({1000, 1033, 1067, 5, 38, 38}),
             (std::vector<bool>{false, false, false, true, false, true}));

@@ -377,6 +377,14 @@ TEST(RecordedPreviews, ARestartedDcodKeepsItsOwnPreviews) {
   std::vector<std::int64_t> replayed;
   for (const std::int64_t seq : {0, 1, 2, 0, 1, 2}) replayed.push_back(sessions.session_of(seq));
   EXPECT_EQ(replayed, (std::vector<std::int64_t>{0, 0, 0, 1, 1, 1}));
+  // A replay of the second run alone (run=2) reads its previews only, and one of them fills the
+  // limit: the first run's do not use it up.
+  const auto second = replayed_log("lcmlog://" + path.string() + "?run=2");
+  ASSERT_TRUE(second.has_value());
+  EXPECT_EQ(second->first_session, 1);
+  const RecordedPreviews only = read_recorded_previews(*second, 1);
+  ASSERT_EQ(only.by_frame.size(), 1u);
+  EXPECT_EQ(only.by_frame.begin()->first, (std::pair<std::int64_t, std::int64_t>{1, 0}));
   EXPECT_TRUE(read_recorded_previews({path, "OTHER_RAW"}, 100).by_frame.empty())
       << "only the replayed channel's pairs";
 }
@@ -424,7 +432,7 @@ struct Collect : FrameSink {
   std::vector<std::uint64_t> seqs;
   std::vector<std::int64_t> captures;
   std::vector<std::vector<ImuSample>> imus;
-  std::vector<bool> gaps;
+  std::vector<bool> gaps, runs;
   bool ended = false;
   std::string error;
   std::mutex mutex;
@@ -439,6 +447,7 @@ struct Collect : FrameSink {
     captures.push_back(f.capture_ns);
     imus.emplace_back(f.imu.begin(), f.imu.end());
     gaps.push_back(f.follows_gap);
+    runs.push_back(f.starts_run);
   }
   void on_end() override {
     std::lock_guard lock(mutex);
@@ -486,46 +495,54 @@ TEST(LcmLogSource, APairLargerThanTheLogsFramesIsRefusedBeforeItIsDecoded) {
       << sink.error;
 }
 
-// A raw pair's frame number, capture time and pipeline keys, for log_of_pairs.
+// A raw pair for log_of_pairs: its frame number, capture time and pipeline keys, the width of
+// the scene (height 3/4 of it) and a note that makes its calibration's text another.
 struct RecordedPair {
   std::uint64_t seq;
   std::int64_t capture_ns;
   std::string keys;
+  int width = 64;
+  std::string calibration_note = {};
 };
 std::filesystem::path log_of_pairs(const std::filesystem::path& path,
-                                   const std::vector<RecordedPair>& pairs) {
-  synthetic::SceneRenderer scene(synthetic::preset("hand", 64, 48));
-  const std::string calibration = calibration_to_toml(scene.calibration());
+                                   const std::vector<RecordedPair>& pairs,
+                                   const std::string& channel = "DCO_RAW") {
   RawStereoEncoder encoder;
   std::vector<LcmLogEvent> events;
   synthetic::StereoSample s;
   for (std::size_t i = 0; i < pairs.size(); ++i) {
+    synthetic::SceneRenderer scene(
+        synthetic::preset("hand", pairs[i].width, pairs[i].width * 3 / 4));
     scene.render(static_cast<int>(i), s);
     StereoFrame f = frame_of(s.left, s.right, {});
     f.seq = pairs[i].seq;
     f.capture_ns = pairs[i].capture_ns;
     ::dco::raw_stereo_t m;
-    encoder.encode(f, calibration, m);
+    encoder.encode(f, calibration_to_toml(scene.calibration()) + pairs[i].calibration_note, m);
     m.pipeline_config = pairs[i].keys;
-    events.push_back(event_of(static_cast<std::int64_t>(i), "DCO_RAW", dco::testing::lcm_bytes(m)));
+    events.push_back(event_of(static_cast<std::int64_t>(i), channel, dco::testing::lcm_bytes(m)));
   }
   std::ofstream(path, std::ios::binary) << log_of(events);
   return path;
 }
 
 // The replay finds the headset's gaps on the recorded stamps, not on its own pace: a second's
-// pause in the camera's frames, and another dcod run (frame numbers from 0 again) recorded into
-// the same log soon after the first.
+// pause in the camera's frames, and two more dcod runs (frame numbers from 0 again) recorded
+// into the same log.
 TEST(LcmLogSource, GapsAreFoundOnTheRecordedStampsAndRuns) {
   dco::testing::TempDir dir;
   const std::int64_t paused = 1'000'000'000;
-  const auto path =
-      log_of_pairs(dir.path() / "gaps.log", {{7, recorded_capture_ns(0), ""},
-                                             {8, recorded_capture_ns(1), ""},
-                                             {9, recorded_capture_ns(2) + paused, ""},
-                                             {10, recorded_capture_ns(3) + paused, ""},
-                                             {0, recorded_capture_ns(4) + paused, ""},
-                                             {1, recorded_capture_ns(5) + paused, ""}});
+  const auto at = [](int i) { return recorded_capture_ns(i); };
+  const std::int64_t later = 300'000'000;
+  const auto path = log_of_pairs(dir.path() / "gaps.log", {{7, at(0), ""},
+                                                           {8, at(1), ""},
+                                                           {9, at(2) + paused, ""},
+                                                           {10, at(3) + paused, ""},
+                                                           {0, at(4) + paused, ""},
+                                                           {1, at(5) + paused, ""},
+                                                           {0, at(6) + 2 * paused, ""},
+                                                           {1, at(6) + 2 * paused + later, ""},
+                                                           {2, at(7) + 2 * paused + later, ""}});
   // Replayed as fast as taken and at 20 fps: the replay's own stamps have no such gaps.
   for (const char* fps : {"0", "20"}) {
     SCOPED_TRACE(fps);
@@ -535,7 +552,13 @@ TEST(LcmLogSource, GapsAreFoundOnTheRecordedStampsAndRuns) {
     ASSERT_TRUE(sink.wait());
     source->stop();
     EXPECT_TRUE(sink.ended) << sink.error;
-    EXPECT_EQ(sink.gaps, (std::vector<bool>{false, false, true, false, true, false}));
+    // The third run, a second after the second, has its second frame 0.3 s after its first: a
+    // gap as it was on the headset, whose new dcod knew no rate yet and no gap before, though it
+    // comes right after the run's start. Each run finds its gaps afresh.
+    EXPECT_EQ(sink.gaps,
+              (std::vector<bool>{false, false, true, false, true, false, true, true, false}));
+    EXPECT_EQ(sink.runs,
+              (std::vector<bool>{false, false, false, false, true, false, true, false, false}));
   }
 }
 
@@ -588,9 +611,33 @@ TEST(LcmLogSource, EachRunOfALogReplaysAloneAndOtherKeysAreNamed) {
               open_source("lcmlog://" + path.string() + "?run=0");
             }).find("run=0 must be an integer in [1, 1000000]"),
             std::string::npos);
-  // The replay check compares a run's frames with that run's previews.
-  EXPECT_EQ(replayed_log("lcmlog://" + path.string() + "?run=3")->first_session, 2);
-  EXPECT_EQ(replayed_log("lcmlog://" + path.string())->first_session, 0);
+  EXPECT_FALSE(replayed_log("lcmlog://" + path.string())->one_run);
+  // A new run with another camera mode or another calibration replays alone too (the URI named
+  // keeps the channel), and the first run alone ends cleanly before it.
+  for (const auto& [second, differs] :
+       {std::pair{RecordedPair{0, at(3), a, 96}, "another image size than"},
+        std::pair{RecordedPair{0, at(3), a, 64, "# moved\n"}, "another calibration than"}}) {
+    SCOPED_TRACE(differs);
+    const auto two =
+        log_of_pairs(dir.path() / "two.log", {{0, at(0), a}, {1, at(1), a}, second}, "CAM_RAW");
+    const std::string uri = "lcmlog://" + two.string();
+    for (const char* query : {"?fps=0&channel=CAM_RAW", "?fps=0&channel=CAM_RAW&run=1"}) {
+      auto source = open_source(uri + query);
+      Collect sink;
+      source->start(sink);
+      ASSERT_TRUE(sink.wait());
+      source->stop();
+      EXPECT_EQ(sink.seqs.size(), 2u);
+      if (std::string(query).ends_with("run=1"))
+        EXPECT_TRUE(sink.ended) << sink.error;
+      else
+        EXPECT_NE(sink.error.find(std::string("dcod run 2 (from frame 0) has ") + differs +
+                                  " the replay started with; replay it alone: " + uri +
+                                  "?run=2&channel=CAM_RAW"),
+                  std::string::npos)
+            << sink.error;
+    }
+  }
   // A reload on the headset changed the keys within a run: the replay ends there.
   const auto reloaded =
       log_of_pairs(dir.path() / "reload.log", {{0, at(0), a}, {1, at(1), a}, {2, at(2), b}});

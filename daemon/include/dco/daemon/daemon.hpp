@@ -127,7 +127,9 @@ class Daemon final : public drivers::FrameSink {
   std::int64_t lcm_retry_ns_ = 0;  // when LCM, not set up at the start, was last tried
 
   FrameNumbers frame_numbers_;
-  bool pushed_in_sequence_ = false;  // the source thread's: a frame since the last start or cut
+  // The source thread's (set while it is stopped): a frame since the last start or cut, and
+  // whether a gap in the camera's frames cuts the sequence (not in deterministic mode).
+  bool pushed_in_sequence_ = false, cut_at_gaps_ = true;
   std::atomic<std::uint64_t> sequence_cuts_{0}, last_cut_seq_{0};
   std::uint64_t cuts_reported_ = 0;
   WarningPacer cut_pacer_;

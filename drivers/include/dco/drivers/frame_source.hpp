@@ -33,8 +33,12 @@ struct StereoFrame {
   // IMU samples that arrived since the previous frame (empty for sources without an IMU).
   std::span<const ImuSample> imu;
   // The source's frames before this one are no neighbours of it in time (CaptureGaps: a gap in
-  // the camera's stream, or another run in a recorded log): depth starts a new sequence here.
+  // the camera's stream, or another run in a recorded log): depth starts a new sequence here,
+  // unless the pipeline's own pace made the gap (runtime.deterministic holds the camera up).
   bool follows_gap = false;
+  // A recorded log's frame where another dcod run begins (follows_gap too): the headset started a
+  // new sequence there in every mode.
+  bool starts_run = false;
 };
 
 // What a source says about its device, for DCO_STATUS and the watchdog.

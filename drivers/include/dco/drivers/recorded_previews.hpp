@@ -50,10 +50,12 @@ struct ReplayedLog {
   std::filesystem::path path;
   std::string channel;
   std::int64_t first_session = 0;  // the dcod run replayed first (lcmlog's run=N: N - 1)
+  bool one_run = false;            // lcmlog's run=N: only that run is replayed
 };
 
-// Reads the log up to its end or its damage (which the replay itself reports). Throws dco::Error
-// when the file cannot be opened or read.
+// Reads the log up to its end or its damage (which the replay itself reports); with
+// ReplayedLog::one_run only that run's previews. Throws dco::Error when the file cannot be opened
+// or read.
 RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_count);
 
 // nullopt for sources other than lcmlog://.
