@@ -279,8 +279,9 @@ void Daemon::on_frame(const drivers::StereoFrame& frame) {
     // The frames before the gap finish as a sequence of their own: none of them is this frame's
     // neighbour for the flow or the stability term. A replayed log cuts at the same frames.
     runtime_->drain();
-    last_cut_seq_ = frame.seq;
-    ++sequence_cuts_;
+    SequenceCuts& cuts = frame.starts_run ? log_runs_ : camera_gaps_;
+    cuts.last_seq = frame.seq;
+    ++cuts.count;
   }
   pushed_in_sequence_ = true;
   const Clock::time_point capture{std::chrono::nanoseconds(frame.capture_ns)};
@@ -379,15 +380,19 @@ void Daemon::report_lcm_failures(std::int64_t now_ns, bool last) {
 }
 
 void Daemon::report_sequence_cuts(std::int64_t now_ns, bool last) {
-  const std::uint64_t cuts = sequence_cuts_.load();
   // Paced: a camera that keeps dropping out must not fill the journal.
-  const bool news = cuts > cuts_reported_;
-  if (!(cut_pacer_.due(now_ns, news) || last) || !news) return;
-  log_.info(fmt::format(
-      "{} gap(s) in the camera's frames since the last report (the last before frame {}): depth "
-      "started a new sequence after each",
-      cuts - cuts_reported_, last_cut_seq_.load()));
-  cuts_reported_ = cuts;
+  const auto report = [&](SequenceCuts& cuts, const char* what, const char* where) {
+    const std::uint64_t count = cuts.count.load();
+    const bool news = count > cuts.reported;
+    if (!(cuts.pacer.due(now_ns, news) || last) || !news) return;
+    log_.info(
+        fmt::format("{} {} since the last report (the last {} frame {}): depth started a "
+                    "new sequence at each",
+                    count - cuts.reported, what, where, cuts.last_seq.load()));
+    cuts.reported = count;
+  };
+  report(camera_gaps_, "gap(s) in the camera's frames", "before");
+  report(log_runs_, "new dcod run(s) in the replayed log", "from");
 }
 
 std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const {

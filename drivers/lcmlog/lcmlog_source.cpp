@@ -31,8 +31,8 @@ class LcmLogSource final : public PacedSource {
     reader_ = std::make_unique<LcmLogReader>(path_);
     // The first pair (of the run asked for) says the size, calibration and pipeline keys every
     // later one must have.
+    // read_message() names damage itself.
     if (!read_message()) {
-      if (!reader_->damage().empty()) throw Error(where_ + ": " + reader_->damage());
       throw Error(
           fmt::format("{}: no {} message in {} events (was dcod recording with "
                       "raw.enabled = true?)",
@@ -40,11 +40,9 @@ class LcmLogSource final : public PacedSource {
     }
     run_of_pair_ = runs_.session_of(message_.frame_seq);
     while (run_ > 0 && run_of_pair_ < run_ - 1) {
-      if (!read_message()) {
-        if (!reader_->damage().empty()) throw Error(where_ + ": " + reader_->damage());
+      if (!read_message())
         throw Error(fmt::format("{}: run={} asked for, the log holds {} dcod run(s)", where_, run_,
                                 run_of_pair_ + 1));
-      }
       run_of_pair_ = runs_.session_of(message_.frame_seq);
     }
     decode_pair();
@@ -136,11 +134,13 @@ class LcmLogSource final : public PacedSource {
       decode_pair();
     }
     pending_ = false;
-    if (message_.width != info_.width || message_.height != info_.height ||
-        left_.channels() != info_.channels)
-      throw Error(fmt::format("{}: frame {} is {}x{}x{}, the log started with {}x{}x{}", where_,
-                              message_.frame_seq, message_.width, message_.height, left_.channels(),
-                              info_.width, info_.height, info_.channels));
+    // The size was checked before the PNGs were decoded; they say grey or colour.
+    if (left_.channels() != info_.channels) {
+      if (run_of_pair_ != run_of_last_)
+        throw settings_error(true, run_of_pair_, "other image channels than", "");
+      throw Error(fmt::format("{}: frame {} has {} channels, the log started with {}", where_,
+                              message_.frame_seq, left_.channels(), info_.channels));
+    }
     // Found on the recorded stamps, as the headset found its gaps, so the replay cuts its
     // sequences where the headset did. Another dcod run started its own, and its gaps afresh.
     starts_run_ = run_of_pair_ != run_of_last_;

@@ -17,13 +17,23 @@ RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_
   // frames apart: recent pairs wait for their previews, and previews for their pairs.
   constexpr std::size_t kRecentPairs = 256;
   std::deque<std::pair<Frame, std::int64_t>> recent_pairs;  // and their sessions
-  std::map<Frame, ::dco::depth_preview_t> waiting;
+  // With the order they came in: a new run numbers its frames from 0 again, so the smallest
+  // frame is not the oldest.
+  std::map<Frame, std::pair<std::uint64_t, ::dco::depth_preview_t>> waiting;
+  std::uint64_t arrivals = 0;
   FrameSessions sessions;
-  // A replay of one run compares with that run's previews only, and counts no others.
-  const auto keep = [&](std::int64_t session) {
-    return !log.one_run || session == log.first_session;
-  };
   RecordedPreviews out;
+  // Stores a preview whose pair was found; false once the limit is reached. A replay of one run
+  // compares with that run's previews only, and counts no others.
+  const auto store = [&](std::int64_t session, std::int64_t seq, ::dco::depth_preview_t&& p) {
+    if (log.one_run && session != log.first_session) return true;
+    if (out.by_frame.size() >= max_count) {
+      out.truncated = true;
+      return false;
+    }
+    out.by_frame[{session, seq}] = std::move(p);
+    return true;
+  };
   LcmLogReader reader(log.path);
   LcmLogEvent event;
   ::dco::depth_preview_t preview;
@@ -36,8 +46,9 @@ RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_
       const Frame frame{pair.frame_seq, pair.capture_ns};
       const std::int64_t session = sessions.session_of(pair.frame_seq);
       if (const auto it = waiting.find(frame); it != waiting.end()) {
-        if (keep(session)) out.by_frame[{session, pair.frame_seq}] = std::move(it->second);
+        const bool room = store(session, pair.frame_seq, std::move(it->second.second));
         waiting.erase(it);
+        if (!room) break;
       } else {
         recent_pairs.emplace_back(frame, session);
         if (recent_pairs.size() > kRecentPairs) recent_pairs.pop_front();
@@ -50,20 +61,19 @@ RecordedPreviews read_recorded_previews(const ReplayedLog& log, std::size_t max_
       ++out.undecodable;
       continue;
     }
-    if (out.by_frame.size() >= max_count) {
-      out.truncated = true;
-      break;
-    }
     const Frame frame{preview.frame_seq, preview.capture_ns};
     const auto it = std::find_if(recent_pairs.rbegin(), recent_pairs.rend(),
                                  [&](const auto& p) { return p.first == frame; });
     if (it != recent_pairs.rend()) {
-      if (keep(it->second)) out.by_frame[{it->second, preview.frame_seq}] = std::move(preview);
+      if (!store(it->second, preview.frame_seq, std::move(preview))) break;
     } else {
-      waiting[frame] = std::move(preview);
+      waiting[frame] = {arrivals++, std::move(preview)};
       // A preview's pair comes a few frames later at most: the oldest waiting ones past that are
       // of frames the log holds no pair of (raw recording was off), and give way.
-      if (waiting.size() > kRecentPairs) waiting.erase(waiting.begin());
+      if (waiting.size() > kRecentPairs)
+        waiting.erase(std::min_element(
+            waiting.begin(), waiting.end(),
+            [](const auto& a, const auto& b) { return a.second.first < b.second.first; }));
     }
   }
   return out;  // previews still waiting have no pair in the log: nothing replays their frames

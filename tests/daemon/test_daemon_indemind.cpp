@@ -128,7 +128,18 @@ TEST(DaemonIndemind, AReplugStartsANewSequenceUnlessDeterministic) {
   for (const bool deterministic : {false, true}) {
     SCOPED_TRACE(deterministic);
     std::atomic<SimulatedIndemind*> sim{nullptr};
+    std::atomic<bool> quit{false};
     std::thread unplugger;
+    // Joined while the simulated module lives (the daemon owns it), and at the latest on the way
+    // out of the test.
+    const auto stop_unplugger = [&] {
+      quit = true;
+      if (unplugger.joinable()) unplugger.join();
+    };
+    struct Join {
+      std::function<void()> f;
+      ~Join() { f(); }
+    } join_on_exit{stop_unplugger};
     ::testing::internal::CaptureStderr();
     const Seen seen = run_daemon(
         "indemind://",
@@ -142,17 +153,19 @@ TEST(DaemonIndemind, AReplugStartsANewSequenceUnlessDeterministic) {
           drivers::IndemindOptions io;
           io.fps = 25;
           io.clock = [s = owned.get()] { return s->now_ns(); };
+          auto source = drivers::open_indemind(std::move(owned), io, std::string(uri));
           // Ten frames, then the cable is out for half a second.
-          unplugger = std::thread([s = owned.get()] {
-            while (s->record().frames_intact < 10)
+          unplugger = std::thread([s = sim.load(), &quit] {
+            while (!quit && s->record().frames_intact < 10)
               std::this_thread::sleep_for(std::chrono::milliseconds(5));
+            if (quit) return;
             s->set_present(false);
             std::this_thread::sleep_for(std::chrono::milliseconds(500));
             s->set_present(true);
           });
-          return drivers::open_indemind(std::move(owned), io, std::string(uri));
+          return source;
         },
-        [&] { unplugger.join(); });
+        stop_unplugger);
     const std::string log = ::testing::internal::GetCapturedStderr();
     EXPECT_EQ(seen.status, 0) << log;
     ASSERT_NE(sim.load(), nullptr);

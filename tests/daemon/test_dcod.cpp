@@ -1040,10 +1040,11 @@ TEST(Dcod, EachRunOfAFieldLogReplaysAsItsOwnSequence) {
   };
   const auto whole = replay("");
   EXPECT_EQ(whole.status, 1) << whole.output;
-  EXPECT_NE(whole.output.find("1 gap(s) in the camera's frames since the last report (the last "
-                              "before frame 0): depth started a new sequence after each"),
+  EXPECT_NE(whole.output.find("1 new dcod run(s) in the replayed log since the last report (the "
+                              "last from frame 0): depth started a new sequence at each"),
             std::string::npos)
       << whole.output;
+  EXPECT_EQ(whole.output.find("gap(s) in the camera's frames"), std::string::npos) << whole.output;
   EXPECT_NE(whole.output.find("replay check: depth identical to the headset's in all 12 "
                               "recorded previews replayed"),
             std::string::npos)

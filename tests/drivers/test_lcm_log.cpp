@@ -385,6 +385,42 @@ TEST(RecordedPreviews, ARestartedDcodKeepsItsOwnPreviews) {
   const RecordedPreviews only = read_recorded_previews(*second, 1);
   ASSERT_EQ(only.by_frame.size(), 1u);
   EXPECT_EQ(only.by_frame.begin()->first, (std::pair<std::int64_t, std::int64_t>{1, 0}));
+  EXPECT_TRUE(only.truncated);
+  keys.clear();
+  for (const auto& [key, p] : read_recorded_previews(*second, 100).by_frame) keys.push_back(key);
+  EXPECT_EQ(keys, (std::vector<std::pair<std::int64_t, std::int64_t>>{{1, 0}, {1, 1}}))
+      << "the preview that came before its pair too";
+}
+
+// Previews whose pairs are not in the log (raw recording off for a while) give way to newer ones
+// in the order they came, not by frame number: a restarted dcod's first previews, numbered from 0
+// again, are the newest.
+TEST(RecordedPreviews, ANewRunsPreviewIsNotTakenForTheOldestWaiting) {
+  dco::testing::TempDir dir;
+  std::vector<LcmLogEvent> events;
+  auto add = [&](const char* channel, std::vector<std::uint8_t> bytes) {
+    events.push_back(event_of(static_cast<int>(events.size()), channel, std::move(bytes)));
+  };
+  auto preview = [](std::int64_t seq, std::int64_t capture_ns) {
+    ::dco::depth_preview_t p{};
+    p.frame_seq = seq;
+    p.capture_ns = capture_ns;
+    p.source_width = 64;
+    p.source_height = 48;
+    p.width = p.height = p.num_pixels = 1;
+    p.depth_mm = {static_cast<std::int16_t>(seq)};
+    return dco::testing::lcm_bytes(p);
+  };
+  add(ipc::channel::kRaw, pair_bytes(1000, 1000));
+  for (std::int64_t seq = 2000; seq < 2300; ++seq)
+    add(ipc::channel::kDepthPreview, preview(seq, seq));
+  add(ipc::channel::kDepthPreview, preview(0, 5000));  // the new run's first frame, before its pair
+  add(ipc::channel::kRaw, pair_bytes(0, 5000));
+  const auto path = dir.path() / "gap_in_recording.log";
+  std::ofstream(path, std::ios::binary) << log_of(events);
+  const RecordedPreviews r = read_recorded_previews({path, ipc::channel::kRaw}, 100);
+  ASSERT_EQ(r.by_frame.size(), 1u);
+  EXPECT_EQ(r.by_frame.begin()->first, (std::pair<std::int64_t, std::int64_t>{1, 0}));
   EXPECT_TRUE(read_recorded_previews({path, "OTHER_RAW"}, 100).by_frame.empty())
       << "only the replayed channel's pairs";
 }

@@ -92,8 +92,9 @@ class Daemon final : public drivers::FrameSink {
   void retry_lcm(std::int64_t now_ns);
   static constexpr std::int64_t kLcmRetryNs = 2'000'000'000;
   void report_lcm_failures(std::int64_t now_ns, bool last);
-  // An info line when the source's frames had gaps since the last one (a sequence cut at each),
-  // paced like the warnings; `last`: at the exit, whatever the pace.
+  // Info lines when the source's frames had gaps, or a replayed log new dcod runs, since the last
+  // ones (a sequence cut at each), paced like the warnings; `last`: at the exit, whatever the
+  // pace.
   void report_sequence_cuts(std::int64_t now_ns, bool last);
   std::string status_line(const pipeline::runtime::RuntimeStats& stats) const;
   void wake();
@@ -130,9 +131,13 @@ class Daemon final : public drivers::FrameSink {
   // The source thread's (set while it is stopped): a frame since the last start or cut, and
   // whether a gap in the camera's frames cuts the sequence (not in deterministic mode).
   bool pushed_in_sequence_ = false, cut_at_gaps_ = true;
-  std::atomic<std::uint64_t> sequence_cuts_{0}, last_cut_seq_{0};
-  std::uint64_t cuts_reported_ = 0;
-  WarningPacer cut_pacer_;
+  // Where a sequence was cut: counted on the source thread, reported on the main thread.
+  struct SequenceCuts {
+    std::atomic<std::uint64_t> count{0}, last_seq{0};
+    std::uint64_t reported = 0;
+    WarningPacer pacer;
+  };
+  SequenceCuts camera_gaps_, log_runs_;  // gaps in the camera's frames; a replayed log's runs
 
   std::atomic<std::int64_t> last_publish_ns_{0};
   std::atomic<std::int64_t> pipeline_start_ns_{0};
