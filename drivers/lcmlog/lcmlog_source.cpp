@@ -30,20 +30,19 @@ class LcmLogSource final : public PacedSource {
     where_ = "lcmlog://" + path_;
     reader_ = std::make_unique<LcmLogReader>(path_);
     // The first pair (of the run asked for) says the size, calibration and pipeline keys every
-    // later one must have.
-    // read_message() names damage itself.
+    // later one must have. read_message() names damage itself.
     if (!read_message()) {
       throw Error(
           fmt::format("{}: no {} message in {} events (was dcod recording with "
                       "raw.enabled = true?)",
                       where_, channel_, reader_->events_read()));
     }
-    run_of_pair_ = runs_.session_of(message_.frame_seq);
-    while (run_ > 0 && run_of_pair_ < run_ - 1) {
+    last_run_ = runs_.session_of(message_.frame_seq);
+    while (run_ > 0 && last_run_ < run_ - 1) {
       if (!read_message())
         throw Error(fmt::format("{}: run={} asked for, the log holds {} dcod run(s)", where_, run_,
-                                run_of_pair_ + 1));
-      run_of_pair_ = runs_.session_of(message_.frame_seq);
+                                last_run_ + 1));
+      last_run_ = runs_.session_of(message_.frame_seq);
     }
     decode_pair();
     calibration_toml_ = message_.calibration;
@@ -53,7 +52,6 @@ class LcmLogSource final : public PacedSource {
                               message_.width, message_.height, calibration_.left.width,
                               calibration_.left.height));
     info_.recorded_pipeline = message_.pipeline_config;
-    first_run_ = run_of_last_ = run_of_pair_;
     info_.width = message_.width;
     info_.height = message_.height;
     info_.channels = left_.channels();
@@ -109,15 +107,16 @@ class LcmLogSource final : public PacedSource {
 
   bool produce(std::uint64_t, ImageView<const std::uint8_t>& left,
                ImageView<const std::uint8_t>& right) override {
+    std::int64_t run = last_run_;  // the first pair's, read at open
     if (!pending_) {
       if (!read_message()) return false;
-      const std::int64_t run = runs_.session_of(message_.frame_seq);
-      if (run_ > 0 && run != first_run_) return false;  // the run asked for ended
+      run = runs_.session_of(message_.frame_seq);
+      if (run_ > 0 && run != run_ - 1) return false;  // the run asked for ended
       // The headset made its depth with the recorded keys, and a replay with others would not be
       // its depth. A new run may have new keys (a new configuration) and is replayed alone; a
       // reload within a run restarted the headset's pipeline with them, which a replay from one
       // set of keys cannot follow.
-      const bool new_run = run != run_of_pair_;
+      const bool new_run = run != last_run_;
       // Before the PNGs are decoded: a pair that says it is larger than the log's frames would
       // take its size in memory first.
       if (message_.width != info_.width || message_.height != info_.height) {
@@ -130,23 +129,21 @@ class LcmLogSource final : public PacedSource {
         throw settings_error(new_run, run, "other pipeline keys than", "the pipeline keys change");
       if (message_.calibration != calibration_toml_)
         throw settings_error(new_run, run, "another calibration than", "the calibration changes");
-      run_of_pair_ = run;
       decode_pair();
     }
     pending_ = false;
+    starts_run_ = run != last_run_;
     // The size was checked before the PNGs were decoded; they say grey or colour.
     if (left_.channels() != info_.channels) {
-      if (run_of_pair_ != run_of_last_)
-        throw settings_error(true, run_of_pair_, "other image channels than", "");
+      if (starts_run_) throw settings_error(true, run, "other image channels than", "");
       throw Error(fmt::format("{}: frame {} has {} channels, the log started with {}", where_,
                               message_.frame_seq, left_.channels(), info_.channels));
     }
     // Found on the recorded stamps, as the headset found its gaps, so the replay cuts its
     // sequences where the headset did. Another dcod run started its own, and its gaps afresh.
-    starts_run_ = run_of_pair_ != run_of_last_;
     if (starts_run_) gaps_ = CaptureGaps{};
     gap_ = gaps_.follows_gap(message_.capture_ns) || starts_run_;
-    run_of_last_ = run_of_pair_;
+    last_run_ = run;
     left = left_.cview();
     right = right_.cview();
     return true;
@@ -186,9 +183,9 @@ class LcmLogSource final : public PacedSource {
   bool gap_ = false, starts_run_ = false;  // of the pair produce() made
   int run_ = 0;                            // the one dcod run to replay (1, 2, ...; 0: all)
   FrameSessions runs_;
-  // The dcod runs (0, 1, ...) of the first pair replayed, of message_'s pair and of the pair
-  // delivered before it.
-  std::int64_t first_run_ = 0, run_of_pair_ = 0, run_of_last_ = 0;
+  // The dcod run (0, 1, ...) of the pair delivered last (before the first: of the one read at
+  // open).
+  std::int64_t last_run_ = 0;
   StereoCalibration calibration_;
   SourceInfo info_;
 };
