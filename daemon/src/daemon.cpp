@@ -16,11 +16,11 @@
 #include "dco/core/depth_conversion.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/usable_cpus.hpp"
+#include "dco/daemon/raw_recorder.hpp"
 #include "dco/gpu/backend.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
 #include "dco/pipeline/densify/densifier.hpp"
 #include "dco/pipeline/row_team.hpp"
-#include "raw_recorder.hpp"
 #include "replay_check.hpp"
 
 namespace dco::daemon {
@@ -30,8 +30,8 @@ namespace {
 std::string raw_totals(const RawRecorder::Counts& n) {
   return fmt::format(
       "{} pairs on DCO_RAW, {} dropped, {} larger than raw.max_message_bytes, {} failed to "
-      "encode or send",
-      n.recorded, n.dropped, n.oversized, n.failed);
+      "encode or send, {} still in their send after its wait",
+      n.recorded, n.dropped, n.oversized, n.failed, n.held);
 }
 
 using pipeline::runtime::Clock;
@@ -511,7 +511,7 @@ void Daemon::configure_raw_recording() {
         [this](const ::dco::raw_stereo_t& m) {
           // Not under publish_mutex_: publish_raw waits for LCM to send the pair, which must
           // never hold up a frame on its way into the ring.
-          publisher_->publish_raw(m);
+          return publisher_->publish_raw(m);
         },
         [this] { return publisher_->raw_can_go(); });
   }
@@ -524,7 +524,7 @@ void Daemon::configure_raw_recording() {
     raw_ = std::move(next);
   }
   if (closed) log_.info("raw recording stopped: " + raw_totals(*closed));
-  raw_dropped_reported_ = raw_oversized_reported_ = raw_failed_reported_ = 0;
+  raw_dropped_reported_ = raw_oversized_reported_ = raw_failed_reported_ = raw_held_reported_ = 0;
   raw_dropped_pacer_ = raw_failed_pacer_ = WarningPacer{};
   raw_settings_ = settings;
   if (c.raw_enabled)
@@ -551,15 +551,23 @@ void Daemon::report_raw_recording(std::int64_t now_ns, bool last) {
                     n.dropped - raw_dropped_reported_));
     raw_dropped_reported_ = n.dropped;
   }
-  const bool lost = n.oversized > raw_oversized_reported_ || n.failed > raw_failed_reported_;
+  const bool lost = n.oversized > raw_oversized_reported_ || n.failed > raw_failed_reported_ ||
+                    n.held > raw_held_reported_;
   if ((raw_failed_pacer_.due(now_ns, lost) || last) && lost) {
+    // A pair still in its send when the wait ran out may go out yet: counted apart.
+    const std::string held = n.held == 0
+                                 ? std::string()
+                                 : fmt::format(
+                                       "; {} held in their send past its wait, {} since (each goes "
+                                       "out if the network takes it)",
+                                       n.held, n.held - raw_held_reported_);
     log_.warning(fmt::format(
-        "raw recording: {} pairs not recorded, {} since the last report; the "
-        "last: {}",
+        "raw recording: {} pairs not recorded, {} since the last report{}; the last: {}",
         n.oversized + n.failed,
-        n.oversized + n.failed - raw_oversized_reported_ - raw_failed_reported_, error));
+        n.oversized + n.failed - raw_oversized_reported_ - raw_failed_reported_, held, error));
     raw_oversized_reported_ = n.oversized;
     raw_failed_reported_ = n.failed;
+    raw_held_reported_ = n.held;
   }
 }
 

@@ -1,4 +1,4 @@
-#include "raw_recorder.hpp"
+#include "dco/daemon/raw_recorder.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -93,7 +93,7 @@ void RawRecorder::run() {
     frame.left = slot.left.cview();
     frame.right = slot.right.cview();
     frame.imu = slot.imu;
-    enum { kSent, kOversized, kFailed } outcome = kSent;
+    enum { kSent, kHeld, kOversized, kFailed } outcome = kSent;
     std::string error;
     try {
       if (can_send_ && !can_send_())
@@ -107,8 +107,12 @@ void RawRecorder::run() {
             "raw frame {} compresses to {} bytes, more than raw.max_message_bytes "
             "({}): not recorded",
             slot.seq, message_.getEncodedSize(), options_.max_message_bytes);
-      } else {
-        send_(message_);
+      } else if (!send_(message_)) {
+        outcome = kHeld;
+        error = fmt::format(
+            "raw frame {} still in its send after LCM's wait: the network holds it (it goes out "
+            "if the network takes it)",
+            slot.seq);
       }
     } catch (const std::exception& e) {
       outcome = kFailed;
@@ -121,6 +125,7 @@ void RawRecorder::run() {
       if (outcome == kSent) ++counts_.recorded;
       if (outcome == kOversized) ++counts_.oversized;
       if (outcome == kFailed) ++counts_.failed;
+      if (outcome == kHeld) ++counts_.held;
       if (!error.empty()) last_error_ = std::move(error);
     }
     changed_.notify_all();

@@ -195,12 +195,11 @@ LcmSender::LargeOutcome LcmSender::send_large(const std::string& channel, std::s
   const std::uint64_t done_before = s.large_done;
   s.changed.notify_all();
   if (!s.changed.wait_for(lock, wait, [&] { return s.large_done != done_before; })) {
-    if (s.large == State::Large::kQueued) {
-      s.large = State::Large::kIdle;  // not sent: the buffer is free again
-      s.failed(name);
-    }
     // Held either way: in its own send, or behind another one the network holds.
     s.blocked = true;
+    if (s.large != State::Large::kQueued) return LargeOutcome::kStillSending;
+    s.large = State::Large::kIdle;  // not sent: the buffer is free again
+    s.failed(name);
     return LargeOutcome::kTimedOut;
   }
   return s.large_sent ? LargeOutcome::kSent : LargeOutcome::kFailed;

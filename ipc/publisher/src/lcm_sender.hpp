@@ -48,9 +48,11 @@ class LcmSender {
   // One large message at a time, sent in its turn among the others, with its outcome: the
   // buffer to fill, once the previous large message is no longer being sent (nullptr when it
   // still is after `wait`, or at once while blocked()), then send_large, which waits up to
-  // `wait` for the send.
+  // `wait` for the send. kTimedOut: it never started (the network holds an earlier send) and is
+  // dropped, a failure; kStillSending: LCM holds it in its own send, which may yet finish (a
+  // send that then fails counts as a failure).
   std::vector<std::uint8_t>* acquire_large(std::chrono::milliseconds wait);
-  enum class LargeOutcome : std::int8_t { kSent, kFailed, kTimedOut };
+  enum class LargeOutcome : std::int8_t { kSent, kFailed, kTimedOut, kStillSending };
   LargeOutcome send_large(const std::string& channel, std::size_t size,
                           std::chrono::milliseconds wait);
 

@@ -321,7 +321,7 @@ void DepthPublisher::publish_status(const DeviceStatus& status, std::int64_t now
   send(kStatusChannel, m);
 }
 
-void DepthPublisher::publish_raw(const ::dco::raw_stereo_t& message) {
+bool DepthPublisher::publish_raw(const ::dco::raw_stereo_t& message) {
   std::lock_guard lock(raw_mutex_);
   if (!lcm_ready_) {
     sender_->count_failure(kRawChannel);
@@ -342,13 +342,18 @@ void DepthPublisher::publish_raw(const ::dco::raw_stereo_t& message) {
   }
   switch (sender_->send_large(kRawChannel, static_cast<std::size_t>(size), kRawSendWait)) {
     case detail::LcmSender::LargeOutcome::kSent:
-      return;
+      return true;
+    case detail::LcmSender::LargeOutcome::kStillSending:
+      return false;
     case detail::LcmSender::LargeOutcome::kFailed:
       throw Error(fmt::format("publisher: LCM publish on {} failed", channel::kRaw));
     case detail::LcmSender::LargeOutcome::kTimedOut:
-      throw Error(fmt::format("publisher: LCM did not send {} within {} ms", channel::kRaw,
-                              kRawSendWait.count()));
+      throw Error(
+          fmt::format("publisher: LCM did not start sending {} within {} ms: the "
+                      "network holds the pair before it",
+                      channel::kRaw, kRawSendWait.count()));
   }
+  return false;  // not reached: every outcome returns above
 }
 
 void DepthPublisher::log(LogLevel level, std::string_view source, std::string_view text,

@@ -121,6 +121,7 @@ class Daemon final : public drivers::FrameSink {
   std::unique_ptr<RawRecorder> raw_;
   std::string raw_settings_;  // what raw_ was made with
   std::uint64_t raw_dropped_reported_ = 0, raw_oversized_reported_ = 0, raw_failed_reported_ = 0;
+  std::uint64_t raw_held_reported_ = 0;
   WarningPacer raw_dropped_pacer_, raw_failed_pacer_;
   std::unique_ptr<ReplayCheck> replay_check_;  // replaying a field log in deterministic mode
   std::uint64_t lcm_failures_reported_ = 0;

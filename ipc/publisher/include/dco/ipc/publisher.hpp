@@ -99,9 +99,11 @@ class DepthPublisher {
   void publish_status(const DeviceStatus& status, std::int64_t now_ns);
   void log(LogLevel level, std::string_view source, std::string_view text, std::int64_t now_ns);
   // DCO_RAW: a recorded raw pair (the daemon's raw recorder builds it), sent in its turn among
-  // the other messages; returns once LCM has sent it. Throws dco::Error when LCM is not set up,
-  // refuses it, or has not sent it (or the pair before it) within two seconds.
-  void publish_raw(const ::dco::raw_stereo_t& message);
+  // the other messages; returns true once LCM has sent it, false when LCM is still sending it
+  // after two seconds (the network holds it: it goes out if the network takes it, and counts in
+  // send_failures() if the send fails). Throws dco::Error when LCM is not set up, refuses it, or
+  // has not started it within two seconds (the network holds the pair before it).
+  bool publish_raw(const ::dco::raw_stereo_t& message);
   bool lcm_ready() const { return lcm_ready_; }
   // Whether a DCO_RAW pair could go out now: LCM is set up and its network is not holding a
   // send past publish_raw's wait. A raw recorder need not compress pairs that cannot go out.

@@ -29,12 +29,15 @@ struct RawRecorderOptions {
 
 class RawRecorder {
  public:
-  using Send = std::function<void(const ::dco::raw_stereo_t&)>;
+  // Sends a message: true once sent, false when it is still in its send (held by the network,
+  // it may yet go out); throws when it is not sent.
+  using Send = std::function<bool(const ::dco::raw_stereo_t&)>;
   // Whether a pair could go out now; while not, pairs are counted as failed without being
   // compressed (no CPU spent on what cannot be sent).
   using CanSend = std::function<bool()>;
   struct Counts {
-    std::uint64_t recorded = 0, dropped = 0, oversized = 0, failed = 0;
+    // held: still in their send when the sender gave up waiting; neither recorded nor lost.
+    std::uint64_t recorded = 0, dropped = 0, oversized = 0, failed = 0, held = 0;
   };
 
   RawRecorder(std::string calibration_toml, RawRecorderOptions options, Send send,
