@@ -399,8 +399,9 @@ std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const 
   return fmt::format(
       "{}: {:.1f} fps in, {:.1f} fps out, {} published, {} dropped ({} late), latency p50 {:.1f} "
       "ms p99 {:.1f} ms{}{}",
-      source_->info().description, fps_in_, fps_out_, published_.load(),
-      earlier_dropped_ + s.dropped, earlier_late_ + s.late, s.latency.p50_ms, s.latency.p99_ms,
+      source_device_.empty() ? source_->info().description : source_device_, fps_in_, fps_out_,
+      published_.load(), earlier_dropped_ + s.dropped, earlier_late_ + s.late, s.latency.p50_ms,
+      s.latency.p99_ms,
       // With runtime.release_latency_ms the latency is fixed: what the stages took and the
       // results ready too late for it tell whether the setting suits the machine.
       runtime_->holds_results_for_release()
@@ -472,6 +473,7 @@ void Daemon::tick(std::int64_t now_ns) {
       status.state = published_ == 0 ? State::kStarting : ok ? State::kStreaming : State::kError;
       break;
   }
+  source_device_ = source.device;
   status.device = std::move(source.device);
   status.serial = std::move(source.serial);
   status.firmware = std::move(source.firmware);

@@ -85,6 +85,7 @@ class IndemindSource final : public FrameSource {
     info_.height = mode_.height;
     info_.channels = 1;
     info_.fps = mode_.fps;
+    stream_fps_ = mode_.fps;
     info_.description = fmt::format(
         "INDEMIND {} {}x{} @ {} fps{}", module_.info.id, mode_.width, mode_.height, mode_.fps,
         options_.imu_hz > 0 ? fmt::format(" + IMU {} Hz", options_.imu_hz) : std::string());
@@ -144,7 +145,12 @@ class IndemindSource final : public FrameSource {
   SourceStatus status() const override {
     SourceStatus s;
     s.state = state_.load();
-    s.device = fmt::format("INDEMIND {}", describe(module_.info));
+    // The rate streamed now: a replug into a port of another speed may have changed it since
+    // info() was made.
+    s.device = fmt::format(
+        "{}, {}x{} @ {} fps{}", describe(module_.info), mode_.width, mode_.height,
+        stream_fps_.load(),
+        options_.imu_hz > 0 ? fmt::format(" + IMU {} Hz", options_.imu_hz) : std::string());
     s.serial = module_.info.id;
     s.firmware = module_.info.firmware_version;
     s.usb_speed_mbps = usb_speed_.load();
@@ -315,6 +321,7 @@ class IndemindSource final : public FrameSource {
       // Only the rate changes: the size the delivery thread reads stays as it is.
       mode_.fps = mode->fps;
       mode_.frame_index = mode->frame_index;
+      stream_fps_ = mode->fps;
       device_ = std::move(device);
       usb_speed_ = d.speed_mbps;
       port_path_ = d.port_path;
@@ -796,6 +803,7 @@ class IndemindSource final : public FrameSource {
   ImuRanges ranges_;
   std::unique_ptr<UsbDevice> device_;
   std::atomic<int> usb_speed_{0};
+  std::atomic<int> stream_fps_{0};  // mode_.fps, for status() on other threads
 
   // Event thread only.
   std::optional<FrameAssembler> assembler_;  // sized once the mode is known

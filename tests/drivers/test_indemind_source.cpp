@@ -651,9 +651,14 @@ void replug_at(Rig& rig, int speed_mbps) {
 // rate it never will.
 TEST(IndemindSource, AModuleRepluggedOnASlowerLinkStreamsAtTheRateItCarries) {
   Rig rig;
+  EXPECT_NE(rig.source->status().device.find(", 640x400 @ 50 fps"), std::string::npos)
+      << rig.source->status().device;
   ASSERT_NO_FATAL_FAILURE(replug_at(rig, 480));
   ASSERT_TRUE(wait_until([&] { return counters_of(*rig.source).at("reconnects") == 1; }))
       << rig.source->status().error;
+  // DCO_STATUS and dcod's status line say the rate streamed now, not the one it started with.
+  EXPECT_NE(rig.source->status().device.find(", 640x400 @ 25 fps"), std::string::npos)
+      << rig.source->status().device;
   const long back = rig.sink.count();
   ASSERT_TRUE(rig.wait_frames(back + 6));
   rig.source->stop();

@@ -122,6 +122,8 @@ class Daemon final : public drivers::FrameSink {
   std::string raw_settings_;  // what raw_ was made with
   std::uint64_t raw_dropped_reported_ = 0, raw_oversized_reported_ = 0, raw_failed_reported_ = 0;
   std::uint64_t raw_held_reported_ = 0;
+  // The source's device as of the last statistics tick (a camera's rate may change on a replug).
+  std::string source_device_;
   WarningPacer raw_dropped_pacer_, raw_failed_pacer_;
   std::unique_ptr<ReplayCheck> replay_check_;  // replaying a field log in deterministic mode
   std::uint64_t lcm_failures_reported_ = 0;
