@@ -20,6 +20,11 @@ constexpr int kMinPairs = 500;
 // small disparities put both views of a point at nearly one r, where no fall-off shows.
 constexpr double kMinUSpread = 0.01;
 constexpr double kMinK = -0.5, kMaxK = 0.75;
+// A channel whose flat pairs' mean level is below this tells no fall-off: a level step there is
+// 6 % and more, as much as the fall-off itself (blue under warm light; the whole of a very dark
+// frame). The boxes scene at an eighth of its levels (mean 14) still fits k 0.35 within 0.03, at
+// a twelfth (mean 9) 0.15 as 0.04.
+constexpr double kMinMeanLevel = 16;
 constexpr int kRounds = 3;  // linearised fits, each about the k of the one before
 
 // The normal equations of right = a left + b + c (u left) over one channel's pairs.
@@ -86,6 +91,8 @@ bool fit_step_about(const std::array<Normals, 3>& normals, int channels, double&
   for (int c = 0; c < channels; ++c) {
     const Normals& n = normals[static_cast<std::size_t>(c)];
     if (n.pairs < kMinPairs) return false;
+    // Too dim to tell: the lens darkens it as the others, whose fit it takes.
+    if (n.m[0][1] / n.pairs < kMinMeanLevel) continue;
     const double mean_u = n.u_sum / n.pairs;
     if (std::sqrt(std::max(0.0, n.u_squares / n.pairs - mean_u * mean_u)) < kMinUSpread)
       return false;
@@ -96,6 +103,7 @@ bool fit_step_about(const std::array<Normals, 3>& normals, int channels, double&
     weighted += n.pairs * (-p[2] / p[0]);
     pairs += n.pairs;
   }
+  if (pairs == 0) return false;  // every channel too dim
   dk = weighted / pairs;
   return std::isfinite(dk);
 }

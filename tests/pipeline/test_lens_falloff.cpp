@@ -91,6 +91,33 @@ TEST(FitLensFalloff, FindsTheFalloffBothViewsShare) {
   }
 }
 
+// Warm indoor light leaves the blue channel a few levels deep: too little to tell a fall-off by,
+// and the lens darkens it as it darkens the others, so the fit is the other channels'.
+TEST(FitLensFalloff, AChannelTooDimToTellIsLeftOut) {
+  const synthetic::SceneRenderer scene(synthetic::preset("boxes", 480, 270));
+  synthetic::StereoSample grey;
+  scene.render(0, grey);
+  // Colour from the grey render: blue a twentieth of it, green as it is, red 0.8 of it.
+  synthetic::StereoSample s = grey;
+  for (auto [from, to] : {std::pair{&grey.left, &s.left}, std::pair{&grey.right, &s.right}}) {
+    to->resize(from->width(), from->height(), 3);
+    for (int y = 0; y < from->height(); ++y)
+      for (int x = 0; x < from->width(); ++x) {
+        const int g = from->cview().at(x, y);
+        to->view().at(x, y, 0) = static_cast<std::uint8_t>(g / 20);
+        to->view().at(x, y, 1) = static_cast<std::uint8_t>(g);
+        to->view().at(x, y, 2) = static_cast<std::uint8_t>(std::lround(g * 0.8));
+      }
+  }
+  for (const double truth : {0.0, 0.15, 0.35}) {
+    const synthetic::StereoSample dark = falling_off(s, truth);
+    double k = 7;
+    ASSERT_TRUE(fit_lens_falloff(dark.left.cview(), dark.right.cview(), dark.disparity.cview(), k))
+        << truth;
+    EXPECT_NEAR(k, truth, 0.03) << truth;
+  }
+}
+
 TEST(FitLensFalloff, AFrameThatCannotTellLeavesK) {
   const synthetic::SceneRenderer scene(synthetic::preset("boxes", 480, 270));
   synthetic::StereoSample s;
@@ -105,6 +132,13 @@ TEST(FitLensFalloff, AFrameThatCannotTellLeavesK) {
   Image<float> none(480, 270);
   none.fill(std::numeric_limits<float>::infinity());
   EXPECT_FALSE(fit_lens_falloff(dark.left.cview(), dark.right.cview(), none.cview(), k));
+  // A frame too dark to tell (mean level 9): a level step is as large as the fall-off.
+  synthetic::StereoSample night = dark;
+  for (Image<std::uint8_t>* image : {&night.left, &night.right})
+    for (int y = 0; y < image->height(); ++y)
+      for (int x = 0; x < image->width(); ++x)
+        image->view().at(x, y) = static_cast<std::uint8_t>(image->view().at(x, y) / 12);
+  EXPECT_FALSE(fit_lens_falloff(night.left.cview(), night.right.cview(), s.disparity.cview(), k));
   EXPECT_EQ(k, 0.123);
 }
 
