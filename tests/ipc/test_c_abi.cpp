@@ -146,6 +146,11 @@ TEST(ClientCAbi, WaitNextAfterTheWriterStoppedWaitsOutItsTimeout) {
     ++calls;
   }
   EXPECT_LE(calls, 4) << "each call waits its 100 ms";
+  // A render loop's short timeouts, most of which end before the call's next look at the
+  // writer: every one says the writer is gone, none that it merely timed out.
+  for (const int timeout_ms : {0, 1, 5, 11, 16})
+    for (int i = 0; i < 8; ++i)
+      EXPECT_EQ(dco_client_wait_next(c, timeout_ms, &v), DCO_E_WRITER_GONE) << timeout_ms;
   RingWriter back(path, o);
   publish_pattern(back, 9);
   ASSERT_EQ(dco_client_wait_next(c, 1000, &v), DCO_OK) << dco_client_last_error();

@@ -24,6 +24,16 @@ TEST(ClientLibrary, UnloadsOnDlclose) {
   ASSERT_NE(handle, nullptr) << dlerror();
   EXPECT_NE(dlsym(handle, "dco_client_open"), nullptr);
   EXPECT_TRUE(mapped(lib));
+  // A failed call leaves its message in thread-local storage of the library's: that must not
+  // pin the library to this thread.
+  using OptionsInit = void (*)(void*);
+  using Open = int (*)(const void*, void**);
+  using LastError = const char* (*)();
+  alignas(16) unsigned char options[512] = {};
+  void* client = nullptr;
+  reinterpret_cast<OptionsInit>(dlsym(handle, "dco_client_options_init"))(options);
+  EXPECT_NE(reinterpret_cast<Open>(dlsym(handle, "dco_client_open"))(options, &client), 0);
+  EXPECT_NE(std::string(reinterpret_cast<LastError>(dlsym(handle, "dco_client_last_error"))()), "");
   ASSERT_EQ(dlclose(handle), 0);
   EXPECT_FALSE(mapped(lib)) << "dlclose left the library mapped";
 }

@@ -653,6 +653,94 @@ TEST(RingClient, AViewOfARestartedWriterStaysMappedUntilAFrameIsReturned) {
   EXPECT_EQ(view_checksum(*fresh), expected_checksum(1, kWidth, kHeight, true));
 }
 
+// A view kept from before dcod restarted at another size, copied once the client has moved to
+// the new ring: its frame is gone, which is what the copy says (not that the caller's buffer,
+// right for that frame, is too small for the new ring).
+TEST(RingClient, CopyingAViewOfARestartedWriterSaysItsFrameIsGone) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  auto old_writer = std::make_unique<RingWriter>(path, small_ring());
+  client::Client c = connect(path);
+  publish_pattern(*old_writer, 7);
+  const auto kept = c.latest();
+  ASSERT_TRUE(kept.has_value());
+  old_writer.reset();
+  RingOptions larger = small_ring();
+  larger.width = 2 * kWidth;
+  larger.height = 2 * kHeight;
+  RingWriter writer(path, larger);
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));  // a path check is due
+  EXPECT_FALSE(c.wait_next(std::chrono::milliseconds(0)).has_value());
+  ASSERT_EQ(c.session_id(), writer.session_id());
+  std::vector<float> depth(static_cast<std::size_t>(kWidth) * kHeight);
+  dco_frame_buffer buf;
+  dco_frame_buffer_init(&buf);
+  buf.depth = depth.data();
+  buf.depth_stride = kWidth * sizeof(float);
+  buf.depth_capacity = depth.size() * sizeof(float);
+  EXPECT_FALSE(c.copy(*kept, buf));
+  EXPECT_NE(std::string(dco_client_last_error()).find("earlier ring"), std::string::npos)
+      << dco_client_last_error();
+}
+
+// The reads that copy check the caller's buffer before they take a frame, and name themselves.
+TEST(RingClient, ReadsCheckTheBufferFirstAndNameTheCall) {
+  TempDir dir;
+  RingWriter writer(dir.path() / "depth.shm", small_ring());
+  client::Client c = connect(writer.path());
+  dco_frame_buffer none;
+  dco_frame_buffer_init(&none);  // no depth pointer
+  // Nothing published yet: the bad buffer is still what is wrong.
+  EXPECT_EQ(dco_client_read_latest(c.handle(), &none, nullptr), DCO_E_INVALID_ARGUMENT);
+  EXPECT_EQ(dco_client_read_latest(c.handle(), nullptr, nullptr), DCO_E_INVALID_ARGUMENT);
+  EXPECT_EQ(dco_client_read_announced(c.handle(), writer.session_id(), 0, 1, &none, nullptr),
+            DCO_E_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(dco_client_last_error()).find("dco_client_read_announced"),
+            std::string::npos)
+      << dco_client_last_error();
+  publish_pattern(writer, 3);
+  float one = 0;
+  dco_frame_buffer small;
+  dco_frame_buffer_init(&small);
+  small.depth = &one;
+  small.depth_stride = sizeof one;
+  small.depth_capacity = sizeof one;
+  EXPECT_EQ(dco_client_read_latest(c.handle(), &small, nullptr), DCO_E_BUFFER_TOO_SMALL);
+  const std::string message = dco_client_last_error();
+  EXPECT_NE(message.find("dco_client_read_latest: depth buffer too small for 96x40"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find(std::to_string(kWidth * kHeight * sizeof(float)) + " bytes"),
+            std::string::npos)
+      << message;
+}
+
+// The likeliest setup fault, an app whose user is not in the ring's group: a permission error
+// that says so, not an I/O error.
+TEST(RingClient, ARingTheUserMayNotReadIsAPermissionError) {
+  if (geteuid() != 0) GTEST_SKIP() << "needs root to read the ring as another user";
+  TempDir dir;
+  RingWriter writer(dir.path() / "depth.shm", small_ring());
+  ASSERT_EQ(chmod(dir.path().c_str(), 0755), 0);  // the directory open to all, the ring 0640
+  const pid_t child = fork();
+  if (child == 0) {
+    if (setgid(65534) != 0 || setuid(65534) != 0) _exit(3);
+    dco_client_options o;
+    dco_client_options_init(&o);
+    const std::string p = writer.path().string();
+    o.path = p.c_str();
+    o.expected_uid = 0;
+    dco_client* c = nullptr;
+    const dco_status status = dco_client_open(&o, &c);
+    const std::string message = dco_client_last_error();
+    _exit(status == DCO_E_PERMISSION && message.find("group") != std::string::npos ? 0 : 1);
+  }
+  int wstatus = 0;
+  ASSERT_EQ(waitpid(child, &wstatus, 0), child);
+  ASSERT_TRUE(WIFEXITED(wstatus));
+  EXPECT_EQ(WEXITSTATUS(wstatus), 0) << "3: could not drop to nobody; 1: not DCO_E_PERMISSION";
+}
+
 TEST(RingClient, WaitsLongerThanTheCApiCanSayAreCutNotWrapped) {
   TempDir dir;
   RingWriter writer(dir.path() / "depth.shm", small_ring());

@@ -34,18 +34,25 @@ constexpr std::uint32_t kMaxPollUs = 100'000;
 // Options structs of callers built before poll_us end here; they get the default.
 constexpr std::uint32_t kOptionsSizeV1 = offsetof(dco_client_options, poll_us);
 
-thread_local std::string t_last_error;
+// A plain array, not a std::string: a thread-local with a destructor registers it with the C++
+// runtime (__cxa_thread_atexit), which keeps the library loaded until the thread exits, so an app
+// that dlclose()s it after a failed call would keep it mapped. Messages longer than the array
+// (a path near PATH_MAX) are cut.
+thread_local char t_last_error[1024];
+
+void set_last_error(const char* message) noexcept {
+  std::snprintf(t_last_error, sizeof t_last_error, "%s", message);
+}
 
 dco_status fail(dco_status status, const std::string& message) {
-  t_last_error = message;
+  set_last_error(message.c_str());
   return status;
 }
 
 // What a C function returns when an exception reaches it (out of memory building a message or a
-// client): it must not unwind into a C caller, which has no unwind tables. The message fits the
-// string's own room, so nothing is allocated here.
+// client): it must not unwind into a C caller, which has no unwind tables.
 dco_status out_of_memory() noexcept {
-  t_last_error = "out of memory";
+  set_last_error("out of memory");
   return DCO_E_IO;
 }
 
@@ -139,6 +146,10 @@ dco_status map_segment(const Expectations& e, Mapping& out) {
     const int err = errno;
     if (err == ENOENT) return fail(DCO_E_NO_SEGMENT, e.path + ": no depth ring (is dcod running?)");
     if (err == ELOOP) return fail(DCO_E_PERMISSION, e.path + ": is a symbolic link");
+    // The likeliest setup fault: the ring is mode 0640, readable by its group only.
+    if (err == EACCES || err == EPERM)
+      return fail(DCO_E_PERMISSION, e.path + ": " + errno_text(err) +
+                                        " (readers of dcod's ring need its group, dcod)");
     return fail(DCO_E_IO, e.path + ": " + errno_text(err));
   }
   struct stat st {};
@@ -403,6 +414,9 @@ struct dco_client {
     if (st.st_dev == map.dev && st.st_ino == map.ino) return DCO_OK;
     Mapping fresh;
     const dco_status status = map_segment(expect, fresh);
+    // Gone again between the stat and the open (a daemon that stopped as it started): as when
+    // the stat finds nothing, the old ring stays.
+    if (status == DCO_E_NO_SEGMENT) return DCO_OK;
     if (status != DCO_OK) return status;
     // The caller's views point into `retired` when it is set (no frame was returned since), so
     // the current ring has none and can go.
@@ -553,7 +567,10 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
       }
     }
     if (now >= deadline) {
-      if (gone) return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
+      // Said again by every call until a new ring replaces this one (a remap clears it), also
+      // by one whose timeout ends before its next look at the writer.
+      if (gone || client->gone_reported)
+        return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
       return fail(DCO_E_TIMEOUT, client->expect.path + ": no new frame within " +
                                      std::to_string(timeout_ms) + " ms");
     }
@@ -585,23 +602,43 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
   return out_of_memory();
 }
 
-dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
-                           dco_frame_buffer* dst) try {
-  const NoCancel no_cancel;
-  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)) ||
-      !struct_ok(dst, dst ? dst->struct_size : 0, sizeof(dco_frame_buffer)) ||
-      dst->depth == nullptr)
-    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_copy: bad client, view or buffer");
+}  // extern "C"
+
+namespace {
+
+bool buffer_ok(const dco_frame_buffer* dst) {
+  return struct_ok(dst, dst ? dst->struct_size : 0, sizeof(dco_frame_buffer)) &&
+         dst->depth != nullptr;
+}
+
+// Copies the frame `view` names into dst; `caller` names the public function in messages.
+dco_status copy_view(const dco_client* client, const dco_frame_view* view, dco_frame_buffer* dst,
+                     const char* caller) {
   // Sizes and addresses come from the mapping; the view only names the slot and its token.
   const Mapping& m = client->map;
+  // A view of the ring a restarted daemon left: its frame is not in the ring now mapped, whose
+  // sizes say nothing of it.
+  if (view->info.session_id != m.session_id)
+    return fail(DCO_E_OVERTAKEN, client->expect.path +
+                                     ": the view is of an earlier ring (dcod "
+                                     "restarted since); its frame is gone");
   const std::size_t depth_row = std::size_t{m.geometry.width} * sizeof(float);
   const std::size_t rows = m.geometry.height;
   if (!rows_fit(dst->depth_capacity, dst->depth_stride, rows, depth_row))
-    return fail(DCO_E_BUFFER_TOO_SMALL, "dco_client_copy: depth buffer too small");
+    return fail(DCO_E_BUFFER_TOO_SMALL,
+                std::string(caller) + ": depth buffer too small for " +
+                    std::to_string(m.geometry.width) + "x" + std::to_string(rows) +
+                    " (rows of at least " + std::to_string(depth_row) + " bytes, " +
+                    std::to_string(rows * depth_row) + " bytes when packed)");
   const bool copy_image = dst->image != nullptr && m.geometry.image_channels != 0;
   const std::size_t image_row = std::size_t{m.geometry.width} * m.geometry.image_channels;
   if (copy_image && !rows_fit(dst->image_capacity, dst->image_stride, rows, image_row))
-    return fail(DCO_E_BUFFER_TOO_SMALL, "dco_client_copy: image buffer too small");
+    return fail(DCO_E_BUFFER_TOO_SMALL,
+                std::string(caller) + ": image buffer too small for " +
+                    std::to_string(m.geometry.width) + "x" + std::to_string(rows) + "x" +
+                    std::to_string(m.geometry.image_channels) + " (rows of at least " +
+                    std::to_string(image_row) + " bytes, " + std::to_string(rows * image_row) +
+                    " bytes when packed)");
   if (!client->valid(view))
     return fail(DCO_E_OVERTAKEN, client->expect.path + ": slot overwritten before the copy");
   const unsigned char* slot = m.slot(view->info.slot);
@@ -617,6 +654,19 @@ dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
   if (!client->valid(view))
     return fail(DCO_E_OVERTAKEN, client->expect.path + ": slot overwritten during the copy");
   return DCO_OK;
+}
+
+}  // namespace
+
+extern "C" {
+
+dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
+                           dco_frame_buffer* dst) try {
+  const NoCancel no_cancel;
+  if (client == nullptr || !struct_ok(view, view ? view->struct_size : 0, sizeof(dco_frame_view)) ||
+      !buffer_ok(dst))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_copy: bad client, view or buffer");
+  return copy_view(client, view, dst, "dco_client_copy");
 } catch (...) {
   return out_of_memory();
 }
@@ -624,15 +674,16 @@ dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
 dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst,
                                   dco_frame_info* info) try {
   const NoCancel no_cancel;
-  if (client == nullptr || (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
-    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_latest: bad client or info");
+  if (client == nullptr || !buffer_ok(dst) ||
+      (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_latest: bad client, buffer or info");
   dco_frame_view view;
   dco_frame_view_init(&view);
   const dco_client::Returned before = client->last_returned();
   for (std::uint32_t attempt = 0; attempt < client->max_attempts; ++attempt) {
     dco_status status = client->checked_latest(&view);
     if (status != DCO_OK) return status;
-    status = dco_client_copy(client, &view, dst);
+    status = copy_view(client, &view, dst, "dco_client_read_latest");
     if (status == DCO_E_OVERTAKEN) continue;
     if (status == DCO_OK && info != nullptr) *info = view.info;
     return client->copied(status, before);
@@ -657,14 +708,15 @@ dco_status dco_client_read_announced(dco_client* client, uint64_t session_id, ui
                                      uint64_t publish_index, dco_frame_buffer* dst,
                                      dco_frame_info* info) try {
   const NoCancel no_cancel;
-  if (client == nullptr || (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
-    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_announced: bad client or info");
+  if (client == nullptr || !buffer_ok(dst) ||
+      (info != nullptr && info->struct_size < sizeof(dco_frame_info)))
+    return fail(DCO_E_INVALID_ARGUMENT, "dco_client_read_announced: bad client, buffer or info");
   dco_frame_view view;
   dco_frame_view_init(&view);
   const dco_client::Returned before = client->last_returned();
   dco_status status = client->take_announced(session_id, slot, publish_index, &view);
   if (status != DCO_OK) return status;
-  status = dco_client_copy(client, &view, dst);
+  status = copy_view(client, &view, dst, "dco_client_read_announced");
   if (status == DCO_OK && info != nullptr) *info = view.info;
   return client->copied(status, before);
 } catch (...) {
@@ -708,7 +760,7 @@ const char* dco_client_strerror(dco_status status) {
 }
 
 const char* dco_client_last_error(void) {
-  return t_last_error.c_str();
+  return t_last_error;
 }
 
 }  // extern "C"

@@ -29,7 +29,8 @@ typedef enum dco_status {
   DCO_E_NO_SEGMENT = 2,        /* the segment file does not exist */
   DCO_E_IO = 3,                /* open, stat or mmap failed */
   DCO_E_BAD_FORMAT = 4,        /* not a depth ring, other version, inconsistent or truncated */
-  DCO_E_PERMISSION = 5,        /* wrong owner, world-writable, not a regular file */
+  DCO_E_PERMISSION = 5,        /* not readable by this user (readers need group dcod), wrong
+                                  owner, world-writable, not a regular file */
   DCO_E_GEOMETRY = 6,          /* not the width/height the caller expects */
   DCO_E_NO_FRAME = 7,          /* nothing published yet */
   DCO_E_OVERTAKEN = 8,         /* the writer overwrote the slot (during every attempt) */
@@ -127,11 +128,14 @@ DCO_CLIENT_API int dco_client_still_valid(const dco_client* client, const dco_fr
 DCO_CLIENT_API dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms,
                                                dco_frame_view* view);
 /* Copies the frame a view names; DCO_E_OVERTAKEN when its slot changed before or during the
- * copy. dst->image NULL skips the image. */
+ * copy, or the view is of a ring a restarted daemon left. dst->image NULL skips the image.
+ * dst is written in place: after any status but DCO_OK it may hold part of a newer frame, so a
+ * caller that keeps drawing its last good frame while reads fail copies into another buffer
+ * than the one that frame is in (two buffers in turn). */
 DCO_CLIENT_API dco_status dco_client_copy(const dco_client* client, const dco_frame_view* view,
                                           dco_frame_buffer* dst);
 /* Copies the newest frame, retrying overwritten slots; succeeds only with an untorn copy. info
- * may be NULL. */
+ * may be NULL. dst as for dco_client_copy: after a failure it may hold a torn frame. */
 DCO_CLIENT_API dco_status dco_client_read_latest(dco_client* client, dco_frame_buffer* dst,
                                                  dco_frame_info* info);
 /* The frame an announcement names (the fields of an LCM DCO_DEPTH descriptor, or any other
@@ -147,7 +151,7 @@ DCO_CLIENT_API dco_status dco_client_view_announced(dco_client* client, uint64_t
                                                     uint32_t slot, uint64_t publish_index,
                                                     dco_frame_view* view);
 /* dco_client_view_announced, then dco_client_copy: succeeds only with an untorn copy of exactly
- * the announced frame. info may be NULL. */
+ * the announced frame. info may be NULL. dst as for dco_client_copy. */
 DCO_CLIENT_API dco_status dco_client_read_announced(dco_client* client, uint64_t session_id,
                                                     uint32_t slot, uint64_t publish_index,
                                                     dco_frame_buffer* dst, dco_frame_info* info);

@@ -101,7 +101,8 @@ class Client {
     return v;
   }
 
-  // Copies a view into dst; false when the slot was overwritten meanwhile.
+  // Copies a view into dst; false when the slot was overwritten meanwhile (dst may then hold
+  // part of a newer frame: keep a frame to draw in another buffer, see dco_client_copy).
   bool copy(const FrameView& view, dco_frame_buffer& dst) const {
     const dco_status s = dco_client_copy(handle_, &view.raw, &dst);
     if (s == DCO_E_OVERTAKEN) return false;
@@ -109,7 +110,8 @@ class Client {
     return true;
   }
 
-  // An untorn copy of the newest frame, or empty when none could be had.
+  // An untorn copy of the newest frame, or empty when none could be had (dst may then hold a
+  // torn one).
   std::optional<dco_frame_info> read_latest(dco_frame_buffer& dst) {
     dco_frame_info info;
     dco_frame_info_init(&info);
@@ -131,7 +133,7 @@ class Client {
     return v;
   }
 
-  // An untorn copy of exactly the announced frame, or empty.
+  // An untorn copy of exactly the announced frame, or empty (dst as for read_latest).
   std::optional<dco_frame_info> read_announced(std::uint64_t session_id, std::uint32_t slot,
                                                std::uint64_t publish_index, dco_frame_buffer& dst) {
     dco_frame_info info;
