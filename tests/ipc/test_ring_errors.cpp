@@ -197,6 +197,12 @@ TEST_F(RingErrors, GeometryMismatch) {
   const auto r = open_with(o);
   EXPECT_EQ(r.status, DCO_E_GEOMETRY);
   EXPECT_NE(r.message.find("64x32"), std::string::npos) << r.message;
+  // Only a width asked for: the height is any, not 0.
+  o.expected_width = 80;
+  o.expected_height = 0;
+  const auto w = open_with(o);
+  EXPECT_EQ(w.status, DCO_E_GEOMETRY);
+  EXPECT_NE(w.message.find("expected 80xany"), std::string::npos) << w.message;
 }
 
 TEST_F(RingErrors, InvalidArguments) {

@@ -129,10 +129,12 @@ dco_status check_header(const Mapping& m, const Expectations& e, std::uint64_t f
   if (file_size < s->file_size)
     return fail(DCO_E_BAD_FORMAT, p + ": truncated (" + std::to_string(file_size) + " of " +
                                       std::to_string(s->file_size) + " bytes)");
-  if ((e.width != 0 && e.width != g.width) || (e.height != 0 && e.height != g.height))
+  if ((e.width != 0 && e.width != g.width) || (e.height != 0 && e.height != g.height)) {
+    const auto expected = [](std::uint32_t v) { return v != 0 ? std::to_string(v) : "any"; };
     return fail(DCO_E_GEOMETRY, p + ": ring is " + std::to_string(g.width) + "x" +
-                                    std::to_string(g.height) + ", expected " +
-                                    std::to_string(e.width) + "x" + std::to_string(e.height));
+                                    std::to_string(g.height) + ", expected " + expected(e.width) +
+                                    "x" + expected(e.height));
+  }
   geometry = g;
   sizes = *s;
   return DCO_OK;
