@@ -192,7 +192,8 @@ void Daemon::start_pipeline() {
     log_.warning(backend.message);
   else
     log_.info(backend.message);
-  // The source is stopped here (first start or a restart), so nothing is rectifying.
+  // The source is not started yet, or (a restart) its thread waits for pipeline_mutex_: nothing
+  // is rectifying.
   remapper_ = rectifier_ && backend.remapper ? backend.remapper(*rectifier_) : nullptr;
   auto next = std::make_unique<pipeline::runtime::DepthRuntime>(
       loaded_.config.pipeline, loaded_.config.runtime,
@@ -210,7 +211,7 @@ void Daemon::start_pipeline() {
   }
   runtime_ = std::move(next);
   runtime_->start();
-  pushed_in_sequence_ = false;  // the source is stopped: its thread pushes nothing now
+  pushed_in_sequence_ = false;  // the source's thread pushes nothing now (see above)
   cut_at_gaps_ = !loaded_.config.runtime.deterministic;
   const int threads = runtime_->runtime_params().threads;
   const pipeline::PipelineParams& stages = loaded_.config.pipeline;
@@ -267,6 +268,7 @@ void Daemon::finish_frames_in_flight() {
 }
 
 void Daemon::on_frame(const drivers::StereoFrame& frame) {
+  const std::lock_guard pipeline_lock(pipeline_mutex_);
   {
     std::lock_guard lock(raw_mutex_);
     if (raw_) raw_->offer(frame);
@@ -587,7 +589,6 @@ void Daemon::apply_live_settings(bool raw_recording) {
 }
 
 void Daemon::restart_pipeline() {
-  source_->stop();
   // The frames already taken in are finished with the settings they came under: a reload loses
   // none (stop() would discard them).
   finish_frames_in_flight();
@@ -596,7 +597,6 @@ void Daemon::restart_pipeline() {
   // stages, while no frame comes in.
   configure_raw_recording();
   start_pipeline();
-  start_source();
 }
 
 void Daemon::reload() {
@@ -634,6 +634,10 @@ void Daemon::reload() {
   next.config.ring_image = loaded_.config.ring_image;
   next.config.lcm_url = loaded_.config.lcm_url;
 
+  // Through the restart and, when it fails, the one with what ran: no frame reaches stages that
+  // are not running.
+  std::unique_lock pipeline_lock(pipeline_mutex_, std::defer_lock);
+  if (!restarted.empty()) pipeline_lock.lock();
   LoadedConfig previous = std::move(loaded_);
   loaded_ = std::move(next);
   apply_live_settings(restarted.empty());  // else the restart changes the raw recording

@@ -10,7 +10,9 @@
 #include <algorithm>
 #include <atomic>
 #include <filesystem>
+#include <fstream>
 #include <functional>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -44,7 +46,8 @@ struct Seen {
 // Runs the daemon on `source` until it exits, reading depth from its ring meanwhile; `after` runs
 // before the daemon (and the source it opened) is destroyed.
 Seen run_daemon(const std::string& source, std::vector<std::string> sets,
-                const Daemon::SourceOpener& opener, const std::function<void()>& after = {}) {
+                const Daemon::SourceOpener& opener, const std::function<void()>& after = {},
+                const std::optional<std::filesystem::path>& config_file = {}) {
   block_service_signals();  // as dcod's main does, before any thread starts
 
   const auto dir =
@@ -55,6 +58,7 @@ Seen run_daemon(const std::string& source, std::vector<std::string> sets,
   sources.sets = {"lcm.url=memq://", "ring.path=" + ring, "stereo.max_disparity=64"};
   sources.sets.insert(sources.sets.end(), sets.begin(), sets.end());
   sources.source = source;
+  sources.file = config_file;
   LoadedConfig config = load_config(sources);
   Logger log;
   Daemon daemon(sources, std::move(config), log, opener);
@@ -174,6 +178,65 @@ TEST(DaemonIndemind, AReplugStartsANewSequenceUnlessDeterministic) {
     EXPECT_EQ(cut, !deterministic) << log;
     EXPECT_GE(seen.frames, 10) << seen.client_error;
   }
+}
+
+// A reload that restarts the stage threads keeps the camera streaming: the module's stream is
+// committed once, not stopped and negotiated afresh, and depth flows on after the reload.
+TEST(DaemonIndemind, AReloadThatRestartsTheStagesKeepsTheCameraStreaming) {
+  block_service_signals();  // before the reloader's thread, so SIGHUP reaches the daemon only
+  const auto config = std::filesystem::temp_directory_path() /
+                      ("dco_daemon_reload_" + std::to_string(getpid()) + ".toml");
+  const auto write_config = [&](double lambda_s) {
+    std::ofstream(config) << "[densify]\nlambda_s = " << lambda_s << "\n";
+  };
+  write_config(1.2);
+  std::atomic<SimulatedIndemind*> sim{nullptr};
+  std::atomic<bool> quit{false};
+  std::atomic<std::uint64_t> intact_at_reload{0};
+  std::thread reloader;
+  const auto stop_reloader = [&] {
+    quit = true;
+    if (reloader.joinable()) reloader.join();
+  };
+  struct Join {
+    std::function<void()> f;
+    ~Join() { f(); }
+  } join_on_exit{stop_reloader};
+  ::testing::internal::CaptureStderr();
+  const Seen seen = run_daemon(
+      "indemind://", {"service.max_frames=30"},
+      [&](std::string_view uri) {
+        SimulatedIndemind::Options o;
+        o.pace_real_time = true;
+        auto owned = std::make_unique<SimulatedIndemind>(o);
+        sim = owned.get();
+        drivers::IndemindOptions io;
+        io.fps = 25;
+        io.clock = [s = owned.get()] { return s->now_ns(); };
+        auto source = drivers::open_indemind(std::move(owned), io, std::string(uri));
+        // Ten frames, then a new densify.lambda_s and a reload.
+        reloader = std::thread([s = sim.load(), &quit, &intact_at_reload, &write_config] {
+          while (!quit && s->record().frames_intact < 10)
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+          if (quit) return;
+          write_config(1.3);
+          intact_at_reload = s->record().frames_intact;
+          kill(getpid(), SIGHUP);
+        });
+        return source;
+      },
+      [&] {
+        stop_reloader();
+        ASSERT_NE(sim.load(), nullptr);
+        EXPECT_EQ(sim.load()->record().commits, 1u);
+      },
+      config);
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  std::filesystem::remove(config);
+  EXPECT_EQ(seen.status, 0) << log;
+  EXPECT_NE(log.find("restarted the pipeline for densify.lambda_s"), std::string::npos) << log;
+  EXPECT_GT(intact_at_reload.load(), 0u);
+  EXPECT_GE(seen.frames, 10) << seen.client_error;
 }
 
 TEST(DaemonIndemind, RecordedUsbCaptureReplaysThroughTheDaemon) {

@@ -390,6 +390,7 @@ class SimulatedIndemind::Device final : public drivers::UsbDevice {
             throw UsbError("commit does not match probe (stall)", false);
           s.mode = mode_of(s.probe);
           s.committed = true;
+          ++s.rec.commits;
         }
         return data.size();
       }

@@ -88,6 +88,7 @@ class SimulatedIndemind final : public drivers::UsbTransport {
     std::uint64_t flash_writes = 0;  // any command that would write or erase flash
     std::uint64_t transfers_submitted = 0, transfers_completed = 0;
     std::uint64_t opens = 0;
+    std::uint64_t commits = 0;           // video streams committed: each start of the stream
     std::uint64_t busy_answers = 0;      // extension-unit answers that said busy
     std::uint64_t control_hotplugs = 0;  // hotplug notes raised inside control transfers
     std::uint64_t expected_lost = 0;     // counter values between consecutive intact frames

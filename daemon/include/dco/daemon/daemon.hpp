@@ -78,7 +78,8 @@ class Daemon final : public drivers::FrameSink {
   // What a reload applies without restarting the pipeline, from loaded_; the raw recording
   // too unless the pipeline restarts, which changes it with the stages.
   void apply_live_settings(bool raw_recording = true);
-  // The stage threads again with loaded_ (between two frames: the source stops first).
+  // The stage threads again with loaded_, between two frames: the caller holds pipeline_mutex_,
+  // so the source's thread waits in on_frame meanwhile.
   void restart_pipeline();
   // Starts, stops or re-creates the DCO_RAW recorder as the configuration says.
   void configure_raw_recording();
@@ -117,7 +118,12 @@ class Daemon final : public drivers::FrameSink {
   std::unique_ptr<ipc::DepthPublisher> publisher_;
   std::unique_ptr<pipeline::runtime::DepthRuntime> runtime_;
   std::string calibration_toml_;  // the source's, as DCO_RAW carries it
-  std::mutex raw_mutex_;          // the recorder: offered frames (source thread), reloads (main)
+  // Held by on_frame while it hands a frame to the recorder and the stages, and by a reload
+  // while it replaces them: the source runs on through a reload (a USB camera is not stopped and
+  // negotiated afresh, and a replayed USB capture sees no calls it did not record); its thread
+  // waits, as behind any slow consumer. Taken before raw_mutex_.
+  std::mutex pipeline_mutex_;
+  std::mutex raw_mutex_;  // the recorder: offered frames (source thread), reloads (main)
   std::unique_ptr<RawRecorder> raw_;
   std::string raw_settings_;  // what raw_ was made with
   std::uint64_t raw_dropped_reported_ = 0, raw_oversized_reported_ = 0, raw_failed_reported_ = 0;
