@@ -207,6 +207,8 @@ void Daemon::start_pipeline() {
     const pipeline::runtime::RuntimeStats before = runtime_->stats();
     earlier_dropped_ += before.dropped;
     earlier_late_ += before.late;
+    early_reported_ = 0;
+    early_pacer_ = WarningPacer{};
     last_pushed_ = last_published_ = 0;
   }
   runtime_ = std::move(next);
@@ -233,6 +235,16 @@ void Daemon::start_pipeline() {
                       : ""));
   const pipeline::runtime::RuntimeParams& rp = loaded_.config.runtime;
   if (runtime_->holds_results_for_release()) {
+    // The results held for their release time are few: a latency longer than they span at the
+    // camera's rate is not kept.
+    const double fps = source_->info().fps;
+    if (const double held_ms =
+            static_cast<double>(pipeline::runtime::DepthRuntime::kReleaseSlots) * 1000.0 / fps;
+        fps > 0 && rp.release_latency_ms > held_ms)
+      log_.warning(fmt::format(
+          "runtime.release_latency_ms {:g} is longer than the {} results the runtime holds span "
+          "at {:g} fps ({:.0f} ms): results will go out early, at about that age",
+          rp.release_latency_ms, pipeline::runtime::DepthRuntime::kReleaseSlots, fps, held_ms));
     if (runtime_->stats().release_realtime)
       log_.info(fmt::format("results go out {:g} ms after capture, from a SCHED_FIFO {} thread",
                             rp.release_latency_ms, rp.release_priority));
@@ -407,7 +419,8 @@ std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const 
       // With runtime.release_latency_ms the latency is fixed: what the stages took and the
       // results ready too late for it tell whether the setting suits the machine.
       runtime_->holds_results_for_release()
-          ? fmt::format(" (ready p99 {:.1f} ms, {} overdue)", s.ready.p99_ms, s.overdue)
+          ? fmt::format(" (ready p99 {:.1f} ms, {} overdue, {} early)", s.ready.p99_ms, s.overdue,
+                        s.early)
           : std::string(),
       stalled_ ? "; STALLED" : "");
 }
@@ -451,6 +464,15 @@ void Daemon::tick(std::int64_t now_ns) {
   last_rate_ns_ = now_ns;
   last_pushed_ = stats.pushed;
   last_published_ = stats.published;
+  if (const bool early = stats.early > early_reported_; early_pacer_.due(now_ns, early) && early) {
+    log_.warning(fmt::format(
+        "{} result(s) went out before runtime.release_latency_ms ({:g} ms) since the last report: "
+        "all {} release slots were taken (the latency spans more frames than they hold, or the "
+        "stages caught up after a stall)",
+        stats.early - early_reported_, loaded_.config.runtime.release_latency_ms,
+        pipeline::runtime::DepthRuntime::kReleaseSlots));
+    early_reported_ = stats.early;
+  }
   // A field engineer's first question about a cheap stereo pair: how far apart its two cameras'
   // exposure and rows are. Logged when it changes (a restarted pipeline fits it anew).
   if (std::string correction = stereo::describe(stats.camera_correction);

@@ -33,7 +33,8 @@ void register_params(ConfigSchema& s, RuntimeParams& p) {
         "entry_deadline_ms alone; with entry_deadline_ms 0 there is no deadline at all");
   s.add("runtime.release_latency_ms", &p.release_latency_ms, 0.0, 1000.0,
         "hand every depth map on this long after its capture, a constant age; one ready later "
-        "goes at once (overdue); 0 = as soon as it is ready");
+        "goes at once (overdue); held for at most about four frame intervals (longer: early, "
+        "with a warning); 0 = as soon as it is ready");
   s.add("runtime.release_priority", &p.release_priority, 0, 99,
         "SCHED_FIFO priority of the thread that hands results on at their release time (and "
         "runs the result callback), where the process may use it; 0 = a normal thread");

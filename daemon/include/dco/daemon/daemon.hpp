@@ -137,7 +137,7 @@ class Daemon final : public drivers::FrameSink {
   std::int64_t lcm_retry_ns_ = 0;  // when LCM, not set up at the start, was last tried
 
   FrameNumbers frame_numbers_;
-  // The source thread's (set while it is stopped): a frame since the last start or cut, and
+  // The source thread's (under pipeline_mutex_): a frame since the last start or cut, and
   // whether a gap in the camera's frames cuts the sequence (not in deterministic mode).
   bool pushed_in_sequence_ = false, cut_at_gaps_ = true;
   // Where a sequence was cut: counted on the source thread, reported on the main thread.
@@ -162,6 +162,10 @@ class Daemon final : public drivers::FrameSink {
   std::int64_t next_stats_ns_ = 0, last_ping_ns_ = 0;
   long last_pushed_ = 0, last_published_ = 0;
   long earlier_dropped_ = 0, earlier_late_ = 0;  // by the runtimes that reloads replaced
+  // Results that went out before runtime.release_latency_ms (every release slot taken), as last
+  // reported; the running runtime's count.
+  long early_reported_ = 0;
+  WarningPacer early_pacer_;
   std::int64_t last_rate_ns_ = 0;
   double fps_in_ = 0, fps_out_ = 0;
   // The stereo stage's correction of the right camera as last written to the log.

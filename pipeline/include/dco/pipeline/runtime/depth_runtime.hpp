@@ -124,6 +124,12 @@ class DepthRuntime {
   // Called on a stage's thread right before that stage runs on a frame (tests slow stages down).
   using StageHook = std::function<void(Stage, FrameIndex index)>;
 
+  // Results waiting for their release time (runtime.release_latency_ms). When all are taken, the
+  // oldest goes early (RuntimeStats::early) rather than the densify stage waiting for it: a
+  // latency longer than this many frame intervals is not held. Each is a whole result (several
+  // full-size maps), so they are few.
+  static constexpr std::size_t kReleaseSlots = 4;
+
   // Throws dco::Error on invalid params.
   // `stages` makes the stereo and contour stages and the densify solver (empty: the CPU ones).
   DepthRuntime(const PipelineParams& pipeline, const RuntimeParams& runtime,
@@ -176,10 +182,6 @@ class DepthRuntime {
   };
   static constexpr int kEnd = -1;            // queue item: the sequence ends here
   static constexpr std::size_t kInputs = 3;  // being filled, waiting, in the stereo stage
-  // Results waiting for their release time. When all are taken, the oldest goes early rather
-  // than the densify stage waiting for it.
-  static constexpr std::size_t kReleaseSlots = 4;
-
   void stereo_loop(std::stop_token stop);
   // True when the stereo stage should take `input`, which it has just taken from the entry, as
   // a flow neighbour only.
