@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <regex>
 #include <string>
 #include <vector>
@@ -226,8 +227,21 @@ TEST(DcoBenchCli, BadDataAndParametersExitWithOne) {
   };
   expect_data({"--sequence", "karlsruhe", "--karlsruhe", (dir.path() / "missing").string()},
               "missing");
-  expect_data({"--sequence", "synthetic", "--set", "runtime.threads=9"}, "runtime.threads");
-  expect_data({"--sequence", "synthetic", "--set", "runtime.affinity=0,0"}, "listed twice");
+  const fs::path config = dir.path() / "bad.toml";
+  std::ofstream(config) << "[runtime]\naffinity = \"0,0\"\n";
+  expect_data({"--sequence", "synthetic", "--config", config.string()}, "listed twice");
+}
+
+// Parameters given on the command line alone are command-line mistakes (status 2), as dcod's.
+TEST(DcoBenchCli, BadSetsAndBackendsExitWithTwo) {
+  TempDir dir;
+  const auto expect_usage = [&](const std::vector<std::string>& args, const std::string& what) {
+    testing::expect_one_error_line(run_bench(dir, args), "dco-bench", 2, what);
+  };
+  expect_usage({"--sequence", "synthetic", "--set", "runtime.threads=9"}, "runtime.threads");
+  expect_usage({"--sequence", "synthetic", "--set", "runtime.affinity=0,0"}, "listed twice");
+  expect_usage({"--sequence", "synthetic", "--set", "foo.bar=1"}, "unknown key 'foo.bar'");
+  expect_usage({"--backend", "foo"}, "--backend foo: not one of auto, cpu, cuda");
 }
 
 // The ipc benchmark sends udpm multicast, so it runs only where a private network namespace can

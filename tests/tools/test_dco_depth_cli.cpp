@@ -34,6 +34,10 @@ const fs::path kDataDir = DCO_DATA_DIR;
 const fs::path kTsukuba = kDataDir / "middlebury2001" / "Tsukuba";
 const fs::path kMotorcycle = kDataDir / "middlebury2014" / "Motorcycle";
 
+std::string fmt_name(const std::string& side, int i) {
+  return side + "_" + (i < 10 ? "0" : "") + std::to_string(i) + ".png";
+}
+
 CliRun run_depth(const TempDir& dir, const std::vector<std::string>& args) {
   return testing::run_cli(DCO_DEPTH_EXE, dir, args);
 }
@@ -255,7 +259,7 @@ TEST(DcoDepthCli, MaxDisparityAboveTheStagesLimitIsRefused) {
   expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
                                (kTsukuba / "im4.png").string(), "--max-disp", "1200", "--out",
                                (dir.path() / "d.pfm").string()}),
-               1, "--max-disp 1200: value 1200 is outside [1, 1024]");
+               2, "--max-disp 1200: value 1200 is outside [1, 1024]");
 }
 
 // A manifest's max_disp is held to the same limit as --max-disp.
@@ -319,6 +323,61 @@ TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
     expect_error(run_depth(dir, {"--left-pattern", "l%d.png", "--right-pattern", "r%d.png",
                                  "--count", count, "--out-dir", "o"}),
                  2, "--count must be >= 1");
+  expect_error(
+      run_depth(dir, {"--left-pattern", "l%s.png", "--right-pattern", "r%d.png", "--out-dir", "o"}),
+      2, "needs exactly one integer field");
+  expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png", "--out", "d.png"}), 2,
+               "--out writes PFM");
+  expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png", "--out", "d.pfm", "--calib",
+                               "c.txt", "--depth-out", "z.jpg"}),
+               2, "--depth-out writes .pfm or .png");
+  expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png", "--out", "d.pfm", "--set",
+                               "nonsense"}),
+               2, "--set nonsense: expected key=value");
+  expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png", "--out", "d.pfm", "--set",
+                               "densify.plane_window=4"}),
+               2, "plane_window must be 0 or odd");
+}
+
+// An output that names an input (through a link too) would replace it: refused, the input kept.
+TEST(DcoDepthCli, AnOutputOverAnInputIsRefused) {
+  TempDir dir;
+  const fs::path left = dir.path() / "l.pfm";
+  fs::copy_file(kTsukuba / "im3.png", dir.path() / "l.png");
+  fs::create_symlink(dir.path() / "l.png", left);
+  const auto size = fs::file_size(dir.path() / "l.png");
+  expect_error(run_depth(dir, {"--left", left.string(), "--right", (kTsukuba / "im4.png").string(),
+                               "--out", left.string()}),
+               2, "is an input; the output would replace it");
+  EXPECT_EQ(fs::file_size(dir.path() / "l.png"), size);
+}
+
+// An open-ended pattern sequence ends at the first frame one of whose images is missing (here
+// the right one); a run that fails part-way leaves no frame of an earlier run beside its own.
+TEST(DcoDepthCli, APatternSequenceEndsAtAMissingRightImageAndAFailedRunLeavesNoStaleFrames) {
+  TempDir dir;
+  const fs::path in = dir.path() / "in";
+  const fs::path out = dir.path() / "out";
+  fs::create_directories(in);
+  for (int i = 0; i < 3; ++i) fs::copy_file(kTsukuba / "im3.png", in / fmt_name("L", i));
+  for (int i = 0; i < 2; ++i) fs::copy_file(kTsukuba / "im4.png", in / fmt_name("R", i));
+  const auto run = [&](const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"--left-pattern",  (in / "L_%02d.png").string(),
+                                     "--right-pattern", (in / "R_%02d.png").string(),
+                                     "--out-dir",       out.string(),
+                                     "--max-disp",      "16"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_depth(dir, args);
+  };
+  const CliRun ok = run({});
+  ASSERT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_THAT(ok.out, HasSubstr("2 frames, max-disp 16,"));
+  // An earlier run's frame 5, then a run that fails at its third frame (its right image is
+  // missing and --count asks for it).
+  fs::copy_file(out / "frame_000000.pfm", out / "frame_000005.pfm");
+  expect_error(run({"--count", "3"}), 1, "R_02.png");
+  EXPECT_TRUE(fs::exists(out / "frame_000000.pfm"));
+  EXPECT_FALSE(fs::exists(out / "frame_000005.pfm"));
 }
 
 // A frame too small for the flow cue fails at the first frame, before anything is written.
@@ -371,7 +430,7 @@ TEST(DcoDepthCli, UnknownParameterIsRefused) {
   expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
                                (kTsukuba / "im4.png").string(), "--out",
                                (dir.path() / "d.pfm").string(), "--set", "stereo.lamda_ad=3"}),
-               1, "stereo.lamda_ad");
+               2, "stereo.lamda_ad");
   const fs::path config = dir.write("bad.toml", "[stereo]\nuniqueness = 0.2\ncensus_widht = 7\n");
   expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
                                (kTsukuba / "im4.png").string(), "--out",

@@ -169,9 +169,12 @@ Options parse_args(int argc, char** argv) {
       opt.config = args.value();
     else if (arg == "--set")
       opt.overrides.push_back(args.value());
-    else if (arg == "--backend")
-      opt.overrides.push_back("runtime.backend=" + args.value());
-    else if (arg.starts_with("-"))
+    else if (arg == "--backend") {
+      const std::string backend = args.value();
+      if (backend != "auto" && backend != "cpu" && backend != "cuda")
+        throw UsageError("--backend " + backend + ": not one of auto, cpu, cuda");
+      opt.overrides.push_back("runtime.backend=" + backend);
+    } else if (arg.starts_with("-"))
       throw UsageError(fmt::format("unknown option {}", arg));
     else
       throw UsageError(fmt::format("unexpected argument '{}'", arg));
@@ -206,10 +209,15 @@ Params load_params(const Options& opt) {
   dco::pipeline::register_params(schema, p.pipeline);
   rt::register_params(schema, p.runtime);
   if (opt.config) schema.load_file(*opt.config);
-  for (const std::string& assignment : opt.overrides) schema.set(assignment);
+  dco::tools::apply_sets(schema, opt.overrides);
   p.max_disparity_given = schema.was_set("stereo.max_disparity");
-  dco::pipeline::validate(p.pipeline);
-  rt::validate(p.runtime);
+  try {
+    dco::pipeline::validate(p.pipeline);
+    rt::validate(p.runtime);
+  } catch (const dco::Error& e) {
+    if (opt.config) throw;  // the file's values or the command line's: a data error
+    throw UsageError(std::string("--set: ") + e.what());  // every value came from --set
+  }
   return p;
 }
 

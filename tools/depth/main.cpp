@@ -40,6 +40,12 @@ std::string lower(std::string text) {
 }
 
 namespace fs = std::filesystem;
+
+// Whether two paths name one file, through links (false when either is not there).
+bool same_file(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  return fs::equivalent(a, b, ec) && !ec;
+}
 using dco::tools::UsageError;
 
 constexpr std::string_view kUsage =
@@ -198,6 +204,22 @@ Options parse_args(int argc, char** argv) {
   if (opt.left || opt.right) {
     if (!opt.left || !opt.right) throw UsageError("give both --left and --right");
     if (!opt.out) throw UsageError("--out is required");
+    if (lower(opt.out->extension().string()) != ".pfm")
+      throw UsageError(
+          fmt::format("--out writes PFM: give a name ending in .pfm, not '{}'", opt.out->string()));
+    if (opt.depth_out && lower(opt.depth_out->extension().string()) != ".pfm" &&
+        lower(opt.depth_out->extension().string()) != ".png")
+      throw UsageError(
+          fmt::format("--depth-out writes .pfm or .png, not '{}'", opt.depth_out->string()));
+    // An output over an input would destroy the input (the write replaces the file, whatever
+    // its permissions).
+    for (const std::optional<fs::path>& output : {opt.out, opt.depth_out})
+      for (const std::optional<fs::path>& input : {opt.left, opt.right, opt.calib, opt.config})
+        if (output && input && same_file(*output, *input))
+          throw UsageError(
+              fmt::format("'{}' is an input; the output would replace it", output->string()));
+    if (opt.depth_out && same_file(*opt.out, *opt.depth_out))
+      throw UsageError("--out and --depth-out name one file");
     if (opt.depth_out && !opt.calib) throw UsageError("--depth-out needs --calib");
     if (opt.out_dir || opt.data_root) throw UsageError("--out-dir and --data-root need --scenes");
     if (opt.overlays) throw UsageError("--overlays is for --out-dir; one pair takes --overlay-dir");
@@ -215,6 +237,13 @@ Options parse_args(int argc, char** argv) {
     throw UsageError("--frames must be >= 1 and --size at least 16x16");
   if (opt.synthetic) dco::tools::check_synthetic_name(*opt.synthetic);
   if (opt.left_pattern && opt.first < 0) throw UsageError("--first must be >= 0");
+  for (const std::optional<std::string>& pattern : {opt.left_pattern, opt.right_pattern}) {
+    try {
+      if (pattern) dco::tools::expand_pattern(*pattern, 0);
+    } catch (const dco::Error& e) {
+      throw UsageError(e.what());
+    }
+  }
   if (opt.left_pattern && opt.count != -1 && opt.count < 1)
     throw UsageError("--count must be >= 1 (without it: up to the first missing file)");
   if (!opt.left_pattern && (opt.first != 0 || opt.count != -1))
@@ -231,14 +260,19 @@ dco::pipeline::PipelineParams load_params(const Options& opt, bool& max_disparit
   dco::ConfigSchema schema;
   dco::pipeline::register_params(schema, params);
   if (opt.config) schema.load_file(*opt.config);
-  for (const std::string& assignment : opt.overrides) schema.set(assignment);
+  dco::tools::apply_sets(schema, opt.overrides);
   max_disparity_given = opt.max_disp || schema.was_set("stereo.max_disparity");
   // --max-disp has the range of stereo.max_disparity (its lower end is checked with the options).
   if (opt.max_disp && *opt.max_disp > dco::stereo::kMaxDisparityLimit)
-    throw dco::Error(fmt::format("--max-disp {}: value {} is outside [1, {}]", *opt.max_disp,
+    throw UsageError(fmt::format("--max-disp {}: value {} is outside [1, {}]", *opt.max_disp,
                                  *opt.max_disp, dco::stereo::kMaxDisparityLimit));
   if (opt.max_disp) params.stereo.max_disparity = *opt.max_disp;
-  dco::pipeline::validate(params);
+  try {
+    dco::pipeline::validate(params);
+  } catch (const dco::Error& e) {
+    if (opt.config) throw;  // the file's values or the command line's: a data error
+    throw UsageError(std::string("--set: ") + e.what());  // every value came from --set
+  }
   return params;
 }
 
@@ -430,15 +464,22 @@ int run_sequence(const Options& opt, dco::pipeline::PipelineParams params,
     written_indices.insert(result.index);
     ++written;
   };
-  while (frames->next(input)) {
-    if (!input.gt_disparity.empty()) {
-      dco::write_pfm(*opt.out_dir / fmt::format("gt_{:06d}.pfm", input.index),
-                     input.gt_disparity.view());
-      written_indices.insert(input.index);
+  try {
+    while (frames->next(input)) {
+      if (!input.gt_disparity.empty()) {
+        dco::write_pfm(*opt.out_dir / fmt::format("gt_{:06d}.pfm", input.index),
+                       input.gt_disparity.view());
+        written_indices.insert(input.index);
+      }
+      if (pipeline.push(input.left.cview(), input.right.cview(), result)) emit();
     }
-    if (pipeline.push(input.left.cview(), input.right.cview(), result)) emit();
+    while (pipeline.finish(result)) emit();
+  } catch (...) {
+    // A run that fails part-way leaves its frames, and not an earlier run's beside them.
+    std::error_code ignored;
+    if (fs::is_directory(*opt.out_dir, ignored)) remove_other_frames(*opt.out_dir, written_indices);
+    throw;
   }
-  while (pipeline.finish(result)) emit();
   if (written == 0) throw dco::Error("the sequence holds no frame");
   // Frames of an earlier, longer run in the same folder would be scored with these.
   if (const int stale = remove_other_frames(*opt.out_dir, written_indices); stale > 0)

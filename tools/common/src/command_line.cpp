@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
 
+#include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/printable.hpp"
 #include "dco/core/synthetic_scene.hpp"
@@ -94,6 +95,16 @@ int run_tool(std::string_view tool, const std::function<int()>& body) {
   } catch (const std::exception& e) {
     fmt::print(stderr, "{}: error: {}\n", tool, one_line(e.what()));
     return 1;
+  }
+}
+
+void apply_sets(ConfigSchema& schema, const std::vector<std::string>& assignments) {
+  for (const std::string& assignment : assignments) {
+    try {
+      schema.set(assignment);
+    } catch (const Error& e) {
+      throw UsageError(e.what());  // it names the --set
+    }
   }
 }
 

@@ -32,9 +32,12 @@ class PatternSequence final : public FrameSequence {
     if ((end_ >= 0 && next_ >= end_) || next_ > std::numeric_limits<int>::max()) return false;
     const int index = static_cast<int>(next_);
     const std::filesystem::path left = expand_pattern(left_, index);
-    if (end_ < 0 && !std::filesystem::exists(left)) return false;
+    const std::filesystem::path right = expand_pattern(right_, index);
+    // Open-ended: up to the first frame one of whose images is missing.
+    if (end_ < 0 && (!std::filesystem::exists(left) || !std::filesystem::exists(right)))
+      return false;
     Image<std::uint8_t> l = load_image(left);
-    Image<std::uint8_t> r = load_image(expand_pattern(right_, index));
+    Image<std::uint8_t> r = load_image(right);
     if (rectifier_) rectifier_->check_inputs(l.cview(), r.cview());
     if (rectifier_ && rectifier_->needs_remap()) {
       rectifier_->rectify(l.cview(), r.cview(), frame.left, frame.right);

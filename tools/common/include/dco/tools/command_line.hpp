@@ -5,6 +5,11 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
+
+namespace dco {
+class ConfigSchema;
+}
 
 namespace dco::tools {
 
@@ -38,6 +43,10 @@ class ArgCursor {
   std::string_view name_;
   std::optional<std::string> inline_value_;
 };
+
+// Applies --set KEY=VALUE assignments in order. A bad one (no '=', an unknown key, a value out
+// of range) is a command-line mistake: UsageError, exit status 2, as dcod's own --set.
+void apply_sets(ConfigSchema& schema, const std::vector<std::string>& assignments);
 
 // Throws UsageError unless `name` is a synthetic scene (hand, boxes, static): a command line
 // naming another one is a usage error, found before any work.
