@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <zlib.h>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -18,6 +19,7 @@
 #include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/file_replace.hpp"
+#include "dco/core/printable.hpp"
 
 namespace dco {
 namespace {
@@ -77,6 +79,29 @@ std::optional<PngHeader> png_header(std::span<const std::uint8_t> bytes) {
   return PngHeader{read_be32(bytes.data() + 16), read_be32(bytes.data() + 20), bytes[24]};
 }
 
+std::string png_damage(std::span<const std::uint8_t> bytes) {
+  constexpr std::size_t kSignature = 8;
+  if (bytes.size() < kSignature) return "shorter than a PNG signature";
+  std::size_t at = kSignature;
+  while (true) {
+    if (bytes.size() - at < 12)
+      return fmt::format("cut short at byte {} of {} (no IEND chunk)", at, bytes.size());
+    const std::uint32_t length = read_be32(bytes.data() + at);
+    const std::string type(reinterpret_cast<const char*>(bytes.data() + at + 4), 4);
+    // Length, type, data, CRC; the length is at most 2^31 - 1 by the format.
+    if (length > 0x7fffffffu || bytes.size() - at - 12 < length)
+      return fmt::format("cut short in chunk {} at byte {} of {}", printable(type), at,
+                         bytes.size());
+    const std::uint8_t* typed = bytes.data() + at + 4;
+    const auto crc = static_cast<std::uint32_t>(crc32(crc32(0, nullptr, 0), typed, length + 4));
+    if (crc != read_be32(typed + 4 + length))
+      return fmt::format("chunk {} at byte {} is damaged (its CRC does not match)", printable(type),
+                         at);
+    at += 12 + length;
+    if (type == "IEND") return {};
+  }
+}
+
 cv::Mat read_image_file(const std::filesystem::path& path, int flags, std::string_view what) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
@@ -91,6 +116,9 @@ cv::Mat read_image_file(const std::filesystem::path& path, int flags, std::strin
               png->height > static_cast<std::uint32_t>(kMaxImageSide)))
     throw Error(fmt::format("{} {} is a {}x{} PNG (sides at most {})", what, quoted(path),
                             png->width, png->height, kMaxImageSide));
+  if (png_header(bytes))
+    if (const std::string damage = png_damage(bytes); !damage.empty())
+      throw Error(fmt::format("cannot decode {} {}: the PNG is {}", what, quoted(path), damage));
   // OpenCV reads a PGM/PPM of fewer levels (maxval 15) as 8-bit values 0..15, unscaled.
   if (const auto maxval = pnm_maxval(bytes); maxval && *maxval < 255)
     throw Error(fmt::format("{} {} is a PGM/PPM with maxval {} (8-bit ones need 255)", what,

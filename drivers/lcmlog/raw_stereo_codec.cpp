@@ -78,6 +78,9 @@ void decode_raw_stereo(const ::dco::raw_stereo_t& message, Image<std::uint8_t>& 
     if (!png_header_is(bytes, message.width, message.height))
       throw Error(fmt::format("raw frame {}: the {} image is not an 8-bit PNG of {}x{}",
                               message.frame_seq, eye, message.width, message.height));
+    if (const std::string damage = png_damage(bytes); !damage.empty())
+      throw Error(
+          fmt::format("raw frame {}: the {} image's PNG is {}", message.frame_seq, eye, damage));
     // Straight into the image when it already has the size: imdecode keeps a matching buffer.
     cv::Mat into;
     if (!to.empty()) into = as_mat(to.view());

@@ -1,11 +1,14 @@
 #include "dco/core/image_io.hpp"
 
 #include <iterator>
+#include <span>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "dco/core/cv_interop.hpp"
 #include "dco/core/error.hpp"
 #include "test_support.hpp"
 
@@ -115,6 +118,30 @@ TEST(ImageIo, HugePngIsRefusedFromItsHeader) {
   EXPECT_NE(error_of(dir / "huge.png").find("huge.png' is a 20000x20000 PNG (sides at most 16384)"),
             std::string::npos)
       << error_of(dir / "huge.png");
+}
+
+// A PNG cut short or with a damaged byte is refused from its chunks, before libpng decodes it
+// (which would also print its own line on stderr); every cut and every flipped byte is found.
+TEST(ImageIo, APngCutShortOrDamagedIsRefusedFromItsChunks) {
+  std::vector<std::uint8_t> png;
+  ASSERT_TRUE(cv::imencode(".png", as_mat(pattern(40, 30, 3).cview()), png));
+  EXPECT_EQ(png_damage(png), "");
+  for (std::size_t cut = 0; cut < png.size(); ++cut) {
+    const std::span<const std::uint8_t> head(png.data(), cut);
+    EXPECT_NE(png_damage(head).find(cut < 8 ? "shorter than" : "cut short"), std::string::npos)
+        << cut << ": " << png_damage(head);
+  }
+  for (std::size_t at = 8; at < png.size(); ++at) {
+    std::vector<std::uint8_t> flipped = png;
+    flipped[at] ^= 0x10;
+    EXPECT_NE(png_damage(flipped), "") << "byte " << at;
+  }
+  test::TempDir dir;
+  test::write_file(
+      dir / "cut.png",
+      std::string(png.begin(), png.begin() + static_cast<std::ptrdiff_t>(png.size() / 2)));
+  EXPECT_NE(error_of(dir / "cut.png").find("cut.png': the PNG is cut short"), std::string::npos)
+      << error_of(dir / "cut.png");
 }
 
 // A PGM of fewer levels than 8 bits give (maxval 15) would come out as values 0..15: refused,

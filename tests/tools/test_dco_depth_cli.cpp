@@ -173,6 +173,17 @@ TEST(DcoDepthCli, DenseBatchModeAlsoWritesTheSparseMapItWasFilledInFrom) {
   EXPECT_FALSE(fs::exists(out_dir / "middlebury2001_Tsukuba.sparse.pfm"));
 }
 
+// A PNG cut short is one error line of dco-depth's, with no line of libpng's before it.
+TEST(DcoDepthCli, APngCutShortIsOneErrorLine) {
+  TempDir dir;
+  const fs::path cut = dir.path() / "cut.png";
+  fs::copy_file(kTsukuba / "im3.png", cut);
+  fs::resize_file(cut, fs::file_size(cut) / 2);
+  expect_error(run_depth(dir, {"--left", cut.string(), "--right", (kTsukuba / "im4.png").string(),
+                               "--out", (dir.path() / "d.pfm").string()}),
+               1, "the PNG is cut short");
+}
+
 TEST(DcoDepthCli, MissingInputFileIsNamed) {
   TempDir dir;
   expect_error(

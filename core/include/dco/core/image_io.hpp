@@ -28,6 +28,11 @@ struct PngHeader {
 };
 std::optional<PngHeader> png_header(std::span<const std::uint8_t> bytes);
 
+// How a PNG's chunks are damaged (cut short, a chunk's CRC wrong, no IEND), or empty when each
+// chunk is whole and its CRC right. Checked before decoding: libpng reports such damage on stderr
+// as well as to its caller, which would put a second line beside the tools' and dcod's own.
+std::string png_damage(std::span<const std::uint8_t> bytes);
+
 // Reads and decodes an image file as cv::imread(path, flags) would, but every failure -- missing,
 // unreadable, corrupt, OpenCV's own exceptions -- is a dco::Error naming the file as `what`, and a
 // PNG whose header claims a side above kMaxImageSide is refused before it is inflated (a small
