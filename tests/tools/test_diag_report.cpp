@@ -584,6 +584,25 @@ TEST(DcoDiagCli, WritesTheReportsAndExitsByTheRules) {
   r = run_cli(DCO_DIAG_EXE, dir, {log.string(), "--html", (dir / "taken.html").string()});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("taken.html': Is a directory"), std::string::npos) << r.err;
+  // The summary goes out all the same (a log on read-only media), without a report line.
+  EXPECT_NE(r.out.find("56 published in 2 sessions"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("report    "), std::string::npos) << r.out;
+  // A folder that cannot take the report's temporary file: the reason is given.
+  std::filesystem::create_directory(dir / "locked");
+  r = run_cli(DCO_DIAG_EXE, dir,
+              {log.string(), "--html", (dir / "locked" / "missing" / "r.html").string()});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("No such file or directory"), std::string::npos) << r.err;
+  // Usage mistakes are one line each, not the whole usage text.
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{log.string(), "--bogus"}, std::vector<std::string>{},
+        std::vector<std::string>{log.string(), "--json", ""},
+        std::vector<std::string>{log.string(), "--html", (dir / "same").string(), "--json",
+                                 (dir / "same").string()}}) {
+    r = run_cli(DCO_DIAG_EXE, dir, args);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 // dco-diag: a report of a dcod LCM log (what lcm-logger recorded in the field): a text summary
 // on stdout, a self-contained HTML report, optionally the key numbers as JSON.
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -31,9 +33,10 @@ it read); 1 when the file is not an LCM log; 2 for a usage mistake.
 void write_file(const std::filesystem::path& path, const std::string& text) {
   dco::replace_file(path, [&](const std::filesystem::path& tmp) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw dco::Error("cannot write " + path.string() + ": " + std::strerror(errno));
     out << text;
     out.close();
-    if (!out) throw dco::Error("cannot write " + path.string());
+    if (!out) throw dco::Error("cannot write " + path.string() + ": " + std::strerror(errno));
   });
 }
 
@@ -60,10 +63,12 @@ int main(int argc, char** argv) {
         return 0;
       } else if (name == "--html") {
         html = args.value();
+        if (html.empty()) throw UsageError("--html needs a file name");
       } else if (name == "--no-html") {
         no_html = args.flag();
       } else if (name == "--json") {
         json = args.value();
+        if (json.empty()) throw UsageError("--json needs a file name (or - for stdout)");
       } else if (name == "--previews") {
         const int n = args.int_value();
         if (n < 0 || n > 10000) throw UsageError("--previews must be 0 to 10000");
@@ -71,24 +76,45 @@ int main(int argc, char** argv) {
       } else if (!name.starts_with("-") && log.empty()) {
         log = std::string(name);
       } else {
-        throw UsageError(fmt::format("unexpected argument {}\n{}", name, kUsage));
+        throw UsageError(fmt::format("unexpected argument {}", name));
       }
     }
-    if (log.empty()) throw UsageError(std::string("no log given\n") + kUsage);
+    if (log.empty()) throw UsageError("no log given");
     if (no_html && !html.empty()) throw UsageError("--html and --no-html exclude each other");
     if (!no_html && html.empty()) html = log + ".html";
     if (!no_html) refuse_the_log(log, html, "--html");
     if (!json.empty() && json != "-") refuse_the_log(log, json, "--json");
+    if (!no_html && !json.empty() && json != "-") {
+      std::error_code ec;
+      if (html == json || std::filesystem::equivalent(html, json, ec))
+        throw UsageError(fmt::format("--html and --json name one file, {}", json));
+    }
 
     const dco::diag::LogDigest digest = dco::diag::digest_log(log, options);
     const dco::diag::LogSummary summary = dco::diag::summarize(digest);
-    if (!no_html) write_file(html, dco::diag::html_report(digest, summary));
+    // The summary goes out whatever becomes of the files: a log on read-only media still has
+    // its summary, then the error.
+    std::string failed;
+    const auto write_or_note = [&](const std::string& path, const std::string& text) {
+      try {
+        write_file(path, text);
+        return true;
+      } catch (const dco::Error& e) {
+        if (failed.empty()) failed = e.what();
+        return false;
+      }
+    };
+    const bool html_written =
+        !no_html && write_or_note(html, dco::diag::html_report(digest, summary));
     if (json == "-") {
       std::fputs(dco::diag::json_summary(digest, summary).c_str(), stdout);
     } else {
-      if (!json.empty()) write_file(json, dco::diag::json_summary(digest, summary));
-      std::fputs(dco::diag::text_summary(digest, summary, no_html ? "" : html).c_str(), stdout);
+      if (!json.empty()) write_or_note(json, dco::diag::json_summary(digest, summary));
+      std::fputs(dco::diag::text_summary(digest, summary, html_written ? html : "").c_str(),
+                 stdout);
     }
+    std::fflush(stdout);
+    if (!failed.empty()) throw dco::Error(failed);
     return 0;
   });
 }
