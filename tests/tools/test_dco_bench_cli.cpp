@@ -242,6 +242,9 @@ TEST(DcoBenchCli, BadSetsAndBackendsExitWithTwo) {
   expect_usage({"--sequence", "synthetic", "--set", "runtime.affinity=0,0"}, "listed twice");
   expect_usage({"--sequence", "synthetic", "--set", "foo.bar=1"}, "unknown key 'foo.bar'");
   expect_usage({"--backend", "foo"}, "--backend foo: not one of auto, cpu, cuda");
+  // Frames held in memory beyond half of it: said, not a bad_alloc or the OOM killer.
+  expect_usage({"--sequence", "synthetic", "--frames", "99999"},
+               "more than half of this machine's");
 }
 
 // The ipc benchmark sends udpm multicast, so it runs only where a private network namespace can

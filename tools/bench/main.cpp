@@ -3,6 +3,8 @@
 // next to OpenCV StereoSGBM (3-way) + WLS on the same frames in the same run. `dco-bench ipc`
 // measures depth delivery through the shared-memory ring instead (ipc_bench.cpp).
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -227,6 +229,25 @@ struct Frames {
   int max_disparity = 0;
 };
 
+// Every frame is held in memory (the timed loop reads none from disk): `frames` pairs like
+// `first` must fit in half the machine's memory, else a clear error rather than bad_alloc or the
+// kernel's OOM killer.
+void check_frames_fit(int frames, const dco::tools::StereoInput& first) {
+  const auto bytes = [](const auto& image) {
+    return static_cast<double>(image.width()) * image.height() * image.channels() *
+           sizeof(*image.cview().row(0));
+  };
+  const double per_frame = bytes(first.left) + bytes(first.right) + bytes(first.gt_disparity);
+  const double memory =
+      static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  if (memory > 0 && frames * per_frame > memory / 2)
+    throw UsageError(fmt::format(
+        "--frames {}: {} frames of {}x{} take {:.1f} GB in memory, more than half of this "
+        "machine's {:.1f} GB",
+        frames, frames, first.left.width(), first.left.height(), frames * per_frame / 1e9,
+        memory / 1e9));
+}
+
 Frames load_frames(const Options& opt, bool synthetic, int default_max_disparity) {
   Frames f;
   std::unique_ptr<dco::tools::FrameSequence> source;
@@ -244,8 +265,10 @@ Frames load_frames(const Options& opt, bool synthetic, int default_max_disparity
   }
   f.max_disparity = source->max_disparity().value_or(default_max_disparity);
   dco::tools::StereoInput input;
-  while (static_cast<int>(f.pairs.size()) < opt.frames && source->next(input))
+  while (static_cast<int>(f.pairs.size()) < opt.frames && source->next(input)) {
+    if (f.pairs.empty()) check_frames_fit(opt.frames, input);
     f.pairs.push_back(input);
+  }
   if (f.pairs.empty()) throw dco::Error(fmt::format("{}: no frames", f.name));
   return f;
 }
