@@ -205,11 +205,12 @@ void Daemon::start_pipeline() {
     // A restarted pipeline counts from 0: the daemon's totals keep what the one it replaces
     // dropped, and the rates measure the new one from its start.
     const pipeline::runtime::RuntimeStats before = runtime_->stats();
-    earlier_dropped_ += before.dropped;
-    earlier_late_ += before.late;
+    earlier_.pushed += before.pushed;
+    earlier_.dropped += before.dropped;
+    earlier_.late += before.late;
+    earlier_.published += before.published;
     early_reported_ = 0;
     early_pacer_ = WarningPacer{};
-    last_pushed_ = last_published_ = 0;
   }
   runtime_ = std::move(next);
   runtime_->start();
@@ -409,13 +410,21 @@ void Daemon::report_sequence_cuts(std::int64_t now_ns, bool last) {
   report(log_runs_, "new dcod run(s) in the replayed log", "from");
 }
 
+pipeline::runtime::RuntimeStats Daemon::run_stats() const {
+  pipeline::runtime::RuntimeStats s = runtime_->stats();
+  s.pushed += earlier_.pushed;
+  s.dropped += earlier_.dropped;
+  s.late += earlier_.late;
+  s.published += earlier_.published;
+  return s;
+}
+
 std::string Daemon::status_line(const pipeline::runtime::RuntimeStats& s) const {
   return fmt::format(
       "{}: {:.1f} fps in, {:.1f} fps out, {} published, {} dropped ({} late), latency p50 {:.1f} "
       "ms p99 {:.1f} ms{}{}",
       source_device_.empty() ? source_->info().description : source_device_, fps_in_, fps_out_,
-      published_.load(), earlier_dropped_ + s.dropped, earlier_late_ + s.late, s.latency.p50_ms,
-      s.latency.p99_ms,
+      published_.load(), s.dropped, s.late, s.latency.p50_ms, s.latency.p99_ms,
       // With runtime.release_latency_ms the latency is fixed: what the stages took and the
       // results ready too late for it tell whether the setting suits the machine.
       runtime_->holds_results_for_release()
@@ -455,7 +464,7 @@ void Daemon::tick(std::int64_t now_ns) {
   report_sequence_cuts(now_ns, false);
   if (now_ns < next_stats_ns_) return;
   next_stats_ns_ = now_ns + static_cast<std::int64_t>(1e9 / loaded_.config.stats_hz);
-  const pipeline::runtime::RuntimeStats stats = runtime_->stats();
+  const pipeline::runtime::RuntimeStats stats = run_stats();
   if (last_rate_ns_ > 0 && now_ns > last_rate_ns_) {
     const double dt = static_cast<double>(now_ns - last_rate_ns_) * 1e-9;
     fps_in_ = static_cast<double>(std::max(0L, stats.pushed - last_pushed_)) / dt;
@@ -629,7 +638,7 @@ void Daemon::reload() {
     parse_log_level(next.config.log_level);
   } catch (const Error& e) {
     log_.error(std::string("reload failed, the running configuration stays: ") + e.what());
-    notifier_.ready(status_line(runtime_->stats()));
+    notifier_.ready(status_line(run_stats()));
     return;
   }
   apply_source_hints(next);
@@ -681,7 +690,7 @@ void Daemon::reload() {
                  again.what());
         return;
       }
-      notifier_.ready(status_line(runtime_->stats()));
+      notifier_.ready(status_line(run_stats()));
       return;
     }
   }
@@ -694,7 +703,7 @@ void Daemon::reload() {
     log_.info(summary);
   else
     log_.warning(summary);
-  notifier_.ready(status_line(runtime_->stats()));
+  notifier_.ready(status_line(run_stats()));
 }
 
 int Daemon::run() {
@@ -723,7 +732,7 @@ int Daemon::run() {
   const std::int64_t start_ns = monotonic_ns();
   next_stats_ns_ = start_ns + static_cast<std::int64_t>(1e9 / loaded_.config.stats_hz);
   last_rate_ns_ = start_ns;
-  notifier_.ready(status_line(runtime_->stats()));
+  notifier_.ready(status_line(run_stats()));
   if (notifier_.watchdog_period()) {
     notifier_.watchdog();
     last_ping_ns_ = start_ns;

@@ -874,9 +874,12 @@ TEST(Dcod, ARawRecordingReloadKeepsThePairsInOrder) {
   TempDir dir;
   const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
   const auto log = dir / "field.log";
-  const auto config = dir.write("dcod.toml", "[raw]\nenabled = true\npng_level = 9\n");
-  const auto other = dir.write("other.toml", "[raw]\nenabled = true\npng_level = 0\n");
-  // Eight reloads, 0.25 s apart, swap the file between two PNG levels. They start once the ring
+  // A PNG level (applied at once) and a densify key (restarting the stage threads) in turn.
+  const auto config =
+      dir.write("dcod.toml", "[raw]\nenabled = true\npng_level = 9\n[densify]\nlambda_s = 1.2\n");
+  const auto other =
+      dir.write("other.toml", "[raw]\nenabled = true\npng_level = 0\n[densify]\nlambda_s = 1.3\n");
+  // Eight reloads, 0.25 s apart, swap the file between the two. They start once the ring
   // exists: a SIGHUP that reaches a process still being loaded ends it, as it would any program.
   const std::string swaps = "n=0; while [ ! -e " + (dir / "rec.shm").string() +
                             " ] && [ $n -lt 1000 ]; do sleep 0.02; n=$((n+1)); done; "
@@ -890,24 +893,38 @@ TEST(Dcod, ARawRecordingReloadKeepsThePairsInOrder) {
       " --source \"synthetic://hand?width=320&height=192&fps=60&frames=150\" --config " +
       config.string() + " --set \"lcm.url=" + url +
       "\" --set ring.path=" + (dir / "rec.shm").string() +
-      " --set runtime.deterministic=true & D=$!; " + swaps +
+      " --set runtime.deterministic=true --set lcm.stats_hz=10 & D=$!; " + swaps +
       "; wait $D; S=$?; sleep 0.5; kill -INT $L; wait $L; exit $S'";
   const auto r = run_command(record);
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("raw recording stopped"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("restarted the pipeline for densify.lambda_s"), std::string::npos)
+      << r.output;
   drivers::LcmLogReader log_reader(log);
   drivers::LcmLogEvent event;
   std::vector<std::int64_t> seqs;
+  std::vector<::dco::pipeline_stats_t> stats;
   while (log_reader.next(event)) {
     ::dco::raw_stereo_t raw;
+    ::dco::pipeline_stats_t s;
     std::string problem;
     if (event.channel == ipc::channel::kRaw &&
         ipc::decode_message(event.data.data(), event.data.size(), raw, problem))
       seqs.push_back(raw.frame_seq);
+    if (event.channel == ipc::channel::kStats &&
+        ipc::decode_message(event.data.data(), event.data.size(), s, problem))
+      stats.push_back(s);
   }
   ASSERT_EQ(seqs.size(), 150u) << r.output;
   for (std::size_t i = 1; i < seqs.size(); ++i)
     EXPECT_GT(seqs[i], seqs[i - 1]) << "pair " << i << " of the log";
+  // DCO_STATS counts the whole run across the pipeline's restarts: its counters never go back.
+  ASSERT_GE(stats.size(), 5u) << r.output;
+  for (std::size_t i = 1; i < stats.size(); ++i) {
+    EXPECT_GE(stats[i].pushed, stats[i - 1].pushed) << "message " << i;
+    EXPECT_GE(stats[i].published, stats[i - 1].published) << "message " << i;
+    EXPECT_GE(stats[i].fps_out, 0.0) << "message " << i;
+  }
 }
 
 TEST(Dcod, RawRecordingThroughLcmLoggerReplaysToIdenticalDepth) {

@@ -97,7 +97,10 @@ class Daemon final : public drivers::FrameSink {
   // ones (a sequence cut at each), paced like the warnings; `last`: at the exit, whatever the
   // pace.
   void report_sequence_cuts(std::int64_t now_ns, bool last);
-  std::string status_line(const pipeline::runtime::RuntimeStats& stats) const;
+  // The running runtime's statistics with the counts of those that reloads replaced added: the
+  // counters of dcod's whole run, as the status line and DCO_STATS give them.
+  pipeline::runtime::RuntimeStats run_stats() const;
+  std::string status_line(const pipeline::runtime::RuntimeStats& run) const;
   void wake();
 
   ConfigSources sources_;  // plus the pipeline keys a replayed log recorded
@@ -161,7 +164,9 @@ class Daemon final : public drivers::FrameSink {
   bool stalled_ = false;
   std::int64_t next_stats_ns_ = 0, last_ping_ns_ = 0;
   long last_pushed_ = 0, last_published_ = 0;
-  long earlier_dropped_ = 0, earlier_late_ = 0;  // by the runtimes that reloads replaced
+  struct EarlierCounts {
+    long pushed = 0, dropped = 0, late = 0, published = 0;
+  } earlier_;  // of the runtimes that reloads replaced
   // Results that went out before runtime.release_latency_ms (every release slot taken), as last
   // reported; the running runtime's count.
   long early_reported_ = 0;
