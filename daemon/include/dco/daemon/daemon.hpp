@@ -12,6 +12,7 @@
 #include <string>
 
 #include "dco/core/image.hpp"
+#include "dco/core/priority_inheritance_mutex.hpp"
 #include "dco/core/rectifier.hpp"
 #include "dco/daemon/daemon_config.hpp"
 #include "dco/daemon/frame_numbers.hpp"
@@ -117,7 +118,8 @@ class Daemon final : public drivers::FrameSink {
   std::unique_ptr<ipc::RingWriter> ring_;
   // The publisher: frames (runtime thread), stats and logs (others). Never held across a wait
   // for the network: the publisher's own thread sends.
-  std::mutex publish_mutex_;
+  // Taken by the release thread (SCHED_FIFO with runtime.release_priority) and normal threads.
+  PriorityInheritanceMutex publish_mutex_;
   std::unique_ptr<ipc::DepthPublisher> publisher_;
   std::unique_ptr<pipeline::runtime::DepthRuntime> runtime_;
   std::string calibration_toml_;  // the source's, as DCO_RAW carries it
