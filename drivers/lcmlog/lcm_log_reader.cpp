@@ -1,6 +1,8 @@
 // Plain std::string messages, no fmt: the fuzz build compiles this file on its own.
+#include <algorithm>
 #include <array>
 #include <string>
+#include <vector>
 
 #include "dco/core/error.hpp"
 #include "dco/core/special_file.hpp"
@@ -121,6 +123,50 @@ bool LcmLogReader::next(LcmLogEvent& event) {
   offset_ += kHeadBytes + channel_bytes + data_bytes;
   ++events_;
   return true;
+}
+
+bool LcmLogReader::resync() {
+  if (damage_.empty() || size_ == UINT64_MAX) return false;
+  constexpr std::size_t kChunk = 1 << 16;
+  std::vector<std::uint8_t> buffer(kChunk + kHeadBytes + kMaxChannel);
+  const auto read_at = [&](std::uint64_t at, std::size_t n) {
+    in_->clear();
+    in_->seekg(static_cast<std::streamoff>(at));
+    in_->read(reinterpret_cast<char*>(buffer.data()), static_cast<std::streamsize>(n));
+    check_read();
+    return static_cast<std::size_t>(in_->gcount());
+  };
+  // Whether a whole event head (and a plausible channel name) starts at buffer[i].
+  const auto head_at = [&](std::size_t i, std::size_t have, std::uint64_t at) {
+    if (have - i < kHeadBytes || read_be(buffer.data() + i, 4) != kSyncWord) return false;
+    const std::uint64_t channel = read_be(buffer.data() + i + 20, 4);
+    const std::uint64_t data = read_be(buffer.data() + i + 24, 4);
+    if (channel == 0 || channel > kMaxChannel || data > kMaxData ||
+        channel + data > size_ - at - kHeadBytes || have - i - kHeadBytes < channel)
+      return false;
+    for (std::size_t k = 0; k < channel; ++k)
+      if (const std::uint8_t c = buffer[i + kHeadBytes + k]; c < 0x20 || c > 0x7e) return false;
+    return true;
+  };
+  for (std::uint64_t from = offset_ + 1; from < size_;) {
+    const std::size_t have = read_at(
+        from, static_cast<std::size_t>(std::min<std::uint64_t>(buffer.size(), size_ - from)));
+    if (have == 0) break;
+    // Candidates in the first kChunk bytes; the rest of the buffer is their heads' room.
+    const std::size_t candidates = std::min(have, kChunk);
+    for (std::size_t i = 0; i < candidates; ++i) {
+      if (buffer[i] != 0xED || !head_at(i, have, from + i)) continue;
+      skipped_ += from + i - offset_;
+      offset_ = from + i;
+      in_->clear();
+      in_->seekg(static_cast<std::streamoff>(offset_));
+      damage_.clear();
+      return true;
+    }
+    from += candidates;
+  }
+  in_->clear();
+  return false;
 }
 
 void write_lcm_log_event(std::ostream& out, const LcmLogEvent& event) {

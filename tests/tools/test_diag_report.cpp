@@ -415,6 +415,45 @@ TEST(LogDigest, ALogCutAnywhereReportsWhatPrecedesTheCut) {
   }
 }
 
+// A damaged stretch inside a field log (stray bytes, a length field hit) costs the events in it,
+// not every event after it: the report reads on from the next whole event and says what it
+// skipped.
+TEST(LogDigest, ADamagedStretchIsSkippedAndTheEventsAfterItAreRead) {
+  const KnownLog known;
+  const std::string whole = known.bytes();
+  std::vector<std::size_t> starts;
+  std::size_t at = 0;
+  for (const LcmLogEvent& e : known.events) {
+    starts.push_back(at);
+    at += 28 + e.channel.size() + e.data.size();
+  }
+  const long all = static_cast<long>(known.events.size());
+  ASSERT_GT(all, 12);
+  // Thirteen stray bytes between events 10 and 11.
+  std::string stray = whole;
+  stray.insert(starts[10], std::string(13, '\x55'));
+  std::istringstream in(stray);
+  const LogDigest d = digest_log(in, "stray.log");
+  EXPECT_EQ(d.events, all);
+  EXPECT_EQ(d.damaged_stretches, 1);
+  EXPECT_EQ(d.skipped_bytes, 13u);
+  EXPECT_NE(d.damage.find("at byte " + std::to_string(starts[10])), std::string::npos) << d.damage;
+  const LogSummary s = summarize(d);
+  std::istringstream intact(whole);
+  EXPECT_EQ(s.frames, summarize(digest_log(intact, "whole.log")).frames);
+  EXPECT_NE(text_summary(d, s, "").find("13 bytes skipped past damage"), std::string::npos)
+      << text_summary(d, s, "");
+  EXPECT_NE(json_summary(d, s).find("\"damaged_stretches\": 1, \"skipped_bytes\": 13"),
+            std::string::npos);
+  // Event 5's channel length hit (0): that event is lost, the rest are read.
+  std::string hit = whole;
+  for (int k = 0; k < 4; ++k) hit[starts[5] + 20 + static_cast<std::size_t>(k)] = 0;
+  std::istringstream in_hit(hit);
+  const LogDigest h = digest_log(in_hit, "hit.log");
+  EXPECT_EQ(h.events, all - 1);
+  EXPECT_EQ(h.skipped_bytes, starts[6] - starts[5]);
+}
+
 TEST(LogDigest, AFileThatIsNoLogIsOneError) {
   std::istringstream text("this is not an LCM log, it is a text file with enough bytes in it");
   try {

@@ -22,7 +22,7 @@ namespace {
 constexpr const char* kUsage =
     R"(usage: dco-diag LOG [--html FILE | --no-html] [--json FILE] [--previews N]
 
-Reads an LCM log of dcod's channels (lcm-logger) to its end or to the first damage and
+Reads an LCM log of dcod's channels (lcm-logger) to its end, past damaged stretches, and
 prints a summary. --html: the report's path (default LOG.html); --json: the key numbers as
 JSON ("-" = stdout instead of the summary); --previews: depth thumbnails in the report
 (default 48). Exit status 0 with a report, also for a damaged log (the summary says how far

@@ -265,8 +265,14 @@ std::string html_report(const LogDigest& d, const LogSummary& s) {
       "<h1>dco-diag: {0}</h1>\n",
       h(d.name));
   if (!d.damage.empty())
-    out += fmt::format("<p class=\"damage\">The log is damaged: read {} of {} bytes. {}</p>\n",
-                       d.bytes, d.file_bytes, h(d.damage));
+    out += fmt::format(
+        "<p class=\"damage\">The log is damaged: read {} of {} bytes{}. {}</p>\n", d.bytes,
+        d.file_bytes,
+        d.skipped_bytes == 0
+            ? std::string()
+            : fmt::format(", {} damaged stretch(es) and {} bytes skipped to read on past them",
+                          d.damaged_stretches, d.skipped_bytes),
+        h(d.damage));
   out += "<h2>Summary</h2>\n" + summary_section(d, s);
   out += "<h2>Timing</h2>\n" + charts(d);
   out += "<h2>Depth</h2>\n" + thumbnails(d);

@@ -194,9 +194,16 @@ LogDigest read_all(drivers::LcmLogReader& reader, const std::string& name,
   d.name = name;
   Digester digester(d, options);
   drivers::LcmLogEvent event;
-  while (reader.next(event)) digester.add(event);
+  // A field log with one bad byte still has hours of good events after it.
+  for (bool more = true; more;) {
+    while (reader.next(event)) digester.add(event);
+    if (reader.damage().empty()) break;
+    if (d.damage.empty()) d.damage = reader.damage();
+    ++d.damaged_stretches;
+    more = reader.resync();
+  }
   d.bytes = reader.bytes_read();
-  d.damage = reader.damage();
+  d.skipped_bytes = reader.skipped_bytes();
   if (d.events == 0 && !d.damage.empty())
     throw Error(d.damage +
                 (reader.began_like_a_log()

@@ -104,9 +104,18 @@ std::string text_summary(const LogDigest& d, const LogSummary& s, const std::str
   std::string out = fmt::format("dco-diag: {}\n", d.name);
   out += fmt::format(
       "  log       {} events, {} over {:.2f} s ({})\n", d.events, human_bytes(d.bytes), d.span_s,
-      d.damage.empty() ? std::string("read to the end")
-                       : fmt::format("DAMAGED, read {} of {} bytes", d.bytes, d.file_bytes));
-  if (!d.damage.empty()) out += fmt::format("  damage    {}\n", d.damage);
+      d.damage.empty()
+          ? std::string("read to the end")
+          : fmt::format("DAMAGED, read {} of {} bytes{}", d.bytes, d.file_bytes,
+                        d.skipped_bytes == 0
+                            ? std::string()
+                            : fmt::format(", {} bytes skipped past damage", d.skipped_bytes)));
+  if (!d.damage.empty())
+    out += fmt::format(
+        "  damage    {}{}\n", d.damage,
+        d.damaged_stretches > 1
+            ? fmt::format(" (and {} more damaged stretch(es) after it)", d.damaged_stretches - 1)
+            : std::string());
   // Text from the log is shown with its control characters as '?': a corrupt or forged log must
   // not move the cursor or retitle the terminal that reads this.
   std::string channels;
@@ -188,7 +197,7 @@ std::string json_summary(const LogDigest& d, const LogSummary& s) {
                             tally.bytes, tally.undecodable);
   return fmt::format(
       "{{\"log\": {}, \"events\": {}, \"bytes_read\": {}, \"file_bytes\": {}, \"span_s\": {}, "
-      "\"damage\": {},\n \"channels\": {{{}}},\n"
+      "\"damage\": {}, \"damaged_stretches\": {}, \"skipped_bytes\": {},\n \"channels\": {{{}}},\n"
       " \"frames\": {}, \"sessions\": {}, \"fps\": {}, \"unpublished_frames\": {}, "
       "\"missing_announcements\": {}, \"dropped_at_entry\": {},\n"
       " \"latency_ms\": {{\"mean\": {}, \"p50\": {}, \"p90\": {}, \"p99\": {}, \"max\": {}}},\n"
@@ -199,14 +208,14 @@ std::string json_summary(const LogDigest& d, const LogSummary& s) {
       "\"log_warnings\": {}, \"previews\": {}, \"raw_pairs\": {}, \"raw_missing\": {}, "
       "\"undecodable\": {}}}\n",
       json_string(d.name), d.events, d.bytes, d.file_bytes, json_number(d.span_s),
-      d.damage.empty() ? std::string("null") : json_string(d.damage), channels, s.frames,
-      s.sessions, json_number(s.fps), s.unpublished_frames, s.missing_announcements,
-      s.dropped_at_entry, json_number(s.latency.mean_ms), json_number(s.latency.p50_ms),
-      json_number(s.latency.p90_ms), json_number(s.latency.p99_ms), json_number(s.latency.max_ms),
-      stage(t.stereo_p50_ms), stage(t.stereo_p99_ms), stage(t.contour_p50_ms),
-      stage(t.contour_p99_ms), stage(t.densify_p50_ms), stage(t.densify_p99_ms), right_camera,
-      s.state_changes, s.device_errors, s.disconnects, s.log_errors, s.log_warnings,
-      d.previews_seen, d.raw_pairs, d.raw_missing, s.undecodable);
+      d.damage.empty() ? std::string("null") : json_string(d.damage), d.damaged_stretches,
+      d.skipped_bytes, channels, s.frames, s.sessions, json_number(s.fps), s.unpublished_frames,
+      s.missing_announcements, s.dropped_at_entry, json_number(s.latency.mean_ms),
+      json_number(s.latency.p50_ms), json_number(s.latency.p90_ms), json_number(s.latency.p99_ms),
+      json_number(s.latency.max_ms), stage(t.stereo_p50_ms), stage(t.stereo_p99_ms),
+      stage(t.contour_p50_ms), stage(t.contour_p99_ms), stage(t.densify_p50_ms),
+      stage(t.densify_p99_ms), right_camera, s.state_changes, s.device_errors, s.disconnects,
+      s.log_errors, s.log_warnings, d.previews_seen, d.raw_pairs, d.raw_missing, s.undecodable);
 }
 
 }  // namespace dco::diag

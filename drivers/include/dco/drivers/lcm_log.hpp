@@ -38,6 +38,13 @@ class LcmLogReader {
 
   // Empty while the log is intact (so far); else one line naming the log, the event and byte.
   const std::string& damage() const { return damage_; }
+  // After damage: moves to the next place past it where a whole event head starts (a sync word,
+  // a channel name of 1..255 printable bytes, lengths within the file), so that a report can
+  // read on past a damaged stretch; next() then reads from there. False, the damage kept, when
+  // none follows or the stream cannot seek. A replay does not resync: frames after a gap of
+  // unknown length are not the recording's sequence.
+  bool resync();
+  std::uint64_t skipped_bytes() const { return skipped_; }  // by resync(), in all
   long events_read() const { return events_; }
   std::uint64_t bytes_read() const { return offset_; }
   // Whether the log began with an event's sync word: a log cut before its first whole event,
@@ -59,6 +66,7 @@ class LcmLogReader {
   std::string damage_;
   std::uint64_t offset_ = 0;
   std::uint64_t size_ = UINT64_MAX;  // of the log, where the stream can tell
+  std::uint64_t skipped_ = 0;
   long events_ = 0;
   bool began_like_a_log_ = false;
 };

@@ -87,11 +87,15 @@ struct DigestOptions {
 struct LogDigest {
   std::string name;
   long events = 0;
-  std::uint64_t bytes = 0;       // read up to the end or the damage
+  std::uint64_t bytes = 0;       // read up to the end or the damage it could not read past
   std::uint64_t file_bytes = 0;  // the whole file, where known
-  std::string damage;            // empty when the whole log reads
-  std::int64_t first_us = 0;     // the logger's wall clock, µs since the epoch
-  double span_s = 0;             // first to last event
+  std::string damage;            // the first damage; empty when the whole log reads
+  // Damaged stretches found, and the bytes skipped to read on past them (the events after a
+  // damaged stretch are read and counted; a cut at the end is a stretch not read past).
+  int damaged_stretches = 0;
+  std::uint64_t skipped_bytes = 0;
+  std::int64_t first_us = 0;  // the logger's wall clock, µs since the epoch
+  double span_s = 0;          // first to last event
   std::map<std::string, ChannelTally> channels;
 
   std::vector<FramePoint> frames;  // every DCO_DEPTH, in log order
@@ -119,7 +123,8 @@ struct LogDigest {
   int raw_width = 0, raw_height = 0;
 };
 
-// Reads the log to its end or to the first damage (which `damage` then names); messages on dco's
+// Reads the log to its end, past damaged stretches to the next whole event (`damage` names the
+// first, `skipped_bytes` says how much was passed over); messages on dco's
 // channels that do not decode are counted per channel, never trusted. Throws dco::Error when the
 // file cannot be opened or holds no LCM event at all.
 LogDigest digest_log(const std::filesystem::path& path, const DigestOptions& options = {});
