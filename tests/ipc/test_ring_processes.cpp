@@ -352,7 +352,14 @@ TEST(DcoWatch, BadInputGivesOneLineAndAnExitCode) {
   EXPECT_NE(out.find("dco-watch: error: no depth ring"), std::string::npos) << out;
   out = run_watch("--frames zero", &code);
   EXPECT_EQ(code, 2);
-  EXPECT_NE(out.find("bad argument"), std::string::npos) << out;
+  EXPECT_NE(out.find("dco-watch: error: --frames needs a whole number of frames, 1 or more, not "
+                     "'zero' (see --help)"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  out = run_watch("--bogus", &code);
+  EXPECT_EQ(code, 2);
+  EXPECT_NE(out.find("unknown argument '--bogus'"), std::string::npos) << out;
   RingOptions o;
   o.width = 8;
   o.height = 8;

@@ -118,8 +118,22 @@ int main(int argc, char** argv) {
       options.poll_us = static_cast<std::uint32_t>(v);
       ++i;
     } else {
-      std::fprintf(stderr, "dco-watch: error: bad argument '%s'\n", argv[i]);
-      usage(stderr);
+      // One line that says what the option takes (the usage is --help's).
+      const char* wants = arg == "--uid"             ? "a uid"
+                          : arg == "--frames"        ? "a whole number of frames, 1 or more"
+                          : arg == "--interval-ms"   ? "milliseconds in 1..3600000"
+                          : arg == "--timeout-ms"    ? "milliseconds in 1..3600000"
+                          : arg == "--poll-us"       ? "microseconds in 0..100000"
+                          : arg == "--virtual-depth" ? "a depth in metres above 0"
+                          : arg == "--overlay"       ? "a file name"
+                          : arg == "--path"          ? "a file name"
+                                                     : nullptr;
+      if (wants != nullptr)
+        std::fprintf(stderr, "dco-watch: error: %s needs %s, not %s%s%s (see --help)\n", argv[i],
+                     wants, has_value ? "'" : "", has_value ? argv[i + 1] : "nothing",
+                     has_value ? "'" : "");
+      else
+        std::fprintf(stderr, "dco-watch: error: unknown argument '%s' (see --help)\n", argv[i]);
       return 2;
     }
   }
