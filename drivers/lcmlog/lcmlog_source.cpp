@@ -80,7 +80,8 @@ class LcmLogSource final : public PacedSource {
                                 event_.offset, channel_, problem));
       return true;
     }
-    if (!reader_->damage().empty()) throw Error(where_ + ": " + reader_->damage());
+    // The reader's line starts with the file's name: the URI's scheme before it names it once.
+    if (!reader_->damage().empty()) throw Error("lcmlog://" + reader_->damage());
     return false;
   }
 

@@ -735,6 +735,8 @@ TEST(LcmLogSource, ReplaysTheRecordedPairsAndNamesDamage) {
     EXPECT_EQ(sink.lefts.size(), 3u);
     EXPECT_NE(sink.error.find("ends inside the event"), std::string::npos) << sink.error;
     EXPECT_NE(sink.error.find("the 6 events before it are good"), std::string::npos) << sink.error;
+    // The file is named once, after the URI's scheme.
+    EXPECT_EQ(sink.error.rfind("lcmlog://" + cut.string() + ": event ", 0), 0u) << sink.error;
   }
   // A log without DCO_RAW, and a file that is no log.
   const auto stats_only = dir.path() / "stats.log";
