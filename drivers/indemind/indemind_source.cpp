@@ -38,6 +38,11 @@ constexpr std::int64_t kLeadNs = 50'000'000;
 // How far behind it: no sample waits this long in a queue, so a device time that maps there is
 // garbage (an IMU report) or of another time line (a frame after the counter stood still).
 constexpr std::int64_t kLagNs = 1'000'000'000;
+// Frames that all arrive more than the lead after their device time maps to, over this much
+// device time, put the map's offsets on another time line: the counter stood still for a while
+// (a pause shorter than kLagNs), not a host hiccup, which delays a few frames. One bucket of the
+// clock map.
+constexpr std::int64_t kLateSpanNs = 250'000'000;
 // A frame whose counter leaves the time line is held; a next frame at most this many counts on
 // (one or two lost between them) may confirm it as the start of a new time line.
 constexpr std::uint16_t kRunMaxStep = 3;
@@ -369,6 +374,7 @@ class IndemindSource final : public FrameSource {
     clock_.reset();
     last_imu_device_ns_ = -1;
     held_.reset();
+    late_since_device_ns_.reset();
   }
 
   std::int64_t lead_ns() const { return std::max(kLeadNs, frames_ns(2)); }
@@ -582,7 +588,7 @@ class IndemindSource final : public FrameSource {
     }
     mask_frame_metadata(last, std::span<const std::uint8_t>(last.data() - row, row));
     const std::int64_t device_ns = frame_device_ns(taken.extended);
-    if (behind_host(device_ns, now)) {
+    if (behind_host(device_ns, now) || late_for_a_bucket(device_ns, first_ns)) {
       // The counter stood still while the host clock ran on (a module that stops counting while
       // it is not streaming): the map's offsets are of another time line now.
       ++counters_.clock_resets;
@@ -612,6 +618,17 @@ class IndemindSource final : public FrameSource {
       slot_.full = true;
     }
     slot_cv_.notify_one();
+  }
+
+  // Whether frames have arrived more than the lead after the host time their device time maps
+  // to for kLateSpanNs of device time, this one included.
+  bool late_for_a_bucket(std::int64_t device_ns, std::int64_t first_ns) {
+    if (clock_.buckets() == 0 || first_ns - clock_.to_host(device_ns) <= lead_ns()) {
+      late_since_device_ns_.reset();
+      return false;
+    }
+    if (!late_since_device_ns_) late_since_device_ns_ = device_ns;
+    return device_ns - *late_since_device_ns_ >= kLateSpanNs;
   }
 
   // Nominal duration of `n` frames.
@@ -816,6 +833,8 @@ class IndemindSource final : public FrameSource {
   std::int64_t last_imu_device_ns_ = -1, last_frame_ns_ = 0;
   // The first payload's arrival of the last frame taken: a counter gap must agree with it.
   std::int64_t last_taken_first_ns_ = 0;
+  // Device time of the first of the frames that have all arrived late since (late_for_a_bucket).
+  std::optional<std::int64_t> late_since_device_ns_;
   // The last IMU sample taken (for the tick race) and the last report of any kind (for silence).
   std::int64_t last_imu_host_ns_ = 0, last_imu_report_ns_ = 0;
   std::uint64_t last_imu_placed_ = 0;

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <random>
@@ -32,6 +33,7 @@ class Collector final : public FrameSink {
     if (f.capture_ns <= last_capture_ns) ++non_increasing;
     last_capture_ns = f.capture_ns;
     captures.push_back(f.capture_ns);
+    if (clock) delivered.push_back(clock());
     gaps += f.follows_gap;
     width = f.left.width;
     height = f.left.height;
@@ -63,6 +65,8 @@ class Collector final : public FrameSink {
   long gaps = 0;  // frames that follow a gap in the stream
   std::int64_t last_capture_ns = 0, last_imu_ns = 0;
   std::vector<std::int64_t> captures;
+  std::function<std::int64_t()> clock;  // when set, the module's time at each delivery
+  std::vector<std::int64_t> delivered;
   int width = 0, height = 0;
   bool left_differs_from_right = false, metadata_masked = false;
   std::size_t imu = 0;
@@ -436,6 +440,37 @@ TEST(IndemindSource, ACounterThatStoodStillStartsTheClockMapAgain) {
   for (std::size_t i = t.size() - 100; i < t.size(); ++i)
     EXPECT_NEAR(static_cast<double>(t[i] - rig.sim->nearest_frame_start_ns(t[i])), 0.0, 1'000'000.0)
         << i;
+}
+
+// The same module silent for half a second, shorter than the one second past which a device time
+// is of another time line at once: the frames after it keep arriving half a second after the
+// time their device time maps to, and after a bucket of the map (a quarter second) of that it
+// starts again. Before, those frames were stamped half a second early, and the fit through old
+// and new offsets then stamped frames up to 150 ms after they arrived, for about 10 s.
+TEST(IndemindSource, AShortSilenceOfAStillCounterStartsTheClockMapAgainWithinABucket) {
+  SimulatedIndemind::Options o;
+  o.counter_counts_unsent_frames = false;
+  IndemindOptions io;
+  io.stall_ms = 5000;
+  io.lossless = true;  // every frame delivered, its delivery time beside its stamp
+  Rig rig(o, io);
+  rig.sink.clock = [s = rig.sim] { return s->now_ns(); };
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(300));
+  ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kSilence, 500));
+  const long before = rig.sink.count();
+  ASSERT_TRUE(rig.wait_frames(before + 500));
+  rig.source->stop();
+  EXPECT_EQ(counters_of(*rig.source).at("clock_resets"), 1u);
+  EXPECT_EQ(rig.sink.non_increasing, 0);
+  EXPECT_EQ(rig.sink.gaps, 1);  // the capture stamps' jump once the map starts again
+  std::lock_guard lock(rig.sink.mutex_);
+  // From half a second after the silence: each frame delivered within 60 ms after its stamp.
+  for (std::size_t i = static_cast<std::size_t>(before) + 25; i < rig.sink.captures.size(); ++i) {
+    const double lag_ms = static_cast<double>(rig.sink.delivered[i] - rig.sink.captures[i]) * 1e-6;
+    EXPECT_GE(lag_ms, 0.0) << i;
+    EXPECT_LT(lag_ms, 60.0) << i;
+  }
 }
 
 // Each width has one height and each height one width: one of them names the mode.
