@@ -52,8 +52,10 @@ std::vector<fs::path> list_images(const fs::path& dir, const std::string& prefix
 }
 
 // The numbers in a file's stem after its side's prefix, in order: "I1_000012" -> 12,
-// "1305031102.175304" (a capture time) -> 1305031102, 175304, "000046_10" (KITTI) -> 46, 10.
-// Compared in that order, so files play in time and frame order. nullopt when there is none.
+// "1305031102.175304" (a capture time) -> 1305031102, 0.175304, "000046_10" (KITTI) -> 46, 10.
+// Digits after a number and a '.' are its fraction, held as 18 decimal places: "100.15" comes
+// after "100.1" and before "100.2" (times written without their trailing zeros). Compared in
+// that order, so files play in time and frame order. nullopt when there is none.
 using FrameKey = std::vector<std::uint64_t>;
 
 std::optional<FrameKey> frame_key(const fs::path& p, const std::string& prefix) {
@@ -66,17 +68,36 @@ std::optional<FrameKey> frame_key(const fs::path& p, const std::string& prefix) 
     if (!digit(first)) continue;
     std::size_t last = first;
     while (digit(last + 1)) ++last;
-    if (last - first >= 18) return std::nullopt;  // no frame count or time has that many digits
-    key.push_back(std::stoull(stem.substr(first, last - first + 1)));
+    const std::size_t digits = last - first + 1;
+    if (digits > 18) return std::nullopt;  // no frame count or time has that many digits
+    std::uint64_t value = std::stoull(stem.substr(first, digits));
+    if (first >= 2 && stem[first - 1] == '.' && digit(first - 2))
+      for (std::size_t place = digits; place < 18; ++place) value *= 10;  // a fraction
+    key.push_back(value);
     first = last;
   }
   if (key.empty()) return std::nullopt;
   return key;
 }
 
-std::string to_string(const FrameKey& key) {
+// The numbers frame_key reads, for messages: "000046_10" -> "46_10", "1305031102.175304" as it is.
+std::string frame_name(const fs::path& p, const std::string& prefix) {
+  const std::string stem = p.stem().string().substr(prefix.size());
+  const auto digit = [&](std::size_t i) {
+    return i < stem.size() && std::isdigit(static_cast<unsigned char>(stem[i]));
+  };
   std::string text;
-  for (const std::uint64_t n : key) text += (text.empty() ? "" : "_") + std::to_string(n);
+  for (std::size_t first = 0; first < stem.size(); ++first) {
+    if (!digit(first)) continue;
+    std::size_t last = first;
+    while (digit(last + 1)) ++last;
+    const std::string run = stem.substr(first, last - first + 1);
+    if (first >= 2 && stem[first - 1] == '.' && digit(first - 2))
+      text += "." + run;
+    else
+      text += (text.empty() ? "" : "_") + std::to_string(std::stoull(run));
+    first = last;
+  }
   return text;
 }
 
@@ -100,7 +121,7 @@ std::vector<std::pair<fs::path, fs::path>> pair_images(const std::vector<fs::pat
       if (!added)
         throw Error(fmt::format("{}: {} and {} are both frame {}", where,
                                 at->second.filename().string(), p.filename().string(),
-                                to_string(*key)));
+                                frame_name(p, prefix[side])));
     }
   std::vector<std::pair<fs::path, fs::path>> pairs;
   if (!numbered) {
@@ -113,7 +134,7 @@ std::vector<std::pair<fs::path, fs::path>> pair_images(const std::vector<fs::pat
     for (const auto& [key, p] : by_number[side])
       if (!by_number[1 - side].contains(key))
         throw Error(fmt::format("{}: {} has no {} image of frame {}", where, p.filename().string(),
-                                side == 0 ? "right" : "left", to_string(key)));
+                                side == 0 ? "right" : "left", frame_name(p, prefix[side])));
   for (const auto& [key, p] : by_number[0]) pairs.emplace_back(p, by_number[1].at(key));
   return pairs;
 }

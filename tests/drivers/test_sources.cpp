@@ -371,6 +371,12 @@ TEST(ReplaySource, OrdersByEveryNumberInTheNames) {
              {"1305031102.175304", "1305031102.943210", "1305031103.211000", "1305031103.600001"});
   EXPECT_TRUE(in_order(replay_all(timed.path()), 4)) << "by capture time";
 
+  // Times written without their trailing zeros: the digits after the point are a fraction.
+  dco::testing::TempDir short_times;
+  write_synthetic_recording(short_times.path(), 5, 96, 64);
+  rename_all(short_times.path(), {"100.1", "100.15", "100.2", "100.25", "100.3"});
+  EXPECT_TRUE(in_order(replay_all(short_times.path()), 5)) << "by time, fractions of any length";
+
   dco::testing::TempDir kitti;
   write_synthetic_recording(kitti.path(), 3, 96, 64);
   rename_all(kitti.path(), {"000046_10", "000047_10", "000048_10"});
