@@ -218,9 +218,9 @@ void EdgeWeightsRow(const EdgeEnds& e, const EdgeRule& rule, int n, float* out) 
     const auto bb = hn::PromoteTo(di, hn::LoadU(du8, e.barrier_b + i));
     const auto sa = hn::LoadU(df, e.strength_a + i);
     const auto sb = hn::LoadU(df, e.strength_b + i);
-    // min(a, b) as the reference picks it: b where b < a, else a (the same value, signed zeros
-    // and all).
-    auto weight = hn::Sub(one, hn::IfThenElse(hn::Lt(sb, sa), sb, sa));
+    // min(a, b) as the reference picks it: b where b < a or b is NaN, else a (the same value,
+    // signed zeros and NaN from either end).
+    auto weight = hn::Sub(one, hn::IfThenElse(hn::Or(hn::Lt(sb, sa), hn::IsNaN(sb)), sb, sa));
     if (colour != nullptr) {
       const auto ga = hn::PromoteTo(di, hn::LoadU(du8, e.grey_a + i));
       const auto gb = hn::PromoteTo(di, hn::LoadU(du8, e.grey_b + i));

@@ -504,6 +504,40 @@ TEST(DensifyKernels, EdgeWeightsMatchScalar) {
   });
 }
 
+// A strength that is not finite at either end of an edge makes its weight NaN (unless a barrier
+// cuts the edge), in every kernel as in the scalar twin: the solve then says it found no finite
+// solution, on the half-size path too.
+TEST(DensifyKernels, EdgeWeightsCarryANaNFromEitherEnd) {
+  std::mt19937 rng(11);
+  for_each_target([&] {
+    for (const int n : kWidths) {
+      const auto size = static_cast<std::size_t>(n);
+      std::vector<std::uint8_t> bar_a(size), bar_b(size), grey(size, 100);
+      std::vector<float> str_a = random_floats(rng, n, 0.0f, 1.0f);
+      std::vector<float> str_b = random_floats(rng, n, 0.0f, 1.0f);
+      for (std::size_t i = 0; i < size; ++i) {
+        bar_a[i] = i % 11 == 3;
+        if (i % 5 == 1) str_a[i] = std::numeric_limits<float>::quiet_NaN();
+        if (i % 7 == 2) str_b[i] = std::numeric_limits<float>::quiet_NaN();
+      }
+      const EdgeEnds ends{bar_a.data(), bar_b.data(), str_a.data(),
+                          str_b.data(), grey.data(),  grey.data()};
+      const EdgeRule rule{2.4f, 0.01f, nullptr, 256};
+      std::vector<float> expected(size), out(size, -1.0f);
+      scalar::edge_weights_row(ends, rule, n, expected.data());
+      edge_weights_row(ends, rule, n, out.data());
+      for (std::size_t i = 0; i < size; ++i) {
+        const bool nan = !bar_a[i] && (std::isnan(str_a[i]) || std::isnan(str_b[i]));
+        ASSERT_EQ(std::isnan(expected[i]), nan) << "scalar, n " << n << " at " << i;
+        ASSERT_EQ(std::isnan(out[i]), nan) << "n " << n << " at " << i;
+        if (!nan) {
+          ASSERT_EQ(out[i], expected[i]) << "n " << n << " at " << i;
+        }
+      }
+    }
+  });
+}
+
 TEST(DensifyKernels, EdgeWeightIsThePaperWeightTimesTheGuidance) {
   const std::uint8_t no_bar[2] = {0, 0}, bar[2] = {1, 0};
   const float str_a[2] = {0.25f, 0.9f}, str_b[2] = {0.5f, 0.995f};

@@ -290,6 +290,37 @@ TEST(Densifier, DisparitiesPastAnyImagesAreAnErrorNotAMapOfNaN) {
   }
 }
 
+// A contour strength that is not finite, at a pixel whose edges the half-size solve folds inside
+// its 2x2 block: the full-size steps after that solve met it, and the output held NaN while the
+// coarse residual said the solve was fine. Every solve path now says so, and the next frame, with
+// clean strengths, starts cold rather than from the failed one.
+TEST(Densifier, ANonFiniteContourStrengthIsAnErrorOnEverySolvePath) {
+  const int w = 64, h = 48;
+  Image<float> sparse(w, h), fuse(w, h), intensity(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) sparse.at(x, y) = (x + y) % 3 ? 10.0f + 0.1f * x : kUnknown;
+  fuse.fill(0.1f);
+  intensity.fill(0.2f);
+  for (const char* r : {"full", "half"}) {
+    SCOPED_TRACE(r);
+    DensifyParams params;
+    params.solve_resolution = r;
+    Densifier d(params);
+    DensifyInputs in;
+    in.sparse = sparse.cview();
+    in.m_fuse = fuse.cview();
+    in.m_intensity = intensity.cview();
+    Image<float> dense;
+    fuse.at(32, 24) = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_THROW(d.compute(in, dense), Error);
+    fuse.at(32, 24) = 0.1f;
+    in.previous = d.last_solution();
+    d.compute(in, dense);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) ASSERT_TRUE(std::isfinite(dense.at(x, y))) << x << "," << y;
+  }
+}
+
 TEST(Densifier, ContourKeepsTwoSurfacesApart) {
   // Left half near (disparity 40), right half far (10); sparse values only far from the edge,
   // and a contour on the true boundary column: the fill must not blend across it.

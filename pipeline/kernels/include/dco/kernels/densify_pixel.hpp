@@ -64,7 +64,11 @@ DCO_HD inline float apply_at(const GridRow& r, const float* x, int c) {
 DCO_HD inline float edge_weight(bool barrier_between, float strength_a, float strength_b,
                                 float colour, float scale, float floor) {
   if (barrier_between) return scale * floor;
-  const float weight = (1.0f - (strength_b < strength_a ? strength_b : strength_a)) * colour;
+  // The lesser strength, and NaN from either end (a NaN at b alone would lose in the compare):
+  // a strength that is not finite must reach every solve path's residual, the half-size one's
+  // too, which folds the edges inside a 2x2 block away.
+  const float low = strength_b < strength_a || strength_b != strength_b ? strength_b : strength_a;
+  const float weight = (1.0f - low) * colour;
   return scale * (weight < floor ? floor : weight);
 }
 
