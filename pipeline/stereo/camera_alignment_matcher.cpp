@@ -47,9 +47,13 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
     timings_ = inner().last_timings();
     // A sequence's first frame has no correction from frames before: its own matches give one,
     // and it is matched again through it while the correction still moves (a few times at most).
+    // The first frame's last round is matched through the correction it reports: no fit after it
+    // (its correction would differ from the one the disparity was matched with).
     const int rounds = first_ ? kFirstFrameRounds : 0;
     const bool fit = first_ || frames_ % kRefitEvery == 0;
-    for (int round = 0; fit && refit(left, right, disparity) && round < rounds; ++round) {
+    for (int round = 0;
+         fit && (rounds == 0 || round < rounds) && refit(left, right, disparity) && round < rounds;
+         ++round) {
       inner().reset();  // matched again as a new sequence
       inner().compute(corrected_left(left), corrected(right), disparity);
       timings_ = inner().last_timings();
