@@ -161,14 +161,20 @@ class LcmLogSource final : public PacedSource {
   // The replay stamps a frame when it delivers it; the samples carry the headset's clock. Each
   // keeps its offset to the recorded frame's capture time, moved onto the replay's time line, so
   // a frame and its samples share one clock (and a re-recorded replay keeps them together).
-  // Between frames the samples follow the replay's pace, not the recorded one. The arithmetic
-  // wraps instead of overflowing on a damaged log's stamps.
+  // Between frames the samples follow the replay's pace, not the recorded one; a replay faster
+  // than the recording would put a frame's first samples before the last frame's, so each
+  // sample comes at least a nanosecond after the one before (IMU consumers integrate in order,
+  // as the camera's own stream promises). The arithmetic wraps instead of overflowing on a
+  // damaged log's stamps.
   std::span<const ImuSample> frame_imu(std::int64_t capture_ns) override {
     replayed_imu_.assign(imu_.begin(), imu_.end());
     const auto shift =
         static_cast<std::uint64_t>(capture_ns) - static_cast<std::uint64_t>(message_.capture_ns);
-    for (ImuSample& s : replayed_imu_)
+    for (ImuSample& s : replayed_imu_) {
       s.capture_ns = static_cast<std::int64_t>(static_cast<std::uint64_t>(s.capture_ns) + shift);
+      if (last_imu_ns_ && s.capture_ns <= *last_imu_ns_) s.capture_ns = *last_imu_ns_ + 1;
+      last_imu_ns_ = s.capture_ns;
+    }
     return replayed_imu_;
   }
 
@@ -177,9 +183,10 @@ class LcmLogSource final : public PacedSource {
   LcmLogEvent event_;
   ::dco::raw_stereo_t message_;
   Image<std::uint8_t> left_, right_;
-  std::vector<ImuSample> imu_;           // as recorded
-  std::vector<ImuSample> replayed_imu_;  // on the replay's time line
-  bool pending_ = false;                 // the first pair, read at open, not yet delivered
+  std::vector<ImuSample> imu_;               // as recorded
+  std::vector<ImuSample> replayed_imu_;      // on the replay's time line
+  std::optional<std::int64_t> last_imu_ns_;  // the last sample handed on
+  bool pending_ = false;                     // the first pair, read at open, not yet delivered
   CaptureGaps gaps_;
   bool gap_ = false, starts_run_ = false;  // of the pair produce() made
   int run_ = 0;                            // the one dcod run to replay (1, 2, ...; 0: all)
