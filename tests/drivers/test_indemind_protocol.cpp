@@ -36,6 +36,17 @@ TEST(UvcPayload, ParsesFlagsPtsAndRejectsBrokenHeaders) {
   EXPECT_EQ(parse_uvc_payload(too_long).fault, PayloadFault::kBadHeaderLength);
   std::vector<std::uint8_t> flags_disagree = {2, 0x80 | 0x04, 0, 0};  // PTS flag, no room
   EXPECT_EQ(parse_uvc_payload(flags_disagree).fault, PayloadFault::kBadHeaderLength);
+  // A header longer than its flags need, within the standard's 12 bytes: its data starts after it.
+  std::vector<std::uint8_t> padded = {12, 0x80 | 0x02, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 9, 8};
+  const ParsedPayload taken = parse_uvc_payload(padded);
+  ASSERT_EQ(taken.fault, PayloadFault::kNone);
+  EXPECT_TRUE(taken.header.eof);
+  ASSERT_EQ(taken.data.size(), 2u);
+  EXPECT_EQ(taken.data[0], 9);
+  std::vector<std::uint8_t> past_standard(20, 0);
+  past_standard[0] = 13;
+  past_standard[1] = 0x80;
+  EXPECT_EQ(parse_uvc_payload(past_standard).fault, PayloadFault::kBadHeaderLength);
   std::vector<std::uint8_t> no_eoh = {2, 0x01, 5};
   EXPECT_EQ(parse_uvc_payload(no_eoh).fault, PayloadFault::kNoEndOfHeader);
 }

@@ -31,7 +31,11 @@ ParsedPayload parse_uvc_payload(std::span<const std::uint8_t> payload) {
   }
   const std::uint8_t length = payload[0], info = payload[1];
   const std::size_t expected = 2u + ((info & kPts) ? 4u : 0u) + ((info & kScr) ? 6u : 0u);
-  if (length != expected || length > payload.size()) {
+  // Room for the fields its flags name, and at most the standard header's 12 bytes: a header
+  // padded past its fields (which libuvc and uvcvideo take, skipping the rest) is taken too,
+  // a length byte hit by corruption (no checksum guards it) mostly is not.
+  constexpr std::size_t kMaxHeader = 12;
+  if (length < expected || length > kMaxHeader || length > payload.size()) {
     out.fault = PayloadFault::kBadHeaderLength;
     return out;
   }
