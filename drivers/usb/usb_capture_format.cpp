@@ -355,7 +355,15 @@ std::optional<UsbCaptureRecord> UsbCaptureReader::next() {
     return std::nullopt;
   };
   std::uint8_t head[kHeadBytes];
+  // A read the disk failed is no end of the capture: said apart from a capture cut short.
+  const auto read_failed = [&] {
+    return std::ferror(file_)
+               ? stop("cannot read the USB capture at byte " + std::to_string(offset_) +
+                      " (record " + std::to_string(index_) + "): a disk error")
+               : std::nullopt;
+  };
   const std::size_t got = std::fread(head, 1, kHeadBytes, file_);
+  if (got < kHeadBytes && std::ferror(file_)) return read_failed();
   if (got == 0 && std::feof(file_)) {
     done_ = true;
     return std::nullopt;
@@ -366,8 +374,10 @@ std::optional<UsbCaptureRecord> UsbCaptureReader::next() {
   std::string problem;
   if (!read_head(head, index_, offset_, r.kind, length, problem)) return stop(problem);
   body_.resize(length);
-  if (std::fread(body_.data(), 1, length, file_) != length)
+  if (std::fread(body_.data(), 1, length, file_) != length) {
+    if (std::ferror(file_)) return read_failed();
     return stop(ends_inside_record(index_, r.kind, offset_));
+  }
   if (!decode_record(head, body_, index_, offset_, r, problem)) return stop(problem);
   if (index_ > 0 && r.t_ns < last_t_ns_) return stop(back_in_time(index_, offset_));
   last_t_ns_ = r.t_ns;
