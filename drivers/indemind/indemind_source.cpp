@@ -638,9 +638,18 @@ class IndemindSource final : public FrameSource {
   }
 
   // Whether a frame at `extended` arrived (its first payload at `first_ns`) as many frame periods
-  // after the last frame taken as the counter stepped, within half a period. The clock map's skew
-  // scales the nominal period, which over a long gap may be off by more than that.
+  // after the last frame taken as the counter stepped. Judged against the clock map where it has
+  // learnt something: its lower envelope is the earliest a frame's first payload arrives, so a
+  // frame lost before this one leaves its arrival there or later (the host's scheduling only
+  // delays it, up to the lead), while a counter a few counts high maps whole periods after its
+  // arrival. Two arrivals compared with each other carry the jitter of both, which at 200 fps
+  // misjudged real losses for corrupt counters (half a period is 2.5 ms). Without a map: within
+  // half a period of the last frame's arrival plus the counted periods, the skew scaling them.
   bool arrived_as_counted(std::uint64_t extended, std::int64_t first_ns) const {
+    if (clock_.buckets() > 0) {
+      const std::int64_t miss = first_ns - clock_.to_host(frame_device_ns(extended));
+      return -2 * miss < frames_ns(1) && miss <= lead_ns();
+    }
     const std::int64_t counted = clock_.to_host(frame_device_ns(extended)) -
                                  clock_.to_host(frame_device_ns(extender_.last()));
     const std::int64_t miss = first_ns - last_taken_first_ns_ - counted;

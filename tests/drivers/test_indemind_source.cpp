@@ -473,6 +473,44 @@ TEST(IndemindSource, AShortSilenceOfAStillCounterStartsTheClockMapAgainWithinABu
   }
 }
 
+// Frames really lost at 200 fps, where the host's scheduling delays arrivals by up to 6 ms (more
+// than the 2.5 ms of half a period): each is counted lost, none taken for a corrupt counter or a
+// restarted one. Judged between two arrivals, each with its own delay, 9 of 20 were.
+TEST(IndemindSource, LostFramesAtAHighRateWithJitteryArrivalsAreCountedLost) {
+  SimulatedIndemind::Options o;
+  o.jitter_ns = 6'000'000;
+  IndemindOptions io;
+  io.width = 640;
+  io.fps = 200;
+  Rig rig(o, io);
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(400));
+  for (int i = 0; i < 20; ++i) {
+    ASSERT_TRUE(rig.sim->inject_and_settle(Fault::kSkipCounter, 1));
+    ASSERT_TRUE(rig.wait_frames(rig.sink.count() + 50));
+  }
+  rig.source->stop();
+  const auto n = counters_of(*rig.source);
+  EXPECT_EQ(n.at("implausible_counters"), 0u);
+  EXPECT_EQ(n.at("counter_restarts"), 0u);
+  EXPECT_EQ(n.at("lost_frames"), 20u);
+  EXPECT_EQ(n.at("lost_frames"), rig.sim->record().expected_lost);
+  // A corrupt counter is still told from a loss: it arrives whole periods before its count.
+  Rig corrupt(o, io);
+  corrupt.source->start(corrupt.sink);
+  ASSERT_TRUE(corrupt.wait_frames(400));
+  for (int i = 0; i < 10; ++i) {
+    ASSERT_TRUE(corrupt.sim->inject_and_settle(Fault::kCorruptCounter, 3));
+    ASSERT_TRUE(corrupt.wait_frames(corrupt.sink.count() + 50));
+  }
+  corrupt.source->stop();
+  const auto c = counters_of(*corrupt.source);
+  EXPECT_EQ(c.at("implausible_counters"), 10u);
+  EXPECT_EQ(c.at("counter_restarts"), 0u);
+  EXPECT_EQ(c.at("frames"), corrupt.sim->record().frames_intact);
+  EXPECT_EQ(c.at("lost_frames"), corrupt.sim->record().expected_lost);  // the dropped ones
+}
+
 // Each width has one height and each height one width: one of them names the mode.
 TEST(IndemindSource, AWidthOrHeightAloneTakesTheOtherFromItsMode) {
   IndemindOptions wide;
