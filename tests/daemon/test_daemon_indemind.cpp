@@ -125,86 +125,36 @@ TEST(DaemonIndemind, SimulatedModuleDeliversDepthEndToEnd) {
   EXPECT_EQ(flash_writes, 0u);
 }
 
-// A replug is a gap in the camera's frames: dcod finishes the frames before it and starts a new
-// sequence, and says so. In deterministic mode, where dcod's own pace holds the camera up and
-// makes gaps of its own, the frames run on as one sequence.
-TEST(DaemonIndemind, AReplugStartsANewSequenceUnlessDeterministic) {
-  for (const bool deterministic : {false, true}) {
-    SCOPED_TRACE(deterministic);
-    std::atomic<SimulatedIndemind*> sim{nullptr};
-    std::atomic<bool> quit{false};
-    std::thread unplugger;
-    // Joined while the simulated module lives (the daemon owns it), and at the latest on the way
-    // out of the test.
-    const auto stop_unplugger = [&] {
-      quit = true;
-      if (unplugger.joinable()) unplugger.join();
-    };
-    struct Join {
-      std::function<void()> f;
-      ~Join() { f(); }
-    } join_on_exit{stop_unplugger};
-    ::testing::internal::CaptureStderr();
-    const Seen seen = run_daemon(
-        "indemind://",
-        {"service.max_frames=30",
-         std::string("runtime.deterministic=") + (deterministic ? "true" : "false")},
-        [&](std::string_view uri) {
-          SimulatedIndemind::Options o;
-          o.pace_real_time = true;
-          auto owned = std::make_unique<SimulatedIndemind>(o);
-          sim = owned.get();
-          drivers::IndemindOptions io;
-          io.fps = 25;
-          io.clock = [s = owned.get()] { return s->now_ns(); };
-          auto source = drivers::open_indemind(std::move(owned), io, std::string(uri));
-          // Ten frames, then the cable is out for half a second.
-          unplugger = std::thread([s = sim.load(), &quit] {
-            while (!quit && s->record().frames_intact < 10)
-              std::this_thread::sleep_for(std::chrono::milliseconds(5));
-            if (quit) return;
-            s->set_present(false);
-            std::this_thread::sleep_for(std::chrono::milliseconds(500));
-            s->set_present(true);
-          });
-          return source;
-        },
-        stop_unplugger);
-    const std::string log = ::testing::internal::GetCapturedStderr();
-    EXPECT_EQ(seen.status, 0) << log;
-    ASSERT_NE(sim.load(), nullptr);
-    const bool cut =
-        log.find("gap(s) in the camera's frames since the last report") != std::string::npos;
-    EXPECT_EQ(cut, !deterministic) << log;
-    EXPECT_GE(seen.frames, 10) << seen.client_error;
-  }
-}
+// The daemon on a simulated module streaming in real time at 25 fps; once the module has sent ten
+// whole frames, `action` runs on a thread of its own (a replug, a reload). The thread is joined
+// while the module lives (the daemon owns it), and at the latest on the way out. dcod's log and
+// the streams the module committed come back with what the client saw.
+struct ModuleRun {
+  Seen seen;
+  std::string log;
+  std::uint64_t commits = 0;
+  bool acted = false;
+};
 
-// A reload that restarts the stage threads keeps the camera streaming: the module's stream is
-// committed once, not stopped and negotiated afresh, and depth flows on after the reload.
-TEST(DaemonIndemind, AReloadThatRestartsTheStagesKeepsTheCameraStreaming) {
-  block_service_signals();  // before the reloader's thread, so SIGHUP reaches the daemon only
-  const auto config = std::filesystem::temp_directory_path() /
-                      ("dco_daemon_reload_" + std::to_string(getpid()) + ".toml");
-  const auto write_config = [&](double lambda_s) {
-    std::ofstream(config) << "[densify]\nlambda_s = " << lambda_s << "\n";
-  };
-  write_config(1.2);
+ModuleRun run_with_module_action(const std::vector<std::string>& sets,
+                                 const std::function<void(SimulatedIndemind&)>& action,
+                                 const std::optional<std::filesystem::path>& config = {}) {
+  block_service_signals();  // before the action's thread, so a SIGHUP reaches the daemon only
   std::atomic<SimulatedIndemind*> sim{nullptr};
-  std::atomic<bool> quit{false};
-  std::atomic<std::uint64_t> intact_at_reload{0};
-  std::thread reloader;
-  const auto stop_reloader = [&] {
+  std::atomic<bool> quit{false}, acted{false};
+  std::thread actor;
+  const auto stop_actor = [&] {
     quit = true;
-    if (reloader.joinable()) reloader.join();
+    if (actor.joinable()) actor.join();
   };
   struct Join {
     std::function<void()> f;
     ~Join() { f(); }
-  } join_on_exit{stop_reloader};
+  } join_on_exit{stop_actor};
+  ModuleRun run;
   ::testing::internal::CaptureStderr();
-  const Seen seen = run_daemon(
-      "indemind://", {"service.max_frames=30"},
+  run.seen = run_daemon(
+      "indemind://", sets,
       [&](std::string_view uri) {
         SimulatedIndemind::Options o;
         o.pace_real_time = true;
@@ -214,29 +164,70 @@ TEST(DaemonIndemind, AReloadThatRestartsTheStagesKeepsTheCameraStreaming) {
         io.fps = 25;
         io.clock = [s = owned.get()] { return s->now_ns(); };
         auto source = drivers::open_indemind(std::move(owned), io, std::string(uri));
-        // Ten frames, then a new densify.lambda_s and a reload.
-        reloader = std::thread([s = sim.load(), &quit, &intact_at_reload, &write_config] {
+        actor = std::thread([s = sim.load(), &quit, &acted, &action] {
           while (!quit && s->record().frames_intact < 10)
             std::this_thread::sleep_for(std::chrono::milliseconds(5));
           if (quit) return;
-          write_config(1.3);
-          intact_at_reload = s->record().frames_intact;
-          kill(getpid(), SIGHUP);
+          action(*s);
+          acted = true;
         });
         return source;
       },
       [&] {
-        stop_reloader();
-        ASSERT_NE(sim.load(), nullptr);
-        EXPECT_EQ(sim.load()->record().commits, 1u);
+        stop_actor();
+        if (sim.load() != nullptr) run.commits = sim.load()->record().commits;
       },
       config);
-  const std::string log = ::testing::internal::GetCapturedStderr();
+  run.log = ::testing::internal::GetCapturedStderr();
+  run.acted = acted;
+  return run;
+}
+
+// A replug is a gap in the camera's frames: dcod finishes the frames before it and starts a new
+// sequence, and says so. In deterministic mode, where dcod's own pace holds the camera up and
+// makes gaps of its own, the frames run on as one sequence.
+TEST(DaemonIndemind, AReplugStartsANewSequenceUnlessDeterministic) {
+  for (const bool deterministic : {false, true}) {
+    SCOPED_TRACE(deterministic);
+    // The cable out for half a second.
+    const ModuleRun run =
+        run_with_module_action({"service.max_frames=30", std::string("runtime.deterministic=") +
+                                                             (deterministic ? "true" : "false")},
+                               [](SimulatedIndemind& s) {
+                                 s.set_present(false);
+                                 std::this_thread::sleep_for(std::chrono::milliseconds(500));
+                                 s.set_present(true);
+                               });
+    EXPECT_EQ(run.seen.status, 0) << run.log;
+    EXPECT_TRUE(run.acted);
+    const bool cut =
+        run.log.find("gap(s) in the camera's frames since the last report") != std::string::npos;
+    EXPECT_EQ(cut, !deterministic) << run.log;
+    EXPECT_GE(run.seen.frames, 10) << run.seen.client_error;
+  }
+}
+
+// A reload that restarts the stage threads keeps the camera streaming: the module's stream is
+// committed once, not stopped and negotiated afresh, and depth flows on after the reload.
+TEST(DaemonIndemind, AReloadThatRestartsTheStagesKeepsTheCameraStreaming) {
+  const auto config = std::filesystem::temp_directory_path() /
+                      ("dco_daemon_reload_" + std::to_string(getpid()) + ".toml");
+  std::ofstream(config) << "[densify]\nlambda_s = 1.2\n";
+  // A new densify.lambda_s, then a reload.
+  const ModuleRun run = run_with_module_action(
+      {"service.max_frames=30"},
+      [&](SimulatedIndemind&) {
+        std::ofstream(config) << "[densify]\nlambda_s = 1.3\n";
+        kill(getpid(), SIGHUP);
+      },
+      config);
   std::filesystem::remove(config);
-  EXPECT_EQ(seen.status, 0) << log;
-  EXPECT_NE(log.find("restarted the pipeline for densify.lambda_s"), std::string::npos) << log;
-  EXPECT_GT(intact_at_reload.load(), 0u);
-  EXPECT_GE(seen.frames, 10) << seen.client_error;
+  EXPECT_EQ(run.seen.status, 0) << run.log;
+  EXPECT_TRUE(run.acted);
+  EXPECT_NE(run.log.find("restarted the pipeline for densify.lambda_s"), std::string::npos)
+      << run.log;
+  EXPECT_EQ(run.commits, 1u);
+  EXPECT_GE(run.seen.frames, 10) << run.seen.client_error;
 }
 
 TEST(DaemonIndemind, RecordedUsbCaptureReplaysThroughTheDaemon) {
