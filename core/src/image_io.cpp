@@ -111,14 +111,14 @@ cv::Mat read_image_file(const std::filesystem::path& path, int flags, std::strin
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(fmt::format("cannot open {} {}", what, quoted(path)));
   const std::vector<std::uint8_t> bytes(std::istreambuf_iterator<char>(in), {});
-  if (const auto png = png_header(bytes);
-      png && (png->width > static_cast<std::uint32_t>(kMaxImageSide) ||
-              png->height > static_cast<std::uint32_t>(kMaxImageSide)))
-    throw Error(fmt::format("{} {} is a {}x{} PNG (sides at most {})", what, quoted(path),
-                            png->width, png->height, kMaxImageSide));
-  if (png_header(bytes))
+  if (const auto png = png_header(bytes)) {
+    if (png->width > static_cast<std::uint32_t>(kMaxImageSide) ||
+        png->height > static_cast<std::uint32_t>(kMaxImageSide))
+      throw Error(fmt::format("{} {} is a {}x{} PNG (sides at most {})", what, quoted(path),
+                              png->width, png->height, kMaxImageSide));
     if (const std::string damage = png_damage(bytes); !damage.empty())
       throw Error(fmt::format("cannot decode {} {}: the PNG is {}", what, quoted(path), damage));
+  }
   // OpenCV reads a PGM/PPM of fewer levels (maxval 15) as 8-bit values 0..15, unscaled.
   if (const auto maxval = pnm_maxval(bytes); maxval && *maxval < 255)
     throw Error(fmt::format("{} {} is a PGM/PPM with maxval {} (8-bit ones need 255)", what,

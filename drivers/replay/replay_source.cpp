@@ -13,6 +13,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -51,53 +52,56 @@ std::vector<fs::path> list_images(const fs::path& dir, const std::string& prefix
   return out;
 }
 
-// The numbers in a file's stem after its side's prefix, in order: "I1_000012" -> 12,
-// "1305031102.175304" (a capture time) -> 1305031102, 0.175304, "000046_10" (KITTI) -> 46, 10.
-// Digits after a number and a '.' are its fraction, held as 18 decimal places: "100.15" comes
-// after "100.1" and before "100.2" (times written without their trailing zeros). Compared in
-// that order, so files play in time and frame order. nullopt when there is none.
-using FrameKey = std::vector<std::uint64_t>;
-
-std::optional<FrameKey> frame_key(const fs::path& p, const std::string& prefix) {
+// Calls number(digits, fraction) for each run of digits in a file's stem after its side's
+// prefix, in order; `fraction`: the run follows a number and a '.' ("1305031102.175304").
+template <class Number>
+void for_each_number(const fs::path& p, const std::string& prefix, Number&& number) {
   const std::string stem = p.stem().string().substr(prefix.size());
   const auto digit = [&](std::size_t i) {
     return i < stem.size() && std::isdigit(static_cast<unsigned char>(stem[i]));
   };
-  FrameKey key;
   for (std::size_t first = 0; first < stem.size(); ++first) {
     if (!digit(first)) continue;
     std::size_t last = first;
     while (digit(last + 1)) ++last;
-    const std::size_t digits = last - first + 1;
-    if (digits > 18) return std::nullopt;  // no frame count or time has that many digits
-    std::uint64_t value = std::stoull(stem.substr(first, digits));
-    if (first >= 2 && stem[first - 1] == '.' && digit(first - 2))
-      for (std::size_t place = digits; place < 18; ++place) value *= 10;  // a fraction
-    key.push_back(value);
+    number(std::string_view(stem).substr(first, last - first + 1),
+           first >= 2 && stem[first - 1] == '.' && digit(first - 2));
     first = last;
   }
-  if (key.empty()) return std::nullopt;
+}
+
+// The numbers in a file's stem, in order: "I1_000012" -> 12, "1305031102.175304" (a capture
+// time) -> 1305031102, 0.175304, "000046_10" (KITTI) -> 46, 10. A fraction is held as 18
+// decimal places: "100.15" comes after "100.1" and before "100.2" (times written without their
+// trailing zeros). Compared in that order, so files play in time and frame order. nullopt when
+// there is none.
+using FrameKey = std::vector<std::uint64_t>;
+
+std::optional<FrameKey> frame_key(const fs::path& p, const std::string& prefix) {
+  FrameKey key;
+  bool too_long = false;
+  for_each_number(p, prefix, [&](std::string_view digits, bool fraction) {
+    // No frame count or time has that many digits.
+    if (digits.size() > 18) too_long = true;
+    if (too_long) return;
+    std::uint64_t value = std::stoull(std::string(digits));
+    if (fraction)
+      for (std::size_t place = digits.size(); place < 18; ++place) value *= 10;
+    key.push_back(value);
+  });
+  if (too_long || key.empty()) return std::nullopt;
   return key;
 }
 
 // The numbers frame_key reads, for messages: "000046_10" -> "46_10", "1305031102.175304" as it is.
 std::string frame_name(const fs::path& p, const std::string& prefix) {
-  const std::string stem = p.stem().string().substr(prefix.size());
-  const auto digit = [&](std::size_t i) {
-    return i < stem.size() && std::isdigit(static_cast<unsigned char>(stem[i]));
-  };
   std::string text;
-  for (std::size_t first = 0; first < stem.size(); ++first) {
-    if (!digit(first)) continue;
-    std::size_t last = first;
-    while (digit(last + 1)) ++last;
-    const std::string run = stem.substr(first, last - first + 1);
-    if (first >= 2 && stem[first - 1] == '.' && digit(first - 2))
-      text += "." + run;
+  for_each_number(p, prefix, [&](std::string_view digits, bool fraction) {
+    if (fraction)
+      text += "." + std::string(digits);
     else
-      text += (text.empty() ? "" : "_") + std::to_string(std::stoull(run));
-    first = last;
-  }
+      text += (text.empty() ? "" : "_") + std::to_string(std::stoull(std::string(digits)));
+  });
   return text;
 }
 

@@ -50,13 +50,12 @@ class CameraAlignmentMatcher final : public StereoStageWrapper {
     // The first frame's last round is matched through the correction it reports: no fit after it
     // (its correction would differ from the one the disparity was matched with).
     const int rounds = first_ ? kFirstFrameRounds : 0;
-    const bool fit = first_ || frames_ % kRefitEvery == 0;
-    for (int round = 0;
-         fit && (rounds == 0 || round < rounds) && refit(left, right, disparity) && round < rounds;
-         ++round) {
+    bool moved = (first_ || frames_ % kRefitEvery == 0) && refit(left, right, disparity);
+    for (int round = 0; moved && round < rounds; ++round) {
       inner().reset();  // matched again as a new sequence
       inner().compute(corrected_left(left), corrected(right), disparity);
       timings_ = inner().last_timings();
+      moved = round + 1 < rounds && refit(left, right, disparity);
     }
     first_ = false;
     ++frames_;

@@ -342,6 +342,10 @@ TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
   expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png", "--out", "d.pfm", "--calib",
                                "c.txt", "--depth-out", "z.jpg"}),
                2, "--depth-out writes .pfm or .png");
+  // One name for both outputs, neither there yet.
+  expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png", "--out", "d.pfm", "--calib",
+                               "c.txt", "--depth-out", "./d.pfm"}),
+               2, "--out and --depth-out name one file");
   expect_error(run_depth(dir, {"--left", "l.png", "--right", "r.png", "--out", "d.pfm", "--set",
                                "nonsense"}),
                2, "--set nonsense: expected key=value");

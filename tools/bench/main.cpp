@@ -213,13 +213,10 @@ Params load_params(const Options& opt) {
   if (opt.config) schema.load_file(*opt.config);
   dco::tools::apply_sets(schema, opt.overrides);
   p.max_disparity_given = schema.was_set("stereo.max_disparity");
-  try {
+  dco::tools::validate_given(opt.config.has_value(), [&] {
     dco::pipeline::validate(p.pipeline);
     rt::validate(p.runtime);
-  } catch (const dco::Error& e) {
-    if (opt.config) throw;  // the file's values or the command line's: a data error
-    throw UsageError(std::string("--set: ") + e.what());  // every value came from --set
-  }
+  });
   return p;
 }
 

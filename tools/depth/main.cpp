@@ -40,12 +40,6 @@ std::string lower(std::string text) {
 }
 
 namespace fs = std::filesystem;
-
-// Whether two paths name one file, through links (false when either is not there).
-bool same_file(const fs::path& a, const fs::path& b) {
-  std::error_code ec;
-  return fs::equivalent(a, b, ec) && !ec;
-}
 using dco::tools::UsageError;
 
 constexpr std::string_view kUsage =
@@ -215,10 +209,10 @@ Options parse_args(int argc, char** argv) {
     // its permissions).
     for (const std::optional<fs::path>& output : {opt.out, opt.depth_out})
       for (const std::optional<fs::path>& input : {opt.left, opt.right, opt.calib, opt.config})
-        if (output && input && same_file(*output, *input))
+        if (output && input && dco::tools::same_file(*output, *input))
           throw UsageError(
               fmt::format("'{}' is an input; the output would replace it", output->string()));
-    if (opt.depth_out && same_file(*opt.out, *opt.depth_out))
+    if (opt.depth_out && dco::tools::same_file(*opt.out, *opt.depth_out))
       throw UsageError("--out and --depth-out name one file");
     if (opt.depth_out && !opt.calib) throw UsageError("--depth-out needs --calib");
     if (opt.out_dir || opt.data_root) throw UsageError("--out-dir and --data-root need --scenes");
@@ -267,12 +261,7 @@ dco::pipeline::PipelineParams load_params(const Options& opt, bool& max_disparit
     throw UsageError(fmt::format("--max-disp {}: value {} is outside [1, {}]", *opt.max_disp,
                                  *opt.max_disp, dco::stereo::kMaxDisparityLimit));
   if (opt.max_disp) params.stereo.max_disparity = *opt.max_disp;
-  try {
-    dco::pipeline::validate(params);
-  } catch (const dco::Error& e) {
-    if (opt.config) throw;  // the file's values or the command line's: a data error
-    throw UsageError(std::string("--set: ") + e.what());  // every value came from --set
-  }
+  dco::tools::validate_given(opt.config.has_value(), [&] { dco::pipeline::validate(params); });
   return params;
 }
 

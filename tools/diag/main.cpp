@@ -42,8 +42,7 @@ void write_file(const std::filesystem::path& path, const std::string& text) {
 
 // A report written over the recording it reads would lose the field log.
 void refuse_the_log(const std::string& log, const std::string& report, const char* option) {
-  std::error_code ec;
-  if (report == log || std::filesystem::equivalent(log, report, ec))
+  if (dco::tools::same_file(log, report))
     throw dco::tools::UsageError(fmt::format("{} {} is the log itself", option, report));
 }
 
@@ -84,11 +83,8 @@ int main(int argc, char** argv) {
     if (!no_html && html.empty()) html = log + ".html";
     if (!no_html) refuse_the_log(log, html, "--html");
     if (!json.empty() && json != "-") refuse_the_log(log, json, "--json");
-    if (!no_html && !json.empty() && json != "-") {
-      std::error_code ec;
-      if (html == json || std::filesystem::equivalent(html, json, ec))
-        throw UsageError(fmt::format("--html and --json name one file, {}", json));
-    }
+    if (!no_html && !json.empty() && json != "-" && dco::tools::same_file(html, json))
+      throw UsageError(fmt::format("--html and --json name one file, {}", json));
 
     const dco::diag::LogDigest digest = dco::diag::digest_log(log, options);
     const dco::diag::LogSummary summary = dco::diag::summarize(digest);

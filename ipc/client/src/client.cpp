@@ -536,7 +536,6 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     return fail(DCO_E_INVALID_ARGUMENT, "dco_client_wait_next: bad client, view or timeout");
   const std::int64_t deadline = now_ns() + std::int64_t{timeout_ms} * 1'000'000;
   if (client->poll_ns != 0) request_polling_slice();
-  bool gone = false;
   for (;;) {
     const auto* h = client->map.header();
     // Read the wake word before looking for a frame: a publish after the look changes it, so the
@@ -553,12 +552,8 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
       bool remapped = false;
       const dco_status status = client->follow_path(&remapped);
       if (status != DCO_OK) return status;
-      if (remapped) {
-        gone = false;
-        continue;
-      }
-      gone = client->writer_gone();
-      if (gone) {
+      if (remapped) continue;
+      if (client->writer_gone()) {
         // A frame published between the look above and the close is still the client's: the
         // writer publishes before it closes, so a count read after seeing it gone has it.
         if (h->publish_count.load(std::memory_order_acquire) > client->last_index) continue;
@@ -571,7 +566,7 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     if (now >= deadline) {
       // Said again by every call until a new ring replaces this one (a remap clears it), also
       // by one whose timeout ends before its next look at the writer.
-      if (gone || client->gone_reported)
+      if (client->gone_reported)
         return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
       return fail(DCO_E_TIMEOUT, client->expect.path + ": no new frame within " +
                                      std::to_string(timeout_ms) + " ms");

@@ -108,6 +108,21 @@ void apply_sets(ConfigSchema& schema, const std::vector<std::string>& assignment
   }
 }
 
+void validate_given(bool from_file, const std::function<void()>& validate) {
+  try {
+    validate();
+  } catch (const Error& e) {
+    if (from_file) throw;
+    throw UsageError(std::string("--set: ") + e.what());
+  }
+}
+
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
+  std::error_code ec;
+  return a.lexically_normal() == b.lexically_normal() ||
+         (std::filesystem::equivalent(a, b, ec) && !ec);
+}
+
 void check_synthetic_name(const std::string& name) {
   try {
     synthetic::preset(name, 64, 64);

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <stdexcept>
@@ -43,6 +44,15 @@ class ArgCursor {
   std::string_view name_;
   std::optional<std::string> inline_value_;
 };
+
+// Checks parameters loaded from an optional config file and --set assignments (`validate`
+// throws dco::Error). Without a file every value came from the command line, so a refusal is a
+// command-line mistake (UsageError); with one it is the data's (the error as thrown).
+void validate_given(bool from_file, const std::function<void()>& validate);
+
+// Whether two paths name one file: the same path, or one file through links (an output given
+// twice, or over an input, would replace it).
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 
 // Applies --set KEY=VALUE assignments in order. A bad one (no '=', an unknown key, a value out
 // of range) is a command-line mistake: UsageError, exit status 2, as dcod's own --set.
