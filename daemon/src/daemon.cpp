@@ -201,6 +201,18 @@ void Daemon::start_pipeline() {
         on_result(r, t);
       },
       pipeline::runtime::DepthRuntime::StageHook{}, backend.stages);
+  const int opencv_threads = next->runtime_params().opencv_threads;
+  if (!opencv_pin_) {
+    opencv_pin_.emplace(opencv_threads);
+    opencv_threads_asked_ = opencv_threads;
+  } else if (opencv_threads != opencv_threads_asked_) {
+    log_.warning(fmt::format(
+        "OpenCV keeps the {} thread(s) it had as dcod started ({} now): its count changes only "
+        "with a restart of dcod, as the source's thread may be in an OpenCV loop at any time",
+        opencv_pin_->threads(),
+        opencv_threads > 0 ? fmt::format("these stages would have it use {}", opencv_threads)
+                           : std::string("these stages would leave it to OpenCV's own choice")));
+  }
   if (runtime_) {
     // A restarted pipeline counts from 0: the daemon's totals keep what the one it replaces
     // dropped, and the rates measure the new one from its start.
@@ -664,6 +676,7 @@ void Daemon::reload() {
   next.config.ring_slots = loaded_.config.ring_slots;
   next.config.ring_image = loaded_.config.ring_image;
   next.config.lcm_url = loaded_.config.lcm_url;
+  next.config.runtime.opencv_threads = loaded_.config.runtime.opencv_threads;
 
   // Through the restart and, when it fails, the one with what ran: no frame reaches stages that
   // are not running.

@@ -112,7 +112,9 @@ std::vector<std::string> changed_keys(const LoadedConfig& before, const LoadedCo
 
 Reload reload_kind(const std::string& key) {
   const auto starts = [&](const char* prefix) { return key.rfind(prefix, 0) == 0; };
-  if (starts("source.") || starts("ring.") || key == "lcm.url") return Reload::kRestart;
+  // OpenCV's thread count is the process's (see Daemon::opencv_pin_).
+  if (starts("source.") || starts("ring.") || key == "lcm.url" || key == "runtime.opencv_threads")
+    return Reload::kRestart;
   if (starts("stereo.") || starts("contour.") || starts("densify.") || starts("runtime."))
     return Reload::kPipeline;
   return Reload::kLive;

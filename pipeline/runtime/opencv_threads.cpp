@@ -7,30 +7,60 @@
 namespace dco::pipeline::runtime {
 namespace {
 
-struct Leases {
+struct Holders {
   std::mutex mutex;
-  int count = 0;
-  int before = 0;  // OpenCV's count before the first lease
+  int count = 0;  // leases and pins
+  int pins = 0;
+  int before = 0;   // OpenCV's count before the first holder
+  int current = 0;  // OpenCV's count while there are holders
+
+  void take() {
+    if (count++ == 0) before = current = cv::getNumThreads();
+  }
+  void give_back() {
+    if (--count == 0) set(before);
+  }
+  void set(int threads) {
+    if (threads == current) return;  // a rebuilt pool would crash a loop running elsewhere
+    cv::setNumThreads(threads);
+    current = threads;
+  }
 };
 
-Leases& leases() {
-  static Leases l;
-  return l;
+Holders& holders() {
+  static Holders h;
+  return h;
 }
 
 }  // namespace
 
 OpenCvThreadsLease::OpenCvThreadsLease(int threads) {
-  Leases& l = leases();
-  const std::lock_guard lock(l.mutex);
-  if (l.count++ == 0) l.before = cv::getNumThreads();
-  cv::setNumThreads(threads);
+  Holders& h = holders();
+  const std::lock_guard lock(h.mutex);
+  h.take();
+  if (h.pins == 0) h.set(threads);
 }
 
 OpenCvThreadsLease::~OpenCvThreadsLease() {
-  Leases& l = leases();
-  const std::lock_guard lock(l.mutex);
-  if (--l.count == 0) cv::setNumThreads(l.before);
+  Holders& h = holders();
+  const std::lock_guard lock(h.mutex);
+  h.give_back();
+}
+
+OpenCvThreadsPin::OpenCvThreadsPin(int threads) {
+  Holders& h = holders();
+  const std::lock_guard lock(h.mutex);
+  h.take();
+  if (threads > 0) h.set(threads);
+  ++h.pins;
+  threads_ = h.current;
+}
+
+OpenCvThreadsPin::~OpenCvThreadsPin() {
+  Holders& h = holders();
+  const std::lock_guard lock(h.mutex);
+  --h.pins;
+  h.give_back();
 }
 
 int opencv_threads_for(int opencv_threads, int stage_threads, int usable_cpus) {

@@ -138,6 +138,7 @@ TEST(DaemonConfig, ChangedKeysAndWhatAReloadCanApply) {
   EXPECT_EQ(reload_kind("ring.slots"), Reload::kRestart);
   EXPECT_EQ(reload_kind("source.uri"), Reload::kRestart);
   EXPECT_EQ(reload_kind("lcm.url"), Reload::kRestart);
+  EXPECT_EQ(reload_kind("runtime.opencv_threads"), Reload::kRestart);  // the process's
 }
 
 TEST(DaemonConfig, ShippedConfigLoads) {

@@ -1,3 +1,4 @@
+#include <sched.h>
 #include <sys/stat.h>
 
 #include <map>
@@ -375,6 +376,64 @@ TEST(Dcod, AReloadWhoseStagesCannotStartKeepsTheRunningConfiguration) {
   EXPECT_TRUE(client.wait_next(3s).has_value());
   dcod.signal(SIGTERM);
   EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+}
+
+// Restricts the calling thread (and the processes it starts) to two of its CPUs for the scope.
+class TwoCpus {
+ public:
+  TwoCpus() {
+    CPU_ZERO(&saved_);
+    sched_getaffinity(0, sizeof(saved_), &saved_);
+    cpu_set_t two;
+    CPU_ZERO(&two);
+    int taken = 0;
+    for (int cpu = 0; cpu < CPU_SETSIZE && taken < 2; ++cpu)
+      if (CPU_ISSET(cpu, &saved_)) {
+        CPU_SET(cpu, &two);
+        ++taken;
+      }
+    ok_ = taken == 2 && sched_setaffinity(0, sizeof(two), &two) == 0;
+  }
+  ~TwoCpus() { sched_setaffinity(0, sizeof(saved_), &saved_); }
+  TwoCpus(const TwoCpus&) = delete;
+  TwoCpus& operator=(const TwoCpus&) = delete;
+  bool ok() const { return ok_; }
+
+ private:
+  cpu_set_t saved_;
+  bool ok_ = false;
+};
+
+// OpenCV's thread count is the process's and the source's thread may be in an OpenCV loop when
+// the stages restart (changing the count under it crashes OpenCV): a reload keeps it, names
+// runtime.opencv_threads as needing a restart, and says so when new stage threads would have had
+// another count.
+TEST(Dcod, AReloadKeepsOpenCvsThreadCountAndSaysSo) {
+  const TwoCpus two;
+  if (!two.ok()) GTEST_SKIP() << "fewer than two CPUs";
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  // One stage thread on two CPUs: OpenCV keeps its own count.
+  const auto config = dir.write("dcod.toml", "[runtime]\nthreads = 1\n");
+  DcodProcess dcod(configured(dir, config, notify));
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  dco::client::Client client = ring_client(dir);
+  ASSERT_TRUE(client.wait_next(3s)) << dcod.log();
+
+  // Two stage threads fill both CPUs, where OpenCV would get one thread.
+  dir.write("dcod.toml", "[runtime]\nthreads = 2\nopencv_threads = 3\n");
+  ASSERT_TRUE(reloaded(dcod, notify)) << dcod.log();
+  const std::string log = dcod.log();
+  EXPECT_NE(log.find("restarted the pipeline for runtime.threads"), std::string::npos) << log;
+  EXPECT_NE(log.find("need a restart of dcod: runtime.opencv_threads"), std::string::npos) << log;
+  EXPECT_NE(log.find("OpenCV keeps the "), std::string::npos) << log;
+  EXPECT_NE(log.find("(these stages would have it use 1 now): its count changes only with a "
+                     "restart of dcod"),
+            std::string::npos)
+      << log;
+  EXPECT_TRUE(client.wait_next(3s).has_value()) << dcod.log();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(5s), 0) << dcod.log();
 }
 
 TEST(Dcod, AReloadThatLowersMaxFramesBelowThePublishedCountStopsCleanly) {

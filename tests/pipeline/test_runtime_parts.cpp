@@ -1,8 +1,11 @@
 // The runtime's building blocks: duration histograms, bounded queues and the runtime.* params.
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -266,6 +269,65 @@ TEST(OpenCvThreads, EachLeaseSetsItsCountAndTheLastOneGivesTheFirstOneBack) {
   }
   EXPECT_EQ(cv::getNumThreads(), 3);
   cv::setNumThreads(original);
+}
+
+// OpenCV rebuilds its pool on every cv::setNumThreads, and a loop running meanwhile on another
+// thread crashes: a lease for the count in effect, and any lease under a pin, must not set it.
+class OpenCvLoopElsewhere {
+ public:
+  OpenCvLoopElsewhere()
+      : thread_([this] {
+          while (!stop_) {
+            cv::parallel_for_(cv::Range(0, 64), [&](const cv::Range& r) {
+              for (int i = r.start; i < r.end; ++i) sums_[static_cast<std::size_t>(i)] += i;
+            });
+            ++loops_;
+          }
+        }) {
+    while (loops_ == 0) std::this_thread::yield();
+  }
+  ~OpenCvLoopElsewhere() {
+    stop_ = true;
+    thread_.join();
+  }
+  long loops() const { return loops_; }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::atomic<long> loops_{0};
+  std::vector<long> sums_ = std::vector<long>(64);
+  std::thread thread_;
+};
+
+TEST(OpenCvThreads, ALeaseForTheCountInEffectLeavesALoopElsewhereRunning) {
+  const int original = cv::getNumThreads();
+  {
+    const OpenCvThreadsLease outer(2);
+    const OpenCvLoopElsewhere loop;
+    for (int i = 0; i < 50000; ++i) const OpenCvThreadsLease again(2);  // a runtime restarting
+    EXPECT_EQ(cv::getNumThreads(), 2);
+    EXPECT_GT(loop.loops(), 0);
+  }
+  EXPECT_EQ(cv::getNumThreads(), original);
+}
+
+TEST(OpenCvThreads, APinKeepsItsCountThroughLeasesWhileALoopRunsElsewhere) {
+  const int original = cv::getNumThreads();
+  {
+    const OpenCvThreadsPin pin(1);
+    EXPECT_EQ(pin.threads(), 1);
+    EXPECT_EQ(cv::getNumThreads(), 1);
+    const OpenCvLoopElsewhere loop;
+    for (int i = 0; i < 20000; ++i) const OpenCvThreadsLease other(1 + i % 3);
+    EXPECT_EQ(cv::getNumThreads(), 1);
+  }
+  EXPECT_EQ(cv::getNumThreads(), original);
+  {
+    const OpenCvThreadsPin as_it_is(0);  // OpenCV's own count, kept
+    EXPECT_EQ(as_it_is.threads(), original);
+    const OpenCvThreadsLease ignored(original + 1);
+    EXPECT_EQ(cv::getNumThreads(), original);
+  }
 }
 
 TEST(RuntimeParams, ZeroThreadsGiveAThirdThreadWhereCpusAreFree) {

@@ -122,6 +122,11 @@ class Daemon final : public drivers::FrameSink {
   PriorityInheritanceMutex publish_mutex_;
   std::unique_ptr<ipc::DepthPublisher> publisher_;
   std::unique_ptr<pipeline::runtime::DepthRuntime> runtime_;
+  // OpenCV's thread count, set as the first stages start and kept through restarts: the source's
+  // thread may be in an OpenCV loop (rendering, decoding) when they restart, and a changed count
+  // crashes it.
+  std::optional<pipeline::runtime::OpenCvThreadsPin> opencv_pin_;
+  int opencv_threads_asked_ = 0;  // what the stages the pin was made for resolved it to
   std::string calibration_toml_;  // the source's, as DCO_RAW carries it
   // Held by on_frame while it hands a frame to the recorder and the stages, and by a reload
   // while it replaces them: the source runs on through a reload (a USB camera is not stopped and
