@@ -19,7 +19,8 @@ void register_params(ConfigSchema& s, RuntimeParams& p) {
         "CPUs for the stage threads, e.g. \"0,1\" (thread i on entry i mod n); empty = any");
   s.add("runtime.opencv_threads", &p.opencv_threads, 0, 256,
         "threads of OpenCV's parallel loops (DIS flow) while the runtime runs, process-wide; "
-        "0 = 1 when the stage threads are as many as the usable CPUs, else OpenCV's choice");
+        "0 = 1 when the stage threads are as many as the usable CPUs, else OpenCV's choice; "
+        "dcod sets it as it starts and keeps it until it restarts");
   s.add("runtime.queue_depth", &p.queue_depth, 1, 8,
         "frames each queue between stage threads holds (each one is a frame of latency)");
   s.add("runtime.entry_deadline_ms", &p.entry_deadline_ms, 0.0, 1000.0,
