@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <system_error>
 
 #include <fmt/format.h>
 
@@ -553,14 +554,18 @@ void Daemon::configure_raw_recording() {
     o.max_message_bytes = static_cast<std::size_t>(c.raw_max_message_bytes);
     o.never_drop = c.runtime.deterministic;
     o.pipeline_config = pipeline;
-    next = std::make_unique<RawRecorder>(
-        calibration_toml_, o,
-        [this](const ::dco::raw_stereo_t& m) {
-          // Not under publish_mutex_: publish_raw waits for LCM to send the pair, which must
-          // never hold up a frame on its way into the ring.
-          return publisher_->publish_raw(m);
-        },
-        [this] { return publisher_->raw_can_go(); });
+    try {
+      next = std::make_unique<RawRecorder>(
+          calibration_toml_, o,
+          [this](const ::dco::raw_stereo_t& m) {
+            // Not under publish_mutex_: publish_raw waits for LCM to send the pair, which must
+            // never hold up a frame on its way into the ring.
+            return publisher_->publish_raw(m);
+          },
+          [this] { return publisher_->raw_can_go(); });
+    } catch (const std::system_error& e) {
+      throw Error(std::string("raw recording: its thread cannot start: ") + e.what());
+    }
   }
   std::optional<RawRecorder::Counts> closed;
   {
@@ -684,7 +689,16 @@ void Daemon::reload() {
   if (!restarted.empty()) pipeline_lock.lock();
   LoadedConfig previous = std::move(loaded_);
   loaded_ = std::move(next);
-  apply_live_settings(restarted.empty());  // else the restart changes the raw recording
+  try {
+    apply_live_settings(restarted.empty());  // else the restart changes the raw recording
+  } catch (const std::exception& e) {
+    // A recorder whose thread the system refuses (a task limit reached): the old one records on.
+    log_.error(std::string("reload failed, the running configuration stays: ") + e.what());
+    loaded_ = std::move(previous);
+    apply_live_settings(false);
+    notifier_.ready(status_line(run_stats()));
+    return;
+  }
   if (!restarted.empty()) {
     try {
       restart_pipeline();

@@ -125,6 +125,7 @@ struct DcodOptions {
   std::chrono::microseconds watchdog{0};    // sets $WATCHDOG_USEC/$WATCHDOG_PID when > 0
   bool private_network = false;             // run inside unshare -n with lo multicast
   std::string network_setup = kNetnsSetup;  // what runs in that namespace before dcod
+  std::vector<std::string> prefix;          // a command that execs dcod (setpriv)
 };
 
 class DcodProcess {
@@ -136,6 +137,7 @@ class DcodProcess {
       for (std::string w; words >> w;) argv.push_back(w);
       argv.insert(argv.end(), {"sh", "-c", o.network_setup + " && exec \"$0\" \"$@\""});
     }
+    argv.insert(argv.end(), o.prefix.begin(), o.prefix.end());
     argv.push_back(DCOD_EXE);
     argv.insert(argv.end(), o.args.begin(), o.args.end());
     pid_ = fork();

@@ -64,6 +64,11 @@ class RecordingSink : public FrameSink {
     std::lock_guard lock(mutex_);
     return frames_.size();
   }
+  // Whether `n` frames came within `timeout` (a loaded machine delivers them late, not fewer).
+  bool wait_for_count(std::size_t n, std::chrono::milliseconds timeout) {
+    std::unique_lock lock(mutex_);
+    return changed_.wait_for(lock, timeout, [&] { return frames_.size() >= n; });
+  }
   std::vector<Frame> frames() {
     std::lock_guard lock(mutex_);
     return frames_;
@@ -137,14 +142,12 @@ TEST(SyntheticSource, AFiniteSourceEndsAndARestartGoesOn) {
   RecordingSink first, second;
   endless->start(first);
   EXPECT_THROW(endless->start(first), Error) << "started twice";
-  std::this_thread::sleep_for(100ms);
+  ASSERT_TRUE(first.wait_for_count(1, 10s));
   endless->stop();
   const std::size_t n = first.count();
-  ASSERT_GT(n, 0u);
   endless->start(second);
-  std::this_thread::sleep_for(100ms);
+  ASSERT_TRUE(second.wait_for_count(1, 10s));
   endless->stop();
-  ASSERT_GT(second.count(), 0u);
   EXPECT_EQ(second.frames().front().seq, n) << "a restart continues the sequence";
 }
 
@@ -186,7 +189,8 @@ TEST(SyntheticSource, StallAfterStopsDeliveringWithoutEnding) {
   auto source = open_source("synthetic://hand?width=96&height=64&fps=0&stall_after=4");
   RecordingSink sink;
   source->start(sink);
-  std::this_thread::sleep_for(300ms);
+  ASSERT_TRUE(sink.wait_for_count(4, 10s));
+  std::this_thread::sleep_for(300ms);  // no fifth frame comes, and no end
   EXPECT_EQ(sink.count(), 4u);
   EXPECT_FALSE(sink.ended());
   const auto before = std::chrono::steady_clock::now();
@@ -256,10 +260,9 @@ TEST(ReplaySource, ReplaysTheFilesInOrderAndLoops) {
   auto looped = open_source("replay://" + dir.path().string() + "?fps=0&loop=1");
   RecordingSink loop_sink;
   looped->start(loop_sink);
-  std::this_thread::sleep_for(100ms);
+  ASSERT_TRUE(loop_sink.wait_for_count(4, 10s));
   looped->stop();
   const auto loop_frames = loop_sink.frames();
-  ASSERT_GE(loop_frames.size(), 4u);
   EXPECT_FALSE(loop_sink.ended());
   EXPECT_EQ(loop_frames[3].seq, 3u);
   EXPECT_TRUE(same_pixels(loop_frames[3].left.cview(), loop_frames[0].left.cview()));

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
@@ -103,8 +104,15 @@ TEST(RingWriter, AStoppingWriterRemovesItsRingOnlyUnderTheDirectoryLock) {
   const int directory = open(dir.path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   ASSERT_GE(directory, 0);
   ASSERT_EQ(flock(directory, LOCK_EX), 0);
-  std::thread stopping([&] { writer.reset(); });
+  std::atomic<bool> began{false}, ended{false};
+  std::thread stopping([&] {
+    began = true;
+    writer.reset();
+    ended = true;
+  });
+  while (!began) std::this_thread::yield();
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_FALSE(ended) << "the stopping writer did not wait for the directory's lock";
   EXPECT_TRUE(std::filesystem::exists(path)) << "removed without the directory's lock";
   // A successor moves its ring into place while the stopping writer waits.
   const auto successor = dir.path() / "successor";
