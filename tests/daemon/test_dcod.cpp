@@ -1,4 +1,3 @@
-#include <sched.h>
 #include <sys/stat.h>
 
 #include <map>
@@ -21,6 +20,7 @@
 #include "dco/drivers/lcm_log.hpp"
 #include "dco/ipc/lcm_messages.hpp"
 #include "dcod_process.hpp"
+#include "support/one_cpu.hpp"
 #include "support/stalled_tcpq_peer.hpp"
 #include "support/synthetic_recording.hpp"
 #include "support/temp_dir.hpp"
@@ -377,38 +377,12 @@ TEST(Dcod, AReloadWhoseStagesCannotStartKeepsTheRunningConfiguration) {
   EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
 }
 
-// Restricts the calling thread (and the processes it starts) to two of its CPUs for the scope.
-class TwoCpus {
- public:
-  TwoCpus() {
-    CPU_ZERO(&saved_);
-    sched_getaffinity(0, sizeof(saved_), &saved_);
-    cpu_set_t two;
-    CPU_ZERO(&two);
-    int taken = 0;
-    for (int cpu = 0; cpu < CPU_SETSIZE && taken < 2; ++cpu)
-      if (CPU_ISSET(cpu, &saved_)) {
-        CPU_SET(cpu, &two);
-        ++taken;
-      }
-    ok_ = taken == 2 && sched_setaffinity(0, sizeof(two), &two) == 0;
-  }
-  ~TwoCpus() { sched_setaffinity(0, sizeof(saved_), &saved_); }
-  TwoCpus(const TwoCpus&) = delete;
-  TwoCpus& operator=(const TwoCpus&) = delete;
-  bool ok() const { return ok_; }
-
- private:
-  cpu_set_t saved_;
-  bool ok_ = false;
-};
-
 // OpenCV's thread count is the process's and the source's thread may be in an OpenCV loop when
 // the stages restart (changing the count under it crashes OpenCV): a reload keeps it, names
 // runtime.opencv_threads as needing a restart, and says so when new stage threads would have had
 // another count.
 TEST(Dcod, AReloadKeepsOpenCvsThreadCountAndSaysSo) {
-  const TwoCpus two;
+  const CpuScope two(2);
   if (!two.ok()) GTEST_SKIP() << "fewer than two CPUs";
   TempDir dir;
   NotifySocket notify(dir / "notify");
