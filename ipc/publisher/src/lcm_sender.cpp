@@ -7,6 +7,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "dco/core/priority_inheritance_mutex.hpp"
 #include "dco/core/thread_name.hpp"
 
 namespace dco::ipc::detail {
@@ -19,8 +20,10 @@ struct LcmSender::State {
   };
   enum class Large : std::int8_t { kIdle, kQueued, kSending };
 
-  std::mutex mutex;
-  std::condition_variable changed;
+  // Posted to by dcod's release thread, which may run at SCHED_FIFO: the sending thread, holding
+  // it to take the next message, is lent that priority rather than preempted with it held.
+  PriorityInheritanceMutex mutex;
+  std::condition_variable_any changed;
   std::unique_ptr<lcm::LCM> lcm;
   std::vector<Message> queue;  // a ring: head, count
   std::size_t head = 0, count = 0;

@@ -1,12 +1,15 @@
 #pragma once
 
 // A mutex that lends its holder the priority of a real-time thread waiting for it
-// (PTHREAD_PRIO_INHERIT). dcod's release thread runs at SCHED_FIFO and shares the publisher with
-// normal threads: one of them preempted while holding it, with the stage threads keeping every
-// CPU busy, would hold a release up for a scheduler slice. Usable with std::lock_guard.
+// (PTHREAD_PRIO_INHERIT). dcod's release thread runs at SCHED_FIFO and shares the runtime's
+// state, the publisher, the frame numbers and the LCM sender's queue with normal threads: one of
+// them preempted while holding such a lock, with the stage threads keeping every CPU busy, would
+// hold a release up for a scheduler slice. Usable with std::lock_guard, std::unique_lock and
+// std::condition_variable_any.
 
 #include <pthread.h>
 
+#include <cerrno>
 #include <system_error>
 
 namespace dco {
@@ -16,10 +19,12 @@ class PriorityInheritanceMutex {
   PriorityInheritanceMutex() {
     pthread_mutexattr_t attr;
     pthread_mutexattr_init(&attr);
-    // Where the protocol is not supported the mutex is a plain one.
     pthread_mutexattr_setprotocol(&attr, PTHREAD_PRIO_INHERIT);
-    const int err = pthread_mutex_init(&mutex_, &attr);
+    int err = pthread_mutex_init(&mutex_, &attr);
     pthread_mutexattr_destroy(&attr);
+    // Where the kernel has no priority-inheriting futexes (glibc's ENOTSUP; emulators) the mutex
+    // is a plain one.
+    if (err == ENOTSUP) err = pthread_mutex_init(&mutex_, nullptr);
     if (err != 0) throw std::system_error(err, std::generic_category(), "pthread_mutex_init");
   }
   ~PriorityInheritanceMutex() { pthread_mutex_destroy(&mutex_); }

@@ -7,6 +7,8 @@
 #include <optional>
 #include <utility>
 
+#include "dco/core/priority_inheritance_mutex.hpp"
+
 namespace dco::daemon {
 
 // The camera's frame number of each result, found by its capture time: the runtime hands a
@@ -14,7 +16,8 @@ namespace dco::daemon {
 // a frame can be in flight: the stages plus up to runtime.release_latency_ms (1 s), 2.5 s of a
 // 200 fps camera. Results come in push order, so where a camera stamped several frames alike
 // (a clock fault) the first of them not yet handed out is the result's. Thread-safe: frames are
-// recorded on the source's thread, taken on the release thread.
+// recorded on the source's thread, taken on the release thread (which may run at SCHED_FIFO: the
+// mutex lends the source's thread its priority).
 class FrameNumbers {
  public:
   void record(std::int64_t capture_ns, std::uint64_t seq) {
@@ -38,7 +41,7 @@ class FrameNumbers {
   }
 
  private:
-  std::mutex mutex_;
+  PriorityInheritanceMutex mutex_;
   std::array<std::pair<std::int64_t, std::uint64_t>, 512> pushed_{};
   std::size_t cursor_ = 0;
   std::optional<std::uint64_t> last_;  // the number take() gave last

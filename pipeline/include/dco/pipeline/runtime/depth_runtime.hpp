@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "dco/core/image.hpp"
+#include "dco/core/priority_inheritance_mutex.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/bounded_queue.hpp"
 #include "dco/pipeline/runtime/entry_deadline.hpp"
@@ -205,7 +206,8 @@ class DepthRuntime {
   // doing the next contour step's share meanwhile when it can take it. False when stopped first.
   // `ready` is called once per wake-up and may take what it waits for.
   template <class Ready>
-  bool stereo_wait(std::unique_lock<std::mutex>& lock, std::stop_token stop, Ready&& ready) {
+  bool stereo_wait(std::unique_lock<PriorityInheritanceMutex>& lock, std::stop_token stop,
+                   Ready&& ready) {
     if (ready()) return true;
     // Held up by the later stages: the entry deadline's share does not cover this wait.
     hold_ups_.begin(Clock::now());
@@ -267,7 +269,9 @@ class DepthRuntime {
   bool planes_on_stereo_thread() const;
   bool early_contour_on_stereo_thread(bool planes_here) const;
 
-  mutable std::mutex mutex_;
+  // Shared by the stage threads and the release thread, which may run at SCHED_FIFO: a stage
+  // thread preempted while holding it runs at the release thread's priority until it lets go.
+  mutable PriorityInheritanceMutex mutex_;
   std::condition_variable_any changed_;  // any state below changed
   // Only what the release thread waits for (a result in an empty release queue, every release
   // slot taken while the densify stage wants one, the end): at real-time priority each needless
