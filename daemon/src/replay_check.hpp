@@ -5,6 +5,7 @@
 #include <string>
 
 #include "dco/core/image.hpp"
+#include "dco/core/priority_inheritance_mutex.hpp"
 #include "dco/drivers/recorded_previews.hpp"
 
 namespace dco::daemon {
@@ -34,7 +35,7 @@ class ReplayCheck {
 
  private:
   const drivers::RecordedPreviews recorded_;
-  mutable std::mutex mutex_;
+  mutable PriorityInheritanceMutex mutex_;  // check() runs on the release thread
   Result result_;
   ::dco::depth_preview_t replayed_;
   drivers::FrameSessions sessions_;
