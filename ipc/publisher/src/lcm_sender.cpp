@@ -1,12 +1,12 @@
 #include "lcm_sender.hpp"
 
 #include <algorithm>
-#include <condition_variable>
 #include <deque>
 #include <mutex>
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "dco/core/priority_inheritance_condition.hpp"
 #include "dco/core/priority_inheritance_mutex.hpp"
 #include "dco/core/thread_name.hpp"
 
@@ -23,7 +23,7 @@ struct LcmSender::State {
   // Posted to by dcod's release thread, which may run at SCHED_FIFO: the sending thread, holding
   // it to take the next message, is lent that priority rather than preempted with it held.
   PriorityInheritanceMutex mutex;
-  std::condition_variable_any changed;
+  PriorityInheritanceCondition changed;
   std::unique_ptr<lcm::LCM> lcm;
   std::vector<Message> queue;  // a ring: head, count
   std::size_t head = 0, count = 0;

@@ -4,8 +4,8 @@
 // (PTHREAD_PRIO_INHERIT). dcod's release thread runs at SCHED_FIFO and shares the runtime's
 // state, the publisher, the frame numbers and the LCM sender's queue with normal threads: one of
 // them preempted while holding such a lock, with the stage threads keeping every CPU busy, would
-// hold a release up for a scheduler slice. Usable with std::lock_guard, std::unique_lock and
-// std::condition_variable_any.
+// hold a release up for a scheduler slice. Usable with std::lock_guard and std::unique_lock; a
+// thread waits on it with PriorityInheritanceCondition.
 
 #include <pthread.h>
 
@@ -37,6 +37,7 @@ class PriorityInheritanceMutex {
   }
   bool try_lock() { return pthread_mutex_trylock(&mutex_) == 0; }
   void unlock() { pthread_mutex_unlock(&mutex_); }
+  pthread_mutex_t* native_handle() { return &mutex_; }
 
  private:
   pthread_mutex_t mutex_;

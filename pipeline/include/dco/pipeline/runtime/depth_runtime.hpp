@@ -2,7 +2,6 @@
 
 #include <array>
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <exception>
 #include <functional>
@@ -14,6 +13,7 @@
 #include <vector>
 
 #include "dco/core/image.hpp"
+#include "dco/core/priority_inheritance_condition.hpp"
 #include "dco/core/priority_inheritance_mutex.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/pipeline/runtime/bounded_queue.hpp"
@@ -272,11 +272,11 @@ class DepthRuntime {
   // Shared by the stage threads and the release thread, which may run at SCHED_FIFO: a stage
   // thread preempted while holding it runs at the release thread's priority until it lets go.
   mutable PriorityInheritanceMutex mutex_;
-  std::condition_variable_any changed_;  // any state below changed
+  PriorityInheritanceCondition changed_;  // any state below changed
   // Only what the release thread waits for (a result in an empty release queue, every release
   // slot taken while the densify stage wants one, the end): at real-time priority each needless
   // wake-up of it preempts a stage thread.
-  std::condition_variable_any release_changed_;
+  PriorityInheritanceCondition release_changed_;
 
   // Entry (producer side).
   std::array<Input, kInputs> inputs_;
