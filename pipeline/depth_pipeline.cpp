@@ -3,6 +3,7 @@
 #include "dco/core/config.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/stopwatch.hpp"
+#include "dco/pipeline/contour/flow_cue.hpp"
 #include "dco/pipeline/stereo/exposure_balance.hpp"
 #include "dco/pipeline/stereo/image_ops.hpp"
 #include "dco/pipeline/stereo/vertical_alignment.hpp"
@@ -19,6 +20,13 @@ void validate(const PipelineParams& params) {
   stereo::validate(params.stereo);
   contour::validate(params.contour);
   densify::validate(params.densify);
+}
+
+void check_frame_size(const PipelineParams& params, int width, int height) {
+  stereo::check_stereo_size(params.stereo, width, height);
+  // The contour stage works on the stereo stage's internal frames.
+  const int scale = stereo::internal_scale(params.stereo, width);
+  contour::check_flow_size(params.contour, width / scale, height / scale);
 }
 
 void prepare_frame(const stereo::StereoParams& params, ImageView<const std::uint8_t> left,

@@ -135,6 +135,7 @@ void Daemon::open() {
   Rectifier rectifier(source_->calibration());
   geometry_ = rectifier.geometry();
   if (rectifier.needs_remap()) rectifier_.emplace(std::move(rectifier));
+  check_frame_size(loaded_.config.pipeline);
 
   ipc::RingOptions ring;
   ring.width = geometry_.width;
@@ -158,6 +159,15 @@ void Daemon::open() {
     std::lock_guard lock(publish_mutex_);
     if (publisher_) publisher_->log(level, "dcod", text, monotonic_ns());
   });
+}
+
+void Daemon::check_frame_size(const pipeline::PipelineParams& stages) const {
+  try {
+    pipeline::check_frame_size(stages, geometry_.width, geometry_.height);
+  } catch (const Error& e) {
+    throw Error(
+        fmt::format("the source's {}x{} frames: {}", geometry_.width, geometry_.height, e.what()));
+  }
 }
 
 void Daemon::open_replay_check() {
@@ -683,6 +693,17 @@ void Daemon::reload() {
   next.config.lcm_url = loaded_.config.lcm_url;
   next.config.runtime.opencv_threads = loaded_.config.runtime.opencv_threads;
 
+  if (!restarted.empty()) {
+    // Limits that depend on the frame size hold for the source's frames before anything stops:
+    // otherwise the first frame would fail the new stages and end dcod.
+    try {
+      check_frame_size(next.config.pipeline);
+    } catch (const Error& e) {
+      log_.error(std::string("reload failed, the running configuration stays: ") + e.what());
+      notifier_.ready(status_line(run_stats()));
+      return;
+    }
+  }
   // Through the restart and, when it fails, the one with what ran: no frame reaches stages that
   // are not running.
   std::unique_lock pipeline_lock(pipeline_mutex_, std::defer_lock);

@@ -166,11 +166,25 @@ bool FlowCue::prepare_next() {
   return true;
 }
 
+namespace {
+
+void refuse_flow_size(const std::string& size, const std::string& preset) {
+  throw Error("contour: the internal frame " + size +
+              " is too small for DIS optical flow with the '" + preset +
+              "' preset (use a larger internal resolution, another preset or use_flow=false)");
+}
+
+}  // namespace
+
 void FlowCue::check_size(ImageView<const std::uint8_t> centre) const {
   if (!dis_handles(s_->dis, centre.width, centre.height))
-    throw Error("contour: the internal frame " + size_text(centre) +
-                " is too small for DIS optical flow with the '" + s_->params.dis_preset +
-                "' preset (use a larger internal resolution, another preset or use_flow=false)");
+    refuse_flow_size(size_text(centre), s_->params.dis_preset);
+}
+
+void check_flow_size(const ContourParams& params, int width, int height) {
+  if (!params.use_flow) return;
+  if (!dis_handles(cv::DISOpticalFlow::create(dis_preset(params.dis_preset)), width, height))
+    refuse_flow_size(std::to_string(width) + "x" + std::to_string(height), params.dis_preset);
 }
 
 void FlowCue::compute_alone(const ContourInputs& in, Image<float>& out, ContourTimings& timings) {

@@ -384,12 +384,17 @@ void check_stereo_input(const StereoParams& params, ImageView<const std::uint8_t
                 size_text(right) + "; a rectified pair has one size");
   if (left.channels != 1 && left.channels != 3)
     throw Error("stereo: images need 1 or 3 channels, not " + std::to_string(left.channels));
-  const int scale = internal_scale(params, left.width);
-  const int w = left.width / scale;
-  const int h = left.height / scale;
+  check_stereo_size(params, left.width, left.height);
+}
+
+void check_stereo_size(const StereoParams& params, int width, int height) {
+  const int scale = internal_scale(params, width);
+  const int w = width / scale;
+  const int h = height / scale;
+  const std::string size = std::to_string(width) + "x" + std::to_string(height);
   // Above 640 px the stage matches at half size: the limits hold there, so the errors say so.
   if (w < params.census_width || h < params.census_height)
-    throw Error("stereo: image " + size_text(left) +
+    throw Error("stereo: image " + size +
                 (scale == 1 ? ""
                             : ", matched at half size (" + std::to_string(w) + "x" +
                                   std::to_string(h) + "),") +
@@ -405,7 +410,7 @@ void check_stereo_input(const StereoParams& params, ImageView<const std::uint8_t
                 (scale == 1 ? " must be smaller than the image width " + std::to_string(w)
                             : " (" + std::to_string(max_d) +
                                   " px at half size) must be smaller than the half-size width " +
-                                  std::to_string(w) + " (image " + size_text(left) + ")"));
+                                  std::to_string(w) + " (image " + size + ")"));
 }
 
 std::unique_ptr<StereoMatcher> make_stereo_matcher(const StereoMatcherFactory& factory,

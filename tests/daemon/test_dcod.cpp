@@ -377,6 +377,55 @@ TEST(Dcod, AReloadWhoseStagesCannotStartKeepsTheRunningConfiguration) {
   EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
 }
 
+// Limits that depend on the frame size (max disparity below the width, the census window, DIS)
+// are checked against the source's size before a reload stops anything: such a value would
+// otherwise fail the first frame of the new stages and end dcod.
+TEST(Dcod, AReloadTooLargeForTheFramesKeepsWhatRuns) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  const auto config = dir.write("dcod.toml", "[stereo]\nmax_disparity = 20\n");
+  DcodProcess dcod(configured(dir, config, notify));
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  dco::client::Client client = ring_client(dir);
+  ASSERT_TRUE(client.wait_next(2s));
+
+  dir.write("dcod.toml", "[stereo]\nmax_disparity = 500\n");
+  ASSERT_TRUE(reloaded(dcod, notify)) << dcod.log();
+  EXPECT_NE(dcod.log().find("reload failed, the running configuration stays: the source's "
+                            "160x96 frames: stereo: max disparity 500 must be smaller than the "
+                            "image width 160"),
+            std::string::npos)
+      << dcod.log();
+  EXPECT_EQ(dcod.log().find("restarted the pipeline"), std::string::npos) << dcod.log();
+  // Frames keep coming, well past the first frame a restarted pipeline would have failed on.
+  for (int i = 0; i < 10; ++i) ASSERT_TRUE(client.wait_next(3s).has_value()) << dcod.log();
+  EXPECT_TRUE(dcod.running());
+
+  // The next good reload compares against what runs.
+  dir.write("dcod.toml", "[stereo]\nmax_disparity = 24\n");
+  ASSERT_TRUE(reloaded(dcod, notify)) << dcod.log();
+  EXPECT_NE(dcod.log().find("restarted the pipeline for stereo.max_disparity"), std::string::npos)
+      << dcod.log();
+  EXPECT_TRUE(client.wait_next(3s).has_value());
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(3s), 0) << dcod.log();
+}
+
+// The same limits at the start: refused before the source streams, with the source's size.
+TEST(Dcod, StagesTooLargeForTheFramesAreRefusedAtTheStart) {
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  const auto config = dir.write("dcod.toml", "[stereo]\nmax_disparity = 500\n");
+  DcodProcess dcod(configured(dir, config, notify));
+  EXPECT_EQ(dcod.wait(20s), 1) << dcod.log();
+  EXPECT_NE(dcod.log().find("the source's 160x96 frames: stereo: max disparity 500 must be "
+                            "smaller than the image width 160"),
+            std::string::npos)
+      << dcod.log();
+  EXPECT_EQ(dcod.log().find("published frames"), std::string::npos) << dcod.log();
+  EXPECT_FALSE(notify.wait_for("READY=1", 100ms));
+}
+
 // OpenCV's thread count is the process's and the source's thread may be in an OpenCV loop when
 // the stages restart (changing the count under it crashes OpenCV): a reload keeps it, names
 // runtime.opencv_threads as needing a restart, and says so when new stage threads would have had

@@ -3,6 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -178,6 +182,76 @@ TEST(DepthPipeline, ResetForgetsTheSequenceBefore) {
     EXPECT_TRUE(testing::same_bytes(a.sparse, b.sparse)) << "frame " << i;
     EXPECT_TRUE(testing::same_bytes(a.dense, b.dense)) << "frame " << i;
   }
+}
+
+}  // namespace
+}  // namespace dco::pipeline
+
+namespace dco::pipeline {
+namespace {
+
+// Whether three frames of this size go through the offline pipeline (the third has a flow
+// window).
+bool sequence_runs(const PipelineParams& p, int width, int height) {
+  Image<std::uint8_t> left(width, height), right(width, height);
+  std::uint32_t seed = 12345;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      seed = seed * 1664525u + 1013904223u;
+      left.row(y)[x] = static_cast<std::uint8_t>(seed >> 24);
+      right.row(y)[x] = static_cast<std::uint8_t>(seed >> 16);
+    }
+  try {
+    DepthPipeline pipeline(p);
+    DepthResult r;
+    for (int i = 0; i < 3; ++i) pipeline.push(left.cview(), right.cview(), r);
+    while (pipeline.finish(r)) {
+    }
+    return true;
+  } catch (const Error&) {
+    return false;
+  }
+}
+
+// A source's size is known before its first frame: check_frame_size refuses exactly the sizes
+// whose frames the stages would refuse, so dcod can refuse a configuration before it runs.
+TEST(DepthPipeline, CheckFrameSizeRefusesWhatTheStagesWould) {
+  int refused = 0, checked = 0;
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{
+           {8, 6}, {9, 7}, {24, 12}, {40, 30}, {64, 48}, {100, 20}, {645, 7}, {650, 20}})
+    for (const int max_d : {1, 2, 8, 20, 64})
+      for (const bool flow : {true, false}) {
+        PipelineParams p;
+        p.stereo.max_disparity = max_d;
+        p.contour.use_flow = flow;
+        bool checks = true;
+        std::string why;
+        try {
+          check_frame_size(p, w, h);
+        } catch (const Error& e) {
+          checks = false;
+          why = e.what();
+        }
+        EXPECT_EQ(checks, sequence_runs(p, w, h))
+            << w << "x" << h << ", max_disparity " << max_d << ", use_flow " << flow << ": " << why;
+        refused += checks ? 0 : 1;
+        ++checked;
+      }
+  // Every kind of refusal occurs: the census window, the width, half size, DIS.
+  EXPECT_GT(refused, 10);
+  EXPECT_LT(refused, checked - 10);
+  PipelineParams p;
+  p.stereo.max_disparity = 20;
+  EXPECT_THROW(check_frame_size(p, 20, 96), Error);
+  p.contour.use_flow = true;
+  try {
+    check_frame_size(p, 30, 20);
+    ADD_FAILURE() << "a 30x20 frame is too small for DIS";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("DIS optical flow"), std::string::npos) << e.what();
+  }
+  p.contour.use_flow = false;
+  EXPECT_NO_THROW(check_frame_size(p, 30, 20));
 }
 
 }  // namespace

@@ -102,6 +102,9 @@ class Daemon final : public drivers::FrameSink {
   // counters of dcod's whole run, as the status line and DCO_STATS give them.
   pipeline::runtime::RuntimeStats run_stats() const;
   std::string status_line(const pipeline::runtime::RuntimeStats& run) const;
+  // Throws dco::Error, naming the source's frame size, when its frames cannot go through stages
+  // with these params (pipeline::check_frame_size).
+  void check_frame_size(const pipeline::PipelineParams& stages) const;
   void wake();
 
   ConfigSources sources_;  // plus the pipeline keys a replayed log recorded

@@ -27,6 +27,10 @@ struct PipelineParams {
 // Registers every stage's parameters ("stereo.*", "contour.*", "densify.*").
 void register_params(ConfigSchema& schema, PipelineParams& params);
 void validate(const PipelineParams& params);  // throws dco::Error
+// Throws dco::Error when frames of this size cannot go through the stages under these params
+// (the census window, max disparity and DIS limits, which depend on the size): a source's size
+// is known before its first frame, so a configuration is refused before it runs.
+void check_frame_size(const PipelineParams& params, int width, int height);
 
 // A frame's number in its sequence. 64 bits: a service that runs for years at any frame rate
 // never wraps it.

@@ -39,6 +39,9 @@ class FlowCue {
   std::unique_ptr<State> s_;
 };
 
+// Throws dco::Error when, with use_flow on, internal frames of this size are too small for the DIS
+// preset (FlowCue::check_size without a FlowCue).
+void check_flow_size(const ContourParams& params, int width, int height);
 // Throws dco::Error unless the inputs are consistent with each other and with `params` (see
 // ContourInputs).
 void check_contour_input(const ContourParams& params, const ContourInputs& in);

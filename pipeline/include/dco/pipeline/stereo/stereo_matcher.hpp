@@ -111,8 +111,10 @@ class StereoStageWrapper : public StereoMatcher {
 // Internal downscale factor (1 or 2) for an input width under the params.
 int internal_scale(const StereoParams& params, int input_width);
 
-// Throws dco::Error when a pair cannot go through the stage under these params (empty, sizes or
-// channels that differ, too small for the census window, max disparity not below the width).
+// Throws dco::Error when frames of this size cannot go through the stage under these params (too
+// small for the census window, max disparity not below the width, both at the internal size).
+void check_stereo_size(const StereoParams& params, int width, int height);
+// The same for a pair, which must also be non-empty, of one size and of 1 or 3 channels.
 void check_stereo_input(const StereoParams& params, ImageView<const std::uint8_t> left,
                         ImageView<const std::uint8_t> right);
 
