@@ -243,6 +243,40 @@ TEST(DcoDepthCli, RectifiedCalibrationOfAnotherSizeIsRefused) {
                1, "left image is 384x288 but the calibration is for 741x497");
 }
 
+// A rectified calibration without a size (Karlsruhe's without roi) takes the images', and its
+// geometry is then checked against their width: principal points 5000 px apart would make every
+// depth a few millimetres.
+TEST(DcoDepthCli, AnUnsizedCalibrationIsCheckedAgainstTheImages) {
+  TempDir dir;
+  const fs::path calib = dir.write(
+      "calib.txt",
+      "P1_roi: 100 0 30 0 0 100 33 0 0 0 1 0\nP2_roi: 100 0 5030 -10 0 100 33 0 0 0 1 0\n");
+  expect_error(run_depth(dir, {"--left", (kTsukuba / "im3.png").string(), "--right",
+                               (kTsukuba / "im4.png").string(), "--calib", calib.string(), "--out",
+                               (dir.path() / "d.pfm").string(), "--depth-out",
+                               (dir.path() / "z.pfm").string()}),
+               1, "principal points differ by 5000 px");
+  EXPECT_FALSE(fs::exists(dir.path() / "z.pfm"));
+  // The same in sequence mode, at its first frame.
+  for (const char* name : {"l_000000.png", "l_000001.png"})
+    fs::copy_file(kTsukuba / "im3.png", dir.path() / name);
+  for (const char* name : {"r_000000.png", "r_000001.png"})
+    fs::copy_file(kTsukuba / "im4.png", dir.path() / name);
+  expect_error(run_depth(dir, {"--left-pattern", (dir.path() / "l_%06d.png").string(),
+                               "--right-pattern", (dir.path() / "r_%06d.png").string(), "--calib",
+                               calib.string(), "--out-dir", (dir.path() / "seq").string()}),
+               1, "principal points differ by 5000 px");
+  // A sensible one of the same form goes through.
+  const fs::path good = dir.write(
+      "good.txt",
+      "P1_roi: 300 0 190 0 0 300 144 0 0 0 1 0\nP2_roi: 300 0 190 -30 0 300 144 0 0 0 1 0\n");
+  const CliRun ok = run_depth(
+      dir, {"--left", (kTsukuba / "im3.png").string(), "--right", (kTsukuba / "im4.png").string(),
+            "--calib", good.string(), "--out", (dir.path() / "d.pfm").string(), "--depth-out",
+            (dir.path() / "z.pfm").string()});
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
 TEST(DcoDepthCli, UnreadableCalibrationIsNamed) {
   TempDir dir;
   const fs::path calib = dir.write("broken_calib.txt", "cam0=[not a matrix]\nbaseline=\n");

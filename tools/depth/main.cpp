@@ -329,7 +329,11 @@ int run_pair(const Options& opt, const dco::pipeline::PipelineParams& params) {
                                  left.channels(), opt.right->string(), right.channels()));
   std::optional<dco::Rectifier> rectifier;
   if (opt.calib) {
-    rectifier.emplace(dco::load_calibration(*opt.calib));
+    dco::StereoCalibration calib = dco::load_calibration(*opt.calib);
+    // A rectified calibration without a size (Karlsruhe without roi) takes the images': only
+    // then is its geometry checked against a width.
+    calib.take_size_if_unknown(left.width(), left.height());
+    rectifier.emplace(calib);
     // Already rectified images go through as they are, but must be of the calibrated size.
     rectifier->check_inputs(left.cview(), right.cview());
     if (rectifier->needs_remap()) {

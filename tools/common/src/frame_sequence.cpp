@@ -7,6 +7,7 @@
 #include <limits>
 #include <regex>
 
+#include "dco/core/calibration.hpp"
 #include "dco/core/error.hpp"
 #include "dco/core/image_io.hpp"
 
@@ -24,7 +25,12 @@ class PatternSequence final : public FrameSequence {
     if (first < 0) throw Error("a pattern sequence starts at frame 0 or later");
     expand_pattern(left_, first);  // validates both patterns up front
     expand_pattern(right_, first);
-    if (calib) rectifier_.emplace(load_calibration(*calib));
+    if (!calib) return;
+    StereoCalibration c = load_calibration(*calib);
+    rectifier_.emplace(c);
+    // A rectified calibration without a size (Karlsruhe without roi) takes the first frame's,
+    // and only then can its geometry be checked against a width.
+    if (c.left.width == 0) unsized_ = std::move(c);
   }
 
   bool next(StereoInput& frame) override {
@@ -38,6 +44,11 @@ class PatternSequence final : public FrameSequence {
       return false;
     Image<std::uint8_t> l = load_image(left);
     Image<std::uint8_t> r = load_image(right);
+    if (unsized_) {
+      unsized_->take_size_if_unknown(l.width(), l.height());
+      rectifier_.emplace(*unsized_);
+      unsized_.reset();
+    }
     if (rectifier_) rectifier_->check_inputs(l.cview(), r.cview());
     if (rectifier_ && rectifier_->needs_remap()) {
       rectifier_->rectify(l.cview(), r.cview(), frame.left, frame.right);
@@ -59,6 +70,7 @@ class PatternSequence final : public FrameSequence {
   std::string left_, right_;
   std::int64_t next_, end_;  // wide enough for first + count and one past the largest int
   std::optional<Rectifier> rectifier_;
+  std::optional<StereoCalibration> unsized_;  // until the first frame gives it a size
 };
 
 class SyntheticSequence final : public FrameSequence {
