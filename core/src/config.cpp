@@ -88,8 +88,11 @@ std::string problem(const E& e, const Value& v) {
 template <typename E>
 void store(const E& e, const Value& v) {
   if (auto* const* d = std::get_if<double*>(&e.target)) {
-    **d = std::holds_alternative<double>(v) ? std::get<double>(v)
-                                            : static_cast<double>(std::get<std::int64_t>(v));
+    // + 0.0 turns -0 into 0: no parameter means anything by the sign of zero (1 / -0 is -inf),
+    // and the printed configuration reads back as written.
+    **d = (std::holds_alternative<double>(v) ? std::get<double>(v)
+                                             : static_cast<double>(std::get<std::int64_t>(v))) +
+          0.0;
   } else if (auto* const* i = std::get_if<int*>(&e.target)) {
     **i = static_cast<int>(std::get<std::int64_t>(v));
   } else if (auto* const* b = std::get_if<bool*>(&e.target)) {
@@ -190,6 +193,11 @@ void ConfigSchema::load_string(std::string_view toml_text, std::string_view orig
       const auto v = from_toml(node);
       if (!v) fail(node, fmt::format("{}: unsupported value type (tables, arrays, dates)", key));
       if (const std::string p = problem(*e, *v); !p.empty()) fail(node, key + ": " + p);
+      // TOML itself refuses a key given twice, but a quoted "a.b" and b in [a] are two of its
+      // keys for one parameter: neither may win silently.
+      if (std::any_of(accepted.begin(), accepted.end(),
+                      [&](const auto& a) { return a.first == e; }))
+        fail(node, fmt::format("{} is set twice (a quoted \"{}\" names the same key)", key, key));
       accepted.emplace_back(e, *v);
     }
   };

@@ -1,5 +1,6 @@
 #include "dco/core/config.hpp"
 
+#include <cmath>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -85,6 +86,20 @@ TEST_F(Config, UnknownKeyNamesFileAndLine) {
   EXPECT_EQ(p.threads, 4);  // nothing applied from a rejected file
 }
 
+// A quoted "stereo.max_disparity" and max_disparity in [stereo] are two TOML keys for one
+// parameter: in either order the file is refused, rather than one of them winning silently.
+TEST_F(Config, AQuotedDottedKeyBesideItsTableIsSetTwice) {
+  EXPECT_EQ(load_error("\"stereo.max_disparity\" = 10\n[stereo]\nmax_disparity = 20\n"),
+            "dcod.toml:1: stereo.max_disparity is set twice (a quoted \"stereo.max_disparity\" "
+            "names the same key)");
+  EXPECT_NE(load_error("stereo.max_disparity = 20\n\"stereo.max_disparity\" = 30\n")
+                .find("stereo.max_disparity is set twice"),
+            std::string::npos);
+  EXPECT_EQ(p.max_disparity, 64);
+  EXPECT_EQ(load_error("\"stereo.max_disparity\" = 10\n"), "");  // alone, it is that key
+  EXPECT_EQ(p.max_disparity, 10);
+}
+
 TEST_F(Config, TypeErrors) {
   EXPECT_NE(load_error("[stereo]\nmax_disparity = 3.5\n")
                 .find("dcod.toml:2: stereo.max_disparity: expects an integer"),
@@ -121,6 +136,21 @@ TEST_F(Config, RangesAreInclusive) {
   EXPECT_NE(load_error("[stereo]\nlambda_ad = nan\n").find("outside"), std::string::npos);
   EXPECT_NE(load_error("[stereo]\nmode = \"slow\"\n").find("\"slow\" is not one of fast, accurate"),
             std::string::npos);
+}
+
+// -0 is stored as 0: no parameter means anything by the sign of zero (a rate of -0 Hz would make
+// a period of -inf), and the printed configuration reads back as written.
+TEST(ConfigZero, NegativeZeroIsStoredAsZero) {
+  double hz = 1;
+  ConfigSchema schema;
+  schema.add("lcm.preview_hz", &hz, 0.0, 30.0, "rate");
+  schema.set("lcm.preview_hz=-0");
+  EXPECT_EQ(hz, 0.0);
+  EXPECT_FALSE(std::signbit(hz));
+  hz = 1;
+  schema.load_string("[lcm]\npreview_hz = -0.0\n", "dcod.toml");
+  EXPECT_FALSE(std::signbit(hz));
+  EXPECT_NE(schema.to_toml().find("preview_hz = 0\n"), std::string::npos) << schema.to_toml();
 }
 
 TEST_F(Config, BadFileIsAppliedAllOrNothing) {
