@@ -327,6 +327,29 @@ TEST(Publisher, NoPreviewAtZeroHz) {
   EXPECT_TRUE(got.previews.empty());
 }
 
+// A rate so low that its period passes what int64 nanoseconds hold still means the first frame's
+// preview and no other (the period's conversion overflowed and previewed every frame).
+TEST(Publisher, ATinyPreviewRateSendsOnlyTheFirstPreview) {
+  TempDir dir;
+  RingWriter ring(dir.path() / "depth.shm", ring_options(8, 8));
+  PublisherOptions po = memq();
+  po.preview_hz = 1e-12;
+  DepthPublisher pub(ring, po);
+  Collector got(pub.lcm());
+  Image<float> depth(8, 8);
+  depth.fill(1.0f);
+  Image<std::uint8_t> image(8, 8);
+  for (int i = 1; i <= 5; ++i) {
+    FrameMeta meta;
+    meta.frame_seq = static_cast<std::uint64_t>(i);
+    meta.capture_ns = i * 33'333'333LL;
+    pub.write(depth.cview(), image.cview(), meta);
+  }
+  handle_all(pub);
+  EXPECT_EQ(got.depth.size(), 5u);
+  EXPECT_EQ(got.previews.size(), 1u);
+}
+
 TEST(Publisher, StatsStatusAndLog) {
   TempDir dir;
   RingWriter ring(dir.path() / "depth.shm", ring_options(8, 8));

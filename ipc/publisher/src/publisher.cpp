@@ -235,7 +235,10 @@ void DepthPublisher::announce(std::uint64_t publish_index, std::uint32_t slot,
   m.height = ring_.options().height;
   send(kDepthChannel, m);
   if (options_.preview_hz > 0) {
-    const auto period_ns = static_cast<std::int64_t>(1e9 / options_.preview_hz);
+    // A rate so low that its period passes int64 nanoseconds (292 years) means one preview.
+    const double period = 1e9 / options_.preview_hz;
+    const std::int64_t period_ns = period < 9e18 ? static_cast<std::int64_t>(period)
+                                                 : std::numeric_limits<std::int64_t>::max();
     // By capture time, so a replay previews the frames the headset did. A stamp that went back
     // (a camera's clock fault) starts the pacing afresh rather than silence the previews until
     // the clock has caught up with the one that went ahead.
