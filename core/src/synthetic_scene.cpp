@@ -524,8 +524,8 @@ void validate_object(const SceneConfig& c, std::size_t i, double bg_nearest_m) {
 }
 
 void validate(const SceneConfig& c) {
-  if (c.width < 16 || c.width > 8192 || c.height < 16 || c.height > 8192)
-    fail(fmt::format("resolution {}x{} is outside 16..8192", c.width, c.height));
+  if (c.width < kMinSide || c.width > kMaxSide || c.height < kMinSide || c.height > kMaxSide)
+    fail(fmt::format("resolution {}x{} is outside {}..{}", c.width, c.height, kMinSide, kMaxSide));
   if (!finite(c.focal_px) || c.focal_px <= 0)
     fail(fmt::format("focal_px {} must be positive", c.focal_px));
   if (!finite(c.baseline_m) || c.baseline_m <= 0)

@@ -29,6 +29,13 @@ TEST(ParseImageSize, RefusesMalformedAndTooSmallSizes) {
   } catch (const UsageError& e) {
     EXPECT_THAT(e.what(), HasSubstr("at least 64x64"));
   }
+  try {
+    parse_image_size("--size", "8193x16", 16, 8192);
+    ADD_FAILURE() << "accepted a width above the maximum";
+  } catch (const UsageError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("--size must be at most 8192x8192, not 8193x16"));
+  }
+  EXPECT_EQ(parse_image_size("--size", "8192x16", 16, 8192).width, 8192);
 }
 
 TEST(OneLine, KeepsAMessageOnOneLineWithoutEscapes) {

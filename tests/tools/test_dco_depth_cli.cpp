@@ -359,6 +359,11 @@ TEST(DcoDepthCli, CommandLineMistakesExitWithTwo) {
                "--first and --count are for --left-pattern");
   expect_error(run_depth(dir, {"--synthetic", "hand", "--calib", "x.txt", "--out-dir", "o"}), 2,
                "--synthetic does not take --calib");
+  // The synthetic scene's sides, 16..8192, are the command line's limits.
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--size", "8193x16", "--out-dir", "o"}), 2,
+               "--size must be at most 8192x8192");
+  expect_error(run_depth(dir, {"--synthetic", "hand", "--size", "8x8", "--out-dir", "o"}), 2,
+               "--size must be at least 16x16");
   expect_error(run_depth(dir, {"--synthetic", "hand", "--data-root", "d", "--out-dir", "o"}), 2,
                "--data-root needs --scenes");
   expect_error(

@@ -31,6 +31,7 @@
 #include "dco/core/memory_policy.hpp"
 #include "dco/core/rectifier.hpp"
 #include "dco/core/stopwatch.hpp"
+#include "dco/core/synthetic_scene.hpp"
 #include "dco/core/usable_cpus.hpp"
 #include "dco/gpu/backend.hpp"
 #include "dco/pipeline/contour/contour_extractor.hpp"
@@ -150,7 +151,8 @@ Options parse_args(int argc, char** argv) {
     else if (arg == "--synthetic")
       opt.synthetic = args.value();
     else if (arg == "--size") {
-      const dco::tools::ImageSize size = dco::tools::parse_image_size("--size", args.value(), 64);
+      const dco::tools::ImageSize size =
+          dco::tools::parse_image_size("--size", args.value(), 64, dco::synthetic::kMaxSide);
       opt.width = size.width;
       opt.height = size.height;
     } else if (arg == "--frames")

@@ -26,6 +26,7 @@
 #include "dco/core/image_io.hpp"
 #include "dco/core/memory_policy.hpp"
 #include "dco/core/rectifier.hpp"
+#include "dco/core/synthetic_scene.hpp"
 #include "dco/pipeline/depth_pipeline.hpp"
 #include "dco/tools/command_line.hpp"
 #include "dco/tools/frame_sequence.hpp"
@@ -152,7 +153,8 @@ Options parse_args(int argc, char** argv) {
     else if (arg == "--synthetic")
       opt.synthetic = args.value();
     else if (arg == "--size") {
-      const dco::tools::ImageSize size = dco::tools::parse_image_size("--size", args.value());
+      const dco::tools::ImageSize size = dco::tools::parse_image_size(
+          "--size", args.value(), dco::synthetic::kMinSide, dco::synthetic::kMaxSide);
       opt.width = size.width;
       opt.height = size.height;
     } else if (arg == "--frames")

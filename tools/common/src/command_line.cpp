@@ -57,7 +57,8 @@ double ArgCursor::number_value(double min, double max) {
   return v;
 }
 
-ImageSize parse_image_size(std::string_view option, const std::string& text, int minimum) {
+ImageSize parse_image_size(std::string_view option, const std::string& text, int minimum,
+                           int maximum) {
   ImageSize size;
   const auto x = text.find('x');
   try {
@@ -73,6 +74,9 @@ ImageSize parse_image_size(std::string_view option, const std::string& text, int
   if (size.width < minimum || size.height < minimum)
     throw UsageError(
         fmt::format("{} must be at least {}x{}, not {}", option, minimum, minimum, text));
+  if (size.width > maximum || size.height > maximum)
+    throw UsageError(
+        fmt::format("{} must be at most {}x{}, not {}", option, maximum, maximum, text));
   return size;
 }
 

@@ -9,6 +9,10 @@
 
 namespace dco::synthetic {
 
+// The sides a scene may have, px.
+inline constexpr int kMinSide = 16;
+inline constexpr int kMaxSide = 8192;
+
 // A procedurally textured stereo sequence with exact ground truth: fronto-parallel objects
 // (boxes, discs, thin capsules like fingers) moving in front of a slanted textured background,
 // seen by an ideal rectified stereo pair. Rendering is point-sampled at pixel centres from

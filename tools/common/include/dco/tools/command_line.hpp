@@ -66,8 +66,9 @@ struct ImageSize {
   int width = 0, height = 0;
 };
 // "WIDTHxHEIGHT" as given to `option` (e.g. --size); throws UsageError when malformed or when a
-// side is below `minimum`.
-ImageSize parse_image_size(std::string_view option, const std::string& text, int minimum = 1);
+// side is below `minimum` or above `maximum`.
+ImageSize parse_image_size(std::string_view option, const std::string& text, int minimum = 1,
+                           int maximum = 16384);
 
 // Errors are reported on exactly one line, whatever the message carried: line breaks and tabs
 // become spaces, other control characters (a terminal escape in a file name) '?'.
