@@ -83,6 +83,17 @@ TEST(SgbmWls, RejectsBadInput) {
   for (const int too_many : {49, 64, 80, 200})
     EXPECT_THROW(run_sgbm_wls(pair.left.view(), pair.right.view(), too_many), Error) << too_many;
   EXPECT_NO_THROW(run_sgbm_wls(pair.left.view(), pair.right.view(), 48));
+  // OpenCV holds disparities as 16-bit sixteenths of a pixel: from 2048 px on they would wrap
+  // negative and read as "no prediction", so more than 2048 disparities are refused.
+  const ShiftedPair wide = shifted_texture(2200, 8, 1);
+  try {
+    run_sgbm_wls(wide.left.view(), wide.right.view(), 2049);
+    ADD_FAILURE() << "2064 disparities accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("more than OpenCV's StereoSGBM holds (2048)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

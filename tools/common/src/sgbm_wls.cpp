@@ -19,6 +19,9 @@ constexpr double kWlsSigmaColor = 1.5;
 // OpenCV matchers report disparities in 1/16 px (StereoMatcher::DISP_SHIFT = 4).
 constexpr float kFixedPointScale = 1.0f / 16.0f;
 
+// At most 2048: OpenCV keeps disparities as 16-bit sixteenths of a pixel.
+constexpr long kMaxDisparityCount = 2048;
+
 // SGBM searches a multiple of 16 disparities.
 long disparity_count(int max_disp) {
   return (static_cast<long>(max_disp) + 15) / 16 * 16;
@@ -37,6 +40,12 @@ void check_inputs(ImageView<const std::uint8_t> left, ImageView<const std::uint8
     throw Error(fmt::format("sgbm-wls: max_disp must be positive (got {})", max_disp));
   // OpenCV's SGBM aborts the process (an exception out of a destructor) on images no wider than
   // its disparity count.
+  // A larger count wraps disparities from 2048 px on negative, which reads as "no prediction".
+  if (disparity_count(max_disp) > kMaxDisparityCount)
+    throw Error(
+        fmt::format("sgbm-wls: {} disparities (max_disp {}) are more than OpenCV's "
+                    "StereoSGBM holds ({})",
+                    disparity_count(max_disp), max_disp, kMaxDisparityCount));
   if (static_cast<long>(left.width) <= disparity_count(max_disp))
     throw Error(
         fmt::format("sgbm-wls: images {} px wide are too narrow for {} disparities (max_disp "
