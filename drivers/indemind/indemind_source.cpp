@@ -606,14 +606,18 @@ class IndemindSource final : public FrameSource {
       if (slot_.full) ++counters_.delivery_drops;
       std::swap(slot_.buffer, spare_);
       slot_.capture_ns = rising(clock_.to_host(device_ns), last_frame_capture_ns_);
-      // Samples of a frame the consumer never took still belong to the time line: keep them.
-      for (const ImuSample& s : imu_pending_) {
-        if (slot_.imu.size() >= kMaxQueuedImu) {
-          ++counters_.imu_overflow;
-          break;
-        }
-        slot_.imu.push_back(s);
-      }
+      // Samples of a frame the consumer never took still belong to the time line: keep them. A
+      // consumer held up past kMaxQueuedImu of them gets the newest (what a tracker resumes
+      // from); each one dropped is counted.
+      const std::size_t total = slot_.imu.size() + imu_pending_.size();
+      const std::size_t drop = total > kMaxQueuedImu ? total - kMaxQueuedImu : 0;
+      const std::size_t from_slot = std::min(drop, slot_.imu.size());
+      slot_.imu.erase(slot_.imu.begin(),
+                      slot_.imu.begin() + static_cast<std::ptrdiff_t>(from_slot));
+      slot_.imu.insert(slot_.imu.end(),
+                       imu_pending_.begin() + static_cast<std::ptrdiff_t>(drop - from_slot),
+                       imu_pending_.end());
+      counters_.imu_overflow += drop;
       imu_pending_.clear();
       slot_.full = true;
     }

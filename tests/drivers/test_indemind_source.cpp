@@ -595,6 +595,39 @@ TEST(IndemindSource, ImuReportsBeforeTheFirstFrameAreCounted) {
   EXPECT_LE(sent - counted, 8u);
 }
 
+// A consumer held up for longer than the driver queues IMU samples for (8192, 8 s at 1 kHz) gets
+// the newest ones when it takes a frame again, and every sample dropped on the way is counted.
+TEST(IndemindSource, AHeldUpConsumerGetsTheNewestImuSamplesAndEveryDropIsCounted) {
+  Rig rig;
+  rig.source->start(rig.sink);
+  ASSERT_TRUE(rig.wait_frames(20));
+  std::uint64_t reports_held = 0;
+  {
+    std::unique_lock hold(rig.sink.mutex_);  // the delivery thread waits in on_frame
+    const std::uint64_t before = rig.sim->record().imu_reports;
+    const std::int64_t start_ns = rig.sim->now_ns();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (rig.sim->now_ns() - start_ns < 10'000'000'000LL &&
+           std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    reports_held = rig.sim->record().imu_reports - before;
+  }
+  ASSERT_GT(reports_held, 9000u) << "the module ran on for 10 s while the consumer was held";
+  const long frames = rig.sink.count();
+  ASSERT_TRUE(rig.wait_frames(frames + 5));
+  rig.source->stop();
+  const auto n = counters_of(*rig.source);
+  // At least what the 10 s brought past the queue's 8192 was dropped, one count per sample (the
+  // counter once went up once per frame, about a twentieth of that).
+  EXPECT_GE(n.at("imu_overflow") + 8192 + 100, reports_held);
+  EXPECT_LE(n.at("imu_overflow"), reports_held);
+  std::lock_guard lock(rig.sink.mutex_);
+  // The samples delivered stay in order, and the newest reach the last frame's time.
+  EXPECT_EQ(rig.sink.imu_non_increasing, 0);
+  EXPECT_NEAR(static_cast<double>(rig.sink.last_imu_ns - rig.sink.last_capture_ns), 0.0,
+              100'000'000.0);
+}
+
 TEST(IndemindSource, UnpluggedModuleIsWaitedForAndResumes) {
   IndemindOptions io;
   io.lossless = true;  // every frame reaches the sink (see AStallRestartStartsANewTimeLine)
