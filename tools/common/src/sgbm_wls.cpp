@@ -38,14 +38,14 @@ void check_inputs(ImageView<const std::uint8_t> left, ImageView<const std::uint8
                             left.channels, right.channels));
   if (max_disp <= 0)
     throw Error(fmt::format("sgbm-wls: max_disp must be positive (got {})", max_disp));
-  // OpenCV's SGBM aborts the process (an exception out of a destructor) on images no wider than
-  // its disparity count.
   // A larger count wraps disparities from 2048 px on negative, which reads as "no prediction".
   if (disparity_count(max_disp) > kMaxDisparityCount)
     throw Error(
         fmt::format("sgbm-wls: {} disparities (max_disp {}) are more than OpenCV's "
                     "StereoSGBM holds ({})",
                     disparity_count(max_disp), max_disp, kMaxDisparityCount));
+  // OpenCV's SGBM aborts the process (an exception out of a destructor) on images no wider than
+  // its disparity count.
   if (static_cast<long>(left.width) <= disparity_count(max_disp))
     throw Error(
         fmt::format("sgbm-wls: images {} px wide are too narrow for {} disparities (max_disp "
