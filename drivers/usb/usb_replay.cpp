@@ -163,13 +163,17 @@ struct Replay {
   // Delivers what arrived inside the call the driver is making, at the times it arrived (the
   // driver reads its clock there), then consumes the call's record and replays its outcome.
   void conclude() {
-    while (inside_next_call(next())) {
-      const UsbCaptureRecord c = advance();
-      now = std::max<std::int64_t>(now, c.t_ns);
-      deliver(c);
-    }
+    while (inside_next_call(next())) deliver_in_call(advance());
     const UsbCaptureRecord r = advance();
+    // The recorded driver read its clock after the call had returned: a control transfer that
+    // took 200 ms, or a busy module's retries, moved it on as much.
+    now = std::max<std::int64_t>(now, r.t_ns);
     if (r.outcome != Outcome::kOk) throw UsbError(r.message, r.outcome == Outcome::kNoDevice);
+  }
+
+  void deliver_in_call(const UsbCaptureRecord& c) {
+    now = std::max<std::int64_t>(now, c.t_ns);
+    deliver(c);
   }
 
   void deliver(const UsbCaptureRecord& r) {
@@ -259,7 +263,7 @@ class ReplayDevice final : public UsbDevice {
         // Completions that arrived while the recorded stop_streams() waited for its transfers
         // reached the driver inside the call: so they do here.
         while (!r_->at_end() && (r_->next().flags & UsbCaptureRecord::kInCall))
-          r_->deliver(r_->advance());
+          r_->deliver_in_call(r_->advance());
       } catch (const UsbError&) {
         // Never throws: the replay has ended and finish_error() says why.
       }

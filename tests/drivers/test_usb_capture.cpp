@@ -114,11 +114,10 @@ IndemindOptions fast_mode() {
 
 // The driver on a simulated module (seeded with `seed`) through a recording transport that
 // writes `path`; `sim` is the module, owned by the source.
-std::unique_ptr<FrameSource> recorded_source(const std::string& path, std::uint32_t seed,
+std::unique_ptr<FrameSource> recorded_source(const std::string& path,
+                                             const SimulatedIndemind::Options& o,
                                              SimulatedIndemind*& sim,
                                              std::uint64_t max_bytes = kDefaultCaptureMaxBytes) {
-  SimulatedIndemind::Options o;
-  o.seed = seed;
   auto sim_owned = std::make_unique<SimulatedIndemind>(o);
   SimulatedIndemind* module = sim_owned.get();
   sim = module;
@@ -128,6 +127,14 @@ std::unique_ptr<FrameSource> recorded_source(const std::string& path, std::uint3
       make_recording_transport(
           std::move(sim_owned), path, [module] { return module->now_ns(); }, max_bytes),
       io, "indemind://");
+}
+
+std::unique_ptr<FrameSource> recorded_source(const std::string& path, std::uint32_t seed,
+                                             SimulatedIndemind*& sim,
+                                             std::uint64_t max_bytes = kDefaultCaptureMaxBytes) {
+  SimulatedIndemind::Options o;
+  o.seed = seed;
+  return recorded_source(path, o, sim, max_bytes);
 }
 
 // Streams from a simulated module through a recording transport, injecting a mix of faults (an
@@ -361,6 +368,39 @@ TEST(UsbCapture, ReplayReproducesARecordedSessionWithFaultsFrameForFrame) {
   EXPECT_EQ(diverged.frames.size(), 0u);
   std::remove(path.c_str());
   std::remove(cut_path.c_str());
+}
+
+// A bridge takes a while to answer each control transfer, and a busy one is asked again 10 ms
+// later: the driver's clock moves on through the calls that start a stream, more than stall_ms
+// here. A replay whose clock stood still through them judged the first frame after each start
+// late and restarted a stream the recording kept.
+TEST(UsbCapture, ControlTransfersThatTakeTimeReplayOnTheRecordedClock) {
+  const std::string path = temp_path("slow-controls.usbcap");
+  Recorder live;
+  std::map<std::string, std::uint64_t> live_counters;
+  {
+    SimulatedIndemind::Options o;
+    o.seed = 11;
+    o.control_ns = 40'000'000;
+    SimulatedIndemind* sim = nullptr;
+    auto source = recorded_source(path, o, sim);
+    ASSERT_GT(9 * o.control_ns, std::int64_t{fast_mode().stall_ms} * 1'000'000);
+    source->start(live);
+    ASSERT_TRUE(sim->inject_and_settle(Fault::kStall, 0));
+    ASSERT_TRUE(sim->inject_and_settle(Fault::kControlBusy, 2));
+    ASSERT_TRUE(sim->inject_and_settle(Fault::kSilence, 500));
+    ASSERT_TRUE(sim->inject_and_settle(Fault::kUnplug, 200));
+    source->stop();
+    live_counters = counters_of(*source);
+  }
+  // One restart after the stall and one after the silence: none for slow answers.
+  EXPECT_EQ(live_counters.at("stream_restarts"), 2u);
+  EXPECT_EQ(live_counters.at("reconnects"), 1u);
+  ASSERT_GE(live.frames.size(), 10u);
+
+  std::vector<Seen> replayed;
+  ASSERT_NO_FATAL_FAILURE(replay_and_compare(path, live, live_counters, replayed));
+  std::remove(path.c_str());
 }
 
 // Completions flagged as arriving inside a call that never comes: the replay reads ahead only so

@@ -375,8 +375,10 @@ class SimulatedIndemind::Device final : public drivers::UsbDevice {
                       std::chrono::milliseconds) override {
     events_inside_control();
     std::lock_guard lock(s_->mu);
-    check_alive();
     State& s = *s_;
+    // The bridge answers after a while; the module's clock runs on meanwhile.
+    if (!s.opt.pace_real_time) s.now += s.opt.control_ns;
+    check_alive();
     const bool in = type & 0x80;
     if (index == indemind::kVideoStreamingInterface &&
         (value >> 8 == indemind::kVsProbeControl || value >> 8 == indemind::kVsCommitControl)) {

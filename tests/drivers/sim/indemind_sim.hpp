@@ -64,6 +64,7 @@ class SimulatedIndemind final : public drivers::UsbTransport {
     std::int64_t latency_ns = 400'000;        // least transfer delay
     std::int64_t jitter_ns = 300'000;         // extra delay, uniform
     std::int64_t imu_latency_ns = -1;         // delay of an IMU report; < 0: latency_ns / 4
+    std::int64_t control_ns = 0;              // how long a control transfer takes to answer
     std::uint16_t first_counter = 65530;      // wraps after a few frames
     // The counter also counts frames it never sends (stream off, silence); false: it stands still.
     bool counter_counts_unsent_frames = true;

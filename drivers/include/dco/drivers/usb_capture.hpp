@@ -124,7 +124,8 @@ std::unique_ptr<UsbTransport> make_recording_transport(
     std::function<std::int64_t()> clock = {}, std::uint64_t max_bytes = kDefaultCaptureMaxBytes);
 
 // Plays a capture back as a transport. Time is the capture's: now_ns() is the time of the last
-// event delivered, so a driver given it as its clock makes the decisions it made when recording.
+// event delivered or call answered, so a driver given it as its clock makes the decisions it made
+// when recording.
 // Every call must be the one the capture has next (list() excepted: it has no side effects and
 // is answered with the latest listing); a call that differs ends the replay with an error that
 // names both. finished() turns true after the last record.
