@@ -450,7 +450,7 @@ const std::array<float, 1 << kGaussBits>& gaussian_table() {
 }
 
 // Row y of a view's noise: its own random stream, so rows may be rendered in any order.
-void add_noise_row(Image<std::uint8_t>& img, double sigma, int index, int view, int y) {
+void add_noise_row(Image<std::uint8_t>& img, double sigma, std::int64_t index, int view, int y) {
   const auto& gauss = gaussian_table();
   const float s = static_cast<float>(sigma);
   const std::uint64_t frame_seed =
@@ -603,11 +603,11 @@ StereoCalibration SceneRenderer::calibration() const {
   return calib;
 }
 
-void SceneRenderer::render(int index, StereoSample& out) const {
+void SceneRenderer::render(std::int64_t index, StereoSample& out) const {
   const SceneConfig& c = config_;
   const int channels = c.color ? 3 : 1;
   out.index = index;
-  out.time_s = index / c.fps;
+  out.time_s = static_cast<double>(index) / c.fps;
   out.left.resize(c.width, c.height, channels);
   out.right.resize(c.width, c.height, channels);
   out.disparity.resize(c.width, c.height);

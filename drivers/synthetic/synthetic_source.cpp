@@ -53,8 +53,7 @@ class SyntheticSource final : public PacedSource {
   bool produce(std::uint64_t seq, ImageView<const std::uint8_t>& left,
                ImageView<const std::uint8_t>& right) override {
     if (frames_ > 0 && seq >= frames_) return false;
-    // The scene's time wraps after a day of frames so the index stays an int.
-    renderer_.render(static_cast<int>(seq % (1u << 24)), sample_);
+    renderer_.render(static_cast<std::int64_t>(seq), sample_);
     left = sample_.left.cview();
     right = sample_.right.cview();
     return true;

@@ -24,7 +24,7 @@ SceneConfig quiet(SceneConfig c) {
   return c;
 }
 
-StereoSample render(const SceneConfig& c, int index) {
+StereoSample render(const SceneConfig& c, std::int64_t index) {
   StereoSample s;
   SceneRenderer(c).render(index, s);
   return s;
@@ -270,6 +270,29 @@ TEST(SyntheticScene, HandMovesAndStaticDoesNot) {
   const StereoSample n30 = render(preset("static", 640, 360), 30);
   EXPECT_FALSE(same_bytes(n0.left, n30.left));
   EXPECT_TRUE(same_bytes(n0.disparity, n30.disparity));
+}
+
+// A source runs for weeks: frame 2^24 (6.5 days at 30 fps) and frames past 2^31 go on with the
+// scene's motion instead of starting it again or running time backwards.
+TEST(SyntheticScene, FramesOfALongRunKeepTheirTime) {
+  const SceneConfig c = quiet(preset("hand", 640, 360));
+  const std::int64_t day6 = std::int64_t{1} << 24, past_int = (std::int64_t{1} << 31) + 7;
+  const StereoSample first = render(c, 0);
+  const StereoSample later = render(c, day6);
+  EXPECT_EQ(later.index, day6);
+  EXPECT_DOUBLE_EQ(later.time_s, static_cast<double>(day6) / c.fps);
+  EXPECT_FALSE(same_bytes(first.disparity, later.disparity));
+  const StereoSample far = render(c, past_int);
+  EXPECT_EQ(far.index, past_int);
+  EXPECT_GT(far.time_s, later.time_s);
+  // One frame later is one frame's motion on: most of the hand stays where it was.
+  const StereoSample next = render(c, past_int + 1);
+  long moved = 0;
+  for (int y = 0; y < far.disparity.height(); ++y)
+    for (int x = 0; x < far.disparity.width(); ++x)
+      moved += std::abs(far.disparity.at(x, y) - next.disparity.at(x, y)) > 1.0f;
+  EXPECT_GT(moved, 0);
+  EXPECT_LT(moved, far.disparity.width() * far.disparity.height() / 20);
 }
 
 TEST(SyntheticScene, DeterministicIncludingNoise) {

@@ -80,7 +80,7 @@ SceneConfig preset(const std::string& name, int width = 1280, int height = 720);
 int covering_max_disparity(const SceneConfig& config);
 
 struct StereoSample {
-  int index = 0;
+  std::int64_t index = 0;
   double time_s = 0;
   Image<std::uint8_t> left, right;  // 1 or 3 channels
   Image<float> disparity;           // left view, pixels, every pixel set
@@ -96,7 +96,7 @@ class SceneRenderer {
   StereoCalibration calibration() const;
   // Renders frame `index` (time index / fps) into `out`, reusing its buffers. Deterministic:
   // the same index gives the same bytes.
-  void render(int index, StereoSample& out) const;
+  void render(std::int64_t index, StereoSample& out) const;
 
  private:
   SceneConfig config_;
