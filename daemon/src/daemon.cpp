@@ -387,12 +387,16 @@ void Daemon::on_result(const pipeline::DepthResult& result,
 }
 
 void Daemon::retry_lcm(std::int64_t now_ns) {
-  if (now_ns - lcm_retry_ns_ < kLcmRetryNs) return;
-  lcm_retry_ns_ = now_ns;
+  // A set-up under way is looked at every tick (without waiting: the lock is the frames'); a new
+  // one starts every kLcmRetryNs.
+  if (!publisher_->lcm_setup_running()) {
+    if (publisher_->lcm_ready() || now_ns - lcm_retry_ns_ < kLcmRetryNs) return;
+    lcm_retry_ns_ = now_ns;
+  }
   bool set_up = false;
   {
     std::lock_guard lock(publish_mutex_);
-    if (!publisher_->lcm_problem().empty()) set_up = publisher_->retry_lcm();
+    set_up = publisher_->retry_lcm();
   }
   if (set_up) log_.info("LCM is set up now: DCO_DEPTH and the other channels go out");
 }

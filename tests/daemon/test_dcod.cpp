@@ -891,6 +891,35 @@ TEST(Dcod, AnLcmPeerThatStopsReadingHoldsUpNeitherTheRingNorAStop) {
       << dcod.log();
 }
 
+// A tcpq server that accepts and hangs: dcod starts and serves the ring without LCM, and takes
+// LCM up once the server answers.
+TEST(Dcod, AnLcmServerThatDoesNotAnswerHoldsUpNeitherTheStartNorTheRing) {
+  StalledTcpqPeer peer(StalledTcpqPeer::Handshake::kSilent);
+  TempDir dir;
+  NotifySocket notify(dir / "notify");
+  DcodOptions o;
+  o.args = {"--source", "synthetic://hand?width=160&height=96&fps=30",
+            "--set",    "lcm.url=" + peer.url(),
+            "--set",    "ring.path=" + (dir / "depth.shm").string()};
+  o.log = dir / "dcod.log";
+  o.notify = &notify;
+  DcodProcess dcod(o);
+  ASSERT_TRUE(notify.wait_for("READY=1", 20s)) << dcod.log();
+  EXPECT_NE(dcod.log().find("has not ended"), std::string::npos) << dcod.log();
+  dco::client::Client client = ring_client(dir);
+  ASSERT_TRUE(client.wait_next(5s).has_value()) << dcod.log();
+  peer.answer();
+  bool set_up = false;
+  for (const auto end = SteadyClock::now() + 10s; !set_up && SteadyClock::now() < end;) {
+    std::this_thread::sleep_for(50ms);
+    set_up = dcod.log().find("LCM is set up now") != std::string::npos;
+  }
+  EXPECT_TRUE(set_up) << dcod.log();
+  ASSERT_TRUE(client.wait_next(5s).has_value()) << dcod.log();
+  dcod.signal(SIGTERM);
+  EXPECT_EQ(dcod.wait(10s), 0) << dcod.log();
+}
+
 TEST(Dcod, ReplayInDeterministicModeIsBitIdenticalToDcoDepth) {
   TempDir dir;
   constexpr int kFrames = 6;

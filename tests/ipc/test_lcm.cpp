@@ -508,6 +508,65 @@ TEST(Publisher, ANetworkThatStopsTakingMessagesHoldsUpNeitherFramesNorTheCaller)
   EXPECT_LT(std::chrono::steady_clock::now() - t1, std::chrono::seconds(3));
 }
 
+// lcm_create for tcpq waits for the server's answer without a timeout: a server that accepts and
+// hangs held the publisher's construction (dcod's start) and every retry for ever.
+TEST(Publisher, ATcpqServerThatDoesNotAnswerHoldsUpNeitherTheStartNorTheFrames) {
+  dco::testing::StalledTcpqPeer peer(dco::testing::StalledTcpqPeer::Handshake::kSilent);
+  TempDir dir;
+  RingWriter ring(dir.path() / "depth.shm", ring_options(32, 16));
+  PublisherOptions po;
+  po.lcm_url = peer.url();
+  const auto t0 = std::chrono::steady_clock::now();
+  DepthPublisher pub(ring, po);
+  const auto took = std::chrono::steady_clock::now() - t0;
+  EXPECT_GE(took, DepthPublisher::kLcmSetupWait - std::chrono::milliseconds(50));
+  EXPECT_LT(took, DepthPublisher::kLcmSetupWait + std::chrono::seconds(1));
+  EXPECT_FALSE(pub.lcm_ready());
+  EXPECT_TRUE(pub.lcm_setup_running());
+  EXPECT_NE(pub.lcm_problem().find("has not ended"), std::string::npos) << pub.lcm_problem();
+  EXPECT_THROW(pub.lcm(), dco::Error);
+
+  Image<float> depth(32, 16);
+  depth.fill(2.0f);
+  Image<std::uint8_t> image(32, 16);
+  FrameMeta meta;
+  meta.frame_seq = 1;
+  meta.capture_ns = 33'333'333;
+  EXPECT_EQ(pub.write(depth.cview(), image.cview(), meta), 1u);
+  EXPECT_EQ(ring.published(), 1u);
+  const auto t1 = std::chrono::steady_clock::now();
+  EXPECT_FALSE(pub.retry_lcm());
+  EXPECT_LT(std::chrono::steady_clock::now() - t1, std::chrono::milliseconds(100));
+  EXPECT_TRUE(pub.lcm_setup_running());
+
+  // The server answers at last: the set-up under way ends, and LCM carries the next frame.
+  peer.answer();
+  EXPECT_TRUE(pub.retry_lcm(std::chrono::seconds(10)));
+  EXPECT_TRUE(pub.lcm_ready());
+  EXPECT_FALSE(pub.lcm_setup_running());
+  EXPECT_EQ(pub.lcm_problem(), "");
+  const std::uint64_t failures = pub.send_failures();
+  meta.frame_seq = 2;
+  meta.capture_ns = 66'666'666;
+  EXPECT_EQ(pub.write(depth.cview(), image.cview(), meta), 2u);
+  EXPECT_TRUE(pub.flush(std::chrono::seconds(5)));
+  EXPECT_EQ(pub.send_failures(), failures);
+}
+
+// A publisher that goes away while its set-up still waits leaves it behind at once.
+TEST(Publisher, ASetUpThatHangsDoesNotHoldUpTheEnd) {
+  dco::testing::StalledTcpqPeer peer(dco::testing::StalledTcpqPeer::Handshake::kSilent);
+  TempDir dir;
+  RingWriter ring(dir.path() / "depth.shm", ring_options(8, 8));
+  PublisherOptions po;
+  po.lcm_url = peer.url();
+  auto pub = std::make_unique<DepthPublisher>(ring, po);
+  ASSERT_TRUE(pub->lcm_setup_running());
+  const auto t0 = std::chrono::steady_clock::now();
+  pub.reset();
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(500));
+}
+
 TEST(Publisher, BadUrlIsAClearError) {
   TempDir dir;
   RingWriter ring(dir.path() / "depth.shm", ring_options(8, 8));

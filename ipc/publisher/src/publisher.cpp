@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -19,6 +20,7 @@
 #include "dco/core/error.hpp"
 #include "dco/ipc/lcm_messages.hpp"
 #include "lcm_sender.hpp"
+#include "lcm_setup.hpp"
 
 namespace dco::ipc {
 namespace {
@@ -137,26 +139,36 @@ DepthPublisher::DepthPublisher(RingWriter& ring, const PublisherOptions& options
                             options.preview_max_height));
   check_lcm_url(options.lcm_url);
   sender_ = std::make_unique<detail::LcmSender>(kQueuedMessages, small_message_bytes(options));
-  retry_lcm();
+  retry_lcm(kLcmSetupWait);
 }
 
-bool DepthPublisher::retry_lcm() {
+bool DepthPublisher::retry_lcm(std::chrono::milliseconds wait) {
   if (lcm_ready_) return true;
-  // LCM prints a dozen lines of advice at every failed udpm setup: after the first, a retry waits
-  // until a route to the group is there.
-  if (tried_lcm_ && !udpm_route_ready(options_.lcm_url)) return false;
-  tried_lcm_ = true;
-  auto lcm = std::make_unique<lcm::LCM>(options_.lcm_url);
-  if (!lcm->good()) return false;
-  sender_->set_lcm(std::move(lcm));
+  if (!setup_) {
+    // LCM prints a dozen lines of advice at every failed udpm setup: after the first, a retry
+    // waits until a route to the group is there.
+    if (tried_lcm_ && !udpm_route_ready(options_.lcm_url)) return false;
+    tried_lcm_ = true;
+    setup_ = std::make_unique<detail::LcmSetup>(options_.lcm_url);
+    setup_running_ = true;
+  }
+  std::optional<std::unique_ptr<lcm::LCM>> lcm = setup_->result(wait);
+  if (!lcm) return false;
+  setup_.reset();
+  setup_running_ = false;
+  if (!*lcm) return false;
+  sender_->set_lcm(std::move(*lcm));
   lcm_ready_ = true;
   return true;
 }
 
 std::string DepthPublisher::lcm_problem() const {
   if (lcm_ready_) return {};
-  return fmt::format("LCM cannot be set up with '{}' (for udpm, is there a multicast route?)",
-                     options_.lcm_url.empty() ? "the default URL" : options_.lcm_url);
+  const std::string url = options_.lcm_url.empty() ? "the default URL" : options_.lcm_url;
+  if (setup_running_)
+    return fmt::format("LCM's set-up with '{}' has not ended (for tcpq, does the server answer?)",
+                       url);
+  return fmt::format("LCM cannot be set up with '{}' (for udpm, is there a multicast route?)", url);
 }
 
 lcm::LCM& DepthPublisher::lcm() {

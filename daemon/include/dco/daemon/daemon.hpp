@@ -88,11 +88,12 @@ class Daemon final : public drivers::FrameSink {
   // whatever the pace.
   void report_raw_recording(std::int64_t now_ns, bool last);
   void tick(std::int64_t now_ns);
-  // A warning when LCM failed to send since the last one (the ring is unaffected); `last`: at
-  // the exit, whenever the last warning was.
-  // Sets LCM up when it could not be at the start (no multicast route yet), every kLcmRetryNs.
+  // Sets LCM up when it could not be at the start (no multicast route yet, a tcpq server that
+  // does not answer), every kLcmRetryNs.
   void retry_lcm(std::int64_t now_ns);
   static constexpr std::int64_t kLcmRetryNs = 2'000'000'000;
+  // A warning when LCM failed to send since the last one (the ring is unaffected); `last`: at
+  // the exit, whenever the last warning was.
   void report_lcm_failures(std::int64_t now_ns, bool last);
   // Info lines when the source's frames had gaps, or a replayed log new dcod runs, since the last
   // ones (a sequence cut at each), paced like the warnings; `last`: at the exit, whatever the

@@ -23,7 +23,8 @@ class LCM;
 namespace dco::ipc {
 namespace detail {
 class LcmSender;
-}
+class LcmSetup;
+}  // namespace detail
 
 struct PublisherOptions {
   // LCM provider URL; empty = LCM's default (LCM_DEFAULT_URL, else udpm multicast).
@@ -68,10 +69,12 @@ int preview_factor(int width, int height, int max_width, int max_height);
 class DepthPublisher {
  public:
   // Throws dco::Error when the URL names no LCM provider (check_lcm_url). An LCM that cannot be
-  // set up now (udpm without a multicast route: a headset booted without a network) leaves the
-  // publisher without LCM: depth still reaches the ring, every message counts as a send failure,
-  // and retry_lcm() tries again.
+  // set up now (udpm without a multicast route: a headset booted without a network), or whose
+  // set-up has not ended within kLcmSetupWait (a tcpq server that accepts and never answers),
+  // leaves the publisher without LCM: depth still reaches the ring, every message counts as a
+  // send failure, and retry_lcm() tries again.
   DepthPublisher(RingWriter& ring, const PublisherOptions& options);
+  static constexpr std::chrono::milliseconds kLcmSetupWait{2000};
   DepthPublisher(const DepthPublisher&) = delete;
   DepthPublisher& operator=(const DepthPublisher&) = delete;
   ~DepthPublisher();
@@ -119,8 +122,13 @@ class DepthPublisher {
   const char* last_failed_channel() const;
   // Waits until every queued message has been handed to LCM; false when `wait` ran out first.
   bool flush(std::chrono::milliseconds wait);
-  // Sets LCM up when it is not yet; true when it is (now or before).
-  bool retry_lcm();
+  // Sets LCM up when it is not yet; true when it is (now or before). The set-up runs on a thread
+  // of its own: this waits up to `wait` for it, and a set-up still running then is looked at
+  // again by the next call instead of starting another. Any one thread may call it while
+  // another publishes.
+  bool retry_lcm(std::chrono::milliseconds wait = std::chrono::milliseconds(0));
+  // Whether a set-up retry_lcm() started is still running.
+  bool lcm_setup_running() const { return setup_running_; }
   // Empty while LCM is set up, else why it is not.
   std::string lcm_problem() const;
   // Throws dco::Error while LCM is not set up.
@@ -142,7 +150,9 @@ class DepthPublisher {
   std::unique_ptr<detail::LcmSender> sender_;
   std::atomic<bool> lcm_ready_{false};
   bool tried_lcm_ = false;
-  std::mutex raw_mutex_;  // publish_raw's callers
+  std::unique_ptr<detail::LcmSetup> setup_;  // the set-up running; null when none
+  std::atomic<bool> setup_running_{false};   // setup_ != null, for other threads
+  std::mutex raw_mutex_;                     // publish_raw's callers
   std::vector<std::uint8_t> encoded_;
   ::dco::depth_preview_t preview_;
   std::uint32_t open_slot_ = 0;
