@@ -41,7 +41,8 @@ void register_params(ConfigSchema& s, ContourParams& p) {
   s.add("contour.lookahead", &p.lookahead, 0, 1,
         "0 = causal window (t-2, t-1, t); 1 = (t-1, t, t+1), output one frame late");
   s.add("contour.t_high", &p.t_high, 0.0, 1.0, "T_high of the dual threshold (§5.3.1)");
-  s.add("contour.t_low", &p.t_low, 0.0, 1.0, "T_low of the dual threshold (§5.3.1)");
+  s.add("contour.t_low", &p.t_low, 0.0, 1.0,
+        "T_low of the dual threshold (§5.3.1); at most t_high");
   s.add("contour.t_depth", &p.t_depth, 0.0, 1.0,
         "T_depth: pixels whose depth-contour filter is below it are no contour (§5.3.2)");
 }

@@ -78,7 +78,7 @@ void register_params(ConfigSchema& s, DensifyParams& p) {
         "within this RMS, px (0 = the row's first match, as other holes)");
   s.add("densify.plane_window", &p.plane_window, 0, 31,
         "matches first take the value of the plane through the matches of this window around "
-        "them, on the matcher's grid, odd (0 = off)");
+        "them, on the matcher's grid: 0 (off) or odd from 3");
   s.add("densify.plane_rms", &p.plane_rms, 0.01, 10.0,
         "... where those matches lie within this RMS of their plane, px");
   s.add("densify.solve_resolution", &p.solve_resolution, {"auto", "full", "half"},
