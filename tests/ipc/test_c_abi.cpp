@@ -158,5 +158,49 @@ TEST(ClientCAbi, WaitNextAfterTheWriterStoppedWaitsOutItsTimeout) {
   dco_client_close(c);
 }
 
+// A daemon stopped and came back at another size, which this client refuses: said at once, then
+// at the end of each wait (not in a loop that spins), by latest() every time, until a ring the
+// client takes is there.
+TEST(ClientCAbi, ARestartedRingTheClientRefusesIsSaidWithoutSpinning) {
+  TempDir dir;
+  const auto path = dir.path() / "depth.shm";
+  const RingOptions o{32, 8};
+  auto writer = std::make_unique<RingWriter>(path, o);
+  publish_pattern(*writer, 1);
+  dco_client_options opt;
+  dco_client_options_init(&opt);
+  const std::string p = path.string();
+  opt.path = p.c_str();
+  opt.expected_width = 32;
+  opt.expected_height = 8;
+  dco_client* c = nullptr;
+  ASSERT_EQ(dco_client_open(&opt, &c), DCO_OK) << dco_client_last_error();
+  dco_frame_view v;
+  dco_frame_view_init(&v);
+  ASSERT_EQ(dco_client_wait_next(c, 100, &v), DCO_OK);
+  writer.reset();
+  writer = std::make_unique<RingWriter>(path, RingOptions{16, 8});
+  EXPECT_EQ(dco_client_wait_next(c, 1000, &v), DCO_E_GEOMETRY) << "said at once";
+  EXPECT_NE(std::string(dco_client_last_error()).find("16"), std::string::npos)
+      << dco_client_last_error();
+  int calls = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - start < std::chrono::milliseconds(300)) {
+    EXPECT_EQ(dco_client_wait_next(c, 100, &v), DCO_E_GEOMETRY);
+    ++calls;
+  }
+  EXPECT_LE(calls, 4) << "each call waits its 100 ms";
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_EQ(dco_client_latest(c, &v), DCO_E_GEOMETRY) << i;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  writer.reset();
+  RingWriter back(path, o);
+  publish_pattern(back, 9);
+  ASSERT_EQ(dco_client_wait_next(c, 1000, &v), DCO_OK) << dco_client_last_error();
+  EXPECT_EQ(v.info.frame_seq, 9u);
+  dco_client_close(c);
+}
+
 }  // namespace
 }  // namespace dco::ipc::testing

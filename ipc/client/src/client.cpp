@@ -260,6 +260,12 @@ struct dco_client {
   // restarted daemon still found within it) rather than return at once, which would spin a
   // caller that simply calls again.
   bool gone_reported = false;
+  // A ring at the path that this client refuses (another size, format or owner: a daemon
+  // restarted otherwise), while it stays there; DCO_OK when none. wait_next says it at once the
+  // first time and then at the end of each wait, as the writer's going.
+  dco_status refused = DCO_OK;
+  std::string refused_message;
+  bool refusal_reported = false;
 
   ~dco_client() {
     map.release();
@@ -336,15 +342,19 @@ struct dco_client {
                                      std::to_string(max_attempts) + " attempts");
   }
 
-  // take_latest, after following a restarted daemon when a path check is due.
+  // take_latest, after following a restarted daemon when a path check is due. A refused ring
+  // at the path is said until the check finds it gone or replaced, not only when it runs.
   dco_status checked_latest(dco_frame_view* view) {
     if (now_ns() - last_path_check_ns >= kPathCheckNs) {
       bool remapped = false;
       const dco_status status = follow_path(&remapped);
       if (status != DCO_OK) return status;
     }
+    if (refused != DCO_OK) return repeat_refusal();
     return take_latest(view);
   }
+
+  dco_status repeat_refusal() { return fail(refused, refused_message); }
 
   // The frame an announcement names, only if the slot holds it (see dco_client_view_announced).
   dco_status take_announced(std::uint64_t session_id, std::uint32_t slot,
@@ -411,6 +421,7 @@ struct dco_client {
   dco_status follow_path(bool* remapped) {
     *remapped = false;
     last_path_check_ns = now_ns();
+    refused = DCO_OK;
     struct stat st {};
     if (stat(expect.path.c_str(), &st) != 0) return DCO_OK;  // gone: keep the old ring
     if (st.st_dev == map.dev && st.st_ino == map.ino) return DCO_OK;
@@ -419,7 +430,11 @@ struct dco_client {
     // Gone again between the stat and the open (a daemon that stopped as it started): as when
     // the stat finds nothing, the old ring stays.
     if (status == DCO_E_NO_SEGMENT) return DCO_OK;
-    if (status != DCO_OK) return status;
+    if (status != DCO_OK) {
+      refused = status;
+      refused_message = t_last_error;
+      return status;
+    }
     // The caller's views point into `retired` when it is set (no frame was returned since), so
     // the current ring has none and can go.
     if (retired.base == nullptr)
@@ -548,12 +563,22 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     }
     const std::int64_t now = now_ns();
     const bool closed = h->state.load(std::memory_order_acquire) == layout::kStateClosed;
-    if ((closed && !client->gone_reported) || now - client->last_path_check_ns >= kPathCheckNs) {
+    const bool gone_or_refused = client->gone_reported || client->refusal_reported;
+    if ((closed && !gone_or_refused) || now - client->last_path_check_ns >= kPathCheckNs) {
       bool remapped = false;
       const dco_status status = client->follow_path(&remapped);
-      if (status != DCO_OK) return status;
+      if (status != DCO_OK) {
+        // Said at once the first time; later calls wait out their timeout (checking again
+        // meanwhile), which a caller that simply calls again would otherwise spin through.
+        if (!client->refusal_reported) {
+          client->refusal_reported = true;
+          return status;
+        }
+      } else {
+        client->refusal_reported = false;
+      }
       if (remapped) continue;
-      if (client->writer_gone()) {
+      if (client->refused == DCO_OK && client->writer_gone()) {
         // A frame published between the look above and the close is still the client's: the
         // writer publishes before it closes, so a count read after seeing it gone has it.
         if (h->publish_count.load(std::memory_order_acquire) > client->last_index) continue;
@@ -566,6 +591,7 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     if (now >= deadline) {
       // Said again by every call until a new ring replaces this one (a remap clears it), also
       // by one whose timeout ends before its next look at the writer.
+      if (client->refusal_reported) return client->repeat_refusal();
       if (client->gone_reported)
         return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
       return fail(DCO_E_TIMEOUT, client->expect.path + ": no new frame within " +

@@ -115,7 +115,8 @@ DCO_CLIENT_API void dco_client_close(dco_client* client);
 
 /* The newest frame as a view (only a view whose counter was even when taken is returned). It is
  * the newest there is, also after the writer stopped: DCO_OK does not say the daemon runs
- * (dco_client_wait_next says DCO_E_WRITER_GONE). */
+ * (dco_client_wait_next says DCO_E_WRITER_GONE). A restarted daemon's ring this client refuses
+ * (another size, format or owner) is said by every call while it is at the path. */
 DCO_CLIENT_API dco_status dco_client_latest(dco_client* client, dco_frame_view* view);
 /* 1 while the slot behind the view has not been rewritten, else 0; 0 as well for a view another
  * handle returned (its pixels go with that handle). */
@@ -124,7 +125,9 @@ DCO_CLIENT_API int dco_client_still_valid(const dco_client* client, const dco_fr
  * the daemon restarted (new session id). DCO_E_WRITER_GONE as soon as the writer is seen to
  * have stopped or died; calling again picks up a daemon that comes back, and while none does,
  * each later call waits out its timeout and says DCO_E_WRITER_GONE again (a loop that calls
- * again does not spin). timeout_ms 0 looks once; a negative one is DCO_E_INVALID_ARGUMENT. */
+ * again does not spin). A restarted daemon's ring this client refuses is said the same way: at
+ * once, then at the end of each wait while it stays. timeout_ms 0 looks once; a negative one is
+ * DCO_E_INVALID_ARGUMENT. */
 DCO_CLIENT_API dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms,
                                                dco_frame_view* view);
 /* Copies the frame a view names; DCO_E_OVERTAKEN when its slot changed before or during the
