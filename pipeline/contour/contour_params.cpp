@@ -1,3 +1,4 @@
+#include <sstream>
 #include <string>
 
 #include "dco/core/config.hpp"
@@ -34,7 +35,8 @@ void register_params(ConfigSchema& s, ContourParams& p) {
   s.add("contour.box_size", &p.box_size, 1, 255,
         "box filter widening the depth-contour filter (§5.2), odd, internal px");
   s.add("contour.flow_floor", &p.flow_floor, 0.0, 1000.0,
-        "the flow cue is divided by max(its maximum, this); internal px of flow change per px");
+        "the flow cue is divided by max(its maximum, this); internal px of flow change per px; 0 "
+        "or at least 1e-06");
   s.add("contour.use_stereo", &p.use_stereo, "disparity-jump cue from the stereo map");
   s.add("contour.stereo_jump", &p.stereo_jump, 0.001, 1000.0,
         "disparity jump (internal px) that counts as a full-strength depth edge");
@@ -63,7 +65,14 @@ void validate(const ContourParams& p) {
           "projection_distance must be in 1..64, not " + std::to_string(p.projection_distance));
   require(p.box_size >= 1 && p.box_size <= 255 && p.box_size % 2 == 1,
           "box_size must be odd and in 1..255, not " + std::to_string(p.box_size));
-  require(p.flow_floor >= 0, "flow_floor must be >= 0, not " + std::to_string(p.flow_floor));
+  // A floor so small that its reciprocal overflows a float (a subnormal) made a still frame's
+  // flow cue 0 * inf = NaN everywhere, which the densifier then cannot solve.
+  if (!(p.flow_floor == 0 || p.flow_floor >= ContourParams::kMinFlowFloor)) {
+    std::ostringstream what;
+    what << "flow_floor must be 0 or at least " << ContourParams::kMinFlowFloor << ", not "
+         << p.flow_floor;
+    require(false, what.str());
+  }
   require(p.stereo_jump > 0, "stereo_jump must be positive, not " + std::to_string(p.stereo_jump));
   require(p.lookahead == 0 || p.lookahead == 1,
           "lookahead must be 0 or 1, not " + std::to_string(p.lookahead));

@@ -12,6 +12,7 @@
 #include <iterator>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -137,6 +138,12 @@ TEST_F(RingErrors, HeaderThatContradictsItself) {
     poke<std::uint32_t>(b, offsetof(RingHeader, image_channels), 0);
   });
   EXPECT_EQ(open_path(channels).status, DCO_E_BAD_FORMAT);
+  const auto session = patched("session.shm", [](std::string& b) {
+    poke<std::uint64_t>(b, offsetof(RingHeader, session_id), 0);
+  });
+  const Opened zero = open_path(session);
+  EXPECT_EQ(zero.status, DCO_E_BAD_FORMAT);
+  EXPECT_NE(zero.message.find("session id 0"), std::string::npos) << zero.message;
 }
 
 TEST_F(RingErrors, CorruptNewestSlotIndex) {
@@ -222,6 +229,23 @@ TEST_F(RingErrors, InvalidArguments) {
   EXPECT_EQ(dco_client_wait_next(nullptr, 0, &v), DCO_E_INVALID_ARGUMENT);
   EXPECT_EQ(dco_client_still_valid(nullptr, &v), 0);
   EXPECT_EQ(dco_client_read_latest(nullptr, nullptr, nullptr), DCO_E_INVALID_ARGUMENT);
+  // A view no call filled (a DCO_E_NO_FRAME gone unchecked) is the caller's mistake, not a
+  // daemon restart.
+  dco_client_options ok;
+  dco_client_options_init(&ok);
+  ok.path = p.c_str();
+  ASSERT_EQ(dco_client_open(&ok, &c), DCO_OK) << dco_client_last_error();
+  EXPECT_EQ(dco_client_latest(c, &v), DCO_E_NO_FRAME);
+  std::vector<float> depth(64 * 32);
+  dco_frame_buffer buffer;
+  dco_frame_buffer_init(&buffer);
+  buffer.depth = depth.data();
+  buffer.depth_capacity = depth.size() * sizeof(float);
+  buffer.depth_stride = 64 * sizeof(float);
+  EXPECT_EQ(dco_client_copy(c, &v, &buffer), DCO_E_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(dco_client_last_error()).find("holds no frame"), std::string::npos)
+      << dco_client_last_error();
+  dco_client_close(c);
   EXPECT_STREQ(dco_client_strerror(DCO_E_OVERTAKEN), "frame overwritten while reading");
   EXPECT_STREQ(dco_client_strerror(static_cast<dco_status>(99)), "unknown status");
   dco_client_close(nullptr);

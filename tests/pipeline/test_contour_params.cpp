@@ -56,6 +56,8 @@ TEST(ContourParams, ValidateRejectsEachInvalidField) {
       {"box 257", [](ContourParams& p) { p.box_size = 257; }, "box_size"},
       {"floor < 0", [](ContourParams& p) { p.flow_floor = -1; }, "flow_floor"},
       {"floor NaN", [nan](ContourParams& p) { p.flow_floor = nan; }, "flow_floor"},
+      {"floor subnormal", [](ContourParams& p) { p.flow_floor = 1e-39; }, "flow_floor"},
+      {"floor under 1e-6", [](ContourParams& p) { p.flow_floor = 5e-7; }, "flow_floor"},
       {"stereo jump 0", [](ContourParams& p) { p.stereo_jump = 0; }, "stereo_jump"},
       {"stereo jump NaN", [nan](ContourParams& p) { p.stereo_jump = nan; }, "stereo_jump"},
       {"lookahead 2", [](ContourParams& p) { p.lookahead = 2; }, "lookahead"},

@@ -114,6 +114,8 @@ dco_status check_header(const Mapping& m, const Expectations& e, std::uint64_t f
   if (h.header_size != sizeof(layout::RingHeader) ||
       h.depth_format != layout::kDepthFormatFloat32Metres)
     return fail(DCO_E_BAD_FORMAT, p + ": unknown header size or depth format");
+  // A writer never draws 0, which names a view that holds no frame.
+  if (h.session_id == 0) return fail(DCO_E_BAD_FORMAT, p + ": session id 0");
   const bool has_image = h.image_format == layout::kImageFormatU8;
   if ((h.image_format != layout::kImageFormatNone && !has_image) ||
       has_image != (h.image_channels != 0))
@@ -639,6 +641,11 @@ dco_status copy_view(const dco_client* client, const dco_frame_view* view, dco_f
                      const char* caller) {
   // Sizes and addresses come from the mapping; the view only names the slot and its token.
   const Mapping& m = client->map;
+  // A writer's session id is never 0: this view was initialised and never given a frame (a
+  // latest() whose DCO_E_NO_FRAME went unchecked), which is no daemon restart.
+  if (view->info.session_id == 0)
+    return fail(DCO_E_INVALID_ARGUMENT,
+                std::string(caller) + ": the view holds no frame (no call returned one into it)");
   // A view of the ring a restarted daemon left: its frame is not in the ring now mapped, whose
   // sizes say nothing of it.
   if (view->info.session_id != m.session_id)

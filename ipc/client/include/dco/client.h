@@ -131,7 +131,8 @@ DCO_CLIENT_API int dco_client_still_valid(const dco_client* client, const dco_fr
 DCO_CLIENT_API dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms,
                                                dco_frame_view* view);
 /* Copies the frame a view names; DCO_E_OVERTAKEN when its slot changed before or during the
- * copy, or the view is of a ring a restarted daemon left. dst->image NULL skips the image.
+ * copy, or the view is of a ring a restarted daemon left; DCO_E_INVALID_ARGUMENT for a view no
+ * call returned a frame into. dst->image NULL skips the image.
  * dst is written in place: after any status but DCO_OK it may hold part of a newer frame, so a
  * caller that keeps drawing its last good frame while reads fail copies into another buffer
  * than the one that frame is in (two buffers in turn). */

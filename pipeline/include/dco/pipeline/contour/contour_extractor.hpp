@@ -36,7 +36,8 @@ struct ContourParams {
   // the paper's plain maximum a still scene's flow noise (|flow| of a few hundredths of a pixel)
   // is stretched to full strength and opens the gate everywhere; motion of about 1 internal px
   // per frame already reaches the floor. Units: flow change (px) per px, after the box filter.
-  double flow_floor = 0.1;
+  double flow_floor = 0.1;  // 0 or at least kMinFlowFloor
+  static constexpr double kMinFlowFloor = 1e-6;
   // Stereo cue: jumps of the stereo disparity (a stereo pair is a horizontal motion), so a static
   // scene still has depth contours.
   bool use_stereo = true;
