@@ -194,11 +194,18 @@ TEST(ClientCAbi, ARestartedRingTheClientRefusesIsSaidWithoutSpinning) {
     EXPECT_EQ(dco_client_latest(c, &v), DCO_E_GEOMETRY) << i;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
+  // The daemon back at the size asked for, found by latest(): a short wait after it has no
+  // newer frame (and no refusal left to say), a longer one the next frame.
   writer.reset();
   RingWriter back(path, o);
   publish_pattern(back, 9);
-  ASSERT_EQ(dco_client_wait_next(c, 1000, &v), DCO_OK) << dco_client_last_error();
+  std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  ASSERT_EQ(dco_client_latest(c, &v), DCO_OK) << dco_client_last_error();
   EXPECT_EQ(v.info.frame_seq, 9u);
+  EXPECT_EQ(dco_client_wait_next(c, 0, &v), DCO_E_TIMEOUT) << dco_client_last_error();
+  publish_pattern(back, 10);
+  ASSERT_EQ(dco_client_wait_next(c, 1000, &v), DCO_OK) << dco_client_last_error();
+  EXPECT_EQ(v.info.frame_seq, 10u);
   dco_client_close(c);
 }
 

@@ -419,11 +419,22 @@ struct dco_client {
   }
 
   // Follows a daemon restart: a different file at the path is a new ring. Returns true when it
-  // remapped.
+  // remapped. A ring it refuses stays `refused` until a check finds the path without it.
   dco_status follow_path(bool* remapped) {
+    const dco_status status = look_at_path(remapped);
+    if (status == DCO_OK) {
+      refused = DCO_OK;
+      refusal_reported = false;
+    } else {
+      refused = status;
+      refused_message = t_last_error;
+    }
+    return status;
+  }
+
+  dco_status look_at_path(bool* remapped) {
     *remapped = false;
     last_path_check_ns = now_ns();
-    refused = DCO_OK;
     struct stat st {};
     if (stat(expect.path.c_str(), &st) != 0) return DCO_OK;  // gone: keep the old ring
     if (st.st_dev == map.dev && st.st_ino == map.ino) return DCO_OK;
@@ -432,11 +443,7 @@ struct dco_client {
     // Gone again between the stat and the open (a daemon that stopped as it started): as when
     // the stat finds nothing, the old ring stays.
     if (status == DCO_E_NO_SEGMENT) return DCO_OK;
-    if (status != DCO_OK) {
-      refused = status;
-      refused_message = t_last_error;
-      return status;
-    }
+    if (status != DCO_OK) return status;
     // The caller's views point into `retired` when it is set (no frame was returned since), so
     // the current ring has none and can go.
     if (retired.base == nullptr)
@@ -569,15 +576,11 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     if ((closed && !gone_or_refused) || now - client->last_path_check_ns >= kPathCheckNs) {
       bool remapped = false;
       const dco_status status = client->follow_path(&remapped);
-      if (status != DCO_OK) {
-        // Said at once the first time; later calls wait out their timeout (checking again
-        // meanwhile), which a caller that simply calls again would otherwise spin through.
-        if (!client->refusal_reported) {
-          client->refusal_reported = true;
-          return status;
-        }
-      } else {
-        client->refusal_reported = false;
+      // A refusal is said at once the first time; later calls wait out their timeout (checking
+      // again meanwhile), which a caller that simply calls again would otherwise spin through.
+      if (status != DCO_OK && !client->refusal_reported) {
+        client->refusal_reported = true;
+        return status;
       }
       if (remapped) continue;
       if (client->refused == DCO_OK && client->writer_gone()) {
@@ -593,7 +596,7 @@ dco_status dco_client_wait_next(dco_client* client, int32_t timeout_ms, dco_fram
     if (now >= deadline) {
       // Said again by every call until a new ring replaces this one (a remap clears it), also
       // by one whose timeout ends before its next look at the writer.
-      if (client->refusal_reported) return client->repeat_refusal();
+      if (client->refused != DCO_OK) return client->repeat_refusal();
       if (client->gone_reported)
         return fail(DCO_E_WRITER_GONE, client->expect.path + ": the writer stopped");
       return fail(DCO_E_TIMEOUT, client->expect.path + ": no new frame within " +
