@@ -302,6 +302,7 @@ class ReplayTransport final : public UsbReplayTransport {
         r.diverge(fmt::format("the capture lists {:04x}:{:04x}, the driver {:04x}:{:04x}",
                               r.next().vendor, r.next().product, vendor, product));
       r.latest_list = r.next().devices;
+      r.now = std::max<std::int64_t>(r.now, r.next().t_ns);  // as after any call it answers
       r.advance();
     } else if (!r.latest_list) {
       r.diverge("the driver lists devices before the capture does");

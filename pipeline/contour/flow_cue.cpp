@@ -302,7 +302,7 @@ void FlowCue::compute(const ContourInputs& in, ImageView<float> dst, ContourTimi
   for (int part = 0; part < s.rows.threads(); ++part)
     largest = std::max(largest, s.part_largest[static_cast<std::size_t>(part)]);
   const float divisor = std::max(largest, static_cast<float>(s.params.flow_floor));
-  if (divisor > 0.0f)
+  if (divisor >= kLeastFlowDivisor)
     s.rows.run(ch, [&](int, int begin, int end) { divide_rows(dst, divisor, begin, end); });
   timings.normalise_ms = t.lap_ms();
 }

@@ -169,7 +169,7 @@ void invert_flow(ImageView<const float> forward, FlowInversionScratch& scratch,
 
 float normalise_by_max(ImageView<float> values, float floor) {
   const float divisor = std::max(largest_value(values, 0, values.height), floor);
-  if (divisor <= 0.0f) return 0.0f;
+  if (divisor < kLeastFlowDivisor) return 0.0f;
   divide_rows(values, divisor, 0, values.height);
   return divisor;
 }

@@ -516,11 +516,12 @@ TEST(Publisher, ATcpqServerThatDoesNotAnswerHoldsUpNeitherTheStartNorTheFrames) 
   RingWriter ring(dir.path() / "depth.shm", ring_options(32, 16));
   PublisherOptions po;
   po.lcm_url = peer.url();
+  po.lcm_setup_wait = std::chrono::milliseconds(300);
   const auto t0 = std::chrono::steady_clock::now();
   DepthPublisher pub(ring, po);
   const auto took = std::chrono::steady_clock::now() - t0;
-  EXPECT_GE(took, DepthPublisher::kLcmSetupWait - std::chrono::milliseconds(50));
-  EXPECT_LT(took, DepthPublisher::kLcmSetupWait + std::chrono::seconds(1));
+  EXPECT_GE(took, po.lcm_setup_wait - std::chrono::milliseconds(20));
+  EXPECT_LT(took, po.lcm_setup_wait + std::chrono::seconds(1));
   EXPECT_FALSE(pub.lcm_ready());
   EXPECT_TRUE(pub.lcm_setup_running());
   EXPECT_NE(pub.lcm_problem().find("has not ended"), std::string::npos) << pub.lcm_problem();
@@ -560,11 +561,39 @@ TEST(Publisher, ASetUpThatHangsDoesNotHoldUpTheEnd) {
   RingWriter ring(dir.path() / "depth.shm", ring_options(8, 8));
   PublisherOptions po;
   po.lcm_url = peer.url();
+  po.lcm_setup_wait = std::chrono::milliseconds(100);
   auto pub = std::make_unique<DepthPublisher>(ring, po);
   ASSERT_TRUE(pub->lcm_setup_running());
   const auto t0 = std::chrono::steady_clock::now();
   pub.reset();
   EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(500));
+}
+
+// A set-up whose server went away without a word never ends: after lcm_setup_patience it is left
+// behind and a fresh one tried, up to kMostLcmSetups threads (and sockets) at once.
+TEST(Publisher, ASetUpLeftWithoutAnAnswerIsTriedAfreshUpToALimit) {
+  // Those of the tests before end as their peers close.
+  for (int i = 0; i < 500 && DepthPublisher::lcm_setups_running() > 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_EQ(DepthPublisher::lcm_setups_running(), 0);
+  dco::testing::StalledTcpqPeer peer(dco::testing::StalledTcpqPeer::Handshake::kSilent);
+  TempDir dir;
+  RingWriter ring(dir.path() / "depth.shm", ring_options(8, 8));
+  PublisherOptions po;
+  po.lcm_url = peer.url();
+  po.lcm_setup_wait = std::chrono::milliseconds(50);
+  po.lcm_setup_patience = std::chrono::milliseconds(150);
+  DepthPublisher pub(ring, po);
+  EXPECT_EQ(DepthPublisher::lcm_setups_running(), 1);
+  EXPECT_FALSE(pub.retry_lcm());
+  EXPECT_EQ(DepthPublisher::lcm_setups_running(), 1) << "within its patience";
+  for (int i = 0; i < 2 * kMostLcmSetups; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(170));
+    EXPECT_FALSE(pub.retry_lcm());
+  }
+  EXPECT_EQ(DepthPublisher::lcm_setups_running(), kMostLcmSetups);
+  EXPECT_TRUE(pub.lcm_setup_running());
+  EXPECT_NE(pub.lcm_problem().find("has not ended"), std::string::npos) << pub.lcm_problem();
 }
 
 TEST(Publisher, BadUrlIsAClearError) {

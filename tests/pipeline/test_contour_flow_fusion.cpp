@@ -212,6 +212,14 @@ TEST(ContourFlowFusion, NormaliseDividesByTheMaximumOrTheFloor) {
   EXPECT_EQ(normalise_by_max(zero.view(), 0.0f), 0.0f);
   for (int y = 0; y < 4; ++y)
     for (int x = 0; x < 4; ++x) EXPECT_EQ(zero.at(x, y), 0.0f);
+  // A subnormal largest value (no motion) with floor 0: its reciprocal is infinite, and 0 times
+  // that NaN; the values stay as they are instead.
+  Image<float> still(2, 1);
+  still.at(0, 0) = 0.0f;
+  still.at(1, 0) = 1e-39f;
+  EXPECT_EQ(normalise_by_max(still.view(), 0.0f), 0.0f);
+  EXPECT_EQ(still.at(0, 0), 0.0f);
+  EXPECT_EQ(still.at(1, 0), 1e-39f);
 }
 
 TEST(ContourStereoCue, MarksBothSidesOfADisparityStep) {

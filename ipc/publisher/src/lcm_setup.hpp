@@ -31,10 +31,15 @@ class LcmSetup {
   // the LCM instance when it is good, else nullptr (LCM has said why on stderr). The instance is
   // handed out once.
   std::optional<std::unique_ptr<lcm::LCM>> result(std::chrono::milliseconds wait);
+  // How long this attempt has run.
+  std::chrono::steady_clock::duration age() const;
+  // Attempts in this process that have not ended, left behind ones included.
+  static int running();
 
  private:
   struct State;
   std::shared_ptr<State> state_;
+  std::chrono::steady_clock::time_point started_;
   std::thread thread_;
 };
 

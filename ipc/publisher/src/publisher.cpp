@@ -11,6 +11,7 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <system_error>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -139,17 +140,30 @@ DepthPublisher::DepthPublisher(RingWriter& ring, const PublisherOptions& options
                             options.preview_max_height));
   check_lcm_url(options.lcm_url);
   sender_ = std::make_unique<detail::LcmSender>(kQueuedMessages, small_message_bytes(options));
-  retry_lcm(kLcmSetupWait);
+  retry_lcm(options.lcm_setup_wait);
 }
 
 bool DepthPublisher::retry_lcm(std::chrono::milliseconds wait) {
   if (lcm_ready_) return true;
+  // One that has not ended by now waits for an answer that will not come (a server gone without
+  // a word): left behind, its thread ends whenever its socket does.
+  if (setup_ && setup_->age() > options_.lcm_setup_patience &&
+      detail::LcmSetup::running() < kMostLcmSetups) {
+    setup_.reset();
+    setup_running_ = false;
+  }
   if (!setup_) {
     // LCM prints a dozen lines of advice at every failed udpm setup: after the first, a retry
     // waits until a route to the group is there.
     if (tried_lcm_ && !udpm_route_ready(options_.lcm_url)) return false;
     tried_lcm_ = true;
-    setup_ = std::make_unique<detail::LcmSetup>(options_.lcm_url);
+    try {
+      setup_ = std::make_unique<detail::LcmSetup>(options_.lcm_url);
+    } catch (const std::system_error&) {
+      setup_unstarted_ = true;  // out of threads: the next retry tries again
+      return false;
+    }
+    setup_unstarted_ = false;
     setup_running_ = true;
   }
   std::optional<std::unique_ptr<lcm::LCM>> lcm = setup_->result(wait);
@@ -162,9 +176,14 @@ bool DepthPublisher::retry_lcm(std::chrono::milliseconds wait) {
   return true;
 }
 
+int DepthPublisher::lcm_setups_running() {
+  return detail::LcmSetup::running();
+}
+
 std::string DepthPublisher::lcm_problem() const {
   if (lcm_ready_) return {};
   const std::string url = options_.lcm_url.empty() ? "the default URL" : options_.lcm_url;
+  if (setup_unstarted_) return fmt::format("LCM's set-up with '{}' found no thread to run on", url);
   if (setup_running_)
     return fmt::format("LCM's set-up with '{}' has not ended (for tcpq, does the server answer?)",
                        url);

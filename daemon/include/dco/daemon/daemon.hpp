@@ -89,7 +89,8 @@ class Daemon final : public drivers::FrameSink {
   void report_raw_recording(std::int64_t now_ns, bool last);
   void tick(std::int64_t now_ns);
   // Sets LCM up when it could not be at the start (no multicast route yet, a tcpq server that
-  // does not answer), every kLcmRetryNs.
+  // does not answer): a set-up under way is looked at every tick, a new one starts every
+  // kLcmRetryNs.
   void retry_lcm(std::int64_t now_ns);
   static constexpr std::int64_t kLcmRetryNs = 2'000'000'000;
   // A warning when LCM failed to send since the last one (the ring is unaffected); `last`: at

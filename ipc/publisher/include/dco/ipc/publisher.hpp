@@ -33,7 +33,13 @@ struct PublisherOptions {
   // The preview is the depth map shrunk by one whole factor until it fits this size.
   int preview_max_width = 80;
   int preview_max_height = 60;
+  // LCM's set-up: how long the constructor waits for it, and after how long one that has not
+  // ended (a tcpq server that accepted and went away without a word) is left behind for a fresh
+  // one. At most kMostLcmSetups are left running at once, each a thread and a socket.
+  std::chrono::milliseconds lcm_setup_wait{2000};
+  std::chrono::milliseconds lcm_setup_patience{30000};
 };
+inline constexpr int kMostLcmSetups = 4;
 
 struct DeviceStatus {
   enum class State : std::int8_t { kDisconnected = 0, kStarting = 1, kStreaming = 2, kError = 3 };
@@ -70,11 +76,10 @@ class DepthPublisher {
  public:
   // Throws dco::Error when the URL names no LCM provider (check_lcm_url). An LCM that cannot be
   // set up now (udpm without a multicast route: a headset booted without a network), or whose
-  // set-up has not ended within kLcmSetupWait (a tcpq server that accepts and never answers),
+  // set-up has not ended within lcm_setup_wait (a tcpq server that accepts and never answers),
   // leaves the publisher without LCM: depth still reaches the ring, every message counts as a
   // send failure, and retry_lcm() tries again.
   DepthPublisher(RingWriter& ring, const PublisherOptions& options);
-  static constexpr std::chrono::milliseconds kLcmSetupWait{2000};
   DepthPublisher(const DepthPublisher&) = delete;
   DepthPublisher& operator=(const DepthPublisher&) = delete;
   ~DepthPublisher();
@@ -124,11 +129,13 @@ class DepthPublisher {
   bool flush(std::chrono::milliseconds wait);
   // Sets LCM up when it is not yet; true when it is (now or before). The set-up runs on a thread
   // of its own: this waits up to `wait` for it, and a set-up still running then is looked at
-  // again by the next call instead of starting another. Any one thread may call it while
-  // another publishes.
+  // again by the next call instead of starting another, until lcm_setup_patience has passed.
+  // Any one thread may call it while another publishes.
   bool retry_lcm(std::chrono::milliseconds wait = std::chrono::milliseconds(0));
   // Whether a set-up retry_lcm() started is still running.
   bool lcm_setup_running() const { return setup_running_; }
+  // Set-ups in this process that have not ended, those left behind included.
+  static int lcm_setups_running();
   // Empty while LCM is set up, else why it is not.
   std::string lcm_problem() const;
   // Throws dco::Error while LCM is not set up.
@@ -150,9 +157,10 @@ class DepthPublisher {
   std::unique_ptr<detail::LcmSender> sender_;
   std::atomic<bool> lcm_ready_{false};
   bool tried_lcm_ = false;
-  std::unique_ptr<detail::LcmSetup> setup_;  // the set-up running; null when none
-  std::atomic<bool> setup_running_{false};   // setup_ != null, for other threads
-  std::mutex raw_mutex_;                     // publish_raw's callers
+  std::unique_ptr<detail::LcmSetup> setup_;   // the set-up running; null when none
+  std::atomic<bool> setup_running_{false};    // setup_ != null, for other threads
+  std::atomic<bool> setup_unstarted_{false};  // the last try could not start its thread
+  std::mutex raw_mutex_;                      // publish_raw's callers
   std::vector<std::uint8_t> encoded_;
   ::dco::depth_preview_t preview_;
   std::uint32_t open_slot_ = 0;

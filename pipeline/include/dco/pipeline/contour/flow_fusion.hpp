@@ -67,7 +67,10 @@ void compose_flow(ImageView<const float> near, ImageView<const float> onward,
                   ImageView<float> composed);
 
 // Divides every value by max(largest value, floor) so the result lies in [0, 1]; returns that
-// divisor. An all-zero image (with floor 0) is left as it is and 0 is returned.
+// divisor. A divisor below kLeastFlowDivisor (an image of no motion, with floor 0) leaves the
+// values as they are and 0 is returned: the reciprocal of a subnormal is infinite, and 0 times it
+// NaN.
+inline constexpr float kLeastFlowDivisor = 1e-6f;
 float normalise_by_max(ImageView<float> values, float floor);
 // Its two steps on rows [y_begin, y_end): the largest value (at least 0), and the division by a
 // divisor (> 0) with the result capped at 1.
