@@ -355,6 +355,115 @@ TEST(LogDigest, DropsAfterARestartCountWhole) {
   EXPECT_EQ(s.dropped_at_entry, 3 + 8 + 9);
 }
 
+// A log of hand-made events, a millisecond apart unless given a time.
+class EventLog {
+ public:
+  void add(const std::string& channel, std::vector<std::uint8_t> data, double t_s = -1) {
+    LcmLogEvent e;
+    e.number = number_;
+    e.timestamp_us =
+        kStartUs + (t_s >= 0 ? std::llround(t_s * 1e6) : static_cast<std::int64_t>(number_) * 1000);
+    ++number_;
+    e.channel = channel;
+    e.data = std::move(data);
+    drivers::write_lcm_log_event(out_, e);
+  }
+  void frame(std::int64_t session, std::int64_t index, double t_s = -1) {
+    ::dco::depth_frame_t m{};
+    m.session_id = session;
+    m.publish_index = index;
+    m.frame_seq = index;
+    m.width = 64;
+    m.height = 48;
+    add(ipc::channel::kDepth, lcm_bytes(m), t_s);
+  }
+  void stats(std::int64_t pushed, std::int64_t dropped, std::int64_t published) {
+    ::dco::pipeline_stats_t m{};
+    m.pushed = pushed;
+    m.dropped = dropped;
+    m.published = published;
+    add(ipc::channel::kStats, lcm_bytes(m));
+  }
+  void raw(std::int64_t seq, int width, int height) {
+    ::dco::raw_stereo_t m{};
+    m.frame_seq = seq;
+    m.width = width;
+    m.height = height;
+    add(ipc::channel::kRaw, lcm_bytes(m));
+  }
+  LogDigest digest(const std::string& name) const {
+    std::istringstream in(out_.str());
+    return digest_log(in, name, DigestOptions{});
+  }
+
+ private:
+  std::ostringstream out_;
+  std::int64_t number_ = 0;
+};
+
+// dcod sends DCO_STATS while it starts, before its first frame: those count whole once, and the
+// stats after the first frame add to them, not count whole again.
+TEST(LogDigest, DropsBeforeASessionsFirstFrameCountOnce) {
+  EventLog log;
+  log.stats(30, 20, 0);  // warming up: the log starts here
+  for (int i = 1; i <= 10; ++i) log.frame(0x1111, i);
+  log.stats(60, 25, 35);
+  log.stats(10, 4, 0);  // a new dcod, still starting: the counts step down
+  for (int i = 1; i <= 10; ++i) log.frame(0x2222, i);
+  log.stats(40, 6, 30);
+  EXPECT_EQ(summarize(log.digest("starting.log")).dropped_at_entry, 25 + 6);
+}
+
+// A pair's frame number with a flipped high bit (LCM messages carry no checksum) must not wrap
+// the count of numbers without a pair.
+TEST(LogDigest, FrameNumbersFarAheadSaturateTheMissingCount) {
+  EventLog log;
+  constexpr std::int64_t kFlip = std::int64_t{1} << 62;
+  for (const std::int64_t seq :
+       {std::int64_t{0}, std::int64_t{1}, std::int64_t{2}, kFlip | 3, std::int64_t{4},
+        std::int64_t{5}, kFlip | 6, std::int64_t{7}, kFlip | 8})
+    log.raw(seq, 8, 4);
+  const LogDigest d = log.digest("flipped.log");
+  EXPECT_EQ(d.raw_missing, 3'000'000'000'000'000);
+  EXPECT_EQ(d.raw_run_count, 3);
+  EXPECT_NE(json_summary(d, summarize(d)).find("\"raw_missing\": 3000000000000000"),
+            std::string::npos);
+}
+
+// The runs of a log are counted and each one's size given: a replay takes one run at a time.
+TEST(LogDigest, RawPairsOfSeveralRunsShowEachRunsSize) {
+  EventLog log;
+  for (int seq = 0; seq < 5; ++seq) log.raw(seq, 1280, 800);
+  for (int seq = 0; seq < 3; ++seq) log.raw(seq, 640, 400);
+  const LogDigest d = log.digest("runs.log");
+  EXPECT_EQ(d.raw_run_count, 2);
+  const std::string text = text_summary(d, summarize(d), "");
+  EXPECT_NE(text.find("8 pairs in 2 dcod runs (run 1: 5 of 1280x800, run 2: 3 of 640x400"),
+            std::string::npos)
+      << text;
+  EventLog one;
+  for (int seq = 0; seq < 5; ++seq) one.raw(seq, 1280, 800);
+  EXPECT_NE(text_summary(one.digest("one.log"), summarize(one.digest("one.log")), "")
+                .find("5 pairs of 1280x800 on DCO_RAW"),
+            std::string::npos);
+}
+
+// A logger whose clock was set back (a headset without a real-time clock): the span is the
+// stamps' extent, and the step is said.
+TEST(LogDigest, ALoggerClockThatStepsBackIsSaid) {
+  EventLog log;
+  log.frame(0x1111, 1, 3600.0);
+  for (int i = 2; i <= 300; ++i) log.frame(0x1111, i, i * 0.033);
+  const LogDigest d = log.digest("clock.log");
+  EXPECT_EQ(d.clock_steps_back, 1);
+  EXPECT_EQ(d.first_step_back_event, 1);
+  EXPECT_NEAR(d.first_step_back_s, 3600 - 0.066, 1e-3);
+  EXPECT_NEAR(d.span_s, 3600 - 0.066, 1e-3);
+  EXPECT_NE(text_summary(d, summarize(d), "").find("clock     the logger's clock stepped back 1"),
+            std::string::npos)
+      << text_summary(d, summarize(d), "");
+}
+
 // Channel names, device text and decode problems come from the log: the text report shows their
 // control characters as '?', so a forged log cannot send escape sequences to a terminal.
 TEST(LogSummary, TextFromTheLogReachesTheTerminalWithoutControlCharacters) {

@@ -161,6 +161,7 @@ std::string summary_section(const LogDigest& d, const LogSummary& s) {
   std::string out = "<table>\n";
   out += row({"log", fmt::format("{} events, {} bytes read of {}, over {:.2f} s", d.events, d.bytes,
                                  d.file_bytes, d.span_s)});
+  if (d.clock_steps_back > 0) out += row({"clock", clock_text(d)});
   out += row({"frames", fmt::format("{} published in {} session(s), {:.2f} fps", s.frames,
                                     s.sessions, s.fps)});
   out += row({"not published", fmt::format("{} camera frames (gaps in frame numbers); {} dropped "
@@ -183,10 +184,9 @@ std::string summary_section(const LogDigest& d, const LogSummary& s) {
                                     s.device_errors, s.disconnects)});
   out += row({"messages", fmt::format("{} errors, {} warnings", s.log_errors, s.log_warnings)});
   if (d.raw_pairs > 0)
-    out += row({"raw recording",
-                fmt::format("{} pairs of {}x{}, {} bytes; {} frame numbers between them without "
-                            "a pair",
-                            d.raw_pairs, d.raw_width, d.raw_height, d.raw_bytes, d.raw_missing)});
+    out += row(
+        {"raw recording", fmt::format("{}, {} bytes; {} frame numbers between them without a pair",
+                                      raw_runs_text(d), d.raw_bytes, d.raw_missing)});
   out +=
       "</table>\n<h3>Sessions</h3>\n<table>\n<tr><th>session</th><th>from (s)</th><th>to "
       "(s)</th><th>size</th><th>frames</th><th>frame numbers</th><th>not published</th><th>"

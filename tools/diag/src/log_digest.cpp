@@ -7,6 +7,7 @@
 
 #include "dco/core/error.hpp"
 #include "dco/drivers/lcm_log.hpp"
+#include "dco/drivers/recorded_previews.hpp"
 #include "dco/ipc/lcm_messages.hpp"
 
 namespace dco::diag {
@@ -22,7 +23,16 @@ class Digester {
     // In double: a damaged timestamp must not overflow 64-bit arithmetic.
     const double t =
         (static_cast<double>(e.timestamp_us) - static_cast<double>(d_.first_us)) * 1e-6;
-    d_.span_s = std::max(d_.span_s, t);
+    if (d_.events > 1 && t < last_t_ - LogDigest::kClockStepBackS) {
+      if (d_.clock_steps_back++ == 0) {
+        d_.first_step_back_event = e.number;
+        d_.first_step_back_s = last_t_ - t;
+      }
+    }
+    last_t_ = t;
+    earliest_t_ = std::min(earliest_t_, t);
+    latest_t_ = std::max(latest_t_, t);
+    d_.span_s = latest_t_ - earliest_t_;
     ChannelTally& tally = d_.channels[e.channel];
     ++tally.events;
     tally.bytes += e.data.size();
@@ -38,16 +48,7 @@ class Digester {
     } else if (e.channel == ch::kDepthPreview) {
       if (decode(e, tally, preview_) && plausible_preview(e, tally)) add_preview(t);
     } else if (e.channel == ch::kRaw) {
-      if (decode(e, tally, raw_)) {
-        // Frame numbers rise within a run; one that does not starts another run.
-        if (d_.raw_pairs > 0 && raw_.frame_seq > last_raw_seq_ + 1)
-          d_.raw_missing += raw_.frame_seq - last_raw_seq_ - 1;
-        last_raw_seq_ = raw_.frame_seq;
-        ++d_.raw_pairs;
-        d_.raw_bytes += e.data.size();
-        d_.raw_width = raw_.width;
-        d_.raw_height = raw_.height;
-      }
+      if (decode(e, tally, raw_)) add_raw(e);
     }
   }
 
@@ -71,7 +72,10 @@ class Digester {
     auto it = std::find_if(d_.sessions.begin(), d_.sessions.end(),
                            [&](const Session& s) { return s.id == m.session_id; });
     if (it == d_.sessions.end()) {
-      new_session_ = true;  // a new dcod: its DCO_STATS count from 0
+      // A new dcod: its DCO_STATS count from 0. Unless those it sent before its first frame
+      // (while starting) already stepped the counts down, or the log starts with them: then they
+      // were counted whole, and the next one adds to them.
+      new_session_ = !restart_counted_;
       Session s;
       s.id = m.session_id;
       s.first_s = t;
@@ -92,12 +96,32 @@ class Digester {
       s.last_index = std::max(s.last_index, m.publish_index);
       s.last_seq = std::max(s.last_seq, m.frame_seq);
     }
+    restart_counted_ = false;
     Session& s = *it;
     s.last_s = t;
     s.last_publish_ns = m.publish_ns;
     s.width = m.width;
     s.height = m.height;
     ++s.frames;
+  }
+
+  void add_raw(const drivers::LcmLogEvent& e) {
+    // Frame numbers rise within a run; one that does not starts another run.
+    const std::int64_t run = raw_run_numbers_.session_of(raw_.frame_seq);
+    if (run >= d_.raw_run_count) {
+      d_.raw_run_count = run + 1;
+      if (d_.raw_runs.size() < LogDigest::kMostRawRuns)
+        d_.raw_runs.push_back({0, raw_.width, raw_.height});
+    } else {
+      // Each step is at most 1e15, so it fits a long.
+      add_saturating(d_.raw_missing,
+                     static_cast<long>(steps_skipped(last_raw_seq_, raw_.frame_seq)));
+    }
+    if (static_cast<std::size_t>(run) < d_.raw_runs.size())
+      ++d_.raw_runs[static_cast<std::size_t>(run)].pairs;
+    last_raw_seq_ = raw_.frame_seq;
+    ++d_.raw_pairs;
+    d_.raw_bytes += e.data.size();
   }
 
   static double steps_skipped(std::int64_t from, std::int64_t to) {
@@ -118,6 +142,7 @@ class Digester {
     last_dropped_ = dropped;
     last_published_ = published;
     new_session_ = false;
+    if (restarted) restart_counted_ = true;
     d_.stats.push_back({t, static_cast<long>(increment), stats_});
   }
 
@@ -179,6 +204,10 @@ class Digester {
   long preview_stride_ = 1;
   double last_pushed_ = 0, last_dropped_ = 0, last_published_ = 0;
   bool new_session_ = false;  // a DCO_DEPTH of a session not seen before since the last stats
+  // DCO_STATS counted whole (a restart, or the log's first) since the last DCO_DEPTH.
+  bool restart_counted_ = true;
+  double last_t_ = 0, earliest_t_ = 0, latest_t_ = 0;
+  drivers::FrameSessions raw_run_numbers_;
   ::dco::depth_frame_t depth_;
   ::dco::pipeline_stats_t stats_;
   ::dco::device_status_t status_;

@@ -100,6 +100,27 @@ LogSummary summarize(const LogDigest& d) {
   return s;
 }
 
+std::string raw_runs_text(const LogDigest& d) {
+  if (d.raw_run_count <= 1 && !d.raw_runs.empty())
+    return fmt::format("{} pairs of {}x{}", d.raw_pairs, d.raw_runs[0].width, d.raw_runs[0].height);
+  constexpr std::size_t kListed = 8;
+  std::string runs;
+  for (std::size_t i = 0; i < d.raw_runs.size() && i < kListed; ++i)
+    runs += fmt::format("{}run {}: {} of {}x{}", i == 0 ? "" : ", ", i + 1, d.raw_runs[i].pairs,
+                        d.raw_runs[i].width, d.raw_runs[i].height);
+  if (d.raw_run_count > static_cast<long>(kListed))
+    runs += fmt::format(", and {} more", d.raw_run_count - static_cast<long>(kListed));
+  return fmt::format("{} pairs in {} dcod runs ({}; a replay takes one: lcmlog://LOG?run=N)",
+                     d.raw_pairs, d.raw_run_count, runs);
+}
+
+std::string clock_text(const LogDigest& d) {
+  return fmt::format(
+      "the logger's clock stepped back {} time(s), first by {:.2f} s at event {}: times count "
+      "from the first event and may be negative",
+      d.clock_steps_back, d.first_step_back_s, d.first_step_back_event);
+}
+
 std::string text_summary(const LogDigest& d, const LogSummary& s, const std::string& report) {
   std::string out = fmt::format("dco-diag: {}\n", d.name);
   out += fmt::format(
@@ -110,6 +131,7 @@ std::string text_summary(const LogDigest& d, const LogSummary& s, const std::str
                         d.skipped_bytes == 0
                             ? std::string()
                             : fmt::format(", {} bytes skipped past damage", d.skipped_bytes)));
+  if (d.clock_steps_back > 0) out += fmt::format("  clock     {}\n", clock_text(d));
   if (!d.damage.empty())
     out += fmt::format(
         "  damage    {}{}\n", d.damage,
@@ -159,8 +181,7 @@ std::string text_summary(const LogDigest& d, const LogSummary& s, const std::str
   out += fmt::format("  messages  {} errors, {} warnings, {} info in DCO_LOG\n", s.log_errors,
                      s.log_warnings, d.log_by_level[1]);
   if (d.raw_pairs > 0)
-    out += fmt::format("  raw       {} pairs of {}x{} on DCO_RAW, {} a pair{}\n", d.raw_pairs,
-                       d.raw_width, d.raw_height,
+    out += fmt::format("  raw       {} on DCO_RAW, {} a pair{}\n", raw_runs_text(d),
                        human_bytes(d.raw_bytes / static_cast<std::uint64_t>(d.raw_pairs)),
                        d.raw_missing > 0 ? fmt::format("; {} frame numbers between them have no "
                                                        "pair (dropped or lost)",
@@ -206,7 +227,7 @@ std::string json_summary(const LogDigest& d, const LogSummary& s) {
       " \"right_camera\": {},\n"
       " \"state_changes\": {}, \"device_errors\": {}, \"disconnects\": {}, \"log_errors\": {}, "
       "\"log_warnings\": {}, \"previews\": {}, \"raw_pairs\": {}, \"raw_missing\": {}, "
-      "\"undecodable\": {}}}\n",
+      "\"raw_runs\": {}, \"clock_steps_back\": {}, \"undecodable\": {}}}\n",
       json_string(d.name), d.events, d.bytes, d.file_bytes, json_number(d.span_s),
       d.damage.empty() ? std::string("null") : json_string(d.damage), d.damaged_stretches,
       d.skipped_bytes, channels, s.frames, s.sessions, json_number(s.fps), s.unpublished_frames,
@@ -215,7 +236,8 @@ std::string json_summary(const LogDigest& d, const LogSummary& s) {
       json_number(s.latency.max_ms), stage(t.stereo_p50_ms), stage(t.stereo_p99_ms),
       stage(t.contour_p50_ms), stage(t.contour_p99_ms), stage(t.densify_p50_ms),
       stage(t.densify_p99_ms), right_camera, s.state_changes, s.device_errors, s.disconnects,
-      s.log_errors, s.log_warnings, d.previews_seen, d.raw_pairs, d.raw_missing, s.undecodable);
+      s.log_errors, s.log_warnings, d.previews_seen, d.raw_pairs, d.raw_missing, d.raw_run_count,
+      d.clock_steps_back, s.undecodable);
 }
 
 }  // namespace dco::diag

@@ -71,6 +71,13 @@ struct Session {
   int width = 0, height = 0;
 };
 
+// The raw pairs of one dcod run, numbered as a replay numbers them (lcmlog://LOG?run=N is the
+// Nth): frame numbers that do not rise start another run.
+struct RawRun {
+  long pairs = 0;
+  int width = 0, height = 0;  // the run's first pair's
+};
+
 struct ChannelTally {
   long events = 0;
   std::uint64_t bytes = 0;
@@ -95,7 +102,13 @@ struct LogDigest {
   int damaged_stretches = 0;
   std::uint64_t skipped_bytes = 0;
   std::int64_t first_us = 0;  // the logger's wall clock, µs since the epoch
-  double span_s = 0;          // first to last event
+  double span_s = 0;          // earliest to latest event
+  // Steps of more than kClockStepBackS back in the logger's clock (one set back on a headset
+  // without a real-time clock): times then run from the first event on both sides of 0.
+  static constexpr double kClockStepBackS = 1.0;
+  long clock_steps_back = 0;
+  long first_step_back_event = 0;
+  double first_step_back_s = 0;
   std::map<std::string, ChannelTally> channels;
 
   std::vector<FramePoint> frames;  // every DCO_DEPTH, in log order
@@ -118,9 +131,11 @@ struct LogDigest {
   // Frame numbers between two pairs of a run that no pair holds: dropped by dcod's recorder
   // (it says how many) or lost on the way to the logger. A replay plays the pairs as if
   // consecutive.
-  std::int64_t raw_missing = 0;
+  long raw_missing = 0;
   std::uint64_t raw_bytes = 0;
-  int raw_width = 0, raw_height = 0;
+  std::vector<RawRun> raw_runs;  // the first kMostRawRuns
+  long raw_run_count = 0;
+  static constexpr std::size_t kMostRawRuns = 64;
 };
 
 // Reads the log to its end, past damaged stretches to the next whole event (`damage` names the

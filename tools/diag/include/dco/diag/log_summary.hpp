@@ -50,6 +50,11 @@ double percentile(std::vector<float> values, double p);
 
 LogSummary summarize(const LogDigest& digest);
 
+// The raw recording's pairs and, when the log holds several dcod runs, each run's count and size.
+std::string raw_runs_text(const LogDigest& digest);
+// What the logger's clock stepping back means for the times shown (digest.clock_steps_back > 0).
+std::string clock_text(const LogDigest& digest);
+
 // A few lines for a terminal; `report` names the HTML file when one was written.
 std::string text_summary(const LogDigest& digest, const LogSummary& summary,
                          const std::string& report);
