@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -74,22 +75,25 @@ void for_each_number(const fs::path& p, const std::string& prefix, Number&& numb
 // time) -> 1305031102, 0.175304, "000046_10" (KITTI) -> 46, 10. A fraction is held as 18
 // decimal places: "100.15" comes after "100.1" and before "100.2" (times written without their
 // trailing zeros). Compared in that order, so files play in time and frame order. nullopt when
-// there is none.
+// there is none; a number past 64 bits (a nanosecond time has 19 digits and fits) or a fraction
+// past 18 places is an error: the files cannot be put in order by it, nor paired by position.
 using FrameKey = std::vector<std::uint64_t>;
 
-std::optional<FrameKey> frame_key(const fs::path& p, const std::string& prefix) {
+std::optional<FrameKey> frame_key(const fs::path& p, const std::string& prefix,
+                                  const std::string& where) {
   FrameKey key;
-  bool too_long = false;
   for_each_number(p, prefix, [&](std::string_view digits, bool fraction) {
-    // No frame count or time has that many digits.
-    if (digits.size() > 18) too_long = true;
-    if (too_long) return;
-    std::uint64_t value = std::stoull(std::string(digits));
+    std::uint64_t value = 0;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+    if (ec != std::errc() || end != digits.data() + digits.size() ||
+        (fraction && digits.size() > 18))
+      throw Error(fmt::format("{}: {} has a number of {} digits, too long to order frames by",
+                              where, p.filename().string(), digits.size()));
     if (fraction)
       for (std::size_t place = digits.size(); place < 18; ++place) value *= 10;
     key.push_back(value);
   });
-  if (too_long || key.empty()) return std::nullopt;
+  if (key.empty()) return std::nullopt;
   return key;
 }
 
@@ -116,7 +120,7 @@ std::vector<std::pair<fs::path, fs::path>> pair_images(const std::vector<fs::pat
   bool numbered = true;
   for (int side = 0; side < 2 && numbered; ++side)
     for (const fs::path& p : side == 0 ? left : right) {
-      const auto key = frame_key(p, prefix[side]);
+      const auto key = frame_key(p, prefix[side], where);
       if (!key) {
         numbered = false;
         break;

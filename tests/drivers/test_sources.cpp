@@ -296,6 +296,33 @@ TEST(ReplaySource, BrokenRecordingsAreRefusedWithTheReason) {
             std::string::npos)
       << error_of(gap.path());
 
+  // Nanosecond capture times as names (19 digits, as exports of ROS bags write them), one frame
+  // missing on each side: paired by the times, so the gap is named.
+  dco::testing::TempDir nanoseconds;
+  write_synthetic_recording(nanoseconds.path(), 4, 96, 64);
+  for (const char* side : {"left", "right"})
+    for (int i = 0; i < 4; ++i) {
+      char from[16], to[32];
+      std::snprintf(from, sizeof from, "%06d.png", i);
+      std::snprintf(to, sizeof to, "14036365797635555%02d.png", i);
+      std::filesystem::rename(nanoseconds.path() / side / from, nanoseconds.path() / side / to);
+    }
+  std::filesystem::remove(nanoseconds.path() / "left" / "1403636579763555502.png");
+  std::filesystem::remove(nanoseconds.path() / "right" / "1403636579763555501.png");
+  EXPECT_NE(error_of(nanoseconds.path())
+                .find("1403636579763555501.png has no right image of frame 1403636579763555501"),
+            std::string::npos)
+      << error_of(nanoseconds.path());
+  // A number past 64 bits cannot order the frames: said, never paired by position.
+  dco::testing::TempDir huge;
+  write_synthetic_recording(huge.path(), 1, 96, 64);
+  for (const char* side : {"left", "right"})
+    std::filesystem::rename(huge.path() / side / "000000.png",
+                            huge.path() / side / "123456789012345678901.png");
+  EXPECT_NE(error_of(huge.path()).find("a number of 21 digits, too long to order frames by"),
+            std::string::npos)
+      << error_of(huge.path());
+
   dco::testing::TempDir mixed;
   write_synthetic_recording(mixed.path(), 2, 96, 64);
   Image<std::uint8_t> colour(96, 64, 3);
