@@ -159,6 +159,18 @@ void check_geometry(const std::string& src, const RectifiedGeometry& g, bool siz
             fmt::format("rectified principal points differ by {} px in x (cx_right - cx_left), "
                         "not less than the image's width of {} px: every depth would be {}",
                         g.doffs(), g.width, g.doffs() < 0 ? "infinite" : "a few millimetres"));
+  // The principal point is where the optical axis meets the image: a rectified one far outside
+  // it (a crop offset typed twice, a sign lost) turns every ray the depth is published with, and
+  // the renderers that project depth by it draw it elsewhere. Half the image's side beyond an
+  // edge holds any real rectification's crop.
+  if (!size_unknown) {
+    const auto off = [](double c, int side) { return c < -0.5 * side || c > 1.5 * side; };
+    if (off(g.cx_left, g.width) || off(g.cx_right, g.width) || off(g.cy, g.height))
+      fail_at(src, 0,
+              fmt::format("rectified principal point ({}, {}) / ({}, {}) lies more than half the "
+                          "image's side outside the {} image",
+                          g.cx_left, g.cy, g.cx_right, g.cy, size_text(g.width, g.height)));
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -258,6 +270,33 @@ void StereoCalibration::validate() const {
   if (has_rectification) {
     check_rotation(src, "left rectifying rotation", rect_rotation_left);
     check_rotation(src, "right rectifying rotation", rect_rotation_right);
+    // Rectification turns both cameras onto one frame whose x axis runs from the left camera to
+    // the right: R_right R R_left^T = I, and R_right T points along -x. A file whose rectifying
+    // rotations belong to other extrinsics (swapped lines, another calibration's) would leave
+    // the rows apart by pixels at the edges with no word; the files' own rounding is far below.
+    constexpr double kMostRectErrorDeg = 0.5;
+    const Mat3 m = mul(mul(rect_rotation_right, rotation), transpose(rect_rotation_left));
+    const double turn_deg =
+        std::acos(std::clamp((m[0] + m[4] + m[8] - 1) / 2, -1.0, 1.0)) * 180 / std::numbers::pi;
+    if (turn_deg > kMostRectErrorDeg)
+      fail_at(src, 0,
+              fmt::format("the rectifying rotations leave the cameras turned {:.2f} degrees apart "
+                          "(at most {:g}): they do not belong to this rotation between them",
+                          turn_deg, kMostRectErrorDeg));
+    std::array<double, 3> axis{};
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) axis[i] += rect_rotation_right[3 * i + k] * translation[k];
+    const double off_axis_deg =
+        std::atan2(std::hypot(axis[1], axis[2]), -axis[0]) * 180 / std::numbers::pi;
+    if (off_axis_deg > 90)
+      fail_at(src, 0,
+              "the rectifying rotations put the right camera left of the left one (swap them?)");
+    if (off_axis_deg > kMostRectErrorDeg)
+      fail_at(src, 0,
+              fmt::format("the rectifying rotations put the right camera {:.2f} degrees off the "
+                          "rectified x axis (at most {:g}): they do not belong to this "
+                          "translation",
+                          off_axis_deg, kMostRectErrorDeg));
   }
   if (is_rectified || has_rectification) {
     check_geometry(src, rectified, size_unknown);

@@ -59,8 +59,11 @@ RectifiedGeometry geometry_from(const cv::Mat& p1, const cv::Mat& p2, cv::Size s
   g.cy = p1.at<double>(1, 2);
   if (std::abs(p2.at<double>(1, 3)) > std::abs(p2.at<double>(0, 3)))
     throw Error(src + ": the cameras are stacked vertically; dco needs a side-by-side rig");
+  if (!(g.f > 0) || !std::isfinite(g.f))
+    throw Error(src + ": the rectification has no focal length (f = " + fmt::format("{}", g.f) +
+                "): check the distortion coefficients");
   g.baseline_m = (p1.at<double>(0, 3) - p2.at<double>(0, 3)) / g.f;
-  if (!(g.baseline_m > 0) || !(g.f > 0))
+  if (!(g.baseline_m > 0))
     throw Error(src + ": the right camera is not to the right of the left camera (swap them?)");
   return g;
 }
@@ -87,6 +90,33 @@ double share_inside(const cv::Mat& map_xy, int width, int height) {
       inside += row[x][0] >= 0 && row[x][0] < width && row[x][1] >= 0 && row[x][1] < height;
   }
   return static_cast<double>(inside) / static_cast<double>(map_xy.total());
+}
+
+// Of the neighbouring rectified pixels that both sample the camera's image, the share whose
+// samples run backwards (right of a pixel, left of its sample; below it, above). A distortion
+// whose radial term turns back inside the view (k1 = -1 on a wide lens) folds the image: past
+// the fold the rectified image shows the camera's mirrored, which the share inside does not see.
+double share_folded(const cv::Mat& map_xy, int width, int height) {
+  const auto inside = [&](const cv::Vec2s& p) {
+    return p[0] >= 0 && p[0] < width && p[1] >= 0 && p[1] < height;
+  };
+  long pairs = 0, backwards = 0;
+  for (int y = 0; y < map_xy.rows; ++y) {
+    const cv::Vec2s* row = map_xy.ptr<cv::Vec2s>(y);
+    const cv::Vec2s* below = y + 1 < map_xy.rows ? map_xy.ptr<cv::Vec2s>(y + 1) : nullptr;
+    for (int x = 0; x < map_xy.cols; ++x) {
+      if (!inside(row[x])) continue;
+      if (x + 1 < map_xy.cols && inside(row[x + 1])) {
+        ++pairs;
+        backwards += row[x + 1][0] < row[x][0];
+      }
+      if (below && inside(below[x])) {
+        ++pairs;
+        backwards += below[x][1] < row[x][1];
+      }
+    }
+  }
+  return pairs > 0 ? static_cast<double>(backwards) / static_cast<double>(pairs) : 0.0;
 }
 
 void check_input(ImageView<const std::uint8_t> img, const char* side, int width, int height) {
@@ -175,6 +205,14 @@ Rectifier::Rectifier(const StereoCalibration& calib) {
             fmt::format("{}: only {:.1f} % of the rectified {} image falls on the "
                         "camera's (at least {:g} %): check the calibration",
                         src, 100 * share, side, 100 * kMinShareInside));
+    constexpr double kMostFolded = 0.001;
+    for (const auto& [map, side] : {std::pair{&map_left_xy_, "left"}, {&map_right_xy_, "right"}})
+      if (const double share = share_folded(*map, in_width_, in_height_); share > kMostFolded)
+        throw Error(
+            fmt::format("{}: the {} camera's distortion folds its image back on itself ({:.1f} % "
+                        "of the rectified neighbours sample it in reverse): check the "
+                        "distortion coefficients",
+                        src, side, 100 * share));
   } catch (const cv::Exception& e) {
     throw Error(src + ": cannot compute the rectification: " + e.err);
   }

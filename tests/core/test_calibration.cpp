@@ -1,8 +1,10 @@
 #include "dco/core/calibration.hpp"
 
+#include <array>
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <numbers>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -493,6 +495,75 @@ TEST(CalibrationErrors, NameTheFileAndLine) {
     ADD_FAILURE();
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("does_not_exist.toml"), std::string::npos);
+  }
+}
+
+// A rectified principal point far outside the image turns the rays depth is published with.
+TEST(CalibrationErrors, ARectifiedPrincipalPointFarOutsideTheImageIsRefused) {
+  test::TempDir dir;
+  const std::string text =
+      "cam0=[125 0 -5000; 0 125 -3000; 0 0 1]\n"
+      "cam1=[125 0 -5000; 0 125 -3000; 0 0 1]\n"
+      "doffs=0\nbaseline=60\nwidth=160\nheight=120\nndisp=32\n";
+  const std::string msg = load_error(dir, "outside.txt", text);
+  EXPECT_NE(msg.find("lies more than half the image's side outside the 160x120 image"),
+            std::string::npos)
+      << msg;
+  std::string inside = text;
+  for (const char* from : {"-5000", "-5000"}) inside.replace(inside.find(from), 5, "79.5");
+  for (const char* from : {"-3000", "-3000"}) inside.replace(inside.find(from), 5, "59.5");
+  EXPECT_EQ(load_error(dir, "inside.txt", inside), "");
+}
+
+// Rectifying rotations of other extrinsics (lines swapped, another calibration's) would leave the
+// rows pixels apart at the edges: refused, while the file as written loads.
+TEST(CalibrationErrors, RectifyingRotationsMustBelongToTheExtrinsics) {
+  test::TempDir dir;
+  const std::string text = test::read_file(kKitti);
+  const auto line_of = [&text](const std::string& key) {
+    const std::size_t begin = text.find(key + ": ");
+    return text.substr(begin, text.find('\n', begin) - begin);
+  };
+  std::string swapped = text;
+  const std::string left = line_of("R_rect_02"), right = line_of("R_rect_03");
+  swapped.replace(swapped.find(left), left.size(), "R_rect_02" + right.substr(9));
+  swapped.replace(swapped.find(right), right.size(), "R_rect_03" + left.substr(9));
+  const std::string msg = load_error(dir, "swapped_rect.txt", swapped);
+  EXPECT_NE(msg.find("the rectifying rotations"), std::string::npos) << msg;
+
+  const StereoCalibration kitti = load_calibration(kKitti);
+  EXPECT_NO_THROW(kitti.validate());
+  // The cameras' rotation turned 1 degree about the optical axis.
+  StereoCalibration turned = kitti;
+  const double a = std::numbers::pi / 180;
+  const std::array<double, 9> roll{
+      std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      double v = 0;
+      for (int k = 0; k < 3; ++k) v += roll[3 * i + k] * kitti.rotation[3 * k + j];
+      turned.rotation[3 * i + j] = v;
+    }
+  try {
+    turned.validate();
+    ADD_FAILURE() << "a rotation 1 degree off its rectification passed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("leave the cameras turned 1.00 degrees apart"),
+              std::string::npos)
+        << e.what();
+  }
+  // The translation 2 degrees off the rectified x axis, and reversed.
+  StereoCalibration tilted = kitti;
+  const double b = std::hypot(kitti.translation[0], kitti.translation[1], kitti.translation[2]);
+  tilted.translation[1] += b * std::tan(2 * a);
+  EXPECT_THROW(tilted.validate(), Error);
+  StereoCalibration reversed = kitti;
+  for (double& t : reversed.translation) t = -t;
+  try {
+    reversed.validate();
+    ADD_FAILURE() << "a reversed translation passed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("swap them?"), std::string::npos) << e.what();
   }
 }
 

@@ -274,6 +274,29 @@ TEST(Rectifier, RefusesADegenerateRectification) {
   }
   c.left.distortion = c.right.distortion = {-0.1, 0.01, 0, 0};
   EXPECT_NO_THROW(Rectifier{c});
+  // k1 = -1 turns the radial term back at r = 0.58, inside the image's 0.8: the corners would
+  // show the camera's image mirrored, though most of them still fall on it.
+  for (const double k1 : {-1.0, -2.0}) {
+    c.left.distortion = c.right.distortion = {k1, 0, 0, 0};
+    try {
+      Rectifier r(c);
+      ADD_FAILURE() << "k1 " << k1 << " rectified to f = " << r.geometry().f;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("folds its image back on itself"), std::string::npos)
+          << e.what();
+    }
+  }
+  // A fisheye lens's coefficients that leave no focal length: said as such, not as swapped
+  // cameras.
+  StereoCalibration fisheye = test::kannala_brandt_rig();
+  fisheye.left.distortion = fisheye.right.distortion = {-0.7, 0, 0, 0};
+  try {
+    Rectifier r(fisheye);
+    ADD_FAILURE() << "rectified to f = " << r.geometry().f;
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).find("swap"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("distortion"), std::string::npos) << e.what();
+  }
 }
 
 // A precomputed rectification gets the checks of one dco computes: a focal length typed in the
@@ -300,12 +323,13 @@ TEST(Rectifier, RefusesAPrecomputedRectificationThatMissesTheCamera) {
   c = kitti;
   c.rectified.width = c.rectified.height = 16384;
   refused(c, "rectified images of 16384x16384 from a camera of 1392x512");
-  // Both principal points moved alike (their difference, doffs, as wide as the image is refused
-  // by the calibration's own check), then the right one by most of the image's width.
+  // Both principal points moved alike far past the image (the calibration's own check; so is
+  // their difference, doffs, as wide as the image), then the right one by most of the image's
+  // width, which still lies within half a side of it.
   c = kitti;
   c.rectified.cx_left += 2000;
   c.rectified.cx_right += 2000;
-  refused(c, "of the rectified left image falls on the camera's");
+  refused(c, "lies more than half the image's side outside the 1242x375 image");
   c = kitti;
   c.rectified.cx_right -= 1100;
   refused(c, "of the rectified right image falls on the camera's");

@@ -390,6 +390,11 @@ TEST(UsbCapture, ControlTransfersThatTakeTimeReplayOnTheRecordedClock) {
     ASSERT_TRUE(sim->inject_and_settle(Fault::kControlBusy, 2));
     ASSERT_TRUE(sim->inject_and_settle(Fault::kSilence, 500));
     ASSERT_TRUE(sim->inject_and_settle(Fault::kUnplug, 200));
+    // Frames a consumer saw after the last reopen, however busy the machine: the replay must
+    // give them too.
+    const std::size_t before = live.count();
+    for (int i = 0; i < 1000 && live.count() < before + 10; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
     source->stop();
     live_counters = counters_of(*source);
   }
