@@ -68,8 +68,8 @@ double det(const Mat3& a) {
 // otherwise flow through as depth a million times off, or not survive being written out.
 constexpr double kMinFocalPx = 1, kMaxFocalPx = 1e6;
 constexpr double kMaxPrincipalPointPx = 1e6;
-constexpr double kMinBaselineM = 1e-6, kMaxBaselineM = 1e4;
-constexpr const char* kBaselineRangeText = "1 um..10 km";
+constexpr double kMinBaselineM = 1e-3, kMaxBaselineM = 10;
+constexpr const char* kBaselineRangeText = "1 mm..10 m (a stereo rig's; another unit?)";
 
 bool focal_in_range(double f) {
   return f >= kMinFocalPx && f <= kMaxFocalPx;

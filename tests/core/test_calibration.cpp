@@ -405,12 +405,21 @@ TEST(CalibrationErrors, NameTheFileAndLine) {
        "focal_huge.toml: left camera: focal lengths must be within 1..1000000 px"},
       {"baseline_far.toml",
        replaced(kRigToml, "translation = [-0.1, 0, 0]", "translation = [-1e5, 0, 0]"),
-       "baseline_far.toml: baseline 100000 m (the translation's length) is not within 1 um..10 km"},
+       "baseline_far.toml: baseline 100000 m (the translation's length) is not within 1 mm..10 m "
+       "(a stereo rig's; another unit?)"},
+      // A baseline in the wrong unit: millimetres where metres go, metres where millimetres go.
+      {"baseline_mm.toml",
+       replaced(kRigToml, "translation = [-0.1, 0, 0]", "translation = [-100, 0, 0]"),
+       "baseline_mm.toml: baseline 100 m (the translation's length) is not within 1 mm..10 m"},
+      {"mb_metres.txt",
+       replaced(test::read_file(kMiddlebury), "baseline=193.001", "baseline=0.193"),
+       "mb_metres.txt: baseline 0.000193 m (the translation's length) is not within 1 mm..10 m"},
       {"centre.toml", replaced(kRigToml, "cx = 320.0", "cx = 3.2e8"),
        "centre.toml: left camera: principal point (320000000, 240) is more than 1000000 px"},
       {"mb_baseline.txt",
        replaced(test::read_file(kMiddlebury), "baseline=193.001", "baseline=1e-9"),
-       "mb_baseline.txt: baseline 1e-12 m (the translation's length) is not within 1 um..10 km"},
+       "mb_baseline.txt: baseline 1e-12 m (the translation's length) is not within 1 mm..10 m (a "
+       "stereo rig's; another unit?)"},
       {"mb_focal.txt",
        std::regex_replace(test::read_file(kMiddlebury), std::regex("999\\.421"), "0.5"),
        "mb_focal.txt: left camera: focal lengths must be within 1..1000000 px (fx 0.5, fy 0.5)"},
