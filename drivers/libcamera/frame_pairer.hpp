@@ -27,6 +27,7 @@ class FramePairer {
     std::uint64_t pairs = 0;
     std::uint64_t unpaired = 0;   // frames dropped without a partner
     std::uint64_t overtaken = 0;  // ready pairs replaced by a newer one before they were taken
+    std::uint64_t untimed = 0;    // frames without a timestamp (0 or less), released at once
   };
 
   // `max_pending`: frames per camera held while waiting for a partner.
@@ -56,6 +57,13 @@ class FramePairer {
   // ready.
   template <typename Release>
   bool add(int eye, const Frame& frame, Release&& release) {
+    // Without a time a frame has no partner to be told from the others: pairing it by arrival
+    // could match frames a period apart for good, unseen.
+    if (frame.ns <= 0) {
+      ++counters_.untimed;
+      release(frame.handle);
+      return false;
+    }
     pending_[eye].push_back(frame);
     bool paired = false;
     const std::int64_t tolerance = period_ns_ / 2;

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <exception>
 #include <filesystem>
 #include <memory>
@@ -43,6 +44,13 @@ namespace dco::drivers {
 namespace {
 
 namespace lc = libcamera;
+
+// CLOCK_MONOTONIC, the clock libcamera stamps frames with.
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::int64_t{ts.tv_sec} * 1'000'000'000 + ts.tv_nsec;
+}
 
 // A camera keeps capturing only while it has queued requests; at most four per camera are held
 // here at once (two waiting for a partner, one in the ready pair, one being copied).
@@ -509,10 +517,12 @@ class LibcameraSource final : public FrameSource {
     }
     ++captured_;
     const auto sensor_ns = r->metadata().get(lc::controls::SensorTimestamp);
-    const Pairer::Frame frame{
+    Pairer::Frame frame{
         r, sensor_ns ? *sensor_ns : static_cast<std::int64_t>(buffer->metadata().timestamp)};
     const auto release = [this](lc::Request* dropped) { requeue(dropped); };
     if (sbs_) {
+      // One sensor needs no partner: a driver that stamps nothing gets the time it arrived.
+      if (frame.ns <= 0) frame.ns = monotonic_ns();
       pairer_.add_single(frame, release);
       wake_.notify_all();
       return;
@@ -528,6 +538,13 @@ class LibcameraSource final : public FrameSource {
         pairer_.measure(buffer->metadata().sequence, frame.ns);
     }
     if (pairer_.add(eye, frame, release)) wake_.notify_all();
+    if (pairer_.counters().untimed > 0 && error_.empty()) {
+      error_ = fmt::format(
+          "libcamera: camera '{}' gives its frames no timestamp; two cameras cannot be paired "
+          "without one (a side-by-side sensor can: layout=sbs)",
+          d.id);
+      wake_.notify_all();
+    }
     if (pairer_.unpaired_run() >= kMaxUnpairedRun && error_.empty()) {
       error_ = fmt::format(
           "libcamera: cameras '{}' and '{}' delivered {} frames in a row without a partner within "

@@ -130,6 +130,10 @@ TEST_F(LibcameraSource, BadNumbersAreNamed) {
 // Pairer tests: handles are frame numbers, left from 0 and right from 1000.
 using Pairer = FramePairer<int>;
 constexpr std::int64_t kPeriod = 33'333'333;  // 30 fps
+// Frame i's time; a camera's clock is well past 0, which means "no timestamp".
+constexpr std::int64_t at(int i) {
+  return 5'000'000'000 + i * kPeriod;
+}
 
 struct Released {
   std::vector<int> handles;
@@ -142,7 +146,7 @@ TEST(LibcameraFramePairer, SameRateCamerasPairEveryFrame) {
   Released released;
   auto release = [&](int h) { released(h); };
   for (int i = 0; i < 50; ++i) {
-    const std::int64_t t = i * kPeriod;
+    const std::int64_t t = at(i);
     EXPECT_FALSE(pairer.add(0, {i, t}, release));
     ASSERT_TRUE(pairer.add(1, {1000 + i, t + 12'000'000}, release)) << i;
     const auto pair = pairer.take();
@@ -163,8 +167,8 @@ TEST(LibcameraFramePairer, PairsTheClosestFrameAndDropsTheOneWithout) {
   auto release = [&](int h) { released(h); };
   std::vector<std::pair<int, int>> pairs;
   for (int i = 0; i < 10; ++i) {
-    pairer.add(0, {i, i * kPeriod}, release);
-    pairer.add(1, {1000 + i, i * kPeriod + 20'000'000}, release);
+    pairer.add(0, {i, at(i)}, release);
+    pairer.add(1, {1000 + i, at(i) + 20'000'000}, release);
     if (const auto p = pairer.take()) pairs.emplace_back((*p)[0].handle, (*p)[1].handle);
   }
   ASSERT_EQ(pairs.size(), 9u);
@@ -182,8 +186,8 @@ TEST(LibcameraFramePairer, NewestPairWinsAndTheOvertakenGoBack) {
   Released released;
   auto release = [&](int h) { released(h); };
   for (int i = 0; i < 4; ++i) {  // nobody takes
-    pairer.add(0, {i, i * kPeriod}, release);
-    pairer.add(1, {1000 + i, i * kPeriod + 1'000'000}, release);
+    pairer.add(0, {i, at(i)}, release);
+    pairer.add(1, {1000 + i, at(i) + 1'000'000}, release);
   }
   EXPECT_EQ(released.handles, (std::vector<int>{0, 1000, 1, 1001, 2, 1002}));
   EXPECT_EQ(pairer.counters().overtaken, 3u);
@@ -200,8 +204,8 @@ TEST(LibcameraFramePairer, HalfRatePartnerLeavesEveryOtherFrameUnpaired) {
   auto release = [&](int h) { released(h); };
   int pairs = 0;
   for (int i = 0; i < 20; ++i) {
-    pairer.add(0, {i, i * kPeriod}, release);
-    if (i % 2 == 0) pairer.add(1, {1000 + i, i * kPeriod + 2'000'000}, release);
+    pairer.add(0, {i, at(i)}, release);
+    if (i % 2 == 0) pairer.add(1, {1000 + i, at(i) + 2'000'000}, release);
     pairs += pairer.take().has_value();
   }
   EXPECT_EQ(pairs, 10);
@@ -215,12 +219,12 @@ TEST(LibcameraFramePairer, StalledPartnerHoldsAtMostMaxPendingFrames) {
   pairer.set_period(kPeriod);
   Released released;
   auto release = [&](int h) { released(h); };
-  for (int i = 0; i < 10; ++i) pairer.add(0, {i, i * kPeriod}, release);
+  for (int i = 0; i < 10; ++i) pairer.add(0, {i, at(i)}, release);
   EXPECT_EQ(released.handles, (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7}));
   EXPECT_EQ(pairer.unpaired_run(), 8);
   EXPECT_FALSE(pairer.take());
   // The partner comes back: the newest held frame pairs and the run ends.
-  EXPECT_TRUE(pairer.add(1, {1000, 9 * kPeriod + 3'000'000}, release));
+  EXPECT_TRUE(pairer.add(1, {1000, at(9) + 3'000'000}, release));
   EXPECT_EQ(pairer.unpaired_run(), 0);
   EXPECT_EQ((*pairer.take())[0].handle, 9);
 }
@@ -244,11 +248,29 @@ TEST(LibcameraFramePairer, UnknownPeriodIsMeasuredPerSensorFrame) {
   EXPECT_EQ(pairer.period(), 2 * kPeriod);
 }
 
+// A camera whose driver stamps nothing: its frames cannot be told apart in time, so none is
+// paired (pairing by arrival could match frames a period apart for good); each goes back and is
+// counted, for the source to say so.
+TEST(LibcameraFramePairer, FramesWithoutATimeAreReleasedAndCounted) {
+  Pairer pairer;
+  pairer.set_period(kPeriod);
+  Released released;
+  auto release = [&](int h) { released(h); };
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_FALSE(pairer.add(0, {i, 0}, release));
+    EXPECT_FALSE(pairer.add(1, {1000 + i, 0}, release));
+  }
+  EXPECT_EQ(released.handles, (std::vector<int>{0, 1000, 1, 1001, 2, 1002, 3, 1003}));
+  EXPECT_EQ(pairer.counters().untimed, 8u);
+  EXPECT_EQ(pairer.counters().pairs, 0u);
+  EXPECT_FALSE(pairer.has_pair());
+}
+
 TEST(LibcameraFramePairer, SingleCameraNewestWins) {
   Pairer pairer;
   Released released;
   auto release = [&](int h) { released(h); };
-  for (int i = 1; i <= 3; ++i) pairer.add_single({i, i * kPeriod}, release);
+  for (int i = 1; i <= 3; ++i) pairer.add_single({i, at(i)}, release);
   EXPECT_EQ(released.handles, (std::vector<int>{1, 2}));
   EXPECT_EQ(pairer.counters().overtaken, 2u);
   EXPECT_EQ((*pairer.take())[0].handle, 3);
