@@ -218,7 +218,8 @@ Format detect_format(std::string_view text) {
 
 double RectifiedGeometry::depth_from_disparity(double d) const {
   const double denom = d + doffs();
-  if (!(denom > 0)) return std::numeric_limits<double>::infinity();  // NaN too: unknown
+  // NaN and +inf too: unknown, as disparity_to_depth has it (sparse maps mark holes with +inf).
+  if (!(denom > 0) || !std::isfinite(d)) return std::numeric_limits<double>::infinity();
   return f * baseline_m / denom;
 }
 

@@ -36,6 +36,9 @@ TEST(DisparityToDepth, FollowsTheGeometryAndMarksUnknownAsInfinity) {
   EXPECT_EQ(z.at(2, 0), kInf);
   EXPECT_EQ(z.at(3, 0), kInf);
   EXPECT_EQ(geometry().depth_from_disparity(std::nan("")), std::numeric_limits<double>::infinity());
+  // +inf marks a hole in a sparse map: unknown, not a point at the camera.
+  EXPECT_EQ(geometry().depth_from_disparity(std::numeric_limits<double>::infinity()),
+            std::numeric_limits<double>::infinity());
 }
 
 TEST(DisparityToDepth, RefusesMismatchedImagesAndAnEmptyGeometry) {

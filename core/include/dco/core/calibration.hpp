@@ -34,7 +34,8 @@ struct RectifiedGeometry {
 
   // Middlebury's doffs: the x-difference of the principal points.
   double doffs() const { return cx_right - cx_left; }
-  // Metric depth (metres) of a disparity in pixels of this geometry; +inf when d + doffs <= 0.
+  // Metric depth (metres) of a disparity in pixels of this geometry; +inf (unknown) when
+  // d + doffs <= 0 or d is not finite.
   double depth_from_disparity(double d) const;
   // Inverse of depth_from_disparity: f * baseline / z - doffs.
   double disparity_from_depth(double z_m) const;
